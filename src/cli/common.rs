@@ -1,0 +1,62 @@
+//! Flags shared by every subcommand (the CLI contract: add, never rename).
+
+use clap::Args;
+use irtp::{DragLaw, Params};
+use std::path::PathBuf;
+
+/// Model flags: `--drag --sigma --lambda --rate --reset-velocity`.
+#[derive(Args, Clone, Debug)]
+pub struct ModelArgs {
+    /// Drag law g(v): tan (shear-thickening), tanh (shear-thinning, needs sigma < 1), linear (Newtonian).
+    #[arg(long, default_value = "tan", value_parser = parse_drag)]
+    pub drag: DragLaw,
+    /// Noise amplitude Sigma (eta = ±Sigma).
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    pub sigma: f64,
+    /// Flip rate lambda of the telegraph noise.
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub lambda: f64,
+    /// Velocity reset rate r.
+    #[arg(
+        long,
+        short = 'r',
+        default_value_t = 2.0,
+        allow_negative_numbers = true
+    )]
+    pub rate: f64,
+    /// Reset velocity v_r.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub reset_velocity: f64,
+}
+
+fn parse_drag(s: &str) -> Result<DragLaw, String> {
+    s.parse::<DragLaw>()
+        .map_err(|_| "expected one of tan, tanh, linear".to_string())
+}
+
+impl ModelArgs {
+    /// Validate into [`Params`].
+    pub fn params(&self) -> irtp::Result<Params> {
+        Params::new(
+            self.drag,
+            self.sigma,
+            self.lambda,
+            self.rate,
+            self.reset_velocity,
+        )
+    }
+}
+
+/// Output flags: `--seed --out --json`.
+#[derive(Args, Clone, Debug)]
+pub struct OutputArgs {
+    /// Master seed; particle i uses a stream derived from (seed, i).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Directory to write CSV files and run.json into.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print one JSON object with the results on stdout.
+    #[arg(long)]
+    pub json: bool,
+}

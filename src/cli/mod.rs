@@ -1,0 +1,13 @@
+//! The `irtp` command line: parse flags, validate into library configs, run,
+//! print JSON / write files. All printing and exit codes live here.
+
+pub mod common;
+pub mod progress;
+
+use serde::Serialize;
+
+/// Print a value as one JSON object on stdout.
+pub fn print_json<T: Serialize>(value: &T) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string(value)?);
+    Ok(())
+}

@@ -1,0 +1,39 @@
+//! Progress bars on a terminal, silence otherwise.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use irtp::parallel::Progress;
+use std::io::IsTerminal;
+
+/// A progress bar on stderr when it is a terminal; hidden otherwise.
+pub struct Bar(ProgressBar);
+
+impl Bar {
+    /// New bar with a label and a total count.
+    pub fn new(label: &str, total: u64) -> Self {
+        let pb = if std::io::stderr().is_terminal() {
+            ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr())
+        } else {
+            ProgressBar::hidden()
+        };
+        pb.set_style(
+            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {pos}/{len} ({eta})")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        pb.set_prefix(label.to_string());
+        Bar(pb)
+    }
+    /// Finish and clear.
+    pub fn finish(&self) {
+        self.0.finish_and_clear();
+    }
+}
+
+impl Progress for Bar {
+    fn update(&self, done: u64, total: u64) {
+        if self.0.length() != Some(total) {
+            self.0.set_length(total);
+        }
+        self.0.set_position(done);
+    }
+}

@@ -1,0 +1,254 @@
+//! Writing results: all files of a run appear together or not at all, and
+//! every output directory carries `run.json` with its provenance.
+
+use crate::error::{Error, Result};
+use serde::Serialize;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Io {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    }
+}
+
+/// An output directory whose files are first written to a hidden staging
+/// directory and moved into place by [`OutputDir::commit`]. Dropping it
+/// uncommitted (error, panic) removes the staging directory, so a failed run
+/// leaves nothing half-written behind.
+#[derive(Debug)]
+pub struct OutputDir {
+    target: PathBuf,
+    staging: PathBuf,
+    files: Vec<String>,
+    committed: bool,
+}
+
+impl OutputDir {
+    /// Prepare writing into `target` (created if missing).
+    pub fn new(target: impl AsRef<Path>) -> Result<Self> {
+        let target = target.as_ref().to_path_buf();
+        if target.exists() && !target.is_dir() {
+            return Err(Error::invalid(
+                "--out",
+                target.display(),
+                "a directory path (it exists and is a file)",
+            ));
+        }
+        let name = target
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
+        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        if staging.exists() {
+            fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+        }
+        fs::create_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+        Ok(OutputDir {
+            target,
+            staging,
+            files: Vec::new(),
+            committed: false,
+        })
+    }
+
+    /// Final directory.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Path inside the staging directory for a new file (sub-directories allowed).
+    pub fn path(&mut self, name: &str) -> Result<PathBuf> {
+        let p = self.staging.join(name);
+        if let Some(parent) = p.parent() {
+            fs::create_dir_all(parent).map_err(|e| io_err(parent, e))?;
+        }
+        if !self.files.iter().any(|f| f == name) {
+            self.files.push(name.to_string());
+        }
+        Ok(p)
+    }
+
+    /// Write a CSV file from a header and rows of numbers (full precision).
+    pub fn write_csv<R: AsRef<[f64]>>(
+        &mut self,
+        name: &str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = R>,
+    ) -> Result<()> {
+        let p = self.path(name)?;
+        let mut w = csv::Writer::from_path(&p).map_err(|e| io_err(&p, e))?;
+        w.write_record(header).map_err(|e| io_err(&p, e))?;
+        for row in rows {
+            let row = row.as_ref();
+            debug_assert_eq!(row.len(), header.len());
+            w.write_record(row.iter().map(|x| format_float(*x)))
+                .map_err(|e| io_err(&p, e))?;
+        }
+        w.flush().map_err(|e| io_err(&p, e))
+    }
+
+    /// Write a JSON file.
+    pub fn write_json<T: Serialize>(&mut self, name: &str, value: &T) -> Result<()> {
+        let p = self.path(name)?;
+        let s = serde_json::to_string_pretty(value).map_err(|e| io_err(&p, e))?;
+        fs::write(&p, s + "\n").map_err(|e| io_err(&p, e))
+    }
+
+    /// Write raw bytes or text.
+    pub fn write_bytes(&mut self, name: &str, bytes: impl AsRef<[u8]>) -> Result<()> {
+        let p = self.path(name)?;
+        fs::write(&p, bytes).map_err(|e| io_err(&p, e))
+    }
+
+    /// Move every staged file into the target directory (each move atomic)
+    /// and remove the staging directory. Returns the final paths.
+    pub fn commit(mut self) -> Result<Vec<PathBuf>> {
+        fs::create_dir_all(&self.target).map_err(|e| io_err(&self.target, e))?;
+        let mut out = Vec::with_capacity(self.files.len());
+        for f in &self.files {
+            let from = self.staging.join(f);
+            let to = self.target.join(f);
+            if let Some(parent) = to.parent() {
+                fs::create_dir_all(parent).map_err(|e| io_err(parent, e))?;
+            }
+            fs::rename(&from, &to).map_err(|e| io_err(&to, e))?;
+            out.push(to);
+        }
+        let _ = fs::remove_dir_all(&self.staging);
+        self.committed = true;
+        Ok(out)
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+/// Shortest representation that round-trips exactly.
+pub fn format_float(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// Provenance written as `run.json` next to every result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Provenance<P: Serialize> {
+    /// Always "irtp".
+    pub software: &'static str,
+    /// Crate version.
+    pub version: &'static str,
+    /// What was run (e.g. "simulate", "fp stationary").
+    pub command: String,
+    /// Full command line as typed.
+    pub argv: Vec<String>,
+    /// Numerical method (e.g. "euler", "exact", "fv-upwind").
+    pub method: String,
+    /// Master seed, for stochastic methods.
+    pub seed: Option<u64>,
+    /// All parameters of the run.
+    pub parameters: P,
+    /// Wall-clock time of the computation in seconds.
+    pub wall_time_s: f64,
+    /// rayon threads used (results do not depend on it).
+    pub threads: usize,
+    /// Seconds since the Unix epoch when the run finished.
+    pub finished_unix: u64,
+    /// Files written alongside.
+    pub files: Vec<String>,
+}
+
+impl<P: Serialize> Provenance<P> {
+    /// Fill in software, version, thread count and time stamp.
+    pub fn new(
+        command: impl Into<String>,
+        method: impl Into<String>,
+        seed: Option<u64>,
+        parameters: P,
+        wall_time_s: f64,
+    ) -> Self {
+        Provenance {
+            software: "irtp",
+            version: env!("CARGO_PKG_VERSION"),
+            command: command.into(),
+            argv: std::env::args().collect(),
+            method: method.into(),
+            seed,
+            parameters,
+            wall_time_s,
+            threads: rayon::current_num_threads(),
+            finished_unix: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_secs())
+                .unwrap_or(0),
+            files: Vec::new(),
+        }
+    }
+}
+
+impl OutputDir {
+    /// Write `run.json` listing every file staged so far, then commit.
+    pub fn commit_with_provenance<P: Serialize>(
+        mut self,
+        mut prov: Provenance<P>,
+    ) -> Result<Vec<PathBuf>> {
+        prov.files = self.files.clone();
+        prov.files.push("run.json".into());
+        self.write_json("run.json", &prov)?;
+        self.commit()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uncommitted_leaves_nothing() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("res");
+        {
+            let mut o = OutputDir::new(&target).unwrap();
+            o.write_csv("a.csv", &["x"], [[1.0]]).unwrap();
+        }
+        assert!(!target.exists());
+        assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn commit_moves_files_with_provenance() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("res");
+        let mut o = OutputDir::new(&target).unwrap();
+        o.write_csv("a.csv", &["x", "y"], [[1.0, 0.1], [2.0, 1e-300]])
+            .unwrap();
+        o.commit_with_provenance(Provenance::new(
+            "test",
+            "none",
+            Some(1),
+            serde_json::json!({"a": 1}),
+            0.0,
+        ))
+        .unwrap();
+        let csv = fs::read_to_string(target.join("a.csv")).unwrap();
+        assert_eq!(csv, "x,y\n1.0,0.1\n2.0,1e-300\n");
+        let run: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(target.join("run.json")).unwrap()).unwrap();
+        assert_eq!(run["software"], "irtp");
+        assert_eq!(run["files"][0], "a.csv");
+        assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 1);
+    }
+}

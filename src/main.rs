@@ -1,0 +1,42 @@
+//! `irtp`: thin binary over the irtp library.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+#[derive(Parser, Debug)]
+#[command(name = "irtp", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {}
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // clap prints help/version on stdout (exit 0) and usage errors on stderr (exit 2).
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let input = e
+                .downcast_ref::<irtp::Error>()
+                .is_some_and(|e| e.is_input_error());
+            eprintln!("irtp: error: {e}");
+            ExitCode::from(if input { 2 } else { 1 })
+        }
+    }
+}

@@ -1,0 +1,7 @@
+//! The model: drag laws (paper Table 1), parameters and velocity bounds (Eqs. 5-10).
+
+pub mod drag;
+pub mod params;
+
+pub use drag::{Drag, DragLaw};
+pub use params::{Params, RawParams};

@@ -1,0 +1,268 @@
+//! Model parameters, validated in one place.
+
+use super::drag::{Drag, DragLaw};
+use crate::error::{finite, Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the IRTP with velocity resetting:
+/// dv/dt = -g(v) + eta(t), eta = ±Sigma flipping at rate lambda (paper Eq. 5-6),
+/// v reset to v_r at rate r with position and noise state kept (paper Eq. 3).
+///
+/// Construct with [`Params::new`]; every field is then guaranteed admissible.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawParams", into = "RawParams")]
+pub struct Params {
+    drag: DragLaw,
+    sigma: f64,
+    lambda: f64,
+    rate: f64,
+    reset_velocity: f64,
+}
+
+/// Unvalidated mirror of [`Params`] used for (de)serialisation.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct RawParams {
+    /// Drag law.
+    pub drag: DragLaw,
+    /// Noise amplitude Sigma.
+    pub sigma: f64,
+    /// Flip rate lambda.
+    pub lambda: f64,
+    /// Reset rate r.
+    pub rate: f64,
+    /// Reset velocity v_r.
+    #[serde(default)]
+    pub reset_velocity: f64,
+}
+
+impl TryFrom<RawParams> for Params {
+    type Error = Error;
+    fn try_from(r: RawParams) -> Result<Self> {
+        Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)
+    }
+}
+
+impl From<Params> for RawParams {
+    fn from(p: Params) -> Self {
+        RawParams {
+            drag: p.drag,
+            sigma: p.sigma,
+            lambda: p.lambda,
+            rate: p.rate,
+            reset_velocity: p.reset_velocity,
+        }
+    }
+}
+
+impl Params {
+    /// Validate and build. Rules: Sigma > 0 and finite, and Sigma < 1 for tanh
+    /// (the velocity bound atanh(Sigma) must exist); lambda ≥ 0 and r ≥ 0, finite;
+    /// v_r strictly inside (v_l, v_u).
+    pub fn new(
+        drag: DragLaw,
+        sigma: f64,
+        lambda: f64,
+        rate: f64,
+        reset_velocity: f64,
+    ) -> Result<Self> {
+        let sigma = finite("--sigma", sigma)?;
+        let limit = drag.force_limit();
+        if !(sigma > 0.0 && sigma < limit) {
+            let allowed = if limit.is_finite() {
+                format!("0 < sigma < {limit} for {drag} drag")
+            } else {
+                format!("sigma > 0 for {drag} drag")
+            };
+            return Err(Error::invalid("--sigma", sigma, allowed));
+        }
+        let lambda = finite("--lambda", lambda)?;
+        if !(lambda >= 0.0) {
+            return Err(Error::invalid("--lambda", lambda, "lambda >= 0"));
+        }
+        let rate = finite("--rate", rate)?;
+        if !(rate >= 0.0) {
+            return Err(Error::invalid("--rate", rate, "rate >= 0"));
+        }
+        let reset_velocity = finite("--reset-velocity", reset_velocity)?;
+        let vu = drag.inverse(sigma);
+        if !(reset_velocity > -vu && reset_velocity < vu) {
+            return Err(Error::invalid(
+                "--reset-velocity",
+                reset_velocity,
+                format!("-{vu:.6} < v_r < {vu:.6} (the open velocity interval for {drag} drag, sigma = {sigma})"),
+            ));
+        }
+        Ok(Params {
+            drag,
+            sigma,
+            lambda,
+            rate,
+            reset_velocity,
+        })
+    }
+
+    /// Same parameters with another reset rate (validated).
+    pub fn with_rate(&self, rate: f64) -> Result<Self> {
+        Params::new(
+            self.drag,
+            self.sigma,
+            self.lambda,
+            rate,
+            self.reset_velocity,
+        )
+    }
+
+    /// Same parameters with another flip rate (validated).
+    pub fn with_lambda(&self, lambda: f64) -> Result<Self> {
+        Params::new(
+            self.drag,
+            self.sigma,
+            lambda,
+            self.rate,
+            self.reset_velocity,
+        )
+    }
+
+    /// Same parameters with another reset velocity (validated).
+    pub fn with_reset_velocity(&self, reset_velocity: f64) -> Result<Self> {
+        Params::new(
+            self.drag,
+            self.sigma,
+            self.lambda,
+            self.rate,
+            reset_velocity,
+        )
+    }
+
+    /// Drag law.
+    pub fn drag(&self) -> DragLaw {
+        self.drag
+    }
+    /// Noise amplitude Sigma.
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+    /// Flip rate lambda (eta correlation Sigma² e^{-2 lambda |t|}).
+    pub fn lambda(&self) -> f64 {
+        self.lambda
+    }
+    /// Reset rate r.
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+    /// Reset velocity v_r.
+    pub fn reset_velocity(&self) -> f64 {
+        self.reset_velocity
+    }
+
+    /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. 8-10).
+    pub fn v_upper(&self) -> f64 {
+        self.drag.inverse(self.sigma)
+    }
+    /// Lower velocity bound v_l = -v_u.
+    pub fn v_lower(&self) -> f64 {
+        -self.v_upper()
+    }
+    /// (v_l, v_u).
+    pub fn bounds(&self) -> (f64, f64) {
+        (self.v_lower(), self.v_upper())
+    }
+
+    /// Largest Euler step that keeps the velocity inside (v_l, v_u):
+    /// dt < 1 / max g' on the interval. Then v ↦ v + dt(Sigma - g(v)) is
+    /// increasing with fixed point v_u, so v < v_u implies v_new < v_u
+    /// (and symmetrically at v_l). Tan: 1/(1+Sigma²); tanh and linear: 1.
+    pub fn max_euler_dt(&self) -> f64 {
+        1.0 / self.drag.max_derivative(self.sigma)
+    }
+
+    /// Validate an Euler time step against [`Params::max_euler_dt`].
+    pub fn check_dt(&self, dt: f64) -> Result<f64> {
+        let dt = finite("--dt", dt)?;
+        let max = self.max_euler_dt();
+        if !(dt > 0.0 && dt < max) {
+            return Err(Error::invalid(
+                "--dt",
+                dt,
+                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, so an Euler step cannot leave it)"),
+            ));
+        }
+        Ok(dt)
+    }
+
+    /// Exponent of the stationary density at the upper edge, P ~ (v_u - v)^a,
+    /// a = (lambda + r)/g'(v_u) - 1 (negative: integrable divergence).
+    pub fn edge_exponent(&self) -> f64 {
+        (self.lambda + self.rate) / self.drag.derivative(self.v_upper()) - 1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok(drag: DragLaw, s: f64, l: f64, r: f64, vr: f64) -> bool {
+        Params::new(drag, s, l, r, vr).is_ok()
+    }
+
+    #[test]
+    fn accepts_paper_values() {
+        assert!(ok(DragLaw::Tan, 3.0, 0.9, 0.0, 0.0));
+        assert!(ok(DragLaw::Tanh, 0.6, 0.85, 2.0, 0.0));
+        assert!(ok(DragLaw::Linear, 1.0, 0.5, 10.0, 0.3));
+    }
+
+    #[test]
+    fn rejects_each_rule() {
+        for bad in [f64::NAN, f64::INFINITY, -1.0, 0.0] {
+            assert!(!ok(DragLaw::Tan, bad, 1.0, 0.0, 0.0), "sigma {bad}");
+        }
+        assert!(!ok(DragLaw::Tanh, 1.0, 1.0, 0.0, 0.0));
+        assert!(!ok(DragLaw::Tanh, 1.5, 1.0, 0.0, 0.0));
+        for bad in [f64::NAN, f64::NEG_INFINITY, f64::INFINITY, -0.1] {
+            assert!(!ok(DragLaw::Tan, 3.0, bad, 0.0, 0.0), "lambda {bad}");
+            assert!(!ok(DragLaw::Tan, 3.0, 1.0, bad, 0.0), "rate {bad}");
+        }
+        let vu = 3f64.atan();
+        for bad in [f64::NAN, vu, -vu, 2.0] {
+            assert!(!ok(DragLaw::Tan, 3.0, 1.0, 1.0, bad), "v_r {bad}");
+        }
+    }
+
+    #[test]
+    fn error_names_parameter_and_range() {
+        let e = Params::new(DragLaw::Tanh, 1.2, 1.0, 0.0, 0.0).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("--sigma") && msg.contains("1.2") && msg.contains("< 1"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn dt_limit() {
+        let p = Params::new(DragLaw::Tan, 3.0, 1.0, 0.0, 0.0).unwrap();
+        assert!((p.max_euler_dt() - 0.1).abs() < 1e-15);
+        assert!(p.check_dt(1e-3).is_ok());
+        for bad in [0.0, -1e-3, 0.1, 0.5, f64::NAN] {
+            assert!(p.check_dt(bad).is_err(), "dt {bad}");
+        }
+    }
+
+    #[test]
+    fn serde_round_trip_validates() {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.0).unwrap();
+        let s = serde_json::to_string(&p).unwrap();
+        let q: Params = serde_json::from_str(&s).unwrap();
+        assert_eq!(p, q);
+        let bad = s.replace("3.0", "-3.0");
+        assert!(serde_json::from_str::<Params>(&bad).is_err());
+    }
+
+    #[test]
+    fn edge_exponent_paper_case() {
+        // Paper Fig. 2a: tan, Sigma = 3, lambda = 0.9 -> 0.9/10 - 1 = -0.91.
+        let p = Params::new(DragLaw::Tan, 3.0, 0.9, 0.0, 0.0).unwrap();
+        assert!((p.edge_exponent() + 0.91).abs() < 1e-12);
+    }
+}
