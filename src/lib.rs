@@ -10,6 +10,7 @@
 //! - [`model`]: drag laws g(v) (Table 1), parameters, velocity bounds (Eqs. 8-10).
 //! - [`rng`], [`parallel`], [`stats`]: per-particle streams, deterministic
 //!   parallel reduction, mergeable estimators.
+//! - [`sim`]: particle simulation (Euler Eqs. 14-16, exact sampler) and observables.
 //! - [`io`]: atomic output directories with provenance.
 //!
 //! The library never prints and never exits; it returns plain, serialisable
@@ -20,6 +21,7 @@ pub mod io;
 pub mod model;
 pub mod parallel;
 pub mod rng;
+pub mod sim;
 pub mod stats;
 
 pub use error::{Error, Result};

@@ -1,0 +1,375 @@
+//! Particle simulation: the paper's Euler scheme (Eqs. 14-16) and the exact
+//! event-driven sampler, sharing one set of mergeable observables.
+//!
+//! A simulation is N independent particles. Particle `i` uses the random
+//! stream [`crate::rng::stream`]`(seed, i)`, and particles are reduced with
+//! [`crate::parallel::reduce`], so results are bit-identical for any thread
+//! count. Each method implements "simulate one particle and add it to an
+//! [`Observables`] accumulator"; everything downstream is shared.
+
+use crate::error::{finite, Error, Result};
+use crate::stats::{merge_all, MeanAcc};
+use serde::{Deserialize, Serialize};
+
+/// Times at which ensemble moments are recorded.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TimeGrid {
+    times: Vec<f64>,
+}
+
+impl TimeGrid {
+    /// `samples` equally spaced times 0 = t_0 < ... < t_{K-1} = t_max.
+    pub fn linear(t_max: f64, samples: usize) -> Result<Self> {
+        check_t_max(t_max)?;
+        if samples < 2 {
+            return Err(Error::invalid("--samples", samples, "samples >= 2"));
+        }
+        let times = (0..samples)
+            .map(|k| t_max * k as f64 / (samples - 1) as f64)
+            .collect();
+        Ok(TimeGrid { times })
+    }
+
+    /// t = 0 followed by `samples - 1` log-spaced times from `t_min` to `t_max`
+    /// (for log-log plots of <x²>(t)).
+    pub fn log(t_min: f64, t_max: f64, samples: usize) -> Result<Self> {
+        check_t_max(t_max)?;
+        let t_min = finite("--t-min", t_min)?;
+        if !(t_min > 0.0 && t_min < t_max) {
+            return Err(Error::invalid(
+                "--t-min",
+                t_min,
+                format!("0 < t_min < t_max = {t_max}"),
+            ));
+        }
+        if samples < 3 {
+            return Err(Error::invalid(
+                "--samples",
+                samples,
+                "samples >= 3 for a log grid",
+            ));
+        }
+        let m = samples - 1;
+        let (a, b) = (t_min.ln(), t_max.ln());
+        let mut times = vec![0.0];
+        times.extend((0..m).map(|k| (a + (b - a) * k as f64 / (m - 1) as f64).exp()));
+        *times.last_mut().expect("non-empty") = t_max;
+        Ok(TimeGrid { times })
+    }
+
+    /// Explicit, strictly increasing, non-negative, finite times.
+    pub fn from_times(times: Vec<f64>) -> Result<Self> {
+        if times.is_empty() {
+            return Err(Error::invalid("--times", "[]", "at least one time"));
+        }
+        for w in times.windows(2) {
+            if !(w[1] > w[0]) {
+                return Err(Error::invalid(
+                    "--times",
+                    format!("{:?}", w),
+                    "strictly increasing times",
+                ));
+            }
+        }
+        if !(times[0] >= 0.0) || !times.iter().all(|t| t.is_finite()) {
+            return Err(Error::invalid("--times", times[0], "finite times >= 0"));
+        }
+        Ok(TimeGrid { times })
+    }
+
+    /// The times.
+    pub fn times(&self) -> &[f64] {
+        &self.times
+    }
+    /// Last time.
+    pub fn t_max(&self) -> f64 {
+        *self.times.last().expect("non-empty grid")
+    }
+    /// Number of times.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+    /// Never true (a grid has at least one time).
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+}
+
+fn check_t_max(t_max: f64) -> Result<f64> {
+    let t = finite("--t-max", t_max)?;
+    if !(t > 0.0) {
+        return Err(Error::invalid("--t-max", t, "t_max > 0"));
+    }
+    Ok(t)
+}
+
+/// What to measure and for how many particles (method-independent).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SimSpec {
+    /// Number of independent particles.
+    pub particles: u64,
+    /// Recording times for ensemble moments; the run ends at `grid.t_max()`.
+    pub grid: TimeGrid,
+    /// Start of the time-averaging window [burn_in, t_max] for stationary
+    /// estimates (time-averaged <v²> and P_s(v)).
+    pub burn_in: f64,
+    /// Number of histogram bins on (v_l, v_u).
+    pub bins: usize,
+    /// Master seed.
+    pub seed: u64,
+}
+
+impl SimSpec {
+    /// Validate.
+    pub fn new(
+        particles: u64,
+        grid: TimeGrid,
+        burn_in: f64,
+        bins: usize,
+        seed: u64,
+    ) -> Result<Self> {
+        if particles < 2 {
+            return Err(Error::invalid(
+                "--particles",
+                particles,
+                "particles >= 2 (error bars need two samples)",
+            ));
+        }
+        let burn_in = finite("--burn-in", burn_in)?;
+        if !(burn_in >= 0.0 && burn_in < grid.t_max()) {
+            return Err(Error::invalid(
+                "--burn-in",
+                burn_in,
+                format!("0 <= burn_in < t_max = {}", grid.t_max()),
+            ));
+        }
+        if !(1..=10_000_000).contains(&bins) {
+            return Err(Error::invalid("--bins", bins, "1 <= bins <= 10000000"));
+        }
+        Ok(SimSpec {
+            particles,
+            grid,
+            burn_in,
+            bins,
+            seed,
+        })
+    }
+}
+
+/// Mergeable accumulator of everything a simulation measures.
+///
+/// Per-particle quantities (time averages, occupation fractions) are pushed
+/// once per particle, so their standard errors are the across-particle
+/// standard errors of independent samples.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Observables {
+    /// Recording times.
+    pub times: Vec<f64>,
+    /// v(t_k) samples.
+    pub v: Vec<MeanAcc>,
+    /// v(t_k)² samples.
+    pub v2: Vec<MeanAcc>,
+    /// x(t_k) samples.
+    pub x: Vec<MeanAcc>,
+    /// x(t_k)² samples.
+    pub x2: Vec<MeanAcc>,
+    /// Per-particle time average of v over [burn_in, t_max].
+    pub v_time_avg: MeanAcc,
+    /// Per-particle time average of v² over [burn_in, t_max].
+    pub v2_time_avg: MeanAcc,
+    /// Histogram range (v_l, v_u) and bin count.
+    pub v_lo: f64,
+    /// Upper end of the histogram range.
+    pub v_hi: f64,
+    /// Per-particle density estimate in each bin: fraction of the window
+    /// spent in the bin divided by the bin width.
+    pub density_time: Vec<MeanAcc>,
+    /// Per-particle indicator of being in each bin at t_max, divided by the bin width.
+    pub density_final: Vec<MeanAcc>,
+    /// Work done: Euler steps or exact-sampler events, summed over particles.
+    pub steps: u64,
+}
+
+impl Observables {
+    /// Empty accumulator for a spec on the velocity interval (v_lo, v_hi).
+    pub fn new(spec: &SimSpec, v_lo: f64, v_hi: f64) -> Self {
+        let k = spec.grid.len();
+        Observables {
+            times: spec.grid.times().to_vec(),
+            v: vec![MeanAcc::new(); k],
+            v2: vec![MeanAcc::new(); k],
+            x: vec![MeanAcc::new(); k],
+            x2: vec![MeanAcc::new(); k],
+            v_time_avg: MeanAcc::new(),
+            v2_time_avg: MeanAcc::new(),
+            v_lo,
+            v_hi,
+            density_time: vec![MeanAcc::new(); spec.bins],
+            density_final: vec![MeanAcc::new(); spec.bins],
+            steps: 0,
+        }
+    }
+
+    /// Bin width.
+    pub fn bin_width(&self) -> f64 {
+        (self.v_hi - self.v_lo) / self.density_time.len() as f64
+    }
+
+    /// Bin index of a velocity (clamped into range).
+    #[inline]
+    pub fn bin_of(&self, v: f64) -> usize {
+        let b = self.density_time.len();
+        let i = ((v - self.v_lo) / (self.v_hi - self.v_lo) * b as f64) as isize;
+        i.clamp(0, b as isize - 1) as usize
+    }
+
+    /// Record the state of one particle at grid time index `k`.
+    #[inline]
+    pub fn record(&mut self, k: usize, v: f64, x: f64) {
+        self.v[k].push(v);
+        self.v2[k].push(v * v);
+        self.x[k].push(x);
+        self.x2[k].push(x * x);
+    }
+
+    /// Add one particle's stationary-window results: time averages of v and v²,
+    /// `occupation[b]` = time spent in bin b during the window (cleared here),
+    /// `window` = window length, `v_final` = velocity at t_max.
+    pub fn finish_particle(
+        &mut self,
+        v_avg: f64,
+        v2_avg: f64,
+        occupation: &mut [f64],
+        window: f64,
+        v_final: f64,
+    ) {
+        self.v_time_avg.push(v_avg);
+        self.v2_time_avg.push(v2_avg);
+        let w = self.bin_width();
+        let final_bin = self.bin_of(v_final);
+        for (b, occ) in occupation.iter_mut().enumerate() {
+            self.density_time[b].push(*occ / (window * w));
+            self.density_final[b].push(if b == final_bin { 1.0 / w } else { 0.0 });
+            *occ = 0.0;
+        }
+    }
+
+    /// Merge another accumulator (same spec) into this one.
+    pub fn merge(&mut self, o: &Observables) {
+        merge_all(&mut self.v, &o.v);
+        merge_all(&mut self.v2, &o.v2);
+        merge_all(&mut self.x, &o.x);
+        merge_all(&mut self.x2, &o.x2);
+        self.v_time_avg.merge(&o.v_time_avg);
+        self.v2_time_avg.merge(&o.v2_time_avg);
+        merge_all(&mut self.density_time, &o.density_time);
+        merge_all(&mut self.density_final, &o.density_final);
+        self.steps += o.steps;
+    }
+
+    /// Number of particles accumulated.
+    pub fn particles(&self) -> u64 {
+        self.v2_time_avg.n
+    }
+
+    /// Bin centres.
+    pub fn bin_centres(&self) -> Vec<f64> {
+        let w = self.bin_width();
+        (0..self.density_time.len())
+            .map(|b| self.v_lo + (b as f64 + 0.5) * w)
+            .collect()
+    }
+
+    /// Rows (t, v_mean, v_mean_err, v2, v2_err, x_mean, x_mean_err, x2, x2_err).
+    pub fn moment_rows(&self) -> Vec<[f64; 9]> {
+        (0..self.times.len())
+            .map(|k| {
+                [
+                    self.times[k],
+                    self.v[k].mean(),
+                    self.v[k].sem(),
+                    self.v2[k].mean(),
+                    self.v2[k].sem(),
+                    self.x[k].mean(),
+                    self.x[k].sem(),
+                    self.x2[k].mean(),
+                    self.x2[k].sem(),
+                ]
+            })
+            .collect()
+    }
+
+    /// Header for [`Observables::moment_rows`].
+    pub const MOMENT_HEADER: [&'static str; 9] = [
+        "t",
+        "v_mean",
+        "v_mean_err",
+        "v2",
+        "v2_err",
+        "x_mean",
+        "x_mean_err",
+        "x2",
+        "x2_err",
+    ];
+
+    /// Rows (v, p, p_err, p_final, p_final_err): time-averaged stationary
+    /// density over the window and the ensemble density at t_max.
+    pub fn density_rows(&self) -> Vec<[f64; 5]> {
+        self.bin_centres()
+            .into_iter()
+            .enumerate()
+            .map(|(b, v)| {
+                let (t, f) = (&self.density_time[b], &self.density_final[b]);
+                [v, t.mean(), t.sem(), f.mean(), f.sem()]
+            })
+            .collect()
+    }
+
+    /// Header for [`Observables::density_rows`].
+    pub const DENSITY_HEADER: [&'static str; 5] = ["v", "p", "p_err", "p_final", "p_final_err"];
+
+    /// Summary numbers (the `--json` contract of `irtp simulate`).
+    pub fn summary(&self) -> SimSummary {
+        let last = self.times.len() - 1;
+        SimSummary {
+            v2: self.v2_time_avg.mean(),
+            v2_err: self.v2_time_avg.sem(),
+            v_mean: self.v_time_avg.mean(),
+            v_mean_err: self.v_time_avg.sem(),
+            v2_final: self.v2[last].mean(),
+            v2_final_err: self.v2[last].sem(),
+            x2_final: self.x2[last].mean(),
+            x2_final_err: self.x2[last].sem(),
+            t_max: self.times[last],
+            particles: self.particles(),
+            steps: self.steps,
+        }
+    }
+}
+
+/// Headline numbers of a simulation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SimSummary {
+    /// Time-averaged stationary <v²> over [burn_in, t_max].
+    pub v2: f64,
+    /// Its standard error (across particles).
+    pub v2_err: f64,
+    /// Time-averaged stationary <v>.
+    pub v_mean: f64,
+    /// Its standard error.
+    pub v_mean_err: f64,
+    /// Ensemble <v²> at t_max.
+    pub v2_final: f64,
+    /// Its standard error.
+    pub v2_final_err: f64,
+    /// Ensemble <x²> at t_max.
+    pub x2_final: f64,
+    /// Its standard error.
+    pub x2_final_err: f64,
+    /// Final time.
+    pub t_max: f64,
+    /// Number of particles.
+    pub particles: u64,
+    /// Euler steps or exact events, summed over particles.
+    pub steps: u64,
+}
