@@ -7,6 +7,7 @@
 //! at rate r the velocity is reset to v_r (position and noise state kept).
 //!
 //! Modules, one per concept:
+//! - [`analytic`]: closed forms (linear drag, r = 0 densities).
 //! - [`model`]: drag laws g(v) (Table 1), parameters, velocity bounds (Eqs. 8-10).
 //! - [`rng`], [`parallel`], [`stats`]: per-particle streams, deterministic
 //!   parallel reduction, mergeable estimators.
@@ -16,6 +17,7 @@
 //! The library never prints and never exits; it returns plain, serialisable
 //! result structs. The `irtp` binary is a thin layer over it.
 
+pub mod analytic;
 pub mod error;
 pub mod io;
 pub mod model;
