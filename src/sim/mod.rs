@@ -7,6 +7,8 @@
 //! count. Each method implements "simulate one particle and add it to an
 //! [`Observables`] accumulator"; everything downstream is shared.
 
+pub mod exact;
+
 use crate::error::{finite, Error, Result};
 use crate::stats::{merge_all, MeanAcc};
 use serde::{Deserialize, Serialize};
