@@ -85,10 +85,10 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             let u = sg * w.exp();
             let v = vs - u;
             let tt = self.flow_time(s, v0, v);
-            (t - tt, u / self.drift_at_distance(s, u))
+            (t - tt, u / self.drift_at_distance(s, u), 0.0)
         };
         let g1 = self.derivative(vs).max(f64::MIN_POSITIVE);
-        let w = quad::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-12);
+        let w = quad::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-12);
         vs - sg * w.exp()
     }
 
@@ -229,136 +229,14 @@ impl Drag for DragLaw {
         }
     }
 
-    /// Closed forms (u = v* - v, d = vb - va = ua - ub):
-    /// linear t = ln(ua/ub);
-    /// tan  t = [ln(sin ua / sin ub) + s d] / (1 + s²);
-    /// tanh t = [ln(sinh ua / sinh ub) - s d] / (1 - s²);
-    /// the log of the ratio is evaluated as ln1p of (sin ua - sin ub)/sin ub with
-    /// sin ua - sin ub = 2 cos((ua+ub)/2) sin(d/2) (sinh/cosh alike), so short
-    /// segments and segments ending next to v* keep full relative accuracy.
+    /// Closed forms, see [`Flow::time`].
     fn flow_time(&self, s: f64, va: f64, vb: f64) -> f64 {
-        if *self != DragLaw::Linear && s < 0.0 {
-            return self.flow_time(-s, -va, -vb);
-        }
-        let vs = self.inverse(s);
-        let (ua, ub) = (vs - va, vs - vb);
-        if vb == va {
-            return 0.0;
-        }
-        if !reachable(ua, ub) {
-            return f64::INFINITY;
-        }
-        let d = vb - va;
-        let m = 0.5 * (ua + ub);
-        match self {
-            DragLaw::Linear => (d / ub).ln_1p(),
-            DragLaw::Tan => {
-                let ratio = 2.0 * m.cos() * (0.5 * d).sin() / ub.sin();
-                (ratio.ln_1p() + s * d) / (1.0 + s * s)
-            }
-            DragLaw::Tanh => {
-                let ratio = 2.0 * m.cosh() * (0.5 * d).sinh() / ub.sinh();
-                (ratio.ln_1p() - s * d) / ((1.0 - s) * (1.0 + s))
-            }
-        }
+        Flow::new(*self, s).time(va, vb)
     }
 
-    /// Linear: v = v* - (v* - v0) e^{-t}. tan/tanh: safeguarded Newton in
-    /// w = ln|v* - v| on Φ(u(w)) = Φ(ua) - g'(v*) t, with Φ(u) = ln|sin u| + s u
-    /// (tan) or ln|sinh u| - s u (tanh); Φ ≈ w + O(u), so the equation is
-    /// nearly linear in w, the starting guess w_a - g'(v*) t is asymptotically
-    /// exact, and a rigorous bracket keeps every step safe. Converged to
-    /// relative accuracy ~1e-16 in v* - v.
+    /// Closed form or safeguarded Halley iteration, see [`Flow::velocity`].
     fn flow_velocity(&self, s: f64, v0: f64, t: f64) -> f64 {
-        if *self != DragLaw::Linear && s < 0.0 {
-            return -self.flow_velocity(-s, -v0, t);
-        }
-        let vs = self.inverse(s);
-        let ua = vs - v0;
-        if !(t > 0.0) || ua == 0.0 {
-            return v0;
-        }
-        let sg = ua.signum();
-        let a = ua.abs();
-        let wa = a.ln();
-        let tiny_w = (vs.abs() * f64::EPSILON * 0.25).max(1e-300).ln();
-        match self {
-            DragLaw::Linear if t < 1.0 => v0 - ua * (-t).exp_m1(),
-            DragLaw::Linear => vs - ua * (-t).exp(),
-            DragLaw::Tan => {
-                let k = 1.0 + s * s;
-                let phi_a = a.sin().ln() + s * ua;
-                let c = phi_a - k * t;
-                let r0 = -(a.sin() / a).ln();
-                let (lo, hi) = if sg > 0.0 {
-                    (c - s * a, c + r0)
-                } else {
-                    (c, c + r0 + 1.0)
-                };
-                let hi = hi.min(wa);
-                if hi < tiny_w {
-                    return vs;
-                }
-                // Short segments (K t < 1/2): H as the difference
-                // Φ(u) - Φ(ua) + K t in cancellation-free form.
-                let precise = k * t < 0.5;
-                let sa = a.sin();
-                let h = |dl: f64| {
-                    let e = a * dl.exp();
-                    let (sn, cs) = e.sin_cos();
-                    let dh = e * cs / sn + s * sg * e;
-                    if precise {
-                        let du = a * dl.exp_m1(); // |u| - |ua|
-                        let diff = 2.0 * (0.5 * (e + a)).cos() * (0.5 * du).sin() / sa;
-                        (diff.ln_1p() + s * sg * du + k * t, dh)
-                    } else {
-                        (sn.ln() + s * sg * e - c, dh)
-                    }
-                };
-                // Unknown δ = ln|u/ua| (relative accuracy even for tiny steps).
-                let dl = quad::solve_increasing(&h, lo.max(-745.0) - wa, hi - wa, -k * t, 0.0);
-                if precise {
-                    v0 - sg * a * dl.exp_m1()
-                } else {
-                    vs - sg * a * dl.exp()
-                }
-            }
-            DragLaw::Tanh => {
-                let k = (1.0 - s) * (1.0 + s);
-                let phi_a = a.sinh().ln() - s * ua;
-                let c = phi_a - k * t;
-                let (lo, hi) = if sg > 0.0 {
-                    (c - (1.0 - s) * a, c + s * a)
-                } else {
-                    (c - (1.0 + s) * a, c)
-                };
-                let hi = hi.min(wa);
-                if hi < tiny_w {
-                    return vs;
-                }
-                let precise = k * t < 0.5;
-                let sa = a.sinh();
-                let h = |dl: f64| {
-                    let e = a * dl.exp();
-                    let (sh, ch) = (e.sinh(), e.cosh());
-                    let dh = e * ch / sh - s * sg * e;
-                    if precise {
-                        let du = a * dl.exp_m1();
-                        let diff = 2.0 * (0.5 * (e + a)).cosh() * (0.5 * du).sinh() / sa;
-                        (diff.ln_1p() - s * sg * du + k * t, dh)
-                    } else {
-                        (sh.ln() - s * sg * e - c, dh)
-                    }
-                };
-                // Unknown δ = ln|u/ua| (relative accuracy even for tiny steps).
-                let dl = quad::solve_increasing(&h, lo.max(-745.0) - wa, hi - wa, -k * t, 0.0);
-                if precise {
-                    v0 - sg * a * dl.exp_m1()
-                } else {
-                    vs - sg * a * dl.exp()
-                }
-            }
-        }
+        Flow::new(*self, s).velocity(v0, t)
     }
 
     /// Linear: ∫ u/u dv = vb - va and ∫ u dv = (ua² - ub²)/2 exactly; tan and
@@ -388,6 +266,217 @@ impl Drag for DragLaw {
                     quad::adaptive(&f1, va, vb, 1e-14),
                     quad::adaptive(&f2, va, vb, 1e-14),
                 )
+            }
+        }
+    }
+}
+
+/// The exact flow dv/dt = s - g(v) of a [`DragLaw`] for one noise value s,
+/// with its constants precomputed (the hot-loop form of [`Drag::flow_time`]
+/// and [`Drag::flow_velocity`], which build one per call).
+///
+/// All three laws are odd, so s < 0 is mapped to s > 0 by v → -v; below,
+/// s ≥ 0, v* = g⁻¹(s) and u = v* - v.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flow {
+    law: DragLaw,
+    /// +1, or -1 when s < 0 was reflected.
+    refl: f64,
+    /// |s|.
+    s: f64,
+    /// Canonical fixed point g⁻¹(|s|).
+    vs: f64,
+    /// g'(v*): 1 + s² (tan), 1 - s² (tanh), 1 (linear).
+    k: f64,
+    /// ln of a quarter ulp of v*: below it v* - v rounds to 0.
+    tiny_w: f64,
+}
+
+impl Flow {
+    /// Flow of `law` with noise value `s`.
+    pub fn new(law: DragLaw, s: f64) -> Self {
+        let a = s.abs();
+        let vs = law.inverse(a);
+        let k = match law {
+            DragLaw::Tan => 1.0 + a * a,
+            DragLaw::Tanh => (1.0 - a) * (1.0 + a),
+            DragLaw::Linear => 1.0,
+        };
+        Flow {
+            law,
+            refl: if s < 0.0 { -1.0 } else { 1.0 },
+            s: a,
+            vs,
+            k,
+            tiny_w: (vs * f64::EPSILON * 0.25).max(1e-300).ln(),
+        }
+    }
+
+    /// The fixed point v* = g⁻¹(s) (signed).
+    pub fn fixed_point(&self) -> f64 {
+        self.refl * self.vs
+    }
+
+    /// Flow time from va to vb (+∞ if not reached, 0 if equal). Closed forms
+    /// with u = v* - v, d = vb - va = ua - ub:
+    /// linear t = ln(ua/ub);
+    /// tan  t = [ln(sin ua / sin ub) + s d] / (1 + s²);
+    /// tanh t = [ln(sinh ua / sinh ub) - s d] / (1 - s²)
+    /// (integrate 1/(s - tan v) = cos v* cos v / sin u, resp.
+    /// cosh v* cosh v / sinh u, in u). The log of the ratio is evaluated as
+    /// ln1p((sin ua - sin ub)/sin ub) with sin ua - sin ub = 2 cos((ua+ub)/2)
+    /// sin(d/2) (sinh/cosh alike), so short segments and segments ending next
+    /// to v* keep full relative accuracy.
+    #[inline]
+    pub fn time(&self, va: f64, vb: f64) -> f64 {
+        let (va, vb) = (self.refl * va, self.refl * vb);
+        let (s, vs) = (self.s, self.vs);
+        let (ua, ub) = (vs - va, vs - vb);
+        if vb == va {
+            return 0.0;
+        }
+        if !reachable(ua, ub) {
+            return f64::INFINITY;
+        }
+        let d = vb - va;
+        let m = 0.5 * (ua + ub);
+        match self.law {
+            DragLaw::Linear => (d / ub).ln_1p(),
+            DragLaw::Tan => {
+                let ratio = 2.0 * m.cos() * (0.5 * d).sin() / ub.sin();
+                (ratio.ln_1p() + s * d) / self.k
+            }
+            DragLaw::Tanh => {
+                let ratio = 2.0 * m.cosh() * (0.5 * d).sinh() / ub.sinh();
+                (ratio.ln_1p() - s * d) / self.k
+            }
+        }
+    }
+
+    /// Velocity after time t ≥ 0 from v0. Linear: v = v* - (v* - v0) e^{-t}.
+    /// tan/tanh: the time formula reads Φ(u) = Φ(ua) - g'(v*) t with
+    /// Φ(u) = ln|sin u| + s u (tan) or ln|sinh u| - s u (tanh). In the unknown
+    /// δ = ln|u/ua|, Φ = δ + ln|ua| + O(u): nearly linear, and exactly linear
+    /// as v → v* (where the approach is exponential). Solved by Halley steps
+    /// inside a rigorous bracket (from bounds on Φ(u) - ln|u|), starting
+    /// from the asymptotic solution or, for short times, the linearisation at
+    /// ua. Short segments (g'(v*) t < 1/2) use the cancellation-free
+    /// difference Φ(u) - Φ(ua) and return v0 - (u - ua), so v keeps full
+    /// accuracy for any t; otherwise v = v* - u keeps full relative accuracy in
+    /// v* - v down to ulp(v*).
+    #[inline]
+    pub fn velocity(&self, v0: f64, t: f64) -> f64 {
+        let v0r = self.refl * v0;
+        self.refl * self.velocity_canonical(v0r, t)
+    }
+
+    fn velocity_canonical(&self, v0: f64, t: f64) -> f64 {
+        let (s, vs, k) = (self.s, self.vs, self.k);
+        let ua = vs - v0;
+        if !(t > 0.0) || ua == 0.0 {
+            return v0;
+        }
+        let sg = ua.signum();
+        let a = ua.abs();
+        let wa = a.ln();
+        let kt = k * t;
+        let precise = kt < 0.5;
+        let finish = |dl: f64| {
+            if precise {
+                v0 - sg * a * dl.exp_m1()
+            } else {
+                vs - sg * a * dl.exp()
+            }
+        };
+        match self.law {
+            DragLaw::Linear if t < 1.0 => v0 - ua * (-t).exp_m1(),
+            DragLaw::Linear => vs - ua * (-t).exp(),
+            DragLaw::Tan => {
+                let (sa, ca) = a.sin_cos();
+                let phi_a = sa.ln() + s * ua;
+                let c = phi_a - kt;
+                let r0 = -(sa / a).ln();
+                let (lo, hi) = if sg > 0.0 {
+                    (c - s * a, c + r0)
+                } else {
+                    (c, c + r0 + 1.0)
+                };
+                let hi = hi.min(wa);
+                if hi < self.tiny_w {
+                    return vs;
+                }
+                let guess = if precise {
+                    -kt / (a * ca / sa + s * sg * a)
+                } else {
+                    c - wa
+                };
+                let h = |dl: f64| {
+                    let e = a * dl.exp();
+                    // sin and cot from one tan(e/2) (e ∈ (0, π)).
+                    let th = (0.5 * e).tan();
+                    let sn = 2.0 * th / (1.0 + th * th);
+                    let cot = (1.0 - th * th) / (2.0 * th);
+                    let dh = e * cot + s * sg * e;
+                    let d2 = e * (cot - e / (sn * sn) + s * sg);
+                    if precise {
+                        let du = a * dl.exp_m1(); // |u| - |ua|
+                        let diff = 2.0 * (0.5 * (e + a)).cos() * (0.5 * du).sin() / sa;
+                        (diff.ln_1p() + s * sg * du + kt, dh, d2)
+                    } else {
+                        (sn.ln() + s * sg * e - c, dh, d2)
+                    }
+                };
+                finish(quad::solve_increasing(
+                    &h,
+                    lo.max(-745.0) - wa,
+                    hi - wa,
+                    guess,
+                    1e-6,
+                    0.0,
+                ))
+            }
+            DragLaw::Tanh => {
+                let sa = a.sinh();
+                let phi_a = sa.ln() - s * ua;
+                let c = phi_a - kt;
+                let (lo, hi) = if sg > 0.0 {
+                    (c - (1.0 - s) * a, c + s * a)
+                } else {
+                    (c - (1.0 + s) * a, c)
+                };
+                let hi = hi.min(wa);
+                if hi < self.tiny_w {
+                    return vs;
+                }
+                let guess = if precise {
+                    -kt / (a / a.tanh() - s * sg * a)
+                } else {
+                    c - wa
+                };
+                let h = |dl: f64| {
+                    let e = a * dl.exp();
+                    // sinh and coth from one expm1 (accurate for tiny e).
+                    let m = e.exp_m1();
+                    let sh = m * (m + 2.0) / (2.0 * (m + 1.0));
+                    let coth = ((m + 1.0) * (m + 1.0) + 1.0) / (m * (m + 2.0));
+                    let dh = e * coth - s * sg * e;
+                    let d2 = e * (coth - e / (sh * sh) - s * sg);
+                    if precise {
+                        let du = a * dl.exp_m1();
+                        let diff = 2.0 * (0.5 * (e + a)).cosh() * (0.5 * du).sinh() / sa;
+                        (diff.ln_1p() - s * sg * du + kt, dh, d2)
+                    } else {
+                        (sh.ln() - s * sg * e - c, dh, d2)
+                    }
+                };
+                finish(quad::solve_increasing(
+                    &h,
+                    lo.max(-745.0) - wa,
+                    hi - wa,
+                    guess,
+                    1e-6,
+                    0.0,
+                ))
             }
         }
     }
@@ -466,21 +555,22 @@ pub mod quad {
     }
 
     /// Root of an increasing function H on [lo, hi] (H(lo) ≤ 0 ≤ H(hi) is
-    /// assumed, not evaluated) by Newton steps from `guess`, falling back to
-    /// bisection whenever a step leaves the current bracket. `h` returns
-    /// (H(w), H'(w)). Stops once a Newton step is below 1e-9 |w| + `abs_tol`
-    /// (then the error is ~1e-18 |w| by quadratic convergence) or the bracket
-    /// has collapsed.
+    /// assumed, not evaluated) by Halley steps (Newton when H'' = 0) from
+    /// `guess`, falling back to bisection whenever a step leaves the current
+    /// bracket. `h` returns (H, H', H''). Stops once a step is below
+    /// `rel_tol` |w| + `abs_tol` (1e-6 for Halley and 1e-9 for Newton leave
+    /// ~1e-18 |w| by cubic/quadratic convergence) or the bracket has collapsed.
     pub fn solve_increasing(
-        h: &dyn Fn(f64) -> (f64, f64),
+        h: &dyn Fn(f64) -> (f64, f64, f64),
         mut lo: f64,
         mut hi: f64,
         guess: f64,
+        rel_tol: f64,
         abs_tol: f64,
     ) -> f64 {
         let mut w = guess.clamp(lo, hi);
         for _ in 0..200 {
-            let (hv, dh) = h(w);
+            let (hv, d1, d2) = h(w);
             if hv == 0.0 {
                 return w;
             }
@@ -489,12 +579,18 @@ pub mod quad {
             } else {
                 lo = w; // also for -∞ (u underflow) and NaN: move up
             }
-            let newton = w - hv / dh;
-            if newton > lo && newton < hi {
-                if (newton - w).abs() <= 1e-9 * newton.abs() + abs_tol {
-                    return newton;
+            let denom = 2.0 * d1 * d1 - hv * d2;
+            let step = if denom > 0.0 {
+                2.0 * hv * d1 / denom
+            } else {
+                hv / d1
+            };
+            let next = w - step;
+            if next > lo && next < hi {
+                if step.abs() <= rel_tol * next.abs() + abs_tol {
+                    return next;
                 }
-                w = newton;
+                w = next;
             } else {
                 let mid = 0.5 * (lo + hi);
                 if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs()) + abs_tol {

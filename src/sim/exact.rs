@@ -19,7 +19,8 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 
 use crate::error::{Error, Result};
-use crate::model::{Drag, DragLaw, Params};
+use crate::model::drag::Flow;
+use crate::model::{Drag, Params};
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use crate::sim::{Observables, SimSpec};
@@ -148,11 +149,12 @@ fn clenshaw(c: &[f64; NC], x: f64) -> f64 {
     let (mut b1, mut b2) = (0.0, 0.0);
     let x2 = 2.0 * x;
     for &ck in c[1..].iter().rev() {
-        let b0 = x2.mul_add(b1, ck - b2);
+        // Plain mul/add: without a target FMA unit, mul_add is a slow soft call.
+        let b0 = x2 * b1 + (ck - b2);
         b2 = b1;
         b1 = b0;
     }
-    x.mul_add(b1, c[0] - b2)
+    x * b1 + (c[0] - b2)
 }
 
 /// Chebyshev fit of both integrands on [a, b] and their antiderivatives
@@ -203,8 +205,8 @@ fn fit_piece(f: &dyn Fn(f64) -> [f64; 2], a: f64, b: f64) -> (bool, [[f64; NC]; 
 
 /// Everything fixed for a run: parameters, tables, histogram geometry.
 struct Sampler {
-    drag: DragLaw,
-    sigma: f64,
+    /// Flows for s = +Sigma (index 0) and s = -Sigma (index 1).
+    flows: [Flow; 2],
     lambda: f64,
     total_rate: f64,
     vr: f64,
@@ -251,8 +253,7 @@ impl Sampler {
                 .collect(),
         ];
         Ok(Sampler {
-            drag,
-            sigma,
+            flows: [Flow::new(drag, sigma), Flow::new(drag, -sigma)],
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
@@ -268,8 +269,8 @@ impl Sampler {
 
     /// Flow time from a to b that is 0 when b is (by rounding) behind a.
     #[inline]
-    fn seg_time(&self, s: f64, a: f64, b: f64) -> f64 {
-        let t = self.drag.flow_time(s, a, b);
+    fn seg_time(&self, si: usize, a: f64, b: f64) -> f64 {
+        let t = self.flows[si].time(a, b);
         if t.is_finite() {
             t
         } else {
@@ -278,33 +279,24 @@ impl Sampler {
     }
 
     /// Add the occupation times of a flow segment va → vb of duration dt.
-    fn occupy(
-        &self,
-        obs: &Observables,
-        sc: &mut Scratch,
-        si: usize,
-        s: f64,
-        va: f64,
-        vb: f64,
-        dt: f64,
-    ) {
+    fn occupy(&self, obs: &Observables, sc: &mut Scratch, si: usize, va: f64, vb: f64, dt: f64) {
         let (ka, kb) = (obs.bin_of(va), obs.bin_of(vb));
         if ka == kb {
             sc.occ[ka] += dt;
         } else if kb > ka {
-            sc.occ[ka] += self.seg_time(s, va, self.edges[ka + 1]);
+            sc.occ[ka] += self.seg_time(si, va, self.edges[ka + 1]);
             if kb > ka + 1 {
                 sc.cross[si][ka + 1] += 1;
                 sc.cross[si][kb] -= 1;
             }
-            sc.occ[kb] += (dt - self.seg_time(s, va, self.edges[kb])).max(0.0);
+            sc.occ[kb] += (dt - self.seg_time(si, va, self.edges[kb])).max(0.0);
         } else {
-            sc.occ[ka] += self.seg_time(s, va, self.edges[ka]);
+            sc.occ[ka] += self.seg_time(si, va, self.edges[ka]);
             if ka > kb + 1 {
                 sc.cross[si][kb + 1] += 1;
                 sc.cross[si][ka] -= 1;
             }
-            sc.occ[kb] += (dt - self.seg_time(s, va, self.edges[kb + 1])).max(0.0);
+            sc.occ[kb] += (dt - self.seg_time(si, va, self.edges[kb + 1])).max(0.0);
         }
     }
 
@@ -319,36 +311,34 @@ impl Sampler {
             let gap = exp_gap(&mut rng, self.total_rate);
             let t_end = (t + gap).min(self.t_max);
             let si = usize::from(!plus);
-            let s = if plus { self.sigma } else { -self.sigma };
+            let flow = &self.flows[si];
             let table = &self.tables[si];
             let vs = table.fixed_point();
             // Moments at grid times inside (t, t_end].
             while k < self.times.len() && self.times[k] <= t_end {
                 let dt = self.times[k] - t;
-                let vk = self.drag.flow_velocity(s, v, dt);
+                let vk = flow.velocity(v, dt);
                 let xk = x + vs * dt - table.deficits(v, vk).0;
                 obs.record(k, vk, xk);
                 k += 1;
             }
             let dt = t_end - t;
-            let vb = self.drag.flow_velocity(s, v, dt);
-            let (i1, _) = table.deficits(v, vb);
+            let vb = flow.velocity(v, dt);
+            let (psi_a, psi_b) = (table.psi(v), table.psi(vb));
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
-                let (va, dw) = if t < self.burn_in {
-                    (
-                        self.drag.flow_velocity(s, v, self.burn_in - t),
-                        t_end - self.burn_in,
-                    )
+                let (va, psi_w, dw) = if t < self.burn_in {
+                    let va = flow.velocity(v, self.burn_in - t);
+                    (va, table.psi(va), t_end - self.burn_in)
                 } else {
-                    (v, dt)
+                    (v, psi_a, dt)
                 };
-                let (j1, j2) = table.deficits(va, vb);
+                let (j1, j2) = (psi_b[0] - psi_w[0], psi_b[1] - psi_w[1]);
                 int_v += vs * dw - j1;
                 int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-                self.occupy(obs, sc, si, s, va, vb, dw);
+                self.occupy(obs, sc, si, va, vb, dw);
             }
-            x += vs * dt - i1;
+            x += vs * dt - (psi_b[0] - psi_a[0]);
             v = vb;
             t = t_end;
             if t >= self.t_max {
@@ -430,8 +420,10 @@ pub fn first_passage(
     if v0 >= vt {
         return (Some(0.0), 0);
     }
-    let drag = params.drag();
-    let sigma = params.sigma();
+    let flows = [
+        Flow::new(params.drag(), params.sigma()),
+        Flow::new(params.drag(), -params.sigma()),
+    ];
     let total = params.lambda() + params.rate();
     let lambda = params.lambda();
     let vr = params.reset_velocity();
@@ -439,9 +431,9 @@ pub fn first_passage(
     let mut events = 0u64;
     loop {
         let gap = exp_gap(rng, total);
-        let s = if plus { sigma } else { -sigma };
+        let flow = &flows[usize::from(!plus)];
         if plus {
-            let tau = drag.flow_time(s, v, vt);
+            let tau = flow.time(v, vt);
             if tau <= gap {
                 let hit = t + tau;
                 return (if hit <= t_max { Some(hit) } else { None }, events);
@@ -450,7 +442,7 @@ pub fn first_passage(
         if t + gap >= t_max {
             return (None, events);
         }
-        v = drag.flow_velocity(s, v, gap);
+        v = flow.velocity(v, gap);
         t += gap;
         events += 1;
         if rng.gen::<f64>() * total < lambda {
