@@ -459,6 +459,7 @@ pub fn first_passage(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::DragLaw;
 
     #[test]
     fn table_matches_quadrature() {
