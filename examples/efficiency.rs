@@ -51,12 +51,14 @@ impl Euler {
 
     /// Time average of v² over steps [burn, n) for one particle.
     fn v2_avg(&self, rng: &mut Rng, burn: u64, n: u64) -> f64 {
-        let mut eta = if rng.gen::<bool>() { self.sigma } else { -self.sigma };
+        let mut eta = if rng.gen::<bool>() {
+            self.sigma
+        } else {
+            -self.sigma
+        };
         let mut v = 0.0f64;
-        let (mut next_flip, mut next_reset) = (
-            geometric(rng, self.ln_flip),
-            geometric(rng, self.ln_reset),
-        );
+        let (mut next_flip, mut next_reset) =
+            (geometric(rng, self.ln_flip), geometric(rng, self.ln_reset));
         let mut acc = 0.0;
         for step in 1..=n {
             v += self.dt * (eta - v.tan());
@@ -77,12 +79,14 @@ impl Euler {
 
     /// First step time at which v ≥ vt (None if not by t_max).
     fn fpt(&self, rng: &mut Rng, vt: f64, t_max: f64) -> Option<f64> {
-        let mut eta = if rng.gen::<bool>() { self.sigma } else { -self.sigma };
+        let mut eta = if rng.gen::<bool>() {
+            self.sigma
+        } else {
+            -self.sigma
+        };
         let mut v = 0.0f64;
-        let (mut next_flip, mut next_reset) = (
-            geometric(rng, self.ln_flip),
-            geometric(rng, self.ln_reset),
-        );
+        let (mut next_flip, mut next_reset) =
+            (geometric(rng, self.ln_flip), geometric(rng, self.ln_reset));
         let n = (t_max / self.dt) as u64;
         for step in 1..=n {
             v += self.dt * (eta - v.tan());
