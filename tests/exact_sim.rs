@@ -27,7 +27,7 @@ fn linear_stationary_moments() {
         (2.0, 0.0, 0.0),
         (0.5, 2.0, 0.3),
         (1.0, 10.0, -0.5),
-        (0.7, 100.0, 0.2),
+        (5.0, 100.0, 0.2),
     ]
     .iter()
     .enumerate()
@@ -74,7 +74,7 @@ fn linear_stationary_moments() {
 /// correlation of x(T1) and x(T2) within a particle.
 #[test]
 fn linear_effective_diffusion() {
-    for (i, &(lambda, r, vr)) in [(0.5, 0.0, 0.0), (1.0, 3.0, 0.4), (0.8, 100.0, 0.0)]
+    for (i, &(lambda, r, vr)) in [(0.5, 0.0, 0.0), (1.0, 3.0, 0.4), (5.0, 100.0, 0.0)]
         .iter()
         .enumerate()
     {
