@@ -1,0 +1,577 @@
+//! The paper's Euler particle simulation (Eqs. 14-16 with the reset rule Eq. 3).
+//!
+//! One step n → n+1 (time n·dt → (n+1)·dt), in this exact order:
+//! 1. observe the state (v_n, x_n): record it if n is a grid step, and, if
+//!    n_b ≤ n < N, add dt to the time averages of v, v² and to the occupation
+//!    time of the histogram bin of v_n (left-point rule, like Eq. 15);
+//! 2. x ← x + v·dt with the OLD velocity (Eq. 15);
+//! 3. with probability p = r·dt: v ← v_r (Eq. 3); otherwise
+//!    v ← v + dt·(η - g(v)) (Eq. 14);
+//! 4. with probability q = ½(1 - e^{-2λ dt}) (Eq. 16): η ← -η.
+//!
+//! The reset and flip decisions are independent of each other and of the
+//! state; a reset keeps x and η. Particles start at x = 0, v = 0 (as in the
+//! paper, not at v_r) with η = ±Σ with probability ½ each.
+//!
+//! Two samplers of the reset/flip decisions are provided ([`EventSampling`]):
+//! the paper's per-step Bernoulli draws, and geometric waiting times. The
+//! decisions of step 3 (and of step 4) form an i.i.d. Bernoulli(p) (resp.
+//! Bernoulli(q)) sequence; the gaps between successes of such a sequence are
+//! i.i.d. Geometric(p) on {1, 2, ...}, so drawing the gaps directly gives the
+//! same process in distribution with two random numbers per event instead of
+//! two per step (tested in `tests/sim_euler.rs` and below).
+//!
+//! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
+//! reported as n_k·dt (the exact time of the recorded state); the run has
+//! N = n_{K-1} steps and the averaging window is steps n_b = round(burn_in/dt)
+//! .. N-1. Grid times closer than dt (two t_k on one step) are rejected.
+
+use super::{Observables, SimSpec};
+use crate::error::{Error, Result};
+use crate::model::{DragLaw, Params};
+use crate::parallel::{self, Progress};
+use crate::rng::{self, Rng};
+use rand::Rng as _;
+use serde::{Deserialize, Serialize};
+
+/// How the per-step reset and flip decisions are drawn (same law, see module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum EventSampling {
+    /// Geometric waiting times between events (fast; default).
+    #[default]
+    Geometric,
+    /// Two uniform draws per step, exactly as written in the paper.
+    Bernoulli,
+}
+
+impl std::str::FromStr for EventSampling {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "geometric" => Ok(EventSampling::Geometric),
+            "bernoulli" => Ok(EventSampling::Bernoulli),
+            _ => Err(Error::invalid(
+                "--events",
+                s,
+                "one of geometric, bernoulli",
+            )),
+        }
+    }
+}
+
+/// Validated step plan of an Euler run (step indices derived from the grid).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EulerPlan {
+    /// Time step.
+    pub dt: f64,
+    /// Reset probability per step, p = r·dt.
+    pub p_reset: f64,
+    /// Flip probability per step, q = ½(1 - e^{-2λ dt}) (Eq. 16).
+    pub q_flip: f64,
+    /// Step index n_k of each grid time.
+    pub record_steps: Vec<u64>,
+    /// First step of the averaging window, n_b.
+    pub burn_in_step: u64,
+    /// Total number of steps N.
+    pub steps: u64,
+}
+
+impl EulerPlan {
+    /// Validate dt against the parameters (dt < 1/max g', r·dt < 1) and map
+    /// the grid and burn-in onto steps.
+    pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
+        let dt = params.check_dt(dt)?;
+        let p_reset = params.rate() * dt;
+        if !(p_reset < 1.0) {
+            return Err(Error::invalid(
+                "--dt",
+                dt,
+                format!(
+                    "dt < 1/rate = {} (the reset probability per step is rate·dt)",
+                    1.0 / params.rate()
+                ),
+            ));
+        }
+        let q_flip = 0.5 * (-(-2.0 * params.lambda() * dt).exp_m1());
+        let max_steps = 1e15;
+        let mut record_steps = Vec::with_capacity(spec.grid.len());
+        for &t in spec.grid.times() {
+            let n = (t / dt).round();
+            if !(n <= max_steps) {
+                return Err(Error::invalid(
+                    "--t-max",
+                    t,
+                    format!("t_max/dt <= {max_steps:e} steps (dt = {dt})"),
+                ));
+            }
+            let n = n as u64;
+            if record_steps.last().is_some_and(|&last| n <= last) {
+                return Err(Error::invalid(
+                    "--samples",
+                    spec.grid.len(),
+                    format!(
+                        "grid times at least dt = {dt} apart (time {t} falls on the same Euler step as the previous one)"
+                    ),
+                ));
+            }
+            record_steps.push(n);
+        }
+        let steps = *record_steps.last().expect("non-empty grid");
+        if steps == 0 {
+            return Err(Error::invalid(
+                "--t-max",
+                spec.grid.t_max(),
+                format!("t_max >= dt = {dt}"),
+            ));
+        }
+        let burn_in_step = (spec.burn_in / dt).round() as u64;
+        if burn_in_step >= steps {
+            return Err(Error::invalid(
+                "--burn-in",
+                spec.burn_in,
+                format!("burn_in <= t_max - dt = {}", steps as f64 * dt - dt),
+            ));
+        }
+        Ok(EulerPlan {
+            dt,
+            p_reset,
+            q_flip,
+            record_steps,
+            burn_in_step,
+            steps,
+        })
+    }
+
+    /// The recorded times n_k·dt.
+    pub fn record_times(&self) -> Vec<f64> {
+        self.record_steps
+            .iter()
+            .map(|&n| n as f64 * self.dt)
+            .collect()
+    }
+}
+
+/// Simulate `spec.particles` particles with the Euler scheme and geometric
+/// waiting times. Bit-identical for any thread count.
+pub fn simulate(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    simulate_with(params, spec, dt, EventSampling::Geometric, progress)
+}
+
+/// [`simulate`] with an explicit event sampler.
+pub fn simulate_with(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    sampling: EventSampling,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    let plan = EulerPlan::new(params, spec, dt)?;
+    // Match the drag law once, outside the hot loop: the kernel is
+    // monomorphised per law (no dispatch per step).
+    Ok(match params.drag() {
+        DragLaw::Tan => run(Tan, params, spec, &plan, sampling, progress),
+        DragLaw::Tanh => run(Tanh, params, spec, &plan, sampling, progress),
+        DragLaw::Linear => run(Linear, params, spec, &plan, sampling, progress),
+    })
+}
+
+// Zero-sized drag types so each law gets its own compiled kernel.
+#[derive(Clone, Copy)]
+struct Tan;
+#[derive(Clone, Copy)]
+struct Tanh;
+#[derive(Clone, Copy)]
+struct Linear;
+
+trait Force: Copy + Send + Sync {
+    fn g(self, v: f64) -> f64;
+}
+impl Force for Tan {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        v.tan()
+    }
+}
+impl Force for Tanh {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        v.tanh()
+    }
+}
+impl Force for Linear {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        v
+    }
+}
+
+fn run<F: Force>(
+    f: F,
+    params: &Params,
+    spec: &SimSpec,
+    plan: &EulerPlan,
+    sampling: EventSampling,
+    progress: &dyn Progress,
+) -> Observables {
+    let (lo, hi) = params.bounds();
+    let mut template = Observables::new(spec, lo, hi);
+    template.times = plan.record_times();
+    let kernel = Kernel {
+        f,
+        sigma: params.sigma(),
+        v_r: params.reset_velocity(),
+        lo,
+        scale: spec.bins as f64 / (hi - lo),
+        bins: spec.bins,
+        plan,
+    };
+    parallel::reduce(
+        spec.particles,
+        || (template.clone(), vec![0.0; spec.bins]),
+        |i, (obs, occ)| {
+            let mut rng = rng::stream(spec.seed, i);
+            match sampling {
+                EventSampling::Geometric => kernel.particle_geometric(&mut rng, obs, occ),
+                EventSampling::Bernoulli => kernel.particle_bernoulli(&mut rng, obs, occ),
+            }
+        },
+        |a, b| a.0.merge(&b.0),
+        progress,
+    )
+    .0
+}
+
+struct Kernel<'a, F> {
+    f: F,
+    sigma: f64,
+    v_r: f64,
+    lo: f64,
+    scale: f64,
+    bins: usize,
+    plan: &'a EulerPlan,
+}
+
+/// Number of Bernoulli(p) trials up to and including the first success,
+/// G ~ Geometric(p) on {1, 2, ...}: G = 1 + floor(ln U / ln(1-p)), U ∈ (0, 1],
+/// since P(G > k) = P(U ≤ (1-p)^k) = (1-p)^k. `ln_1mp` = ln(1-p) < 0;
+/// p = 0 (ln_1mp = 0) never succeeds.
+#[inline]
+pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
+    if ln_1mp == 0.0 {
+        return u64::MAX;
+    }
+    let u = 1.0 - rng.gen::<f64>(); // (0, 1]
+    // `as` saturates, so an astronomically long gap becomes u64::MAX.
+    1u64.saturating_add((u.ln() / ln_1mp) as u64)
+}
+
+impl<F: Force> Kernel<'_, F> {
+    #[inline(always)]
+    fn bin(&self, v: f64) -> usize {
+        let i = ((v - self.lo) * self.scale) as isize;
+        i.clamp(0, self.bins as isize - 1) as usize
+    }
+
+    #[inline]
+    fn initial_eta(&self, rng: &mut Rng) -> f64 {
+        if rng.gen::<f64>() < 0.5 {
+            self.sigma
+        } else {
+            -self.sigma
+        }
+    }
+
+    /// Observe step n (step 1 of the module docs). Returns nothing; updates
+    /// the record cursor and the window sums.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn observe(
+        &self,
+        n: u64,
+        v: f64,
+        x: f64,
+        k: &mut usize,
+        next_rec: &mut u64,
+        win: &mut (f64, f64),
+        obs: &mut Observables,
+        occ: &mut [f64],
+    ) {
+        if n == *next_rec {
+            obs.record(*k, v, x);
+            *k += 1;
+            *next_rec = self.plan.record_steps.get(*k).copied().unwrap_or(u64::MAX);
+        }
+        if n >= self.plan.burn_in_step {
+            win.0 += v;
+            win.1 += v * v;
+            // Occupation in units of steps; `finish` passes the window in steps.
+            occ[self.bin(v)] += 1.0;
+        }
+    }
+
+    #[inline]
+    fn finish(
+        &self,
+        v: f64,
+        x: f64,
+        k: usize,
+        win: (f64, f64),
+        obs: &mut Observables,
+        occ: &mut [f64],
+    ) {
+        let plan = self.plan;
+        if k < plan.record_steps.len() {
+            debug_assert_eq!(k + 1, plan.record_steps.len());
+            obs.record(k, v, x);
+        }
+        let w = (plan.steps - plan.burn_in_step) as f64;
+        obs.finish_particle(win.0 / w, win.1 / w, occ, w, v);
+        obs.steps += plan.steps;
+    }
+
+    /// One particle, geometric waiting times between resets and flips.
+    fn particle_geometric(&self, rng: &mut Rng, obs: &mut Observables, occ: &mut [f64]) {
+        let plan = self.plan;
+        let dt = plan.dt;
+        let ln_reset = (-plan.p_reset).ln_1p();
+        let ln_flip = (-plan.q_flip).ln_1p();
+        let (mut v, mut x) = (0.0f64, 0.0f64);
+        let mut eta = self.initial_eta(rng);
+        // Step indices of the next reset / flip (first event at step G - 1).
+        let mut next_reset = geometric_gap(rng, ln_reset) - 1;
+        let mut next_flip = geometric_gap(rng, ln_flip) - 1;
+        let mut k = 0usize;
+        let mut next_rec = plan.record_steps[0];
+        let mut win = (0.0, 0.0);
+        for n in 0..plan.steps {
+            self.observe(n, v, x, &mut k, &mut next_rec, &mut win, obs, occ);
+            x += v * dt;
+            if n == next_reset {
+                v = self.v_r;
+                next_reset = n.saturating_add(geometric_gap(rng, ln_reset));
+            } else {
+                v += dt * (eta - self.f.g(v));
+            }
+            if n == next_flip {
+                eta = -eta;
+                next_flip = n.saturating_add(geometric_gap(rng, ln_flip));
+            }
+        }
+        self.finish(v, x, k, win, obs, occ);
+    }
+
+    /// One particle, the paper's two uniform draws per step (reset, then flip).
+    fn particle_bernoulli(&self, rng: &mut Rng, obs: &mut Observables, occ: &mut [f64]) {
+        let plan = self.plan;
+        let dt = plan.dt;
+        let (mut v, mut x) = (0.0f64, 0.0f64);
+        let mut eta = self.initial_eta(rng);
+        let mut k = 0usize;
+        let mut next_rec = plan.record_steps[0];
+        let mut win = (0.0, 0.0);
+        for n in 0..plan.steps {
+            self.observe(n, v, x, &mut k, &mut next_rec, &mut win, obs, occ);
+            x += v * dt;
+            if rng.gen::<f64>() < plan.p_reset {
+                v = self.v_r;
+            } else {
+                v += dt * (eta - self.f.g(v));
+            }
+            if rng.gen::<f64>() < plan.q_flip {
+                eta = -eta;
+            }
+        }
+        self.finish(v, x, k, win, obs, occ);
+    }
+}
+
+/// Exact expected moments of the Euler chain (not of the continuum process)
+/// for linear drag g(v) = v, started like the simulation (x = v = 0, η = ±Σ).
+///
+/// With a = 1 - dt, p = r·dt, ρ = 1 - 2q = e^{-2λ dt} and the step order of
+/// the module docs, the moments m = E v, c = E vη, s = E v², X = E x,
+/// XV = E xv, XE = E xη, X2 = E x² obey a closed linear recursion
+/// (E η_n = 0, E η² = Σ², E[η_{n+1} | η_n] = ρ η_n, events independent):
+/// m' = p v_r + (1-p) a m, c' = ρ(1-p)(a c + dt Σ²),
+/// s' = p v_r² + (1-p)(a² s + 2 a dt c + dt² Σ²), X' = X + dt m,
+/// X2' = X2 + 2 dt XV + dt² s, XV' = p v_r X' + (1-p)(a (XV + dt s) + dt (XE + dt c)),
+/// XE' = ρ (XE + dt c). This separates the O(dt) discretisation bias from
+/// statistical error in tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LinearChainMoments {
+    /// E v_n.
+    pub v: f64,
+    /// E v_n η_n.
+    pub v_eta: f64,
+    /// E v_n².
+    pub v2: f64,
+    /// E x_n.
+    pub x: f64,
+    /// E x_n v_n.
+    pub x_v: f64,
+    /// E x_n η_n.
+    pub x_eta: f64,
+    /// E x_n².
+    pub x2: f64,
+}
+
+/// Iterator-style stepper for [`LinearChainMoments`].
+#[derive(Clone, Debug)]
+pub struct LinearChain {
+    dt: f64,
+    p: f64,
+    rho: f64,
+    v_r: f64,
+    s2: f64,
+    /// Moments at the current step.
+    pub m: LinearChainMoments,
+}
+
+impl LinearChain {
+    /// Start at step 0 (all moments zero). Requires linear drag and a valid dt.
+    pub fn new(params: &Params, dt: f64) -> Result<Self> {
+        if params.drag() != DragLaw::Linear {
+            return Err(Error::invalid(
+                "--drag",
+                params.drag(),
+                "linear (the Euler chain is exactly solvable only for Newtonian drag)",
+            ));
+        }
+        let dt = params.check_dt(dt)?;
+        Ok(LinearChain {
+            dt,
+            p: params.rate() * dt,
+            rho: (-2.0 * params.lambda() * dt).exp(),
+            v_r: params.reset_velocity(),
+            s2: params.sigma() * params.sigma(),
+            m: LinearChainMoments::default(),
+        })
+    }
+
+    /// Advance one Euler step.
+    pub fn step(&mut self) {
+        let (dt, p, rho, vr, s2) = (self.dt, self.p, self.rho, self.v_r, self.s2);
+        let a = 1.0 - dt;
+        let o = self.m;
+        let x = o.x + dt * o.v;
+        let x_eta_pre = o.x_eta + dt * o.v_eta;
+        self.m = LinearChainMoments {
+            v: p * vr + (1.0 - p) * a * o.v,
+            v_eta: rho * (1.0 - p) * (a * o.v_eta + dt * s2),
+            v2: p * vr * vr + (1.0 - p) * (a * a * o.v2 + 2.0 * a * dt * o.v_eta + dt * dt * s2),
+            x,
+            x_v: p * vr * x + (1.0 - p) * (a * (o.x_v + dt * o.v2) + dt * x_eta_pre),
+            x_eta: rho * x_eta_pre,
+            x2: o.x2 + 2.0 * dt * o.x_v + dt * dt * o.v2,
+        };
+    }
+
+    /// Stationary E v², E v, E vη of the chain (fixed point of the recursion).
+    pub fn stationary(params: &Params, dt: f64) -> Result<LinearChainMoments> {
+        let c = LinearChain::new(params, dt)?;
+        let (p, rho, vr, s2) = (c.p, c.rho, c.v_r, c.s2);
+        let a = 1.0 - dt;
+        let v = p * vr / (1.0 - (1.0 - p) * a);
+        let v_eta = rho * (1.0 - p) * dt * s2 / (1.0 - rho * (1.0 - p) * a);
+        let v2 = (p * vr * vr + (1.0 - p) * (2.0 * a * dt * v_eta + dt * dt * s2))
+            / (1.0 - (1.0 - p) * a * a);
+        Ok(LinearChainMoments {
+            v,
+            v_eta,
+            v2,
+            ..Default::default()
+        })
+    }
+}
+
+/// Exact expectation of what an Euler run with linear drag reports: the
+/// window average of v² (the `v2` of the summary) and E v², E x² at the
+/// plan's record steps.
+pub fn linear_chain_expectations(
+    params: &Params,
+    plan: &EulerPlan,
+) -> Result<(f64, Vec<LinearChainMoments>)> {
+    let mut chain = LinearChain::new(params, plan.dt)?;
+    let mut at = Vec::with_capacity(plan.record_steps.len());
+    let mut k = 0;
+    let mut sum = 0.0;
+    for n in 0..=plan.steps {
+        if plan.record_steps.get(k) == Some(&n) {
+            at.push(chain.m);
+            k += 1;
+        }
+        if n >= plan.burn_in_step && n < plan.steps {
+            sum += chain.m.v2;
+        }
+        chain.step();
+    }
+    Ok((sum / (plan.steps - plan.burn_in_step) as f64, at))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::stream;
+    use crate::stats::MeanAcc;
+
+    /// The law of event step indices: the number of events among the first
+    /// `n` steps is Binomial(n, p) for both samplers. Compare mean and
+    /// variance of the count (4 standard errors).
+    #[test]
+    fn geometric_gaps_give_binomial_counts() {
+        let (n, p) = (200u64, 0.03f64);
+        let ln = (-p).ln_1p();
+        let reps = 40_000;
+        let (mut geo, mut ber) = (MeanAcc::new(), MeanAcc::new());
+        for i in 0..reps {
+            let mut rng = stream(5, i);
+            let mut count = 0u64;
+            let mut next = geometric_gap(&mut rng, ln) - 1;
+            while next < n {
+                count += 1;
+                next += geometric_gap(&mut rng, ln);
+            }
+            geo.push(count as f64);
+            let mut rng = stream(6, i);
+            ber.push((0..n).filter(|_| rng.gen::<f64>() < p).count() as f64);
+        }
+        let mean = n as f64 * p;
+        let var = mean * (1.0 - p);
+        for acc in [geo, ber] {
+            let se = (var / reps as f64).sqrt();
+            assert!((acc.mean() - mean).abs() < 4.0 * se, "{acc:?}");
+            // Var of the sample variance ≈ (μ4 - σ⁴)/n; μ4 of a binomial ≈ 3σ⁴ + σ²(1-6p(1-p)).
+            let mu4 = 3.0 * var * var + var * (1.0 - 6.0 * p * (1.0 - p));
+            let se_var = ((mu4 - var * var) / reps as f64).sqrt();
+            assert!((acc.variance() - var).abs() < 4.0 * se_var, "{acc:?}");
+        }
+    }
+
+    #[test]
+    fn geometric_gap_extremes() {
+        let mut rng = stream(1, 1);
+        assert_eq!(geometric_gap(&mut rng, 0.0), u64::MAX);
+        // p → 1: every trial succeeds.
+        let ln = (-(1.0 - 1e-300f64)).ln_1p();
+        assert!((0..100).all(|_| geometric_gap(&mut rng, ln) == 1));
+    }
+
+    #[test]
+    fn chain_fixed_point_matches_iteration() {
+        let p = Params::new(DragLaw::Linear, 1.3, 0.7, 2.0, 0.4).unwrap();
+        let mut c = LinearChain::new(&p, 0.01).unwrap();
+        for _ in 0..20_000 {
+            c.step();
+        }
+        let s = LinearChain::stationary(&p, 0.01).unwrap();
+        assert!((c.m.v2 - s.v2).abs() < 1e-12);
+        assert!((c.m.v - s.v).abs() < 1e-12);
+        assert!((c.m.v_eta - s.v_eta).abs() < 1e-12);
+    }
+}
