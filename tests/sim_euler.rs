@@ -8,7 +8,14 @@ use irtp::sim::euler::{self, EulerPlan, EventSampling, LinearChain};
 use irtp::sim::{simulate, Method, Observables, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
 
-fn spec(particles: u64, t_max: f64, samples: usize, burn_in: f64, bins: usize, seed: u64) -> SimSpec {
+fn spec(
+    particles: u64,
+    t_max: f64,
+    samples: usize,
+    burn_in: f64,
+    bins: usize,
+    seed: u64,
+) -> SimSpec {
     SimSpec::new(
         particles,
         TimeGrid::linear(t_max, samples).unwrap(),
@@ -77,7 +84,12 @@ fn linear_drag_matches_exact_euler_chain() {
 /// continuum formulas (analytic::linear) at first order in dt.
 #[test]
 fn euler_chain_converges_to_continuum() {
-    for &(lambda, r, vr) in &[(1.0, 0.0, 0.0), (0.5, 2.0, 0.0), (2.0, 10.0, 0.0), (0.7, 3.0, 0.6)] {
+    for &(lambda, r, vr) in &[
+        (1.0, 0.0, 0.0),
+        (0.5, 2.0, 0.0),
+        (2.0, 10.0, 0.0),
+        (0.7, 3.0, 0.6),
+    ] {
         let p = Params::new(DragLaw::Linear, 1.3, lambda, r, vr).unwrap();
         let exact = linear::v2(&p).unwrap();
         let err = |dt: f64| LinearChain::stationary(&p, dt).unwrap().v2 - exact;
@@ -232,9 +244,15 @@ fn plan_validation_and_rounding() {
         1,
     )
     .unwrap();
-    assert_eq!(name(EulerPlan::new(&p, &close, 1e-3).unwrap_err()), "--samples");
+    assert_eq!(
+        name(EulerPlan::new(&p, &close, 1e-3).unwrap_err()),
+        "--samples"
+    );
     let late = spec(10, 1.0, 3, 0.9999, 4, 1);
-    assert_eq!(name(EulerPlan::new(&p, &late, 1e-3).unwrap_err()), "--burn-in");
+    assert_eq!(
+        name(EulerPlan::new(&p, &late, 1e-3).unwrap_err()),
+        "--burn-in"
+    );
     let ok = spec(10, 1.0, 3, 0.5, 4, 1);
     assert_eq!(name(EulerPlan::new(&p, &ok, 0.1).unwrap_err()), "--dt");
     let fast = Params::new(DragLaw::Linear, 1.0, 0.5, 20.0, 0.0).unwrap();

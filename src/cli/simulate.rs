@@ -128,8 +128,16 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
 
     let out_path = out.as_ref().map(|o| o.target().display().to_string());
     if let Some(mut o) = out {
-        o.write_csv("moments.csv", &Observables::MOMENT_HEADER, obs.moment_rows())?;
-        o.write_csv("density.csv", &Observables::DENSITY_HEADER, obs.density_rows())?;
+        o.write_csv(
+            "moments.csv",
+            &Observables::MOMENT_HEADER,
+            obs.moment_rows(),
+        )?;
+        o.write_csv(
+            "density.csv",
+            &Observables::DENSITY_HEADER,
+            obs.density_rows(),
+        )?;
         let run_params = RunParameters {
             model: &params,
             particles: spec.particles,

@@ -51,11 +51,7 @@ impl std::str::FromStr for EventSampling {
         match s {
             "geometric" => Ok(EventSampling::Geometric),
             "bernoulli" => Ok(EventSampling::Bernoulli),
-            _ => Err(Error::invalid(
-                "--events",
-                s,
-                "one of geometric, bernoulli",
-            )),
+            _ => Err(Error::invalid("--events", s, "one of geometric, bernoulli")),
         }
     }
 }
@@ -267,7 +263,7 @@ pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
         return u64::MAX;
     }
     let u = 1.0 - rng.gen::<f64>(); // (0, 1]
-    // `as` saturates, so an astronomically long gap becomes u64::MAX.
+                                    // `as` saturates, so an astronomically long gap becomes u64::MAX.
     1u64.saturating_add((u.ln() / ln_1mp) as u64)
 }
 
