@@ -201,12 +201,12 @@ fn pinned_values() {
     }
 }
 const PINNED: [u64; 6] = [
-    0x3fde5cc759c67129,
-    0x3fabc34ee89963b7,
-    0x3f8833342b8f46f1,
-    0x3fdcf4dfd752d96d,
-    0x3faad990a879bf87,
-    0xbf93f5be25f71399,
+    0x3fde5cc759c67122,
+    0x3fabc34ee89963b1,
+    0x3f8833342b8f46f2,
+    0x3fdcf4dfd752d96c,
+    0x3faad990a879bf7f,
+    0xbf93f5be25f7139a,
 ];
 
 /// Grid handling: times are recorded at round(t/dt) and reported as n·dt;
@@ -260,9 +260,9 @@ fn plan_validation_and_rounding() {
     assert!(EulerPlan::new(&fast, &ok, 0.04).is_ok());
 }
 
-/// Lanes (particles integrated side by side) change no trajectory: with one
-/// reduction chunk the summation order is the same, so every output is
-/// bit-identical to the one-lane kernel (incl. a short last group).
+/// Lanes (particles integrated side by side) change no trajectory and no
+/// summation order: every output is bit-identical to the one-lane kernel
+/// (several reduction chunks, a short last chunk, a remainder group).
 #[test]
 fn lanes_do_not_change_results() {
     for (drag, sigma) in [
@@ -271,7 +271,7 @@ fn lanes_do_not_change_results() {
         (DragLaw::Linear, 1.0),
     ] {
         let p = Params::new(drag, sigma, 0.9, 1.5, 0.05).unwrap();
-        let s = spec(250, 0.4, 5, 0.1, 9, 8);
+        let s = spec(605, 0.3, 5, 0.1, 9, 8);
         for sampling in [EventSampling::Geometric, EventSampling::Bernoulli] {
             let one = euler::simulate_with_lanes(&p, &s, 1e-3, sampling, 1, &NoProgress).unwrap();
             let four =
