@@ -247,6 +247,7 @@ impl Force for Linear {
 /// the Euler step (the linear-drag step costs ~4 ns); this kernel is ~3x
 /// faster and identical on every platform (bit reproducibility across libms).
 #[inline(always)]
+#[allow(clippy::excessive_precision)] // Cephes coefficients quoted verbatim
 pub fn tan(xx: f64) -> f64 {
     const P: [f64; 3] = [
         -1.309_369_391_813_837_776_46e4,
