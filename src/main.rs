@@ -14,10 +14,15 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Particle simulation (Euler scheme of the paper): moments, densities.
+    Simulate(cli::simulate::SimulateArgs),
+}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Simulate(a) => cli::simulate::run(a),
+    }
 }
 
 fn main() -> ExitCode {

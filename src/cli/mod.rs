@@ -3,6 +3,7 @@
 
 pub mod common;
 pub mod progress;
+pub mod simulate;
 
 use serde::Serialize;
 
