@@ -6,14 +6,14 @@
 //!
 //! cargo run --release --example efficiency -- [particles] [fpt_particles]
 //!
-//! The Euler loop here is the paper's scheme (Eqs. 14-16): v += dt(η - g(v)),
-//! x += v_old dt, a noise flip w.p. ½(1 - e^{-2λ dt}) and a reset w.p. r dt
-//! per step, with the per-step Bernoulli trials drawn as geometric gaps (one
-//! random number per event instead of two per step, the fastest form).
+//! Stationary <v²>: the library's Euler simulation (`irtp::sim::euler`, same
+//! observables). MFPT: a minimal Euler first-passage loop, the paper's scheme
+//! (Eqs. 14-16) v += dt(η - g(v)), a noise flip w.p. ½(1 - e^{-2λ dt}) and a
+//! reset w.p. r dt per step, drawn as geometric gaps (the fastest form).
 
 use irtp::parallel::{self, NoProgress};
 use irtp::rng::{self, Rng};
-use irtp::sim::{exact, SimSpec, TimeGrid};
+use irtp::sim::{euler, exact, SimSpec, TimeGrid};
 use irtp::stats::MeanAcc;
 use irtp::{DragLaw, Params};
 use rand::Rng as _;
@@ -47,34 +47,6 @@ impl Euler {
             ln_flip: (-pf).ln_1p(),
             ln_reset: (-pr).ln_1p(),
         }
-    }
-
-    /// Time average of v² over steps [burn, n) for one particle.
-    fn v2_avg(&self, rng: &mut Rng, burn: u64, n: u64) -> f64 {
-        let mut eta = if rng.gen::<bool>() {
-            self.sigma
-        } else {
-            -self.sigma
-        };
-        let mut v = 0.0f64;
-        let (mut next_flip, mut next_reset) =
-            (geometric(rng, self.ln_flip), geometric(rng, self.ln_reset));
-        let mut acc = 0.0;
-        for step in 1..=n {
-            v += self.dt * (eta - v.tan());
-            if step == next_flip {
-                eta = -eta;
-                next_flip += geometric(rng, self.ln_flip);
-            }
-            if step == next_reset {
-                v = self.vr;
-                next_reset += geometric(rng, self.ln_reset);
-            }
-            if step > burn {
-                acc += v * v;
-            }
-        }
-        acc / (n - burn) as f64
     }
 
     /// First step time at which v ≥ vt (None if not by t_max).
@@ -137,17 +109,8 @@ fn main() {
     )
     .unwrap();
     let (ex, w_ex) = timed(|| exact::simulate(&p, &spec, &NoProgress).unwrap());
-    let eu = Euler::new(&p, dt);
-    let (nb, nt) = ((burn / dt).round() as u64, (t_max / dt).round() as u64);
-    let (ev, w_eu) = timed(|| {
-        parallel::reduce(
-            particles,
-            MeanAcc::new,
-            |i, acc| acc.push(eu.v2_avg(&mut rng::stream(12, i), nb, nt)),
-            |a, b| a.merge(&b),
-            &NoProgress,
-        )
-    });
+    let (eo, w_eu) = timed(|| euler::simulate(&p, &spec, dt, &NoProgress).unwrap());
+    let ev = eo.v2_time_avg;
     let (a, b) = (&ex.v2_time_avg, &ev);
     println!("\nstationary <v^2>, {particles} particles, window [{burn}, {t_max}]:");
     println!(
@@ -162,7 +125,7 @@ fn main() {
         b.mean(),
         b.sem(),
         w_eu,
-        particles * nt
+        eo.steps
     );
     let ratio = (w_eu * b.sem().powi(2)) / (w_ex * a.sem().powi(2));
     println!("  efficiency ratio exact/euler (wall × variance): {ratio:.1}");
@@ -199,6 +162,7 @@ fn main() {
             exact::first_passage(&p, 0.0, vt, plus, t_cap, &mut r).0
         })
     });
+    let eu = Euler::new(&p, dt);
     let ((fe, ce), w_fe) = timed(|| collect(&|i| eu.fpt(&mut rng::stream(22, i), vt, t_cap)));
     println!("\nMFPT 0 -> {vt}, {fpt_particles} particles:");
     println!(

@@ -353,6 +353,28 @@ impl Flow {
         }
     }
 
+    /// g'(v*), the rate of the exponential approach to v*.
+    pub fn rate(&self) -> f64 {
+        self.k
+    }
+
+    /// The flow potential Φ with t(va → vb) = (Φ(va) - Φ(vb)) / g'(v*) for any
+    /// vb reached from va: Φ = ln|u| (linear), ln|sin u| + s u (tan),
+    /// ln|sinh u| - s u (tanh), u = v* - v in the reflected (s ≥ 0) frame;
+    /// -∞ at v*. A difference of potentials loses ~1e-16 |Φ| absolute
+    /// accuracy ([`Flow::time`] does not), which is harmless for occupation
+    /// times; one potential per velocity replaces a time per pair.
+    #[inline]
+    pub fn potential(&self, v: f64) -> f64 {
+        let u = self.vs - self.refl * v;
+        let a = u.abs();
+        match self.law {
+            DragLaw::Linear => a.ln(),
+            DragLaw::Tan => a.sin().ln() + self.s * u,
+            DragLaw::Tanh => a.sinh().ln() - self.s * u,
+        }
+    }
+
     /// Velocity after time t ≥ 0 from v0. Linear: v = v* - (v* - v0) e^{-t}.
     /// tan/tanh: the time formula reads Φ(u) = Φ(ua) - g'(v*) t with
     /// Φ(u) = ln|sin u| + s u (tan) or ln|sinh u| - s u (tanh). In the unknown

@@ -212,10 +212,10 @@ struct Sampler {
     vr: f64,
     /// Tables for s = +Sigma (index 0) and s = -Sigma (index 1).
     tables: [DeficitTable; 2],
-    /// Histogram bin edges e_0 = v_l, ..., e_B = v_u.
-    edges: Vec<f64>,
     /// Flow time across bin k in full, per noise state (0 where never crossed).
     tau: [Vec<f64>; 2],
+    /// Flow potential (see [`Flow::potential`]) at every edge, per noise state.
+    phi_edges: [Vec<f64>; 2],
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
@@ -252,13 +252,18 @@ impl Sampler {
                 .map(|k| fin(drag.flow_time(-sigma, edges[k + 1], edges[k])))
                 .collect(),
         ];
+        let flows = [Flow::new(drag, sigma), Flow::new(drag, -sigma)];
+        let phi_edges = [
+            edges.iter().map(|&e| flows[0].potential(e)).collect(),
+            edges.iter().map(|&e| flows[1].potential(e)).collect(),
+        ];
         Ok(Sampler {
-            flows: [Flow::new(drag, sigma), Flow::new(drag, -sigma)],
+            flows,
+            phi_edges,
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
             tables,
-            edges,
             tau,
             times: spec.grid.times().to_vec(),
             burn_in: spec.burn_in,
@@ -267,36 +272,37 @@ impl Sampler {
         })
     }
 
-    /// Flow time from a to b that is 0 when b is (by rounding) behind a.
-    #[inline]
-    fn seg_time(&self, si: usize, a: f64, b: f64) -> f64 {
-        let t = self.flows[si].time(a, b);
-        if t.is_finite() {
-            t
-        } else {
-            0.0
-        }
-    }
-
-    /// Add the occupation times of a flow segment va → vb of duration dt.
+    /// Add the occupation times of a flow segment va → vb of duration dt:
+    /// partial first and last bins from flow potentials (time to an edge =
+    /// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
+    /// in full via the difference array of crossings.
+    #[allow(clippy::too_many_arguments)]
     fn occupy(&self, obs: &Observables, sc: &mut Scratch, si: usize, va: f64, vb: f64, dt: f64) {
         let (ka, kb) = (obs.bin_of(va), obs.bin_of(vb));
         if ka == kb {
             sc.occ[ka] += dt;
-        } else if kb > ka {
-            sc.occ[ka] += self.seg_time(si, va, self.edges[ka + 1]);
+            return;
+        }
+        let flow = &self.flows[si];
+        let pa = flow.potential(va);
+        let k = flow.rate();
+        let phi = &self.phi_edges[si];
+        // Time to reach edge e (clamped into [0, dt] against rounding).
+        let to = |e: usize| ((pa - phi[e]) / k).clamp(0.0, dt);
+        if kb > ka {
+            sc.occ[ka] += to(ka + 1);
             if kb > ka + 1 {
                 sc.cross[si][ka + 1] += 1;
                 sc.cross[si][kb] -= 1;
             }
-            sc.occ[kb] += (dt - self.seg_time(si, va, self.edges[kb])).max(0.0);
+            sc.occ[kb] += dt - to(kb);
         } else {
-            sc.occ[ka] += self.seg_time(si, va, self.edges[ka]);
+            sc.occ[ka] += to(ka);
             if ka > kb + 1 {
                 sc.cross[si][kb + 1] += 1;
                 sc.cross[si][ka] -= 1;
             }
-            sc.occ[kb] += (dt - self.seg_time(si, va, self.edges[kb + 1])).max(0.0);
+            sc.occ[kb] += dt - to(kb + 1);
         }
     }
 
