@@ -143,10 +143,10 @@ fn unreachable_targets_are_infinite() {
 #[test]
 fn linear_closed_forms() {
     let d = DragLaw::Linear;
-    let (s, v0, t) = (1.7, -0.4, 0.83);
-    let v = s + (v0 - s) * (-t as f64).exp();
+    let (s, v0, t) = (1.7f64, -0.4f64, 0.83f64);
+    let v = s + (v0 - s) * (-t).exp();
     assert!((d.flow_velocity(s, v0, t) - v).abs() < 1e-15);
-    let x = s * t + (v0 - s) * (1.0 - (-t as f64).exp());
+    let x = s * t + (v0 - s) * (1.0 - (-t).exp());
     assert!((d.flow_displacement(s, v0, t) - x).abs() < 1e-14);
     assert!((d.flow_time(s, v0, v) - t).abs() < 1e-14);
 }
