@@ -166,3 +166,27 @@ fn deficits_match_generic_quadrature() {
         }
     }
 }
+
+/// The trait's generic defaults (quadrature + safeguarded Newton, for drags
+/// without closed forms) agree with the closed forms.
+#[test]
+fn generic_velocity_and_displacement_defaults() {
+    for (d, sigma) in CASES {
+        let vu = d.inverse(sigma);
+        for s in [sigma, -sigma] {
+            for &(xa, t) in &[(0.1, 0.01), (0.5, 0.7), (0.9, 3.0), (0.3, 12.0)] {
+                let va = -vu + 2.0 * vu * xa;
+                let (a, b) = (
+                    d.flow_velocity(s, va, t),
+                    Generic(d).flow_velocity(s, va, t),
+                );
+                assert!((a - b).abs() < 1e-12, "{d} s={s} va={va} t={t}: {a} vs {b}");
+                let (a, b) = (
+                    d.flow_displacement(s, va, t),
+                    Generic(d).flow_displacement(s, va, t),
+                );
+                assert!((a - b).abs() < 1e-11, "{d} s={s} va={va} t={t}: {a} vs {b}");
+            }
+        }
+    }
+}

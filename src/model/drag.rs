@@ -88,7 +88,7 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             (t - tt, u / self.drift_at_distance(s, u), 0.0)
         };
         let g1 = self.derivative(vs).max(f64::MIN_POSITIVE);
-        let w = quad::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-12);
+        let w = quad::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
         vs - sg * w.exp()
     }
 
@@ -615,7 +615,7 @@ pub mod quad {
                 w = next;
             } else {
                 let mid = 0.5 * (lo + hi);
-                if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs()) + abs_tol {
+                if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs()) {
                     return mid;
                 }
                 w = mid;
