@@ -168,7 +168,7 @@ fn occupation_density_matches_final_histogram() {
 
 /// Nonlinear drag with resetting, no closed form: the exact sampler's
 /// stationary <v²> agrees within 4 standard errors with the library's Euler
-/// scheme Richardson-extrapolated to dt → 0 from dt = 2e-3 and 1e-3
+/// scheme Richardson-extrapolated (and so does <x²>(t)) to dt → 0 from dt = 2e-3 and 1e-3
 /// (2 E(dt/2) - E(dt) cancels the O(dt) bias, about 1% at r = 10).
 #[test]
 fn matches_richardson_extrapolated_euler() {
@@ -184,13 +184,21 @@ fn matches_richardson_extrapolated_euler() {
         )
         .unwrap()
     };
-    let ex = exact::simulate(&p, &spec(40), &NoProgress).unwrap().v2_time_avg;
-    let e1 = euler::simulate(&p, &spec(41), 2e-3, &NoProgress)
-        .unwrap()
-        .v2_time_avg;
-    let e2 = euler::simulate(&p, &spec(42), 1e-3, &NoProgress)
-        .unwrap()
-        .v2_time_avg;
+    let ox = exact::simulate(&p, &spec(40), &NoProgress).unwrap();
+    let o1 = euler::simulate(&p, &spec(41), 2e-3, &NoProgress).unwrap();
+    let o2 = euler::simulate(&p, &spec(42), 1e-3, &NoProgress).unwrap();
+    // Positions too: <x²>(t = 13) (exact displacement integrals vs Euler's
+    // left-point rule, also O(dt)).
+    let (x, x1, x2) = (ox.x2[1], o1.x2[1], o2.x2[1]);
+    let rich_x = 2.0 * x2.mean() - x1.mean();
+    let se_x = (4.0 * x2.sem().powi(2) + x1.sem().powi(2) + x.sem().powi(2)).sqrt();
+    assert!(
+        ((rich_x - x.mean()) / se_x).abs() < 4.0,
+        "<x2>: exact {} ± {}, extrapolated Euler {rich_x} ± {se_x}",
+        x.mean(),
+        x.sem()
+    );
+    let (ex, e1, e2) = (ox.v2_time_avg, o1.v2_time_avg, o2.v2_time_avg);
     let rich = 2.0 * e2.mean() - e1.mean();
     let se = (4.0 * e2.sem().powi(2) + e1.sem().powi(2) + ex.sem().powi(2)).sqrt();
     eprintln!(
