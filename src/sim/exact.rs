@@ -469,12 +469,16 @@ mod tests {
 
     #[test]
     fn table_matches_quadrature() {
-        for (d, sg) in [
-            (DragLaw::Tan, 3.0),
-            (DragLaw::Tan, 30.0),
-            (DragLaw::Tanh, 0.6),
-            (DragLaw::Tanh, 0.99),
-            (DragLaw::Linear, 2.0),
+        // Extreme parameters (g'(v*) ~ 1e6 or 1e-6) lose a few digits: the
+        // integrand spans many orders of magnitude.
+        for (d, sg, tol) in [
+            (DragLaw::Tan, 3.0, 1e-13),
+            (DragLaw::Tan, 30.0, 1e-13),
+            (DragLaw::Tanh, 0.6, 1e-13),
+            (DragLaw::Tanh, 0.99, 1e-13),
+            (DragLaw::Linear, 2.0, 1e-13),
+            (DragLaw::Tan, 1000.0, 1e-11),
+            (DragLaw::Tanh, 0.999999, 1e-11),
         ] {
             let p = Params::new(d, sg, 1.0, 0.0, 0.0).unwrap();
             let (lo, hi) = p.bounds();
@@ -488,7 +492,7 @@ mod tests {
                         let (b1, b2) = d.flow_deficits(s, va, vb);
                         let scale = 1.0 + b1.abs() + b2.abs();
                         assert!(
-                            (a1 - b1).abs() < 1e-13 * scale && (a2 - b2).abs() < 1e-13 * scale,
+                            (a1 - b1).abs() < tol * scale && (a2 - b2).abs() < tol * scale,
                             "{d} s={s} {va}->{vb}: {a1} {b1} / {a2} {b2} ({} pieces)",
                             tab.pieces()
                         );
