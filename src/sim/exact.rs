@@ -462,6 +462,25 @@ pub fn first_passage(
     }
 }
 
+/// [`first_passage`] in either direction: the first time v(t) reaches `vt`
+/// from `v0` (from below or from above). A downward problem is the upward
+/// one under v → -v (all drag laws are odd): v0, vt and v_r change sign and
+/// the noise states swap, so both directions share one code path.
+pub fn first_passage_to(
+    params: &Params,
+    v0: f64,
+    vt: f64,
+    start_plus: bool,
+    t_max: f64,
+    rng: &mut Rng,
+) -> Result<(Option<f64>, u64)> {
+    if v0 <= vt {
+        return Ok(first_passage(params, v0, vt, start_plus, t_max, rng));
+    }
+    let mirrored = params.with_reset_velocity(-params.reset_velocity())?;
+    Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -499,6 +518,20 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn downward_passage_is_mirrored_upward() {
+        use crate::model::DragLaw;
+        let p = Params::new(DragLaw::Tanh, 0.6, 1.2, 0.5, 0.1).unwrap();
+        let q = p.with_reset_velocity(-0.1).unwrap();
+        for i in 0..50 {
+            let (mut a, mut b) = (rng::stream(9, i), rng::stream(9, i));
+            let down = first_passage_to(&p, 0.2, -0.3, i % 2 == 0, 1e3, &mut a).unwrap();
+            let up = first_passage(&q, -0.2, 0.3, i % 2 == 1, 1e3, &mut b);
+            assert_eq!(down, up);
+            assert!(down.0.is_some());
         }
     }
 }
