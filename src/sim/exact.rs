@@ -216,6 +216,8 @@ struct Sampler {
     tau: [Vec<f64>; 2],
     /// Flow potential (see [`Flow::potential`]) at every edge, per noise state.
     phi_edges: [Vec<f64>; 2],
+    /// Ψ(v_r) of each table (segment start after a reset).
+    psi_vr: [[f64; 2]; 2],
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
@@ -257,9 +259,12 @@ impl Sampler {
             edges.iter().map(|&e| flows[0].potential(e)).collect(),
             edges.iter().map(|&e| flows[1].potential(e)).collect(),
         ];
+        let vr = params.reset_velocity();
+        let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
         Ok(Sampler {
             flows,
             phi_edges,
+            psi_vr,
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
@@ -313,6 +318,9 @@ impl Sampler {
         let mut k = 0usize;
         let (mut int_v, mut int_v2) = (0.0f64, 0.0f64);
         let mut events = 0u64;
+        // Ψ(v) of the current table at the segment start, when known (after a
+        // reset it is the precomputed Ψ(v_r)).
+        let mut psi_start: Option<[f64; 2]> = None;
         loop {
             let gap = exp_gap(&mut rng, self.total_rate);
             let t_end = (t + gap).min(self.t_max);
@@ -330,7 +338,8 @@ impl Sampler {
             }
             let dt = t_end - t;
             let vb = flow.velocity(v, dt);
-            let (psi_a, psi_b) = (table.psi(v), table.psi(vb));
+            let psi_a = psi_start.unwrap_or_else(|| table.psi(v));
+            let psi_b = table.psi(vb);
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
                 let (va, psi_w, dw) = if t < self.burn_in {
@@ -353,8 +362,10 @@ impl Sampler {
             events += 1;
             if rng.gen::<f64>() * self.total_rate < self.lambda {
                 plus = !plus;
+                psi_start = None;
             } else {
                 v = self.vr;
+                psi_start = Some(self.psi_vr[si]);
             }
         }
         // Full bin crossings: occupation += (number of crossings) × tau.
