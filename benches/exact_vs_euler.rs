@@ -29,6 +29,16 @@ fn kernels(c: &mut Criterion) {
                 black_box(f.velocity(black_box(v0), black_box(t)))
             })
         });
+        let guide = irtp::model::drag::InverseGuide::new(&f);
+        c.bench_function(&format!("flow_velocity_guided/{d}"), |b| {
+            let mut k = 0u32;
+            b.iter(|| {
+                k = k.wrapping_add(1);
+                let v0 = -0.9 * vu + 1.8 * vu * ((k % 97) as f64 / 97.0);
+                let t = 0.05 + (k % 13) as f64 * 0.3;
+                black_box(f.velocity_guided(black_box(v0), black_box(t), &guide))
+            })
+        });
         c.bench_function(&format!("flow_time/{d}"), |b| {
             b.iter(|| black_box(f.time(black_box(-0.5 * vu), black_box(0.8 * vu))))
         });
@@ -56,7 +66,8 @@ fn particles(c: &mut Criterion) {
     });
     g.bench_function("first_passage_exact", |b| {
         let mut r = irtp::rng::stream(3, 0);
-        b.iter(|| black_box(exact::first_passage(&p, 0.0, 0.8, true, 1e6, &mut r)))
+        let fpt = exact::FirstPassage::new(&p);
+        b.iter(|| black_box(fpt.run(0.0, 0.8, true, 1e6, &mut r)))
     });
     // The paper's Euler scheme over the same time span (dt = 1e-3, one
     // uniform per step for the flip and one for the reset), for scale.

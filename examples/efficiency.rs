@@ -156,10 +156,11 @@ fn main() {
         )
     };
     let ((fx, cx), w_fx) = timed(|| {
+        let fpt = exact::FirstPassage::new(&p);
         collect(&|i| {
             let mut r = rng::stream(21, i);
             let plus = r.gen::<bool>();
-            exact::first_passage(&p, 0.0, vt, plus, t_cap, &mut r).0
+            fpt.run(0.0, vt, plus, t_cap, &mut r).0
         })
     });
     let eu = Euler::new(&p, dt);

@@ -80,7 +80,8 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
         }
         let sg = ua.signum();
         let wa = ua.abs().ln();
-        // H(w) = t(va → v(w)) - t, increasing in w... decreasing: use -H.
+        // H(w) = t - t(v0 → v(w)) increases with w = ln|v* - v| (H(wa) = t > 0),
+        // H'(w) = u / (s - g(v)); safeguarded Newton.
         let h = |w: f64| {
             let u = sg * w.exp();
             let v = vs - u;
@@ -94,7 +95,7 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
 
     /// Deficit integrals along the flow from va to vb:
     /// (∫ (v* - v) dt, ∫ (v* - v)² dt) = ∫_{va}^{vb} (v* - v)^k / (s - g(v)) dv,
-    /// k = 1, 2. Their integrands are smooth up to v* (→ 0 and → 1/g'(v*)·u),
+    /// k = 1, 2. Their integrands are smooth up to v* (→ 1/g'(v*) and → 0),
     /// so they stay accurate even when vb rounds to v*.
     fn flow_deficits(&self, s: f64, va: f64, vb: f64) -> (f64, f64) {
         let vs = self.inverse(s);
@@ -389,10 +390,19 @@ impl Flow {
     #[inline]
     pub fn velocity(&self, v0: f64, t: f64) -> f64 {
         let v0r = self.refl * v0;
-        self.refl * self.velocity_canonical(v0r, t)
+        self.refl * self.velocity_canonical(v0r, t, None)
     }
 
-    fn velocity_canonical(&self, v0: f64, t: f64) -> f64 {
+    /// [`Flow::velocity`] started from the tabulated inverse of the potential
+    /// (`guide` built for this flow): the first Halley step then already
+    /// converges, about three times cheaper. Same result to rounding.
+    #[inline]
+    pub fn velocity_guided(&self, v0: f64, t: f64, guide: &InverseGuide) -> f64 {
+        let v0r = self.refl * v0;
+        self.refl * self.velocity_canonical(v0r, t, Some(guide))
+    }
+
+    fn velocity_canonical(&self, v0: f64, t: f64, guide: Option<&InverseGuide>) -> f64 {
         let (s, vs, k) = (self.s, self.vs, self.k);
         let ua = vs - v0;
         if !(t > 0.0) || ua == 0.0 {
@@ -414,10 +424,11 @@ impl Flow {
             DragLaw::Linear if t < 1.0 => v0 - ua * (-t).exp_m1(),
             DragLaw::Linear => vs - ua * (-t).exp(),
             DragLaw::Tan => {
-                let (sa, ca) = a.sin_cos();
-                let phi_a = sa.ln() + s * ua;
+                let sa = a.sin();
+                let ln_sa = sa.ln();
+                let phi_a = ln_sa + s * ua;
                 let c = phi_a - kt;
-                let r0 = -(sa / a).ln();
+                let r0 = wa - ln_sa; // -ln(sin a / a) ≥ 0
                 let (lo, hi) = if sg > 0.0 {
                     (c - s * a, c + r0)
                 } else {
@@ -427,10 +438,10 @@ impl Flow {
                 if hi < self.tiny_w {
                     return vs;
                 }
-                let guess = if precise {
-                    -kt / (a * ca / sa + s * sg * a)
-                } else {
-                    c - wa
+                let guess = match guide {
+                    Some(g) if sg > 0.0 => g.ln_u(c) - wa,
+                    _ if precise => -kt / (a * a.cos() / sa + s * sg * a),
+                    _ => c - wa,
                 };
                 let h = |dl: f64| {
                     let e = a * dl.exp();
@@ -470,10 +481,10 @@ impl Flow {
                 if hi < self.tiny_w {
                     return vs;
                 }
-                let guess = if precise {
-                    -kt / (a / a.tanh() - s * sg * a)
-                } else {
-                    c - wa
+                let guess = match guide {
+                    Some(g) if sg > 0.0 => g.ln_u(c) - wa,
+                    _ if precise => -kt / (a / a.tanh() - s * sg * a),
+                    _ => c - wa,
                 };
                 let h = |dl: f64| {
                     let e = a * dl.exp();
@@ -501,6 +512,88 @@ impl Flow {
                 ))
             }
         }
+    }
+}
+
+/// Tabulated inverse of the flow potential for one [`Flow`] on the velocity
+/// interval (-|v*|, |v*|): ln u as a function of Φ (canonical frame), by cubic
+/// Hermite interpolation on a uniform Φ grid (nodes solved once with the
+/// Halley iteration), and the small-u expansion ln u = Φ ∓ s e^Φ + O(u²)
+/// below it. Used only as a starting guess (error ~1e-9), so the result of
+/// [`Flow::velocity_guided`] does not depend on its accuracy.
+#[derive(Clone, Debug)]
+pub struct InverseGuide {
+    /// Φ at the first node (u = 1e-3).
+    phi0: f64,
+    /// Node spacing and its inverse.
+    h: f64,
+    inv_h: f64,
+    /// ln u and d ln u / dΦ at the nodes.
+    lnu: Vec<f64>,
+    dlnu: Vec<f64>,
+    /// Coefficient c of ln u ≈ Φ + c e^Φ for small u.
+    small: f64,
+}
+
+impl InverseGuide {
+    /// Nodes on the uniform Φ grid.
+    const NODES: usize = 1024;
+
+    /// Build for `flow` (any law; linear gets the exact ln u = Φ).
+    pub fn new(flow: &Flow) -> Self {
+        let (s, vs) = (flow.s, flow.vs);
+        let dphi = |u: f64| match flow.law {
+            DragLaw::Linear => 1.0 / u,
+            DragLaw::Tan => 1.0 / u.tan() + s,
+            DragLaw::Tanh => 1.0 / u.tanh() - s,
+        };
+        let small = match flow.law {
+            DragLaw::Linear => 0.0,
+            DragLaw::Tan => -s,
+            DragLaw::Tanh => s,
+        };
+        let pot = |u: f64| flow.potential(flow.refl * (vs - u));
+        let u_far = 2.0 * vs;
+        let phi_max = pot(u_far);
+        let phi0 = pot(1e-3_f64.min(0.5 * u_far));
+        let n = Self::NODES;
+        let h = (phi_max - phi0) / (n - 1) as f64;
+        let mut lnu = Vec::with_capacity(n);
+        let mut dlnu = Vec::with_capacity(n);
+        for i in 0..n {
+            let phi = phi0 + h * i as f64;
+            let t = ((phi_max - phi) / flow.k).max(0.0);
+            let u = vs - flow.velocity_canonical(-vs, t, None);
+            lnu.push(u.ln());
+            dlnu.push(1.0 / (u * dphi(u)));
+        }
+        InverseGuide {
+            phi0,
+            h,
+            inv_h: 1.0 / h,
+            lnu,
+            dlnu,
+            small,
+        }
+    }
+
+    /// Estimate of ln u at potential Φ.
+    #[inline]
+    pub fn ln_u(&self, phi: f64) -> f64 {
+        if !(phi >= self.phi0) {
+            return phi + self.small * phi.exp();
+        }
+        let x = (phi - self.phi0) * self.inv_h;
+        let i = (x as usize).min(self.lnu.len() - 2);
+        let tt = x - i as f64;
+        let (y0, y1) = (self.lnu[i], self.lnu[i + 1]);
+        let (m0, m1) = (self.dlnu[i] * self.h, self.dlnu[i + 1] * self.h);
+        let t2 = tt * tt;
+        let t3 = t2 * tt;
+        (2.0 * t3 - 3.0 * t2 + 1.0) * y0
+            + (t3 - 2.0 * t2 + tt) * m0
+            + (-2.0 * t3 + 3.0 * t2) * y1
+            + (t3 - t2) * m1
     }
 }
 

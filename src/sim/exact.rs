@@ -19,7 +19,7 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 
 use crate::error::{Error, Result};
-use crate::model::drag::Flow;
+use crate::model::drag::{Flow, InverseGuide};
 use crate::model::{Drag, Params};
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -207,6 +207,8 @@ fn fit_piece(f: &dyn Fn(f64) -> [f64; 2], a: f64, b: f64) -> (bool, [[f64; NC]; 
 struct Sampler {
     /// Flows for s = +Sigma (index 0) and s = -Sigma (index 1).
     flows: [Flow; 2],
+    /// Their tabulated inverse potentials (Newton starting points).
+    guides: [InverseGuide; 2],
     lambda: f64,
     total_rate: f64,
     vr: f64,
@@ -261,8 +263,10 @@ impl Sampler {
         ];
         let vr = params.reset_velocity();
         let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
+        let guides = [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])];
         Ok(Sampler {
             flows,
+            guides,
             phi_edges,
             psi_vr,
             lambda: params.lambda(),
@@ -326,24 +330,25 @@ impl Sampler {
             let t_end = (t + gap).min(self.t_max);
             let si = usize::from(!plus);
             let flow = &self.flows[si];
+            let guide = &self.guides[si];
             let table = &self.tables[si];
             let vs = table.fixed_point();
             // Moments at grid times inside (t, t_end].
             while k < self.times.len() && self.times[k] <= t_end {
                 let dt = self.times[k] - t;
-                let vk = flow.velocity(v, dt);
+                let vk = flow.velocity_guided(v, dt, guide);
                 let xk = x + vs * dt - table.deficits(v, vk).0;
                 obs.record(k, vk, xk);
                 k += 1;
             }
             let dt = t_end - t;
-            let vb = flow.velocity(v, dt);
+            let vb = flow.velocity_guided(v, dt, guide);
             let psi_a = psi_start.unwrap_or_else(|| table.psi(v));
             let psi_b = table.psi(vb);
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
                 let (va, psi_w, dw) = if t < self.burn_in {
-                    let va = flow.velocity(v, self.burn_in - t);
+                    let va = flow.velocity_guided(v, self.burn_in - t, guide);
                     (va, table.psi(va), t_end - self.burn_in)
                 } else {
                     (v, psi_a, dt)
@@ -426,6 +431,7 @@ pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Res
 /// A flow segment is tested with the exact flow time to vt (no overshoot);
 /// a reset to v_r ≥ vt counts as passage at the reset instant. Returns
 /// (passage time, or None if not reached by `t_max`; number of events).
+/// For many particles build a [`FirstPassage`] once instead (faster).
 pub fn first_passage(
     params: &Params,
     v0: f64,
@@ -434,40 +440,82 @@ pub fn first_passage(
     t_max: f64,
     rng: &mut Rng,
 ) -> (Option<f64>, u64) {
-    if v0 >= vt {
-        return (Some(0.0), 0);
+    FirstPassage::with_guides(params, false).run(v0, vt, start_plus, t_max, rng)
+}
+
+/// Prepared exact first-passage sampler for one parameter set (flows and
+/// their tabulated inverse potentials built once); see [`first_passage`].
+#[derive(Clone, Debug)]
+pub struct FirstPassage {
+    flows: [Flow; 2],
+    guides: Option<[InverseGuide; 2]>,
+    lambda: f64,
+    total_rate: f64,
+    vr: f64,
+}
+
+impl FirstPassage {
+    /// Prepare for `params`.
+    pub fn new(params: &Params) -> Self {
+        Self::with_guides(params, true)
     }
-    let flows = [
-        Flow::new(params.drag(), params.sigma()),
-        Flow::new(params.drag(), -params.sigma()),
-    ];
-    let total = params.lambda() + params.rate();
-    let lambda = params.lambda();
-    let vr = params.reset_velocity();
-    let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-    let mut events = 0u64;
-    loop {
-        let gap = exp_gap(rng, total);
-        let flow = &flows[usize::from(!plus)];
-        if plus {
-            let tau = flow.time(v, vt);
-            if tau <= gap {
-                let hit = t + tau;
-                return (if hit <= t_max { Some(hit) } else { None }, events);
+
+    fn with_guides(params: &Params, guided: bool) -> Self {
+        let flows = [
+            Flow::new(params.drag(), params.sigma()),
+            Flow::new(params.drag(), -params.sigma()),
+        ];
+        let guides = guided.then(|| [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])]);
+        FirstPassage {
+            flows,
+            guides,
+            lambda: params.lambda(),
+            total_rate: params.lambda() + params.rate(),
+            vr: params.reset_velocity(),
+        }
+    }
+
+    /// One upward first passage, as [`first_passage`].
+    pub fn run(
+        &self,
+        v0: f64,
+        vt: f64,
+        start_plus: bool,
+        t_max: f64,
+        rng: &mut Rng,
+    ) -> (Option<f64>, u64) {
+        if v0 >= vt {
+            return (Some(0.0), 0);
+        }
+        let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
+        let mut events = 0u64;
+        loop {
+            let gap = exp_gap(rng, self.total_rate);
+            let si = usize::from(!plus);
+            let flow = &self.flows[si];
+            if plus {
+                let tau = flow.time(v, vt);
+                if tau <= gap {
+                    let hit = t + tau;
+                    return (if hit <= t_max { Some(hit) } else { None }, events);
+                }
             }
-        }
-        if t + gap >= t_max {
-            return (None, events);
-        }
-        v = flow.velocity(v, gap);
-        t += gap;
-        events += 1;
-        if rng.gen::<f64>() * total < lambda {
-            plus = !plus;
-        } else {
-            v = vr;
-            if v >= vt {
-                return (Some(t), events);
+            if t + gap >= t_max {
+                return (None, events);
+            }
+            v = match &self.guides {
+                Some(g) => flow.velocity_guided(v, gap, &g[si]),
+                None => flow.velocity(v, gap),
+            };
+            t += gap;
+            events += 1;
+            if rng.gen::<f64>() * self.total_rate < self.lambda {
+                plus = !plus;
+            } else {
+                v = self.vr;
+                if v >= vt {
+                    return (Some(t), events);
+                }
             }
         }
     }
