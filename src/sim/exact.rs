@@ -10,8 +10,17 @@
 //! integrals I_k = ∫ (v* - v)^k dt = ∫ (v* - v)^k / (s - g(v)) dv, whose
 //! integrands are smooth up to the fixed point v*. The sampler tabulates their
 //! antiderivatives once per run as piecewise Chebyshev series ([`DeficitTable`],
-//! built from the trait's quadrature and checked against it to 1e-13), so an
-//! event costs one Newton solve and a few polynomial evaluations.
+//! built from the trait's quadrature and checked against it to 1e-13), and
+//! the velocity solve starts from a tabulated inverse of the flow potential
+//! ([`InverseGuide`]), so an event costs about one Halley step (three
+//! transcendental functions), one exponential waiting time and a few
+//! polynomial evaluations. Occupation times come from the flow potential
+//! at precomputed bin edges (no transcendental per crossed edge; bins crossed
+//! in full are counted in a difference array and weighted by their exact
+//! crossing time at the end of the particle).
+//!
+//! Paper references: flow Eq. 5, reset rule Eq. 3 (here to v_r, noise kept),
+//! velocity bounds Eqs. 8-10; the Euler scheme it replaces is Eqs. 14-16.
 //!
 //! Estimators are exact functionals of each path: moments at the grid times
 //! (flow evaluated inside the segment), time averages of v and v² and the
