@@ -229,6 +229,8 @@ struct Sampler {
     phi_edges: [Vec<f64>; 2],
     /// Ψ(v_r) of each table (segment start after a reset).
     psi_vr: [[f64; 2]; 2],
+    /// Flow potential at v_r, per noise state.
+    phi_vr: [f64; 2],
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
@@ -272,12 +274,14 @@ impl Sampler {
         ];
         let vr = params.reset_velocity();
         let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
+        let phi_vr = [flows[0].potential(vr), flows[1].potential(vr)];
         let guides = [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])];
         Ok(Sampler {
             flows,
             guides,
             phi_edges,
             psi_vr,
+            phi_vr,
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
@@ -295,14 +299,24 @@ impl Sampler {
     /// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
     /// in full via the difference array of crossings.
     #[allow(clippy::too_many_arguments)]
-    fn occupy(&self, obs: &Observables, sc: &mut Scratch, si: usize, va: f64, vb: f64, dt: f64) {
+    #[allow(clippy::too_many_arguments)]
+    fn occupy(
+        &self,
+        obs: &Observables,
+        sc: &mut Scratch,
+        si: usize,
+        va: f64,
+        pa: Option<f64>,
+        vb: f64,
+        dt: f64,
+    ) {
         let (ka, kb) = (obs.bin_of(va), obs.bin_of(vb));
         if ka == kb {
             sc.occ[ka] += dt;
             return;
         }
         let flow = &self.flows[si];
-        let pa = flow.potential(va);
+        let pa = pa.unwrap_or_else(|| flow.potential(va));
         let k = flow.rate();
         let phi = &self.phi_edges[si];
         // Time to reach edge e (clamped into [0, dt] against rounding).
@@ -356,16 +370,18 @@ impl Sampler {
             let psi_b = table.psi(vb);
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
-                let (va, psi_w, dw) = if t < self.burn_in {
+                let (va, psi_w, phi_w, dw) = if t < self.burn_in {
                     let va = flow.velocity_guided(v, self.burn_in - t, guide);
-                    (va, table.psi(va), t_end - self.burn_in)
+                    (va, table.psi(va), None, t_end - self.burn_in)
                 } else {
-                    (v, psi_a, dt)
+                    // After a reset the start potential is the precomputed one.
+                    let phi = psi_start.map(|_| self.phi_vr[si]);
+                    (v, psi_a, phi, dt)
                 };
                 let (j1, j2) = (psi_b[0] - psi_w[0], psi_b[1] - psi_w[1]);
                 int_v += vs * dw - j1;
                 int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-                self.occupy(obs, sc, si, va, vb, dw);
+                self.occupy(obs, sc, si, va, phi_w, vb, dw);
             }
             x += vs * dt - (psi_b[0] - psi_a[0]);
             v = vb;
