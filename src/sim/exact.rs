@@ -50,8 +50,9 @@ pub struct DeficitTable {
     vs: f64,
     /// Piece boundaries (strictly increasing, first = lo, last = hi).
     bounds: Vec<f64>,
-    /// Per piece: antiderivative coefficients of k = 1 and k = 2.
-    coef: Vec<[[f64; NC]; 2]>,
+    /// Per piece: antiderivative coefficients of k = 1 and k = 2, interleaved
+    /// ([j][k]) so both series are summed in one Clenshaw pass.
+    coef: Vec<[[f64; 2]; NC]>,
     /// Per piece: Ψ_k at the piece's left end.
     offset: Vec<[f64; 2]>,
 }
@@ -111,7 +112,11 @@ impl DeficitTable {
             for k in 0..2 {
                 acc[k] += clenshaw(&c[k], 1.0);
             }
-            coef.push(c);
+            let mut inter = [[0.0; 2]; NC];
+            for (j, cj) in inter.iter_mut().enumerate() {
+                *cj = [c[0][j], c[1][j]];
+            }
+            coef.push(inter);
         }
         Ok(DeficitTable {
             vs,
@@ -140,7 +145,8 @@ impl DeficitTable {
         let x = ((2.0 * v - a - b) / (b - a)).clamp(-1.0, 1.0);
         let c = &self.coef[p];
         let o = &self.offset[p];
-        [o[0] + clenshaw(&c[0], x), o[1] + clenshaw(&c[1], x)]
+        let r = clenshaw2(c, x);
+        [o[0] + r[0], o[1] + r[1]]
     }
 
     /// Deficit integrals (I1, I2) along the flow from va to vb
@@ -150,6 +156,20 @@ impl DeficitTable {
         let (a, b) = (self.psi(va), self.psi(vb));
         (b[0] - a[0], b[1] - a[1])
     }
+}
+
+/// Two Chebyshev series Σ_j c_j[k] T_j(x), k = 0, 1, in one Clenshaw pass
+/// (independent recurrences interleaved for instruction-level parallelism).
+#[inline]
+fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
+    let (mut b1, mut b2) = ([0.0f64; 2], [0.0f64; 2]);
+    let x2 = 2.0 * x;
+    for cj in c[1..].iter().rev() {
+        let b0 = [x2 * b1[0] + (cj[0] - b2[0]), x2 * b1[1] + (cj[1] - b2[1])];
+        b2 = b1;
+        b1 = b0;
+    }
+    [x * b1[0] + (c[0][0] - b2[0]), x * b1[1] + (c[0][1] - b2[1])]
 }
 
 /// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
