@@ -209,9 +209,9 @@ const PINNED: [u64; 6] = [
     0xbf93f5be25f7139a,
 ];
 
-/// Grid handling: times are recorded at round(t/dt) and reported as n·dt;
-/// grid times on the same step, a burn-in at t_max, dt above the stability
-/// or reset limit are rejected naming the flag.
+/// Grid handling: times are recorded at round(t/dt) and reported as n·dt,
+/// times on one step are recorded once; a burn-in at t_max, dt above the
+/// stability or reset limit are rejected naming the flag.
 #[test]
 fn plan_validation_and_rounding() {
     let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
@@ -244,10 +244,13 @@ fn plan_validation_and_rounding() {
         1,
     )
     .unwrap();
-    assert_eq!(
-        name(EulerPlan::new(&p, &close, 1e-3).unwrap_err()),
-        "--samples"
-    );
+    // Times on the same step are recorded once.
+    let plan = EulerPlan::new(&p, &close, 1e-3).unwrap();
+    assert_eq!(plan.record_steps, vec![0, 10, 1000]);
+    let obs = simulate(&p, &close, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
+    assert_eq!(obs.times, vec![0.0, 0.01, 1.0]);
+    assert_eq!(obs.moment_rows().len(), 3);
+    assert_eq!(obs.v2[2].n, 10);
     let late = spec(10, 1.0, 3, 0.9999, 4, 1);
     assert_eq!(
         name(EulerPlan::new(&p, &late, 1e-3).unwrap_err()),
