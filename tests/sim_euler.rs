@@ -394,15 +394,14 @@ fn r0_density_matches_exact() {
         );
 
         // Time-averaged density, per-bin z-scores.
-        for b in 0..bins {
-            let acc = &obs.density_time[b];
-            let zb = z(acc.mean(), prob[b] / w, acc.sem());
+        for (b, (acc, pb)) in obs.density_time.iter().zip(&prob).enumerate() {
+            let zb = z(acc.mean(), pb / w, acc.sem());
             assert!(
                 zb < Z_MAX,
                 "{drag} bin {b}: {} ± {} vs {} (z = {zb:.2})",
                 acc.mean(),
                 acc.sem(),
-                prob[b] / w
+                pb / w
             );
         }
         let sum = obs.summary();
