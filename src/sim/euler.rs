@@ -21,6 +21,12 @@
 //! same process in distribution with two random numbers per event instead of
 //! two per step (tested in `tests/sim_euler.rs` and below).
 //!
+//! Implementation: the drag law and sampler are matched once per run and the
+//! kernel is monomorphised; [`LANES`] particles are integrated side by side
+//! (bit-identical to one at a time); g(v) uses the Cephes [`tan`] and an
+//! expm1-based [`tanh`] (within 3 ulp of libm, platform-independent) instead
+//! of `DragLaw::force`.
+//!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
 //! round to the same step (closer than dt, e.g. the short end of a log grid)
