@@ -14,10 +14,15 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    Analytic(cli::analytic::AnalyticArgs),
+}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Analytic(a) => cli::analytic::run(a),
+    }
 }
 
 fn main() -> ExitCode {
