@@ -79,7 +79,12 @@ impl Panels {
 /// reached. Global (not per-panel) control matters for endpoint singularities
 /// w^a with small a, whose leftmost panel error shrinks only like h^{1+a}.
 /// Panels are returned in ascending order.
-pub fn adaptive<F: Fn(f64) -> f64>(f: &F, start: &[f64], tol_abs: f64, max_panels: usize) -> Panels {
+pub fn adaptive<F: Fn(f64) -> f64>(
+    f: &F,
+    start: &[f64],
+    tol_abs: f64,
+    max_panels: usize,
+) -> Panels {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
     struct P {

@@ -20,7 +20,12 @@ pub struct AnalyticArgs {
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub lambda: f64,
     /// Reset rate: the closed form exists only for r = 0 (any other value is rejected).
-    #[arg(long, short = 'r', default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        short = 'r',
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     pub rate: f64,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).
     #[arg(long, default_value_t = 1001)]
@@ -77,7 +82,7 @@ fn grid(vu: f64, n: usize) -> Vec<f64> {
 pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
     let params = Params::new(args.drag, args.sigma, args.lambda, args.rate, 0.0)?;
-    if !(args.points >= 2) {
+    if args.points < 2 {
         return Err(Error::invalid("--points", args.points, "points >= 2").into());
     }
     let d = R0Density::from_params(&params)?;
