@@ -238,14 +238,14 @@ pub fn regime(drag: DragLaw, sigma: f64, lambda: f64) -> Regime {
             .iter()
             .filter(|e| e.v >= 0.0)
             .map(|e| {
-                let k = match e.kind {
-                    ExtremumKind::Maximum => "maximum",
-                    ExtremumKind::Minimum => "minimum",
+                let (one, two) = match e.kind {
+                    ExtremumKind::Maximum => ("maximum", "maxima"),
+                    ExtremumKind::Minimum => ("minimum", "minima"),
                 };
                 if e.v == 0.0 {
-                    format!("local {k} at v = 0")
+                    format!("local {one} at v = 0")
                 } else {
-                    format!("local {k}s at v = ±{:.6}", e.v)
+                    format!("local {two} at v = ±{:.6}", e.v)
                 }
             })
             .collect::<Vec<_>>()
