@@ -4,6 +4,7 @@
 pub mod analytic;
 pub mod common;
 pub mod progress;
+pub mod simulate;
 
 use serde::Serialize;
 
