@@ -496,3 +496,43 @@ fn matches_simulation_of_the_process() {
     simulate_against_density(DragLaw::Tan, 3.0, 0.9, 3000, 11);
     simulate_against_density(DragLaw::Tanh, 0.6, 0.85, 3000, 12);
 }
+
+#[test]
+fn extreme_parameters_stay_accurate() {
+    // Linear drag: exact Beta moments from nearly-all-mass-at-the-edges to a
+    // needle at 0 (c = lambda up to 1e4; the density spans 1e±6 in scale).
+    for (s, l) in [(1e-6, 1e-3), (1.0, 1e-6), (1e6, 1e4), (2.0, 3e3)] {
+        let d = R0Density::new(DragLaw::Linear, s, l).unwrap();
+        let exact = s * s / (1.0 + 2.0 * l);
+        assert!(
+            ((d.v2() - exact) / exact).abs() < 1e-12,
+            "linear {s} {l}: {} vs {exact}",
+            d.v2()
+        );
+        assert!((d.cdf(0.3 * s) - d.cdf(-0.3 * s) - (1.0 - 2.0 * d.cdf(-0.3 * s))).abs() < 1e-14);
+    }
+    // Huge lambda: Gaussian limit <v²> ≈ Sigma²/(2(lambda-1)) (tan) up to O(1/lambda).
+    let d = R0Density::new(DragLaw::Tan, 3.0, 1e6).unwrap();
+    let approx = 9.0 / (2.0 * (1e6 - 1.0));
+    assert!(((d.v2() - approx) / approx).abs() < 1e-4, "{}", d.v2());
+    for (drag, s, l) in [
+        (DragLaw::Tan, 3.0, 1e6),
+        (DragLaw::Tanh, 0.999, 1e3),
+        (DragLaw::Tan, 3.0, 1e-6),
+    ] {
+        let d = R0Density::new(drag, s, l).unwrap();
+        let vu = d.bounds().1;
+        let mut prev = 0.0;
+        for i in 0..=2000 {
+            let v = -vu + 2.0 * vu * i as f64 / 2000.0;
+            let f = d.cdf(v);
+            assert!(
+                f.is_finite() && f >= prev - 1e-15,
+                "{drag} {s} {l} cdf({v}) = {f}"
+            );
+            assert!(d.pdf(v).is_finite());
+            prev = f;
+        }
+        assert_eq!(prev, 1.0);
+    }
+}

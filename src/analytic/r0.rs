@@ -342,6 +342,24 @@ fn sinhc(w: f64) -> f64 {
     }
 }
 
+/// Panel boundaries in u = w^p for w ∈ [0, w_top]: n uniform steps in w plus
+/// w_top/n · 2^{-k}, k = 1..40, mapped to u. Mapping from w matters for tiny p
+/// (λ ≪ g'(v_u)), where all of w ≳ 1e-300 is squeezed into a sliver of width
+/// ~p next to u_top that a partition uniform in u would never sample.
+fn breakpoints(w_top: f64, n: usize, p: f64) -> Vec<f64> {
+    let mut ws: Vec<f64> = (1..=n).map(|j| w_top * j as f64 / n as f64).collect();
+    ws.extend((1..=40).map(|k| w_top / n as f64 * 0.5f64.powi(k)));
+    ws.sort_by(f64::total_cmp);
+    let mut us = vec![0.0];
+    for w in ws {
+        let u = if p == 1.0 { w } else { w.powf(p) };
+        if u > *us.last().unwrap() {
+            us.push(u);
+        }
+    }
+    us
+}
+
 impl R0Density {
     /// Build and normalise. Sigma rules as [`Params`]; λ > 0 and finite (at λ = 0
     /// the velocity piles up at the edges and no density exists).
@@ -377,10 +395,10 @@ impl R0Density {
             ln_norm: 0.0,
             v2: 0.0,
         };
-        let umax = vu.powf(m);
-        // Initial partition: fine enough to see a peak of width ~ 1/√λ at v = 0.
+        // Initial partition: uniform in w, fine enough to see a peak of width
+        // ~ 1/√λ at v = 0, plus geometric points toward the edge.
         let n0 = (16.0 * lambda.sqrt().max(1.0)).min(4096.0) as usize;
-        let start: Vec<f64> = (0..=n0).map(|i| umax * i as f64 / n0 as f64).collect();
+        let start = breakpoints(vu, n0, m);
         let g = |u: f64| d.integrand(u);
         let rough: f64 = start.windows(2).map(|w| quad::gk15(&g, w[0], w[1]).0).sum();
         let panels = quad::adaptive(&g, &start, REL_TOL * rough, MAX_PANELS);
@@ -421,10 +439,10 @@ impl R0Density {
         Self::new(p.drag(), p.sigma(), p.lambda())
     }
 
-    /// ln φ(w) with φ = P_unnorm / w^a: a ln(s/w) - c ln q, s = 1 - g²/Σ²,
-    /// q = 1 + g² (tan), 1 - g² (tanh), 1 (linear), at v = v_u - w, w ∈ [0, v_u].
-    /// Uses Σ - g(v_u - w) = w · (D/w) from exact identities (no cancellation).
-    fn ln_phi(&self, w: f64) -> f64 {
+    /// Near-edge terms at v = v_u - w: (ln(s/w), ln q) with s = 1 - g²/Σ² and
+    /// q = 1 + g² (tan), 1 - g² (tanh), 1 (linear). Uses Σ - g(v_u - w) = w·(D/w)
+    /// from exact identities in Σ and w, so there is no cancellation at the edge.
+    fn edge_terms(&self, w: f64) -> (f64, f64) {
         let s = self.sigma;
         let (d_over_w, g) = match self.drag {
             DragLaw::Tan => {
@@ -441,21 +459,54 @@ impl R0Density {
         };
         let dd = w * d_over_w;
         let s_over_w = d_over_w * (2.0 * s - dd) / (s * s);
-        let ln_q = match self.drag {
+        (s_over_w.ln(), self.ln_q(g))
+    }
+
+    /// Bulk terms (ln s, ln q) from g(v) directly: ln s = ln(1 - g²/Σ²) via
+    /// ln_1p keeps c·ln s accurate when c = λ/g'(v_u) is huge.
+    fn bulk_terms(&self, w: f64) -> (f64, f64) {
+        let g = crate::model::Drag::force(&self.drag, self.vu - w);
+        let r = g / self.sigma;
+        ((-r * r).ln_1p(), self.ln_q(g))
+    }
+
+    fn ln_q(&self, g: f64) -> f64 {
+        match self.drag {
             DragLaw::Tan => (g * g).ln_1p(),
             DragLaw::Tanh => (-g * g).ln_1p(),
             DragLaw::Linear => 0.0,
-        };
-        self.a * s_over_w.ln() - self.c * ln_q
+        }
     }
 
-    /// ln of the unnormalised density at distance w from the edge.
-    fn ln_unnorm(&self, w: f64) -> f64 {
-        let lp = self.ln_phi(w);
-        if self.a == 0.0 {
-            lp
+    /// The bulk formulas are used for w > v_u/2, the edge identities below.
+    fn in_bulk(&self, w: f64) -> bool {
+        w > 0.5 * self.vu
+    }
+
+    /// ln φ(w) with φ = P_unnorm / w^a = (s/w)^a q^{-c}.
+    fn ln_phi(&self, w: f64) -> f64 {
+        if self.in_bulk(w) {
+            let (ls, lq) = self.bulk_terms(w);
+            self.a * (ls - w.ln()) - self.c * lq
         } else {
-            self.a * w.ln() + lp
+            let (lsw, lq) = self.edge_terms(w);
+            self.a * lsw - self.c * lq
+        }
+    }
+
+    /// ln of the unnormalised density s^a q^{-c} (= 1 at v = 0) at distance w
+    /// from the edge.
+    fn ln_unnorm(&self, w: f64) -> f64 {
+        if self.in_bulk(w) {
+            let (ls, lq) = self.bulk_terms(w);
+            self.a * ls - self.c * lq
+        } else {
+            let (lsw, lq) = self.edge_terms(w);
+            if self.a == 0.0 {
+                -self.c * lq
+            } else {
+                self.a * (lsw + w.ln()) - self.c * lq
+            }
         }
     }
 
@@ -537,13 +588,21 @@ impl R0Density {
             return self.half;
         }
         if w <= EDGE_FRACTION * self.vu {
-            // Near the edge: integrate afresh in t = w^c, where the integrand
-            // (1/c) φ(t^{1/c}) tends to a constant, with a tolerance relative to
-            // this tail, so tiny tail masses keep their relative accuracy.
-            let h = |t: f64| self.ln_phi(t.powf(1.0 / self.c)).exp() / self.c;
-            let tmax = w.powf(self.c);
-            let rough = quad::gk15(&h, 0.0, tmax).0;
-            return quad::adaptive(&h, &[0.0, tmax], REL_TOL * rough, 2000).total();
+            // Near the edge: integrate afresh with a tolerance relative to this
+            // tail, so tiny tail masses keep their relative accuracy. Divergent
+            // edge (c < 1): in t = w^c, where the integrand (1/c) φ(t^{1/c}) tends
+            // to a constant; otherwise the density is bounded: directly in w.
+            let (h, p): (Box<dyn Fn(f64) -> f64 + '_>, f64) = if self.c < 1.0 {
+                (
+                    Box::new(|t: f64| self.ln_phi(t.powf(1.0 / self.c)).exp() / self.c),
+                    self.c,
+                )
+            } else {
+                (Box::new(|x: f64| self.ln_unnorm(x).exp()), 1.0)
+            };
+            let start = breakpoints(w, 4, p);
+            let rough: f64 = start.windows(2).map(|x| quad::gk15(&h, x[0], x[1]).0).sum();
+            return quad::adaptive(&h, &start, REL_TOL * rough, 4000).total();
         }
         // Last boundary ≤ u.
         let i = e.partition_point(|&x| x <= u) - 1;
