@@ -136,6 +136,15 @@ fn cdf_matches_independent_tail_integrals() {
         edges[40] = vu;
         let p = d.bin_probabilities(&edges);
         assert!(p.iter().all(|&x| x >= 0.0));
+        for (k, pk) in p.iter().enumerate() {
+            let diff = d.cdf(edges[k + 1]) - d.cdf(edges[k]);
+            assert!((pk - diff).abs() < 1e-13, "bin {k}: {pk} vs {diff}");
+        }
+        // A bin straddling 0 and bins beyond the interval.
+        let q = d.bin_probabilities(&[-2.0 * vu, -0.3 * vu, 0.2 * vu, 3.0 * vu]);
+        assert!((q[0] - d.cdf(-0.3 * vu)).abs() < 1e-14);
+        assert!((q[1] - (d.cdf(0.2 * vu) - d.cdf(-0.3 * vu))).abs() < 1e-14);
+        assert!((q.iter().sum::<f64>() - 1.0).abs() < 1e-14);
         let sum: f64 = p.iter().sum();
         assert!((sum - 1.0).abs() < 1e-12, "{drag} {s} {l}: {sum} {p:?}");
     }
