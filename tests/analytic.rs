@@ -254,6 +254,26 @@ fn satisfies_stationary_forward_equations() {
 }
 
 #[test]
+fn state_densities_near_the_edge() {
+    // P₋/P = (Σ - g)/(2Σ) ≈ g'(v_u) w/(2Σ) at distance w below v_u, to O(w).
+    let (s, l) = (3.0, 0.9);
+    let d = R0Density::new(DragLaw::Tan, s, l).unwrap();
+    let vu = d.bounds().1;
+    let v = vu - 1e-9;
+    let w = vu - v; // the representable distance
+    let (pp, pm) = d.state_pdf(v);
+    let expect = (1.0 + s * s) * w / (2.0 * s);
+    assert!(
+        ((pm / (pp + pm)) / expect - 1.0).abs() < 1e-7,
+        "{}",
+        pm / (pp + pm)
+    );
+    let (qp, qm) = d.state_pdf(-v);
+    assert_eq!((qp, qm), (pm, pp));
+    assert_eq!(d.state_pdf(2.0), (0.0, 0.0));
+}
+
+#[test]
 fn paper_closed_forms_are_correct_and_wrong_sign_fails() {
     // Eqs. Neqn17 / apeqn18a equal the derived density up to normalisation...
     for (drag, s, l) in CASES {

@@ -444,7 +444,16 @@ impl R0Density {
     /// from exact identities in Σ and w, so there is no cancellation at the edge.
     fn edge_terms(&self, w: f64) -> (f64, f64) {
         let s = self.sigma;
-        let (d_over_w, g) = match self.drag {
+        let (d_over_w, g) = self.edge_identities(w);
+        let dd = w * d_over_w;
+        let s_over_w = d_over_w * (2.0 * s - dd) / (s * s);
+        (s_over_w.ln(), self.ln_q(g))
+    }
+
+    /// ((Σ - g(v_u - w))/w, g(v_u - w)) from exact identities in Σ and w.
+    fn edge_identities(&self, w: f64) -> (f64, f64) {
+        let s = self.sigma;
+        match self.drag {
             DragLaw::Tan => {
                 let (sw, cw) = w.sin_cos();
                 let den = cw + s * sw;
@@ -456,10 +465,7 @@ impl R0Density {
                 (sinhc(w) * (1.0 - s * s) / den, (s * ch - sh) / den)
             }
             DragLaw::Linear => (1.0, s - w),
-        };
-        let dd = w * d_over_w;
-        let s_over_w = d_over_w * (2.0 * s - dd) / (s * s);
-        (s_over_w.ln(), self.ln_q(g))
+        }
     }
 
     /// Bulk terms (ln s, ln q) from g(v) directly: ln s = ln(1 - g²/Σ²) via
@@ -571,10 +577,22 @@ impl R0Density {
     }
 
     /// State-resolved densities (P₊, P₋) with P± = P (1 ± g/Σ)/2 (zero-flux condition).
+    /// The minority state near an edge (P₋ at v_u) keeps full relative accuracy.
     pub fn state_pdf(&self, v: f64) -> (f64, f64) {
         let p = self.pdf(v);
-        let r = crate::model::Drag::force(&self.drag, v) / self.sigma;
-        (0.5 * p * (1.0 + r), 0.5 * p * (1.0 - r))
+        if !(p > 0.0) {
+            return (0.5 * p, 0.5 * p);
+        }
+        let w = self.vu - v.abs();
+        // Σ - g(|v|) without cancellation near the edge.
+        let d = w * self.edge_identities(w).0;
+        let minority = 0.5 * p * d / self.sigma;
+        let majority = p - minority;
+        if v >= 0.0 {
+            (majority, minority)
+        } else {
+            (minority, majority)
+        }
     }
 
     /// Unnormalised mass between the edge and distance w from it (w ∈ [0, v_u]).
