@@ -18,21 +18,26 @@
 //! These coincide with the paper's Eq. Neqn17 (tan) and Eq. apeqn18a (tanh; its
 //! absolute value is immaterial since both factors are positive inside the
 //! interval): the paper's r = 0 closed forms are correct for the simulated process
-//! (tested in `tests/analytic.rs`). In all three cases c = λ / g'(v_u), and near
-//! the edges P ~ (v_u - |v|)^a with a = c - 1.
+//! (tested in `tests/analytic.rs`, also against an independent simulation of the
+//! process). The drift-sign slip of the paper's Sec. 2.2 does not enter: its FP
+//! Eqs. p2c4eqn11-12 carry ∂_v[(g ∓ Σ)P±] = -∂_v[(±Σ - g)P±], as derived here.
+//! In all three cases c = λ / g'(v_u), and near the edges P ~ (v_u - |v|)^a with
+//! a = c - 1 (paper Fig. 2a: tan, Σ = 3, λ = 0.9 gives a = -0.91). Linear drag:
+//! <v²> = Σ²/(1 + 2λ), as [`crate::analytic::linear::v2`] at r = 0.
 //!
 //! Extrema: d ln P/dv = 2g (g' - λ)/(Σ² - g²), so the interior extrema are v = 0
 //! and the solutions of g'(v) = λ.
 //!
 //! # Numerics
 //! The density is evaluated through w = v_u - |v| (distance to the edge) using
-//! exact identities for Σ - g(v_u - w), so it keeps full relative precision at
-//! distances far below the spacing of doubles near v_u. The half-interval
-//! w ∈ (0, v_u] is integrated in u = w^m, m = min(c, 1): for c < 1 (divergent
-//! edges) the integrand becomes (1/c) (v_u - |v|)^{-a} P, bounded and smooth up
-//! to u^{1/c} terms, so the mass hidden within 10⁻²⁰ of the edge is captured.
-//! Adaptive Gauss–Kronrod panels are kept so the CDF is a table look-up plus one
-//! 15-point rule.
+//! exact identities for Σ - g(v_u - w) near the edge, so it keeps full relative
+//! precision at distances far below the spacing of doubles near v_u; in the bulk
+//! (w > v_u/2) ln(1 - g²/Σ²) via ln_1p keeps huge exponents c accurate. The
+//! half-interval w ∈ (0, v_u] is integrated in u = w^m, m = min(c, 1): for c < 1
+//! (divergent edges) the integrand becomes (1/c) (v_u - |v|)^{-a} P, bounded and
+//! smooth up to u^{1/c} terms, so the mass hidden within 10⁻²⁰ of the edge is
+//! captured. Globally adaptive Gauss–Kronrod (G7/K15) panels are kept, so the
+//! CDF is a table look-up plus one 15-point rule (~1 µs).
 
 use super::quad::{self, Panels};
 use crate::error::{Error, Result};
