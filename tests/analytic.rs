@@ -329,6 +329,23 @@ fn regimes_of_the_paper_parameter_sets() {
     assert_eq!(e(DragLaw::Tanh, 0.6, 0.85), EdgeBehaviour::Cusp);
     assert_eq!(e(DragLaw::Tanh, 0.6, 1.2), EdgeBehaviour::Cusp);
     assert_eq!(e(DragLaw::Tanh, 0.6, 3.0), EdgeBehaviour::Smooth);
+    // Boundary values of lambda.
+    let r = regime(DragLaw::Tan, 3.0, 1.0);
+    assert_eq!((r.label.as_str(), r.extrema.len()), ("i", 1));
+    let r = regime(DragLaw::Tan, 3.0, 10.0);
+    assert_eq!((r.label.as_str(), r.edge), ("iii", EdgeBehaviour::Finite));
+    let r = regime(DragLaw::Tan, 3.0, 20.0);
+    assert_eq!((r.label.as_str(), r.edge), ("iii", EdgeBehaviour::Linear));
+    let r = regime(DragLaw::Tanh, 0.6, 0.64);
+    assert_eq!((r.label.as_str(), r.edge), ("a", EdgeBehaviour::Finite));
+    let r = regime(DragLaw::Tanh, 0.8, 1.0);
+    assert_eq!((r.label.as_str(), r.extrema.len()), ("d", 1));
+    assert_eq!(r.extrema[0].kind, ExtremumKind::Maximum);
+    // (degenerate quartic maximum: check monotone decrease on (0, v_u) instead)
+    let d = R0Density::new(DragLaw::Tanh, 0.8, 1.0).unwrap();
+    let vu = d.bounds().1;
+    let p: Vec<f64> = (0..=200).map(|i| d.pdf(vu * i as f64 / 201.0)).collect();
+    assert!(p.windows(2).all(|w| w[1] < w[0]));
     // Linear drag: edge-exponent based.
     assert_eq!(regime(DragLaw::Linear, 1.0, 0.5).label, "i");
     assert_eq!(regime(DragLaw::Linear, 1.0, 1.0).label, "uniform");

@@ -220,7 +220,7 @@ pub fn regime(drag: DragLaw, sigma: f64, lambda: f64) -> Regime {
             } else {
                 (
                     "d",
-                    format!("lambda > max(1, 2(1-Sigma^2)) = {}", two.max(1.0)),
+                    format!("lambda >= 1 and lambda > 2(1-Sigma^2) = {two}"),
                 )
             }
         }
