@@ -14,10 +14,15 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(cli::mfpt::MfptArgs),
+}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Mfpt(a) => cli::mfpt::run(a),
+    }
 }
 
 fn main() -> ExitCode {

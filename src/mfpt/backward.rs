@@ -264,14 +264,16 @@ enum Source<'a> {
     Nodes(&'a [f64], &'a [f64]),
 }
 
-/// Solve on the canonical (upward) mesh; returns (tau+, tau-) at the nodes.
+/// Solve on the canonical (upward) mesh; returns (tau+, tau-) at the nodes,
+/// or `None` when tau exceeds the f64 range (resetting so frequent that the
+/// target is practically never reached).
 fn solve_mesh(
     p: &Problem,
     m: &Mesh,
     rate: f64,
     sign: DriftSign,
     src: Source,
-) -> Result<(Vec<f64>, Vec<f64>)> {
+) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
     let par = &p.params;
     let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
     let nodes = m.v.len();
@@ -320,20 +322,27 @@ fn solve_mesh(
     a.solve(&mut b);
     let mut x = b;
     if rate > 0.0 {
+        // x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and R± = x±(v_r).
+        // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
+        // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
+        // so the 2×2 system is rewritten in sums of non-negative terms only:
+        // no cancellation even when tau ~ e^{r T} is astronomically large.
+        let mut q = vec![0.0; n];
+        q[n - 1] = 1.0;
+        a.solve(&mut q);
         a.solve(&mut cp);
         a.solve(&mut cm);
         let (kp, km) = (2 * m.reset, 2 * m.reset + 1);
-        // x = y0 - R+ y1 - R- y2 and R± = x±(v_r).
-        let (m11, m12, m21, m22) = (1.0 + cp[kp], cm[kp], cp[km], 1.0 + cm[km]);
-        let det = m11 * m22 - m12 * m21;
-        if !(det.abs() > 0.0) || !det.is_finite() {
-            return Err(Error::Numerical {
-                method: "mfpt backward solve",
-                reason: "singular reset coupling".into(),
-            });
+        let (y1m, y2p) = (cp[km], cm[kp]);
+        let (qp, qm) = (q[kp], q[km]);
+        // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
+        let (m11, m22) = (qp - y2p, qm - y1m);
+        let det = qp * qm - qp * y1m - qm * y2p;
+        if !(det > 0.0) || !det.is_finite() {
+            return Ok(None);
         }
-        let rp = (x[kp] * m22 - m12 * x[km]) / det;
-        let rm = (m11 * x[km] - m21 * x[kp]) / det;
+        let rp = (x[kp] * m22 - y2p * x[km]) / det;
+        let rm = (m11 * x[km] - y1m * x[kp]) / det;
         for k in 0..n {
             x[k] -= rp * cp[k] + rm * cm[k];
         }
@@ -341,12 +350,9 @@ fn solve_mesh(
     let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
     let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
     if tp.iter().chain(&tm).any(|t| !t.is_finite()) {
-        return Err(Error::Numerical {
-            method: "mfpt backward solve",
-            reason: "non-finite solution (mean first-passage time overflows)".into(),
-        });
+        return Ok(None);
     }
-    Ok((tp, tm))
+    Ok(Some((tp, tm)))
 }
 
 /// tau±(v) on the whole mesh, in the user's frame.
@@ -354,8 +360,31 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells);
-    let (tp, tm) = solve_mesh(&cp, &m, cp.params.rate(), opts.drift, Source::One)?;
+    let (tp, tm) = solve_mesh(&cp, &m, cp.params.rate(), opts.drift, Source::One)?
+        .ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
+}
+
+/// Start of the [`Error::Numerical`] reason when tau overflows f64.
+pub const OVERFLOW: &str = "the mean first-passage time exceeds the f64 range";
+
+fn overflow() -> Error {
+    Error::Numerical {
+        method: "mfpt backward solve",
+        reason: format!("{OVERFLOW} (~1e308): the target is practically never reached"),
+    }
+}
+
+/// Like [`profile`] at v_0, but `Ok(None)` when tau overflows f64.
+pub fn at_start_or_overflow(
+    problem: &Problem,
+    opts: &BackwardOptions,
+) -> Result<Option<BackwardSolution>> {
+    match profile(problem, opts) {
+        Ok(p) => Ok(Some(p.at_start())),
+        Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => Ok(None),
+        Err(e) => Err(e),
+    }
 }
 
 fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
@@ -377,6 +406,7 @@ fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile 
 }
 
 /// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
+/// Errors with [`Error::Numerical`] if tau overflows f64.
 pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
     let fine = profile(problem, opts)?.at_start();
     let half = BackwardOptions {
@@ -399,10 +429,11 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
     opts.validate()?;
     let (cp, _) = problem.canonical();
     let m = mesh(&cp, opts.cells);
-    let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?;
+    let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
     let sp: Vec<f64> = tp.iter().map(|t| tp[m.reset] - t).collect();
     let sm: Vec<f64> = tm.iter().map(|t| tm[m.reset] - t).collect();
-    let (dp, dm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?;
+    let (dp, dm) =
+        solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
     let i = m.start;
     Ok((0.5 * (tp[i] + tm[i]), 0.5 * (dp[i] + dm[i])))
 }

@@ -1,6 +1,8 @@
 //! Scans of tau against v_t or r (paper Fig. 7) and the optimal resetting rate.
 
-use super::backward::{profile, rate_derivative_at_zero, BackwardOptions, BackwardSolution};
+use super::backward::{
+    at_start_or_overflow, profile, OVERFLOW, rate_derivative_at_zero, BackwardOptions, BackwardSolution,
+};
 use super::Problem;
 use crate::error::{finite, Error, Result};
 use crate::parallel::{self, Progress};
@@ -37,6 +39,7 @@ pub fn scan_problem(base: &Problem, axis: ScanAxis, x: f64) -> Result<Problem> {
 
 /// tau against v_t or r: every value is validated first (nothing is solved
 /// if one is inadmissible), then solved in parallel (with error estimates).
+/// Points where tau overflows f64 get tau = tau± = +∞.
 pub fn scan(
     base: &Problem,
     axis: ScanAxis,
@@ -58,10 +61,23 @@ pub fn scan(
         .zip(values)
         .zip(sols)
         .map(|((p, &x), s)| {
+            let solution = match s {
+                Ok(s) => s,
+                Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => {
+                    BackwardSolution {
+                        tau: f64::INFINITY,
+                        tau_plus: f64::INFINITY,
+                        tau_minus: f64::INFINITY,
+                        cells: opts.cells,
+                        error_estimate: f64::NAN,
+                    }
+                }
+                Err(e) => return Err(e),
+            };
             Ok(ScanPoint {
                 x,
                 problem: *p,
-                solution: s?,
+                solution,
             })
         })
         .collect()
@@ -115,8 +131,9 @@ pub struct Optimum {
     pub grid: Vec<(f64, f64)>,
 }
 
-fn tau_at(base: &Problem, r: f64, opts: &BackwardOptions) -> Result<BackwardSolution> {
-    Ok(profile(&base.with_rate(r)?, opts)?.at_start())
+/// tau at rate r; +∞ where it overflows f64 (never the minimum).
+fn tau_at(base: &Problem, r: f64, opts: &BackwardOptions) -> Result<f64> {
+    Ok(at_start_or_overflow(&base.with_rate(r)?, opts)?.map_or(f64::INFINITY, |s| s.tau))
 }
 
 /// Golden-section minimisation of f on [a, b]; returns (x, f(x)).
@@ -182,7 +199,7 @@ pub fn optimize_rate(
         .collect();
     let taus = parallel::map(
         k as u64,
-        |i| tau_at(base, rs[i as usize], bo).map(|s| s.tau),
+        |i| tau_at(base, rs[i as usize], bo),
         progress,
     )
     .into_iter()
@@ -200,11 +217,11 @@ pub fn optimize_rate(
             (0.0, tau0)
         } else {
             // Minimum in (0, r_1]: refine in linear r.
-            golden(|r| Ok(tau_at(base, r, bo)?.tau), 0.0, rs[1], 1e-9)?
+            golden(|r| tau_at(base, r, bo), 0.0, rs[1], 1e-9)?
         }
     } else {
         let (x, f) = golden(
-            |lr| Ok(tau_at(base, lr.exp(), bo)?.tau),
+            |lr| tau_at(base, lr.exp(), bo),
             rs[kmin - 1].ln(),
             rs[kmin + 1].ln(),
             1e-9,
@@ -216,7 +233,7 @@ pub fn optimize_rate(
     } else {
         (r_opt, tau_opt)
     };
-    let at = tau_at(base, r_opt, bo)?;
+    let at = profile(&base.with_rate(r_opt)?, bo)?.at_start();
     Ok(Optimum {
         r_opt,
         tau_opt,
