@@ -10,7 +10,10 @@ fn problem(drag: DragLaw, sigma: f64, lambda: f64, r: f64, vr: f64, v0: f64, vt:
 }
 
 fn tau(p: &Problem, cells: usize) -> f64 {
-    profile(p, &BackwardOptions::with_cells(cells)).unwrap().at_start().tau
+    profile(p, &BackwardOptions::with_cells(cells))
+        .unwrap()
+        .at_start()
+        .tau
 }
 
 /// Composite Gauss-Legendre (10 nodes per panel) on [a, b].
@@ -25,7 +28,7 @@ fn gauss<F: Fn(f64) -> f64>(f: F, a: f64, b: f64, panels: usize) -> f64 {
     const W: [f64; 5] = [
         0.295_524_224_714_752_9,
         0.269_266_719_309_996_4,
-        0.219_086_362_515_982_0,
+        0.219_086_362_515_982,
         0.149_451_349_150_580_6,
         0.066_671_344_308_688_1,
     ];
@@ -54,7 +57,8 @@ fn linear_exact(sigma: f64, lambda: f64, v0: f64, vt: f64) -> (f64, f64, f64) {
     // ∫_{-Sigma}^v (Sigma² - u²)^lambda du with u = -Sigma cos(th).
     let inner = |v: f64| {
         let th = (-v / sigma).acos();
-        sigma.powf(2.0 * lambda + 1.0) * gauss(|t: f64| t.sin().powf(2.0 * lambda + 1.0), 0.0, th, 60)
+        sigma.powf(2.0 * lambda + 1.0)
+            * gauss(|t: f64| t.sin().powf(2.0 * lambda + 1.0), 0.0, th, 60)
     };
     let w = |v: f64| -(4.0 * lambda + 2.0) * (s2 - v * v).powf(-(lambda + 1.0)) * inner(v);
     let d_of = |v: f64| ((s2 - v * v) * w(v) + 2.0 * v) / (2.0 * lambda * sigma);
@@ -127,7 +131,10 @@ fn small_rate_limit_and_derivative() {
         let (t0, d0) = rate_derivative_at_zero(&p, &o).unwrap();
         assert_eq!(t0, profile(&p, &o).unwrap().at_start().tau);
         let eps = 1e-5;
-        let te = profile(&p.with_rate(eps).unwrap(), &o).unwrap().at_start().tau;
+        let te = profile(&p.with_rate(eps).unwrap(), &o)
+            .unwrap()
+            .at_start()
+            .tau;
         // tau(eps) = tau(0) + eps tau'(0) + O(eps²).
         assert!(rel(te, t0) < 1e-4);
         let fd = (te - t0) / eps;
@@ -210,7 +217,10 @@ fn paper_claims_optimal_rate() {
     // log-log plot, and tau grows monotonically for r ≥ 0.1.
     let fast = problem(DragLaw::Tan, 3.0, 50.0, 0.0, 0.0, -0.249, 0.5);
     let o = optimize_rate(&fast, &opts, &NoProgress).unwrap();
-    assert!(o.dtau_dr_r0 < 0.0 && o.r_opt > 0.005 && o.r_opt < 0.02, "{o:?}");
+    assert!(
+        o.dtau_dr_r0 < 0.0 && o.r_opt > 0.005 && o.r_opt < 0.02,
+        "{o:?}"
+    );
     assert!((o.tau_r0 - o.tau_opt) / o.tau_r0 < 5e-5, "{o:?}");
     let tail: Vec<f64> = o.grid.iter().filter(|g| g.0 >= 0.1).map(|g| g.1).collect();
     assert!(tail.windows(2).all(|w| w[1] > w[0]));

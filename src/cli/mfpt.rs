@@ -156,7 +156,8 @@ pub fn run(args: MfptArgs) -> anyhow::Result<()> {
 
 fn build(p: &ProblemArgs, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
     let params = p.model.params()?;
-    let v0 = p.v0.ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
+    let v0 =
+        p.v0.ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
     let problem = Problem::new(params, v0, vt)?;
     let opts = BackwardOptions::with_cells(p.cells);
     // Validates --cells.
@@ -232,7 +233,8 @@ fn print_lines(v: &serde_json::Value) {
 }
 
 fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
-    let vt = a.vt.ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
+    let vt =
+        a.vt.ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
     let (problem, opts) = build(&a.problem, vt)?;
     check_sim(&a.sim, &problem)?;
     let out = match &a.output.out {
@@ -354,7 +356,13 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         Over::Vt => (ScanAxis::Vt, values[0]),
         Over::Rate => (
             ScanAxis::Rate,
-            a.vt.ok_or_else(|| Error::invalid("--vt", "missing", "a target velocity (required with --over rate)"))?,
+            a.vt.ok_or_else(|| {
+                Error::invalid(
+                    "--vt",
+                    "missing",
+                    "a target velocity (required with --over rate)",
+                )
+            })?,
         ),
     };
     let (base, opts) = build(&a.problem, vt)?;
@@ -534,7 +542,11 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
     };
     if let Some(mut dir) = out {
         dir.write_json("optimum.json", &summary)?;
-        dir.write_csv("rate_grid.csv", &["rate", "tau"], best.grid.iter().map(|&(r, t)| [r, t]))?;
+        dir.write_csv(
+            "rate_grid.csv",
+            &["rate", "tau"],
+            best.grid.iter().map(|&(r, t)| [r, t]),
+        )?;
         dir.commit_with_provenance(Provenance::new(
             "mfpt optimize",
             "backward-box + golden-section",

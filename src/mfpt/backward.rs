@@ -6,16 +6,16 @@
 //! over the two nodes: second order on any mesh, and no coefficient is ever
 //! evaluated at v_l, where the - drift vanishes. There the ODE has a regular
 //! singular point: besides the regular solution, the homogeneous one grows as
-//! (v - v_l)^{-(lambda + r)/g'(v_l)}, so regularity (tau- finite) reduces the
-//! - equation at v_l to the algebraic relation
-//! (lambda + r) tau-(v_l) - lambda tau+(v_l) - r tau-(v_r) = 1.
+//! (v - v_l)^{-(lambda + r)/g'(v_l)}, so regularity (tau- finite) reduces
+//! the equation of the - state at v_l to the algebraic relation
+//! `(lambda + r) tau-(v_l) - lambda tau+(v_l) - r tau-(v_r) = 1`.
 //! Together with tau+(v_t) = 0 this closes the system. The + state
 //! integrates from v_t downwards, the - state from v_l upwards (their
 //! characteristic directions), so both boundary conditions are natural.
 //!
 //! Unknowns (tau+_0, tau-_0, tau+_1, ...) give a banded matrix (2 below,
 //! 2 above the diagonal) plus two columns for the non-local reset values
-//! tau±(v_r). Those are moved to the right-hand side (bordering): three
+//! tau±(v_r). Those are moved to the right-hand side (bordering): four
 //! band solves with one LU factorisation and a 2×2 system, O(N) in all.
 
 use super::Problem;
@@ -238,6 +238,7 @@ impl Band {
         }
         Ok(())
     }
+    #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
     fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
@@ -360,8 +361,8 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells);
-    let (tp, tm) = solve_mesh(&cp, &m, cp.params.rate(), opts.drift, Source::One)?
-        .ok_or_else(overflow)?;
+    let (tp, tm) =
+        solve_mesh(&cp, &m, cp.params.rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
 }
 
@@ -455,11 +456,10 @@ pub fn fixed_point_upwind(
     let par = &cp.params;
     let (g, sigma, lam, r) = (par.drag(), par.sigma(), par.lambda(), par.rate());
     let n = m.v.len();
-    let a: Vec<(f64, f64)> = m
-        .v
-        .iter()
-        .map(|&v| drifts(g, sigma, v, DriftSign::Simulated))
-        .collect();
+    let a: Vec<(f64, f64)> =
+        m.v.iter()
+            .map(|&v| drifts(g, sigma, v, DriftSign::Simulated))
+            .collect();
     let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
     for sweep in 1..=max_sweeps {
         let mut change = 0.0f64;

@@ -80,9 +80,13 @@ impl Problem {
         }
         if (up && !(vr < vt)) || (!up && !(vr > vt)) {
             let side = if up {
-                format!("v_r < vt = {vt} (same side as v0, so a reset cannot jump across the target)")
+                format!(
+                    "v_r < vt = {vt} (same side as v0, so a reset cannot jump across the target)"
+                )
             } else {
-                format!("v_r > vt = {vt} (same side as v0, so a reset cannot jump across the target)")
+                format!(
+                    "v_r > vt = {vt} (same side as v0, so a reset cannot jump across the target)"
+                )
             };
             return Err(Error::invalid("--reset-velocity", vr, side));
         }

@@ -1,7 +1,8 @@
 //! Scans of tau against v_t or r (paper Fig. 7) and the optimal resetting rate.
 
 use super::backward::{
-    at_start_or_overflow, profile, OVERFLOW, rate_derivative_at_zero, BackwardOptions, BackwardSolution,
+    at_start_or_overflow, profile, rate_derivative_at_zero, BackwardOptions, BackwardSolution,
+    OVERFLOW,
 };
 use super::Problem;
 use crate::error::{finite, Error, Result};
@@ -180,7 +181,11 @@ pub fn optimize_rate(
         return Err(Error::invalid("--r-min", r_min, "r_min > 0"));
     }
     if !(r_max > r_min) {
-        return Err(Error::invalid("--r-max", r_max, format!("r_max > r_min = {r_min}")));
+        return Err(Error::invalid(
+            "--r-max",
+            r_max,
+            format!("r_max > r_min = {r_min}"),
+        ));
     }
     if opts.grid_points < 3 {
         return Err(Error::invalid(
@@ -197,13 +202,9 @@ pub fn optimize_rate(
     let rs: Vec<f64> = (0..k)
         .map(|i| (la + (lb - la) * i as f64 / (k - 1) as f64).exp())
         .collect();
-    let taus = parallel::map(
-        k as u64,
-        |i| tau_at(base, rs[i as usize], bo),
-        progress,
-    )
-    .into_iter()
-    .collect::<Result<Vec<f64>>>()?;
+    let taus = parallel::map(k as u64, |i| tau_at(base, rs[i as usize], bo), progress)
+        .into_iter()
+        .collect::<Result<Vec<f64>>>()?;
     let grid: Vec<(f64, f64)> = rs.iter().copied().zip(taus.iter().copied()).collect();
     let kmin = (0..k)
         .min_by(|&i, &j| taus[i].total_cmp(&taus[j]))

@@ -90,6 +90,7 @@ impl FptStats {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FptSummary {
     /// (tau_plus + tau_minus)/2: the MFPT for a uniformly random initial state.
+    /// Means are over arrived particles (NaN if none of a half arrived).
     pub tau: f64,
     /// Its standard error.
     pub tau_err: f64,
@@ -161,7 +162,11 @@ impl EulerFpt {
         }
         let t_max = finite("--t-max", t_max)?;
         if !(t_max >= dt) {
-            return Err(Error::invalid("--t-max", t_max, format!("t_max >= dt = {dt}")));
+            return Err(Error::invalid(
+                "--t-max",
+                t_max,
+                format!("t_max >= dt = {dt}"),
+            ));
         }
         Ok(EulerFpt { problem, dt, t_max })
     }
@@ -277,7 +282,11 @@ mod tests {
             acc.push(geometric(&mut rng, p) as f64);
         }
         // Mean 1/p = 100, sd ≈ 99.5.
-        assert!((acc.mean() - 100.0).abs() < 4.0 * acc.sem(), "{}", acc.mean());
+        assert!(
+            (acc.mean() - 100.0).abs() < 4.0 * acc.sem(),
+            "{}",
+            acc.mean()
+        );
         assert_eq!(geometric(&mut rng, 0.0), u64::MAX);
     }
 }
