@@ -160,10 +160,7 @@ fn build(p: &ProblemArgs, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
         p.v0.ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
     let problem = Problem::new(params, v0, vt)?;
     let opts = BackwardOptions::with_cells(p.cells);
-    // Validates --cells.
-    if p.cells < 8 {
-        return Err(Error::invalid("--cells", p.cells, "cells >= 8"));
-    }
+    opts.validate()?;
     Ok((problem, opts))
 }
 

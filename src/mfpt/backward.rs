@@ -62,12 +62,13 @@ impl BackwardOptions {
             ..Default::default()
         }
     }
-    fn validate(&self) -> Result<()> {
-        if self.cells < 8 || self.cells > 100_000_000 {
+    /// 8 ≤ cells ≤ 2·10⁶ (the band matrix takes ~110 bytes per cell).
+    pub fn validate(&self) -> Result<()> {
+        if self.cells < 8 || self.cells > 2_000_000 {
             return Err(Error::invalid(
                 "--cells",
                 self.cells,
-                "8 <= cells <= 100000000",
+                "8 <= cells <= 2000000",
             ));
         }
         Ok(())

@@ -132,10 +132,11 @@ where
     )
 }
 
-/// Euler first-passage sampler (paper Eqs. 14-16): per step
-/// v ← v + dt (eta - g(v)); arrival when v ≥ v_t (time = steps·dt, an
-/// overshoot bias of at most dt); eta flips with probability
-/// q = ½(1 - e^{-2 lambda dt}); v ← v_r with probability r dt (noise kept).
+/// Euler first-passage sampler (paper Eqs. 14-16), step order as in
+/// [`crate::sim::euler`]: with probability r dt, v ← v_r (noise kept),
+/// otherwise v ← v + dt (eta - g(v)) and arrival if v ≥ v_t (time = steps·dt,
+/// an overshoot bias of at most dt); then eta flips with probability
+/// q = ½(1 - e^{-2 lambda dt}).
 /// Flip and reset steps are drawn as geometric waiting times — the same
 /// Markov chain as a Bernoulli trial every step, with one random number per
 /// event instead of two per step. Targets below v_0 run in the reflected frame.
@@ -206,20 +207,21 @@ impl EulerFpt {
         let mut step = 0u64;
         while step < max_steps {
             step += 1;
-            v += dt * (s - g(v));
-            if v >= vt {
-                return FptSample {
-                    time: Some(step as f64 * dt),
-                    work: step,
-                };
+            if step == next_reset {
+                v = vr;
+                next_reset = step + geometric(rng, pr);
+            } else {
+                v += dt * (s - g(v));
+                if v >= vt {
+                    return FptSample {
+                        time: Some(step as f64 * dt),
+                        work: step,
+                    };
+                }
             }
             if step == next_flip {
                 s = -s;
                 next_flip = step + geometric(rng, q);
-            }
-            if step == next_reset {
-                v = vr;
-                next_reset = step + geometric(rng, pr);
             }
         }
         FptSample {
