@@ -98,6 +98,9 @@ fn second_order_grid_convergence() {
         problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 0.5),
         problem(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0, -0.249, 0.5),
         problem(DragLaw::Linear, 1.0, 0.8, 3.0, 0.1, -0.5, 0.7),
+        // Targets close to v_u (graded mesh): tan v_u = 1.2490458, tanh 0.6931472.
+        problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 1.2489),
+        problem(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0, -0.249, 0.693),
     ] {
         let (a, b, c) = (tau(&p, 500), tau(&p, 1000), tau(&p, 2000));
         let order = ((a - b) / (b - c)).abs().log2();

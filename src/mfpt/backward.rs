@@ -1,7 +1,8 @@
 //! Direct solve of the MFPT backward equations (see [`crate::mfpt`]).
 //!
-//! Discretisation: box (midpoint) scheme on a piecewise-uniform mesh of
-//! [v_l, v_t] with v_0 and v_r as nodes. On each cell [v_i, v_{i+1}] both
+//! Discretisation: box (midpoint) scheme on a piecewise-smooth mesh of
+//! [v_l, v_t] with v_0 and v_r as nodes (graded towards v_t when v_t is
+//! close to v_u). On each cell [v_i, v_{i+1}] both
 //! first-order equations are imposed at the midpoint with tau± averaged
 //! over the two nodes: second order on any mesh, and no coefficient is ever
 //! evaluated at v_l, where the - drift vanishes. There the ODE has a regular
@@ -118,8 +119,8 @@ impl Profile {
     }
 }
 
-/// Piecewise-uniform mesh of [v_l, v_t] (canonical, upward frame) with v_0
-/// and v_r as nodes.
+/// Mesh of [v_l, v_t] (canonical, upward frame) with v_0 and v_r as nodes:
+/// uniform per segment, except the last one when v_t is close to v_u.
 struct Mesh {
     v: Vec<f64>,
     start: usize,
@@ -128,20 +129,58 @@ struct Mesh {
 
 fn mesh(p: &Problem, cells: usize) -> Mesh {
     let vl = p.params.v_lower();
+    let vu = p.params.v_upper();
     let mut cuts = vec![vl, p.v0, p.params.reset_velocity(), p.vt];
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
     let total = p.vt - vl;
     let mut v = vec![vl];
-    for w in cuts.windows(2) {
-        let n = ((cells as f64 * (w[1] - w[0]) / total).round() as usize).max(2);
+    let segments = cuts.len() - 1;
+    for (i, w) in cuts.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let n = ((cells as f64 * (b - a) / total).round() as usize).max(2);
+        let last = i + 1 == segments;
+        // Near v_u the + drift Sigma - g(v) ≈ g'(v_u)(v_u - v) vanishes and
+        // tau+ varies like ln(v_u - v): when v_t is close to v_u, up to half
+        // of the last segment's cells are spaced uniformly in ln(v_u - v)
+        // (node density 1/H + 1/(alpha (v_u - v))), smoothly switched on as
+        // v_u - v_t drops below a quarter of the segment length.
+        let (da, dt) = (vu - a, vu - b);
+        let weight = if last {
+            0.5 * (1.0 - 4.0 * dt / (b - a)).max(0.0)
+        } else {
+            0.0
+        };
+        let (nu, nl) = (
+            (1.0 - weight) * n as f64 / (b - a),
+            weight * n as f64 / (da / dt).ln(),
+        );
+        let count = |x: f64| nu * (x - a) + nl * (da / (vu - x)).ln();
+        let density = |x: f64| nu + nl / (vu - x);
+        let mut x = a;
         for k in 1..=n {
             // Last node of each segment exactly at the cut.
-            v.push(if k == n {
-                w[1]
+            x = if k == n {
+                b
+            } else if weight == 0.0 {
+                a + (b - a) * k as f64 / n as f64
             } else {
-                w[0] + (w[1] - w[0]) * k as f64 / n as f64
-            });
+                // Newton on count(x) = k (count is increasing and convex,
+                // so after the first step the iterates approach from above).
+                let target = k as f64;
+                let mut y = x;
+                for _ in 0..50 {
+                    let step = (target - count(y)) / density(y);
+                    let next = (y + step).clamp(x, b);
+                    if (next - y).abs() <= 1e-15 * (1.0 + y.abs()) {
+                        y = next;
+                        break;
+                    }
+                    y = next;
+                }
+                y
+            };
+            v.push(x);
         }
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
