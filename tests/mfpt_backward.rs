@@ -259,4 +259,8 @@ fn rejects_bad_problems() {
     assert!(Problem::new(l0, -0.2, 0.5).is_err());
     let ok = Problem::new(p, -0.2, 0.5).unwrap();
     assert!(solve(&ok, &BackwardOptions::with_cells(3)).is_err());
+    // Deserialisation validates too.
+    let s = serde_json::to_string(&ok).unwrap();
+    assert_eq!(serde_json::from_str::<Problem>(&s).unwrap(), ok);
+    assert!(serde_json::from_str::<Problem>(&s.replace("0.5", "1.5")).is_err());
 }

@@ -25,7 +25,7 @@ const PARTICLES: u64 = 6000;
 fn euler(p: &Problem, seed: u64) -> FptSummary {
     euler_first_passage(
         p,
-        dt_for(p.params.rate()),
+        dt_for(p.params().rate()),
         1e4,
         PARTICLES,
         seed,

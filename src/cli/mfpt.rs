@@ -166,13 +166,13 @@ fn build(p: &ProblemArgs, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
 
 /// Validate the simulation flags before anything runs.
 fn check_sim(s: &SimArgs, problem: &Problem) -> irtp::Result<()> {
-    if s.method == Method::Ode {
-        return Ok(());
-    }
-    if s.particles < 2 {
+    if s.method != Method::Ode && s.particles < 2 {
         return Err(Error::invalid("--particles", s.particles, "particles >= 2"));
     }
-    mfpt::EulerFpt::new(*problem, s.dt, s.t_max).map(|_| ())
+    match s.method {
+        Method::Ode => Ok(()),
+        Method::Euler => mfpt::EulerFpt::new(*problem, s.dt, s.t_max).map(|_| ()),
+    }
 }
 
 /// Particle estimate with the requested method.

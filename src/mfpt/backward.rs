@@ -128,12 +128,12 @@ struct Mesh {
 }
 
 fn mesh(p: &Problem, cells: usize) -> Mesh {
-    let vl = p.params.v_lower();
-    let vu = p.params.v_upper();
-    let mut cuts = vec![vl, p.v0, p.params.reset_velocity(), p.vt];
+    let vl = p.params().v_lower();
+    let vu = p.params().v_upper();
+    let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
-    let total = p.vt - vl;
+    let total = p.vt() - vl;
     let mut v = vec![vl];
     let segments = cuts.len() - 1;
     for (i, w) in cuts.windows(2).enumerate() {
@@ -185,8 +185,8 @@ fn mesh(p: &Problem, cells: usize) -> Mesh {
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
     Mesh {
-        start: find(p.v0),
-        reset: find(p.params.reset_velocity()),
+        start: find(p.v0()),
+        reset: find(p.params().reset_velocity()),
         v,
     }
 }
@@ -315,7 +315,7 @@ fn solve_mesh(
     sign: DriftSign,
     src: Source,
 ) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
-    let par = &p.params;
+    let par = &p.params();
     let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
     let nodes = m.v.len();
     let n = 2 * nodes;
@@ -402,7 +402,7 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells);
     let (tp, tm) =
-        solve_mesh(&cp, &m, cp.params.rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
+        solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
 }
 
@@ -493,7 +493,7 @@ pub fn fixed_point_upwind(
     BackwardOptions::with_cells(cells).validate()?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, cells);
-    let par = &cp.params;
+    let par = &cp.params();
     let (g, sigma, lam, r) = (par.drag(), par.sigma(), par.lambda(), par.rate());
     let n = m.v.len();
     let a: Vec<(f64, f64)> =

@@ -34,14 +34,41 @@ pub use optimize::{optimize_rate, scan, OptimizeOptions, Optimum, ScanAxis, Scan
 pub use simulate::{euler_first_passage, first_passage_stats, EulerFpt, FptSample, FptStats};
 
 /// A validated first-passage problem: model parameters, start v_0, target v_t.
+/// Built with [`Problem::new`] (also on deserialisation), so always admissible.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawProblem", into = "RawProblem")]
 pub struct Problem {
-    /// Model parameters (rate r and reset velocity v_r included).
+    params: Params,
+    v0: f64,
+    vt: f64,
+}
+
+/// Unvalidated mirror of [`Problem`] for (de)serialisation.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct RawProblem {
+    /// Model parameters.
     pub params: Params,
     /// Initial velocity v_0.
     pub v0: f64,
     /// Target velocity v_t.
     pub vt: f64,
+}
+
+impl TryFrom<RawProblem> for Problem {
+    type Error = Error;
+    fn try_from(r: RawProblem) -> Result<Self> {
+        Problem::new(r.params, r.v0, r.vt)
+    }
+}
+
+impl From<Problem> for RawProblem {
+    fn from(p: Problem) -> Self {
+        RawProblem {
+            params: p.params,
+            v0: p.v0,
+            vt: p.vt,
+        }
+    }
 }
 
 impl Problem {
@@ -91,6 +118,19 @@ impl Problem {
             return Err(Error::invalid("--reset-velocity", vr, side));
         }
         Ok(Problem { params, v0, vt })
+    }
+
+    /// Model parameters (rate r and reset velocity v_r included).
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+    /// Initial velocity v_0.
+    pub fn v0(&self) -> f64 {
+        self.v0
+    }
+    /// Target velocity v_t.
+    pub fn vt(&self) -> f64 {
+        self.vt
     }
 
     /// Same problem with another reset rate (validated).

@@ -150,14 +150,14 @@ pub struct EulerFpt {
 impl EulerFpt {
     /// Validate dt (Euler stability limit and r dt < 1) and t_max > 0.
     pub fn new(problem: Problem, dt: f64, t_max: f64) -> Result<Self> {
-        let dt = problem.params.check_dt(dt)?;
-        if !(problem.params.rate() * dt < 1.0) {
+        let dt = problem.params().check_dt(dt)?;
+        if !(problem.params().rate() * dt < 1.0) {
             return Err(Error::invalid(
                 "--dt",
                 dt,
                 format!(
                     "rate * dt < 1 (the reset probability per step is r dt), i.e. dt < {}",
-                    1.0 / problem.params.rate()
+                    1.0 / problem.params().rate()
                 ),
             ));
         }
@@ -180,7 +180,7 @@ impl EulerFpt {
     /// One particle's first passage.
     pub fn sample(&self, rng: &mut Rng, start_plus: bool) -> FptSample {
         use crate::model::DragLaw;
-        match self.problem.params.drag() {
+        match self.problem.params().drag() {
             DragLaw::Tan => self.run(rng, start_plus, f64::tan),
             DragLaw::Tanh => self.run(rng, start_plus, f64::tanh),
             DragLaw::Linear => self.run(rng, start_plus, |v| v),
@@ -190,18 +190,18 @@ impl EulerFpt {
     #[inline(always)]
     fn run<G: Fn(f64) -> f64>(&self, rng: &mut Rng, start_plus: bool, g: G) -> FptSample {
         let (p, swapped) = self.problem.canonical();
-        let par = &p.params;
+        let par = &p.params();
         let dt = self.dt;
         let q = 0.5 * (-(-2.0 * par.lambda() * dt).exp_m1());
         let pr = par.rate() * dt;
-        let (vt, vr) = (p.vt, par.reset_velocity());
+        let (vt, vr) = (p.vt(), par.reset_velocity());
         let max_steps = (self.t_max / dt).floor() as u64;
         let mut s = if start_plus != swapped {
             par.sigma()
         } else {
             -par.sigma()
         };
-        let mut v = p.v0;
+        let mut v = p.v0();
         let mut next_flip = geometric(rng, q);
         let mut next_reset = geometric(rng, pr);
         let mut step = 0u64;
