@@ -264,3 +264,47 @@ fn rejects_bad_problems() {
     assert_eq!(serde_json::from_str::<Problem>(&s).unwrap(), ok);
     assert!(serde_json::from_str::<Problem>(&s.replace("0.5", "1.5")).is_err());
 }
+
+/// The closed equation for tau = (tau+ + tau-)/2 (paper Eq. neqn10), derived
+/// from the generator's drifts ±Sigma - g: with u = 1 - r (tau - tau(v_r)),
+/// (Sigma² - g²) tau'' - 2 g (lambda + r + g') tau' = -(2 lambda + r + g') u.
+/// The paper prints (Sigma² - g²) tau'' + 2 g (lambda + r - g') tau'
+/// = (g' - 2 lambda - r) u, i.e. the same with g → -g (consistent with its
+/// sign-flipped Eqs. neqn26-27). The computed profile satisfies the former
+/// to discretisation accuracy and violates the latter.
+#[test]
+fn closed_tau_equation_with_correct_signs() {
+    let (sigma, lambda, r) = (3.0, 0.5, 2.0);
+    let p = problem(DragLaw::Tan, sigma, lambda, r, 0.0, -0.249, 0.5);
+    let prof = profile(&p, &BackwardOptions::with_cells(20_000)).unwrap();
+    let tau: Vec<f64> = prof
+        .tau_plus
+        .iter()
+        .zip(&prof.tau_minus)
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
+    let ir = prof.v.iter().position(|&v| v == 0.0).unwrap();
+    let tau_r = tau[ir];
+    let (mut worst_ours, mut worst_paper) = (0.0f64, f64::INFINITY);
+    // Uniform interior nodes between v_r = 0 and v_t = 0.5.
+    for i in (ir + 5..prof.v.len() - 5).step_by(97) {
+        let h = prof.v[i + 1] - prof.v[i];
+        assert!((prof.v[i] - prof.v[i - 1] - h).abs() < 1e-12);
+        let d1 = (tau[i + 1] - tau[i - 1]) / (2.0 * h);
+        let d2 = (tau[i + 1] - 2.0 * tau[i] + tau[i - 1]) / (h * h);
+        let v = prof.v[i];
+        let (g, gp) = (v.tan(), 1.0 + v.tan().powi(2));
+        let u = 1.0 - r * (tau[i] - tau_r);
+        let ours = (sigma * sigma - g * g) * d2 - 2.0 * g * (lambda + r + gp) * d1
+            + (2.0 * lambda + r + gp) * u;
+        let paper = (sigma * sigma - g * g) * d2 + 2.0 * g * (lambda + r - gp) * d1
+            - (gp - 2.0 * lambda - r) * u;
+        let scale = (2.0 * lambda + r + gp) * u.abs().max(1.0);
+        worst_ours = worst_ours.max(ours.abs() / scale);
+        if g.abs() > 0.1 {
+            worst_paper = worst_paper.min(paper.abs() / scale);
+        }
+    }
+    assert!(worst_ours < 1e-5, "our residual {worst_ours}");
+    assert!(worst_paper > 0.05, "paper residual {worst_paper}");
+}
