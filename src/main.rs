@@ -19,12 +19,15 @@ enum Command {
     Analytic(cli::analytic::AnalyticArgs),
     /// Particle simulation (Euler scheme of the paper): moments, densities.
     Simulate(cli::simulate::SimulateArgs),
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(cli::mfpt::MfptArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Analytic(a) => cli::analytic::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
+        Command::Mfpt(a) => cli::mfpt::run(a),
     }
 }
 
