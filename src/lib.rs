@@ -20,6 +20,7 @@
 pub mod analytic;
 pub mod error;
 pub mod io;
+pub mod mfpt;
 pub mod model;
 pub mod parallel;
 pub mod rng;
