@@ -587,6 +587,44 @@ pub fn first_passage_to(
     Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
 }
 
+/// Validate a first-passage time cap (`--t-max`): t_max > 0 (+∞ allowed:
+/// with lambda > 0 every particle arrives almost surely).
+pub fn check_t_max(t_max: f64) -> Result<f64> {
+    if !(t_max > 0.0) {
+        return Err(Error::invalid("--t-max", t_max, "t_max > 0 (inf allowed)"));
+    }
+    Ok(t_max)
+}
+
+/// First-passage statistics of `problem` (either direction) by the exact
+/// sampler, through the method-agnostic driver
+/// [`crate::mfpt::first_passage_stats`] (particle i: stream (seed, i), start
+/// state +Sigma for even i). Downward problems run in the mirrored upward
+/// frame ([`crate::mfpt::Problem::canonical`]), where the noise states swap.
+pub fn exact_first_passage(
+    problem: &crate::mfpt::Problem,
+    t_max: f64,
+    particles: u64,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<crate::mfpt::FptStats> {
+    check_t_max(t_max)?;
+    if particles < 2 {
+        return Err(Error::invalid("--particles", particles, "particles >= 2"));
+    }
+    let (cp, swapped) = problem.canonical();
+    let fpt = FirstPassage::new(cp.params());
+    Ok(crate::mfpt::first_passage_stats(
+        particles,
+        seed,
+        progress,
+        |_, rng, plus| {
+            let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
+            crate::mfpt::FptSample { time, work }
+        },
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
