@@ -14,10 +14,15 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    Fp(cli::fp::FpArgs),
+}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Fp(a) => cli::fp::run(a),
+    }
 }
 
 fn main() -> ExitCode {

@@ -2,6 +2,7 @@
 //! print JSON / write files. All printing and exit codes live here.
 
 pub mod common;
+pub mod fp;
 pub mod progress;
 
 use serde::Serialize;

@@ -233,10 +233,12 @@ fn graded_distances(len: f64, n: usize, q: f64) -> Vec<f64> {
             let uq1 = u.powf(q - 1.0);
             let f = u * uq1 + kq * u - s;
             let du = f / (q * uq1 + kq);
-            u -= du;
-            if du.abs() <= 1e-16 * u {
+            // Monotone from above: stop at convergence or when rounding
+            // makes f <= 0 (no further progress possible).
+            if !(du > 4e-16 * u) {
                 break;
             }
+            u -= du;
         }
         out.push(u.powf(q).min(len));
     }
