@@ -173,7 +173,13 @@ impl Grid {
             }
         };
         let out_plus = (0..n)
-            .map(|i| if i + 1 == n { 0.0 } else { plus(i + 1) / widths[i] })
+            .map(|i| {
+                if i + 1 == n {
+                    0.0
+                } else {
+                    plus(i + 1) / widths[i]
+                }
+            })
             .collect();
         let out_minus = (0..n)
             .map(|i| if i == 0 { 0.0 } else { minus(i) / widths[i] })
@@ -275,7 +281,7 @@ mod tests {
         let total: f64 = g.widths.iter().sum();
         assert!((total - 2.0 * 3f64.atan()).abs() < 1e-12);
         assert!((g.edges[300] - 0.3).abs() < 1e-15);
-        assert!(g.widths[0] < 1e-40 && g.widths[799] < 1e-40);
+        assert!(g.widths[0] < 1e-30 && g.widths[799] < 1e-30);
         assert!(g.out_plus.iter().all(|a| a.is_finite() && *a >= 0.0));
     }
 }

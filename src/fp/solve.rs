@@ -100,3 +100,87 @@ pub(crate) fn solve_free(g: &Grid, lambda: f64, b: &[[f64; 2]], start: f64) -> V
     }
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{DragLaw, Params};
+
+    /// (B x) with reset loss -r on the diagonal, applied directly.
+    fn apply(g: &Grid, lambda: f64, r: f64, x: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let n = g.cells();
+        let (al, be) = (&g.out_plus, &g.out_minus);
+        (0..n)
+            .map(|i| {
+                let left = if i > 0 { al[i - 1] * x[i - 1][0] } else { 0.0 };
+                let right = if i + 1 < n {
+                    be[i + 1] * x[i + 1][1]
+                } else {
+                    0.0
+                };
+                [
+                    left - (al[i] + lambda + r) * x[i][0] + lambda * x[i][1],
+                    lambda * x[i][0] - (be[i] + lambda + r) * x[i][1] + right,
+                ]
+            })
+            .collect()
+    }
+
+    fn rhs(n: usize) -> Vec<[f64; 2]> {
+        // Mixed signs, zero sum (needed for r = 0).
+        let mut b: Vec<[f64; 2]> = (0..n)
+            .map(|i| [((i * 7) % 11) as f64 - 5.0, ((i * 3) % 5) as f64 - 2.0])
+            .collect();
+        let s: f64 = b.iter().map(|c| c[0] + c[1]).sum();
+        b[n / 2][0] -= s;
+        b
+    }
+
+    fn check(g: &Grid, lambda: f64, r: f64) {
+        let b = rhs(g.cells());
+        let x = if r > 0.0 {
+            solve_reset(g, lambda, r, &b)
+        } else {
+            solve_free(g, lambda, &b, 0.3)
+        };
+        let y = apply(g, lambda, r, &x);
+        let scale = b
+            .iter()
+            .map(|c| c[0].abs() + c[1].abs())
+            .fold(0.0, f64::max);
+        for (yi, bi) in y.iter().zip(&b) {
+            for k in 0..2 {
+                assert!((yi[k] - bi[k]).abs() < 1e-9 * scale, "{yi:?} vs {bi:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn solvers_satisfy_the_equations() {
+        for (d, s, l) in [
+            (DragLaw::Tan, 3.0, 0.9),
+            (DragLaw::Tanh, 0.6, 3.0),
+            (DragLaw::Linear, 1.0, 0.3),
+        ] {
+            for r in [0.0, 1e-3, 2.0] {
+                let p = Params::new(d, s, l, r, 0.1).unwrap();
+                check(&Grid::uniform(&p, 200), l, r);
+                // Moderate grading so that the residual check is well scaled.
+                check(&Grid::graded(&p, 90, 110), l, r);
+            }
+        }
+    }
+
+    #[test]
+    fn stationary_solution_is_nonnegative_with_unit_mass() {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.5, 1e-6, 0.2).unwrap();
+        let g = Grid::graded(&p, 400, 600);
+        let mut b = vec![[0.0; 2]; g.cells()];
+        b[g.reset_plus][0] -= 0.5 * p.rate();
+        b[g.reset_minus][1] -= 0.5 * p.rate();
+        let x = solve_reset(&g, p.lambda(), p.rate(), &b);
+        assert!(x.iter().all(|c| c[0] >= 0.0 && c[1] >= 0.0));
+        let mass: f64 = x.iter().map(|c| c[0] + c[1]).sum();
+        assert!((mass - 1.0).abs() < 1e-12, "{mass}");
+    }
+}

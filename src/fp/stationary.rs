@@ -231,7 +231,8 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
     } else {
         None
     };
-    let ex = |f: f64, c: f64| 2.0 * f - c;
+    // ∞ (λ = 0) stays ∞.
+    let ex = |f: f64, c: f64| if f.is_finite() { 2.0 * f - c } else { f };
     let (v_mean, v2, d_eff) = match &coarse {
         Some(c) => (
             ex(fine.v_mean, c.v_mean),

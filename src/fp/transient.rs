@@ -83,7 +83,11 @@ fn check_times(name: &'static str, ts: &[f64], t_max: f64) -> Result<Vec<f64>> {
     for &t in ts {
         let t = finite(name, t)?;
         if !(t >= 0.0 && t <= t_max) {
-            return Err(Error::invalid(name, t, format!("0 <= t <= t_max = {t_max}")));
+            return Err(Error::invalid(
+                name,
+                t,
+                format!("0 <= t <= t_max = {t_max}"),
+            ));
         }
         out.push(t);
     }
