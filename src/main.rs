@@ -15,12 +15,15 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Particle simulation (Euler scheme of the paper): moments, densities.
+    Simulate(cli::simulate::SimulateArgs),
     /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
     Fp(cli::fp::FpArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Simulate(a) => cli::simulate::run(a),
         Command::Fp(a) => cli::fp::run(a),
     }
 }

@@ -4,6 +4,7 @@
 pub mod common;
 pub mod fp;
 pub mod progress;
+pub mod simulate;
 
 use serde::Serialize;
 
