@@ -92,7 +92,7 @@ pub struct Stationary {
 }
 
 fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
-    if !(o.cells >= MIN_CELLS && o.cells <= MAX_CELLS) {
+    if !(MIN_CELLS..=MAX_CELLS).contains(&o.cells) {
         return Err(Error::invalid(
             "--cells",
             o.cells,

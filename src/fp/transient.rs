@@ -108,7 +108,7 @@ pub fn transient_with_progress(
     progress: &dyn Progress,
 ) -> Result<Transient> {
     let n = opts.cells;
-    if !(n >= MIN_CELLS && n <= MAX_CELLS) {
+    if !(MIN_CELLS..=MAX_CELLS).contains(&n) {
         return Err(Error::invalid(
             "--cells",
             n,
