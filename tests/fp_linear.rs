@@ -131,3 +131,24 @@ fn bad_options_are_rejected() {
         assert!(e.to_string().contains("--cells"), "{e}");
     }
 }
+
+/// Paper Fig. 6: D_eff ~ r^-2 at large r for any drag. Near v_r = 0 every g
+/// has g'(0) = 1, so the prefactor is the Newtonian one: D_eff r² → Σ²/(2λ),
+/// with O(1/r) corrections.
+#[test]
+fn d_eff_large_r_law() {
+    for (drag, sigma, lambda) in [(DragLaw::Tan, 3.0, 0.5), (DragLaw::Tanh, 0.6, 0.5)] {
+        let ratio = |r: f64| {
+            let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();
+            let d = stationary(&p, &StationaryOptions::default()).unwrap().d_eff;
+            d * 2.0 * lambda * r * r / (sigma * sigma)
+        };
+        let (a, b) = (ratio(1000.0), ratio(2000.0));
+        assert!((b - 1.0).abs() < 2e-3, "{drag}: {a} {b}");
+        let q = (b - 1.0) / (a - 1.0);
+        assert!(
+            q > 0.4 && q < 0.6,
+            "{drag}: O(1/r) approach expected: {a} {b}"
+        );
+    }
+}

@@ -94,9 +94,10 @@ impl Grid {
 
     /// Graded mesh of `nl + nu` cells: `nl` on (v_l, v_r), `nu` on (v_r, v_u).
     /// Within each part the node distance x from the edge solves
-    /// s(x) = x + (θX)^(1-1/q) x^(1/q) = k Δs for equally spaced s, i.e. the
-    /// mesh equidistributes the monitor 1 + c x^(1/q - 1): cells shrink like
-    /// x ~ s^q next to the edge (layer of width θX) and are uniform inside.
+    /// s(x) = x + (θX)^(1-1/q) x^(1/q) [+ log clustering at v_r, see `HalfMap`]
+    /// = k Δs for equally spaced s, i.e. the mesh equidistributes the monitor
+    /// 1 + c x^(1/q - 1): cells shrink like x ~ s^q next to the edge (layer of
+    /// width θX) and are uniform inside.
     /// With q = 1/(1+a) the singular density (v_u - v)^a carries the same mass
     /// in every edge cell (it is smooth in s), so first-order upwind converges
     /// like O(1/N) with a smooth error expansion, and Richardson extrapolation
@@ -104,10 +105,9 @@ impl Grid {
     pub fn graded(p: &Params, nl: usize, nu: usize) -> Grid {
         let (vl, vu) = p.bounds();
         let vr = p.reset_velocity();
-        let q = grading_exponent(p);
-        // Lower part: distances from v_l, nodes 0..=nl.
-        let low = graded_distances(vr - vl, nl, q);
-        let up = graded_distances(vu - vr, nu, q);
+        let (lo_map, up_map) = half_maps(p);
+        let low = lo_map.distances(nl);
+        let up = up_map.distances(nu);
         let n = nl + nu;
         let mut xl = Vec::with_capacity(n + 1);
         let mut xu = Vec::with_capacity(n + 1);
@@ -128,7 +128,7 @@ impl Grid {
         for k in (0..nu).rev() {
             widths.push(up[k + 1] - up[k]);
         }
-        Grid::build(p, xl, xu, widths, nl, nl.saturating_sub(1), q)
+        Grid::build(p, xl, xu, widths, nl, nl.saturating_sub(1), lo_map.q)
     }
 
     fn build(
@@ -213,6 +213,29 @@ pub(crate) fn uniform_target(n: usize, vl: f64, vu: f64, w: f64) -> (usize, usiz
     }
 }
 
+/// The mesh maps of (v_l, v_r) and (v_r, v_u).
+fn half_maps(p: &Params) -> (HalfMap, HalfMap) {
+    let (vl, vu) = p.bounds();
+    let vr = p.reset_velocity();
+    let q = grading_exponent(p);
+    let (s, gr) = (p.sigma(), p.drag().force(vr));
+    let rate = p.lambda() + p.rate();
+    let r_on = if p.rate() > 0.0 { rate } else { 0.0 };
+    (
+        HalfMap::new(vr - vl, q, s + gr, r_on),
+        HalfMap::new(vu - vr, q, s - gr, r_on),
+    )
+}
+
+/// Cells (nl, nu) of a graded mesh of n cells, in proportion to the mesh
+/// parameter length of each half (so that doubling both nests the meshes).
+pub(crate) fn graded_split(p: &Params, n: usize) -> (usize, usize) {
+    let (a, b) = half_maps(p);
+    let frac = a.s_total() / (a.s_total() + b.s_total());
+    let nl = ((n as f64 * frac).round() as usize).clamp(1, n - 1);
+    (nl, n - nl)
+}
+
 /// q = 1/(1+a) for a singular edge (a < 0), capped at [`MAX_GRADING`]; 1 otherwise.
 pub(crate) fn grading_exponent(p: &Params) -> f64 {
     let a = p.edge_exponent();
@@ -223,33 +246,91 @@ pub(crate) fn grading_exponent(p: &Params) -> f64 {
     }
 }
 
-/// Distances 0 = x_0 < x_1 < ... < x_n = len from an edge (see [`Grid::graded`]).
-fn graded_distances(len: f64, n: usize, q: f64) -> Vec<f64> {
-    let kq = (LAYER * len).powf(1.0 - 1.0 / q);
-    let s_tot = len + kq * len.powf(1.0 / q);
-    let mut out = Vec::with_capacity(n + 1);
-    out.push(0.0);
-    for k in 1..n {
-        let s = s_tot * k as f64 / n as f64;
-        // Solve f(u) = u^q + kq u - s = 0 for u = x^(1/q); f is increasing and
-        // convex on u > 0, so Newton from a point with f >= 0 converges
-        // monotonically from above.
-        let mut u = (s / kq).min(s.powf(1.0 / q));
-        for _ in 0..200 {
-            let uq1 = u.powf(q - 1.0);
-            let f = u * uq1 + kq * u - s;
-            let du = f / (q * uq1 + kq);
-            // Monotone from above: stop at convergence or when rounding
-            // makes f <= 0 (no further progress possible).
-            if !(du > 4e-16 * u) {
-                break;
-            }
-            u -= du;
+/// Mesh parameter of one half (edge at distance 0, v_r at distance `len`):
+/// s(x) = x + K x^(1/q) + β ℓ [ln(1 + len/ℓ) - ln(1 + (len - x)/ℓ)].
+/// The second term grades towards the edge (monitor ~ x^(1/q - 1)); the third
+/// clusters cells logarithmically at v_r on the scale ℓ = |drift(v_r)|/(λ + r),
+/// the distance travelled between events, which at large r is the width of
+/// the density peak at v_r (β = 0 unless ℓ < len/10).
+#[derive(Clone, Copy, Debug)]
+struct HalfMap {
+    len: f64,
+    q: f64,
+    k: f64,
+    ell: f64,
+    beta: f64,
+}
+
+impl HalfMap {
+    fn new(len: f64, q: f64, drift_at_vr: f64, rate: f64) -> Self {
+        let k = (LAYER * len).powf(1.0 - 1.0 / q);
+        let ell = if rate > 0.0 {
+            drift_at_vr / rate
+        } else {
+            f64::INFINITY
+        };
+        let w = 1.0 - 10.0 * ell / len;
+        let beta = if w > 0.0 {
+            0.5 * len / (ell * (1.0 + len / ell).ln()) * w
+        } else {
+            0.0
+        };
+        HalfMap {
+            len,
+            q,
+            k,
+            ell,
+            beta,
         }
-        out.push(u.powf(q).min(len));
     }
-    out.push(len);
-    out
+
+    fn log_term(&self, x: f64) -> f64 {
+        if self.beta == 0.0 {
+            0.0
+        } else {
+            self.beta
+                * self.ell
+                * ((self.len / self.ell).ln_1p() - ((self.len - x) / self.ell).ln_1p())
+        }
+    }
+
+    fn s_total(&self) -> f64 {
+        self.len + self.k * self.len.powf(1.0 / self.q) + self.log_term(self.len)
+    }
+
+    /// Distances 0 = x_0 < x_1 < ... < x_n = len at equally spaced s.
+    fn distances(&self, n: usize) -> Vec<f64> {
+        let (q, kq, len) = (self.q, self.k, self.len);
+        let s_tot = self.s_total();
+        let mut out = Vec::with_capacity(n + 1);
+        out.push(0.0);
+        for k in 1..n {
+            let s = s_tot * k as f64 / n as f64;
+            // Solve f(u) = u^q + K u + log_term(u^q) - s = 0 for u = x^(1/q):
+            // f is increasing and convex on u > 0, so Newton from a point with
+            // f >= 0 converges monotonically from above.
+            let mut u = (s / kq).min(s.powf(1.0 / q)).min(len.powf(1.0 / q));
+            for _ in 0..500 {
+                let uq1 = u.powf(q - 1.0);
+                let x = u * uq1;
+                let f = x + kq * u + self.log_term(x) - s;
+                let dlog = if self.beta == 0.0 {
+                    0.0
+                } else {
+                    self.beta * self.ell / (self.ell + len - x)
+                };
+                let du = f / (q * uq1 * (1.0 + dlog) + kq);
+                // Stop at convergence or when rounding makes f <= 0.
+                if !(du > 4e-16 * u) {
+                    break;
+                }
+                u -= du;
+            }
+            out.push(u.powf(q).min(len));
+        }
+        out.push(len);
+        out
+    }
 }
 
 #[cfg(test)]
@@ -283,5 +364,19 @@ mod tests {
         assert!((g.edges[300] - 0.3).abs() < 1e-15);
         assert!(g.widths[0] < 1e-30 && g.widths[799] < 1e-30);
         assert!(g.out_plus.iter().all(|a| a.is_finite() && *a >= 0.0));
+    }
+
+    #[test]
+    fn large_rate_clusters_cells_at_reset_velocity() {
+        let p = Params::new(DragLaw::Tanh, 0.6, 0.5, 1000.0, 0.1).unwrap();
+        let (nl, nu) = graded_split(&p, 2000);
+        let g = Grid::graded(&p, nl, nu);
+        assert!((g.edges[nl] - 0.1).abs() < 1e-15);
+        let mean = (g.edges[2000] - g.edges[0]) / 2000.0;
+        // Cells next to v_r are far below the mean width (peak width ~ Σ/r).
+        assert!(g.widths[nl] < 0.05 * mean && g.widths[nl - 1] < 0.05 * mean);
+        let total: f64 = g.widths.iter().sum();
+        assert!((total - 2.0 * 0.6f64.atanh()).abs() < 1e-12);
+        assert!(g.widths.iter().all(|&h| h > 0.0));
     }
 }

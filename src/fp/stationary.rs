@@ -123,17 +123,10 @@ pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Grid
     match mesh {
         Mesh::Uniform => Grid::uniform(p, n << refine),
         Mesh::Graded => {
-            let (nl, nu) = split(p, n);
+            let (nl, nu) = super::grid::graded_split(p, n);
             Grid::graded(p, nl << refine, nu << refine)
         }
     }
-}
-
-fn split(p: &Params, n: usize) -> (usize, usize) {
-    let (vl, vu) = p.bounds();
-    let frac = (p.reset_velocity() - vl) / (vu - vl);
-    let nl = ((n as f64 * frac).round() as usize).clamp(1, n - 1);
-    (nl, n - nl)
 }
 
 /// Stationary cell masses [m+, m-] (sum 1) of the discrete forward equations.
