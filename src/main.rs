@@ -15,15 +15,21 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    Analytic(cli::analytic::AnalyticArgs),
     /// Particle simulation (Euler scheme of the paper): moments, densities.
     Simulate(cli::simulate::SimulateArgs),
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(cli::mfpt::MfptArgs),
     /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
     Fp(cli::fp::FpArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Analytic(a) => cli::analytic::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
+        Command::Mfpt(a) => cli::mfpt::run(a),
         Command::Fp(a) => cli::fp::run(a),
     }
 }

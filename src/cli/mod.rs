@@ -1,8 +1,10 @@
 //! The `irtp` command line: parse flags, validate into library configs, run,
 //! print JSON / write files. All printing and exit codes live here.
 
+pub mod analytic;
 pub mod common;
 pub mod fp;
+pub mod mfpt;
 pub mod progress;
 pub mod simulate;
 

@@ -7,6 +7,7 @@ use irtp::io::{OutputDir, Provenance};
 use irtp::sim::euler::{self, EulerPlan, EventSampling};
 use irtp::sim::{Observables, SimSpec, TimeGrid};
 use serde::Serialize;
+use std::io::Write;
 use std::time::Instant;
 
 /// Simulation method.
@@ -174,9 +175,10 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
         })?;
     } else {
         let s = &summary;
-        println!(
-            "euler ({:?} events), {} drag, sigma = {}, lambda = {}, r = {}, v_r = {}: {} particles x {} steps of dt = {} in {:.2} s ({:.3e} particle-steps/s)",
-            events,
+        let mut text = String::new();
+        text += &format!(
+            "euler ({} events), {} drag, sigma = {}, lambda = {}, r = {}, v_r = {}: {} particles x {} steps of dt = {} in {:.2} s ({:.3e} particle-steps/s)\n",
+            format!("{events:?}").to_lowercase(),
             params.drag(),
             params.sigma(),
             params.lambda(),
@@ -188,17 +190,19 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
             wall,
             rate
         );
-        println!(
-            "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])",
+        text += &format!(
+            "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
             s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
         );
-        println!(
-            "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}",
+        text += &format!(
+            "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
             s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
         );
         if let Some(p) = out_path {
-            println!("wrote {p}/moments.csv, density.csv, run.json");
+            text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
         }
+        // The results are already on disk; a closed pipe (`| head`) is not an error.
+        let _ = std::io::stdout().lock().write_all(text.as_bytes());
     }
     Ok(())
 }
