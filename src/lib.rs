@@ -19,6 +19,7 @@
 
 pub mod analytic;
 pub mod error;
+pub mod fp;
 pub mod io;
 pub mod mfpt;
 pub mod model;
