@@ -51,7 +51,11 @@ fn main() {
     let (eo, w_eu) = timed(|| euler::simulate(&p, &spec, dt, &NoProgress).unwrap());
     let ev = eo.v2_time_avg;
     let (a, b) = (&ex.v2_time_avg, &ev);
-    println!("\nstationary <v^2>, {particles} particles, window [{burn}, {t_max}]:");
+    let fp = irtp::fp::stationary(&p, &irtp::fp::StationaryOptions::default()).unwrap();
+    println!(
+        "\nstationary <v^2>, {particles} particles, window [{burn}, {t_max}] (Fokker-Planck: {:.6}):",
+        fp.v2
+    );
     println!(
         "  exact: {:.6} ± {:.6}  wall {:.3} s  ({} events)",
         a.mean(),
@@ -75,6 +79,14 @@ fn main() {
         100.0 * bias / a.mean(),
         bias / se
     );
+    for (name, acc) in [("exact", a), ("euler", b)] {
+        let d = acc.mean() - fp.v2;
+        println!(
+            "  {name} - FP: {d:.6} ± {:.6} (z = {:.1})",
+            acc.sem(),
+            d / acc.sem()
+        );
+    }
 
     // MFPT from v0 = 0 to v_t = 0.8 (start states stratified ±, both methods
     // through the same driver), with the backward-equation value.
