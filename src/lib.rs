@@ -13,6 +13,7 @@
 //!   parallel reduction, mergeable estimators.
 //! - [`sim`]: particle simulation (Euler Eqs. 14-16, exact sampler) and observables.
 //! - [`io`]: atomic output directories with provenance.
+//! - [`numerics`]: shared quadrature and root-finding kernels.
 //!
 //! The library never prints and never exits; it returns plain, serialisable
 //! result structs. The `irtp` binary is a thin layer over it.
@@ -23,6 +24,7 @@ pub mod fp;
 pub mod io;
 pub mod mfpt;
 pub mod model;
+pub mod numerics;
 pub mod parallel;
 pub mod rng;
 pub mod sim;

@@ -39,9 +39,9 @@
 //! captured. Globally adaptive Gauss–Kronrod (G7/K15) panels are kept, so the
 //! CDF is a table look-up plus one 15-point rule (~1 µs).
 
-use super::quad::{self, Panels};
 use crate::error::{Error, Result};
 use crate::model::{DragLaw, Params};
+use crate::numerics::quad::{self, Panels};
 use serde::{Deserialize, Serialize};
 
 /// Relative tolerance of the normalisation and moment quadratures.
@@ -405,7 +405,10 @@ impl R0Density {
         let n0 = (16.0 * lambda.sqrt().max(1.0)).min(4096.0) as usize;
         let start = breakpoints(vu, n0, m);
         let g = |u: f64| d.integrand(u);
-        let rough: f64 = start.windows(2).map(|w| quad::gk15(&g, w[0], w[1]).0).sum();
+        let rough: f64 = start
+            .windows(2)
+            .map(|w| quad::gk15(&g, w[0], w[1]).kronrod)
+            .sum();
         let panels = quad::adaptive(&g, &start, REL_TOL * rough, MAX_PANELS);
         let half = panels.total();
         if !panels.converged || !(half > 0.0) || !half.is_finite() {
@@ -550,7 +553,10 @@ impl R0Density {
         }
         let f = |u: f64| self.integrand(u) * self.u_to_v(u).powi(k as i32);
         let e = &self.panels.edges;
-        let rough: f64 = e.windows(2).map(|w| quad::gk15(&f, w[0], w[1]).0).sum();
+        let rough: f64 = e
+            .windows(2)
+            .map(|w| quad::gk15(&f, w[0], w[1]).kronrod)
+            .sum();
         let p = quad::adaptive(&f, e, REL_TOL * rough, MAX_PANELS);
         if !p.converged {
             return Err(Error::Numerical {
@@ -626,14 +632,17 @@ impl R0Density {
                 (Box::new(|x: f64| self.ln_unnorm(x).exp()), 1.0)
             };
             let start = breakpoints(w, 4, p);
-            let rough: f64 = start.windows(2).map(|x| quad::gk15(&h, x[0], x[1]).0).sum();
+            let rough: f64 = start
+                .windows(2)
+                .map(|x| quad::gk15(&h, x[0], x[1]).kronrod)
+                .sum();
             return quad::adaptive(&h, &start, REL_TOL * rough, 4000).total();
         }
         // Last boundary ≤ u.
         let i = e.partition_point(|&x| x <= u) - 1;
         let g = |x: f64| self.integrand(x);
         let part = if u > e[i] {
-            quad::gk15(&g, e[i], u).0
+            quad::gk15(&g, e[i], u).kronrod
         } else {
             0.0
         };

@@ -4,6 +4,7 @@
 //! dv/dt = s - g(v) with s = ±Sigma (paper Eq. 5). Its fixed point v* = g⁻¹(s)
 //! bounds the velocity: v ∈ (-g⁻¹(Sigma), g⁻¹(Sigma)) (paper Eqs. 8-10).
 
+use crate::numerics::{quad, root};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -66,7 +67,7 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             let u = sg * w.exp();
             u / self.drift_at_distance(s, u)
         };
-        quad::adaptive(&f, ub.abs().ln(), ua.abs().ln(), 1e-14)
+        quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14)
     }
 
     /// Velocity after flowing for time t ≥ 0 from v0 (inverse of
@@ -89,7 +90,7 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             (t - tt, u / self.drift_at_distance(s, u), 0.0)
         };
         let g1 = self.derivative(vs).max(f64::MIN_POSITIVE);
-        let w = quad::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
+        let w = root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
         vs - sg * w.exp()
     }
 
@@ -112,8 +113,8 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
         };
         let f2 = |v: f64| (vs - v) * f1(v);
         (
-            quad::adaptive(&f1, va, vb, 1e-14),
-            quad::adaptive(&f2, va, vb, 1e-14),
+            quad::integrate(&f1, va, vb, 1e-14),
+            quad::integrate(&f2, va, vb, 1e-14),
         )
     }
 
@@ -264,8 +265,8 @@ impl Drag for DragLaw {
                 };
                 let f2 = |v: f64| (vs - v) * f1(v);
                 (
-                    quad::adaptive(&f1, va, vb, 1e-14),
-                    quad::adaptive(&f2, va, vb, 1e-14),
+                    quad::integrate(&f1, va, vb, 1e-14),
+                    quad::integrate(&f2, va, vb, 1e-14),
                 )
             }
         }
@@ -459,7 +460,7 @@ impl Flow {
                         (sn.ln() + s * sg * e - c, dh, d2)
                     }
                 };
-                finish(quad::solve_increasing(
+                finish(root::solve_increasing(
                     &h,
                     lo.max(-745.0) - wa,
                     hi - wa,
@@ -502,7 +503,7 @@ impl Flow {
                         (sh.ln() - s * sg * e - c, dh, d2)
                     }
                 };
-                finish(quad::solve_increasing(
+                finish(root::solve_increasing(
                     &h,
                     lo.max(-745.0) - wa,
                     hi - wa,
@@ -594,127 +595,6 @@ impl InverseGuide {
             + (t3 - 2.0 * t2 + tt) * m0
             + (-2.0 * t3 + 3.0 * t2) * y1
             + (t3 - t2) * m1
-    }
-}
-
-/// Small quadrature and root-finding kernels for the flow (hand-written: the
-/// integrands are cheap closures evaluated millions of times in tests and
-/// table construction, and a dependency would add nothing in accuracy).
-pub mod quad {
-    /// Gauss-Kronrod 15-point nodes (positive half, QUADPACK qk15).
-    const XGK: [f64; 8] = [
-        0.991_455_371_120_812_6,
-        0.949_107_912_342_758_5,
-        0.864_864_423_359_769_1,
-        0.741_531_185_599_394_4,
-        0.586_087_235_467_691_1,
-        0.405_845_151_377_397_2,
-        0.207_784_955_007_898_5,
-        0.0,
-    ];
-    const WGK: [f64; 8] = [
-        0.022_935_322_010_529_225,
-        0.063_092_092_629_978_55,
-        0.104_790_010_322_250_18,
-        0.140_653_259_715_525_92,
-        0.169_004_726_639_267_9,
-        0.190_350_578_064_785_4,
-        0.204_432_940_075_298_9,
-        0.209_482_141_084_727_83,
-    ];
-    /// 7-point Gauss weights for nodes XGK[1], XGK[3], XGK[5], XGK[7].
-    const WG: [f64; 4] = [
-        0.129_484_966_168_869_7,
-        0.279_705_391_489_276_7,
-        0.381_830_050_505_118_9,
-        0.417_959_183_673_469_4,
-    ];
-
-    /// (Kronrod-15, Gauss-7) estimates of ∫_a^b f.
-    pub fn gk15(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
-        let c = 0.5 * (a + b);
-        let h = 0.5 * (b - a);
-        let fc = f(c);
-        let mut k = WGK[7] * fc;
-        let mut g = WG[3] * fc;
-        for j in 0..7 {
-            let x = h * XGK[j];
-            let s = f(c - x) + f(c + x);
-            k += WGK[j] * s;
-            if j % 2 == 1 {
-                g += WG[j / 2] * s;
-            }
-        }
-        (k * h, g * h)
-    }
-
-    /// Adaptive Gauss-Kronrod: ∫_a^b f to relative tolerance `rel` (the
-    /// |K15 - G7| estimate is pessimistic, the result is usually far better).
-    pub fn adaptive(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rel: f64) -> f64 {
-        if a == b {
-            return 0.0;
-        }
-        let (k, g) = gk15(f, a, b);
-        let tol = (rel * k.abs()).max(1e-300);
-        rec(f, a, b, k, g, tol, 60)
-    }
-
-    fn rec(f: &dyn Fn(f64) -> f64, a: f64, b: f64, k: f64, g: f64, tol: f64, depth: u32) -> f64 {
-        if (k - g).abs() <= tol || depth == 0 {
-            return k;
-        }
-        let m = 0.5 * (a + b);
-        let (k1, g1) = gk15(f, a, m);
-        let (k2, g2) = gk15(f, m, b);
-        rec(f, a, m, k1, g1, tol, depth - 1) + rec(f, m, b, k2, g2, tol, depth - 1)
-    }
-
-    /// Root of an increasing function H on [lo, hi] (H(lo) ≤ 0 ≤ H(hi) is
-    /// assumed, not evaluated) by Halley steps (Newton when H'' = 0) from
-    /// `guess`, falling back to bisection whenever a step leaves the current
-    /// bracket. `h` returns (H, H', H''). Stops once a step is below
-    /// `rel_tol` |w| + `abs_tol` (1e-6 for Halley and 1e-9 for Newton leave
-    /// ~1e-18 |w| by cubic/quadratic convergence) or the bracket has collapsed.
-    pub fn solve_increasing(
-        h: &dyn Fn(f64) -> (f64, f64, f64),
-        mut lo: f64,
-        mut hi: f64,
-        guess: f64,
-        rel_tol: f64,
-        abs_tol: f64,
-    ) -> f64 {
-        let mut w = guess.clamp(lo, hi);
-        for _ in 0..200 {
-            let (hv, d1, d2) = h(w);
-            if hv == 0.0 {
-                return w;
-            }
-            if hv > 0.0 {
-                hi = w;
-            } else {
-                lo = w; // also for -∞ (u underflow) and NaN: move up
-            }
-            let denom = 2.0 * d1 * d1 - hv * d2;
-            let step = if denom > 0.0 {
-                2.0 * hv * d1 / denom
-            } else {
-                hv / d1
-            };
-            let next = w - step;
-            if next > lo && next < hi {
-                if step.abs() <= rel_tol * next.abs() + abs_tol {
-                    return next;
-                }
-                w = next;
-            } else {
-                let mid = 0.5 * (lo + hi);
-                if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs()) {
-                    return mid;
-                }
-                w = mid;
-            }
-        }
-        w
     }
 }
 
