@@ -1,27 +1,16 @@
 //! `irtp analytic` contract: JSON fields, output files, bad input.
 
+mod common;
+
+use common::{assert_rejected, assert_success, irtp, json, read_json};
 use irtp::analytic::r0::R0Density;
 use irtp::DragLaw;
-use std::process::Command;
-
-fn irtp(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irtp"))
-        .args(args)
-        .output()
-        .expect("run irtp")
-}
 
 #[test]
 fn json_contract() {
-    let out = irtp(&[
+    let j = json(&irtp(&[
         "analytic", "--drag", "tan", "--sigma", "3", "--lambda", "0.9", "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    ]));
     let d = R0Density::new(DragLaw::Tan, 3.0, 0.9).unwrap();
     assert_eq!(j["v2"].as_f64().unwrap(), d.v2());
     assert_eq!(j["regime"], "i");
@@ -37,10 +26,9 @@ fn json_contract() {
             < 1e-12
     );
 
-    let out = irtp(&[
+    let j = json(&irtp(&[
         "analytic", "--drag", "tanh", "--sigma", "0.6", "--lambda", "0.85", "--json",
-    ]);
-    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    ]));
     assert_eq!(j["regime"], "b");
     assert_eq!(j["extrema"].as_array().unwrap().len(), 3);
 }
@@ -62,11 +50,7 @@ fn writes_density_and_provenance() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = std::fs::read_to_string(dir.join("density.csv")).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next().unwrap(), "v,p,cdf");
@@ -83,8 +67,7 @@ fn writes_density_and_provenance() {
         assert_eq!(r[1], d.pdf(r[0]));
         assert_eq!(r[2], d.cdf(r[0]));
     }
-    let run: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap();
+    let run = read_json(&dir.join("run.json"));
     assert_eq!(run["command"], "analytic");
     assert_eq!(run["parameters"]["lambda"], 0.5);
 }
@@ -127,16 +110,7 @@ fn bad_input_one_line_exit_2_nothing_written() {
         let mut all = vec!["analytic"];
         all.extend(&args);
         all.extend(["--out", d]);
-        let out = irtp(&all);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-        assert!(
-            err.starts_with("irtp: error: invalid") && err.contains(flag),
-            "{err}"
-        );
-        assert!(out.stdout.is_empty());
-        assert!(!dir.exists());
+        assert_rejected(&irtp(&all), flag, &dir);
     }
     // Unknown drag: clap usage error, also exit 2.
     let out = irtp(&[

@@ -1,10 +1,11 @@
 //! `irtp simulate` through the binary: outputs, JSON contract,
 //! thread-count independence, and bad-input handling.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_irtp");
+use common::{assert_rejected, assert_success, irtp_env, json, read_json};
+use std::path::Path;
+use std::process::Output;
 
 /// A small, fast run.
 const SMALL: &[&str] = &[
@@ -32,13 +33,10 @@ fn with_defaults<'a>(over: &[&'a str]) -> Vec<&'a str> {
     args
 }
 
-fn irtp(args: &[&str], threads: &str) -> Output {
-    Command::new(BIN)
-        .arg("simulate")
-        .args(args)
-        .env("RAYON_NUM_THREADS", threads)
-        .output()
-        .expect("run irtp")
+/// `irtp simulate args...` on `threads` rayon threads.
+fn simulate(args: &[&str], threads: &str) -> Output {
+    let all = [&["simulate"][..], args].concat();
+    irtp_env(&all, &[("RAYON_NUM_THREADS", threads)])
 }
 
 #[test]
@@ -55,11 +53,7 @@ fn writes_outputs_and_json() {
         "--method",
         "euler",
     ]);
-    let o = irtp(&args, "2");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout = String::from_utf8(o.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 1, "one JSON object: {stdout}");
-    let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let j = json(&simulate(&args, "2"));
     for key in [
         "v2",
         "v2_err",
@@ -90,8 +84,7 @@ fn writes_outputs_and_json() {
         "v,p,p_err,p_final,p_final_err"
     );
     assert_eq!(density.lines().count(), 1 + 10);
-    let run: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    let run = read_json(&out.join("run.json"));
     assert_eq!(run["method"], "euler");
     assert_eq!(run["seed"], 9);
     assert_eq!(run["parameters"]["dt"], 1e-3);
@@ -104,8 +97,8 @@ fn writes_outputs_and_json() {
 
 #[test]
 fn human_summary_without_json() {
-    let o = irtp(SMALL, "1");
-    assert!(o.status.success());
+    let o = simulate(SMALL, "1");
+    assert_success(&o);
     let s = String::from_utf8(o.stdout).unwrap();
     assert!((2..=6).contains(&s.lines().count()), "{s}");
     assert!(s.contains("<v^2>"), "{s}");
@@ -115,8 +108,7 @@ fn run_to(dir: &Path, threads: &str, extra: &[&str]) -> (Vec<u8>, Vec<u8>) {
     let mut args = SMALL.to_vec();
     args.extend(extra);
     args.extend(["--out", dir.to_str().unwrap()]);
-    let o = irtp(&args, threads);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&simulate(&args, threads));
     (
         std::fs::read(dir.join("moments.csv")).unwrap(),
         std::fs::read(dir.join("density.csv")).unwrap(),
@@ -196,20 +188,20 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
         let out = tmp.path().join(format!("out{i}"));
         let mut args = with_defaults(bad);
         args.extend(["--out", out.to_str().unwrap()]);
-        let o = irtp(&args, "1");
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{bad:?}: {err}");
-        assert!(o.stdout.is_empty(), "{bad:?}");
-        let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
-        assert!(lines[0].contains(flag), "{bad:?}: {err}");
+        let o = simulate(&args, "1");
         // Values that do not even parse are clap's errors (with a usage hint);
         // every parameter rule is our one-line message.
         let unparsable = ["x", "cubic"].contains(&bad[1]);
-        if !unparsable {
-            assert_eq!(lines.len(), 1, "{bad:?}: {err}");
-            assert!(lines[0].starts_with("irtp: error: invalid"), "{err}");
+        if unparsable {
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{bad:?}: {err}");
+            assert!(o.stdout.is_empty(), "{bad:?}");
+            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap();
+            assert!(first.contains(flag), "{bad:?}: {err}");
+            assert!(!out.exists(), "{bad:?} created the output dir");
+        } else {
+            assert_rejected(&o, flag, &out);
         }
-        assert!(!out.exists(), "{bad:?} created the output dir");
     }
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }
@@ -223,7 +215,7 @@ fn out_is_a_file() {
     std::fs::write(&f, "keep").unwrap();
     let mut args = SMALL.to_vec();
     args.extend(["--out", f.to_str().unwrap()]);
-    let o = irtp(&args, "1");
+    let o = simulate(&args, "1");
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -241,8 +233,7 @@ fn log_grid_runs() {
     let args = with_defaults(&["--grid", "log", "--t-min", "0.001", "--samples", "50"]);
     let mut args = args;
     args.extend(["--out", out.to_str().unwrap()]);
-    let o = irtp(&args, "2");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&simulate(&args, "2"));
     let m = std::fs::read_to_string(out.join("moments.csv")).unwrap();
     let t: Vec<f64> = m
         .lines()

@@ -1,14 +1,13 @@
 //! `irtp simulate --method exact` (the default): the same files, columns and
 //! JSON keys as the Euler method.
 
-use std::collections::BTreeSet;
-use std::process::Command;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_irtp");
+use common::{irtp, json, read_json};
+use std::collections::BTreeSet;
 
 fn run(method: Option<&str>, out: &std::path::Path) -> serde_json::Value {
-    let mut c = Command::new(BIN);
-    c.args([
+    let mut args = vec![
         "simulate",
         "--particles",
         "200",
@@ -23,13 +22,11 @@ fn run(method: Option<&str>, out: &std::path::Path) -> serde_json::Value {
         "--json",
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
     if let Some(m) = method {
-        c.args(["--method", m]);
+        args.extend(["--method", m]);
     }
-    let o = c.output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap()
+    json(&irtp(&args))
 }
 
 fn keys(v: &serde_json::Value) -> BTreeSet<String> {
@@ -53,10 +50,8 @@ fn exact_is_default_with_euler_outputs() {
         assert_eq!(a.lines().next(), b.lines().next(), "{f} header");
         assert_eq!(a.lines().count(), b.lines().count(), "{f} rows");
     }
-    let re: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(de.join("run.json")).unwrap()).unwrap();
-    let rx: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dx.join("run.json")).unwrap()).unwrap();
+    let re = read_json(&de.join("run.json"));
+    let rx = read_json(&dx.join("run.json"));
     assert_eq!(rx["method"], "exact");
     assert_eq!(keys(&re), keys(&rx));
     assert_eq!(keys(&re["parameters"]), keys(&rx["parameters"]));
@@ -67,27 +62,22 @@ fn exact_is_default_with_euler_outputs() {
 #[test]
 fn mfpt_method_exact() {
     let run = |m: &str| -> serde_json::Value {
-        let o = Command::new(BIN)
-            .args([
-                "mfpt",
-                "--v0",
-                "-0.249",
-                "--vt",
-                "0.5",
-                "--lambda",
-                "0.9",
-                "--rate",
-                "2",
-                "--particles",
-                "400",
-                "--json",
-                "--method",
-                m,
-            ])
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        serde_json::from_slice(&o.stdout).unwrap()
+        json(&irtp(&[
+            "mfpt",
+            "--v0",
+            "-0.249",
+            "--vt",
+            "0.5",
+            "--lambda",
+            "0.9",
+            "--rate",
+            "2",
+            "--particles",
+            "400",
+            "--json",
+            "--method",
+            m,
+        ]))
     };
     let (x, e) = (run("exact"), run("euler"));
     assert_eq!(x["method"], "exact");

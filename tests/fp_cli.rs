@@ -1,24 +1,8 @@
 //! `irtp fp ...` end to end: JSON, output files with provenance, bad input.
 
-use std::process::Command;
+mod common;
 
-fn irtp(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irtp"))
-        .args(args)
-        .output()
-        .expect("run irtp")
-}
-
-fn json(out: &std::process::Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let s = String::from_utf8(out.stdout.clone()).unwrap();
-    assert_eq!(s.lines().count(), 1, "one JSON object: {s}");
-    serde_json::from_str(&s).unwrap()
-}
+use common::{assert_rejected, irtp, json, read_json};
 
 #[test]
 fn stationary_json_and_files() {
@@ -54,8 +38,7 @@ fn stationary_json_and_files() {
     let csv = std::fs::read_to_string(dir.join("density.csv")).unwrap();
     assert_eq!(csv.lines().next(), Some("v,p,p_plus,p_minus,dv"));
     assert_eq!(csv.lines().count(), 4001);
-    let run: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap();
+    let run = read_json(&dir.join("run.json"));
     assert_eq!(run["command"], "fp stationary");
     assert_eq!(run["parameters"]["model"]["reset_velocity"], -0.3);
 }
@@ -184,15 +167,6 @@ fn bad_input_one_line_exit_2_nothing_written() {
         ),
     ];
     for (args, name) in cases {
-        let out = irtp(&args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(
-            err.starts_with("irtp: error: invalid ") && err.contains(name),
-            "{err}"
-        );
-        assert!(!dir.exists(), "{args:?} wrote output");
-        assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+        assert_rejected(&irtp(&args), name, &dir);
     }
 }

@@ -1,22 +1,8 @@
 //! `irtp mfpt` through the binary.
 
-use std::process::{Command, Output};
+mod common;
 
-fn irtp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_irtp"))
-        .args(args)
-        .output()
-        .expect("run irtp")
-}
-
-fn json(out: &Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
+use common::{assert_rejected, assert_success, irtp, json, read_json};
 
 const PAPER: [&str; 10] = [
     "--drag", "tan", "--sigma", "3", "--lambda", "0.5", "--rate", "2", "--v0", "-0.249",
@@ -98,18 +84,13 @@ fn scan_writes_csv_and_provenance() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let csv = std::fs::read_to_string(dir.join("mfpt_scan.csv")).unwrap();
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     assert!(header.starts_with("vt,tau,tau_plus,tau_minus,error_estimate,tau_sim,tau_sim_err"));
     assert_eq!(lines.count(), 3);
-    let run: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap();
+    let run = read_json(&dir.join("run.json"));
     assert_eq!(run["command"], "mfpt scan");
     assert_eq!(run["method"], "euler");
 
@@ -205,18 +186,7 @@ fn bad_input_one_line_exit_2_nothing_written() {
             a = vec!["mfpt", "--out", d];
         }
         a.extend(extra);
-        let out = irtp(&a);
-        assert_eq!(out.status.code(), Some(2), "{extra:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(
-            err.starts_with(&format!("irtp: error: invalid {flag} = ")),
-            "{err}"
-        );
-        assert!(err.contains("allowed"), "{err}");
-        assert!(out.stdout.is_empty());
-        assert!(!dir.exists());
-        assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+        assert_rejected(&irtp(&a), flag, &dir);
     }
     // v_t at v_u: the message says why it is never reached.
     let out = irtp(&["mfpt", "--v0", "-0.249", "--vt", "1.25"]);
