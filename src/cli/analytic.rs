@@ -1,24 +1,21 @@
 //! `irtp analytic`: exact r = 0 stationary density, its regime and moments.
 
+use super::common::NoiseArgs;
 use clap::Args;
 use irtp::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
 use irtp::io::{OutputDir, Provenance};
-use irtp::{DragLaw, Error, Params};
+use irtp::{DragLaw, Error};
 use serde::Serialize;
 use std::path::PathBuf;
 
-/// Flags of `irtp analytic`.
+/// Flags of `irtp analytic`: the shared `--drag --sigma --lambda`, and its own
+/// `--rate` (default 0, the only admissible value) instead of the resetting flags.
 #[derive(Args, Debug, Clone)]
+#[command(mut_arg("lambda", |a| a.help("Flip rate lambda of the telegraph noise (> 0)")))]
 pub struct AnalyticArgs {
-    /// Drag law g(v): tan (shear-thickening), tanh (shear-thinning, needs sigma < 1), linear (Newtonian).
-    #[arg(long, default_value = "tan", value_parser = parse_drag)]
-    pub drag: DragLaw,
-    /// Noise amplitude Sigma (eta = ±Sigma).
-    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
-    pub sigma: f64,
-    /// Flip rate lambda of the telegraph noise (> 0).
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    pub lambda: f64,
+    /// `--drag --sigma --lambda`.
+    #[command(flatten)]
+    pub noise: NoiseArgs,
     /// Reset rate: the closed form exists only for r = 0 (any other value is rejected).
     #[arg(
         long,
@@ -36,11 +33,6 @@ pub struct AnalyticArgs {
     /// Print one JSON object with the results on stdout.
     #[arg(long)]
     pub json: bool,
-}
-
-fn parse_drag(s: &str) -> Result<DragLaw, String> {
-    s.parse::<DragLaw>()
-        .map_err(|_| "expected one of tan, tanh, linear".to_string())
 }
 
 #[derive(Serialize)]
@@ -81,17 +73,22 @@ fn grid(vu: f64, n: usize) -> Vec<f64> {
 /// Run `irtp analytic`.
 pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
-    let params = Params::new(args.drag, args.sigma, args.lambda, args.rate, 0.0)?;
+    let params = args.noise.params(args.rate, 0.0)?;
     if args.points < 2 {
         return Err(Error::invalid("--points", args.points, "points >= 2").into());
     }
     let d = R0Density::from_params(&params)?;
     let reg = d.regime();
     let (vl, vu) = d.bounds();
+    let NoiseArgs {
+        drag,
+        sigma,
+        lambda,
+    } = args.noise;
     let report = Report {
-        drag: args.drag,
-        sigma: args.sigma,
-        lambda: args.lambda,
+        drag,
+        sigma,
+        lambda,
         rate: args.rate,
         v_lower: vl,
         v_upper: vu,
@@ -113,9 +110,9 @@ pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
         out.write_csv("density.csv", &["v", "p", "cdf"], rows)?;
         out.write_json("summary.json", &report)?;
         let run = RunParams {
-            drag: args.drag,
-            sigma: args.sigma,
-            lambda: args.lambda,
+            drag,
+            sigma,
+            lambda,
             rate: args.rate,
             points: args.points,
         };
@@ -130,10 +127,7 @@ pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
     if args.json {
         super::print_json(&report)?;
     } else {
-        println!(
-            "{} drag, Sigma = {}, lambda = {}, r = 0: v in ({vl:.6}, {vu:.6})",
-            args.drag, args.sigma, args.lambda
-        );
+        println!("{drag} drag, Sigma = {sigma}, lambda = {lambda}, r = 0: v in ({vl:.6}, {vu:.6})");
         println!("regime {}", reg.description);
         println!("<v^2> = {:.15e}   <v^4> = {:.15e}", report.v2, report.v4);
         if let Some(dir) = &args.out {

@@ -4,9 +4,10 @@ use clap::Args;
 use irtp::{DragLaw, Params};
 use std::path::PathBuf;
 
-/// Model flags: `--drag --sigma --lambda --rate --reset-velocity`.
+/// Medium and noise flags: `--drag --sigma --lambda` (every subcommand,
+/// including `analytic`, which has no resetting flags of its own).
 #[derive(Args, Clone, Debug)]
-pub struct ModelArgs {
+pub struct NoiseArgs {
     /// Drag law g(v): tan (shear-thickening), tanh (shear-thinning, needs sigma < 1), linear (Newtonian).
     #[arg(long, default_value = "tan", value_parser = parse_drag)]
     pub drag: DragLaw,
@@ -16,6 +17,21 @@ pub struct ModelArgs {
     /// Flip rate lambda of the telegraph noise.
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub lambda: f64,
+}
+
+impl NoiseArgs {
+    /// Validate into [`Params`] with the given reset rate and velocity.
+    pub fn params(&self, rate: f64, reset_velocity: f64) -> irtp::Result<Params> {
+        Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity)
+    }
+}
+
+/// Model flags: `--drag --sigma --lambda --rate --reset-velocity`.
+#[derive(Args, Clone, Debug)]
+pub struct ModelArgs {
+    /// `--drag --sigma --lambda`.
+    #[command(flatten)]
+    pub noise: NoiseArgs,
     /// Velocity reset rate r.
     #[arg(
         long,
@@ -37,13 +53,7 @@ fn parse_drag(s: &str) -> Result<DragLaw, String> {
 impl ModelArgs {
     /// Validate into [`Params`].
     pub fn params(&self) -> irtp::Result<Params> {
-        Params::new(
-            self.drag,
-            self.sigma,
-            self.lambda,
-            self.rate,
-            self.reset_velocity,
-        )
+        self.noise.params(self.rate, self.reset_velocity)
     }
 }
 
