@@ -99,23 +99,7 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
     /// k = 1, 2. Their integrands are smooth up to v* (→ 1/g'(v*) and → 0),
     /// so they stay accurate even when vb rounds to v*.
     fn flow_deficits(&self, s: f64, va: f64, vb: f64) -> (f64, f64) {
-        let vs = self.inverse(s);
-        if vb == va {
-            return (0.0, 0.0);
-        }
-        let f1 = |v: f64| {
-            let u = vs - v;
-            if u == 0.0 {
-                1.0 / self.derivative(vs)
-            } else {
-                u / self.drift_at_distance(s, u)
-            }
-        };
-        let f2 = |v: f64| (vs - v) * f1(v);
-        (
-            quad::integrate(&f1, va, vb, 1e-14),
-            quad::integrate(&f2, va, vb, 1e-14),
-        )
+        quadrature_deficits(self, s, va, vb)
     }
 
     /// Displacement ∫_0^t v dt' along the flow from v0 = v(0):
@@ -125,6 +109,28 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
         let vb = self.flow_velocity(s, v0, t);
         vs * t - self.flow_deficits(s, v0, vb).0
     }
+}
+
+/// [`Drag::flow_deficits`] by adaptive quadrature in v with the accurate drift
+/// (the default, and the tan and tanh laws).
+fn quadrature_deficits<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> (f64, f64) {
+    let vs = d.inverse(s);
+    if vb == va {
+        return (0.0, 0.0);
+    }
+    let f1 = |v: f64| {
+        let u = vs - v;
+        if u == 0.0 {
+            1.0 / d.derivative(vs)
+        } else {
+            u / d.drift_at_distance(s, u)
+        }
+    };
+    let f2 = |v: f64| (vs - v) * f1(v);
+    (
+        quad::integrate(&f1, va, vb, 1e-14),
+        quad::integrate(&f2, va, vb, 1e-14),
+    )
 }
 
 /// Is vb (distance ub to v*) reached by the flow from va (distance ua)?
@@ -250,25 +256,7 @@ impl Drag for DragLaw {
                 let d = vb - va;
                 (d, 0.5 * d * (ua + ub))
             }
-            _ => {
-                let vs = self.inverse(s);
-                if vb == va {
-                    return (0.0, 0.0);
-                }
-                let f1 = |v: f64| {
-                    let u = vs - v;
-                    if u == 0.0 {
-                        1.0 / self.derivative(vs)
-                    } else {
-                        u / self.drift_at_distance(s, u)
-                    }
-                };
-                let f2 = |v: f64| (vs - v) * f1(v);
-                (
-                    quad::integrate(&f1, va, vb, 1e-14),
-                    quad::integrate(&f2, va, vb, 1e-14),
-                )
-            }
+            _ => quadrature_deficits(self, s, va, vb),
         }
     }
 }
