@@ -1,16 +1,23 @@
 //! Newtonian drag g(v) = v: exact stationary moments and D_eff for any r ≥ 0.
 //!
-//! Derived from the generator of the simulated process,
-//! L f(v, η) = (η - v) ∂_v f + λ [f(v, -η) - f(v, η)] + r [f(v_r, η) - f(v, η)],
-//! by setting <L f> = 0 for f = v, vη, v²:
-//! - f = v:   <η> - <v> + r (v_r - <v>) = 0, and <η> = 0   ⇒ <v> = r v_r / (1 + r);
-//! - f = vη:  Σ² - (1 + 2λ + r) <vη> + r v_r <η> = 0        ⇒ <vη> = Σ² / (1 + 2λ + r);
-//! - f = v²:  2<vη> - 2<v²> + r (v_r² - <v²>) = 0           ⇒ <v²> = (2<vη> + r v_r²) / (2 + r).
+//! Derived from the generator of the simulated process by setting the
+//! stationary mean `<L f>` of L f to zero for f = v, vη, v²:
 //!
-//! For D_eff = ∫_0^∞ [<v(0) v(t)> - <v>²] dt use
+//! ```text
+//! L f(v, η) = (η - v) ∂_v f + λ [f(v, -η) - f(v, η)] + r [f(v_r, η) - f(v, η)]
+//! f = v:   <η> - <v> + r (v_r - <v>) = 0, and <η> = 0   ⇒ <v> = r v_r / (1 + r)
+//! f = vη:  Σ² - (1 + 2λ + r) <vη> + r v_r <η> = 0        ⇒ <vη> = Σ² / (1 + 2λ + r)
+//! f = v²:  2<vη> - 2<v²> + r (v_r² - <v²>) = 0           ⇒ <v²> = (2<vη> + r v_r²) / (2 + r)
+//! ```
+//!
+//! For D_eff = ∫_0^∞ [`<v(0) v(t)>` - `<v>`²] dt use
+//!
+//! ```text
 //! E[v(t) | v_0, η_0] = <v> + (v_0 - <v>) e^{-(1+r)t} + η_0 (e^{-2λt} - e^{-(1+r)t}) / (1 + r - 2λ),
-//! which integrates to D_eff = (Var v + <vη>/(2λ)) / (1 + r).
-//! Checks: r = 0 gives <v²> = Σ²/(1+2λ) and D_eff = Σ²/(2λ) (free telegraph
+//! ```
+//!
+//! which integrates to D_eff = (Var v + `<vη>`/(2λ)) / (1 + r).
+//! Checks: r = 0 gives `<v²>` = Σ²/(1+2λ) and D_eff = Σ²/(2λ) (free telegraph
 //! noise integrated once); r → ∞ gives D_eff ≈ Σ²/(2λ r²), the paper's r⁻².
 
 use crate::error::{Error, Result};
@@ -27,26 +34,26 @@ fn require_linear(p: &Params) -> Result<()> {
     Ok(())
 }
 
-/// Stationary <v η>.
+/// Stationary `<v η>`.
 pub fn v_eta(p: &Params) -> Result<f64> {
     require_linear(p)?;
     Ok(p.sigma() * p.sigma() / (1.0 + 2.0 * p.lambda() + p.rate()))
 }
 
-/// Stationary <v>.
+/// Stationary `<v>`.
 pub fn v_mean(p: &Params) -> Result<f64> {
     require_linear(p)?;
     Ok(p.rate() * p.reset_velocity() / (1.0 + p.rate()))
 }
 
-/// Stationary <v²>.
+/// Stationary `<v²>`.
 pub fn v2(p: &Params) -> Result<f64> {
     let c = v_eta(p)?;
     let vr = p.reset_velocity();
     Ok((2.0 * c + p.rate() * vr * vr) / (2.0 + p.rate()))
 }
 
-/// Effective diffusion coefficient D_eff = lim <(x - <x>)²>/(2t) (needs λ > 0).
+/// Effective diffusion coefficient D_eff = lim `<(x - <x>)²>/(2t)` (needs λ > 0).
 pub fn d_eff(p: &Params) -> Result<f64> {
     if !(p.lambda() > 0.0) {
         return Err(Error::invalid(

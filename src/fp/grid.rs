@@ -66,7 +66,7 @@ pub(crate) fn edge_drift(drag: DragLaw, sigma: f64, x: f64) -> f64 {
     }
 }
 
-/// A mesh with its upwind rates. Cell i is [edges[i], edges[i+1]].
+/// A mesh with its upwind rates. Cell i is `[edges[i], edges[i+1]]`.
 #[derive(Clone, Debug)]
 pub(crate) struct Grid {
     pub edges: Vec<f64>,

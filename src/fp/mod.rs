@@ -15,10 +15,10 @@
 //! it conserves mass and positivity exactly, and its adjoint is the discrete
 //! backward operator used for D_eff.
 //!
-//! - [`stationary`]: direct O(N) solve of the stationary equations, graded
+//! - [`stationary()`]: direct O(N) solve of the stationary equations, graded
 //!   mesh for the singular edges, Richardson extrapolation; exact discrete
 //!   Green-Kubo D_eff.
-//! - [`transient`]: explicit time stepping from the paper's initial condition.
+//! - [`transient()`]: explicit time stepping from the paper's initial condition.
 
 mod grid;
 mod solve;

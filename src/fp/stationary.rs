@@ -1,4 +1,4 @@
-//! Direct stationary solve, <v>, <v²> (paper Eq. 17) and the exact D_eff.
+//! Direct stationary solve, `<v>`, `<v²>` (paper Eq. 17) and the exact D_eff.
 
 use super::grid::{Grid, Mesh};
 use super::solve::{solve_free, solve_reset};
@@ -18,7 +18,7 @@ pub struct StationaryOptions {
     pub cells: usize,
     /// Cell placement.
     pub mesh: Mesh,
-    /// Richardson-extrapolate <v>, <v²>, D_eff from the meshes with `cells`
+    /// Richardson-extrapolate `<v>`, `<v²>`, D_eff from the meshes with `cells`
     /// and `cells/2` cells (first-order scheme: X = 2 X_N - X_{N/2}).
     /// Needs an even `cells`. The density is always the fine-mesh one.
     pub extrapolate: bool,
@@ -41,9 +41,9 @@ pub struct Moments {
     pub cells: usize,
     /// Σ P Δv (1 up to rounding).
     pub mass: f64,
-    /// <v>_ss.
+    /// `<v>_ss`.
     pub v_mean: f64,
-    /// <v²>_ss (paper Eq. 17).
+    /// `<v²>_ss` (paper Eq. 17).
     pub v2: f64,
     /// D_eff = ∫_0^∞ <δv(0) δv(t)>_ss dt (∞ for λ = 0: ballistic).
     pub d_eff: f64,
@@ -77,9 +77,9 @@ pub struct Stationary {
     pub p_minus: Vec<f64>,
     /// Σ P Δv after normalisation.
     pub mass: f64,
-    /// <v>_ss (extrapolated if `extrapolated`).
+    /// `<v>_ss` (extrapolated if `extrapolated`).
     pub v_mean: f64,
-    /// <v²>_ss (extrapolated if `extrapolated`).
+    /// `<v²>_ss` (extrapolated if `extrapolated`).
     pub v2: f64,
     /// D_eff (extrapolated if `extrapolated`).
     pub d_eff: f64,
@@ -157,9 +157,9 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
     Ok(m)
 }
 
-/// <v>, <v²> and D_eff of the discrete chain with stationary masses `m`.
+/// `<v>`, `<v²>` and D_eff of the discrete chain with stationary masses `m`.
 ///
-/// D_eff = Σ_s π(s) f(s) h(s) with f = v - <v> and -Q h = f (Q: the discrete
+/// D_eff = Σ_s π(s) f(s) h(s) with f = v - `<v>` and -Q h = f (Q: the discrete
 /// generator, Q = Bᵀ + reset re-injection), the exact Green-Kubo integral of
 /// the discrete process. Computed through the dual problem Qᵀ y = -(π∘f),
 /// D = Σ f y, which uses the forward solvers. Summing the + rows of

@@ -16,7 +16,7 @@ pub struct TransientOptions {
     pub cells: usize,
     /// Final time.
     pub t_max: f64,
-    /// Times in [0, t_max] at which <v>, <v²> and the mass are recorded
+    /// Times in [0, t_max] at which `<v>`, `<v²>` and the mass are recorded
     /// (empty: t_max only).
     pub times: Vec<f64>,
     /// Times in [0, t_max] at which the density P(v, t) is stored.
@@ -66,9 +66,9 @@ pub struct Transient {
     pub v: Vec<f64>,
     /// Recording times.
     pub times: Vec<f64>,
-    /// <v>(t).
+    /// `<v>(t)`.
     pub v_mean: Vec<f64>,
-    /// <v²>(t) (paper Fig. 1).
+    /// `<v²>(t)` (paper Fig. 1).
     pub v2: Vec<f64>,
     /// Σ P Δv at the recording times.
     pub mass: Vec<f64>,

@@ -51,7 +51,7 @@ pub struct DeficitTable {
     /// Piece boundaries (strictly increasing, first = lo, last = hi).
     bounds: Vec<f64>,
     /// Per piece: antiderivative coefficients of k = 1 and k = 2, interleaved
-    /// ([j][k]) so both series are summed in one Clenshaw pass.
+    /// (`[j][k]`) so both series are summed in one Clenshaw pass.
     coef: Vec<[[f64; 2]; NC]>,
     /// Per piece: Ψ_k at the piece's left end.
     offset: Vec<[f64; 2]>,
@@ -158,7 +158,7 @@ impl DeficitTable {
     }
 }
 
-/// Two Chebyshev series Σ_j c_j[k] T_j(x), k = 0, 1, in one Clenshaw pass
+/// Two Chebyshev series Σ_j `c_j[k]` T_j(x), k = 0, 1, in one Clenshaw pass
 /// (independent recurrences interleaved for instruction-level parallelism).
 #[inline]
 fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
