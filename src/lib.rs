@@ -19,6 +19,7 @@
 
 pub mod analytic;
 pub mod error;
+pub mod figures;
 pub mod io;
 pub mod model;
 pub mod parallel;
