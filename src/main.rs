@@ -14,10 +14,15 @@ struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Regenerate the paper's figures (data, plots, claims).
+    Reproduce(cli::reproduce::ReproduceArgs),
+}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Reproduce(a) => cli::reproduce::run(a),
+    }
 }
 
 fn main() -> ExitCode {

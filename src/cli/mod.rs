@@ -3,6 +3,7 @@
 
 pub mod common;
 pub mod progress;
+pub mod reproduce;
 
 use serde::Serialize;
 
