@@ -25,6 +25,8 @@ pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Res
 pub struct Density {
     /// Velocities (cell centres).
     pub v: Vec<f64>,
+    /// Cell widths.
+    pub widths: Vec<f64>,
     /// Density values.
     pub p: Vec<f64>,
     /// Stationary <v²> (paper Eq. 17).
@@ -72,4 +74,10 @@ pub fn mfpt_sim(
 pub fn optimal_rate(params: &Params, v0: f64, vt: f64) -> Result<Option<(f64, f64, f64)>> {
     let _ = (params, v0, vt);
     Err(missing("mfpt optimiser"))
+}
+
+/// <v²>(t) from the time-dependent FP equations at `times`.
+pub fn fp_transient_v2(params: &Params, cells: usize, times: &[f64]) -> Result<Vec<f64>> {
+    let _ = (params, cells, times);
+    Err(missing("fp transient"))
 }

@@ -284,21 +284,26 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
                     continue;
                 }
                 let (a, b) = (d[0] - w / 2.0, d[0] + w / 2.0);
-                let (mut s, mut n) = (0.0, 0usize);
-                for (&v, &p) in fp.v.iter().zip(&fp.p) {
+                // Cell-width weighted mean of the FP density over the bin.
+                let (mut s, mut n) = (0.0, 0.0);
+                for ((&v, &p), &wc) in fp.v.iter().zip(&fp.p).zip(&fp.widths) {
                     if v >= a && v < b {
-                        s += p;
-                        n += 1;
+                        s += p * wc;
+                        n += wc;
                     }
                 }
-                if n > 0 {
-                    zmax = zmax.max(((d[1] - s / n as f64) / d[2]).abs());
+                if n > 0.0 {
+                    zmax = zmax.max(((d[1] - s / n) / d[2]).abs());
                 }
             }
             worst_sim_z = worst_sim_z.max(zmax);
             fp_vs_sim.push(serde_json::json!({"lambda": lambda, "r": r, "max_abs_z": zmax}));
             if r > 0.0 {
-                let h = fp.v[1] - fp.v[0];
+                // Cell width at v = 0 (the mesh is graded only near the edges).
+                let i0 = (0..fp.v.len())
+                    .min_by(|&i, &j| fp.v[i].abs().total_cmp(&fp.v[j].abs()))
+                    .unwrap_or(0);
+                let h = fp.widths[i0];
                 let (sl, sr) = one_sided_slopes(&fp.v, &fp.p, 3.0 * h, (40.0 * h).max(0.06 * vu));
                 let exact = slope_jump_exact(&params);
                 cusp_rows.push(serde_json::json!({
