@@ -6,7 +6,8 @@
 //! backward MFPT equations, analytic r = 0 densities), and returns a
 //! [`plot::Figure`] plus the numeric [`Claim`]s it supports. [`reproduce`]
 //! runs a list of figures and [`write_outputs`] writes CSV, PNG, SVG,
-//! `parameters.json`, `claims.json`, `claims.md` and `run.json` atomically.
+//! `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and `run.json`
+//! atomically.
 
 pub mod compute;
 pub mod fig1;
@@ -216,6 +217,59 @@ pub fn claims_markdown(claims: &[Claim]) -> String {
     s
 }
 
+fn json_short(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Array(a) if a.len() > 12 => format!(
+            "{} values from {} to {}",
+            a.len(),
+            json_short(&a[0]),
+            json_short(&a[a.len() - 1])
+        ),
+        serde_json::Value::Array(a) => {
+            format!("[{}]", a.iter().map(json_short).collect::<Vec<_>>().join(", "))
+        }
+        serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), fmt_num),
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Object(o) => format!(
+            "{{{}}}",
+            o.iter()
+                .map(|(k, v)| format!("{k}: {}", json_short(v)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        other => other.to_string(),
+    }
+}
+
+/// A markdown report: figures, parameter sets, claims table, timings.
+pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f64) -> String {
+    let mut s = format!(
+        "# irtp reproduce: {} ({} run, seed {})\n\nTotal wall time {:.1} s.\n\n",
+        outputs.iter().map(|o| o.which.name()).collect::<Vec<_>>().join(", "),
+        if opts.quick { "quick" } else { "full" },
+        opts.seed,
+        wall_time_s
+    );
+    for o in outputs {
+        let name = o.which.name();
+        s.push_str(&format!(
+            "## {}\n\n![{name}]({name}.png)\n\nWall time {:.1} s. Data: `{name}.csv`.\n\n",
+            o.figure.title, o.wall_time_s
+        ));
+        if let Some(spec) = o.parameters.get("spec").and_then(|v| v.as_object()) {
+            s.push_str("| parameter | value |\n|---|---|\n");
+            for (k, v) in spec {
+                s.push_str(&format!("| {k} | {} |\n", json_short(v).replace('|', "\\|")));
+            }
+            s.push('\n');
+        }
+    }
+    s.push_str("## Claims\n\n");
+    let claims: Vec<Claim> = outputs.iter().flat_map(|o| o.claims.iter().cloned()).collect();
+    s.push_str(&claims_markdown(&claims));
+    s
+}
+
 /// Write every figure's CSV, PNG and SVG, `parameters.json`, `claims.json`,
 /// `claims.md` and `run.json` into `dir` (all or nothing).
 pub fn write_outputs(
@@ -243,6 +297,7 @@ pub fn write_outputs(
     out.write_json("parameters.json", &params)?;
     out.write_json("claims.json", &claims)?;
     out.write_bytes("claims.md", claims_markdown(&claims))?;
+    out.write_bytes("REPORT.md", report_markdown(outputs, opts, wall_time_s))?;
     let figs: Vec<&str> = outputs.iter().map(|o| o.which.name()).collect();
     out.commit_with_provenance(Provenance::new(
         format!("reproduce {}", figs.join(" ")),
