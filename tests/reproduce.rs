@@ -36,7 +36,10 @@ fn reproduce_all_quick() {
 
     for f in ["fig1", "fig2", "fig3", "fig5", "fig6", "fig7"] {
         let csv = std::fs::read_to_string(out.join(format!("{f}.csv"))).unwrap();
-        assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"), "{f}");
+        assert!(
+            csv.starts_with("panel,series,source,style,x,y,y_err\n"),
+            "{f}"
+        );
         assert!(csv.lines().count() > 20, "{f}.csv has data");
         let png = std::fs::read(out.join(format!("{f}.png"))).unwrap();
         assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{f}.png");
@@ -53,7 +56,10 @@ fn reproduce_all_quick() {
     let params: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("parameters.json")).unwrap())
             .unwrap();
-    assert_eq!(params["fig2"]["spec"]["lambdas"], serde_json::json!([0.9, 7.0, 15.0, 25.0]));
+    assert_eq!(
+        params["fig2"]["spec"]["lambdas"],
+        serde_json::json!([0.9, 7.0, 15.0, 25.0])
+    );
     assert_eq!(params["fig7"]["spec"]["v0"], -0.249);
 
     let claims: Vec<Value> =
@@ -92,10 +98,15 @@ fn reproduce_all_quick() {
             .clone()
     };
     let tan = find("tan", 0.5);
-    let r_star = tan["optimal_rate"].as_f64().expect("tan lambda=0.5 has an optimum");
+    let r_star = tan["optimal_rate"]
+        .as_f64()
+        .expect("tan lambda=0.5 has an optimum");
     assert!(r_star > 0.0 && r_star.is_finite());
     assert!(tan["tau_at_optimum"].as_f64().unwrap() < tan["tau_r0"].as_f64().unwrap());
-    assert!(find("tanh", 0.5)["optimal_rate"].is_null(), "tanh: no optimum");
+    assert!(
+        find("tanh", 0.5)["optimal_rate"].is_null(),
+        "tanh: no optimum"
+    );
 }
 
 #[test]

@@ -136,8 +136,9 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> [f64; 3] {
         b.swap(k, piv);
         for i in k + 1..3 {
             let f = a[i][k] / a[k][k];
-            for j in k..3 {
-                a[i][j] -= f * a[k][j];
+            let row = a[k];
+            for (x, y) in a[i][k..].iter_mut().zip(&row[k..]) {
+                *x -= f * y;
             }
             b[i] -= f * b[k];
         }

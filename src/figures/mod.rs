@@ -226,7 +226,10 @@ fn json_short(v: &serde_json::Value) -> String {
             json_short(&a[a.len() - 1])
         ),
         serde_json::Value::Array(a) => {
-            format!("[{}]", a.iter().map(json_short).collect::<Vec<_>>().join(", "))
+            format!(
+                "[{}]",
+                a.iter().map(json_short).collect::<Vec<_>>().join(", ")
+            )
         }
         serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), fmt_num),
         serde_json::Value::String(s) => s.clone(),
@@ -245,7 +248,11 @@ fn json_short(v: &serde_json::Value) -> String {
 pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f64) -> String {
     let mut s = format!(
         "# irtp reproduce: {} ({} run, seed {})\n\nTotal wall time {:.1} s.\n\n",
-        outputs.iter().map(|o| o.which.name()).collect::<Vec<_>>().join(", "),
+        outputs
+            .iter()
+            .map(|o| o.which.name())
+            .collect::<Vec<_>>()
+            .join(", "),
         if opts.quick { "quick" } else { "full" },
         opts.seed,
         wall_time_s
@@ -259,13 +266,19 @@ pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f6
         if let Some(spec) = o.parameters.get("spec").and_then(|v| v.as_object()) {
             s.push_str("| parameter | value |\n|---|---|\n");
             for (k, v) in spec {
-                s.push_str(&format!("| {k} | {} |\n", json_short(v).replace('|', "\\|")));
+                s.push_str(&format!(
+                    "| {k} | {} |\n",
+                    json_short(v).replace('|', "\\|")
+                ));
             }
             s.push('\n');
         }
     }
     s.push_str("## Claims\n\n");
-    let claims: Vec<Claim> = outputs.iter().flat_map(|o| o.claims.iter().cloned()).collect();
+    let claims: Vec<Claim> = outputs
+        .iter()
+        .flat_map(|o| o.claims.iter().cloned())
+        .collect();
     s.push_str(&claims_markdown(&claims));
     s
 }

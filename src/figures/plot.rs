@@ -663,11 +663,7 @@ fn legend_size<DB: DrawingBackend>(
 ) -> (i32, i32) {
     let font = (FAMILY, LEGEND_FONT_PX).into_font();
     let mut w = 0i32;
-    for t in entries
-        .iter()
-        .map(|e| e.label.as_str())
-        .chain(title.into_iter())
-    {
+    for t in entries.iter().map(|e| e.label.as_str()).chain(title) {
         let (tw, _) = area
             .estimate_text_size(t, &TextStyle::from(font.clone()))
             .unwrap_or((8 * t.len() as u32, 14));
@@ -733,9 +729,9 @@ fn occupancy(p: &Panel, xr: (f64, f64), yr: (f64, f64)) -> Vec<(f64, f64)> {
                 }
                 // Error bar ends count as data too.
                 if let Some(e) = &s.y_err {
-                    for i in 0..s.x.len() {
-                        for yy in [s.y[i] - e[i], s.y[i] + e[i]] {
-                            if let (Some(x), Some(y)) = (p.x.tr(s.x[i]), p.y.tr(yy)) {
+                    for ((&xv, &yv), &ev) in s.x.iter().zip(&s.y).zip(e) {
+                        for yy in [yv - ev, yv + ev] {
+                            if let (Some(x), Some(y)) = (p.x.tr(xv), p.y.tr(yy)) {
                                 out.push((fx(x), fy(y)));
                             }
                         }
