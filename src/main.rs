@@ -15,12 +15,15 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Particle simulation (Euler scheme of the paper): moments, densities.
+    Simulate(cli::simulate::SimulateArgs),
     /// Regenerate the paper's figures (data, plots, claims).
     Reproduce(cli::reproduce::ReproduceArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Simulate(a) => cli::simulate::run(a),
         Command::Reproduce(a) => cli::reproduce::run(a),
     }
 }

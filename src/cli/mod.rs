@@ -4,6 +4,7 @@
 pub mod common;
 pub mod progress;
 pub mod reproduce;
+pub mod simulate;
 
 use serde::Serialize;
 

@@ -1,0 +1,756 @@
+//! The paper's Euler particle simulation (Eqs. 14-16 with the reset rule Eq. 3).
+//!
+//! One step n → n+1 (time n·dt → (n+1)·dt), in this exact order:
+//! 1. observe the state (v_n, x_n): record it if n is a grid step, and, if
+//!    n_b ≤ n < N, add dt to the time averages of v, v² and to the occupation
+//!    time of the histogram bin of v_n (left-point rule, like Eq. 15);
+//! 2. x ← x + v·dt with the OLD velocity (Eq. 15);
+//! 3. with probability p = r·dt: v ← v_r (Eq. 3); otherwise
+//!    v ← v + dt·(η - g(v)) (Eq. 14);
+//! 4. with probability q = ½(1 - e^{-2λ dt}) (Eq. 16): η ← -η.
+//!
+//! The reset and flip decisions are independent of each other and of the
+//! state; a reset keeps x and η. Particles start at x = 0, v = 0 (as in the
+//! paper, not at v_r) with η = ±Σ with probability ½ each.
+//!
+//! Two samplers of the reset/flip decisions are provided ([`EventSampling`]):
+//! the paper's per-step Bernoulli draws, and geometric waiting times. The
+//! decisions of step 3 (and of step 4) form an i.i.d. Bernoulli(p) (resp.
+//! Bernoulli(q)) sequence; the gaps between successes of such a sequence are
+//! i.i.d. Geometric(p) on {1, 2, ...}, so drawing the gaps directly gives the
+//! same process in distribution with two random numbers per event instead of
+//! two per step (tested in `tests/sim_euler.rs` and below).
+//!
+//! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
+//! reported as n_k·dt (the exact time of the recorded state); the run has
+//! N = n_{K-1} steps and the averaging window is steps n_b = round(burn_in/dt)
+//! .. N-1. Grid times closer than dt (two t_k on one step) are rejected.
+
+use super::{Observables, SimSpec};
+use crate::error::{Error, Result};
+use crate::model::{DragLaw, Params};
+use crate::parallel::{self, Progress};
+use crate::rng::{self, Rng};
+use rand::Rng as _;
+use serde::{Deserialize, Serialize};
+
+/// How the per-step reset and flip decisions are drawn (same law, see module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum EventSampling {
+    /// Geometric waiting times between events (fast; default).
+    #[default]
+    Geometric,
+    /// Two uniform draws per step, exactly as written in the paper.
+    Bernoulli,
+}
+
+impl std::str::FromStr for EventSampling {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "geometric" => Ok(EventSampling::Geometric),
+            "bernoulli" => Ok(EventSampling::Bernoulli),
+            _ => Err(Error::invalid("--events", s, "one of geometric, bernoulli")),
+        }
+    }
+}
+
+/// Validated step plan of an Euler run (step indices derived from the grid).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EulerPlan {
+    /// Time step.
+    pub dt: f64,
+    /// Reset probability per step, p = r·dt.
+    pub p_reset: f64,
+    /// Flip probability per step, q = ½(1 - e^{-2λ dt}) (Eq. 16).
+    pub q_flip: f64,
+    /// Step index n_k of each grid time.
+    pub record_steps: Vec<u64>,
+    /// First step of the averaging window, n_b.
+    pub burn_in_step: u64,
+    /// Total number of steps N.
+    pub steps: u64,
+}
+
+impl EulerPlan {
+    /// Validate dt against the parameters (dt < 1/max g', r·dt < 1) and map
+    /// the grid and burn-in onto steps.
+    pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
+        let dt = params.check_dt(dt)?;
+        let p_reset = params.rate() * dt;
+        if !(p_reset < 1.0) {
+            return Err(Error::invalid(
+                "--dt",
+                dt,
+                format!(
+                    "dt < 1/rate = {} (the reset probability per step is rate·dt)",
+                    1.0 / params.rate()
+                ),
+            ));
+        }
+        let q_flip = 0.5 * (-(-2.0 * params.lambda() * dt).exp_m1());
+        let max_steps = 1e15;
+        let mut record_steps = Vec::with_capacity(spec.grid.len());
+        for &t in spec.grid.times() {
+            let n = (t / dt).round();
+            if !(n <= max_steps) {
+                return Err(Error::invalid(
+                    "--t-max",
+                    t,
+                    format!("t_max/dt <= {max_steps:e} steps (dt = {dt})"),
+                ));
+            }
+            let n = n as u64;
+            if record_steps.last().is_some_and(|&last| n <= last) {
+                return Err(Error::invalid(
+                    "--samples",
+                    spec.grid.len(),
+                    format!(
+                        "grid times at least dt = {dt} apart (time {t} falls on the same Euler step as the previous one)"
+                    ),
+                ));
+            }
+            record_steps.push(n);
+        }
+        let steps = *record_steps.last().expect("non-empty grid");
+        if steps == 0 {
+            return Err(Error::invalid(
+                "--t-max",
+                spec.grid.t_max(),
+                format!("t_max >= dt = {dt}"),
+            ));
+        }
+        let burn_in_step = (spec.burn_in / dt).round() as u64;
+        if burn_in_step >= steps {
+            return Err(Error::invalid(
+                "--burn-in",
+                spec.burn_in,
+                format!("burn_in <= t_max - dt = {}", steps as f64 * dt - dt),
+            ));
+        }
+        Ok(EulerPlan {
+            dt,
+            p_reset,
+            q_flip,
+            record_steps,
+            burn_in_step,
+            steps,
+        })
+    }
+
+    /// The recorded times n_k·dt.
+    pub fn record_times(&self) -> Vec<f64> {
+        self.record_steps
+            .iter()
+            .map(|&n| n as f64 * self.dt)
+            .collect()
+    }
+}
+
+/// Simulate `spec.particles` particles with the Euler scheme and geometric
+/// waiting times. Bit-identical for any thread count.
+pub fn simulate(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    simulate_with(params, spec, dt, EventSampling::Geometric, progress)
+}
+
+/// [`simulate`] with an explicit event sampler.
+pub fn simulate_with(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    sampling: EventSampling,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    simulate_with_lanes(params, spec, dt, sampling, LANES, progress)
+}
+
+/// Particles integrated side by side in one loop. The Euler step is
+/// latency-bound (v → g(v) → v is a serial chain), so interleaving
+/// independent particles lets the CPU overlap their chains. Every particle
+/// keeps its own stream and pushes its samples in particle order, so each
+/// particle's trajectory is the same as with one lane.
+pub const LANES: usize = 8;
+
+/// [`simulate_with`] with an explicit lane count (1 or [`LANES`]; anything
+/// else means 1); exposed so tests can check that lanes change nothing.
+#[doc(hidden)]
+pub fn simulate_with_lanes(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    sampling: EventSampling,
+    lanes: usize,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    let plan = EulerPlan::new(params, spec, dt)?;
+    // Match the drag law and sampler once, outside the hot loop: the kernel
+    // is monomorphised per (law, sampler) and has no dispatch per step.
+    macro_rules! go {
+        ($f:expr) => {
+            match sampling {
+                EventSampling::Geometric => {
+                    run::<_, Geometric>($f, params, spec, &plan, lanes, progress)
+                }
+                EventSampling::Bernoulli => {
+                    run::<_, Bernoulli>($f, params, spec, &plan, lanes, progress)
+                }
+            }
+        };
+    }
+    Ok(match params.drag() {
+        DragLaw::Tan => go!(Tan),
+        DragLaw::Tanh => go!(Tanh),
+        DragLaw::Linear => go!(Linear),
+    })
+}
+
+// Zero-sized drag types so each law gets its own compiled kernel.
+#[derive(Clone, Copy)]
+struct Tan;
+#[derive(Clone, Copy)]
+struct Tanh;
+#[derive(Clone, Copy)]
+struct Linear;
+
+trait Force: Copy + Send + Sync {
+    fn g(self, v: f64) -> f64;
+}
+impl Force for Tan {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        tan(v)
+    }
+}
+impl Force for Tanh {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        tanh(v)
+    }
+}
+impl Force for Linear {
+    #[inline(always)]
+    fn g(self, v: f64) -> f64 {
+        v
+    }
+}
+
+/// tan(x), Cephes algorithm (Moshier): Cody-Waite reduction by π/4 in three
+/// parts, then tan z ≈ z + z³ P(z²)/Q(z²) on |z| ≤ π/4, and -1/tan for the
+/// odd octants. Relative error ≲ 2 ulp (tested against `f64::tan` below).
+/// Hand-written because the platform libm `tan` costs ~18 ns and dominates
+/// the Euler step (the linear-drag step costs ~4 ns); this kernel is ~3x
+/// faster and identical on every platform (bit reproducibility across libms).
+#[inline(always)]
+#[allow(clippy::excessive_precision)] // Cephes coefficients quoted verbatim
+pub fn tan(xx: f64) -> f64 {
+    const P: [f64; 3] = [
+        -1.309_369_391_813_837_776_46e4,
+        1.153_516_648_385_874_161_40e6,
+        -1.795_652_519_764_848_779_88e7,
+    ];
+    const Q: [f64; 4] = [
+        1.368_129_634_706_929_546_78e4,
+        -1.320_892_344_402_109_674_47e6,
+        2.500_838_018_233_579_158_39e7,
+        -5.386_957_559_294_546_298_81e7,
+    ];
+    const DP1: f64 = 7.853_981_554_508_209_228_515_625e-1;
+    const DP2: f64 = 7.946_627_356_147_928_367_14e-9;
+    const DP3: f64 = 3.061_616_997_868_382_943_07e-17;
+    let x = xx.abs();
+    if !(x < 1.073_741_824e9) {
+        return xx.tan(); // huge or non-finite: reduction would lose accuracy
+    }
+    let mut y = (x * (4.0 * std::f64::consts::FRAC_1_PI)).floor();
+    let mut j = y as u64 & 15;
+    if j & 1 == 1 {
+        j += 1;
+        y += 1.0;
+    }
+    let z = ((x - y * DP1) - y * DP2) - y * DP3;
+    let zz = z * z;
+    let p = (P[0] * zz + P[1]) * zz + P[2];
+    let q = (((zz + Q[0]) * zz + Q[1]) * zz + Q[2]) * zz + Q[3];
+    let mut t = z + z * (zz * p / q);
+    if j & 2 != 0 {
+        t = -1.0 / t;
+    }
+    if xx < 0.0 {
+        -t
+    } else {
+        t
+    }
+}
+
+/// tanh(x) = expm1(2x) / (expm1(2x) + 2), accurate for small |x| too
+/// (expm1 avoids cancellation); faster than the platform `tanh`.
+#[inline(always)]
+pub fn tanh(x: f64) -> f64 {
+    let a = x.abs();
+    if !(a < 22.0) {
+        return x.tanh(); // |tanh| = 1 to double precision, or NaN
+    }
+    let e = (2.0 * a).exp_m1();
+    let t = e / (e + 2.0);
+    if x < 0.0 {
+        -t
+    } else {
+        t
+    }
+}
+
+/// Reset / flip decisions of one particle (steps 3 and 4 of the module docs).
+trait Events: Sized {
+    fn new(rng: &mut Rng, plan: &EulerPlan) -> Self;
+    /// Does a reset happen in step n?
+    fn reset(&mut self, n: u64, rng: &mut Rng) -> bool;
+    /// Does η flip in step n?
+    fn flip(&mut self, n: u64, rng: &mut Rng) -> bool;
+}
+
+/// Geometric waiting times: step indices of the next reset and flip.
+struct Geometric {
+    next_reset: u64,
+    next_flip: u64,
+    ln_reset: f64,
+    ln_flip: f64,
+}
+
+impl Events for Geometric {
+    #[inline(always)]
+    fn new(rng: &mut Rng, plan: &EulerPlan) -> Self {
+        let ln_reset = (-plan.p_reset).ln_1p();
+        let ln_flip = (-plan.q_flip).ln_1p();
+        // The first event happens in step G - 1 (steps count from 0).
+        let next_reset = geometric_gap(rng, ln_reset) - 1;
+        let next_flip = geometric_gap(rng, ln_flip) - 1;
+        Geometric {
+            next_reset,
+            next_flip,
+            ln_reset,
+            ln_flip,
+        }
+    }
+    #[inline(always)]
+    fn reset(&mut self, n: u64, rng: &mut Rng) -> bool {
+        if n == self.next_reset {
+            self.next_reset = n.saturating_add(geometric_gap(rng, self.ln_reset));
+            true
+        } else {
+            false
+        }
+    }
+    #[inline(always)]
+    fn flip(&mut self, n: u64, rng: &mut Rng) -> bool {
+        if n == self.next_flip {
+            self.next_flip = n.saturating_add(geometric_gap(rng, self.ln_flip));
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// The paper's two uniform draws per step: reset if u < r·dt, flip if u < q.
+struct Bernoulli {
+    p: f64,
+    q: f64,
+}
+
+impl Events for Bernoulli {
+    #[inline(always)]
+    fn new(_rng: &mut Rng, plan: &EulerPlan) -> Self {
+        Bernoulli {
+            p: plan.p_reset,
+            q: plan.q_flip,
+        }
+    }
+    #[inline(always)]
+    fn reset(&mut self, _n: u64, rng: &mut Rng) -> bool {
+        rng.gen::<f64>() < self.p
+    }
+    #[inline(always)]
+    fn flip(&mut self, _n: u64, rng: &mut Rng) -> bool {
+        rng.gen::<f64>() < self.q
+    }
+}
+
+fn run<F: Force, E: Events>(
+    f: F,
+    params: &Params,
+    spec: &SimSpec,
+    plan: &EulerPlan,
+    lanes: usize,
+    progress: &dyn Progress,
+) -> Observables {
+    let (lo, hi) = params.bounds();
+    let mut template = Observables::new(spec, lo, hi);
+    template.times = plan.record_times();
+    let kernel = Kernel {
+        f,
+        sigma: params.sigma(),
+        v_r: params.reset_velocity(),
+        lo,
+        scale: spec.bins as f64 / (hi - lo),
+        bins: spec.bins,
+        seed: spec.seed,
+        plan,
+    };
+    // Chunks of parallel::CHUNK consecutive particles, reduced exactly like
+    // parallel::reduce (each chunk from an empty accumulator in particle
+    // order, chunks merged in index order): bit-identical for any thread
+    // count and for any lane count. Inside a chunk, groups of LANES
+    // particles run side by side; the remainder runs one at a time.
+    let n = spec.particles;
+    let chunks = n.div_ceil(parallel::CHUNK);
+    let parts = parallel::map(
+        chunks,
+        |c| {
+            let mut obs = template.clone();
+            let mut occ = vec![0.0; LANES * spec.bins];
+            let hi = ((c + 1) * parallel::CHUNK).min(n);
+            let mut i = c * parallel::CHUNK;
+            if lanes == LANES {
+                while i + LANES as u64 <= hi {
+                    kernel.group::<LANES, E>(i, &mut obs, &mut occ);
+                    i += LANES as u64;
+                }
+            }
+            for i in i..hi {
+                kernel.group::<1, E>(i, &mut obs, &mut occ);
+            }
+            obs
+        },
+        &|done: u64, _total: u64| progress.update((done * parallel::CHUNK).min(n), n),
+    );
+    let mut total = template;
+    for p in &parts {
+        total.merge(p);
+    }
+    total
+}
+
+struct Kernel<'a, F> {
+    f: F,
+    sigma: f64,
+    v_r: f64,
+    lo: f64,
+    scale: f64,
+    bins: usize,
+    seed: u64,
+    plan: &'a EulerPlan,
+}
+
+/// Number of Bernoulli(p) trials up to and including the first success,
+/// G ~ Geometric(p) on {1, 2, ...}: G = 1 + floor(ln U / ln(1-p)), U ∈ (0, 1],
+/// since P(G > k) = P(U ≤ (1-p)^k) = (1-p)^k. `ln_1mp` = ln(1-p) < 0;
+/// p = 0 (ln_1mp = 0) never succeeds.
+#[inline]
+pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
+    if ln_1mp == 0.0 {
+        return u64::MAX;
+    }
+    let u = 1.0 - rng.gen::<f64>(); // (0, 1]
+                                    // `as` saturates, so an astronomically long gap becomes u64::MAX.
+    1u64.saturating_add((u.ln() / ln_1mp) as u64)
+}
+
+impl<F: Force> Kernel<'_, F> {
+    #[inline(always)]
+    fn bin(&self, v: f64) -> usize {
+        let i = ((v - self.lo) * self.scale) as isize;
+        i.clamp(0, self.bins as isize - 1) as usize
+    }
+
+    /// Particles `first .. first + L`, side by side, following the step order
+    /// of the module docs. Per particle, the random stream is consumed as:
+    /// η_0 (one uniform), the event sampler's initial draws, then per step the
+    /// reset draw(s) before the flip draw(s).
+    #[inline(always)]
+    fn group<const L: usize, E: Events>(&self, first: u64, obs: &mut Observables, occ: &mut [f64]) {
+        let plan = self.plan;
+        let dt = plan.dt;
+        let mut rng: [Rng; L] = std::array::from_fn(|l| rng::stream(self.seed, first + l as u64));
+        let mut eta = [0.0f64; L];
+        let mut ev: [Option<E>; L] = std::array::from_fn(|_| None);
+        for l in 0..L {
+            eta[l] = if rng[l].gen::<f64>() < 0.5 {
+                self.sigma
+            } else {
+                -self.sigma
+            };
+            ev[l] = Some(E::new(&mut rng[l], plan));
+        }
+        let mut ev: [E; L] = ev.map(|e| e.expect("initialised"));
+        let (mut v, mut x) = ([0.0f64; L], [0.0f64; L]);
+        let (mut sv, mut sv2) = ([0.0f64; L], [0.0f64; L]);
+        let mut k = 0usize;
+        let mut next_rec = plan.record_steps[0];
+        for n in 0..plan.steps {
+            // 1. observe
+            if n == next_rec {
+                for l in 0..L {
+                    obs.record(k, v[l], x[l]);
+                }
+                k += 1;
+                next_rec = plan.record_steps.get(k).copied().unwrap_or(u64::MAX);
+            }
+            if n >= plan.burn_in_step {
+                for l in 0..L {
+                    sv[l] += v[l];
+                    sv2[l] += v[l] * v[l];
+                    // Occupation in units of steps; the window is passed in steps too.
+                    occ[l * self.bins + self.bin(v[l])] += 1.0;
+                }
+            }
+            for l in 0..L {
+                // 2. position with the old velocity
+                x[l] += v[l] * dt;
+                // 3. reset or Euler drift
+                if ev[l].reset(n, &mut rng[l]) {
+                    v[l] = self.v_r;
+                } else {
+                    v[l] += dt * (eta[l] - self.f.g(v[l]));
+                }
+                // 4. flip
+                if ev[l].flip(n, &mut rng[l]) {
+                    eta[l] = -eta[l];
+                }
+            }
+        }
+        if k < plan.record_steps.len() {
+            for l in 0..L {
+                obs.record(k, v[l], x[l]);
+            }
+        }
+        let w = (plan.steps - plan.burn_in_step) as f64;
+        for l in 0..L {
+            let o = &mut occ[l * self.bins..(l + 1) * self.bins];
+            obs.finish_particle(sv[l] / w, sv2[l] / w, o, w, v[l]);
+        }
+        obs.steps += L as u64 * plan.steps;
+    }
+}
+
+/// Exact expected moments of the Euler chain (not of the continuum process)
+/// for linear drag g(v) = v, started like the simulation (x = v = 0, η = ±Σ).
+///
+/// With a = 1 - dt, p = r·dt, ρ = 1 - 2q = e^{-2λ dt} and the step order of
+/// the module docs, the moments m = E v, c = E vη, s = E v², X = E x,
+/// XV = E xv, XE = E xη, X2 = E x² obey a closed linear recursion
+/// (E η_n = 0, E η² = Σ², E[η_{n+1} | η_n] = ρ η_n, events independent):
+/// m' = p v_r + (1-p) a m, c' = ρ(1-p)(a c + dt Σ²),
+/// s' = p v_r² + (1-p)(a² s + 2 a dt c + dt² Σ²), X' = X + dt m,
+/// X2' = X2 + 2 dt XV + dt² s, XV' = p v_r X' + (1-p)(a (XV + dt s) + dt (XE + dt c)),
+/// XE' = ρ (XE + dt c). This separates the O(dt) discretisation bias from
+/// statistical error in tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LinearChainMoments {
+    /// E v_n.
+    pub v: f64,
+    /// E v_n η_n.
+    pub v_eta: f64,
+    /// E v_n².
+    pub v2: f64,
+    /// E x_n.
+    pub x: f64,
+    /// E x_n v_n.
+    pub x_v: f64,
+    /// E x_n η_n.
+    pub x_eta: f64,
+    /// E x_n².
+    pub x2: f64,
+}
+
+/// Iterator-style stepper for [`LinearChainMoments`].
+#[derive(Clone, Debug)]
+pub struct LinearChain {
+    dt: f64,
+    p: f64,
+    rho: f64,
+    v_r: f64,
+    s2: f64,
+    /// Moments at the current step.
+    pub m: LinearChainMoments,
+}
+
+impl LinearChain {
+    /// Start at step 0 (all moments zero). Requires linear drag and a valid dt.
+    pub fn new(params: &Params, dt: f64) -> Result<Self> {
+        if params.drag() != DragLaw::Linear {
+            return Err(Error::invalid(
+                "--drag",
+                params.drag(),
+                "linear (the Euler chain is exactly solvable only for Newtonian drag)",
+            ));
+        }
+        let dt = params.check_dt(dt)?;
+        Ok(LinearChain {
+            dt,
+            p: params.rate() * dt,
+            rho: (-2.0 * params.lambda() * dt).exp(),
+            v_r: params.reset_velocity(),
+            s2: params.sigma() * params.sigma(),
+            m: LinearChainMoments::default(),
+        })
+    }
+
+    /// Advance one Euler step.
+    pub fn step(&mut self) {
+        let (dt, p, rho, vr, s2) = (self.dt, self.p, self.rho, self.v_r, self.s2);
+        let a = 1.0 - dt;
+        let o = self.m;
+        let x = o.x + dt * o.v;
+        let x_eta_pre = o.x_eta + dt * o.v_eta;
+        self.m = LinearChainMoments {
+            v: p * vr + (1.0 - p) * a * o.v,
+            v_eta: rho * (1.0 - p) * (a * o.v_eta + dt * s2),
+            v2: p * vr * vr + (1.0 - p) * (a * a * o.v2 + 2.0 * a * dt * o.v_eta + dt * dt * s2),
+            x,
+            x_v: p * vr * x + (1.0 - p) * (a * (o.x_v + dt * o.v2) + dt * x_eta_pre),
+            x_eta: rho * x_eta_pre,
+            x2: o.x2 + 2.0 * dt * o.x_v + dt * dt * o.v2,
+        };
+    }
+
+    /// Stationary E v², E v, E vη of the chain (fixed point of the recursion).
+    pub fn stationary(params: &Params, dt: f64) -> Result<LinearChainMoments> {
+        let c = LinearChain::new(params, dt)?;
+        let (p, rho, vr, s2) = (c.p, c.rho, c.v_r, c.s2);
+        let a = 1.0 - dt;
+        let v = p * vr / (1.0 - (1.0 - p) * a);
+        let v_eta = rho * (1.0 - p) * dt * s2 / (1.0 - rho * (1.0 - p) * a);
+        let v2 = (p * vr * vr + (1.0 - p) * (2.0 * a * dt * v_eta + dt * dt * s2))
+            / (1.0 - (1.0 - p) * a * a);
+        Ok(LinearChainMoments {
+            v,
+            v_eta,
+            v2,
+            ..Default::default()
+        })
+    }
+}
+
+/// Exact expectation of what an Euler run with linear drag reports: the
+/// window average of v² (the `v2` of the summary) and E v², E x² at the
+/// plan's record steps.
+pub fn linear_chain_expectations(
+    params: &Params,
+    plan: &EulerPlan,
+) -> Result<(f64, Vec<LinearChainMoments>)> {
+    let mut chain = LinearChain::new(params, plan.dt)?;
+    let mut at = Vec::with_capacity(plan.record_steps.len());
+    let mut k = 0;
+    let mut sum = 0.0;
+    for n in 0..=plan.steps {
+        if plan.record_steps.get(k) == Some(&n) {
+            at.push(chain.m);
+            k += 1;
+        }
+        if n >= plan.burn_in_step && n < plan.steps {
+            sum += chain.m.v2;
+        }
+        chain.step();
+    }
+    Ok((sum / (plan.steps - plan.burn_in_step) as f64, at))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::stream;
+    use crate::stats::MeanAcc;
+
+    /// The law of event step indices: the number of events among the first
+    /// `n` steps is Binomial(n, p) for both samplers. Compare mean and
+    /// variance of the count (4 standard errors).
+    #[test]
+    fn geometric_gaps_give_binomial_counts() {
+        let (n, p) = (200u64, 0.03f64);
+        let ln = (-p).ln_1p();
+        let reps = 40_000;
+        let (mut geo, mut ber) = (MeanAcc::new(), MeanAcc::new());
+        for i in 0..reps {
+            let mut rng = stream(5, i);
+            let mut count = 0u64;
+            let mut next = geometric_gap(&mut rng, ln) - 1;
+            while next < n {
+                count += 1;
+                next += geometric_gap(&mut rng, ln);
+            }
+            geo.push(count as f64);
+            let mut rng = stream(6, i);
+            ber.push((0..n).filter(|_| rng.gen::<f64>() < p).count() as f64);
+        }
+        let mean = n as f64 * p;
+        let var = mean * (1.0 - p);
+        for acc in [geo, ber] {
+            let se = (var / reps as f64).sqrt();
+            assert!((acc.mean() - mean).abs() < 4.0 * se, "{acc:?}");
+            // Var of the sample variance ≈ (μ4 - σ⁴)/n; μ4 of a binomial ≈ 3σ⁴ + σ²(1-6p(1-p)).
+            let mu4 = 3.0 * var * var + var * (1.0 - 6.0 * p * (1.0 - p));
+            let se_var = ((mu4 - var * var) / reps as f64).sqrt();
+            assert!((acc.variance() - var).abs() < 4.0 * se_var, "{acc:?}");
+        }
+    }
+
+    /// Max relative error in units of 2^-52 against the platform libm.
+    fn max_ulps(f: fn(f64) -> f64, g: fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
+        let n = 400_000;
+        (0..=n)
+            .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+            .map(|x| {
+                let (a, b) = (f(x), g(x));
+                if b == 0.0 {
+                    (a - b).abs() / f64::MIN_POSITIVE
+                } else {
+                    ((a - b) / b).abs() / f64::EPSILON
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn fast_tan_and_tanh_are_accurate() {
+        let h = std::f64::consts::FRAC_PI_2;
+        let tan_err = max_ulps(tan, f64::tan, -h + 1e-9, h - 1e-9);
+        assert!(tan_err < 3.0, "tan: {tan_err} ulp");
+        let tiny = max_ulps(tan, f64::tan, -1e-6, 1e-6);
+        assert!(tiny < 2.0, "tan near 0: {tiny} ulp");
+        let tanh_err = max_ulps(tanh, f64::tanh, -25.0, 25.0);
+        assert!(tanh_err < 3.0, "tanh: {tanh_err} ulp");
+        let tiny = max_ulps(tanh, f64::tanh, -1e-6, 1e-6);
+        assert!(tiny < 3.0, "tanh near 0: {tiny} ulp");
+        assert_eq!(tan(0.0), 0.0);
+        assert_eq!(tanh(0.0), 0.0);
+        assert!(tan(f64::NAN).is_nan() && tanh(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn geometric_gap_extremes() {
+        let mut rng = stream(1, 1);
+        assert_eq!(geometric_gap(&mut rng, 0.0), u64::MAX);
+        // p → 1: every trial succeeds.
+        let ln = (-(1.0 - 1e-300f64)).ln_1p();
+        assert!((0..100).all(|_| geometric_gap(&mut rng, ln) == 1));
+    }
+
+    #[test]
+    fn chain_fixed_point_matches_iteration() {
+        let p = Params::new(DragLaw::Linear, 1.3, 0.7, 2.0, 0.4).unwrap();
+        let mut c = LinearChain::new(&p, 0.01).unwrap();
+        for _ in 0..20_000 {
+            c.step();
+        }
+        let s = LinearChain::stationary(&p, 0.01).unwrap();
+        assert!((c.m.v2 - s.v2).abs() < 1e-12);
+        assert!((c.m.v - s.v).abs() < 1e-12);
+        assert!((c.m.v_eta - s.v_eta).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,192 @@
+//! `irtp simulate` through the binary: outputs, JSON contract,
+//! thread-count independence, and bad-input handling.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_irtp");
+
+/// A small, fast run.
+const SMALL: &[&str] = &[
+    "--particles",
+    "300",
+    "--t-max",
+    "0.5",
+    "--burn-in",
+    "0.2",
+    "--samples",
+    "6",
+    "--bins",
+    "10",
+];
+
+/// SMALL with the flags of `over` replaced by `over`'s values.
+fn with_defaults<'a>(over: &[&'a str]) -> Vec<&'a str> {
+    let mut args: Vec<&str> = Vec::new();
+    for pair in SMALL.chunks(2) {
+        if !over.contains(&pair[0]) {
+            args.extend(pair);
+        }
+    }
+    args.extend(over);
+    args
+}
+
+fn irtp(args: &[&str], threads: &str) -> Output {
+    Command::new(BIN)
+        .arg("simulate")
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("run irtp")
+}
+
+#[test]
+fn writes_outputs_and_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("res");
+    let mut args = SMALL.to_vec();
+    args.extend(["--out", out.to_str().unwrap(), "--json", "--seed", "9"]);
+    let o = irtp(&args, "2");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1, "one JSON object: {stdout}");
+    let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    for key in [
+        "v2",
+        "v2_err",
+        "x2_final",
+        "x2_final_err",
+        "particles",
+        "steps",
+        "method",
+        "dt",
+        "wall_time_s",
+    ] {
+        assert!(!j[key].is_null(), "missing {key} in {j}");
+    }
+    assert_eq!(j["particles"], 300);
+    assert_eq!(j["steps"], 300 * 500);
+    assert_eq!(j["method"], "euler");
+    assert!(j["v2"].as_f64().unwrap() > 0.0);
+
+    let moments = std::fs::read_to_string(out.join("moments.csv")).unwrap();
+    let header = moments.lines().next().unwrap();
+    for col in ["t", "v_mean", "v2", "v2_err", "x_mean", "x2", "x2_err"] {
+        assert!(header.split(',').any(|c| c == col), "{header}");
+    }
+    assert_eq!(moments.lines().count(), 1 + 6);
+    let density = std::fs::read_to_string(out.join("density.csv")).unwrap();
+    assert_eq!(
+        density.lines().next().unwrap(),
+        "v,p,p_err,p_final,p_final_err"
+    );
+    assert_eq!(density.lines().count(), 1 + 10);
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["method"], "euler");
+    assert_eq!(run["seed"], 9);
+    assert_eq!(run["parameters"]["dt"], 1e-3);
+    assert_eq!(run["parameters"]["model"]["drag"], "tan");
+    assert!(run["wall_time_s"].as_f64().unwrap() >= 0.0);
+    assert!(!run["version"].is_null());
+    // Nothing else left behind (no staging directory).
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn human_summary_without_json() {
+    let o = irtp(SMALL, "1");
+    assert!(o.status.success());
+    let s = String::from_utf8(o.stdout).unwrap();
+    assert!((2..=6).contains(&s.lines().count()), "{s}");
+    assert!(s.contains("<v^2>"), "{s}");
+}
+
+fn run_to(dir: &Path, threads: &str, extra: &[&str]) -> (Vec<u8>, Vec<u8>) {
+    let mut args = SMALL.to_vec();
+    args.extend(extra);
+    args.extend(["--out", dir.to_str().unwrap()]);
+    let o = irtp(&args, threads);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (
+        std::fs::read(dir.join("moments.csv")).unwrap(),
+        std::fs::read(dir.join("density.csv")).unwrap(),
+    )
+}
+
+/// moments.csv and density.csv are byte-identical for 1 and 2 threads.
+#[test]
+fn identical_files_for_one_and_two_threads() {
+    let tmp = tempfile::tempdir().unwrap();
+    for extra in [
+        &[][..],
+        &["--events", "bernoulli", "--drag", "tanh", "--sigma", "0.6"][..],
+    ] {
+        let a = run_to(&tmp.path().join("a"), "1", extra);
+        let b = run_to(&tmp.path().join("b"), "2", extra);
+        assert_eq!(a, b);
+    }
+}
+
+/// Each bad input: exit code 2, exactly one stderr line naming the flag,
+/// nothing on stdout, and the --out directory not created.
+#[test]
+fn bad_input_is_one_line_exit_2_nothing_written() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--sigma", "0"], "--sigma"),
+        (&["--sigma", "-1"], "--sigma"),
+        (&["--sigma", "NaN"], "--sigma"),
+        (&["--sigma", "inf"], "--sigma"),
+        (&["--drag", "tanh", "--sigma", "1"], "--sigma"),
+        (&["--drag", "tanh", "--sigma", "1.5"], "--sigma"),
+        (&["--lambda", "-0.5"], "--lambda"),
+        (&["--lambda", "nan"], "--lambda"),
+        (&["--rate", "-1"], "--rate"),
+        (&["--rate", "inf"], "--rate"),
+        (&["--reset-velocity", "1.3"], "--reset-velocity"),
+        (&["--reset-velocity", "-1.3"], "--reset-velocity"),
+        (&["--dt", "0"], "--dt"),
+        (&["--dt", "-0.001"], "--dt"),
+        (&["--dt", "0.1"], "--dt"),
+        (&["--dt", "nan"], "--dt"),
+        (
+            &["--rate", "20", "--dt", "0.06", "--drag", "linear"],
+            "--dt",
+        ),
+        (&["--particles", "1"], "--particles"),
+        (&["--particles", "0"], "--particles"),
+        (&["--t-max", "0"], "--t-max"),
+        (&["--t-max", "-1"], "--t-max"),
+        (&["--t-max", "inf"], "--t-max"),
+        (&["--burn-in", "0.5"], "--burn-in"),
+        (&["--burn-in", "-0.1"], "--burn-in"),
+        (&["--bins", "0"], "--bins"),
+        (&["--samples", "1"], "--samples"),
+        (&["--grid", "log", "--t-min", "0"], "--t-min"),
+        (&["--grid", "log", "--t-min", "1"], "--t-min"),
+        (&["--particles", "x"], "--particles"),
+        (&["--drag", "cubic"], "--drag"),
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    for (i, (bad, flag)) in cases.iter().enumerate() {
+        let out = tmp.path().join(format!("out{i}"));
+        let mut args = with_defaults(bad);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = irtp(&args, "1");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {err}");
+        assert!(o.stdout.is_empty(), "{bad:?}");
+        let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert!(lines[0].contains(flag), "{bad:?}: {err}");
+        // Values that do not even parse are clap's errors (with a usage hint);
+        // every parameter rule is our one-line message.
+        let unparsable = ["x", "cubic"].contains(&bad[1]);
+        if !unparsable {
+            assert_eq!(lines.len(), 1, "{bad:?}: {err}");
+            assert!(lines[0].starts_with("irtp: error: invalid"), "{err}");
+        }
+        assert!(!out.exists(), "{bad:?} created the output dir");
+    }
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
