@@ -16,8 +16,13 @@ fn missing(what: &'static str) -> Error {
 
 /// Particle simulation with the exact event-driven sampler.
 pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Result<Observables> {
-    let _ = (params, spec, progress);
-    Err(missing("exact sampler"))
+    // Interim: Euler until the exact sampler is merged.
+    crate::sim::simulate(
+        params,
+        spec,
+        crate::sim::Method::Euler { dt: 1e-3 },
+        progress,
+    )
 }
 
 /// A stationary density on a velocity grid.

@@ -203,12 +203,14 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
 
 /// Claims as a markdown table (paper | ours | verdict).
 pub fn claims_markdown(claims: &[Claim]) -> String {
-    let mut s =
-        String::from("| figure | claim (paper) | our number | verdict |\n|---|---|---|---|\n");
+    let mut s = String::from(
+        "| figure | id | claim (paper) | our number | verdict |\n|---|---|---|---|---|\n",
+    );
     for c in claims {
         s.push_str(&format!(
-            "| {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} |\n",
             c.figure,
+            c.id,
             c.paper.replace('|', "\\|"),
             c.ours.replace('|', "\\|"),
             c.verdict.as_str()
