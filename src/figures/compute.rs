@@ -69,9 +69,10 @@ pub fn mfpt_sim(
     vt: f64,
     samples: u64,
     seed: u64,
+    t_cap: f64,
     progress: &dyn Progress,
-) -> Result<(f64, f64, u64)> {
-    let _ = (params, v0, vt, samples, seed, progress);
+) -> Result<(f64, f64, u64, u64)> {
+    let _ = (params, v0, vt, samples, seed, t_cap, progress);
     Err(missing("exact first passage"))
 }
 

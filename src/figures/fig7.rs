@@ -303,13 +303,23 @@ fn sim_point(
         progress.update(1, 1);
         return Ok(None);
     }
-    let (m, e, n) = compute::mfpt_sim(
+    // Censoring cap far beyond the mean: a censored particle would bias the
+    // mean low, so any censoring is reported as an error rather than plotted.
+    let t_cap = 1e3 * tau + 1e3;
+    let (m, e, n, censored) = compute::mfpt_sim(
         p,
         spec.v0,
         vt,
         n,
         curve_seed(opts.seed, Which::Fig7, index as u64),
+        t_cap,
         progress,
     )?;
+    if censored > 0 {
+        return Err(crate::error::Error::Numerical {
+            method: "exact first passage",
+            reason: format!("{censored} of {n} particles not arrived by t = {t_cap:.3e}"),
+        });
+    }
     Ok(Some((m, e, n)))
 }
