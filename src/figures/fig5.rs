@@ -43,7 +43,7 @@ impl Spec {
             media: MEDIA.to_vec(),
             rates: vec![0.0, 0.1, 1.0, 10.0],
             t_min: 0.01,
-            t_max: if quick { 30.0 } else { 300.0 },
+            t_max: if quick { 30.0 } else { 100.0 },
             samples: if quick { 16 } else { 36 },
             particles: if quick { 2_000 } else { 100_000 },
         }

@@ -59,13 +59,13 @@ impl Spec {
             sim_rates: if quick {
                 vec![0.1, 1.0, 10.0, 100.0]
             } else {
-                vec![0.01, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0]
+                vec![0.01, 0.1, 1.0, 10.0, 30.0, 100.0]
             },
             t_factor: 40.0,
             samples: 9,
             batches: 16,
             max_particles: if quick { 3_200 } else { 200_000 },
-            events_per_point: if quick { 2e6 } else { 4e7 },
+            events_per_point: if quick { 2e6 } else { 1e7 },
             fit_r_min: 10.0,
         }
     }

@@ -70,7 +70,7 @@ impl Spec {
     /// Full or quick size.
     pub fn new(quick: bool) -> Self {
         let n = if quick { 25 } else { 60 };
-        let ns = if quick { 4 } else { 8 };
+        let ns = if quick { 4 } else { 6 };
         let tan_vu = 3f64.atan();
         let tanh_vu = 0.6f64.atanh();
         Spec {
@@ -101,7 +101,7 @@ impl Spec {
                 },
             ],
             samples: if quick { 2_000 } else { 100_000 },
-            events_per_point: if quick { 2e5 } else { 2e7 },
+            events_per_point: if quick { 2e5 } else { 1e7 },
             min_samples: if quick { 200 } else { 2_000 },
         }
     }
