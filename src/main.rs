@@ -15,6 +15,8 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    Analytic(cli::analytic::AnalyticArgs),
     /// Particle simulation (Euler scheme of the paper): moments, densities.
     Simulate(cli::simulate::SimulateArgs),
     /// Regenerate the paper's figures (data, plots, claims).
@@ -23,6 +25,7 @@ enum Command {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Analytic(a) => cli::analytic::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
         Command::Reproduce(a) => cli::reproduce::run(a),
     }

@@ -1,6 +1,7 @@
 //! The `irtp` command line: parse flags, validate into library configs, run,
 //! print JSON / write files. All printing and exit codes live here.
 
+pub mod analytic;
 pub mod common;
 pub mod progress;
 pub mod reproduce;
