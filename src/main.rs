@@ -21,6 +21,8 @@ enum Command {
     Simulate(cli::simulate::SimulateArgs),
     /// Regenerate the paper's figures (data, plots, claims).
     Reproduce(cli::reproduce::ReproduceArgs),
+    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    Fp(cli::fp::FpArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -28,6 +30,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analytic(a) => cli::analytic::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
         Command::Reproduce(a) => cli::reproduce::run(a),
+        Command::Fp(a) => cli::fp::run(a),
     }
 }
 

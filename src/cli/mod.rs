@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod common;
+pub mod fp;
 pub mod progress;
 pub mod reproduce;
 pub mod simulate;

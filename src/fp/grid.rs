@@ -1,0 +1,382 @@
+//! Finite-volume meshes on (v_l, v_u) and the upwind transport rates.
+//!
+//! Every node stores its distances to both edges, xl = v - v_l and
+//! xu = v_u - v, computed exactly from the edge it is graded towards, so that
+//! cells of width 1e-100 next to a singular edge are represented without
+//! cancellation, and the drifts there are evaluated from the distance
+//! (see [`edge_drift`]).
+
+use crate::model::{Drag, DragLaw, Params};
+use serde::{Deserialize, Serialize};
+
+/// How cells are placed on (v_l, v_u).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mesh {
+    /// Equal cells (the paper's finite-difference grid, Sec. 3).
+    Uniform,
+    /// Cells graded algebraically towards both edges with the exponent taken
+    /// from the edge singularity P ~ (v_u - v)^a; v_r is a node.
+    #[default]
+    Graded,
+}
+
+impl Mesh {
+    /// Name as typed on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mesh::Uniform => "uniform",
+            Mesh::Graded => "graded",
+        }
+    }
+}
+
+/// Width of the graded edge layer as a fraction of the half interval.
+const LAYER: f64 = 0.2;
+/// Largest grading exponent (a -> -1 would ask for q -> infinity).
+pub(crate) const MAX_GRADING: f64 = 40.0;
+
+/// Σ - g(v_u - x) for 0 ≤ x ≤ v_u, free of cancellation as x -> 0 (the
+/// drift of the + state at distance x below v_u; by oddness of g, |drift| of
+/// the - state at distance x above v_l). Exact identities:
+/// tan: Σ - tan(v_u - x) = (1+Σ²) tan x / (1 + Σ tan x);
+/// tanh: Σ - tanh(v_u - x) = (1-Σ²) tanh x / (1 - Σ tanh x).
+pub(crate) fn edge_drift(drag: DragLaw, sigma: f64, x: f64) -> f64 {
+    match drag {
+        DragLaw::Tan => {
+            let t = x.tan();
+            (1.0 + sigma * sigma) * t / (1.0 + sigma * t)
+        }
+        DragLaw::Tanh => {
+            let t = x.tanh();
+            (1.0 - sigma * sigma) * t / (1.0 - sigma * t)
+        }
+        DragLaw::Linear => x,
+    }
+}
+
+/// A mesh with its upwind rates. Cell i is [edges[i], edges[i+1]].
+#[derive(Clone, Debug)]
+pub(crate) struct Grid {
+    pub edges: Vec<f64>,
+    pub widths: Vec<f64>,
+    pub centres: Vec<f64>,
+    /// α_i: rate at which + mass leaves cell i to the right
+    /// (drift at its right edge / width; 0 in the last cell: no flux).
+    pub out_plus: Vec<f64>,
+    /// β_i: rate at which - mass leaves cell i to the left (0 in cell 0).
+    pub out_minus: Vec<f64>,
+    /// Cell receiving reset (and initial) + mass.
+    pub reset_plus: usize,
+    /// Cell receiving reset (and initial) - mass.
+    pub reset_minus: usize,
+    /// Grading exponent q (1 for a uniform mesh).
+    pub grading: f64,
+}
+
+impl Grid {
+    pub fn cells(&self) -> usize {
+        self.widths.len()
+    }
+
+    /// Uniform mesh of `n` cells. Reset target: the cell containing v_r; if v_r
+    /// is a node, + mass enters the cell to its right and - mass the cell to
+    /// its left (the direction each state moves in).
+    pub fn uniform(p: &Params, n: usize) -> Grid {
+        let (vl, vu) = p.bounds();
+        let dv = (vu - vl) / n as f64;
+        let xl: Vec<f64> = (0..=n).map(|i| i as f64 * dv).collect();
+        let xu: Vec<f64> = (0..=n).map(|i| (n - i) as f64 * dv).collect();
+        let widths = vec![dv; n];
+        let (rp, rm) = uniform_target(n, vl, vu, p.reset_velocity());
+        Grid::build(p, xl, xu, widths, rp, rm, 1.0)
+    }
+
+    /// Graded mesh of `nl + nu` cells: `nl` on (v_l, v_r), `nu` on (v_r, v_u).
+    /// Within each part the node distance x from the edge solves
+    /// s(x) = x + (θX)^(1-1/q) x^(1/q) [+ log clustering at v_r, see `HalfMap`]
+    /// = k Δs for equally spaced s, i.e. the mesh equidistributes the monitor
+    /// 1 + c x^(1/q - 1): cells shrink like x ~ s^q next to the edge (layer of
+    /// width θX) and are uniform inside.
+    /// With q = 1/(1+a) the singular density (v_u - v)^a carries the same mass
+    /// in every edge cell (it is smooth in s), so first-order upwind converges
+    /// like O(1/N) with a smooth error expansion, and Richardson extrapolation
+    /// over nested meshes (nl, nu) -> (2nl, 2nu) is valid.
+    pub fn graded(p: &Params, nl: usize, nu: usize) -> Grid {
+        let (vl, vu) = p.bounds();
+        let vr = p.reset_velocity();
+        let (lo_map, up_map) = half_maps(p);
+        let low = lo_map.distances(nl);
+        let up = up_map.distances(nu);
+        let n = nl + nu;
+        let mut xl = Vec::with_capacity(n + 1);
+        let mut xu = Vec::with_capacity(n + 1);
+        let mut widths = Vec::with_capacity(n);
+        let total = vu - vl;
+        for (k, &x) in low.iter().enumerate() {
+            xl.push(x);
+            xu.push(if k == nl { vu - vr } else { total - x });
+        }
+        for k in (0..nu).rev() {
+            let x = up[k];
+            xu.push(x);
+            xl.push(total - x);
+        }
+        for k in 0..nl {
+            widths.push(low[k + 1] - low[k]);
+        }
+        for k in (0..nu).rev() {
+            widths.push(up[k + 1] - up[k]);
+        }
+        Grid::build(p, xl, xu, widths, nl, nl.saturating_sub(1), lo_map.q)
+    }
+
+    fn build(
+        p: &Params,
+        xl: Vec<f64>,
+        xu: Vec<f64>,
+        widths: Vec<f64>,
+        reset_plus: usize,
+        reset_minus: usize,
+        grading: f64,
+    ) -> Grid {
+        let (drag, sigma) = (p.drag(), p.sigma());
+        let (vl, vu) = p.bounds();
+        let n = widths.len();
+        let edges: Vec<f64> = xl
+            .iter()
+            .zip(&xu)
+            .map(|(&a, &b)| if a <= b { vl + a } else { vu - b })
+            .collect();
+        let centres = (0..n)
+            .map(|i| {
+                if xl[i] <= xu[i + 1] {
+                    vl + 0.5 * (xl[i] + xl[i + 1])
+                } else {
+                    vu - 0.5 * (xu[i] + xu[i + 1])
+                }
+            })
+            .collect();
+        // Drift of + at node j: Σ - g(v_j) > 0; of - : -(Σ + g(v_j)) < 0.
+        let plus = |j: usize| {
+            if xu[j] <= xl[j] {
+                edge_drift(drag, sigma, xu[j])
+            } else {
+                sigma - drag.force(edges[j])
+            }
+        };
+        let minus = |j: usize| {
+            if xl[j] <= xu[j] {
+                edge_drift(drag, sigma, xl[j])
+            } else {
+                sigma + drag.force(edges[j])
+            }
+        };
+        let out_plus = (0..n)
+            .map(|i| {
+                if i + 1 == n {
+                    0.0
+                } else {
+                    plus(i + 1) / widths[i]
+                }
+            })
+            .collect();
+        let out_minus = (0..n)
+            .map(|i| if i == 0 { 0.0 } else { minus(i) / widths[i] })
+            .collect();
+        Grid {
+            edges,
+            widths,
+            centres,
+            out_plus,
+            out_minus,
+            reset_plus,
+            reset_minus,
+            grading,
+        }
+    }
+}
+
+/// Cells of a uniform mesh that receive + and - mass placed at velocity w:
+/// the cell containing w, or, if w is a node, the cell on the side each state
+/// moves to (right for +, left for -), which respects the symmetry
+/// (v, +) <-> (-v, -) of the model.
+pub(crate) fn uniform_target(n: usize, vl: f64, vu: f64, w: f64) -> (usize, usize) {
+    let dv = (vu - vl) / n as f64;
+    let pos = (w - vl) / dv;
+    let k = pos.round();
+    if (pos - k).abs() < 1e-9 && k >= 1.0 && k <= (n - 1) as f64 {
+        (k as usize, k as usize - 1)
+    } else {
+        let j = (pos.floor().max(0.0) as usize).min(n - 1);
+        (j, j)
+    }
+}
+
+/// The mesh maps of (v_l, v_r) and (v_r, v_u).
+fn half_maps(p: &Params) -> (HalfMap, HalfMap) {
+    let (vl, vu) = p.bounds();
+    let vr = p.reset_velocity();
+    let q = grading_exponent(p);
+    let (s, gr) = (p.sigma(), p.drag().force(vr));
+    let rate = p.lambda() + p.rate();
+    let r_on = if p.rate() > 0.0 { rate } else { 0.0 };
+    (
+        HalfMap::new(vr - vl, q, s + gr, r_on),
+        HalfMap::new(vu - vr, q, s - gr, r_on),
+    )
+}
+
+/// Cells (nl, nu) of a graded mesh of n cells, in proportion to the mesh
+/// parameter length of each half (so that doubling both nests the meshes).
+pub(crate) fn graded_split(p: &Params, n: usize) -> (usize, usize) {
+    let (a, b) = half_maps(p);
+    let frac = a.s_total() / (a.s_total() + b.s_total());
+    let nl = ((n as f64 * frac).round() as usize).clamp(1, n - 1);
+    (nl, n - nl)
+}
+
+/// q = 1/(1+a) for a singular edge (a < 0), capped at [`MAX_GRADING`]; 1 otherwise.
+pub(crate) fn grading_exponent(p: &Params) -> f64 {
+    let a = p.edge_exponent();
+    if a < 0.0 {
+        (1.0 / (1.0 + a)).min(MAX_GRADING)
+    } else {
+        1.0
+    }
+}
+
+/// Mesh parameter of one half (edge at distance 0, v_r at distance `len`):
+/// s(x) = x + K x^(1/q) + β ℓ [ln(1 + len/ℓ) - ln(1 + (len - x)/ℓ)].
+/// The second term grades towards the edge (monitor ~ x^(1/q - 1)); the third
+/// clusters cells logarithmically at v_r on the scale ℓ = |drift(v_r)|/(λ + r),
+/// the distance travelled between events, which at large r is the width of
+/// the density peak at v_r (β = 0 unless ℓ < len/10).
+#[derive(Clone, Copy, Debug)]
+struct HalfMap {
+    len: f64,
+    q: f64,
+    k: f64,
+    ell: f64,
+    beta: f64,
+}
+
+impl HalfMap {
+    fn new(len: f64, q: f64, drift_at_vr: f64, rate: f64) -> Self {
+        let k = (LAYER * len).powf(1.0 - 1.0 / q);
+        let ell = if rate > 0.0 {
+            drift_at_vr / rate
+        } else {
+            f64::INFINITY
+        };
+        let w = 1.0 - 10.0 * ell / len;
+        let beta = if w > 0.0 {
+            0.5 * len / (ell * (1.0 + len / ell).ln()) * w
+        } else {
+            0.0
+        };
+        HalfMap {
+            len,
+            q,
+            k,
+            ell,
+            beta,
+        }
+    }
+
+    fn log_term(&self, x: f64) -> f64 {
+        if self.beta == 0.0 {
+            0.0
+        } else {
+            self.beta
+                * self.ell
+                * ((self.len / self.ell).ln_1p() - ((self.len - x) / self.ell).ln_1p())
+        }
+    }
+
+    fn s_total(&self) -> f64 {
+        self.len + self.k * self.len.powf(1.0 / self.q) + self.log_term(self.len)
+    }
+
+    /// Distances 0 = x_0 < x_1 < ... < x_n = len at equally spaced s.
+    fn distances(&self, n: usize) -> Vec<f64> {
+        let (q, kq, len) = (self.q, self.k, self.len);
+        let s_tot = self.s_total();
+        let mut out = Vec::with_capacity(n + 1);
+        out.push(0.0);
+        for k in 1..n {
+            let s = s_tot * k as f64 / n as f64;
+            // Solve f(u) = u^q + K u + log_term(u^q) - s = 0 for u = x^(1/q):
+            // f is increasing and convex on u > 0, so Newton from a point with
+            // f >= 0 converges monotonically from above.
+            let mut u = (s / kq).min(s.powf(1.0 / q)).min(len.powf(1.0 / q));
+            for _ in 0..500 {
+                let uq1 = u.powf(q - 1.0);
+                let x = u * uq1;
+                let f = x + kq * u + self.log_term(x) - s;
+                let dlog = if self.beta == 0.0 {
+                    0.0
+                } else {
+                    self.beta * self.ell / (self.ell + len - x)
+                };
+                let du = f / (q * uq1 * (1.0 + dlog) + kq);
+                // Stop at convergence or when rounding makes f <= 0.
+                if !(du > 4e-16 * u) {
+                    break;
+                }
+                u -= du;
+            }
+            out.push(u.powf(q).min(len));
+        }
+        out.push(len);
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edge_drift_matches_direct_formula() {
+        for (d, s) in [
+            (DragLaw::Tan, 3.0),
+            (DragLaw::Tanh, 0.6),
+            (DragLaw::Linear, 1.5),
+        ] {
+            let vu = d.inverse(s);
+            for &x in &[0.01, 0.3 * vu, 0.9 * vu] {
+                let direct = s - d.force(vu - x);
+                assert!((edge_drift(d, s, x) - direct).abs() < 1e-12 * (1.0 + direct));
+            }
+        }
+    }
+
+    #[test]
+    fn graded_mesh_is_monotone_and_spans_interval() {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.5, 0.0, 0.3).unwrap();
+        let g = Grid::graded(&p, 300, 500);
+        assert_eq!(g.cells(), 800);
+        assert!(g.grading > 19.0);
+        assert!(g.widths.iter().all(|&h| h > 0.0));
+        let total: f64 = g.widths.iter().sum();
+        assert!((total - 2.0 * 3f64.atan()).abs() < 1e-12);
+        assert!((g.edges[300] - 0.3).abs() < 1e-15);
+        assert!(g.widths[0] < 1e-30 && g.widths[799] < 1e-30);
+        assert!(g.out_plus.iter().all(|a| a.is_finite() && *a >= 0.0));
+    }
+
+    #[test]
+    fn large_rate_clusters_cells_at_reset_velocity() {
+        let p = Params::new(DragLaw::Tanh, 0.6, 0.5, 1000.0, 0.1).unwrap();
+        let (nl, nu) = graded_split(&p, 2000);
+        let g = Grid::graded(&p, nl, nu);
+        assert!((g.edges[nl] - 0.1).abs() < 1e-15);
+        let mean = (g.edges[2000] - g.edges[0]) / 2000.0;
+        // Cells next to v_r are far below the mean width (peak width ~ Σ/r).
+        assert!(g.widths[nl] < 0.05 * mean && g.widths[nl - 1] < 0.05 * mean);
+        let total: f64 = g.widths.iter().sum();
+        assert!((total - 2.0 * 0.6f64.atanh()).abs() < 1e-12);
+        assert!(g.widths.iter().all(|&h| h > 0.0));
+    }
+}

@@ -1,0 +1,30 @@
+//! Fokker-Planck solvers for P±(v, t) (paper Eqs. 11-12).
+//!
+//! Forward equations of the simulated process (drift ±Σ - g(v), flips at rate
+//! λ, state-preserving reset to v_r at rate r):
+//!   ∂_t P+ = -∂_v[(Σ - g) P+] + λ (P- - P+) - r P+ + r m+(t) δ(v - v_r),
+//!   ∂_t P- = -∂_v[(-Σ - g) P-] + λ (P+ - P-) - r P- + r m-(t) δ(v - v_r),
+//! with m± = ∫ P± dv and no flux through v_l, v_u. The paper's Eqs. 11-12
+//! write the transport term as ∂_v[(g ∓ Σ) P±] (the same thing) and the
+//! source as (r/2) δ(v): identical for v_r = 0 and m± = ½, which holds in the
+//! stationary state and for all t from the paper's symmetric initial condition.
+//!
+//! Discretisation: finite volumes with upwind fluxes. The + state only moves
+//! right and the - state only left (Σ - g(v) > 0 inside the interval), so the
+//! upwind scheme is the generator of a Markov jump process on (cell, state):
+//! it conserves mass and positivity exactly, and its adjoint is the discrete
+//! backward operator used for D_eff.
+//!
+//! - [`stationary`]: direct O(N) solve of the stationary equations, graded
+//!   mesh for the singular edges, Richardson extrapolation; exact discrete
+//!   Green-Kubo D_eff.
+//! - [`transient`]: explicit time stepping from the paper's initial condition.
+
+mod grid;
+mod solve;
+mod stationary;
+mod transient;
+
+pub use grid::Mesh;
+pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
+pub use transient::{transient, transient_with_progress, Snapshot, Transient, TransientOptions};

@@ -1,0 +1,279 @@
+//! Direct stationary solve, <v>, <v²> (paper Eq. 17) and the exact D_eff.
+
+use super::grid::{Grid, Mesh};
+use super::solve::{solve_free, solve_reset};
+use crate::error::{Error, Result};
+use crate::model::Params;
+use serde::{Deserialize, Serialize};
+
+/// Smallest number of cells accepted.
+pub const MIN_CELLS: usize = 16;
+/// Largest number of cells accepted (memory: ~100 bytes per cell).
+pub const MAX_CELLS: usize = 50_000_000;
+
+/// Options of [`stationary`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StationaryOptions {
+    /// Number of finite-volume cells of the reported (fine) mesh.
+    pub cells: usize,
+    /// Cell placement.
+    pub mesh: Mesh,
+    /// Richardson-extrapolate <v>, <v²>, D_eff from the meshes with `cells`
+    /// and `cells/2` cells (first-order scheme: X = 2 X_N - X_{N/2}).
+    /// Needs an even `cells`. The density is always the fine-mesh one.
+    pub extrapolate: bool,
+}
+
+impl Default for StationaryOptions {
+    fn default() -> Self {
+        StationaryOptions {
+            cells: 20_000,
+            mesh: Mesh::Graded,
+            extrapolate: true,
+        }
+    }
+}
+
+/// Scalar stationary observables on one mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Moments {
+    /// Number of cells.
+    pub cells: usize,
+    /// Σ P Δv (1 up to rounding).
+    pub mass: f64,
+    /// <v>_ss.
+    pub v_mean: f64,
+    /// <v²>_ss (paper Eq. 17).
+    pub v2: f64,
+    /// D_eff = ∫_0^∞ <δv(0) δv(t)>_ss dt (∞ for λ = 0: ballistic).
+    pub d_eff: f64,
+}
+
+/// Stationary state of the discrete forward equations (paper Eqs. 11-12 with
+/// state-preserving reset to v_r).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Stationary {
+    /// Parameters.
+    pub params: Params,
+    /// Mesh kind.
+    pub mesh: Mesh,
+    /// Number of cells (fine mesh).
+    pub cells: usize,
+    /// Grading exponent q (1 = uniform near the edges).
+    pub grading: f64,
+    /// Edge exponent a = (λ + r)/g'(v_u) - 1 of P ~ (v_u - v)^a.
+    pub edge_exponent: f64,
+    /// Cell centres.
+    pub v: Vec<f64>,
+    /// Cell edges (cells + 1).
+    pub edges: Vec<f64>,
+    /// Cell widths (exact, also where edges round to the same float).
+    pub widths: Vec<f64>,
+    /// Total density P_s = P+ + P- (cell averages).
+    pub p: Vec<f64>,
+    /// Density of the + state.
+    pub p_plus: Vec<f64>,
+    /// Density of the - state.
+    pub p_minus: Vec<f64>,
+    /// Σ P Δv after normalisation.
+    pub mass: f64,
+    /// <v>_ss (extrapolated if `extrapolated`).
+    pub v_mean: f64,
+    /// <v²>_ss (extrapolated if `extrapolated`).
+    pub v2: f64,
+    /// D_eff (extrapolated if `extrapolated`).
+    pub d_eff: f64,
+    /// Whether v_mean, v2, d_eff are Richardson-extrapolated.
+    pub extrapolated: bool,
+    /// Observables on the fine mesh.
+    pub fine: Moments,
+    /// Observables on the coarse mesh (when extrapolating).
+    pub coarse: Option<Moments>,
+}
+
+fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
+    if !(MIN_CELLS..=MAX_CELLS).contains(&o.cells) {
+        return Err(Error::invalid(
+            "--cells",
+            o.cells,
+            format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
+        ));
+    }
+    if o.extrapolate && o.cells % 2 != 0 {
+        return Err(Error::invalid(
+            "--cells",
+            o.cells,
+            "an even number (extrapolation uses cells/2 as the coarse mesh)",
+        ));
+    }
+    if !(p.lambda() > 0.0) && !(p.rate() > 0.0) {
+        return Err(Error::invalid(
+            "--lambda",
+            p.lambda(),
+            "lambda > 0 when rate = 0 (otherwise each state sits at its edge forever)",
+        ));
+    }
+    Ok(())
+}
+
+/// Mesh with `n` cells, `halves` times refined (each refinement splits every
+/// cell in two in the mesh parameter): the graded mesh splits its cells at v_r
+/// in proportion to length, so nested meshes share the same split.
+pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Grid {
+    match mesh {
+        Mesh::Uniform => Grid::uniform(p, n << refine),
+        Mesh::Graded => {
+            let (nl, nu) = super::grid::graded_split(p, n);
+            Grid::graded(p, nl << refine, nu << refine)
+        }
+    }
+}
+
+/// Stationary cell masses [m+, m-] (sum 1) of the discrete forward equations.
+pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
+    let (lambda, r) = (p.lambda(), p.rate());
+    let n = g.cells();
+    let mut m = if r > 0.0 {
+        // Flips conserve the state masses' sum and equalise them: M± = 1/2
+        // (for λ = 0 the symmetric choice), so the reset influx is r/2 per state.
+        let mut b = vec![[0.0; 2]; n];
+        b[g.reset_plus][0] -= 0.5 * r;
+        b[g.reset_minus][1] -= 0.5 * r;
+        solve_reset(g, lambda, r, &b)
+    } else {
+        solve_free(g, lambda, &vec![[0.0; 2]; n], 1.0)
+    };
+    let total: f64 = m.iter().map(|c| c[0] + c[1]).sum();
+    if !(total.is_finite() && total > 0.0) {
+        return Err(Error::Numerical {
+            method: "fp stationary",
+            reason: format!("stationary solve gave total mass {total}"),
+        });
+    }
+    for c in m.iter_mut() {
+        c[0] /= total;
+        c[1] /= total;
+    }
+    Ok(m)
+}
+
+/// <v>, <v²> and D_eff of the discrete chain with stationary masses `m`.
+///
+/// D_eff = Σ_s π(s) f(s) h(s) with f = v - <v> and -Q h = f (Q: the discrete
+/// generator, Q = Bᵀ + reset re-injection), the exact Green-Kubo integral of
+/// the discrete process. Computed through the dual problem Qᵀ y = -(π∘f),
+/// D = Σ f y, which uses the forward solvers. Summing the + rows of
+/// Qᵀ y = -(π∘f) gives λ (Y+ - Y-) = F+ := Σ π+ f; we pick Y± = ±F+/(2λ)
+/// (the free null-space component cπ does not change Σ f y since Σ π f = 0),
+/// so By = -(π∘f) - r Y+ e_{k+} - r Y- e_{k-}.
+pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
+    let (lambda, r) = (p.lambda(), p.rate());
+    let n = g.cells();
+    let mut mass = 0.0;
+    let mut v1 = 0.0;
+    let mut v2 = 0.0;
+    for (c, &v) in m.iter().zip(&g.centres) {
+        let w = c[0] + c[1];
+        mass += w;
+        v1 += w * v;
+        v2 += w * v * v;
+    }
+    let d_eff = if lambda > 0.0 {
+        let f: Vec<f64> = g.centres.iter().map(|&v| v - v1).collect();
+        let mut b: Vec<[f64; 2]> = m
+            .iter()
+            .zip(&f)
+            .map(|(c, &fi)| [-c[0] * fi, -c[1] * fi])
+            .collect();
+        let y = if r > 0.0 {
+            let fp: f64 = m.iter().zip(&f).map(|(c, &fi)| c[0] * fi).sum();
+            let yp = fp / (2.0 * lambda);
+            b[g.reset_plus][0] -= r * yp;
+            b[g.reset_minus][1] += r * yp;
+            solve_reset(g, lambda, r, &b)
+        } else {
+            solve_free(g, lambda, &b, 0.0)
+        };
+        (0..n).map(|i| f[i] * (y[i][0] + y[i][1])).sum()
+    } else {
+        f64::INFINITY
+    };
+    Moments {
+        cells: n,
+        mass,
+        v_mean: v1,
+        v2,
+        d_eff,
+    }
+}
+
+/// Solve the stationary forward equations directly (no time stepping), in O(N).
+pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
+    check_options(params, opts)?;
+    let g = if opts.extrapolate {
+        make_grid(params, opts.mesh, opts.cells / 2, 1)
+    } else {
+        make_grid(params, opts.mesh, opts.cells, 0)
+    };
+    let m = stationary_masses(&g, params)?;
+    let fine = moments(&g, params, &m);
+    let coarse = if opts.extrapolate {
+        let gc = make_grid(params, opts.mesh, opts.cells / 2, 0);
+        let mc = stationary_masses(&gc, params)?;
+        Some(moments(&gc, params, &mc))
+    } else {
+        None
+    };
+    // ∞ (λ = 0) stays ∞.
+    let ex = |f: f64, c: f64| if f.is_finite() { 2.0 * f - c } else { f };
+    let (v_mean, v2, d_eff) = match &coarse {
+        Some(c) => (
+            ex(fine.v_mean, c.v_mean),
+            ex(fine.v2, c.v2),
+            ex(fine.d_eff, c.d_eff),
+        ),
+        None => (fine.v_mean, fine.v2, fine.d_eff),
+    };
+    for (name, x) in [("<v>", v_mean), ("<v^2>", v2)] {
+        if !x.is_finite() {
+            return Err(Error::Numerical {
+                method: "fp stationary",
+                reason: format!("{name} = {x}"),
+            });
+        }
+    }
+    let p_plus: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[0] / h).collect();
+    let p_minus: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
+    let p = p_plus.iter().zip(&p_minus).map(|(a, b)| a + b).collect();
+    Ok(Stationary {
+        params: *params,
+        mesh: opts.mesh,
+        cells: opts.cells,
+        grading: g.grading,
+        edge_exponent: params.edge_exponent(),
+        v: g.centres.clone(),
+        edges: g.edges.clone(),
+        widths: g.widths.clone(),
+        p,
+        p_plus,
+        p_minus,
+        mass: fine.mass,
+        v_mean,
+        v2,
+        d_eff,
+        extrapolated: coarse.is_some(),
+        fine,
+        coarse,
+    })
+}
+
+impl Stationary {
+    /// Cell masses P_i Δv_i (total over both states).
+    pub fn cell_masses(&self) -> Vec<f64> {
+        self.p
+            .iter()
+            .zip(&self.widths)
+            .map(|(p, h)| p * h)
+            .collect()
+    }
+}

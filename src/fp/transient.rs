@@ -1,0 +1,254 @@
+//! Time-dependent forward equations, the paper's way (Sec. 3): explicit
+//! upwind finite volumes on a uniform mesh, no-flux edges, the initial
+//! condition P±(v, 0) = ½ δ(v) placed in the cell of v = 0.
+
+use super::grid::{uniform_target, Grid};
+use super::stationary::{MAX_CELLS, MIN_CELLS};
+use crate::error::{finite, Error, Result};
+use crate::model::Params;
+use crate::parallel::{NoProgress, Progress};
+use serde::{Deserialize, Serialize};
+
+/// Options of [`transient`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TransientOptions {
+    /// Number of uniform cells on (v_l, v_u) (paper: 2000 for tan, 1000 for tanh).
+    pub cells: usize,
+    /// Final time.
+    pub t_max: f64,
+    /// Times in [0, t_max] at which <v>, <v²> and the mass are recorded
+    /// (empty: t_max only).
+    pub times: Vec<f64>,
+    /// Times in [0, t_max] at which the density P(v, t) is stored.
+    pub snapshot_times: Vec<f64>,
+    /// Courant number in (0, 1]: dt = cfl / max_i (outflow + flip + reset rate
+    /// of cell i) ≤ cfl Δv / max|drift|. cfl ≤ 1 keeps every cell mass ≥ 0.
+    pub cfl: f64,
+}
+
+impl Default for TransientOptions {
+    fn default() -> Self {
+        TransientOptions {
+            cells: 2000,
+            t_max: 10.0,
+            times: Vec::new(),
+            snapshot_times: Vec::new(),
+            cfl: 0.5,
+        }
+    }
+}
+
+/// Density at one time.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Snapshot {
+    /// Time.
+    pub t: f64,
+    /// Total density P(v, t) at the cell centres.
+    pub p: Vec<f64>,
+    /// + state density.
+    pub p_plus: Vec<f64>,
+    /// - state density.
+    pub p_minus: Vec<f64>,
+}
+
+/// Result of [`transient`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Transient {
+    /// Parameters.
+    pub params: Params,
+    /// Number of cells.
+    pub cells: usize,
+    /// Time step used (steps landing on a requested time are shortened).
+    pub dt: f64,
+    /// Number of steps taken.
+    pub steps: u64,
+    /// Cell centres.
+    pub v: Vec<f64>,
+    /// Recording times.
+    pub times: Vec<f64>,
+    /// <v>(t).
+    pub v_mean: Vec<f64>,
+    /// <v²>(t) (paper Fig. 1).
+    pub v2: Vec<f64>,
+    /// Σ P Δv at the recording times.
+    pub mass: Vec<f64>,
+    /// max over all steps of |Σ P Δv - 1|.
+    pub mass_error_max: f64,
+    /// Density snapshots.
+    pub snapshots: Vec<Snapshot>,
+}
+
+fn check_times(name: &'static str, ts: &[f64], t_max: f64) -> Result<Vec<f64>> {
+    let mut out = Vec::with_capacity(ts.len());
+    for &t in ts {
+        let t = finite(name, t)?;
+        if !(t >= 0.0 && t <= t_max) {
+            return Err(Error::invalid(
+                name,
+                t,
+                format!("0 <= t <= t_max = {t_max}"),
+            ));
+        }
+        out.push(t);
+    }
+    out.sort_by(|a, b| a.total_cmp(b));
+    out.dedup();
+    Ok(out)
+}
+
+/// Integrate the forward equations from the paper's initial condition.
+pub fn transient(params: &Params, opts: &TransientOptions) -> Result<Transient> {
+    transient_with_progress(params, opts, &NoProgress)
+}
+
+/// [`transient`] reporting steps done to `progress`.
+pub fn transient_with_progress(
+    params: &Params,
+    opts: &TransientOptions,
+    progress: &dyn Progress,
+) -> Result<Transient> {
+    let n = opts.cells;
+    if !(MIN_CELLS..=MAX_CELLS).contains(&n) {
+        return Err(Error::invalid(
+            "--cells",
+            n,
+            format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
+        ));
+    }
+    let t_max = finite("--t-max", opts.t_max)?;
+    if !(t_max > 0.0) {
+        return Err(Error::invalid("--t-max", t_max, "t_max > 0"));
+    }
+    let cfl = finite("--cfl", opts.cfl)?;
+    if !(cfl > 0.0 && cfl <= 1.0) {
+        return Err(Error::invalid("--cfl", cfl, "0 < cfl <= 1"));
+    }
+    let mut times = check_times("--times", &opts.times, t_max)?;
+    if times.is_empty() {
+        times.push(t_max);
+    }
+    let snaps = check_times("--snapshot-times", &opts.snapshot_times, t_max)?;
+
+    let g = Grid::uniform(params, n);
+    let (lambda, r) = (params.lambda(), params.rate());
+    let (al, be) = (&g.out_plus, &g.out_minus);
+    let max_rate = (0..n)
+        .map(|i| al[i].max(be[i]) + lambda + r)
+        .fold(0.0, f64::max);
+    let dt = cfl / max_rate;
+    let total_steps = (t_max / dt).ceil() as u64;
+    if total_steps > 1_000_000_000_000 {
+        return Err(Error::invalid(
+            "--t-max",
+            t_max,
+            format!("t_max / dt <= 1e12 steps (dt = {dt:.3e})"),
+        ));
+    }
+
+    let (vl, vu) = params.bounds();
+    let (i0p, i0m) = uniform_target(n, vl, vu, 0.0);
+    let mut m = vec![[0.0f64; 2]; n];
+    m[i0p][0] += 0.5;
+    m[i0m][1] += 0.5;
+    let mut next = vec![[0.0f64; 2]; n];
+
+    let mut out = Transient {
+        params: *params,
+        cells: n,
+        dt,
+        steps: 0,
+        v: g.centres.clone(),
+        times: Vec::with_capacity(times.len()),
+        v_mean: Vec::with_capacity(times.len()),
+        v2: Vec::with_capacity(times.len()),
+        mass: Vec::with_capacity(times.len()),
+        mass_error_max: 0.0,
+        snapshots: Vec::with_capacity(snaps.len()),
+    };
+    let (mut ti, mut si) = (0usize, 0usize);
+    let mut t = 0.0f64;
+    let report_every = (total_steps / 200).max(1);
+    loop {
+        while ti < times.len() && times[ti] <= t {
+            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+            for (c, &v) in m.iter().zip(&g.centres) {
+                let w = c[0] + c[1];
+                s0 += w;
+                s1 += w * v;
+                s2 += w * v * v;
+            }
+            out.times.push(times[ti]);
+            out.mass.push(s0);
+            out.v_mean.push(s1);
+            out.v2.push(s2);
+            ti += 1;
+        }
+        while si < snaps.len() && snaps[si] <= t {
+            let pp: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[0] / h).collect();
+            let pm: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
+            out.snapshots.push(Snapshot {
+                t: snaps[si],
+                p: pp.iter().zip(&pm).map(|(a, b)| a + b).collect(),
+                p_plus: pp,
+                p_minus: pm,
+            });
+            si += 1;
+        }
+        let target = match (times.get(ti), snaps.get(si)) {
+            (Some(&a), Some(&b)) => a.min(b),
+            (Some(&a), None) => a,
+            (None, Some(&b)) => b,
+            (None, None) => break,
+        };
+        // Step to `target`, the last step shortened to land on it exactly.
+        while t < target {
+            let h = if t + dt >= target - 1e-9 * dt {
+                target - t
+            } else {
+                dt
+            };
+            let err = step(&g, lambda, r, h, &m, &mut next);
+            std::mem::swap(&mut m, &mut next);
+            out.mass_error_max = out.mass_error_max.max(err);
+            out.steps += 1;
+            t = if h == dt { t + dt } else { target };
+            if out.steps % report_every == 0 {
+                progress.update(out.steps.min(total_steps), total_steps);
+            }
+        }
+    }
+    progress.update(total_steps, total_steps);
+    Ok(out)
+}
+
+/// One explicit step in conservative form: every transfer (flux through an
+/// edge, flip, reset) is subtracted from one cell and added to another, so the
+/// total mass changes by rounding only. Returns |Σ m - 1| after the step.
+fn step(g: &Grid, lambda: f64, r: f64, h: f64, m: &[[f64; 2]], next: &mut [[f64; 2]]) -> f64 {
+    let n = m.len();
+    let (al, be) = (&g.out_plus, &g.out_minus);
+    let (mut reset_p, mut reset_m) = (0.0, 0.0);
+    let mut in_p = 0.0; // + flux entering cell i from i-1
+    let mut out_m_next = h * be[0] * m[0][1]; // - flux leaving cell i leftwards
+    for i in 0..n {
+        let [mp, mm] = m[i];
+        let op = h * al[i] * mp;
+        let om = out_m_next;
+        let in_m = if i + 1 < n {
+            out_m_next = h * be[i + 1] * m[i + 1][1];
+            out_m_next
+        } else {
+            0.0
+        };
+        let fl = h * lambda * (mm - mp);
+        let (rp, rm) = (h * r * mp, h * r * mm);
+        reset_p += rp;
+        reset_m += rm;
+        next[i] = [mp - op - rp + fl + in_p, mm - om - rm - fl + in_m];
+        in_p = op;
+    }
+    next[g.reset_plus][0] += reset_p;
+    next[g.reset_minus][1] += reset_m;
+    let total: f64 = next.iter().map(|c| c[0] + c[1]).sum();
+    (total - 1.0).abs()
+}
