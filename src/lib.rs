@@ -22,6 +22,7 @@ pub mod error;
 pub mod figures;
 pub mod fp;
 pub mod io;
+pub mod mfpt;
 pub mod model;
 pub mod parallel;
 pub mod rng;

@@ -23,6 +23,8 @@ enum Command {
     Reproduce(cli::reproduce::ReproduceArgs),
     /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
     Fp(cli::fp::FpArgs),
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(cli::mfpt::MfptArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -31,6 +33,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => cli::simulate::run(a),
         Command::Reproduce(a) => cli::reproduce::run(a),
         Command::Fp(a) => cli::fp::run(a),
+        Command::Mfpt(a) => cli::mfpt::run(a),
     }
 }
 

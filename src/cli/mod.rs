@@ -4,6 +4,7 @@
 pub mod analytic;
 pub mod common;
 pub mod fp;
+pub mod mfpt;
 pub mod progress;
 pub mod reproduce;
 pub mod simulate;

@@ -1,0 +1,562 @@
+//! `irtp mfpt`: mean first-passage time to a target velocity.
+//!
+//! - `irtp mfpt --v0 V0 --vt VT [--method ode|euler]`: one problem;
+//! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
+//! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
+//!
+//! To add a particle method: a [`Method`] variant and an arm in [`simulate`].
+
+use super::common::{ModelArgs, OutputArgs};
+use super::progress::Bar;
+use clap::{Args, Subcommand, ValueEnum};
+use irtp::error::finite;
+use irtp::io::{OutputDir, Provenance};
+use irtp::mfpt::backward::{profile, BackwardOptions};
+use irtp::mfpt::simulate::FptSummary;
+use irtp::mfpt::{self, OptimizeOptions, Problem, ScanAxis};
+use irtp::Error;
+use serde::Serialize;
+use std::time::Instant;
+
+/// `irtp mfpt`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct MfptArgs {
+    #[command(subcommand)]
+    command: Option<MfptCommand>,
+    #[command(flatten)]
+    direct: DirectArgs,
+}
+
+#[derive(Subcommand, Debug)]
+enum MfptCommand {
+    /// tau against the target velocity or the reset rate (paper Fig. 7).
+    Scan(ScanArgs),
+    /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]; --rate is ignored).
+    Optimize(OptimizeArgs),
+}
+
+/// Start and discretisation of the backward equations.
+#[derive(Args, Debug, Clone)]
+struct ProblemArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Initial velocity v_0 (inside (v_l, v_u), on the same side of v_t as v_r).
+    #[arg(long, required = true, allow_negative_numbers = true)]
+    v0: Option<f64>,
+    /// Cells of the backward-equation mesh on [v_l, v_t].
+    #[arg(long, default_value_t = 20_000)]
+    cells: usize,
+}
+
+/// How tau is computed.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Backward equations solved directly (second order, with error estimate).
+    Ode,
+    /// Particle simulation with the Euler scheme (paper Eqs. 14-16).
+    Euler,
+}
+
+/// Particle-simulation flags.
+#[derive(Args, Debug, Clone)]
+struct SimArgs {
+    /// Method: ode (backward equations) or euler (particles).
+    #[arg(long, value_enum, default_value = "ode")]
+    method: Method,
+    /// Particles (half start in +Sigma, half in -Sigma).
+    #[arg(long, default_value_t = 10_000)]
+    particles: u64,
+    /// Euler time step (O(dt) bias, including an overshoot of at most dt).
+    #[arg(long, default_value_t = 1e-3)]
+    dt: f64,
+    /// Particles not arrived by t-max are counted as censored (means become lower bounds).
+    #[arg(long, default_value_t = 1e4)]
+    t_max: f64,
+}
+
+#[derive(Args, Debug)]
+struct DirectArgs {
+    #[command(flatten)]
+    problem: ProblemArgs,
+    /// Target velocity v_t (v_l < v_t < v_u).
+    #[arg(long, required = true, allow_negative_numbers = true)]
+    vt: Option<f64>,
+    #[command(flatten)]
+    sim: SimArgs,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+#[derive(Args, Debug)]
+struct ScanArgs {
+    #[command(flatten)]
+    problem: ProblemArgs,
+    /// Target velocity (needed with --over rate).
+    #[arg(long, allow_negative_numbers = true)]
+    vt: Option<f64>,
+    /// Scanned quantity.
+    #[arg(long, value_enum)]
+    over: Over,
+    /// First value.
+    #[arg(long, allow_negative_numbers = true)]
+    from: f64,
+    /// Last value.
+    #[arg(long, allow_negative_numbers = true)]
+    to: f64,
+    /// Number of values (>= 2).
+    #[arg(long, default_value_t = 21)]
+    points: usize,
+    /// Logarithmic spacing (needs from, to > 0).
+    #[arg(long)]
+    log: bool,
+    #[command(flatten)]
+    sim: SimArgs,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum Over {
+    /// Target velocity v_t.
+    Vt,
+    /// Reset rate r.
+    Rate,
+}
+
+#[derive(Args, Debug)]
+struct OptimizeArgs {
+    #[command(flatten)]
+    problem: ProblemArgs,
+    /// Target velocity v_t.
+    #[arg(long, allow_negative_numbers = true)]
+    vt: f64,
+    /// Smallest positive r of the search grid (r = 0 is always compared).
+    #[arg(long, default_value_t = 1e-3)]
+    r_min: f64,
+    /// Largest r of the search grid.
+    #[arg(long, default_value_t = 1e3)]
+    r_max: f64,
+    /// Points of the coarse log grid.
+    #[arg(long, default_value_t = 61)]
+    grid_points: usize,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// Entry point.
+pub fn run(args: MfptArgs) -> anyhow::Result<()> {
+    match args.command {
+        None => run_direct(args.direct),
+        Some(MfptCommand::Scan(a)) => run_scan(a),
+        Some(MfptCommand::Optimize(a)) => run_optimize(a),
+    }
+}
+
+fn build(p: &ProblemArgs, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
+    let params = p.model.params()?;
+    let v0 =
+        p.v0.ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
+    let problem = Problem::new(params, v0, vt)?;
+    let opts = BackwardOptions::with_cells(p.cells);
+    opts.validate()?;
+    Ok((problem, opts))
+}
+
+/// Validate the simulation flags before anything runs.
+fn check_sim(s: &SimArgs, problem: &Problem) -> irtp::Result<()> {
+    if s.method != Method::Ode && s.particles < 2 {
+        return Err(Error::invalid("--particles", s.particles, "particles >= 2"));
+    }
+    match s.method {
+        Method::Ode => Ok(()),
+        Method::Euler => mfpt::EulerFpt::new(*problem, s.dt, s.t_max).map(|_| ()),
+    }
+}
+
+/// Particle estimate with the requested method.
+fn simulate(s: &SimArgs, problem: &Problem, seed: u64, label: &str) -> irtp::Result<FptSummary> {
+    let bar = Bar::new(label, s.particles);
+    let stats = match s.method {
+        Method::Euler => {
+            mfpt::euler_first_passage(problem, s.dt, s.t_max, s.particles, seed, &bar)?
+        }
+        Method::Ode => unreachable!("ode is not a particle method"),
+    };
+    bar.finish();
+    Ok(stats.summary())
+}
+
+#[derive(Serialize)]
+struct Report {
+    method: Method,
+    problem: Problem,
+    tau: f64,
+    tau_plus: f64,
+    tau_minus: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cells: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error_estimate: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tau_err: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tau_plus_err: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tau_minus_err: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    particles: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    censored: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mean_is_lower_bound: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dt: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    t_max: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seed: Option<u64>,
+}
+
+fn print_lines(v: &serde_json::Value) {
+    if let Some(obj) = v.as_object() {
+        for (k, x) in obj {
+            if k != "problem" {
+                println!("{k} = {x}");
+            }
+        }
+    }
+}
+
+fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
+    let vt =
+        a.vt.ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
+    let (problem, opts) = build(&a.problem, vt)?;
+    check_sim(&a.sim, &problem)?;
+    let out = match &a.output.out {
+        Some(d) => Some(OutputDir::new(d)?),
+        None => None,
+    };
+    let t0 = Instant::now();
+    let mut prof = None;
+    let report = match a.sim.method {
+        Method::Ode => {
+            let s = mfpt::solve(&problem, &opts)?;
+            prof = Some(profile(&problem, &opts)?);
+            Report {
+                method: Method::Ode,
+                problem,
+                tau: s.tau,
+                tau_plus: s.tau_plus,
+                tau_minus: s.tau_minus,
+                cells: Some(s.cells),
+                error_estimate: Some(s.error_estimate),
+                tau_err: None,
+                tau_plus_err: None,
+                tau_minus_err: None,
+                particles: None,
+                censored: None,
+                mean_is_lower_bound: None,
+                dt: None,
+                t_max: None,
+                seed: None,
+            }
+        }
+        m => {
+            let s = simulate(&a.sim, &problem, a.output.seed, "mfpt")?;
+            Report {
+                method: m,
+                problem,
+                tau: s.tau,
+                tau_plus: s.tau_plus,
+                tau_minus: s.tau_minus,
+                cells: None,
+                error_estimate: None,
+                tau_err: Some(s.tau_err),
+                tau_plus_err: Some(s.tau_plus_err),
+                tau_minus_err: Some(s.tau_minus_err),
+                particles: Some(s.particles),
+                censored: Some(s.censored),
+                mean_is_lower_bound: Some(s.mean_is_lower_bound),
+                dt: Some(a.sim.dt),
+                t_max: Some(a.sim.t_max),
+                seed: Some(a.output.seed),
+            }
+        }
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    if let Some(mut dir) = out {
+        dir.write_json("mfpt.json", &report)?;
+        if let Some(p) = &prof {
+            let rows = (0..p.v.len())
+                .map(|i| {
+                    let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
+                    [p.v[i], tp, tm, 0.5 * (tp + tm)]
+                })
+                .collect::<Vec<_>>();
+            dir.write_csv("profile.csv", &["v0", "tau_plus", "tau_minus", "tau"], rows)?;
+        }
+        dir.commit_with_provenance(Provenance::new(
+            "mfpt",
+            method_name(report.method),
+            report.seed,
+            &report,
+            wall,
+        ))?;
+    }
+    let v = serde_json::to_value(&report)?;
+    if a.output.json {
+        super::print_json(&v)?;
+    } else {
+        print_lines(&v);
+    }
+    Ok(())
+}
+
+fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Ode => "backward-box",
+        Method::Euler => "euler",
+    }
+}
+
+fn scan_values(a: &ScanArgs) -> irtp::Result<Vec<f64>> {
+    let from = finite("--from", a.from)?;
+    let to = finite("--to", a.to)?;
+    if a.points < 2 {
+        return Err(Error::invalid("--points", a.points, "points >= 2"));
+    }
+    if a.log && !(from > 0.0 && to > 0.0) {
+        return Err(Error::invalid(
+            "--from",
+            from,
+            "from > 0 and to > 0 with --log",
+        ));
+    }
+    let k = a.points;
+    Ok((0..k)
+        .map(|i| {
+            let f = i as f64 / (k - 1) as f64;
+            if a.log {
+                (from.ln() + (to.ln() - from.ln()) * f).exp()
+            } else {
+                from + (to - from) * f
+            }
+        })
+        .collect())
+}
+
+fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
+    let values = scan_values(&a)?;
+    let (axis, vt) = match a.over {
+        Over::Vt => (ScanAxis::Vt, values[0]),
+        Over::Rate => (
+            ScanAxis::Rate,
+            a.vt.ok_or_else(|| {
+                Error::invalid(
+                    "--vt",
+                    "missing",
+                    "a target velocity (required with --over rate)",
+                )
+            })?,
+        ),
+    };
+    let (base, opts) = build(&a.problem, vt)?;
+    // Validate every point (and the simulation flags there) before any work.
+    let problems = values
+        .iter()
+        .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
+        .collect::<irtp::Result<Vec<_>>>()?;
+    for p in &problems {
+        check_sim(&a.sim, p)?;
+    }
+    let out = match &a.output.out {
+        Some(d) => Some(OutputDir::new(d)?),
+        None => None,
+    };
+    let t0 = Instant::now();
+    let bar = Bar::new("mfpt scan", values.len() as u64);
+    let points = mfpt::scan(&base, axis, &values, &opts, &bar)?;
+    bar.finish();
+    let sims = if a.sim.method == Method::Ode {
+        None
+    } else {
+        // Common random numbers: every point uses the same seed, so the
+        // curve is smooth and differences between points are precise.
+        Some(
+            problems
+                .iter()
+                .enumerate()
+                .map(|(i, p)| simulate(&a.sim, p, a.output.seed, &format!("point {}", i + 1)))
+                .collect::<irtp::Result<Vec<_>>>()?,
+        )
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    let xname = match a.over {
+        Over::Vt => "vt",
+        Over::Rate => "rate",
+    };
+    let mut header = vec![xname, "tau", "tau_plus", "tau_minus", "error_estimate"];
+    if sims.is_some() {
+        header.extend([
+            "tau_sim",
+            "tau_sim_err",
+            "tau_plus_sim",
+            "tau_plus_sim_err",
+            "tau_minus_sim",
+            "tau_minus_sim_err",
+            "censored",
+        ]);
+    }
+    let rows: Vec<Vec<f64>> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let s = &p.solution;
+            let mut row = vec![p.x, s.tau, s.tau_plus, s.tau_minus, s.error_estimate];
+            if let Some(sims) = &sims {
+                let m = &sims[i];
+                row.extend([
+                    m.tau,
+                    m.tau_err,
+                    m.tau_plus,
+                    m.tau_plus_err,
+                    m.tau_minus,
+                    m.tau_minus_err,
+                    m.censored as f64,
+                ]);
+            }
+            row
+        })
+        .collect();
+    #[derive(Serialize)]
+    struct Params<'a> {
+        base: &'a Problem,
+        over: &'a str,
+        values: &'a [f64],
+        cells: usize,
+        method: Method,
+        particles: Option<u64>,
+        dt: Option<f64>,
+        t_max: Option<f64>,
+    }
+    let sim = a.sim.method != Method::Ode;
+    let params = Params {
+        base: &base,
+        over: xname,
+        values: &values,
+        cells: a.problem.cells,
+        method: a.sim.method,
+        particles: sim.then_some(a.sim.particles),
+        dt: sim.then_some(a.sim.dt),
+        t_max: sim.then_some(a.sim.t_max),
+    };
+    if let Some(mut dir) = out {
+        dir.write_csv("mfpt_scan.csv", &header, &rows)?;
+        dir.commit_with_provenance(Provenance::new(
+            "mfpt scan",
+            method_name(a.sim.method),
+            sim.then_some(a.output.seed),
+            &params,
+            wall,
+        ))?;
+    }
+    if a.output.json {
+        let objs: Vec<serde_json::Map<String, serde_json::Value>> = rows
+            .iter()
+            .map(|r| {
+                header
+                    .iter()
+                    .zip(r)
+                    .map(|(h, x)| (h.to_string(), serde_json::json!(x)))
+                    .collect()
+            })
+            .collect();
+        super::print_json(&objs)?;
+    } else if a.output.out.is_none() {
+        println!("{}", header.join(","));
+        for r in &rows {
+            let s: Vec<String> = r.iter().map(|x| irtp::io::format_float(*x)).collect();
+            println!("{}", s.join(","));
+        }
+    }
+    Ok(())
+}
+
+fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
+    let (problem, backward) = build(&a.problem, a.vt)?;
+    let opts = OptimizeOptions {
+        r_min: a.r_min,
+        r_max: a.r_max,
+        grid_points: a.grid_points,
+        backward,
+    };
+    // Validate the range before creating any output.
+    let r_min = finite("--r-min", a.r_min)?;
+    let r_max = finite("--r-max", a.r_max)?;
+    if !(r_min > 0.0) {
+        return Err(Error::invalid("--r-min", r_min, "r_min > 0").into());
+    }
+    if !(r_max > r_min) {
+        return Err(Error::invalid("--r-max", r_max, format!("r_max > r_min = {r_min}")).into());
+    }
+    let out = match &a.output.out {
+        Some(d) => Some(OutputDir::new(d)?),
+        None => None,
+    };
+    let t0 = Instant::now();
+    let bar = Bar::new("mfpt optimize", a.grid_points as u64);
+    let best = mfpt::optimize_rate(&problem, &opts, &bar)?;
+    bar.finish();
+    let wall = t0.elapsed().as_secs_f64();
+    #[derive(Serialize)]
+    struct Summary<'a> {
+        r_opt: f64,
+        tau_opt: f64,
+        tau_plus_opt: f64,
+        tau_minus_opt: f64,
+        tau_r0: f64,
+        dtau_dr_r0: f64,
+        interior: bool,
+        at_upper_bound: bool,
+        problem: &'a Problem,
+        r_min: f64,
+        r_max: f64,
+    }
+    let summary = Summary {
+        r_opt: best.r_opt,
+        tau_opt: best.tau_opt,
+        tau_plus_opt: best.tau_plus_opt,
+        tau_minus_opt: best.tau_minus_opt,
+        tau_r0: best.tau_r0,
+        dtau_dr_r0: best.dtau_dr_r0,
+        interior: best.interior,
+        at_upper_bound: best.at_upper_bound,
+        problem: &problem,
+        r_min,
+        r_max,
+    };
+    if let Some(mut dir) = out {
+        dir.write_json("optimum.json", &summary)?;
+        dir.write_csv(
+            "rate_grid.csv",
+            &["rate", "tau"],
+            best.grid.iter().map(|&(r, t)| [r, t]),
+        )?;
+        dir.commit_with_provenance(Provenance::new(
+            "mfpt optimize",
+            "backward-box + golden-section",
+            None,
+            &summary,
+            wall,
+        ))?;
+    }
+    let v = serde_json::to_value(&summary)?;
+    if a.output.json {
+        super::print_json(&v)?;
+    } else {
+        print_lines(&v);
+    }
+    Ok(())
+}

@@ -1,0 +1,534 @@
+//! Direct solve of the MFPT backward equations (see [`crate::mfpt`]).
+//!
+//! Discretisation: box (midpoint) scheme on a piecewise-smooth mesh of
+//! [v_l, v_t] with v_0 and v_r as nodes (graded towards v_t when v_t is
+//! close to v_u). On each cell [v_i, v_{i+1}] both
+//! first-order equations are imposed at the midpoint with tau± averaged
+//! over the two nodes: second order on any mesh, and no coefficient is ever
+//! evaluated at v_l, where the - drift vanishes. There the ODE has a regular
+//! singular point: besides the regular solution, the homogeneous one grows as
+//! (v - v_l)^{-(lambda + r)/g'(v_l)}, so regularity (tau- finite) reduces
+//! the equation of the - state at v_l to the algebraic relation
+//! `(lambda + r) tau-(v_l) - lambda tau+(v_l) - r tau-(v_r) = 1`.
+//! Together with tau+(v_t) = 0 this closes the system. The + state
+//! integrates from v_t downwards, the - state from v_l upwards (their
+//! characteristic directions), so both boundary conditions are natural.
+//!
+//! Unknowns (tau+_0, tau-_0, tau+_1, ...) give a banded matrix (2 below,
+//! 2 above the diagonal) plus two columns for the non-local reset values
+//! tau±(v_r). Those are moved to the right-hand side (bordering): four
+//! band solves with one LU factorisation and a 2×2 system, O(N) in all.
+
+use super::Problem;
+use crate::error::{Error, Result};
+use crate::model::Drag;
+use serde::{Deserialize, Serialize};
+
+/// Which drift the ± states carry in the backward equations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DriftSign {
+    /// ±Sigma - g(v): the process that is simulated (paper Eq. 5). Correct.
+    #[default]
+    Simulated,
+    /// g(v) ± Sigma as printed in the paper's Eqs. (neqn26-27), with the
+    /// paper's boundary conditions. Kept only to demonstrate the sign error.
+    PaperPrinted,
+}
+
+/// Options of the backward solver.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BackwardOptions {
+    /// Number of cells on [v_l, v_t] (distributed over the segments cut by
+    /// v_0 and v_r, at least 2 each).
+    pub cells: usize,
+    /// Drift convention (always [`DriftSign::Simulated`] except in tests).
+    pub drift: DriftSign,
+}
+
+impl Default for BackwardOptions {
+    fn default() -> Self {
+        BackwardOptions {
+            cells: 20_000,
+            drift: DriftSign::Simulated,
+        }
+    }
+}
+
+impl BackwardOptions {
+    /// Options with a given number of cells.
+    pub fn with_cells(cells: usize) -> Self {
+        BackwardOptions {
+            cells,
+            ..Default::default()
+        }
+    }
+    /// 8 ≤ cells ≤ 2·10⁶ (the band matrix takes ~110 bytes per cell).
+    pub fn validate(&self) -> Result<()> {
+        if self.cells < 8 || self.cells > 2_000_000 {
+            return Err(Error::invalid(
+                "--cells",
+                self.cells,
+                "8 <= cells <= 2000000",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// MFPT at v_0 from the backward equations.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BackwardSolution {
+    /// tau = (tau+ + tau-)/2 (paper Eq. neqn9).
+    pub tau: f64,
+    /// Start in the +Sigma state.
+    pub tau_plus: f64,
+    /// Start in the -Sigma state.
+    pub tau_minus: f64,
+    /// Cells actually used.
+    pub cells: usize,
+    /// Discretisation error estimate of tau: |tau_N - tau_{N/2}| / 3
+    /// (Richardson, second order); NaN where not computed.
+    pub error_estimate: f64,
+}
+
+/// tau±(v) on the whole mesh, in the user's frame (v increasing).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Profile {
+    /// Mesh nodes.
+    pub v: Vec<f64>,
+    /// tau+(v).
+    pub tau_plus: Vec<f64>,
+    /// tau-(v).
+    pub tau_minus: Vec<f64>,
+    /// Index of v_0 in `v`.
+    pub start: usize,
+}
+
+impl Profile {
+    /// The solution at v_0.
+    pub fn at_start(&self) -> BackwardSolution {
+        let (p, m) = (self.tau_plus[self.start], self.tau_minus[self.start]);
+        BackwardSolution {
+            tau: 0.5 * (p + m),
+            tau_plus: p,
+            tau_minus: m,
+            cells: self.v.len() - 1,
+            error_estimate: f64::NAN,
+        }
+    }
+}
+
+/// Mesh of [v_l, v_t] (canonical, upward frame) with v_0 and v_r as nodes:
+/// uniform per segment, except the last one when v_t is close to v_u.
+struct Mesh {
+    v: Vec<f64>,
+    start: usize,
+    reset: usize,
+}
+
+fn mesh(p: &Problem, cells: usize) -> Mesh {
+    let vl = p.params().v_lower();
+    let vu = p.params().v_upper();
+    let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
+    cuts.sort_by(|a, b| a.total_cmp(b));
+    cuts.dedup();
+    let total = p.vt() - vl;
+    let mut v = vec![vl];
+    let segments = cuts.len() - 1;
+    for (i, w) in cuts.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let n = ((cells as f64 * (b - a) / total).round() as usize).max(2);
+        let last = i + 1 == segments;
+        // Near v_u the + drift Sigma - g(v) ≈ g'(v_u)(v_u - v) vanishes and
+        // tau+ varies like ln(v_u - v): when v_t is close to v_u, up to half
+        // of the last segment's cells are spaced uniformly in ln(v_u - v)
+        // (node density 1/H + 1/(alpha (v_u - v))), smoothly switched on as
+        // v_u - v_t drops below a quarter of the segment length.
+        let (da, dt) = (vu - a, vu - b);
+        let weight = if last {
+            0.5 * (1.0 - 4.0 * dt / (b - a)).max(0.0)
+        } else {
+            0.0
+        };
+        let (nu, nl) = (
+            (1.0 - weight) * n as f64 / (b - a),
+            weight * n as f64 / (da / dt).ln(),
+        );
+        let count = |x: f64| nu * (x - a) + nl * (da / (vu - x)).ln();
+        let density = |x: f64| nu + nl / (vu - x);
+        let mut x = a;
+        for k in 1..=n {
+            // Last node of each segment exactly at the cut.
+            x = if k == n {
+                b
+            } else if weight == 0.0 {
+                a + (b - a) * k as f64 / n as f64
+            } else {
+                // Newton on count(x) = k (count is increasing and convex,
+                // so after the first step the iterates approach from above).
+                let target = k as f64;
+                let mut y = x;
+                for _ in 0..50 {
+                    let step = (target - count(y)) / density(y);
+                    let next = (y + step).clamp(x, b);
+                    if (next - y).abs() <= 1e-15 * (1.0 + y.abs()) {
+                        y = next;
+                        break;
+                    }
+                    y = next;
+                }
+                y
+            };
+            v.push(x);
+        }
+    }
+    let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
+    Mesh {
+        start: find(p.v0()),
+        reset: find(p.params().reset_velocity()),
+        v,
+    }
+}
+
+/// Drifts (a+, a-) at v.
+#[inline]
+fn drifts<D: Drag>(g: D, sigma: f64, v: f64, sign: DriftSign) -> (f64, f64) {
+    let f = g.force(v);
+    match sign {
+        DriftSign::Simulated => (sigma - f, -sigma - f),
+        DriftSign::PaperPrinted => (f + sigma, f - sigma),
+    }
+}
+
+/// Banded matrix with partial pivoting (LINPACK-style band LU). Hand-written:
+/// the crate has no banded solver, and with 2 sub- and 2 super-diagonals a
+/// dense or sparse general solver would be far slower.
+struct Band {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    w: usize,
+    a: Vec<f64>,
+    piv: Vec<usize>,
+}
+
+impl Band {
+    fn new(n: usize, kl: usize, ku: usize) -> Self {
+        let w = 2 * kl + ku + 1;
+        Band {
+            n,
+            kl,
+            ku,
+            w,
+            a: vec![0.0; n * w],
+            piv: vec![0; n],
+        }
+    }
+    #[inline]
+    fn idx(&self, i: usize, j: usize) -> usize {
+        debug_assert!(j + self.kl >= i && j <= i + self.ku + self.kl);
+        i * self.w + (j + self.kl - i)
+    }
+    #[inline]
+    fn set(&mut self, i: usize, j: usize, x: f64) {
+        let k = self.idx(i, j);
+        self.a[k] = x;
+    }
+    fn factor(&mut self) -> Result<()> {
+        let (n, kl, ku) = (self.n, self.kl, self.ku);
+        for k in 0..n {
+            let last = (k + kl).min(n - 1);
+            let mut p = k;
+            let mut best = self.a[self.idx(k, k)].abs();
+            for i in k + 1..=last {
+                let x = self.a[self.idx(i, k)].abs();
+                if x > best {
+                    best = x;
+                    p = i;
+                }
+            }
+            if !(best > 0.0) || !best.is_finite() {
+                return Err(Error::Numerical {
+                    method: "mfpt backward solve",
+                    reason: format!("singular band matrix at row {k}"),
+                });
+            }
+            self.piv[k] = p;
+            let jmax = (k + ku + kl).min(n - 1);
+            if p != k {
+                for j in k..=jmax {
+                    let (x, y) = (self.idx(k, j), self.idx(p, j));
+                    self.a.swap(x, y);
+                }
+            }
+            let d = self.a[self.idx(k, k)];
+            for i in k + 1..=last {
+                let ik = self.idx(i, k);
+                let l = self.a[ik] / d;
+                self.a[ik] = l;
+                if l != 0.0 {
+                    for j in k + 1..=jmax {
+                        let kj = self.a[self.idx(k, j)];
+                        let ij = self.idx(i, j);
+                        self.a[ij] -= l * kj;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+    #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
+    fn solve(&self, b: &mut [f64]) {
+        let (n, kl, ku) = (self.n, self.kl, self.ku);
+        for k in 0..n {
+            b.swap(k, self.piv[k]);
+            let bk = b[k];
+            for i in k + 1..=(k + kl).min(n - 1) {
+                b[i] -= self.a[self.idx(i, k)] * bk;
+            }
+        }
+        for k in (0..n).rev() {
+            let mut s = b[k];
+            for j in k + 1..=(k + ku + kl).min(n - 1) {
+                s -= self.a[self.idx(k, j)] * b[j];
+            }
+            b[k] = s / self.a[self.idx(k, k)];
+        }
+    }
+}
+
+/// Source terms s± of the equations "... = -s±": 1 for the MFPT itself,
+/// node values for derivatives.
+enum Source<'a> {
+    One,
+    Nodes(&'a [f64], &'a [f64]),
+}
+
+/// Solve on the canonical (upward) mesh; returns (tau+, tau-) at the nodes,
+/// or `None` when tau exceeds the f64 range (resetting so frequent that the
+/// target is practically never reached).
+fn solve_mesh(
+    p: &Problem,
+    m: &Mesh,
+    rate: f64,
+    sign: DriftSign,
+    src: Source,
+) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
+    let par = &p.params();
+    let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
+    let nodes = m.v.len();
+    let n = 2 * nodes;
+    let mut a = Band::new(n, 2, 2);
+    let mut b = vec![0.0; n];
+    let mut cp = vec![0.0; n];
+    let mut cm = vec![0.0; n];
+    let s_at = |i: usize| -> (f64, f64) {
+        match src {
+            Source::One => (1.0, 1.0),
+            Source::Nodes(sp, sm) => (sp[i], sm[i]),
+        }
+    };
+    // Row 0: regularity of tau- at v_l.
+    a.set(0, 0, -lam);
+    a.set(0, 1, lam + rate);
+    cm[0] = -rate;
+    b[0] = s_at(0).1;
+    for i in 0..nodes - 1 {
+        let h = m.v[i + 1] - m.v[i];
+        let mid = 0.5 * (m.v[i] + m.v[i + 1]);
+        let (ap, am) = drifts(g, sigma, mid, sign);
+        let (s0, s1) = (s_at(i), s_at(i + 1));
+        let hl = 0.5 * h * lam;
+        let hd = 0.5 * h * (lam + rate);
+        let (rp, rm) = (2 * i + 1, 2 * i + 2);
+        let (pi, mi, pj, mj) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        a.set(rp, pi, -ap - hd);
+        a.set(rp, pj, ap - hd);
+        a.set(rp, mi, hl);
+        a.set(rp, mj, hl);
+        cp[rp] = h * rate;
+        b[rp] = -h * 0.5 * (s0.0 + s1.0);
+        a.set(rm, mi, -am - hd);
+        a.set(rm, mj, am - hd);
+        a.set(rm, pi, hl);
+        a.set(rm, pj, hl);
+        cm[rm] = h * rate;
+        b[rm] = -h * 0.5 * (s0.1 + s1.1);
+    }
+    // Last row: tau+(v_t) = 0.
+    a.set(n - 1, n - 2, 1.0);
+    b[n - 1] = 0.0;
+    a.factor()?;
+    a.solve(&mut b);
+    let mut x = b;
+    if rate > 0.0 {
+        // x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and R± = x±(v_r).
+        // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
+        // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
+        // so the 2×2 system is rewritten in sums of non-negative terms only:
+        // no cancellation even when tau ~ e^{r T} is astronomically large.
+        let mut q = vec![0.0; n];
+        q[n - 1] = 1.0;
+        a.solve(&mut q);
+        a.solve(&mut cp);
+        a.solve(&mut cm);
+        let (kp, km) = (2 * m.reset, 2 * m.reset + 1);
+        let (y1m, y2p) = (cp[km], cm[kp]);
+        let (qp, qm) = (q[kp], q[km]);
+        // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
+        let (m11, m22) = (qp - y2p, qm - y1m);
+        let det = qp * qm - qp * y1m - qm * y2p;
+        if !(det > 0.0) || !det.is_finite() {
+            return Ok(None);
+        }
+        let rp = (x[kp] * m22 - y2p * x[km]) / det;
+        let rm = (m11 * x[km] - y1m * x[kp]) / det;
+        for k in 0..n {
+            x[k] -= rp * cp[k] + rm * cm[k];
+        }
+    }
+    let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
+    let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
+    if tp.iter().chain(&tm).any(|t| !t.is_finite()) {
+        return Ok(None);
+    }
+    Ok(Some((tp, tm)))
+}
+
+/// tau±(v) on the whole mesh, in the user's frame.
+pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
+    opts.validate()?;
+    let (cp, swapped) = problem.canonical();
+    let m = mesh(&cp, opts.cells);
+    let (tp, tm) =
+        solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
+    Ok(to_user_frame(m, tp, tm, swapped))
+}
+
+/// Start of the [`Error::Numerical`] reason when tau overflows f64.
+pub const OVERFLOW: &str = "the mean first-passage time exceeds the f64 range";
+
+fn overflow() -> Error {
+    Error::Numerical {
+        method: "mfpt backward solve",
+        reason: format!("{OVERFLOW} (~1e308): the target is practically never reached"),
+    }
+}
+
+/// Like [`profile`] at v_0, but `Ok(None)` when tau overflows f64.
+pub fn at_start_or_overflow(
+    problem: &Problem,
+    opts: &BackwardOptions,
+) -> Result<Option<BackwardSolution>> {
+    match profile(problem, opts) {
+        Ok(p) => Ok(Some(p.at_start())),
+        Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
+    if !swapped {
+        return Profile {
+            v: m.v,
+            tau_plus: tp,
+            tau_minus: tm,
+            start: m.start,
+        };
+    }
+    let n = m.v.len();
+    Profile {
+        v: m.v.iter().rev().map(|x| -x).collect(),
+        tau_plus: tm.into_iter().rev().collect(),
+        tau_minus: tp.into_iter().rev().collect(),
+        start: n - 1 - m.start,
+    }
+}
+
+/// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
+/// Errors with [`Error::Numerical`] if tau overflows f64.
+pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
+    let fine = profile(problem, opts)?.at_start();
+    let half = BackwardOptions {
+        cells: (opts.cells / 2).max(8),
+        ..*opts
+    };
+    let coarse = profile(problem, &half)?.at_start();
+    Ok(BackwardSolution {
+        error_estimate: (fine.tau - coarse.tau).abs() / 3.0,
+        ..fine
+    })
+}
+
+/// tau(v_0) at r = 0 and its derivative d tau / d r at r = 0 (the rate in
+/// `problem` is ignored). Differentiating the backward equations in r gives
+/// the r = 0 operator acting on sigma± = d tau± / dr with source
+/// tau±(v_r) - tau±(v) (evaluated with the r = 0 solution). Negative
+/// derivative: a little resetting shortens the search.
+pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Result<(f64, f64)> {
+    opts.validate()?;
+    let (cp, _) = problem.canonical();
+    let m = mesh(&cp, opts.cells);
+    let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
+    let sp: Vec<f64> = tp.iter().map(|t| tp[m.reset] - t).collect();
+    let sm: Vec<f64> = tm.iter().map(|t| tm[m.reset] - t).collect();
+    let (dp, dm) =
+        solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
+    let i = m.start;
+    Ok((0.5 * (tp[i] + tm[i]), 0.5 * (dp[i] + dm[i])))
+}
+
+/// The paper's method (Sec. 3): first-order upwind differences iterated to a
+/// fixed point (Gauss-Seidel sweeps: tau+ downwards from v_t, tau- upwards
+/// from v_l, then the reset values) until the largest change is below `tol`.
+/// Slow (many sweeps) and first order; kept as an independent check of
+/// [`solve`]. Returns the solution and the number of sweeps.
+pub fn fixed_point_upwind(
+    problem: &Problem,
+    cells: usize,
+    tol: f64,
+    max_sweeps: usize,
+) -> Result<(BackwardSolution, usize)> {
+    BackwardOptions::with_cells(cells).validate()?;
+    let (cp, swapped) = problem.canonical();
+    let m = mesh(&cp, cells);
+    let par = &cp.params();
+    let (g, sigma, lam, r) = (par.drag(), par.sigma(), par.lambda(), par.rate());
+    let n = m.v.len();
+    let a: Vec<(f64, f64)> =
+        m.v.iter()
+            .map(|&v| drifts(g, sigma, v, DriftSign::Simulated))
+            .collect();
+    let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
+    for sweep in 1..=max_sweeps {
+        let mut change = 0.0f64;
+        let rp = tp[m.reset];
+        for i in (0..n - 1).rev() {
+            let c = a[i].0 / (m.v[i + 1] - m.v[i]);
+            let new = (c * tp[i + 1] + lam * tm[i] + r * rp + 1.0) / (c + lam + r);
+            change = change.max((new - tp[i]).abs());
+            tp[i] = new;
+        }
+        let rm = tm[m.reset];
+        for i in 0..n {
+            let c = if i == 0 {
+                0.0
+            } else {
+                -a[i].1 / (m.v[i] - m.v[i - 1])
+            };
+            let prev = if i == 0 { 0.0 } else { tm[i - 1] };
+            let new = (c * prev + lam * tp[i] + r * rm + 1.0) / (c + lam + r);
+            change = change.max((new - tm[i]).abs());
+            tm[i] = new;
+        }
+        if change < tol {
+            let prof = to_user_frame(m, tp, tm, swapped);
+            return Ok((prof.at_start(), sweep));
+        }
+    }
+    Err(Error::Numerical {
+        method: "mfpt fixed-point iteration",
+        reason: format!("no convergence to {tol} in {max_sweeps} sweeps"),
+    })
+}

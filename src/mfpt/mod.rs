@@ -1,0 +1,171 @@
+//! Mean first-passage time (MFPT) to a target velocity v_t (paper Sec. 2.2, Fig. 7).
+//!
+//! The particle starts at v_0 with eta(0) = ±Sigma (equally likely) and the
+//! first-passage time is the first t with v(t) = v_t. Conditional means
+//! tau±(v_0) solve the backward equations of the *simulated* process, whose
+//! generator is L f(v,±) = (±Sigma - g(v)) f' + lambda [f(v,∓) - f(v,±)]
+//! + r [f(v_r,±) - f(v,±)]; L tau± = -1 gives, on (v_l, v_t),
+//!
+//! (Sigma - g) tau+' + lambda (tau- - tau+) + r (tau+(v_r) - tau+) = -1,
+//! (-Sigma - g) tau-' + lambda (tau+ - tau-) + r (tau-(v_r) - tau-) = -1,
+//!
+//! with tau+(v_t) = 0 and regularity at v_l, where the - drift vanishes.
+//! The paper's Eqs. (neqn26-27) print the drifts as g ± Sigma (the sign of g
+//! flipped); [`backward::DriftSign::PaperPrinted`] solves that printed form so
+//! tests can show it disagrees with the particle simulation.
+//!
+//! Targets below v_0 are handled by the reflection v → -v (g is odd, the
+//! noise symmetric): tau±(v_0; v_t, v_r) = tau∓(-v_0; -v_t, -v_r).
+//!
+//! - [`backward`]: direct O(N) second-order solve of the backward equations.
+//! - [`simulate`]: first-passage statistics from particles (Euler, pluggable).
+//! - [`optimize`]: scans and the optimal resetting rate.
+
+pub mod backward;
+pub mod optimize;
+pub mod simulate;
+
+use crate::error::{finite, Error, Result};
+use crate::model::Params;
+use serde::{Deserialize, Serialize};
+
+pub use backward::{solve, BackwardOptions, BackwardSolution, DriftSign};
+pub use optimize::{optimize_rate, scan, OptimizeOptions, Optimum, ScanAxis, ScanPoint};
+pub use simulate::{euler_first_passage, first_passage_stats, EulerFpt, FptSample, FptStats};
+
+/// A validated first-passage problem: model parameters, start v_0, target v_t.
+/// Built with [`Problem::new`] (also on deserialisation), so always admissible.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawProblem", into = "RawProblem")]
+pub struct Problem {
+    params: Params,
+    v0: f64,
+    vt: f64,
+}
+
+/// Unvalidated mirror of [`Problem`] for (de)serialisation.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct RawProblem {
+    /// Model parameters.
+    pub params: Params,
+    /// Initial velocity v_0.
+    pub v0: f64,
+    /// Target velocity v_t.
+    pub vt: f64,
+}
+
+impl TryFrom<RawProblem> for Problem {
+    type Error = Error;
+    fn try_from(r: RawProblem) -> Result<Self> {
+        Problem::new(r.params, r.v0, r.vt)
+    }
+}
+
+impl From<Problem> for RawProblem {
+    fn from(p: Problem) -> Self {
+        RawProblem {
+            params: p.params,
+            v0: p.v0,
+            vt: p.vt,
+        }
+    }
+}
+
+impl Problem {
+    /// Validate: lambda > 0 (else the - state never arrives), v_l < v_t < v_u
+    /// (the ± state only approaches v_u / v_l asymptotically, so a target
+    /// there is never reached), v_0 and v_r strictly on the same side of v_t
+    /// (a reset must not jump across the target) and inside (v_l, v_u).
+    pub fn new(params: Params, v0: f64, vt: f64) -> Result<Self> {
+        let v0 = finite("--v0", v0)?;
+        let vt = finite("--vt", vt)?;
+        let (vl, vu) = params.bounds();
+        if !(params.lambda() > 0.0) {
+            return Err(Error::invalid(
+                "--lambda",
+                params.lambda(),
+                "lambda > 0 for first passage (with lambda = 0 a particle in the -Sigma state never reaches the target)",
+            ));
+        }
+        if !(vt > vl && vt < vu) {
+            return Err(Error::invalid(
+                "--vt",
+                vt,
+                format!(
+                    "{vl:.6} < vt < {vu:.6}: the +Sigma state approaches v_u = g^-1(Sigma) = {vu:.6} only asymptotically (drift Sigma - g(v) -> 0), so a target at or beyond v_u (or v_l) is never reached"
+                ),
+            ));
+        }
+        let vr = params.reset_velocity();
+        let up = v0 < vt;
+        if !(v0 > vl && v0 < vu) || v0 == vt {
+            return Err(Error::invalid(
+                "--v0",
+                v0,
+                format!("{vl:.6} < v0 < {vu:.6} and v0 != vt"),
+            ));
+        }
+        if (up && !(vr < vt)) || (!up && !(vr > vt)) {
+            let side = if up {
+                format!(
+                    "v_r < vt = {vt} (same side as v0, so a reset cannot jump across the target)"
+                )
+            } else {
+                format!(
+                    "v_r > vt = {vt} (same side as v0, so a reset cannot jump across the target)"
+                )
+            };
+            return Err(Error::invalid("--reset-velocity", vr, side));
+        }
+        Ok(Problem { params, v0, vt })
+    }
+
+    /// Model parameters (rate r and reset velocity v_r included).
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+    /// Initial velocity v_0.
+    pub fn v0(&self) -> f64 {
+        self.v0
+    }
+    /// Target velocity v_t.
+    pub fn vt(&self) -> f64 {
+        self.vt
+    }
+
+    /// Same problem with another reset rate (validated).
+    pub fn with_rate(&self, rate: f64) -> Result<Self> {
+        Problem::new(self.params.with_rate(rate)?, self.v0, self.vt)
+    }
+
+    /// Same problem with another target (validated).
+    pub fn with_target(&self, vt: f64) -> Result<Self> {
+        Problem::new(self.params, self.v0, vt)
+    }
+
+    /// True when the target lies above the start (the + state drives into it).
+    pub fn upward(&self) -> bool {
+        self.v0 < self.vt
+    }
+
+    /// The equivalent upward problem (v → -v when the target is below v_0),
+    /// and whether the ± labels were swapped.
+    pub fn canonical(&self) -> (Problem, bool) {
+        if self.upward() {
+            (*self, false)
+        } else {
+            let p = self
+                .params
+                .with_reset_velocity(-self.params.reset_velocity())
+                .expect("the velocity interval is symmetric");
+            (
+                Problem {
+                    params: p,
+                    v0: -self.v0,
+                    vt: -self.vt,
+                },
+                true,
+            )
+        }
+    }
+}

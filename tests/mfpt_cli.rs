@@ -1,0 +1,239 @@
+//! `irtp mfpt` through the binary.
+
+use std::process::{Command, Output};
+
+fn irtp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_irtp"))
+        .args(args)
+        .output()
+        .expect("run irtp")
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+const PAPER: [&str; 10] = [
+    "--drag", "tan", "--sigma", "3", "--lambda", "0.5", "--rate", "2", "--v0", "-0.249",
+];
+
+#[test]
+fn direct_usage_ode_json() {
+    let mut a = vec!["mfpt"];
+    a.extend(PAPER);
+    a.extend(["--vt", "0.5", "--json", "--cells", "4000"]);
+    let v = json(&irtp(&a));
+    let (t, tp, tm) = (
+        v["tau"].as_f64().unwrap(),
+        v["tau_plus"].as_f64().unwrap(),
+        v["tau_minus"].as_f64().unwrap(),
+    );
+    assert!(tp > 0.0 && tm > tp);
+    assert!((t - 0.5 * (tp + tm)).abs() < 1e-12);
+    assert!((t - 1.7442128).abs() < 1e-6, "{t}");
+    assert!(v["error_estimate"].as_f64().unwrap() < 1e-6);
+    assert_eq!(v["method"], "ode");
+}
+
+#[test]
+fn direct_usage_euler_reports_errors_and_censoring() {
+    let mut a = vec!["mfpt"];
+    a.extend(PAPER);
+    a.extend([
+        "--vt",
+        "0.5",
+        "--json",
+        "--method",
+        "euler",
+        "--particles",
+        "2000",
+    ]);
+    a.extend(["--dt", "1e-3", "--seed", "3"]);
+    let v = json(&irtp(&a));
+    let err = v["tau_err"].as_f64().unwrap();
+    assert!(err > 0.0);
+    assert_eq!(v["censored"], 0);
+    assert_eq!(v["mean_is_lower_bound"], false);
+    assert!((v["tau"].as_f64().unwrap() - 1.7442128).abs() < 4.0 * err);
+    // Same seed, same answer.
+    assert_eq!(v, json(&irtp(&a)));
+}
+
+#[test]
+fn scan_writes_csv_and_provenance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    let out = irtp(&[
+        "mfpt",
+        "scan",
+        "--drag",
+        "tanh",
+        "--sigma",
+        "0.6",
+        "--lambda",
+        "0.5",
+        "--rate",
+        "0.2",
+        "--v0",
+        "-0.249",
+        "--over",
+        "vt",
+        "--from",
+        "0.05",
+        "--to",
+        "0.15",
+        "--points",
+        "3",
+        "--cells",
+        "2000",
+        "--method",
+        "euler",
+        "--particles",
+        "400",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("mfpt_scan.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert!(header.starts_with("vt,tau,tau_plus,tau_minus,error_estimate,tau_sim,tau_sim_err"));
+    assert_eq!(lines.count(), 3);
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["command"], "mfpt scan");
+    assert_eq!(run["method"], "euler");
+
+    let rate = irtp(&[
+        "mfpt", "scan", "--v0", "-0.249", "--vt", "0.5", "--over", "rate", "--from", "0.01",
+        "--to", "100", "--points", "5", "--log", "--cells", "2000", "--json",
+    ]);
+    let v = json(&rate);
+    assert_eq!(v.as_array().unwrap().len(), 5);
+    assert!((v[4]["rate"].as_f64().unwrap() - 100.0).abs() < 1e-9);
+}
+
+#[test]
+fn optimize_json() {
+    let v = json(&irtp(&[
+        "mfpt",
+        "optimize",
+        "--drag",
+        "tan",
+        "--sigma",
+        "3",
+        "--lambda",
+        "0.5",
+        "--v0",
+        "-0.249",
+        "--vt",
+        "0.5",
+        "--cells",
+        "2000",
+        "--grid-points",
+        "21",
+        "--json",
+    ]));
+    assert_eq!(v["interior"], true);
+    let (r, t, t0) = (
+        v["r_opt"].as_f64().unwrap(),
+        v["tau_opt"].as_f64().unwrap(),
+        v["tau_r0"].as_f64().unwrap(),
+    );
+    assert!(r > 1.0 && r < 5.0 && t < t0, "{v}");
+    let v = json(&irtp(&[
+        "mfpt",
+        "optimize",
+        "--drag",
+        "tanh",
+        "--sigma",
+        "0.6",
+        "--lambda",
+        "0.5",
+        "--v0",
+        "-0.249",
+        "--vt",
+        "0.5",
+        "--cells",
+        "2000",
+        "--grid-points",
+        "21",
+        "--json",
+    ]));
+    assert_eq!(v["interior"], false);
+    assert_eq!(v["r_opt"].as_f64().unwrap(), 0.0);
+}
+
+#[test]
+fn bad_input_one_line_exit_2_nothing_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("res");
+    let d = dir.to_str().unwrap();
+    let cases: [(&[&str], &str); 9] = [
+        (&["--vt", "1.249046"], "--vt"),
+        (&["--vt", "2"], "--vt"),
+        (&["--vt", "nan"], "--vt"),
+        (&["--vt", "0.5", "--v0", "-1.3"], "--v0"),
+        (
+            &["--vt", "0.5", "--reset-velocity", "0.7"],
+            "--reset-velocity",
+        ),
+        (
+            &["--vt", "0.5", "--reset-velocity", "-1.3"],
+            "--reset-velocity",
+        ),
+        (
+            &["--vt", "0.5", "--drag", "tanh", "--sigma", "1.0"],
+            "--sigma",
+        ),
+        (&["--vt", "0.5", "--lambda", "0"], "--lambda"),
+        (&["--vt", "0.5", "--method", "euler", "--dt", "0.5"], "--dt"),
+    ];
+    for (extra, flag) in cases {
+        let mut a = vec!["mfpt", "--v0", "-0.249", "--out", d];
+        // A later --v0 overrides is not allowed by clap; put it first only once.
+        if extra.contains(&"--v0") {
+            a = vec!["mfpt", "--out", d];
+        }
+        a.extend(extra);
+        let out = irtp(&a);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with(&format!("irtp: error: invalid {flag} = ")),
+            "{err}"
+        );
+        assert!(err.contains("allowed"), "{err}");
+        assert!(out.stdout.is_empty());
+        assert!(!dir.exists());
+        assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+    }
+    // v_t at v_u: the message says why it is never reached.
+    let out = irtp(&["mfpt", "--v0", "-0.249", "--vt", "1.25"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("never reached"), "{err}");
+    // Scan and optimize validate too.
+    for a in [
+        &[
+            "mfpt", "scan", "--v0", "-0.249", "--over", "vt", "--from", "0.1", "--to", "1.3",
+            "--out", d,
+        ][..],
+        &[
+            "mfpt", "optimize", "--v0", "-0.249", "--vt", "0.5", "--r-min", "-1", "--out", d,
+        ][..],
+    ] {
+        let out = irtp(a);
+        assert_eq!(out.status.code(), Some(2), "{a:?}");
+        assert!(!dir.exists());
+    }
+}
