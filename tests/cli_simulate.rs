@@ -46,7 +46,15 @@ fn writes_outputs_and_json() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("res");
     let mut args = SMALL.to_vec();
-    args.extend(["--out", out.to_str().unwrap(), "--json", "--seed", "9"]);
+    args.extend([
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        "--seed",
+        "9",
+        "--method",
+        "euler",
+    ]);
     let o = irtp(&args, "2");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8(o.stdout).unwrap();
@@ -121,7 +129,17 @@ fn identical_files_for_one_and_two_threads() {
     let tmp = tempfile::tempdir().unwrap();
     for extra in [
         &[][..],
-        &["--events", "bernoulli", "--drag", "tanh", "--sigma", "0.6"][..],
+        &["--method", "euler"][..],
+        &[
+            "--method",
+            "euler",
+            "--events",
+            "bernoulli",
+            "--drag",
+            "tanh",
+            "--sigma",
+            "0.6",
+        ][..],
     ] {
         let a = run_to(&tmp.path().join("a"), "1", extra);
         let b = run_to(&tmp.path().join("b"), "2", extra);
@@ -146,14 +164,19 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
         (&["--rate", "inf"], "--rate"),
         (&["--reset-velocity", "1.3"], "--reset-velocity"),
         (&["--reset-velocity", "-1.3"], "--reset-velocity"),
-        (&["--dt", "0"], "--dt"),
-        (&["--dt", "-0.001"], "--dt"),
-        (&["--dt", "0.1"], "--dt"),
-        (&["--dt", "nan"], "--dt"),
+        (&["--method", "euler", "--dt", "0"], "--dt"),
+        (&["--method", "euler", "--dt", "-0.001"], "--dt"),
+        (&["--method", "euler", "--dt", "0.1"], "--dt"),
+        (&["--method", "euler", "--dt", "nan"], "--dt"),
         (
-            &["--rate", "20", "--dt", "0.06", "--drag", "linear"],
+            &[
+                "--method", "euler", "--rate", "20", "--dt", "0.06", "--drag", "linear",
+            ],
             "--dt",
         ),
+        // The exact sampler (default) has no time step or event sampler.
+        (&["--dt", "1e-3"], "--dt"),
+        (&["--events", "bernoulli"], "--events"),
         (&["--particles", "1"], "--particles"),
         (&["--particles", "0"], "--particles"),
         (&["--t-max", "0"], "--t-max"),

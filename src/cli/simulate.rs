@@ -5,6 +5,7 @@ use super::progress::Bar;
 use clap::{Args, ValueEnum};
 use irtp::io::{OutputDir, Provenance};
 use irtp::sim::euler::{self, EulerPlan, EventSampling};
+use irtp::sim::exact;
 use irtp::sim::{Observables, SimSpec, TimeGrid};
 use serde::Serialize;
 use std::time::Instant;
@@ -12,6 +13,8 @@ use std::time::Instant;
 /// Simulation method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
+    /// Exact event-driven sampler: no time step, no discretisation bias.
+    Exact,
     /// Euler scheme of the paper (Eqs. 14-16).
     Euler,
 }
@@ -45,9 +48,10 @@ pub struct SimulateArgs {
     /// Number of independent particles.
     #[arg(long, default_value_t = 20_000)]
     pub particles: u64,
-    /// Euler time step (must be < 1/max g'(v) and < 1/rate).
-    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
-    pub dt: f64,
+    /// Euler time step (must be < 1/max g'(v) and < 1/rate) [default with
+    /// --method euler: 1e-3; not accepted by the exact method, which has no step].
+    #[arg(long, allow_negative_numbers = true)]
+    pub dt: Option<f64>,
     /// Final time.
     #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
     pub t_max: f64,
@@ -67,34 +71,35 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 100)]
     pub bins: usize,
     /// Simulation method.
-    #[arg(long, value_enum, default_value_t = MethodArg::Euler)]
+    #[arg(long, value_enum, default_value_t = MethodArg::Exact)]
     pub method: MethodArg,
-    /// How the Euler scheme draws resets and flips (same law either way).
-    #[arg(long, value_enum, default_value_t = EventsArg::Geometric)]
-    pub events: EventsArg,
+    /// How the Euler scheme draws resets and flips (same law either way)
+    /// [default with --method euler: geometric].
+    #[arg(long, value_enum)]
+    pub events: Option<EventsArg>,
 }
 
 #[derive(Serialize)]
 struct RunParameters<'a> {
     model: &'a irtp::Params,
     particles: u64,
-    dt: f64,
+    dt: Option<f64>,
     t_max: f64,
     samples: usize,
     grid: GridArg,
     t_min: Option<f64>,
     burn_in: f64,
     bins: usize,
-    events: EventSampling,
+    events: Option<EventSampling>,
     seed: u64,
-    steps_per_particle: u64,
+    steps_per_particle: Option<u64>,
 }
 
 #[derive(Serialize)]
 struct JsonOut<'a> {
     method: &'a str,
-    events: EventSampling,
-    dt: f64,
+    events: Option<EventSampling>,
+    dt: Option<f64>,
     #[serde(flatten)]
     summary: irtp::sim::SimSummary,
     wall_time_s: f64,
@@ -111,17 +116,53 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
         GridArg::Log => TimeGrid::log(a.t_min, a.t_max, a.samples)?,
     };
     let spec = SimSpec::new(a.particles, grid, a.burn_in, a.bins, a.output.seed)?;
-    let MethodArg::Euler = a.method;
-    let plan = EulerPlan::new(&params, &spec, a.dt)?;
-    let events = match a.events {
-        EventsArg::Geometric => EventSampling::Geometric,
-        EventsArg::Bernoulli => EventSampling::Bernoulli,
+    // Euler: (dt, event sampler, plan); the exact sampler takes neither flag.
+    let euler_setup = match a.method {
+        MethodArg::Euler => {
+            let dt = a.dt.unwrap_or(1e-3);
+            let plan = EulerPlan::new(&params, &spec, dt)?;
+            let events = match a.events.unwrap_or(EventsArg::Geometric) {
+                EventsArg::Geometric => EventSampling::Geometric,
+                EventsArg::Bernoulli => EventSampling::Bernoulli,
+            };
+            Some((dt, events, plan))
+        }
+        MethodArg::Exact => {
+            if let Some(dt) = a.dt {
+                return Err(irtp::Error::invalid(
+                    "--dt",
+                    dt,
+                    "only with --method euler (the exact sampler has no time step)",
+                )
+                .into());
+            }
+            if let Some(e) = a.events {
+                return Err(irtp::Error::invalid(
+                    "--events",
+                    format!("{e:?}").to_lowercase(),
+                    "only with --method euler (the exact sampler draws exact event times)",
+                )
+                .into());
+            }
+            None
+        }
+    };
+    let method = match a.method {
+        MethodArg::Euler => "euler",
+        MethodArg::Exact => "exact",
+    };
+    let (dt, events) = match &euler_setup {
+        Some((dt, ev, _)) => (Some(*dt), Some(*ev)),
+        None => (None, None),
     };
     let out = a.output.out.as_ref().map(OutputDir::new).transpose()?;
 
     let bar = Bar::new("simulate", spec.particles);
     let start = Instant::now();
-    let obs = euler::simulate_with(&params, &spec, a.dt, events, &bar)?;
+    let obs = match &euler_setup {
+        Some((dt, ev, _)) => euler::simulate_with(&params, &spec, *dt, *ev, &bar)?,
+        None => exact::simulate(&params, &spec, &bar)?,
+    };
     let wall = start.elapsed().as_secs_f64();
     bar.finish();
     let summary = obs.summary();
@@ -141,7 +182,7 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
         let run_params = RunParameters {
             model: &params,
             particles: spec.particles,
-            dt: a.dt,
+            dt,
             t_max: spec.grid.t_max(),
             samples: a.samples,
             grid: a.grid,
@@ -150,11 +191,11 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
             bins: a.bins,
             events,
             seed: spec.seed,
-            steps_per_particle: plan.steps,
+            steps_per_particle: euler_setup.as_ref().map(|(_, _, p)| p.steps),
         };
         o.commit_with_provenance(Provenance::new(
             "simulate",
-            "euler",
+            method,
             Some(spec.seed),
             run_params,
             wall,
@@ -164,9 +205,9 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
     let rate = summary.steps as f64 / wall;
     if a.output.json {
         super::print_json(&JsonOut {
-            method: "euler",
+            method,
             events,
-            dt: a.dt,
+            dt,
             summary,
             wall_time_s: wall,
             particle_steps_per_s: rate,
@@ -174,20 +215,24 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
         })?;
     } else {
         let s = &summary;
-        println!(
-            "euler ({:?} events), {} drag, sigma = {}, lambda = {}, r = {}, v_r = {}: {} particles x {} steps of dt = {} in {:.2} s ({:.3e} particle-steps/s)",
-            events,
+        let model = format!(
+            "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
             params.drag(),
             params.sigma(),
             params.lambda(),
             params.rate(),
-            params.reset_velocity(),
-            s.particles,
-            plan.steps,
-            a.dt,
-            wall,
-            rate
+            params.reset_velocity()
         );
+        match &euler_setup {
+            Some((dt, ev, plan)) => println!(
+                "euler ({ev:?} events), {model}: {} particles x {} steps of dt = {dt} in {wall:.2} s ({rate:.3e} particle-steps/s)",
+                s.particles, plan.steps
+            ),
+            None => println!(
+                "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)",
+                s.particles, s.steps
+            ),
+        }
         println!(
             "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])",
             s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max

@@ -8,6 +8,7 @@
 //! [`Observables`] accumulator"; everything downstream is shared.
 
 pub mod euler;
+pub mod exact;
 
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
@@ -25,6 +26,9 @@ pub enum Method {
         /// Time step.
         dt: f64,
     },
+    /// The exact event-driven sampler: no time step, no discretisation bias
+    /// (see [`exact`]).
+    Exact,
 }
 
 impl Method {
@@ -32,6 +36,7 @@ impl Method {
     pub fn name(&self) -> &'static str {
         match self {
             Method::Euler { .. } => "euler",
+            Method::Exact => "exact",
         }
     }
 }
@@ -46,6 +51,7 @@ pub fn simulate(
 ) -> Result<Observables> {
     match method {
         Method::Euler { dt } => euler::simulate(params, spec, dt, progress),
+        Method::Exact => exact::simulate(params, spec, progress),
     }
 }
 

@@ -1,0 +1,63 @@
+//! `irtp simulate --method exact` (the default): the same files, columns and
+//! JSON keys as the Euler method.
+
+use std::collections::BTreeSet;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_irtp");
+
+fn run(method: Option<&str>, out: &std::path::Path) -> serde_json::Value {
+    let mut c = Command::new(BIN);
+    c.args([
+        "simulate",
+        "--particles",
+        "200",
+        "--t-max",
+        "2",
+        "--burn-in",
+        "0.5",
+        "--samples",
+        "5",
+        "--bins",
+        "12",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    if let Some(m) = method {
+        c.args(["--method", m]);
+    }
+    let o = c.output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn keys(v: &serde_json::Value) -> BTreeSet<String> {
+    v.as_object().unwrap().keys().cloned().collect()
+}
+
+#[test]
+fn exact_is_default_with_euler_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (de, dx) = (tmp.path().join("euler"), tmp.path().join("exact"));
+    let je = run(Some("euler"), &de);
+    let jx = run(None, &dx);
+    assert_eq!(jx["method"], "exact");
+    assert!(jx["dt"].is_null() && jx["events"].is_null());
+    assert_eq!(keys(&je), keys(&jx));
+    assert_eq!(jx["particles"], 200);
+    assert!(jx["v2"].as_f64().unwrap() > 0.0);
+    for f in ["moments.csv", "density.csv"] {
+        let a = std::fs::read_to_string(de.join(f)).unwrap();
+        let b = std::fs::read_to_string(dx.join(f)).unwrap();
+        assert_eq!(a.lines().next(), b.lines().next(), "{f} header");
+        assert_eq!(a.lines().count(), b.lines().count(), "{f} rows");
+    }
+    let re: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(de.join("run.json")).unwrap()).unwrap();
+    let rx: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dx.join("run.json")).unwrap()).unwrap();
+    assert_eq!(rx["method"], "exact");
+    assert_eq!(keys(&re), keys(&rx));
+    assert_eq!(keys(&re["parameters"]), keys(&rx["parameters"]));
+}
