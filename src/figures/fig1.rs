@@ -51,8 +51,10 @@ pub struct Spec {
     pub samples: usize,
     /// Particles per curve.
     pub particles: u64,
-    /// Fokker-Planck cells per medium (paper: 2000 tan, 1000 tanh).
-    pub fp_cells: Vec<usize>,
+    /// Cells of the stationary FP solve (graded mesh, Richardson-extrapolated <v²>).
+    pub fp_cells: usize,
+    /// Uniform cells of the time-dependent FP solve per medium (paper: 2000 tan, 1000 tanh).
+    pub fp_transient_cells: Vec<usize>,
     /// Start of the time-averaging window for the simulated stationary <v²>.
     pub burn_in: f64,
 }
@@ -68,11 +70,8 @@ impl Spec {
             t_max: 8.0,
             samples: if quick { 17 } else { 41 },
             particles: if quick { 4_000 } else { 1_000_000 },
-            fp_cells: if quick {
-                vec![400, 400]
-            } else {
-                vec![2000, 1000]
-            },
+            fp_cells: 20_000,
+            fp_transient_cells: vec![2000, 1000],
             burn_in: 4.0,
         }
     }
@@ -118,7 +117,7 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
                 curve_seed(opts.seed, Which::Fig1, k as u64),
             )?;
             let obs = compute::simulate(&params, &sim_spec, &Stage::new(progress, k, n_stages))?;
-            let fp = compute::fp_stationary(&params, spec.fp_cells[mi])?;
+            let fp = compute::fp_stationary(&params, spec.fp_cells)?;
             let lab = Some(format!("r = {}", fmt_num(r)));
             let rows_k = obs.moment_rows();
             panel.series.push(Series::points(
@@ -139,7 +138,7 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             ));
             // The paper's FP method in time (uniform mesh, explicit upwind), dashed.
             let times: Vec<f64> = rows_k.iter().map(|r| r[0]).collect();
-            let tr = compute::fp_transient_v2(&params, spec.fp_cells[mi], &times)?;
+            let tr = compute::fp_transient_v2(&params, spec.fp_transient_cells[mi], &times)?;
             let mut dev: f64 = 0.0;
             for (row, &y) in rows_k.iter().zip(&tr) {
                 if row[0] >= spec.burn_in {
