@@ -107,9 +107,23 @@ pub fn mfpt_sim(
     Ok((s.tau, s.tau_err, s.particles, s.censored))
 }
 
-/// Optimal resetting rate over r ∈ {0} ∪ [1e-3, 1e3]:
-/// `Some((r*, tau(r*), tau(0)))` when the minimum is interior, else `None`.
-pub fn optimal_rate(params: &Params, v0: f64, vt: f64) -> Result<Option<(f64, f64, f64)>> {
+/// Result of the optimal-rate search.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct RateOptimum {
+    /// Minimising rate (0 when resetting never helps).
+    pub r_opt: f64,
+    /// tau at r_opt.
+    pub tau_opt: f64,
+    /// tau without resetting.
+    pub tau_r0: f64,
+    /// d tau / d r at r = 0 (negative: a little resetting helps).
+    pub dtau_dr_r0: f64,
+    /// Minimum at some r > 0 with tau_opt < tau_r0.
+    pub interior: bool,
+}
+
+/// Optimal resetting rate over r ∈ {0} ∪ [1e-3, 1e3] (`mfpt::optimize_rate`).
+pub fn optimal_rate(params: &Params, v0: f64, vt: f64) -> Result<RateOptimum> {
     let pr = Problem::new(params.with_rate(0.0)?, v0, vt)?;
     let o = mfpt::optimize_rate(&pr, &OptimizeOptions::default(), &NoProgress)?;
     if o.at_upper_bound {
@@ -118,7 +132,13 @@ pub fn optimal_rate(params: &Params, v0: f64, vt: f64) -> Result<Option<(f64, f6
             reason: "minimum at the upper end of the r range".into(),
         });
     }
-    Ok(o.interior.then_some((o.r_opt, o.tau_opt, o.tau_r0)))
+    Ok(RateOptimum {
+        r_opt: o.r_opt,
+        tau_opt: o.tau_opt,
+        tau_r0: o.tau_r0,
+        dtau_dr_r0: o.dtau_dr_r0,
+        interior: o.interior,
+    })
 }
 
 /// <v²>(t) from the time-dependent FP equations, the paper's method

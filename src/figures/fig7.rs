@@ -1,7 +1,9 @@
 //! Fig. 7: mean first-passage time tau_r(v_0) to a target velocity v_t,
 //! v_0 = -0.249, v_r = 0, eta(0) = ±Sigma equally likely.
 //! (a) tan, Sigma = 3, r = 2: tau against v_t - v_0; (b) tan, v_t = 0.5:
-//! tau against r (log-log); (c), (d) the same for tanh, Sigma = 0.6, r = 0.2.
+//! tau against r (log-log); (c), (d) the same for tanh, Sigma = 0.6, r = 0.2;
+//! (e), not in the paper: tau_r / tau_0 on a linear axis, where the optimum
+//! (a few per cent deep) is visible.
 //! Lines: backward equations of the simulated process (crate::mfpt);
 //! points: exact event-driven first-passage sampler, run only where the
 //! expected cost tau·(lambda + r)·samples fits the event budget.
@@ -107,6 +109,9 @@ impl Spec {
     }
 }
 
+/// Relative MFPT gain (tau(0) - tau(r*))/tau(0) above which an optimum counts as substantial.
+pub const SUBSTANTIAL: f64 = 0.01;
+
 /// Compute Fig. 7.
 pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
     let spec = Spec::new(opts.quick);
@@ -124,6 +129,12 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
         .map(|m| m.lambdas.len() * (m.sim_targets.len() + m.sim_rates.len()))
         .sum();
     let mut stage = 0usize;
+    let mut zoom = Panel::new(
+        "(e)",
+        format!("zoom of (b), (d): τ_r/τ_0 at v_t = 0.5"),
+        Axis::log("r"),
+        Axis::linear("τ_r(v₀) / τ_0(v₀)").range(0.75, 1.5),
+    );
     let mut points = Vec::new();
     let mut optima = Vec::new();
     for (mi, m) in spec.media.iter().enumerate() {
@@ -184,6 +195,16 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             for &r in &m.rates {
                 ly.push(compute::mfpt(&p0.with_rate(r)?, spec.v0, m.target)?);
             }
+            // Zoom panel (e): tau(r)/tau(0) on a linear axis shows the optimum.
+            let tau0 = compute::mfpt(&p0, spec.v0, m.target)?;
+            zoom.series.push(Series::line(
+                Some(format!("{} λ = {}", m.drag, fmt_num(lambda))),
+                col,
+                if mi == 0 { Dash::Solid } else { Dash::Dashed },
+                "backward",
+                m.rates.clone(),
+                ly.iter().map(|t| t / tau0).collect(),
+            ));
             pb.series.push(Series::line(
                 lab.clone(),
                 col,
@@ -210,56 +231,97 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             pb.series
                 .push(Series::points(lab, col, "simulation", sx, sy, se));
             let opt = compute::optimal_rate(&p0, spec.v0, m.target)?;
+            let gain = (opt.tau_r0 - opt.tau_opt) / opt.tau_r0;
             optima.push(serde_json::json!({
                 "drag": m.drag, "sigma": m.sigma, "lambda": lambda, "vt": m.target,
-                "optimal_rate": opt.map(|o| o.0), "tau_at_optimum": opt.map(|o| o.1), "tau_r0": opt.map(|o| o.2),
+                "optimal_rate": opt.interior.then_some(opt.r_opt),
+                "tau_at_optimum": opt.tau_opt, "tau_r0": opt.tau_r0,
+                "dtau_dr_r0": opt.dtau_dr_r0, "relative_gain": gain,
+                "substantial": opt.interior && gain > SUBSTANTIAL,
             }));
+        }
+        // τ spans many decades where it diverges; cap the axes at 10⁴ so the
+        // bulk of the curves stays readable (the CSV holds everything).
+        for p in [&mut pa, &mut pb] {
+            let lo = p
+                .series
+                .iter()
+                .flat_map(|s| s.y.iter().copied())
+                .filter(|y| y.is_finite() && *y > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            p.y = p.y.clone().range(0.7 * lo, 1e4);
         }
         fig.panels.push(pa);
         fig.panels.push(pb);
     }
-    // Paper order: (a) (b) (c) (d) = tan-vt, tan-r, tanh-vt, tanh-r.
-    let has = |drag: DragLaw, lambda: f64| {
+    zoom.series.push(Series::line(
+        None,
+        Color::Gray,
+        Dash::Dotted,
+        "guide",
+        vec![spec.media[0].rates[0], 100.0],
+        vec![1.0, 1.0],
+    ));
+    fig.panels.push(zoom);
+    // The paper's statements: an optimum for tan at lambda = 0.5 (and small
+    // lambda), none for tan at lambda = 50, none for tanh at any lambda.
+    let find = |drag: DragLaw, lambda: f64| {
         optima
             .iter()
             .find(|o| o["drag"] == serde_json::json!(drag) && o["lambda"].as_f64() == Some(lambda))
-            .map(|o| !o["optimal_rate"].is_null())
     };
-    let tan_small = has(DragLaw::Tan, 0.5);
-    let tanh_small = has(DragLaw::Tanh, 0.5);
-    let tan_big = has(DragLaw::Tan, 50.0);
+    let interior = |o: Option<&serde_json::Value>| o.map(|o| !o["optimal_rate"].is_null());
+    let substantial = |o: Option<&serde_json::Value>| o.and_then(|o| o["substantial"].as_bool());
+    let tan_small = substantial(find(DragLaw::Tan, 0.5));
+    let tan_big_interior = interior(find(DragLaw::Tan, 50.0));
+    let tan_big_substantial = substantial(find(DragLaw::Tan, 50.0));
     let tanh_any = optima
         .iter()
         .filter(|o| o["drag"] == serde_json::json!(DragLaw::Tanh))
         .any(|o| !o["optimal_rate"].is_null());
     let fmt_opt = |o: &serde_json::Value| match o["optimal_rate"].as_f64() {
         Some(r) => format!(
-            "{} λ = {}: r* = {:.4} (τ = {:.4} vs τ(r→0) = {:.4})",
+            "{} λ = {}: r* = {:.4}, τ(r*) = {:.4} vs τ(0) = {:.4} (gain {:.2e}, dτ/dr(0) = {:.3e})",
             o["drag"].as_str().unwrap_or(""),
             o["lambda"],
             r,
             o["tau_at_optimum"].as_f64().unwrap_or(f64::NAN),
-            o["tau_r0"].as_f64().unwrap_or(f64::NAN)
+            o["tau_r0"].as_f64().unwrap_or(f64::NAN),
+            o["relative_gain"].as_f64().unwrap_or(f64::NAN),
+            o["dtau_dr_r0"].as_f64().unwrap_or(f64::NAN),
         ),
         None => format!(
-            "{} λ = {}: none",
+            "{} λ = {}: none (dτ/dr(0) = {:.3e})",
             o["drag"].as_str().unwrap_or(""),
-            o["lambda"]
+            o["lambda"],
+            o["dtau_dr_r0"].as_f64().unwrap_or(f64::NAN)
         ),
+    };
+    let verdict = if tan_small == Some(true) && !tanh_any && tan_big_substantial == Some(false) {
+        if tan_big_interior == Some(true) {
+            // A real but negligible dip (gain below SUBSTANTIAL) at lambda = 50.
+            Verdict::Partly
+        } else {
+            Verdict::Agrees
+        }
+    } else {
+        Verdict::Differs
     };
     let mut claims = vec![Claim {
         id: "optimal_reset_rate".into(),
         figure: "fig7",
         paper: "v_t = 0.5: an optimal resetting rate exists for tan at small/moderate λ (none at λ = 50), and never for tanh".into(),
         ours: format!(
-            "backward-equation optimiser: {}",
-            optima.iter().map(fmt_opt).collect::<Vec<_>>().join("; ")
+            "backward-equation optimiser over r ∈ {{0}} ∪ [10⁻³, 10³]: {}. Substantial (gain > {}%) optima only for tan; tanh has none at any λ{}",
+            optima.iter().map(fmt_opt).collect::<Vec<_>>().join("; "),
+            100.0 * SUBSTANTIAL,
+            if tan_big_interior == Some(true) {
+                "; at tan λ = 50 τ(r) is not strictly monotone: dτ/dr(0) < 0 gives a real but negligible dip"
+            } else {
+                ""
+            }
         ),
-        verdict: if tan_small == Some(true) && tanh_small == Some(false) && tan_big == Some(false) && !tanh_any {
-            Verdict::Agrees
-        } else {
-            Verdict::Differs
-        },
+        verdict,
         values: serde_json::json!(optima),
     }];
     let worst = points

@@ -469,7 +469,13 @@ fn fmt_lin(v: f64, step: f64) -> String {
     if v.abs() < 1e-12 * step.max(1e-300) {
         return "0".into();
     }
-    let dec = (-(step.log10().floor())).max(0.0) as usize;
+    // Enough decimals for the step itself (0.25 needs two, 0.2 one).
+    let dec = (0..12)
+        .find(|&d| {
+            let f = 10f64.powi(d);
+            ((step * f).round() - step * f).abs() < 1e-6 * step * f
+        })
+        .unwrap_or(12) as usize;
     let a = v.abs();
     if !(1e-3..1e5).contains(&a) {
         return fmt_sci(v);
@@ -1077,6 +1083,10 @@ mod tests {
         assert_eq!(fmt_log(-2.0), "0.01");
         assert_eq!(fmt_log(4.0), "10⁴");
         assert_eq!(fmt_log(2f64.log10()), "2");
+        assert_eq!(fmt_lin(0.25, 0.25), "0.25");
+        assert_eq!(fmt_lin(0.5, 0.25), "0.50");
+        assert_eq!(fmt_lin(0.4, 0.2), "0.4");
+        assert_eq!(fmt_lin(10.0, 5.0), "10");
     }
 
     #[test]
