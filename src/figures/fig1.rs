@@ -103,7 +103,7 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             Axis::linear("t"),
             Axis::linear("⟨v²⟩"),
         );
-        panel.legend_title = Some(format!("λ = {}", fmt_num(spec.lambda)));
+        panel.legend_title = Some("solid: Eq. 17, dashed: FP(t)".into());
         let mut worst_z: f64 = 0.0;
         let mut ss = Vec::new();
         for (ri, &r) in spec.rates.iter().enumerate() {

@@ -84,7 +84,7 @@ impl Spec {
                 DragLaw::Tanh,
                 0.6,
                 vec![0.5, 0.85, 1.2, 3.0],
-                vec![0.0, 0.1, 0.5, 2.0, 5.0],
+                vec![0.0, 0.2, 0.5, 2.0, 5.0],
                 100_000,
                 ["diverges", "cusp", "cusp", "flat"],
             ),
@@ -186,6 +186,22 @@ pub fn decimate(v: &[f64], n: usize) -> Vec<usize> {
     out
 }
 
+/// Positions of the local maxima of the FP density in |v| < 0.995 v_u
+/// (strict maxima over ±8 cells; the cusp at 0 counts).
+pub fn local_maxima(v: &[f64], p: &[f64], vu: f64) -> Vec<f64> {
+    const K: usize = 8;
+    let mut out = Vec::new();
+    for i in K..v.len().saturating_sub(K) {
+        if v[i].abs() >= 0.995 * vu {
+            continue;
+        }
+        if (1..=K).all(|k| p[i] > p[i - k] && p[i] >= p[i + k]) {
+            out.push(v[i]);
+        }
+    }
+    out
+}
+
 /// Edge class of an exponent a: P ~ (v_u - v)^a.
 pub fn edge_class(a: f64) -> &'static str {
     if a < 0.0 {
@@ -230,6 +246,7 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
     let mut cusp_rows = Vec::new();
     let mut edge_rows = Vec::new();
     let mut fp_vs_sim = Vec::new();
+    let mut shape_rows = Vec::new();
     let gp_edge_of = |p: &Params| p.drag().derivative(p.v_upper());
     for (li, &lambda) in spec.lambdas.iter().enumerate() {
         let label = ["(a)", "(b)", "(c)", "(d)"][li % 4];
@@ -331,6 +348,11 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
                 zmax = zmax.max(((d[1] - avg) / d[2]).abs());
             }
             worst_sim_z = worst_sim_z.max(zmax);
+            shape_rows.push(serde_json::json!({
+                "lambda": lambda, "r": r,
+                "edge_exponent": (lambda + r) / gpe - 1.0,
+                "interior_maxima": local_maxima(&fp.v, &fp.p, vu),
+            }));
             fp_vs_sim.push(serde_json::json!({"lambda": lambda, "r": r, "max_abs_z": zmax, "bins_compared": compared}));
             if r > 0.0 {
                 // Cell width at v = 0 (the mesh is graded only near the edges).
@@ -365,6 +387,39 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
         fig.panels.push(panel);
     }
 
+    // Fig. 3(a) text: "around r = 2 two local maxima emerge near ±v_u". Scan
+    // r finely with the FP solver and report where near-edge maxima exist.
+    let p_first = Params::new(
+        spec.drag,
+        spec.sigma,
+        spec.lambdas[0],
+        0.0,
+        spec.reset_velocity,
+    )?;
+    let edge_max_scan = if medium == Medium::Tanh {
+        let rs: Vec<f64> = (0..=40)
+            .map(|i| 10f64.powf(-2.0 + 2.5 * i as f64 / 40.0))
+            .collect();
+        let vu = p_first.v_upper();
+        let mut with = Vec::new();
+        for &r in &rs {
+            let fp = compute::fp_stationary(&p_first.with_rate(r)?, 20_000)?;
+            if local_maxima(&fp.v, &fp.p, vu)
+                .iter()
+                .any(|v| v.abs() > 0.5 * vu)
+            {
+                with.push(r);
+            }
+        }
+        let text = if with.is_empty() {
+            "none".to_string()
+        } else {
+            format!("{:.3}, {:.3}", with[0], with[with.len() - 1])
+        };
+        Some((rs, text, with))
+    } else {
+        None
+    };
     let mut claims = Vec::new();
     let fname = which.name();
     // Cusp at v = 0.
@@ -425,14 +480,24 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
             "edge exponent a = (λ + r)/g'(v_u) - 1 with g'(v_u) = {:.3}: {}{}",
             gp_edge_of(&Params::new(spec.drag, spec.sigma, 1.0, 0.0, 0.0)?),
             edge_text.join("; "),
-            if medium == Medium::Tanh {
-                ". For λ = 0.5 the divergence already ends at r = 0.14, far below 'around r = 2' (consistent only if the paper's r grid jumps from 0 to 2)"
+            if let Some(sc) = &edge_max_scan {
+                format!(
+                    ". λ = 0.5, FP scan of r ∈ [{}, {}]: local maxima near the edges (|v| > v_u/2) exist for r ∈ [{}], i.e. right after the divergence ends at r₀ = {:.3}, not 'around r = 2'",
+                    fmt_num(sc.0[0]),
+                    fmt_num(sc.0[sc.0.len() - 1]),
+                    sc.1,
+                    (gp_edge_of(&p_first) - spec.lambdas[0]).max(0.0)
+                )
             } else {
-                ""
+                String::new()
             }
         ),
         verdict: verdict_edge,
-        values: serde_json::json!(edge_rows),
+        values: serde_json::json!({
+            "panels": edge_rows,
+            "shapes": shape_rows,
+            "near_edge_maxima_rates": edge_max_scan.as_ref().map(|s| s.2.clone()),
+        }),
     });
     claims.push(Claim {
         id: format!("fp_vs_simulation_{}", spec.drag),

@@ -229,10 +229,10 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
                 }));
             }
         }
-        // r⁻² guide: dotted, a factor 4 above the lowest exact value at the largest rate.
+        // r⁻² guide: dotted, a factor 4 below the lowest exact value at the largest rate.
         let rg = spec.line_rates[spec.line_rates.len() - 1];
         let (ra, rb) = (rg / 30.0, rg);
-        let c = 4.0 * anchor * rg * rg;
+        let c = 0.25 * anchor * rg * rg;
         panel.series.push(Series::line(
             None,
             Color::Gray,
@@ -244,7 +244,7 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
         panel.notes.push(Note {
             text: "r⁻²".into(),
             x: (ra * rb).sqrt(),
-            y: 2.0 * c / (ra * rb),
+            y: 0.3 * c / (ra * rb),
         });
         let worst = fits
             .iter()
