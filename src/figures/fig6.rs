@@ -1,7 +1,7 @@
 //! Fig. 6: effective diffusion coefficient D_eff against r (log-log) for
 //! several lambda; (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6.
 //! Points: simulation, D_eff from a least-squares fit of <x²> = 2 D t + c
-//! (paper Eq. 18) on late times [T/4, T], with its standard error from 32 32
+//! (paper Eq. 18) on late times [T/4, T], with its standard error from 32
 //! independent batches of particles; lines: exact D_eff from the
 //! Fokker-Planck (Poisson-equation) solver; grey dotted guide: r⁻².
 
