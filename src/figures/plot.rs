@@ -613,6 +613,33 @@ fn clip_polyline(pts: &[(f64, f64)], bx: (f64, f64), by: (f64, f64)) -> Vec<Vec<
     out
 }
 
+/// Split a polyline where it turns by more than 120° in pixel space (a cusp),
+/// so thick lines get no miter spike there; pieces share the turning point.
+fn split_sharp(pts: Vec<(f64, f64)>, px: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    // Direction of the last segment of non-zero pixel length.
+    let mut prev: Option<(f64, f64)> = None;
+    for i in 1..pts.len() {
+        let d = (px[i].0 - px[i - 1].0, px[i].1 - px[i - 1].1);
+        let len = (d.0 * d.0 + d.1 * d.1).sqrt();
+        if len < 1e-9 {
+            continue;
+        }
+        let d = (d.0 / len, d.1 / len);
+        if let Some(p) = prev {
+            if p.0 * d.0 + p.1 * d.1 < -0.5 && i - 1 > start {
+                out.push(pts[start..i].to_vec());
+                start = i - 1;
+            }
+        }
+        prev = Some(d);
+    }
+    out.push(pts[start..].to_vec());
+    out.retain(|p| p.len() > 1);
+    out
+}
+
 /// One legend entry: label, colour, line pattern and/or marker.
 struct Entry {
     label: String,
@@ -892,7 +919,20 @@ where
         let col = s.color.rgb();
         let width = if s.source == "guide" { 1 } else { 2 };
         let style = ShapeStyle::from(&col).stroke_width(width);
-        for piece in clip_polyline(&pts, xr, yr) {
+        let pieces: Vec<Vec<(f64, f64)>> = clip_polyline(&pts, xr, yr)
+            .into_iter()
+            .flat_map(|piece| {
+                let px: Vec<(f64, f64)> = piece
+                    .iter()
+                    .map(|c| {
+                        let b = chart.backend_coord(c);
+                        (b.0 as f64, b.1 as f64)
+                    })
+                    .collect();
+                split_sharp(piece, &px)
+            })
+            .collect();
+        for piece in pieces {
             match dash {
                 Dash::Solid => {
                     chart.draw_series(std::iter::once(PathElement::new(piece, style)))?;
@@ -1070,6 +1110,16 @@ mod tests {
         assert_eq!(out[1], vec![(3.0, 1.0), (4.0, 0.0)]);
         let all = clip_polyline(&pts, (-1.0, 5.0), (-1.0, 3.0));
         assert_eq!(all, vec![pts.to_vec()]);
+    }
+
+    #[test]
+    fn sharp_turns_split() {
+        let pts = vec![(0.0, 0.0), (1.0, 10.0), (1.01, 0.0), (2.0, 0.0)];
+        let px: Vec<(f64, f64)> = pts.iter().map(|p| (p.0 * 100.0, -p.1 * 10.0)).collect();
+        let out = split_sharp(pts.clone(), &px);
+        assert_eq!(out.len(), 2);
+        assert_eq!(out[0], pts[..2].to_vec());
+        assert_eq!(out[1], pts[1..].to_vec());
     }
 
     #[test]
