@@ -131,7 +131,7 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
     let mut stage = 0usize;
     let mut zoom = Panel::new(
         "(e)",
-        format!("zoom of (b), (d): τ_r/τ_0 at v_t = 0.5"),
+        "zoom of (b), (d): τ_r/τ_0 at v_t = 0.5".to_string(),
         Axis::log("r"),
         Axis::linear("τ_r(v₀) / τ_0(v₀)").range(0.75, 1.5),
     );
