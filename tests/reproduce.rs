@@ -121,3 +121,25 @@ fn bad_figure_name_is_an_input_error() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!Path::new(&out).exists());
 }
+
+#[test]
+fn out_is_a_file_fails_before_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("f");
+    std::fs::write(&file, "x").unwrap();
+    let t0 = std::time::Instant::now();
+    let o = bin()
+        .args(["reproduce", "all", "--out"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--out"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        t0.elapsed().as_secs_f64() < 5.0,
+        "validated before computing"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+}

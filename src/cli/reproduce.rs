@@ -3,6 +3,7 @@
 use super::progress::Bar;
 use clap::Args;
 use irtp::figures::{self, Options, Which, SCALE};
+use irtp::io::OutputDir;
 use irtp::parallel::Progress;
 use std::path::PathBuf;
 
@@ -70,11 +71,13 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
         quick: args.quick,
         seed: args.seed,
     };
+    // Validate the output directory before computing anything.
+    let out = OutputDir::new(&args.out)?;
     let t0 = std::time::Instant::now();
     let outputs = figures::reproduce(&which, &opts, |w| {
         Box::new(BarProgress(Bar::new(w.name(), SCALE)))
     })?;
-    let files = figures::write_outputs(&args.out, &outputs, &opts, t0.elapsed().as_secs_f64())?;
+    let files = figures::write_outputs(out, &outputs, &opts, t0.elapsed().as_secs_f64())?;
     for o in &outputs {
         eprintln!("{}: {:.1} s", o.which.name(), o.wall_time_s);
     }

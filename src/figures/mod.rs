@@ -287,13 +287,13 @@ pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f6
 
 /// Write every figure's CSV, PNG and SVG, `parameters.json`, `claims.json`,
 /// `claims.md` and `run.json` into `dir` (all or nothing).
+/// Create the [`OutputDir`] first (so a bad `--out` fails before any work).
 pub fn write_outputs(
-    dir: impl Into<PathBuf>,
+    mut out: OutputDir,
     outputs: &[FigureOutput],
     opts: &Options,
     wall_time_s: f64,
 ) -> Result<Vec<PathBuf>> {
-    let mut out = OutputDir::new(dir.into())?;
     let mut params = serde_json::Map::new();
     let mut claims = Vec::new();
     let mut timings = serde_json::Map::new();

@@ -917,7 +917,11 @@ where
                 .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
                 .collect();
         let col = s.color.rgb();
-        let width = if s.source == "guide" && dash == Dash::Dashed { 1 } else { 2 };
+        let width = if s.source == "guide" && dash == Dash::Dashed {
+            1
+        } else {
+            2
+        };
         let style = ShapeStyle::from(&col).stroke_width(width);
         let pieces: Vec<Vec<(f64, f64)>> = clip_polyline(&pts, xr, yr)
             .into_iter()
