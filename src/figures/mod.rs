@@ -233,6 +233,7 @@ fn json_short(v: &serde_json::Value) -> String {
                 a.iter().map(json_short).collect::<Vec<_>>().join(", ")
             )
         }
+        serde_json::Value::Number(n) if n.is_u64() || n.is_i64() => n.to_string(),
         serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), fmt_num),
         serde_json::Value::String(s) => s.clone(),
         serde_json::Value::Object(o) => format!(
