@@ -174,15 +174,16 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
                 m.drag
             ),
             ours: format!(
-                "FP <v²>_ss = [{}] for r = [{}] ({}); simulation time average over [{}, {}] vs FP: max |z| = {:.2}",
+                "FP <v²>_ss = [{}] for r = [{}] ({}); simulation time average over [{}, {}] vs FP: max |z| = {:.2} (limit max(4, 1 % Bonferroni) = {:.2})",
                 ss.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", "),
                 spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
                 if decreasing { "decreasing" } else { "NOT monotone" },
                 fmt_num(burn_in),
                 fmt_num(t_max),
-                worst_z
+                worst_z,
+                super::z_crit(spec.rates.len())
             ),
-            verdict: if decreasing && worst_z < 4.0 {
+            verdict: if decreasing && worst_z < super::z_crit(spec.rates.len()) {
                 Verdict::Agrees
             } else {
                 Verdict::Differs

@@ -343,6 +343,53 @@ pub fn reproduce<'a>(
         .collect()
 }
 
+/// Complementary error function (W. J. Cody's rational approximations are
+/// overkill here: Numerical Recipes' erfcc, relative error < 1.2e-7, is
+/// plenty for tail probabilities of z-scores).
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// Limit for the maximum of `n` independent z-scores: 4 (the project's
+/// 4-sigma rule), raised to the two-sided Bonferroni bound at family-wise
+/// level 1 % (P(|Z| > z) = 0.01 / n) once that exceeds 4 (n ≳ 160). Every
+/// "max |z|" verdict uses it.
+pub fn z_crit(n: usize) -> f64 {
+    bonferroni_z(n).max(4.0)
+}
+
+/// Two-sided z with P(|Z| > z) = 0.01 / n.
+pub fn bonferroni_z(n: usize) -> f64 {
+    let p = 0.01 / n.max(1) as f64;
+    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if erfc(mid / std::f64::consts::SQRT_2) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// Format a number for a legend / table: up to 3 significant digits, no trailing zeros.
 pub fn fmt_num(x: f64) -> String {
     if x == 0.0 {
@@ -381,6 +428,23 @@ mod tests {
         assert_eq!(fmt_num(0.85), "0.85");
         assert_eq!(fmt_num(2.0), "2");
         assert_eq!(fmt_num(0.123456), "0.123");
+    }
+
+    #[test]
+    fn critical_z() {
+        assert!(
+            (bonferroni_z(1) - 2.5758).abs() < 1e-3,
+            "{}",
+            bonferroni_z(1)
+        );
+        assert!(
+            (bonferroni_z(100) - 3.8906).abs() < 2e-3,
+            "{}",
+            bonferroni_z(100)
+        );
+        assert_eq!(z_crit(3), 4.0);
+        assert!(z_crit(600) > 4.3 && z_crit(600) < 4.4);
+        assert!((erfc(0.0) - 1.0).abs() < 1e-7 && (erfc(-1.0) - 1.842_700_79).abs() < 1e-6);
     }
 
     #[test]
