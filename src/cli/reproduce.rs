@@ -17,7 +17,7 @@ pub struct ReproduceArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
-    /// Small sizes (CI, about a minute): same code path, fewer particles and points.
+    /// Small sizes for CI (seconds): same code path, fewer particles and points.
     #[arg(long)]
     pub quick: bool,
     /// Master seed; each curve derives its own seed from it.
