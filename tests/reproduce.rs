@@ -86,6 +86,33 @@ fn reproduce_all_quick() {
         }
     }
 
+    // Cusp at v = 0: the FP slope jump equals -r(2λ + r - 1)/Σ² within 1 %
+    // (deterministic solver, so a tight check), for every panel and r > 0.
+    for drag in ["tan", "tanh"] {
+        let c = claim(&claims, &format!("cusp_at_zero_{drag}"));
+        let rows = c["values"].as_array().unwrap();
+        assert_eq!(rows.len(), 16, "4 panels x 4 rates");
+        for r in rows {
+            let (a, b) = (
+                r["jump_fp"].as_f64().unwrap(),
+                r["jump_exact"].as_f64().unwrap(),
+            );
+            assert!((a - b).abs() < 0.01 * b.abs(), "{drag}: {r}");
+        }
+        // Simulation vs FP and FP vs analytic r = 0 agree (verdict computed
+        // from the standard errors: max |z| below max(4, Bonferroni 1 %)).
+        assert_eq!(
+            claim(&claims, &format!("fp_vs_simulation_{drag}"))["verdict"],
+            "agrees"
+        );
+        assert_eq!(
+            claim(&claims, &format!("v2_ss_{drag}"))["verdict"],
+            "agrees"
+        );
+    }
+    assert_eq!(claim(&claims, "mfpt_sim_vs_backward")["verdict"], "agrees");
+    assert_eq!(claim(&claims, "deff_sim_vs_exact")["verdict"], "agrees");
+
     // Optimal resetting rate: interior for tan at lambda = 0.5, none for tanh.
     let opt = claim(&claims, "optimal_reset_rate");
     let find = |drag: &str, lambda: f64| {
