@@ -19,21 +19,21 @@ enum Command {
     Analytic(cli::analytic::AnalyticArgs),
     /// Particle simulation (Euler scheme of the paper): moments, densities.
     Simulate(cli::simulate::SimulateArgs),
-    /// Regenerate the paper's figures (data, plots, claims).
-    Reproduce(cli::reproduce::ReproduceArgs),
-    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
-    Fp(cli::fp::FpArgs),
     /// Mean first-passage time to a target velocity (backward equations or particles).
     Mfpt(cli::mfpt::MfptArgs),
+    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    Fp(cli::fp::FpArgs),
+    /// Regenerate the paper's figures (data, plots, claims).
+    Reproduce(cli::reproduce::ReproduceArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Analytic(a) => cli::analytic::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
-        Command::Reproduce(a) => cli::reproduce::run(a),
-        Command::Fp(a) => cli::fp::run(a),
         Command::Mfpt(a) => cli::mfpt::run(a),
+        Command::Fp(a) => cli::fp::run(a),
+        Command::Reproduce(a) => cli::reproduce::run(a),
     }
 }
 

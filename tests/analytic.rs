@@ -77,7 +77,14 @@ fn normalised_to_1e10_by_independent_quadrature() {
         let d = R0Density::new(drag, s, l).unwrap();
         let vu = d.bounds().1;
         let total = 2.0 * integrate_from_edge(&d, vu, |_| 1.0);
-        assert!((total - 1.0).abs() < 1e-11, "{drag} {s} {l}: ∫P = {total}");
+        let b2 = 2.0 * integrate_from_edge(&d, vu, |v| v * v);
+        eprintln!(
+            "{drag} {s} {l}: |∫P - 1| = {:.1e}, <v²> = {:.15} (method B rel. diff {:.1e})",
+            (total - 1.0).abs(),
+            d.v2(),
+            (d.v2() - b2).abs() / b2
+        );
+        assert!((total - 1.0).abs() < 1e-12, "{drag} {s} {l}: ∫P = {total}");
         let n = d.normalisation();
         assert!(n.relative_error_bound < 1e-12, "{n:?}");
     }

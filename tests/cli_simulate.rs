@@ -213,3 +213,43 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
     }
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }
+
+/// --out naming an existing file: one-line error naming --out, exit 2, the
+/// file untouched and nothing else created.
+#[test]
+fn out_is_a_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let f = tmp.path().join("file");
+    std::fs::write(&f, "keep").unwrap();
+    let mut args = SMALL.to_vec();
+    args.extend(["--out", f.to_str().unwrap()]);
+    let o = irtp(&args, "1");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("--out"), "{err}");
+    assert_eq!(std::fs::read_to_string(&f).unwrap(), "keep");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}
+
+/// A log grid denser than dt at its short end still runs; its times are
+/// multiples of dt and strictly increasing.
+#[test]
+fn log_grid_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("log");
+    let args = with_defaults(&["--grid", "log", "--t-min", "0.001", "--samples", "50"]);
+    let mut args = args;
+    args.extend(["--out", out.to_str().unwrap()]);
+    let o = irtp(&args, "2");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = std::fs::read_to_string(out.join("moments.csv")).unwrap();
+    let t: Vec<f64> = m
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(t.len() >= 10 && t.len() <= 50);
+    assert!(t.windows(2).all(|w| w[1] > w[0]));
+    assert_eq!(*t.last().unwrap(), 0.5);
+}

@@ -61,3 +61,39 @@ fn exact_is_default_with_euler_outputs() {
     assert_eq!(keys(&re), keys(&rx));
     assert_eq!(keys(&re["parameters"]), keys(&rx["parameters"]));
 }
+
+/// `irtp mfpt --method exact`: particle estimate through the exact sampler,
+/// same report keys as euler except the time step.
+#[test]
+fn mfpt_method_exact() {
+    let run = |m: &str| -> serde_json::Value {
+        let o = Command::new(BIN)
+            .args([
+                "mfpt",
+                "--v0",
+                "-0.249",
+                "--vt",
+                "0.5",
+                "--lambda",
+                "0.9",
+                "--rate",
+                "2",
+                "--particles",
+                "400",
+                "--json",
+                "--method",
+                m,
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let (x, e) = (run("exact"), run("euler"));
+    assert_eq!(x["method"], "exact");
+    assert!(x["tau"].as_f64().unwrap() > 0.0 && x["tau_err"].as_f64().unwrap() > 0.0);
+    assert!(x.get("dt").is_none());
+    let mut ke = keys(&e);
+    ke.remove("dt");
+    assert_eq!(keys(&x), ke);
+}

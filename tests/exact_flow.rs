@@ -128,6 +128,24 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// Flow potential differences (used for occupation times) reproduce the
+    /// flow time up to the rounding of the potentials themselves.
+    #[test]
+    fn potential_difference_is_flow_time(case in 0usize..7, plus: bool, xa in 0.0005f64..0.9995, ld in 0.0f64..12.0) {
+        let (d, s, vs, va, vb) = setup(case, plus, xa, ld);
+        prop_assume!(vb != vs);
+        let f = Flow::new(d, s);
+        let (pa, pb) = (f.potential(va), f.potential(vb));
+        let t = f.time(va, vb);
+        let tp = (pa - pb) / f.rate();
+        let tol = 1e-12 * t + 4.0 * f64::EPSILON * (pa.abs() + pb.abs()) / f.rate();
+        prop_assert!((tp - t).abs() <= tol, "{d} s={s} {va}->{vb}: {t} vs {tp}");
+    }
+}
+
 /// Guides for every case and sign, built once.
 fn guide(case: usize, plus: bool) -> &'static InverseGuide {
     static GUIDES: OnceLock<Vec<InverseGuide>> = OnceLock::new();

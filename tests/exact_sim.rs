@@ -260,3 +260,20 @@ fn extreme_parameters_stay_finite() {
         }
     }
 }
+
+/// `Method::Exact` dispatches to the exact sampler and serialises as
+/// {"method": "exact"}.
+#[test]
+fn method_dispatch() {
+    use irtp::sim::{simulate, Method};
+    let p = Params::new(DragLaw::Tanh, 0.6, 0.85, 1.0, 0.0).unwrap();
+    let spec = SimSpec::new(50, TimeGrid::linear(3.0, 4).unwrap(), 1.0, 8, 2).unwrap();
+    let a = simulate(&p, &spec, Method::Exact, &NoProgress).unwrap();
+    let b = exact::simulate(&p, &spec, &NoProgress).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(Method::Exact.name(), "exact");
+    assert_eq!(
+        serde_json::to_string(&Method::Exact).unwrap(),
+        r#"{"method":"exact"}"#
+    );
+}

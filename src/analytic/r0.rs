@@ -700,12 +700,18 @@ impl R0Density {
             .collect()
     }
 
-    /// <v^k>; odd moments vanish by symmetry. Relative accuracy ~1e-13.
+    /// <v^k>; odd moments vanish by symmetry. Relative accuracy ~1e-13; NaN if
+    /// the quadrature fails (see [`R0Density::try_moment`]).
     pub fn moment(&self, k: u32) -> f64 {
+        self.try_moment(k).unwrap_or(f64::NAN)
+    }
+
+    /// <v^k>, or a [`Error::Numerical`] if the adaptive quadrature fails.
+    pub fn try_moment(&self, k: u32) -> Result<f64> {
         if k == 2 {
-            return self.v2;
+            return Ok(self.v2);
         }
-        self.moment_checked(k).unwrap_or(f64::NAN)
+        self.moment_checked(k)
     }
 
     /// Stationary <v²>.

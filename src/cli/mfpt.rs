@@ -1,6 +1,6 @@
 //! `irtp mfpt`: mean first-passage time to a target velocity.
 //!
-//! - `irtp mfpt --v0 V0 --vt VT [--method ode|euler]`: one problem;
+//! - `irtp mfpt --v0 V0 --vt VT [--method ode|euler|exact]`: one problem;
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
 //!
@@ -57,12 +57,14 @@ pub enum Method {
     Ode,
     /// Particle simulation with the Euler scheme (paper Eqs. 14-16).
     Euler,
+    /// Exact event-driven particle sampler: no time step, no overshoot.
+    Exact,
 }
 
 /// Particle-simulation flags.
 #[derive(Args, Debug, Clone)]
 struct SimArgs {
-    /// Method: ode (backward equations) or euler (particles).
+    /// Method: ode (backward equations), euler or exact (particles).
     #[arg(long, value_enum, default_value = "ode")]
     method: Method,
     /// Particles (half start in +Sigma, half in -Sigma).
@@ -172,6 +174,7 @@ fn check_sim(s: &SimArgs, problem: &Problem) -> irtp::Result<()> {
     match s.method {
         Method::Ode => Ok(()),
         Method::Euler => mfpt::EulerFpt::new(*problem, s.dt, s.t_max).map(|_| ()),
+        Method::Exact => irtp::sim::exact::check_t_max(s.t_max).map(|_| ()),
     }
 }
 
@@ -181,6 +184,9 @@ fn simulate(s: &SimArgs, problem: &Problem, seed: u64, label: &str) -> irtp::Res
     let stats = match s.method {
         Method::Euler => {
             mfpt::euler_first_passage(problem, s.dt, s.t_max, s.particles, seed, &bar)?
+        }
+        Method::Exact => {
+            irtp::sim::exact::exact_first_passage(problem, s.t_max, s.particles, seed, &bar)?
         }
         Method::Ode => unreachable!("ode is not a particle method"),
     };
@@ -279,7 +285,7 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
                 particles: Some(s.particles),
                 censored: Some(s.censored),
                 mean_is_lower_bound: Some(s.mean_is_lower_bound),
-                dt: Some(a.sim.dt),
+                dt: (m == Method::Euler).then_some(a.sim.dt),
                 t_max: Some(a.sim.t_max),
                 seed: Some(a.output.seed),
             }
@@ -318,6 +324,7 @@ fn method_name(m: Method) -> &'static str {
     match m {
         Method::Ode => "backward-box",
         Method::Euler => "euler",
+        Method::Exact => "exact",
     }
 }
 
@@ -449,7 +456,7 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         cells: a.problem.cells,
         method: a.sim.method,
         particles: sim.then_some(a.sim.particles),
-        dt: sim.then_some(a.sim.dt),
+        dt: (a.sim.method == Method::Euler).then_some(a.sim.dt),
         t_max: sim.then_some(a.sim.t_max),
     };
     if let Some(mut dir) = out {

@@ -8,6 +8,7 @@ use irtp::sim::euler::{self, EulerPlan, EventSampling};
 use irtp::sim::exact;
 use irtp::sim::{Observables, SimSpec, TimeGrid};
 use serde::Serialize;
+use std::io::Write;
 use std::time::Instant;
 
 /// Simulation method.
@@ -223,27 +224,31 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
             params.rate(),
             params.reset_velocity()
         );
-        match &euler_setup {
-            Some((dt, ev, plan)) => println!(
-                "euler ({ev:?} events), {model}: {} particles x {} steps of dt = {dt} in {wall:.2} s ({rate:.3e} particle-steps/s)",
-                s.particles, plan.steps
+        let mut text = match &euler_setup {
+            Some((dt, ev, plan)) => format!(
+                "euler ({} events), {model}: {} particles x {} steps of dt = {dt} in {wall:.2} s ({rate:.3e} particle-steps/s)\n",
+                format!("{ev:?}").to_lowercase(),
+                s.particles,
+                plan.steps
             ),
-            None => println!(
-                "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)",
+            None => format!(
+                "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)\n",
                 s.particles, s.steps
             ),
-        }
-        println!(
-            "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])",
+        };
+        text += &format!(
+            "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
             s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
         );
-        println!(
-            "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}",
+        text += &format!(
+            "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
             s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
         );
         if let Some(p) = out_path {
-            println!("wrote {p}/moments.csv, density.csv, run.json");
+            text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
         }
+        // The results are already on disk; a closed pipe (`| head`) is not an error.
+        let _ = std::io::stdout().lock().write_all(text.as_bytes());
     }
     Ok(())
 }

@@ -50,8 +50,9 @@ pub struct DeficitTable {
     vs: f64,
     /// Piece boundaries (strictly increasing, first = lo, last = hi).
     bounds: Vec<f64>,
-    /// Per piece: antiderivative coefficients of k = 1 and k = 2.
-    coef: Vec<[[f64; NC]; 2]>,
+    /// Per piece: antiderivative coefficients of k = 1 and k = 2, interleaved
+    /// ([j][k]) so both series are summed in one Clenshaw pass.
+    coef: Vec<[[f64; 2]; NC]>,
     /// Per piece: Ψ_k at the piece's left end.
     offset: Vec<[f64; 2]>,
 }
@@ -111,7 +112,11 @@ impl DeficitTable {
             for k in 0..2 {
                 acc[k] += clenshaw(&c[k], 1.0);
             }
-            coef.push(c);
+            let mut inter = [[0.0; 2]; NC];
+            for (j, cj) in inter.iter_mut().enumerate() {
+                *cj = [c[0][j], c[1][j]];
+            }
+            coef.push(inter);
         }
         Ok(DeficitTable {
             vs,
@@ -140,7 +145,8 @@ impl DeficitTable {
         let x = ((2.0 * v - a - b) / (b - a)).clamp(-1.0, 1.0);
         let c = &self.coef[p];
         let o = &self.offset[p];
-        [o[0] + clenshaw(&c[0], x), o[1] + clenshaw(&c[1], x)]
+        let r = clenshaw2(c, x);
+        [o[0] + r[0], o[1] + r[1]]
     }
 
     /// Deficit integrals (I1, I2) along the flow from va to vb
@@ -150,6 +156,20 @@ impl DeficitTable {
         let (a, b) = (self.psi(va), self.psi(vb));
         (b[0] - a[0], b[1] - a[1])
     }
+}
+
+/// Two Chebyshev series Σ_j c_j[k] T_j(x), k = 0, 1, in one Clenshaw pass
+/// (independent recurrences interleaved for instruction-level parallelism).
+#[inline]
+fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
+    let (mut b1, mut b2) = ([0.0f64; 2], [0.0f64; 2]);
+    let x2 = 2.0 * x;
+    for cj in c[1..].iter().rev() {
+        let b0 = [x2 * b1[0] + (cj[0] - b2[0]), x2 * b1[1] + (cj[1] - b2[1])];
+        b2 = b1;
+        b1 = b0;
+    }
+    [x * b1[0] + (c[0][0] - b2[0]), x * b1[1] + (c[0][1] - b2[1])]
 }
 
 /// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
@@ -229,6 +249,8 @@ struct Sampler {
     phi_edges: [Vec<f64>; 2],
     /// Ψ(v_r) of each table (segment start after a reset).
     psi_vr: [[f64; 2]; 2],
+    /// Flow potential at v_r, per noise state.
+    phi_vr: [f64; 2],
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
@@ -272,12 +294,14 @@ impl Sampler {
         ];
         let vr = params.reset_velocity();
         let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
+        let phi_vr = [flows[0].potential(vr), flows[1].potential(vr)];
         let guides = [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])];
         Ok(Sampler {
             flows,
             guides,
             phi_edges,
             psi_vr,
+            phi_vr,
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
@@ -295,14 +319,24 @@ impl Sampler {
     /// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
     /// in full via the difference array of crossings.
     #[allow(clippy::too_many_arguments)]
-    fn occupy(&self, obs: &Observables, sc: &mut Scratch, si: usize, va: f64, vb: f64, dt: f64) {
+    #[allow(clippy::too_many_arguments)]
+    fn occupy(
+        &self,
+        obs: &Observables,
+        sc: &mut Scratch,
+        si: usize,
+        va: f64,
+        pa: Option<f64>,
+        vb: f64,
+        dt: f64,
+    ) {
         let (ka, kb) = (obs.bin_of(va), obs.bin_of(vb));
         if ka == kb {
             sc.occ[ka] += dt;
             return;
         }
         let flow = &self.flows[si];
-        let pa = flow.potential(va);
+        let pa = pa.unwrap_or_else(|| flow.potential(va));
         let k = flow.rate();
         let phi = &self.phi_edges[si];
         // Time to reach edge e (clamped into [0, dt] against rounding).
@@ -356,16 +390,18 @@ impl Sampler {
             let psi_b = table.psi(vb);
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
-                let (va, psi_w, dw) = if t < self.burn_in {
+                let (va, psi_w, phi_w, dw) = if t < self.burn_in {
                     let va = flow.velocity_guided(v, self.burn_in - t, guide);
-                    (va, table.psi(va), t_end - self.burn_in)
+                    (va, table.psi(va), None, t_end - self.burn_in)
                 } else {
-                    (v, psi_a, dt)
+                    // After a reset the start potential is the precomputed one.
+                    let phi = psi_start.map(|_| self.phi_vr[si]);
+                    (v, psi_a, phi, dt)
                 };
                 let (j1, j2) = (psi_b[0] - psi_w[0], psi_b[1] - psi_w[1]);
                 int_v += vs * dw - j1;
                 int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-                self.occupy(obs, sc, si, va, vb, dw);
+                self.occupy(obs, sc, si, va, phi_w, vb, dw);
             }
             x += vs * dt - (psi_b[0] - psi_a[0]);
             v = vb;
@@ -399,11 +435,13 @@ impl Sampler {
     }
 }
 
-/// Exp(rate) waiting time (∞ for rate 0).
+/// Exp(rate) waiting time (∞ for rate 0), by the ziggurat sampler of
+/// `rand_distr::Exp1` (exact in distribution, cheaper than -ln U).
 #[inline]
 fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
     if rate > 0.0 {
-        -(1.0 - rng.gen::<f64>()).ln() / rate
+        let e: f64 = rng.sample(rand_distr::Exp1);
+        e / rate
     } else {
         f64::INFINITY
     }
@@ -547,6 +585,44 @@ pub fn first_passage_to(
     }
     let mirrored = params.with_reset_velocity(-params.reset_velocity())?;
     Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
+}
+
+/// Validate a first-passage time cap (`--t-max`): t_max > 0 (+∞ allowed:
+/// with lambda > 0 every particle arrives almost surely).
+pub fn check_t_max(t_max: f64) -> Result<f64> {
+    if !(t_max > 0.0) {
+        return Err(Error::invalid("--t-max", t_max, "t_max > 0 (inf allowed)"));
+    }
+    Ok(t_max)
+}
+
+/// First-passage statistics of `problem` (either direction) by the exact
+/// sampler, through the method-agnostic driver
+/// [`crate::mfpt::first_passage_stats`] (particle i: stream (seed, i), start
+/// state +Sigma for even i). Downward problems run in the mirrored upward
+/// frame ([`crate::mfpt::Problem::canonical`]), where the noise states swap.
+pub fn exact_first_passage(
+    problem: &crate::mfpt::Problem,
+    t_max: f64,
+    particles: u64,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<crate::mfpt::FptStats> {
+    check_t_max(t_max)?;
+    if particles < 2 {
+        return Err(Error::invalid("--particles", particles, "particles >= 2"));
+    }
+    let (cp, swapped) = problem.canonical();
+    let fpt = FirstPassage::new(cp.params());
+    Ok(crate::mfpt::first_passage_stats(
+        particles,
+        seed,
+        progress,
+        |_, rng, plus| {
+            let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
+            crate::mfpt::FptSample { time, work }
+        },
+    ))
 }
 
 #[cfg(test)]

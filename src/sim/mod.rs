@@ -398,7 +398,7 @@ pub struct SimSummary {
     pub v2: f64,
     /// Its standard error (across particles).
     pub v2_err: f64,
-    /// Time-averaged stationary <v>.
+    /// Time-averaged stationary `<v>`.
     pub v_mean: f64,
     /// Its standard error.
     pub v_mean_err: f64,
