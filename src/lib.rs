@@ -20,6 +20,7 @@
 
 pub mod analytic;
 pub mod error;
+pub mod figures;
 pub mod fp;
 pub mod io;
 pub mod mfpt;

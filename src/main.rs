@@ -23,6 +23,8 @@ enum Command {
     Mfpt(cli::mfpt::MfptArgs),
     /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
     Fp(cli::fp::FpArgs),
+    /// Regenerate the paper's figures (data, plots, claims).
+    Reproduce(cli::reproduce::ReproduceArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -31,6 +33,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => cli::simulate::run(a),
         Command::Mfpt(a) => cli::mfpt::run(a),
         Command::Fp(a) => cli::fp::run(a),
+        Command::Reproduce(a) => cli::reproduce::run(a),
     }
 }
 

@@ -6,6 +6,7 @@ pub mod common;
 pub mod fp;
 pub mod mfpt;
 pub mod progress;
+pub mod reproduce;
 pub mod simulate;
 
 use serde::Serialize;

@@ -1,0 +1,1274 @@
+//! A small declarative plotting layer on top of `plotters`.
+//!
+//! A [`Figure`] is a grid of [`Panel`]s; a panel has two [`Axis`] (linear or
+//! logarithmic each), [`Series`] (lines with a dash pattern, or points with
+//! vertical error bars) and free text [`Note`]s (guide-line labels such as
+//! "t²"). Series with the same legend label and colour share one legend entry
+//! showing both the marker and the line, so simulation points and solver
+//! lines of one parameter set read as one item. The legend goes into the
+//! corner of the plotting area that hides the least data, or outside the
+//! plotting area when every corner would hide some.
+//!
+//! Log axes are drawn on linear coordinates of log10(value) with decade key
+//! points, so one code path serves all four axis combinations. Rendering goes
+//! to PNG (bitmap backend) and SVG with the embedded DejaVu Sans font (no
+//! system font library needed).
+
+use crate::error::{Error, Result};
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::Color as _;
+use serde::Serialize;
+use std::path::Path;
+use std::sync::Once;
+
+/// The embedded sans-serif font (DejaVu Sans, free license, see assets/fonts).
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+const FAMILY: &str = "sans-serif";
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bytes are a valid TrueType font shipped with the crate.
+        plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
+            .map_err(|_| ())
+            .expect("embedded DejaVu Sans is a valid font");
+    });
+}
+
+/// Axis scale.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// Linear axis.
+    Linear,
+    /// Base-10 logarithmic axis (non-positive values are not drawn).
+    Log,
+}
+
+/// One axis of a panel.
+#[derive(Clone, Debug, Serialize)]
+pub struct Axis {
+    /// Axis label.
+    pub label: String,
+    /// Scale.
+    pub scale: Scale,
+    /// Fixed range in data units; `None` fits the data (with a margin).
+    pub range: Option<(f64, f64)>,
+}
+
+impl Axis {
+    /// Linear axis fitted to the data.
+    pub fn linear(label: impl Into<String>) -> Self {
+        Axis {
+            label: label.into(),
+            scale: Scale::Linear,
+            range: None,
+        }
+    }
+    /// Log axis fitted to the data.
+    pub fn log(label: impl Into<String>) -> Self {
+        Axis {
+            label: label.into(),
+            scale: Scale::Log,
+            range: None,
+        }
+    }
+    /// Fix the range.
+    pub fn range(mut self, lo: f64, hi: f64) -> Self {
+        self.range = Some((lo, hi));
+        self
+    }
+    fn tr(&self, v: f64) -> Option<f64> {
+        match self.scale {
+            Scale::Linear => v.is_finite().then_some(v),
+            Scale::Log => (v > 0.0 && v.is_finite()).then(|| v.log10()),
+        }
+    }
+}
+
+/// Line pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Dash {
+    /// Solid line.
+    Solid,
+    /// Dashed line.
+    Dashed,
+    /// Dotted line.
+    Dotted,
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Style {
+    /// A polyline.
+    Line(Dash),
+    /// Markers, with vertical error bars when the series has `y_err`.
+    Points,
+}
+
+/// Series colour: a palette index (same index = same parameter set) or black/grey.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Color {
+    /// Entry of the 10-colour palette (indices wrap).
+    Palette(usize),
+    /// Black (reserved for analytic r = 0 results).
+    Black,
+    /// Grey (guide lines).
+    Gray,
+}
+
+/// Tableau-10 palette: distinguishable, readable on white.
+const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (23, 190, 207),
+    (188, 189, 34),
+    (127, 127, 127),
+];
+
+impl Color {
+    fn rgb(self) -> RGBColor {
+        match self {
+            Color::Palette(i) => {
+                let (r, g, b) = PALETTE[i % PALETTE.len()];
+                RGBColor(r, g, b)
+            }
+            Color::Black => RGBColor(0, 0, 0),
+            Color::Gray => RGBColor(110, 110, 110),
+        }
+    }
+}
+
+/// One data series.
+#[derive(Clone, Debug, Serialize)]
+pub struct Series {
+    /// Legend label (`None`: not in the legend).
+    pub label: Option<String>,
+    /// Colour.
+    pub color: Color,
+    /// Line or points.
+    pub style: Style,
+    /// x values.
+    pub x: Vec<f64>,
+    /// y values.
+    pub y: Vec<f64>,
+    /// Standard errors of y (points only).
+    pub y_err: Option<Vec<f64>>,
+    /// Origin of the data, written to the CSV (e.g. "simulation", "fp", "analytic", "guide").
+    pub source: String,
+}
+
+impl Series {
+    /// A line.
+    pub fn line(
+        label: Option<String>,
+        color: Color,
+        dash: Dash,
+        source: &str,
+        x: Vec<f64>,
+        y: Vec<f64>,
+    ) -> Self {
+        Series {
+            label,
+            color,
+            style: Style::Line(dash),
+            x,
+            y,
+            y_err: None,
+            source: source.into(),
+        }
+    }
+    /// Points with error bars.
+    pub fn points(
+        label: Option<String>,
+        color: Color,
+        source: &str,
+        x: Vec<f64>,
+        y: Vec<f64>,
+        y_err: Vec<f64>,
+    ) -> Self {
+        Series {
+            label,
+            color,
+            style: Style::Points,
+            x,
+            y,
+            y_err: Some(y_err),
+            source: source.into(),
+        }
+    }
+}
+
+/// Free text at a data position (left end of the text at x, centred on y).
+#[derive(Clone, Debug, Serialize)]
+pub struct Note {
+    /// Text.
+    pub text: String,
+    /// x in data units.
+    pub x: f64,
+    /// y in data units.
+    pub y: f64,
+}
+
+/// One subplot.
+#[derive(Clone, Debug, Serialize)]
+pub struct Panel {
+    /// Panel label, e.g. "(a)".
+    pub label: String,
+    /// Short description after the label, e.g. "tan, Σ = 3, λ = 0.9".
+    pub title: String,
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// Data.
+    pub series: Vec<Series>,
+    /// Text notes (guide labels).
+    pub notes: Vec<Note>,
+    /// Optional heading of the legend (e.g. "r =").
+    pub legend_title: Option<String>,
+}
+
+impl Panel {
+    /// Empty panel.
+    pub fn new(label: impl Into<String>, title: impl Into<String>, x: Axis, y: Axis) -> Self {
+        Panel {
+            label: label.into(),
+            title: title.into(),
+            x,
+            y,
+            series: Vec::new(),
+            notes: Vec::new(),
+            legend_title: None,
+        }
+    }
+}
+
+/// A figure: panels on a grid with `cols` columns, each `panel_px` pixels.
+#[derive(Clone, Debug, Serialize)]
+pub struct Figure {
+    /// File stem, e.g. "fig2".
+    pub name: String,
+    /// Title over all panels.
+    pub title: String,
+    /// Number of panel columns.
+    pub cols: usize,
+    /// Panel size in pixels (width, height).
+    pub panel_px: (u32, u32),
+    /// Panels in reading order.
+    pub panels: Vec<Panel>,
+}
+
+const TITLE_PX: u32 = 34;
+const FONT_PX: f64 = 17.0;
+const TICK_FONT_PX: f64 = 15.0;
+const LEGEND_FONT_PX: f64 = 15.0;
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Io {
+        path: path.display().to_string(),
+        reason: format!("plotting: {e}"),
+    }
+}
+
+impl Figure {
+    /// New empty figure.
+    pub fn new(name: impl Into<String>, title: impl Into<String>, cols: usize) -> Self {
+        Figure {
+            name: name.into(),
+            title: title.into(),
+            cols: cols.max(1),
+            panel_px: (640, 480),
+            panels: Vec::new(),
+        }
+    }
+
+    fn size(&self) -> (u32, u32) {
+        let rows = self.panels.len().div_ceil(self.cols).max(1) as u32;
+        let cols = self.cols.min(self.panels.len().max(1)) as u32;
+        (cols * self.panel_px.0, rows * self.panel_px.1 + TITLE_PX)
+    }
+
+    /// Render to a PNG file.
+    pub fn render_png(&self, path: &Path) -> Result<()> {
+        register_font();
+        let root = BitMapBackend::new(path, self.size()).into_drawing_area();
+        self.draw(&root).map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))
+    }
+
+    /// Render to an SVG file.
+    pub fn render_svg(&self, path: &Path) -> Result<()> {
+        register_font();
+        let root = SVGBackend::new(path, self.size()).into_drawing_area();
+        self.draw(&root).map_err(|e| plot_err(path, e))?;
+        root.present().map_err(|e| plot_err(path, e))
+    }
+
+    /// All plotted data in long format:
+    /// `panel,series,source,style,x,y,y_err` (y_err empty for lines).
+    pub fn data_csv(&self) -> Result<String> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        let e = |e: csv::Error| Error::Io {
+            path: format!("{}.csv", self.name),
+            reason: e.to_string(),
+        };
+        w.write_record(["panel", "series", "source", "style", "x", "y", "y_err"])
+            .map_err(e)?;
+        for p in &self.panels {
+            let panel = p.label.trim_matches(|c| c == '(' || c == ')');
+            for s in &self.series_of(p) {
+                let style = match s.style {
+                    Style::Points => "points",
+                    Style::Line(Dash::Solid) => "line",
+                    Style::Line(Dash::Dashed) => "dashed",
+                    Style::Line(Dash::Dotted) => "dotted",
+                };
+                for i in 0..s.x.len() {
+                    let err = s
+                        .y_err
+                        .as_ref()
+                        .map(|v| crate::io::format_float(v[i]))
+                        .unwrap_or_default();
+                    w.write_record([
+                        panel,
+                        s.label.as_deref().unwrap_or(""),
+                        &s.source,
+                        style,
+                        &crate::io::format_float(s.x[i]),
+                        &crate::io::format_float(s.y[i]),
+                        &err,
+                    ])
+                    .map_err(e)?;
+                }
+            }
+        }
+        let bytes = w.into_inner().map_err(|x| Error::Io {
+            path: format!("{}.csv", self.name),
+            reason: x.to_string(),
+        })?;
+        Ok(String::from_utf8(bytes).expect("csv of utf-8 strings"))
+    }
+
+    fn series_of<'a>(&self, p: &'a Panel) -> Vec<&'a Series> {
+        p.series.iter().collect()
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), Box<dyn std::error::Error + 'static>>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE)?;
+        let (_, h) = root.dim_in_pixel();
+        let (title_area, body) = root.split_vertically(TITLE_PX.min(h));
+        title_area.draw(&Text::new(
+            self.title.clone(),
+            (12, 8),
+            (FAMILY, FONT_PX + 2.0).into_font(),
+        ))?;
+        let rows = self.panels.len().div_ceil(self.cols).max(1);
+        let cols = self.cols.min(self.panels.len().max(1));
+        let areas = body.split_evenly((rows, cols));
+        for (panel, area) in self.panels.iter().zip(areas.iter()) {
+            draw_panel(panel, area)?;
+        }
+        Ok(())
+    }
+}
+
+/// Data range of an axis in transformed units, with a margin.
+fn fit_range(axis: &Axis, vals: impl Iterator<Item = f64>) -> (f64, f64) {
+    if let Some((lo, hi)) = axis.range {
+        let (a, b) = (axis.tr(lo), axis.tr(hi));
+        if let (Some(a), Some(b)) = (a, b) {
+            if b > a {
+                return (a, b);
+            }
+        }
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in vals.filter_map(|v| axis.tr(v)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 * (1.0 + lo.abs()) {
+        let d = if axis.scale == Scale::Log {
+            0.5
+        } else {
+            0.5 * (1.0 + lo.abs())
+        };
+        return (lo - d, hi + d);
+    }
+    let m = 0.04 * (hi - lo);
+    (lo - m, hi + m)
+}
+
+/// "Nice" linear tick positions covering [lo, hi] (about `n` of them).
+fn nice_ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    let span = hi - lo;
+    let raw = span / n.max(1) as f64;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= n as f64 + 0.5)
+        .unwrap_or(10.0 * mag);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|k| k as f64 * step).collect()
+}
+
+/// Decades (and 2, 5 subdivisions for short ranges) in log10 units.
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let (a, b) = (lo.ceil() as i64, hi.floor() as i64);
+    let mut major: Vec<f64> = (a..=b).map(|k| k as f64).collect();
+    let mut minor = Vec::new();
+    for k in (lo.floor() as i64)..=(hi.ceil() as i64) {
+        for m in 2..10 {
+            let v = k as f64 + (m as f64).log10();
+            if v >= lo && v <= hi {
+                minor.push(v);
+            }
+        }
+    }
+    if major.len() < 2 {
+        // Less than two decades shown: label 2 and 5 multiples too.
+        major.extend(
+            minor
+                .iter()
+                .copied()
+                .filter(|v| {
+                    let f = 10f64.powf(v - v.floor());
+                    (f - 2.0).abs() < 1e-9 || (f - 5.0).abs() < 1e-9
+                })
+                .collect::<Vec<_>>(),
+        );
+        major.sort_by(|a, b| a.total_cmp(b));
+    }
+    (major, minor)
+}
+
+fn fmt_lin(v: f64, step: f64) -> String {
+    if v.abs() < 1e-12 * step.max(1e-300) {
+        return "0".into();
+    }
+    // Enough decimals for the step itself (0.25 needs two, 0.2 one).
+    let dec = (0..12)
+        .find(|&d| {
+            let f = 10f64.powi(d);
+            ((step * f).round() - step * f).abs() < 1e-6 * step * f
+        })
+        .unwrap_or(12) as usize;
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return fmt_sci(v);
+    }
+    format!("{v:.dec$}")
+}
+
+fn superscript(s: &str) -> String {
+    s.chars()
+        .map(|c| match c {
+            '-' => '⁻',
+            '0' => '⁰',
+            '1' => '¹',
+            '2' => '²',
+            '3' => '³',
+            '4' => '⁴',
+            '5' => '⁵',
+            '6' => '⁶',
+            '7' => '⁷',
+            '8' => '⁸',
+            '9' => '⁹',
+            c => c,
+        })
+        .collect()
+}
+
+fn fmt_sci(v: f64) -> String {
+    let e = v.abs().log10().floor() as i32;
+    let m = v / 10f64.powi(e);
+    if (m.abs() - 1.0).abs() < 1e-9 {
+        format!(
+            "{}10{}",
+            if v < 0.0 { "-" } else { "" },
+            superscript(&e.to_string())
+        )
+    } else {
+        format!("{m:.1}×10{}", superscript(&e.to_string()))
+    }
+}
+
+fn fmt_log(v: f64) -> String {
+    let x = 10f64.powf(v);
+    let k = v.round();
+    if (v - k).abs() < 1e-9 {
+        let k = k as i32;
+        return match k {
+            -2..=3 => {
+                let d = (-k).max(0) as usize;
+                format!("{:.d$}", 10f64.powi(k))
+            }
+            _ => format!("10{}", superscript(&k.to_string())),
+        };
+    }
+    if (1e-2..1e4).contains(&x) {
+        let d = (-(x.log10().floor()) as i32).max(0) as usize;
+        format!("{x:.d$}")
+    } else {
+        fmt_sci(x)
+    }
+}
+
+/// Ticks for an axis in transformed units and the label step (linear only).
+fn ticks(axis: &Axis, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>, f64) {
+    match axis.scale {
+        Scale::Linear => {
+            let t = nice_ticks(lo, hi, 6);
+            let step = if t.len() > 1 { t[1] - t[0] } else { hi - lo };
+            (t, Vec::new(), step)
+        }
+        Scale::Log => {
+            let (a, b) = log_ticks(lo, hi);
+            (a, b, 1.0)
+        }
+    }
+}
+
+/// Cut a polyline (transformed units) into pieces inside the box
+/// [x0,x1]×[y0,y1] (Liang-Barsky clipping of each segment).
+fn clip_polyline(pts: &[(f64, f64)], bx: (f64, f64), by: (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    for w in pts.windows(2) {
+        let (p, q) = (w[0], w[1]);
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        let mut ok = true;
+        for (pi, qi) in [
+            (-dx, p.0 - bx.0),
+            (dx, bx.1 - p.0),
+            (-dy, p.1 - by.0),
+            (dy, by.1 - p.1),
+        ] {
+            if pi == 0.0 {
+                if qi < 0.0 {
+                    ok = false;
+                    break;
+                }
+            } else {
+                let r = qi / pi;
+                if pi < 0.0 {
+                    t0 = t0.max(r);
+                } else {
+                    t1 = t1.min(r);
+                }
+            }
+        }
+        if !ok || t0 > t1 {
+            if cur.len() > 1 {
+                out.push(std::mem::take(&mut cur));
+            }
+            cur.clear();
+            continue;
+        }
+        let a = (p.0 + t0 * dx, p.1 + t0 * dy);
+        let b = (p.0 + t1 * dx, p.1 + t1 * dy);
+        if cur.is_empty() {
+            cur.push(a);
+        } else if t0 > 0.0 {
+            if cur.len() > 1 {
+                out.push(std::mem::take(&mut cur));
+            }
+            cur = vec![a];
+        }
+        cur.push(b);
+        if t1 < 1.0 {
+            if cur.len() > 1 {
+                out.push(std::mem::take(&mut cur));
+            }
+            cur.clear();
+        }
+    }
+    if cur.len() > 1 {
+        out.push(cur);
+    }
+    out
+}
+
+/// Split a polyline where it turns by more than 120° in pixel space (a cusp),
+/// so thick lines get no miter spike there; pieces share the turning point.
+fn split_sharp(pts: Vec<(f64, f64)>, px: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    // Direction of the last segment of non-zero pixel length.
+    let mut prev: Option<(f64, f64)> = None;
+    for i in 1..pts.len() {
+        let d = (px[i].0 - px[i - 1].0, px[i].1 - px[i - 1].1);
+        let len = (d.0 * d.0 + d.1 * d.1).sqrt();
+        if len < 1e-9 {
+            continue;
+        }
+        let d = (d.0 / len, d.1 / len);
+        if let Some(p) = prev {
+            if p.0 * d.0 + p.1 * d.1 < -0.5 && i - 1 > start {
+                out.push(pts[start..i].to_vec());
+                start = i - 1;
+            }
+        }
+        prev = Some(d);
+    }
+    out.push(pts[start..].to_vec());
+    out.retain(|p| p.len() > 1);
+    out
+}
+
+/// One legend entry: label, colour, line pattern and/or marker.
+struct Entry {
+    label: String,
+    color: Color,
+    dash: Option<Dash>,
+    marker: bool,
+}
+
+fn legend_entries(p: &Panel) -> Vec<Entry> {
+    let mut out: Vec<Entry> = Vec::new();
+    for s in &p.series {
+        let Some(label) = &s.label else { continue };
+        let idx = out
+            .iter()
+            .position(|e| &e.label == label && e.color == s.color);
+        let e = match idx {
+            Some(i) => &mut out[i],
+            None => {
+                out.push(Entry {
+                    label: label.clone(),
+                    color: s.color,
+                    dash: None,
+                    marker: false,
+                });
+                out.last_mut().expect("just pushed")
+            }
+        };
+        match s.style {
+            Style::Points => e.marker = true,
+            Style::Line(d) => {
+                if e.dash.is_none() {
+                    e.dash = Some(d)
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Where the legend goes: a corner of the plotting area, or outside on the right.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Place {
+    Inside(f64, f64), // top-left corner as a fraction of the plotting area
+    Outside,
+}
+
+const SAMPLE_PX: i32 = 34;
+const ROW_PX: i32 = 20;
+
+fn legend_size<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    title: Option<&str>,
+) -> (i32, i32) {
+    let font = (FAMILY, LEGEND_FONT_PX).into_font();
+    let mut w = 0i32;
+    for t in entries.iter().map(|e| e.label.as_str()).chain(title) {
+        let (tw, _) = area
+            .estimate_text_size(t, &TextStyle::from(font.clone()))
+            .unwrap_or((8 * t.len() as u32, 14));
+        w = w.max(tw as i32);
+    }
+    let rows = entries.len() as i32 + i32::from(title.is_some());
+    (SAMPLE_PX + 14 + w + 8, rows * ROW_PX + 10)
+}
+
+/// Choose the legend place: the candidate box (fractions of the plotting
+/// area) covering the fewest data points; outside if all cover some.
+fn choose_place(pts: &[(f64, f64)], fw: f64, fh: f64) -> Place {
+    if fw > 0.6 || fh > 0.9 {
+        return Place::Outside;
+    }
+    let m = 0.015;
+    let cands = [
+        (1.0 - fw - m, m),            // upper right
+        (m, m),                       // upper left
+        (1.0 - fw - m, 1.0 - fh - m), // lower right
+        (m, 1.0 - fh - m),            // lower left
+        (0.5 - fw / 2.0, m),          // upper centre
+        (0.5 - fw / 2.0, 1.0 - fh - m),
+        (1.0 - fw - m, 0.5 - fh / 2.0),
+        (m, 0.5 - fh / 2.0),
+    ];
+    let pad = 0.01;
+    let mut best = (usize::MAX, Place::Outside);
+    for (x, y) in cands {
+        let n = pts
+            .iter()
+            .filter(|(px, py)| {
+                *px >= x - pad && *px <= x + fw + pad && *py >= y - pad && *py <= y + fh + pad
+            })
+            .count();
+        if n < best.0 {
+            best = (n, Place::Inside(x, y));
+        }
+    }
+    if best.0 == 0 {
+        best.1
+    } else {
+        Place::Outside
+    }
+}
+
+/// Data points of a panel as fractions of the plotting area (0,0 = top left),
+/// lines densely sampled so crossing segments count.
+fn occupancy(p: &Panel, xr: (f64, f64), yr: (f64, f64)) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    let fx = |x: f64| (x - xr.0) / (xr.1 - xr.0);
+    let fy = |y: f64| 1.0 - (y - yr.0) / (yr.1 - yr.0);
+    for s in &p.series {
+        let pts: Vec<(f64, f64)> =
+            s.x.iter()
+                .zip(&s.y)
+                .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
+                .collect();
+        match s.style {
+            Style::Points => {
+                for &(x, y) in &pts {
+                    out.push((fx(x), fy(y)));
+                }
+                // Error bar ends count as data too.
+                if let Some(e) = &s.y_err {
+                    for ((&xv, &yv), &ev) in s.x.iter().zip(&s.y).zip(e) {
+                        for yy in [yv - ev, yv + ev] {
+                            if let (Some(x), Some(y)) = (p.x.tr(xv), p.y.tr(yy)) {
+                                out.push((fx(x), fy(y)));
+                            }
+                        }
+                    }
+                }
+            }
+            Style::Line(_) => {
+                for piece in clip_polyline(&pts, xr, yr) {
+                    for w in piece.windows(2) {
+                        for k in 0..=20 {
+                            let t = k as f64 / 20.0;
+                            let x = w[0].0 + t * (w[1].0 - w[0].0);
+                            let y = w[0].1 + t * (w[1].1 - w[0].1);
+                            out.push((fx(x), fy(y)));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out.retain(|(x, y)| (0.0..=1.0).contains(x) && (0.0..=1.0).contains(y));
+    out
+}
+
+type DynErr = Box<dyn std::error::Error + 'static>;
+
+/// Linear f64 coordinate with explicit tick (bold) and grid (light) positions.
+/// (plotters' `WithKeyPoints<RangedCoordf64>` cannot take a label formatter.)
+struct Ticked {
+    inner: RangedCoordf64,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl Ranged for Ticked {
+    type ValueType = f64;
+    type FormatOption = DefaultFormatting;
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
+    }
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> std::ops::Range<i32> {
+        self.inner.axis_pixel_range(limit)
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let xr = fit_range(&p.x, p.series.iter().flat_map(|s| s.x.iter().copied()));
+    let yvals = p.series.iter().flat_map(|s| {
+        let e = s.y_err.clone();
+        s.y.iter().enumerate().flat_map(move |(i, &y)| {
+            let d = e
+                .as_ref()
+                .map_or(0.0, |e| if e[i].is_finite() { e[i] } else { 0.0 });
+            [y - d, y + d]
+        })
+    });
+    let yr = fit_range(&p.y, yvals.collect::<Vec<_>>().into_iter());
+    let (xt, xminor, xstep) = ticks(&p.x, xr.0, xr.1);
+    let (yt, yminor, ystep) = ticks(&p.y, yr.0, yr.1);
+
+    let entries = legend_entries(p);
+    let (lw, lh) = legend_size(area, &entries, p.legend_title.as_deref());
+    let (aw, ah) = area.dim_in_pixel();
+    // Approximate plotting-area size (margins and label areas subtracted).
+    let (pw, ph) = (aw as f64 - 100.0, ah as f64 - 110.0);
+    let occ = occupancy(p, xr, yr);
+    let place = if entries.is_empty() {
+        Place::Inside(0.0, 0.0)
+    } else {
+        choose_place(&occ, lw as f64 / pw, lh as f64 / ph)
+    };
+    let right_margin = if place == Place::Outside && !entries.is_empty() {
+        lw + 16
+    } else {
+        16
+    };
+
+    let caption = if p.title.is_empty() {
+        p.label.clone()
+    } else {
+        format!("{}  {}", p.label, p.title)
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FAMILY, FONT_PX))
+        .margin_top(6)
+        .margin_left(8)
+        .margin_bottom(6)
+        .margin_right(right_margin)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(
+            Ticked {
+                inner: (xr.0..xr.1).into(),
+                bold: xt,
+                light: xminor,
+            },
+            Ticked {
+                inner: (yr.0..yr.1).into(),
+                bold: yt,
+                light: yminor,
+            },
+        )?;
+    let xs = p.x.scale;
+    let ys = p.y.scale;
+    let fx = move |v: &f64| match xs {
+        Scale::Linear => fmt_lin(*v, xstep),
+        Scale::Log => fmt_log(*v),
+    };
+    let fy = move |v: &f64| match ys {
+        Scale::Linear => fmt_lin(*v, ystep),
+        Scale::Log => fmt_log(*v),
+    };
+    chart
+        .configure_mesh()
+        .x_desc(p.x.label.clone())
+        .y_desc(p.y.label.clone())
+        .axis_desc_style((FAMILY, FONT_PX))
+        .label_style((FAMILY, TICK_FONT_PX))
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .bold_line_style(RGBColor(225, 225, 225))
+        .light_line_style(RGBColor(243, 243, 243))
+        .draw()?;
+
+    // Lines first, points on top.
+    for s in p
+        .series
+        .iter()
+        .filter(|s| matches!(s.style, Style::Line(_)))
+    {
+        let Style::Line(dash) = s.style else {
+            continue;
+        };
+        let pts: Vec<(f64, f64)> =
+            s.x.iter()
+                .zip(&s.y)
+                .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
+                .collect();
+        let col = s.color.rgb();
+        let width = if s.source == "guide" && dash == Dash::Dashed {
+            1
+        } else {
+            2
+        };
+        let style = ShapeStyle::from(&col).stroke_width(width);
+        let pieces: Vec<Vec<(f64, f64)>> = clip_polyline(&pts, xr, yr)
+            .into_iter()
+            .flat_map(|piece| {
+                let px: Vec<(f64, f64)> = piece
+                    .iter()
+                    .map(|c| {
+                        let b = chart.backend_coord(c);
+                        (b.0 as f64, b.1 as f64)
+                    })
+                    .collect();
+                split_sharp(piece, &px)
+            })
+            .collect();
+        for piece in pieces {
+            match dash {
+                Dash::Solid => {
+                    chart.draw_series(std::iter::once(PathElement::new(piece, style)))?;
+                }
+                Dash::Dashed => {
+                    chart.draw_series(DashedLineSeries::new(piece, 9, 6, style))?;
+                }
+                Dash::Dotted => {
+                    chart.draw_series(DashedLineSeries::new(piece, 2, 4, style))?;
+                }
+            }
+        }
+    }
+    for s in p.series.iter().filter(|s| s.style == Style::Points) {
+        let col = s.color.rgb();
+        let mut pts = Vec::new();
+        let mut bars = Vec::new();
+        for i in 0..s.x.len() {
+            let (Some(x), Some(y)) = (p.x.tr(s.x[i]), p.y.tr(s.y[i])) else {
+                continue;
+            };
+            if x < xr.0 || x > xr.1 || y < yr.0 || y > yr.1 {
+                continue;
+            }
+            pts.push((x, y));
+            if let Some(e) = &s.y_err {
+                let e = e[i];
+                if e.is_finite() && e > 0.0 {
+                    let lo = p.y.tr(s.y[i] - e).unwrap_or(yr.0).max(yr.0);
+                    let hi = p.y.tr(s.y[i] + e).unwrap_or(yr.1).min(yr.1);
+                    bars.push((x, lo, y, hi));
+                }
+            }
+        }
+        // Error bars drawn as paths (plotters' ErrorBar needs an extra feature).
+        let bar_style = ShapeStyle::from(&col).stroke_width(1);
+        let cap = 0.006 * (xr.1 - xr.0);
+        for (x, lo, _y, hi) in bars {
+            chart.draw_series(std::iter::once(PathElement::new(
+                vec![(x, lo), (x, hi)],
+                bar_style,
+            )))?;
+            for yy in [lo, hi] {
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(x - cap, yy), (x + cap, yy)],
+                    bar_style,
+                )))?;
+            }
+        }
+        chart.draw_series(
+            pts.into_iter()
+                .map(|c| Circle::new(c, 3, ShapeStyle::from(&col).filled())),
+        )?;
+    }
+    for n in &p.notes {
+        if let (Some(x), Some(y)) = (p.x.tr(n.x), p.y.tr(n.y)) {
+            if x >= xr.0 && x <= xr.1 && y >= yr.0 && y <= yr.1 {
+                chart.draw_series(std::iter::once(Text::new(
+                    n.text.clone(),
+                    (x, y),
+                    (FAMILY, FONT_PX).into_font().color(&Color::Gray.rgb()),
+                )))?;
+            }
+        }
+    }
+
+    if !entries.is_empty() {
+        let plot = chart.plotting_area();
+        let xrange = plot.get_x_range();
+        let yrange = plot.get_y_range();
+        let (px0, px1) = (xrange.start, xrange.end);
+        let (py0, py1) = (yrange.start, yrange.end);
+        let (ox, oy) = {
+            // Pixel position of the plotting area's top-left corner.
+            let c = chart.backend_coord(&(px0, py1));
+            (c.0, c.1)
+        };
+        let br = chart.backend_coord(&(px1, py0));
+        let (w, h) = (br.0 - ox, br.1 - oy);
+        let (lx, ly) = match place {
+            Place::Inside(fx, fy) => (ox + (fx * w as f64) as i32, oy + (fy * h as f64) as i32),
+            Place::Outside => (br.0 + 10, oy),
+        };
+        draw_legend(
+            area,
+            &entries,
+            p.legend_title.as_deref(),
+            (lx, ly),
+            (lw, lh),
+        )?;
+    }
+    Ok(())
+}
+
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    title: Option<&str>,
+    (x, y): (i32, i32),
+    (w, h): (i32, i32),
+) -> Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    // The area's own pixel origin: drawing uses coordinates relative to it.
+    let (ax, ay) = area.get_base_pixel();
+    let (x, y) = (x - ax, y - ay);
+    area.draw(&Rectangle::new(
+        [(x, y), (x + w, y + h)],
+        ShapeStyle::from(&WHITE.mix(0.85)).filled(),
+    ))?;
+    area.draw(&Rectangle::new(
+        [(x, y), (x + w, y + h)],
+        ShapeStyle::from(&RGBColor(190, 190, 190)).stroke_width(1),
+    ))?;
+    let font = (FAMILY, LEGEND_FONT_PX).into_font();
+    let mut row = y + 5;
+    if let Some(t) = title {
+        area.draw(&Text::new(t.to_string(), (x + 8, row + 2), font.clone()))?;
+        row += ROW_PX;
+    }
+    for e in entries {
+        let col = e.color.rgb();
+        let cy = row + ROW_PX / 2;
+        let (x0, x1) = (x + 8, x + 8 + SAMPLE_PX);
+        if let Some(d) = e.dash {
+            let style = ShapeStyle::from(&col).stroke_width(2);
+            match d {
+                Dash::Solid => area.draw(&PathElement::new(vec![(x0, cy), (x1, cy)], style))?,
+                Dash::Dashed => {
+                    for k in (x0..x1).step_by(12) {
+                        area.draw(&PathElement::new(
+                            vec![(k, cy), ((k + 7).min(x1), cy)],
+                            style,
+                        ))?;
+                    }
+                }
+                Dash::Dotted => {
+                    for k in (x0..x1).step_by(5) {
+                        area.draw(&PathElement::new(
+                            vec![(k, cy), ((k + 2).min(x1), cy)],
+                            style,
+                        ))?;
+                    }
+                }
+            }
+        }
+        if e.marker {
+            area.draw(&Circle::new(
+                ((x0 + x1) / 2, cy),
+                4,
+                ShapeStyle::from(&col).filled(),
+            ))?;
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (x1 + 8, cy - (LEGEND_FONT_PX as i32) / 2 - 1),
+            font.clone(),
+        ))?;
+        row += ROW_PX;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clipping_keeps_inside_and_cuts_crossings() {
+        let pts = [(0.0, 0.0), (2.0, 2.0), (4.0, 0.0)];
+        let out = clip_polyline(&pts, (0.0, 4.0), (0.0, 1.0));
+        assert_eq!(out.len(), 2);
+        assert_eq!(out[0], vec![(0.0, 0.0), (1.0, 1.0)]);
+        assert_eq!(out[1], vec![(3.0, 1.0), (4.0, 0.0)]);
+        let all = clip_polyline(&pts, (-1.0, 5.0), (-1.0, 3.0));
+        assert_eq!(all, vec![pts.to_vec()]);
+    }
+
+    #[test]
+    fn sharp_turns_split() {
+        let pts = vec![(0.0, 0.0), (1.0, 10.0), (1.01, 0.0), (2.0, 0.0)];
+        let px: Vec<(f64, f64)> = pts.iter().map(|p| (p.0 * 100.0, -p.1 * 10.0)).collect();
+        let out = split_sharp(pts.clone(), &px);
+        assert_eq!(out.len(), 2);
+        assert_eq!(out[0], pts[..2].to_vec());
+        assert_eq!(out[1], pts[1..].to_vec());
+    }
+
+    #[test]
+    fn ticks_are_nice() {
+        assert_eq!(
+            nice_ticks(0.0, 1.0, 5),
+            vec![0.0, 0.2, 0.4, 0.6000000000000001, 0.8, 1.0]
+        );
+        let (maj, _) = log_ticks(-2.1, 1.2);
+        assert_eq!(maj, vec![-2.0, -1.0, 0.0, 1.0]);
+        assert_eq!(fmt_log(-2.0), "0.01");
+        assert_eq!(fmt_log(4.0), "10⁴");
+        assert_eq!(fmt_log(2f64.log10()), "2");
+        assert_eq!(fmt_lin(0.25, 0.25), "0.25");
+        assert_eq!(fmt_lin(0.5, 0.25), "0.50");
+        assert_eq!(fmt_lin(0.4, 0.2), "0.4");
+        assert_eq!(fmt_lin(10.0, 5.0), "10");
+    }
+
+    #[test]
+    fn legend_merges_points_and_line_of_same_parameter() {
+        let mut p = Panel::new("(a)", "", Axis::linear("x"), Axis::linear("y"));
+        p.series.push(Series::points(
+            Some("r = 1".into()),
+            Color::Palette(0),
+            "simulation",
+            vec![0.0],
+            vec![0.0],
+            vec![0.1],
+        ));
+        p.series.push(Series::line(
+            Some("r = 1".into()),
+            Color::Palette(0),
+            Dash::Solid,
+            "fp",
+            vec![0.0, 1.0],
+            vec![0.0, 1.0],
+        ));
+        let e = legend_entries(&p);
+        assert_eq!(e.len(), 1);
+        assert!(e[0].marker && e[0].dash == Some(Dash::Solid));
+    }
+
+    #[test]
+    fn legend_avoids_data() {
+        // Data filling the upper right: the legend must go elsewhere.
+        let pts: Vec<(f64, f64)> = (0..100)
+            .map(|i| (0.6 + 0.004 * i as f64, 0.05 + 0.003 * i as f64))
+            .collect();
+        match choose_place(&pts, 0.3, 0.3) {
+            Place::Inside(x, y) => assert!(!(x > 0.5 && y < 0.2), "{x} {y}"),
+            Place::Outside => panic!("free corners exist"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod render_tests {
+    use super::*;
+
+    /// Demo figure: all axis combinations, lines, points with error bars, guides.
+    pub(super) fn demo() -> Figure {
+        let mut f = Figure::new("demo", "Demo figure: λ = 0.5, Σ = 3", 2);
+        let t: Vec<f64> = (0..60)
+            .map(|i| 10f64.powf(-2.0 + 5.0 * i as f64 / 59.0))
+            .collect();
+        let mut a = Panel::new("(a)", "log-log", Axis::log("t"), Axis::log("⟨x²⟩"));
+        for (k, d) in [1.0, 0.3, 0.05].iter().enumerate() {
+            let y: Vec<f64> = t.iter().map(|t| t * t / (1.0 + t / d)).collect();
+            let e: Vec<f64> = y.iter().map(|y| 0.1 * y).collect();
+            a.series.push(Series::points(
+                Some(format!("r = {k}")),
+                Color::Palette(k),
+                "simulation",
+                t.iter().step_by(4).copied().collect(),
+                y.iter().step_by(4).copied().collect(),
+                e.iter().step_by(4).copied().collect(),
+            ));
+            a.series.push(Series::line(
+                Some(format!("r = {k}")),
+                Color::Palette(k),
+                Dash::Solid,
+                "fp",
+                t.clone(),
+                y,
+            ));
+        }
+        a.series.push(Series::line(
+            None,
+            Color::Gray,
+            Dash::Dotted,
+            "guide",
+            vec![0.01, 1.0],
+            vec![1e-4, 1.0],
+        ));
+        a.notes.push(Note {
+            text: "t²".into(),
+            x: 0.05,
+            y: 0.01,
+        });
+        a.legend_title = Some("reset rate".into());
+        f.panels.push(a);
+        let v: Vec<f64> = (0..200).map(|i| -1.2 + 2.4 * i as f64 / 199.0).collect();
+        let mut b = Panel::new(
+            "(b)",
+            "linear",
+            Axis::linear("v"),
+            Axis::linear("P(v)").range(0.0, 2.0),
+        );
+        b.series.push(Series::line(
+            Some("r = 0".into()),
+            Color::Black,
+            Dash::Solid,
+            "analytic",
+            v.clone(),
+            v.iter().map(|v| 0.3 / (1.25 - v.abs()).sqrt()).collect(),
+        ));
+        b.series.push(Series::line(
+            Some("r = 5".into()),
+            Color::Palette(1),
+            Dash::Dashed,
+            "fp",
+            v.clone(),
+            v.iter().map(|v| (-3.0 * v.abs()).exp() * 1.4).collect(),
+        ));
+        f.panels.push(b);
+        f
+    }
+
+    #[test]
+    fn renders_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = demo();
+        let png = dir.path().join("demo.png");
+        let svg = dir.path().join("demo.svg");
+        f.render_png(&png).unwrap();
+        f.render_svg(&svg).unwrap();
+        assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
+        let s = std::fs::read_to_string(&svg).unwrap();
+        assert!(s.contains("<svg") && s.contains("r = 0"));
+        let csv = f.data_csv().unwrap();
+        assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"));
+        if let Ok(d) = std::env::var("IRTP_PLOT_DEMO_DIR") {
+            f.render_png(&std::path::Path::new(&d).join("demo.png"))
+                .unwrap();
+        }
+    }
+}

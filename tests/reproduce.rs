@@ -1,0 +1,172 @@
+//! `irtp reproduce all --quick`: every expected file is written, and the
+//! numeric claims hold (D_eff ∝ r⁻² asymptotically, optimal resetting rate
+//! for tan at lambda = 0.5 but not for tanh).
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_irtp"))
+}
+
+fn claim<'a>(claims: &'a [Value], id: &str) -> &'a Value {
+    claims
+        .iter()
+        .find(|c| c["id"] == id)
+        .unwrap_or_else(|| panic!("claim {id} missing"))
+}
+
+#[test]
+fn reproduce_all_quick() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("figs");
+    let t0 = std::time::Instant::now();
+    let o = bin()
+        .args(["reproduce", "all", "--quick", "--seed", "7", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    eprintln!("reproduce all --quick: {:.1} s", t0.elapsed().as_secs_f64());
+
+    for f in ["fig1", "fig2", "fig3", "fig5", "fig6", "fig7"] {
+        let csv = std::fs::read_to_string(out.join(format!("{f}.csv"))).unwrap();
+        assert!(
+            csv.starts_with("panel,series,source,style,x,y,y_err\n"),
+            "{f}"
+        );
+        assert!(csv.lines().count() > 20, "{f}.csv has data");
+        let png = std::fs::read(out.join(format!("{f}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{f}.png");
+        let svg = std::fs::read_to_string(out.join(format!("{f}.svg"))).unwrap();
+        assert!(svg.contains("<svg"), "{f}.svg");
+    }
+    for f in ["claims.json", "claims.md", "parameters.json", "run.json"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let run: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["seed"], 7);
+    assert_eq!(run["parameters"]["quick"], true);
+    let params: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("parameters.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        params["fig2"]["spec"]["lambdas"],
+        serde_json::json!([0.9, 7.0, 15.0, 25.0])
+    );
+    assert_eq!(params["fig7"]["spec"]["v0"], -0.249);
+
+    let claims: Vec<Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("claims.json")).unwrap()).unwrap();
+
+    // D_eff ∝ r⁻² at large r: exact (FP) local exponent at r = 10³..10⁴ is -2
+    // within 0.01 for every lambda and both media; the simulation's fitted
+    // exponent agrees with the exact one at the same rates within 4 SE.
+    for drag in ["tan", "tanh"] {
+        let c = claim(&claims, &format!("deff_r_minus_2_{drag}"));
+        let fits = c["values"].as_array().unwrap();
+        assert!(!fits.is_empty());
+        for f in fits {
+            let asym = f["exponent_exact_r_1e3_1e4"].as_f64().unwrap();
+            assert!((asym + 2.0).abs() < 0.01, "{drag}: {f}");
+            let pref = f["d_r2_over_sigma2_2lambda_at_1e4"].as_f64().unwrap();
+            assert!((pref - 1.0).abs() < 0.01, "{drag}: D r² -> Σ²/(2λ): {f}");
+            let (b, sb, be) = (
+                f["exponent_sim"].as_f64().unwrap(),
+                f["exponent_sim_err"].as_f64().unwrap(),
+                f["exponent_exact_same_rates"].as_f64().unwrap(),
+            );
+            assert!(sb > 0.0 && (b - be).abs() < 4.0 * sb, "{drag}: {f}");
+        }
+    }
+
+    // Cusp at v = 0: the FP slope jump equals -r(2λ + r - 1)/Σ² within 1 %
+    // (deterministic solver, so a tight check), for every panel and r > 0.
+    for drag in ["tan", "tanh"] {
+        let c = claim(&claims, &format!("cusp_at_zero_{drag}"));
+        let rows = c["values"].as_array().unwrap();
+        assert_eq!(rows.len(), 16, "4 panels x 4 rates");
+        for r in rows {
+            let (a, b) = (
+                r["jump_fp"].as_f64().unwrap(),
+                r["jump_exact"].as_f64().unwrap(),
+            );
+            assert!((a - b).abs() < 0.01 * b.abs(), "{drag}: {r}");
+        }
+        // Simulation vs FP and FP vs analytic r = 0 agree (verdict computed
+        // from the standard errors: max |z| below max(4, Bonferroni 1 %)).
+        assert_eq!(
+            claim(&claims, &format!("fp_vs_simulation_{drag}"))["verdict"],
+            "agrees"
+        );
+        assert_eq!(
+            claim(&claims, &format!("v2_ss_{drag}"))["verdict"],
+            "agrees"
+        );
+    }
+    assert_eq!(claim(&claims, "mfpt_sim_vs_backward")["verdict"], "agrees");
+    assert_eq!(claim(&claims, "deff_sim_vs_exact")["verdict"], "agrees");
+
+    // Optimal resetting rate: interior for tan at lambda = 0.5, none for tanh.
+    let opt = claim(&claims, "optimal_reset_rate");
+    let find = |drag: &str, lambda: f64| {
+        opt["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| o["drag"] == drag && o["lambda"].as_f64() == Some(lambda))
+            .unwrap()
+            .clone()
+    };
+    let tan = find("tan", 0.5);
+    let r_star = tan["optimal_rate"]
+        .as_f64()
+        .expect("tan lambda=0.5 has an optimum");
+    assert!(r_star > 0.0 && r_star.is_finite());
+    assert!(tan["tau_at_optimum"].as_f64().unwrap() < tan["tau_r0"].as_f64().unwrap());
+    assert!(
+        find("tanh", 0.5)["optimal_rate"].is_null(),
+        "tanh: no optimum"
+    );
+}
+
+#[test]
+fn bad_figure_name_is_an_input_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("x");
+    let o = bin()
+        .args(["reproduce", "fig4", "--quick", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!Path::new(&out).exists());
+}
+
+#[test]
+fn out_is_a_file_fails_before_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("f");
+    std::fs::write(&file, "x").unwrap();
+    let t0 = std::time::Instant::now();
+    let o = bin()
+        .args(["reproduce", "all", "--out"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--out"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        t0.elapsed().as_secs_f64() < 5.0,
+        "validated before computing"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+}
