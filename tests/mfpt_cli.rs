@@ -193,17 +193,53 @@ fn bad_input_one_line_exit_2_nothing_written() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("never reached"), "{err}");
     // Scan and optimize validate too.
-    for a in [
-        &[
-            "mfpt", "scan", "--v0", "-0.249", "--over", "vt", "--from", "0.1", "--to", "1.3",
-            "--out", d,
-        ][..],
-        &[
-            "mfpt", "optimize", "--v0", "-0.249", "--vt", "0.5", "--r-min", "-1", "--out", d,
-        ][..],
-    ] {
-        let out = irtp(a);
-        assert_eq!(out.status.code(), Some(2), "{a:?}");
-        assert!(!dir.exists());
+    let out = irtp(&[
+        "mfpt", "scan", "--v0", "-0.249", "--over", "vt", "--from", "0.1", "--to", "1.3", "--out",
+        d,
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!dir.exists());
+    // Negative numbers reach validation (not clap's "unexpected argument").
+    let negative: [(&[&str], &str); 4] = [
+        (
+            &[
+                "mfpt", "optimize", "--v0", "-0.249", "--vt", "0.5", "--r-min", "-1",
+            ],
+            "--r-min",
+        ),
+        (
+            &[
+                "mfpt", "optimize", "--v0", "-0.249", "--vt", "0.5", "--r-max", "-1",
+            ],
+            "--r-max",
+        ),
+        (
+            &[
+                "mfpt", "--v0", "-0.249", "--vt", "0.5", "--method", "euler", "--dt", "-1e-3",
+            ],
+            "--dt",
+        ),
+        (
+            &[
+                "mfpt", "--v0", "-0.249", "--vt", "0.5", "--method", "euler", "--t-max", "-5",
+            ],
+            "--t-max",
+        ),
+    ];
+    // Exponent notation with a negative exponent parses too (clap's own
+    // negative-number detection does not accept it).
+    let a = irtp(&["mfpt", "--v0", "-2.49e-1", "--vt", "5e-1", "--json"]);
+    let b = irtp(&["mfpt", "--v0", "-0.249", "--vt", "0.5", "--json"]);
+    assert_eq!(
+        a.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&a.stderr)
+    );
+    assert_eq!(a.stdout, b.stdout);
+    for (args, flag) in negative {
+        let mut a = args.to_vec();
+        a.extend(["--out", d]);
+        assert_rejected(&irtp(&a), flag, &dir);
     }
 }

@@ -17,15 +17,10 @@ pub struct AnalyticArgs {
     #[command(flatten)]
     pub noise: NoiseArgs,
     /// Reset rate: the closed form exists only for r = 0 (any other value is rejected).
-    #[arg(
-        long,
-        short = 'r',
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, short = 'r', default_value_t = 0.0, allow_hyphen_values = true)]
     pub rate: f64,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).
-    #[arg(long, default_value_t = 1001)]
+    #[arg(long, default_value_t = 1001, allow_hyphen_values = true)]
     pub points: usize,
     /// Directory to write density.csv and run.json into.
     #[arg(long)]

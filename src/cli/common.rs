@@ -12,10 +12,10 @@ pub struct NoiseArgs {
     #[arg(long, default_value = "tan", value_parser = parse_drag)]
     pub drag: DragLaw,
     /// Noise amplitude Sigma (eta = ±Sigma).
-    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
     pub sigma: f64,
     /// Flip rate lambda of the telegraph noise.
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub lambda: f64,
 }
 
@@ -33,15 +33,10 @@ pub struct ModelArgs {
     #[command(flatten)]
     pub noise: NoiseArgs,
     /// Velocity reset rate r.
-    #[arg(
-        long,
-        short = 'r',
-        default_value_t = 2.0,
-        allow_negative_numbers = true
-    )]
+    #[arg(long, short = 'r', default_value_t = 2.0, allow_hyphen_values = true)]
     pub rate: f64,
     /// Reset velocity v_r.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub reset_velocity: f64,
 }
 
@@ -61,7 +56,7 @@ impl ModelArgs {
 #[derive(Args, Clone, Debug)]
 pub struct OutputArgs {
     /// Master seed; particle i uses a stream derived from (seed, i).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub seed: u64,
     /// Directory to write CSV files and run.json into.
     #[arg(long)]

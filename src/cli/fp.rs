@@ -39,7 +39,7 @@ struct StationaryArgs {
     #[command(flatten)]
     output: OutputArgs,
     /// Number of finite-volume cells (even when extrapolating).
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
     cells: usize,
     /// Cell placement.
     #[arg(long, value_enum, default_value = "graded")]
@@ -57,19 +57,19 @@ struct TransientArgs {
     #[command(flatten)]
     output: OutputArgs,
     /// Final time.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     t_max: f64,
     /// Number of uniform cells (paper: 2000 for tan, 1000 for tanh).
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, allow_hyphen_values = true)]
     cells: usize,
     /// Number of equally spaced recording times of <v²>(t) in [0, t_max].
-    #[arg(long, default_value_t = 101)]
+    #[arg(long, default_value_t = 101, allow_hyphen_values = true)]
     samples: usize,
     /// Number of equally spaced density snapshots in (0, t_max].
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, allow_hyphen_values = true)]
     snapshots: usize,
     /// Courant number in (0, 1].
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     cfl: f64,
 }
 

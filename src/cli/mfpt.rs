@@ -42,10 +42,10 @@ struct ProblemArgs {
     #[command(flatten)]
     model: ModelArgs,
     /// Initial velocity v_0 (inside (v_l, v_u), on the same side of v_t as v_r).
-    #[arg(long, required = true, allow_negative_numbers = true)]
+    #[arg(long, required = true, allow_hyphen_values = true)]
     v0: Option<f64>,
     /// Cells of the backward-equation mesh on [v_l, v_t].
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
     cells: usize,
 }
 
@@ -68,13 +68,13 @@ struct SimArgs {
     #[arg(long, value_enum, default_value = "ode")]
     method: Method,
     /// Particles (half start in +Sigma, half in -Sigma).
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true)]
     particles: u64,
     /// Euler time step (O(dt) bias, including an overshoot of at most dt).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     dt: f64,
     /// Particles not arrived by t-max are counted as censored (means become lower bounds).
-    #[arg(long, default_value_t = 1e4)]
+    #[arg(long, default_value_t = 1e4, allow_hyphen_values = true)]
     t_max: f64,
 }
 
@@ -83,7 +83,7 @@ struct DirectArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity v_t (v_l < v_t < v_u).
-    #[arg(long, required = true, allow_negative_numbers = true)]
+    #[arg(long, required = true, allow_hyphen_values = true)]
     vt: Option<f64>,
     #[command(flatten)]
     sim: SimArgs,
@@ -96,19 +96,19 @@ struct ScanArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity (needed with --over rate).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     vt: Option<f64>,
     /// Scanned quantity.
     #[arg(long, value_enum)]
     over: Over,
     /// First value.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     from: f64,
     /// Last value.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     to: f64,
     /// Number of values (>= 2).
-    #[arg(long, default_value_t = 21)]
+    #[arg(long, default_value_t = 21, allow_hyphen_values = true)]
     points: usize,
     /// Logarithmic spacing (needs from, to > 0).
     #[arg(long)]
@@ -132,16 +132,16 @@ struct OptimizeArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity v_t.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     vt: f64,
     /// Smallest positive r of the search grid (r = 0 is always compared).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     r_min: f64,
     /// Largest r of the search grid.
-    #[arg(long, default_value_t = 1e3)]
+    #[arg(long, default_value_t = 1e3, allow_hyphen_values = true)]
     r_max: f64,
     /// Points of the coarse log grid.
-    #[arg(long, default_value_t = 61)]
+    #[arg(long, default_value_t = 61, allow_hyphen_values = true)]
     grid_points: usize,
     #[command(flatten)]
     output: OutputArgs,

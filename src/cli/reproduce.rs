@@ -21,7 +21,7 @@ pub struct ReproduceArgs {
     #[arg(long)]
     pub quick: bool,
     /// Master seed; each curve derives its own seed from it.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub seed: u64,
 }
 

@@ -47,29 +47,29 @@ pub struct SimulateArgs {
     #[command(flatten)]
     pub output: OutputArgs,
     /// Number of independent particles.
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
     pub particles: u64,
     /// Euler time step (must be < 1/max g'(v) and < 1/rate) [default with
     /// --method euler: 1e-3; not accepted by the exact method, which has no step].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
     /// Final time.
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 20.0, allow_hyphen_values = true)]
     pub t_max: f64,
     /// Number of recording times for the moments.
-    #[arg(long, default_value_t = 201)]
+    #[arg(long, default_value_t = 201, allow_hyphen_values = true)]
     pub samples: usize,
     /// Recording grid.
     #[arg(long, value_enum, default_value_t = GridArg::Linear)]
     pub grid: GridArg,
     /// First non-zero time of a log grid.
-    #[arg(long, default_value_t = 1e-2, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1e-2, allow_hyphen_values = true)]
     pub t_min: f64,
     /// Start of the stationary averaging window [burn_in, t_max].
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub burn_in: f64,
     /// Histogram bins on (v_l, v_u).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
     pub bins: usize,
     /// Simulation method.
     #[arg(long, value_enum, default_value_t = MethodArg::Exact)]
