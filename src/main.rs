@@ -17,7 +17,7 @@ struct Cli {
 enum Command {
     /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
     Analytic(cli::analytic::AnalyticArgs),
-    /// Particle simulation (Euler scheme of the paper): moments, densities.
+    /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
     Simulate(cli::simulate::SimulateArgs),
     /// Mean first-passage time to a target velocity (backward equations or particles).
     Mfpt(cli::mfpt::MfptArgs),

@@ -109,6 +109,7 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
         "params": params,
         "wall_time_s": wall,
     });
+    let mut written = None;
     if let Some(dir) = &a.output.out {
         let mut out = OutputDir::new(dir)?;
         out.write_csv(
@@ -117,17 +118,17 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
             (0..s.cells).map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]]),
         )?;
         out.write_json("summary.json", &summary)?;
-        out.commit_with_provenance(Provenance::new(
+        written = Some(out.commit_with_provenance(Provenance::new(
             "fp stationary",
             format!("fv-upwind-direct-{}", s.mesh.name()),
             None,
             json!({"model": params, "options": opts}),
             wall,
-        ))?;
+        ))?);
     }
     if a.output.json {
         print_json(&summary)?;
-    } else if a.output.out.is_none() {
+    } else {
         println!(
             "<v^2> = {:.12}  <v> = {:.12}  D_eff = {:.12}  ({} cells, {} mesh{})",
             s.v2,
@@ -137,6 +138,9 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
             s.mesh.name(),
             if s.extrapolated { ", extrapolated" } else { "" }
         );
+        if let (Some(dir), Some(files)) = (&a.output.out, &written) {
+            super::print_written(dir, files);
+        }
     }
     Ok(())
 }
@@ -182,6 +186,7 @@ fn transient(a: TransientArgs) -> anyhow::Result<()> {
         "params": params,
         "wall_time_s": wall,
     });
+    let mut written = None;
     if let Some(dir) = &a.output.out {
         let mut out = OutputDir::new(dir)?;
         out.write_csv(
@@ -198,21 +203,24 @@ fn transient(a: TransientArgs) -> anyhow::Result<()> {
             }),
         )?;
         out.write_json("summary.json", &summary)?;
-        out.commit_with_provenance(Provenance::new(
+        written = Some(out.commit_with_provenance(Provenance::new(
             "fp transient",
             "fv-upwind-explicit-uniform",
             None,
             json!({"model": params, "options": opts}),
             wall,
-        ))?;
+        ))?);
     }
     if a.output.json {
         print_json(&summary)?;
-    } else if a.output.out.is_none() {
+    } else {
         println!(
             "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)",
             tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
         );
+        if let (Some(dir), Some(files)) = (&a.output.out, &written) {
+            super::print_written(dir, files);
+        }
     }
     Ok(())
 }

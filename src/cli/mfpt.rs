@@ -292,6 +292,7 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
         }
     };
     let wall = t0.elapsed().as_secs_f64();
+    let mut written = None;
     if let Some(mut dir) = out {
         dir.write_json("mfpt.json", &report)?;
         if let Some(p) = &prof {
@@ -303,21 +304,28 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
                 .collect::<Vec<_>>();
             dir.write_csv("profile.csv", &["v0", "tau_plus", "tau_minus", "tau"], rows)?;
         }
-        dir.commit_with_provenance(Provenance::new(
+        written = Some(dir.commit_with_provenance(Provenance::new(
             "mfpt",
             method_name(report.method),
             report.seed,
             &report,
             wall,
-        ))?;
+        ))?);
     }
     let v = serde_json::to_value(&report)?;
     if a.output.json {
         super::print_json(&v)?;
     } else {
         print_lines(&v);
+        print_written_opt(&a.output.out, &written);
     }
     Ok(())
+}
+
+fn print_written_opt(dir: &Option<std::path::PathBuf>, files: &Option<Vec<std::path::PathBuf>>) {
+    if let (Some(dir), Some(files)) = (dir, files) {
+        super::print_written(dir, files);
+    }
 }
 
 fn method_name(m: Method) -> &'static str {
@@ -344,11 +352,16 @@ fn scan_values(a: &ScanArgs) -> irtp::Result<Vec<f64>> {
     let k = a.points;
     Ok((0..k)
         .map(|i| {
+            // Endpoints exact; base-10 powers so that decades come out as typed (0.01, not 0.010000000000000004).
             let f = i as f64 / (k - 1) as f64;
-            if a.log {
-                (from.ln() + (to.ln() - from.ln()) * f).exp()
+            if i == 0 {
+                from
+            } else if i == k - 1 {
+                to
+            } else if a.log {
+                10f64.powf(from.log10() * (1.0 - f) + to.log10() * f)
             } else {
-                from + (to - from) * f
+                from * (1.0 - f) + to * f
             }
         })
         .collect())
@@ -459,15 +472,16 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         dt: (a.sim.method == Method::Euler).then_some(a.sim.dt),
         t_max: sim.then_some(a.sim.t_max),
     };
+    let mut written = None;
     if let Some(mut dir) = out {
         dir.write_csv("mfpt_scan.csv", &header, &rows)?;
-        dir.commit_with_provenance(Provenance::new(
+        written = Some(dir.commit_with_provenance(Provenance::new(
             "mfpt scan",
             method_name(a.sim.method),
             sim.then_some(a.output.seed),
             &params,
             wall,
-        ))?;
+        ))?);
     }
     if a.output.json {
         let objs: Vec<serde_json::Map<String, serde_json::Value>> = rows
@@ -481,12 +495,13 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
             })
             .collect();
         super::print_json(&objs)?;
-    } else if a.output.out.is_none() {
+    } else {
         println!("{}", header.join(","));
         for r in &rows {
             let s: Vec<String> = r.iter().map(|x| irtp::io::format_float(*x)).collect();
             println!("{}", s.join(","));
         }
+        print_written_opt(&a.output.out, &written);
     }
     Ok(())
 }
@@ -544,6 +559,7 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
         r_min,
         r_max,
     };
+    let mut written = None;
     if let Some(mut dir) = out {
         dir.write_json("optimum.json", &summary)?;
         dir.write_csv(
@@ -551,19 +567,20 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
             &["rate", "tau"],
             best.grid.iter().map(|&(r, t)| [r, t]),
         )?;
-        dir.commit_with_provenance(Provenance::new(
+        written = Some(dir.commit_with_provenance(Provenance::new(
             "mfpt optimize",
             "backward-box + golden-section",
             None,
             &summary,
             wall,
-        ))?;
+        ))?);
     }
     let v = serde_json::to_value(&summary)?;
     if a.output.json {
         super::print_json(&v)?;
     } else {
         print_lines(&v);
+        print_written_opt(&a.output.out, &written);
     }
     Ok(())
 }

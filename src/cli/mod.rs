@@ -11,6 +11,15 @@ pub mod simulate;
 
 use serde::Serialize;
 
+/// Text-mode note listing the files an output directory received.
+pub fn print_written(dir: &std::path::Path, files: &[std::path::PathBuf]) {
+    let names: Vec<String> = files
+        .iter()
+        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    println!("wrote {}: {}", dir.display(), names.join(", "));
+}
+
 /// Print a value as one JSON object on stdout.
 pub fn print_json<T: Serialize>(value: &T) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string(value)?);
