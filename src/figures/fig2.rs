@@ -23,8 +23,8 @@ use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
 use super::{curve_seed, fmt_num, Claim, FigureOutput, Options, Stage, Verdict, Which};
 use crate::error::Result;
 use crate::model::{Drag, DragLaw, Params};
-use crate::parallel::Progress;
-use crate::sim::{SimSpec, TimeGrid};
+use crate::parallel::{NoProgress, Progress};
+use crate::sim::{Observables, SimSpec, TimeGrid};
 use serde::Serialize;
 
 /// Which of the two density figures.
@@ -49,8 +49,18 @@ pub struct Spec {
     pub rates: Vec<f64>,
     /// Reset velocity.
     pub reset_velocity: f64,
-    /// Particles per curve.
+    /// Smallest number of particles per curve.
     pub particles: u64,
+    /// Target of equivalent independent samples per curve: a pilot run of
+    /// `pilot_particles` measures how many independent stationary samples
+    /// one particle's time average is worth, n₁ = Var_ss(v²) / (N SE²(<v²>)),
+    /// with Var_ss(v²) from the FP density; the curve then gets
+    /// clamp(1.2 target / n₁, particles, max_particles) particles.
+    pub target_equivalent: f64,
+    /// Particles of the sizing pilot run (own seed, not part of the result).
+    pub pilot_particles: u64,
+    /// Largest number of particles per curve.
+    pub max_particles: u64,
     /// Time averaging window [burn_in, t_max] per particle.
     pub burn_in: f64,
     /// End of each trajectory.
@@ -96,6 +106,9 @@ impl Spec {
             rates,
             reset_velocity: 0.0,
             particles: if quick { 1_000 } else { 20_000 },
+            target_equivalent: if quick { 2e4 } else { 1e6 },
+            pilot_particles: if quick { 200 } else { 2_000 },
+            max_particles: if quick { 2_000 } else { 200_000 },
             burn_in: 5.0,
             t_max: if quick { 10.0 } else { 30.0 },
             bins: if quick { 40 } else { 80 },
@@ -202,6 +215,27 @@ pub fn local_maxima(v: &[f64], p: &[f64], vu: f64) -> Vec<f64> {
     out
 }
 
+/// Seed index offset of the sizing pilots (disjoint from the curves' indices).
+const PILOT_SEED_OFFSET: u64 = 1 << 32;
+
+/// Stationary variance of v², <v⁴> - <v²>², from an FP density (cell masses).
+pub fn stationary_var_v2(fp: &compute::Density) -> f64 {
+    let (mut m2, mut m4) = (0.0, 0.0);
+    for ((&v, &p), &w) in fp.v.iter().zip(&fp.p).zip(&fp.widths) {
+        let v2 = v * v;
+        m2 += v2 * p * w;
+        m4 += v2 * v2 * p * w;
+    }
+    m4 - m2 * m2
+}
+
+/// Number of independent draws from P_s that would give the same standard
+/// error on <v²> as the simulation's time average: Var_ss(v²) / SE².
+pub fn equivalent_samples(var_v2: f64, obs: &Observables) -> f64 {
+    let se = obs.v2_time_avg.sem();
+    var_v2 / (se * se)
+}
+
 /// Edge class of an exponent a: P ~ (v_u - v)^a.
 pub fn edge_class(a: f64) -> &'static str {
     if a < 0.0 {
@@ -248,6 +282,8 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
     let mut edge_rows = Vec::new();
     let mut fp_vs_sim = Vec::new();
     let mut shape_rows = Vec::new();
+    let mut fewest_equivalent = f64::INFINITY;
+    let mut worst_v2_z: f64 = 0.0;
     let gp_edge_of = |p: &Params| p.drag().derivative(p.v_upper());
     for (li, &lambda) in spec.lambdas.iter().enumerate() {
         let label = ["(a)", "(b)", "(c)", "(d)"][li % 4];
@@ -265,15 +301,33 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
         for (ri, &r) in spec.rates.iter().enumerate() {
             let k = li * spec.rates.len() + ri;
             let params = p0.with_rate(r)?;
-            let sim_spec = SimSpec::new(
-                spec.particles,
-                grid.clone(),
-                spec.burn_in,
-                spec.bins,
-                curve_seed(opts.seed, which, k as u64),
-            )?;
-            let obs = compute::simulate(&params, &sim_spec, &Stage::new(progress, k, n_stages))?;
             let fp = compute::fp_stationary(&params, spec.fp_cells)?;
+            let var_v2 = stationary_var_v2(&fp);
+            let spec_for = |n: u64, index: u64| {
+                SimSpec::new(
+                    n,
+                    grid.clone(),
+                    spec.burn_in,
+                    spec.bins,
+                    curve_seed(opts.seed, which, index),
+                )
+            };
+            // Sizing pilot (its own seed stream; results discarded).
+            let pilot = compute::simulate(
+                &params,
+                &spec_for(spec.pilot_particles, PILOT_SEED_OFFSET + k as u64)?,
+                &NoProgress,
+            )?;
+            let n_per_particle = equivalent_samples(var_v2, &pilot) / spec.pilot_particles as f64;
+            // 20 % margin for the pilot's own sampling error.
+            let particles = ((1.2 * spec.target_equivalent / n_per_particle).ceil() as u64)
+                .clamp(spec.particles, spec.max_particles);
+            let obs = compute::simulate(
+                &params,
+                &spec_for(particles, k as u64)?,
+                &Stage::new(progress, k, n_stages),
+            )?;
+            let equivalent = equivalent_samples(var_v2, &obs);
             let dens = obs.density_rows();
             let color = if r == 0.0 {
                 Color::Black
@@ -355,7 +409,14 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
                 "edge_exponent": (lambda + r) / gpe - 1.0,
                 "interior_maxima": local_maxima(&fp.v, &fp.p, vu),
             }));
-            fp_vs_sim.push(serde_json::json!({"lambda": lambda, "r": r, "max_abs_z": zmax, "bins_compared": compared}));
+            fp_vs_sim.push(serde_json::json!({
+                "lambda": lambda, "r": r, "max_abs_z": zmax, "bins_compared": compared,
+                "particles": particles, "equivalent_samples": equivalent,
+                "v2_sim": obs.v2_time_avg.mean(), "v2_sim_err": obs.v2_time_avg.sem(), "v2_fp": fp.v2,
+            }));
+            fewest_equivalent = fewest_equivalent.min(equivalent);
+            worst_v2_z =
+                worst_v2_z.max(((obs.v2_time_avg.mean() - fp.v2) / obs.v2_time_avg.sem()).abs());
             if r > 0.0 {
                 // Cell width at v = 0 (the mesh is graded only near the edges).
                 let i0 = (0..fp.v.len())
@@ -506,10 +567,17 @@ pub fn run(medium: Medium, opts: &Options, progress: &dyn Progress) -> Result<Fi
         figure: fname,
         paper: "particle simulation and FP solution agree; FP at r = 0 reproduces the analytic density".into(),
         ours: format!(
-            "max |sim - FP|/SE over {} bins with |v| < 0.9 v_u and relative SE < 10 %: {:.2} (limit max(4, 1 % Bonferroni) = {:.2}); FP vs analytic r = 0 (|v| < 0.8 v_u): max relative difference {:.2e}",
-            bins_total, worst_sim_z, super::z_crit(bins_total), worst_r0_rel
+            "max |sim - FP|/SE over {} bins with |v| < 0.9 v_u and relative SE < 10 %: {:.2} (limit max(4, 1 % Bonferroni) = {:.2}); FP vs analytic r = 0 (|v| < 0.8 v_u): max relative difference {:.2e}; time-averaged <v²> vs FP Eq. 17 over {} curves: max |z| = {:.2}; every curve is worth at least {:.2e} independent stationary samples (Var_ss(v²)/SE²(<v²>))",
+            bins_total, worst_sim_z, super::z_crit(bins_total), worst_r0_rel, fp_vs_sim.len(), worst_v2_z, fewest_equivalent
         ),
-        verdict: if worst_sim_z < super::z_crit(bins_total) && worst_r0_rel < 0.01 { Verdict::Agrees } else { Verdict::Differs },
+        verdict: if worst_sim_z < super::z_crit(bins_total)
+            && worst_v2_z < super::z_crit(fp_vs_sim.len())
+            && worst_r0_rel < 0.01
+        {
+            Verdict::Agrees
+        } else {
+            Verdict::Differs
+        },
         values: serde_json::json!({"max_abs_z": worst_sim_z, "r0_max_rel": worst_r0_rel, "per_curve": fp_vs_sim}),
     });
     Ok(FigureOutput {
