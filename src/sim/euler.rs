@@ -420,7 +420,7 @@ fn run<F: Force, E: Events>(
     // order, chunks merged in index order): bit-identical for any thread
     // count and for any lane count. Inside a chunk, groups of LANES
     // particles run side by side; the remainder runs one at a time.
-    let n = spec.particles;
+    let (n, first) = (spec.particles, spec.first_particle);
     let chunks = n.div_ceil(parallel::CHUNK);
     let parts = parallel::map(
         chunks,
@@ -431,12 +431,12 @@ fn run<F: Force, E: Events>(
             let mut i = c * parallel::CHUNK;
             if lanes == LANES {
                 while i + LANES as u64 <= hi {
-                    kernel.group::<LANES, E>(i, &mut obs, &mut occ);
+                    kernel.group::<LANES, E>(first + i, &mut obs, &mut occ);
                     i += LANES as u64;
                 }
             }
             for i in i..hi {
-                kernel.group::<1, E>(i, &mut obs, &mut occ);
+                kernel.group::<1, E>(first + i, &mut obs, &mut occ);
             }
             obs
         },

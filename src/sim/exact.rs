@@ -466,7 +466,7 @@ pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Res
                 },
             )
         },
-        |i, (obs, sc)| sampler.particle(i, obs, sc),
+        |i, (obs, sc)| sampler.particle(spec.first_particle + i, obs, sc),
         |a, b| a.0.merge(&b.0),
         progress,
     );

@@ -161,6 +161,14 @@ pub struct SimSpec {
     pub bins: usize,
     /// Master seed.
     pub seed: u64,
+    /// Index of the first particle: a run simulates particles
+    /// `first_particle .. first_particle + particles`, each from its own
+    /// stream (seed, index), so disjoint shards of one run (e.g. SLURM array
+    /// tasks) merge with [`Observables::merge`] into the statistics of the
+    /// whole run (sums, counts and sums of squares add; only the rounding of
+    /// the sums depends on the split).
+    #[serde(default)]
+    pub first_particle: u64,
 }
 
 impl SimSpec {
@@ -196,7 +204,21 @@ impl SimSpec {
             burn_in,
             bins,
             seed,
+            first_particle: 0,
         })
+    }
+
+    /// The shard of particles `first .. first + particles` of the same run.
+    pub fn shard(mut self, first: u64) -> Result<Self> {
+        if first.checked_add(self.particles).is_none() {
+            return Err(Error::invalid(
+                "--first-particle",
+                first,
+                "first_particle + particles <= 2^64 - 1",
+            ));
+        }
+        self.first_particle = first;
+        Ok(self)
     }
 }
 
