@@ -136,10 +136,18 @@ fn mesh(p: &Problem, cells: usize) -> Mesh {
     let total = p.vt() - vl;
     let mut v = vec![vl];
     let segments = cuts.len() - 1;
+    let mut used = 0usize;
     for (i, w) in cuts.windows(2).enumerate() {
         let (a, b) = (w[0], w[1]);
-        let n = ((cells as f64 * (b - a) / total).round() as usize).max(2);
         let last = i + 1 == segments;
+        // Cells in proportion to length; the last segment takes the rounding
+        // remainder, so the mesh has exactly `cells` cells when it can.
+        let n = if last {
+            cells.saturating_sub(used).max(2)
+        } else {
+            ((cells as f64 * (b - a) / total).round() as usize).max(2)
+        };
+        used += n;
         // Near v_u the + drift Sigma - g(v) ≈ g'(v_u)(v_u - v) vanishes and
         // tau+ varies like ln(v_u - v): when v_t is close to v_u, up to half
         // of the last segment's cells are spaced uniformly in ln(v_u - v)
@@ -455,8 +463,14 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
         ..*opts
     };
     let coarse = profile(problem, &half)?.at_start();
+    // On the smallest meshes the halved mesh can be the same mesh: no estimate.
+    let error_estimate = if coarse.cells < fine.cells {
+        (fine.tau - coarse.tau).abs() / 3.0
+    } else {
+        f64::NAN
+    };
     Ok(BackwardSolution {
-        error_estimate: (fine.tau - coarse.tau).abs() / 3.0,
+        error_estimate,
         ..fine
     })
 }
