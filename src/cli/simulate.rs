@@ -244,6 +244,12 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
             "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
             s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
         );
+        if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
+            text += &format!(
+                "Eq. 18 fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
+                a.burn_in, s.t_max, d, e
+            );
+        }
         if let Some(p) = out_path {
             text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
         }

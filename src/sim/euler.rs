@@ -394,9 +394,11 @@ fn run<F: Force, E: Events>(
     progress: &dyn Progress,
 ) -> Observables {
     let (lo, hi) = params.bounds();
-    let mut template = Observables::new(spec, lo, hi);
+    let mut template = Observables::new(spec, params);
     let k = plan.record_steps.len();
+    // Recording happens at whole steps: the fit uses the times actually recorded.
     template.times = plan.record_times();
+    template.msd_weights = super::msd_fit_weights(&template.times, spec.burn_in, params);
     for a in [
         &mut template.v,
         &mut template.v2,
@@ -502,7 +504,7 @@ impl<F: Force> Kernel<'_, F> {
         }
         let mut ev: [E; L] = ev.map(|e| e.expect("initialised"));
         let (mut v, mut x) = ([0.0f64; L], [0.0f64; L]);
-        let (mut sv, mut sv2) = ([0.0f64; L], [0.0f64; L]);
+        let (mut sv, mut sv2, mut msd) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
         let mut k = 0usize;
         let mut next_rec = plan.record_steps[0];
         for n in 0..plan.steps {
@@ -510,6 +512,7 @@ impl<F: Force> Kernel<'_, F> {
             if n == next_rec {
                 for l in 0..L {
                     obs.record(k, v[l], x[l]);
+                    msd[l] += obs.msd_term(k, x[l]);
                 }
                 k += 1;
                 next_rec = plan.record_steps.get(k).copied().unwrap_or(u64::MAX);
@@ -540,12 +543,13 @@ impl<F: Force> Kernel<'_, F> {
         if k < plan.record_steps.len() {
             for l in 0..L {
                 obs.record(k, v[l], x[l]);
+                msd[l] += obs.msd_term(k, x[l]);
             }
         }
         let w = (plan.steps - plan.burn_in_step) as f64;
         for l in 0..L {
             let o = &mut occ[l * self.bins..(l + 1) * self.bins];
-            obs.finish_particle(sv[l] / w, sv2[l] / w, o, w, v[l]);
+            obs.finish_particle(sv[l] / w, sv2[l] / w, o, w, v[l], msd[l]);
         }
         obs.steps += L as u64 * plan.steps;
     }

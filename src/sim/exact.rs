@@ -365,6 +365,7 @@ impl Sampler {
         let mut k = 0usize;
         let (mut int_v, mut int_v2) = (0.0f64, 0.0f64);
         let mut events = 0u64;
+        let mut msd = 0.0f64;
         // Ψ(v) of the current table at the segment start, when known (after a
         // reset it is the precomputed Ψ(v_r)).
         let mut psi_start: Option<[f64; 2]> = None;
@@ -382,6 +383,7 @@ impl Sampler {
                 let vk = flow.velocity_guided(v, dt, guide);
                 let xk = x + vs * dt - table.deficits(v, vk).0;
                 obs.record(k, vk, xk);
+                msd += obs.msd_term(k, xk);
                 k += 1;
             }
             let dt = t_end - t;
@@ -430,7 +432,7 @@ impl Sampler {
             }
         }
         let window = self.t_max - self.burn_in;
-        obs.finish_particle(int_v / window, int_v2 / window, &mut sc.occ, window, v);
+        obs.finish_particle(int_v / window, int_v2 / window, &mut sc.occ, window, v, msd);
         obs.steps += events;
     }
 }
@@ -452,8 +454,7 @@ fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
 /// Bit-identical for any thread count.
 pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Result<Observables> {
     let sampler = Sampler::new(params, spec)?;
-    let (lo, hi) = params.bounds();
-    let template = Observables::new(spec, lo, hi);
+    let template = Observables::new(spec, params);
     let b = spec.bins;
     let (obs, _) = parallel::reduce(
         spec.particles,

@@ -222,6 +222,34 @@ impl SimSpec {
     }
 }
 
+/// Least-squares weights w_k with Σ w_k y_k = (slope of y against t over the
+/// times in [burn_in, t_max]) / 2; all zero if fewer than two such times, or
+/// if v_r ≠ 0: then <x> ≠ 0 and <x²> carries the drift, so no Eq. 18 fit
+/// (with v_r = 0 the process is symmetric under (x, v, η) → -(x, v, η) and <x> = 0 exactly).
+pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> Vec<f64> {
+    let inside = |t: f64| t >= burn_in;
+    let n = times.iter().filter(|&&t| inside(t)).count();
+    if n < 2 || params.reset_velocity() != 0.0 {
+        return vec![0.0; times.len()];
+    }
+    let mean = times.iter().filter(|&&t| inside(t)).sum::<f64>() / n as f64;
+    let sxx: f64 = times
+        .iter()
+        .filter(|&&t| inside(t))
+        .map(|&t| (t - mean) * (t - mean))
+        .sum();
+    times
+        .iter()
+        .map(|&t| {
+            if inside(t) {
+                (t - mean) / (2.0 * sxx)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 /// Mergeable accumulator of everything a simulation measures.
 ///
 /// Per-particle quantities (time averages, occupation fractions) are pushed
@@ -254,11 +282,22 @@ pub struct Observables {
     pub density_final: Vec<MeanAcc>,
     /// Work done: Euler steps or exact-sampler events, summed over particles.
     pub steps: u64,
+    /// Paper Eq. 18 per particle: the least-squares slope of x(t_k)² against
+    /// t_k over the grid times in [burn_in, t_max], halved. Its mean is the
+    /// MSD-fit D of <x²> = 2 D t + c on those times (the fit is linear in the
+    /// data), its across-particle SE the fit's honest standard error. Empty
+    /// when the window holds fewer than two grid times.
+    #[serde(default)]
+    pub msd_fit_d: MeanAcc,
+    /// Weights of that fit per grid time (zero outside the window).
+    #[serde(default)]
+    pub msd_weights: Vec<f64>,
 }
 
 impl Observables {
-    /// Empty accumulator for a spec on the velocity interval (v_lo, v_hi).
-    pub fn new(spec: &SimSpec, v_lo: f64, v_hi: f64) -> Self {
+    /// Empty accumulator for a spec and a model (histogram on (v_l, v_u)).
+    pub fn new(spec: &SimSpec, params: &Params) -> Self {
+        let (v_lo, v_hi) = params.bounds();
         let k = spec.grid.len();
         Observables {
             times: spec.grid.times().to_vec(),
@@ -273,7 +312,16 @@ impl Observables {
             density_time: vec![MeanAcc::new(); spec.bins],
             density_final: vec![MeanAcc::new(); spec.bins],
             steps: 0,
+            msd_fit_d: MeanAcc::new(),
+            msd_weights: msd_fit_weights(spec.grid.times(), spec.burn_in, params),
         }
+    }
+
+    /// Contribution of x(t_k) to the particle's Eq. 18 slope (see
+    /// [`Observables::msd_fit_d`]); samplers sum it over k per particle.
+    #[inline]
+    pub fn msd_term(&self, k: usize, x: f64) -> f64 {
+        self.msd_weights[k] * x * x
     }
 
     /// Bin width.
@@ -301,6 +349,7 @@ impl Observables {
     /// Add one particle's stationary-window results: time averages of v and v²,
     /// `occupation[b]` = time spent in bin b during the window (cleared here),
     /// `window` = window length, `v_final` = velocity at t_max.
+    /// `msd_d` = the particle's sum of [`Observables::msd_term`].
     pub fn finish_particle(
         &mut self,
         v_avg: f64,
@@ -308,9 +357,13 @@ impl Observables {
         occupation: &mut [f64],
         window: f64,
         v_final: f64,
+        msd_d: f64,
     ) {
         self.v_time_avg.push(v_avg);
         self.v2_time_avg.push(v2_avg);
+        if self.msd_weights.iter().any(|&w| w != 0.0) {
+            self.msd_fit_d.push(msd_d);
+        }
         let w = self.bin_width();
         let final_bin = self.bin_of(v_final);
         for (b, occ) in occupation.iter_mut().enumerate() {
@@ -331,6 +384,7 @@ impl Observables {
         merge_all(&mut self.density_time, &o.density_time);
         merge_all(&mut self.density_final, &o.density_final);
         self.steps += o.steps;
+        self.msd_fit_d.merge(&o.msd_fit_d);
     }
 
     /// Number of particles accumulated.
@@ -409,6 +463,8 @@ impl Observables {
             t_max: self.times[last],
             particles: self.particles(),
             steps: self.steps,
+            d_eff_msd: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.mean()),
+            d_eff_msd_err: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.sem()),
         }
     }
 }
@@ -438,4 +494,11 @@ pub struct SimSummary {
     pub particles: u64,
     /// Euler steps or exact events, summed over particles.
     pub steps: u64,
+    /// D_eff by the paper's Eq. 18 fit, <x²> = 2 D t + c, over the grid
+    /// times in [burn_in, t_max] (None with fewer than two such times). Only
+    /// meaningful when burn_in is many correlation times; the exact value is
+    /// `irtp fp stationary`'s `d_eff`.
+    pub d_eff_msd: Option<f64>,
+    /// Its standard error (across particles).
+    pub d_eff_msd_err: Option<f64>,
 }
