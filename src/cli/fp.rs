@@ -138,9 +138,7 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
             s.mesh.name(),
             if s.extrapolated { ", extrapolated" } else { "" }
         );
-        if let (Some(dir), Some(files)) = (&a.output.out, &written) {
-            super::print_written(dir, files);
-        }
+        super::print_written(&a.output.out, &written);
     }
     Ok(())
 }
@@ -218,9 +216,7 @@ fn transient(a: TransientArgs) -> anyhow::Result<()> {
             "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)",
             tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
         );
-        if let (Some(dir), Some(files)) = (&a.output.out, &written) {
-            super::print_written(dir, files);
-        }
+        super::print_written(&a.output.out, &written);
     }
     Ok(())
 }

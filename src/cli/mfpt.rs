@@ -317,15 +317,9 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
         super::print_json(&v)?;
     } else {
         print_lines(&v);
-        print_written_opt(&a.output.out, &written);
+        super::print_written(&a.output.out, &written);
     }
     Ok(())
-}
-
-fn print_written_opt(dir: &Option<std::path::PathBuf>, files: &Option<Vec<std::path::PathBuf>>) {
-    if let (Some(dir), Some(files)) = (dir, files) {
-        super::print_written(dir, files);
-    }
 }
 
 fn method_name(m: Method) -> &'static str {
@@ -501,7 +495,7 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
             let s: Vec<String> = r.iter().map(|x| irtp::io::format_float(*x)).collect();
             println!("{}", s.join(","));
         }
-        print_written_opt(&a.output.out, &written);
+        super::print_written(&a.output.out, &written);
     }
     Ok(())
 }
@@ -580,7 +574,7 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
         super::print_json(&v)?;
     } else {
         print_lines(&v);
-        print_written_opt(&a.output.out, &written);
+        super::print_written(&a.output.out, &written);
     }
     Ok(())
 }

@@ -11,8 +11,12 @@ pub mod simulate;
 
 use serde::Serialize;
 
-/// Text-mode note listing the files an output directory received.
-pub fn print_written(dir: &std::path::Path, files: &[std::path::PathBuf]) {
+/// Text-mode note listing the files an output directory received (nothing
+/// when no `--out` was given).
+pub fn print_written(dir: &Option<std::path::PathBuf>, files: &Option<Vec<std::path::PathBuf>>) {
+    let (Some(dir), Some(files)) = (dir, files) else {
+        return;
+    };
     let names: Vec<String> = files
         .iter()
         .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
