@@ -285,7 +285,7 @@ fn state_densities_near_the_edge() {
 
 #[test]
 fn paper_closed_forms_are_correct_and_wrong_sign_fails() {
-    // Eqs. Neqn17 / apeqn18a equal the derived density up to normalisation...
+    // Eqs. (34) / (35) equal the derived density up to normalisation...
     for (drag, s, l) in CASES {
         let d = R0Density::new(drag, s, l).unwrap();
         let vu = d.bounds().1;

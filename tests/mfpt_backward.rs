@@ -51,7 +51,7 @@ fn gauss<F: Fn(f64) -> f64>(f: F, a: f64, b: f64, panels: usize) -> f64 {
 /// equations gives Sigma D' - g T' = -2 and Sigma T' - g D' = 2 lambda D, hence
 /// D = [(Sigma² - g²) T' + 2g] / (2 lambda Sigma) and
 /// (Sigma² - g²) T'' - 2 g (lambda + g') T' = -2 (2 lambda + g')
-/// (the paper's Eq. neqn10 at r = 0 has the sign of g flipped). For g = v:
+/// (the paper's Eq. (29) at r = 0 has the sign of g flipped). For g = v:
 /// T'(v) = -(4 lambda + 2) (Sigma² - v²)^{-(lambda+1)} ∫_{-Sigma}^v (Sigma² - u²)^lambda du
 /// (the regular solution at v_l = -Sigma), and tau+(v_t) = 0 means
 /// D(v_t) = -T(v_t). Returns (tau, tau+, tau-) at v0.
@@ -268,12 +268,12 @@ fn rejects_bad_problems() {
     assert!(serde_json::from_str::<Problem>(&s.replace("0.5", "1.5")).is_err());
 }
 
-/// The closed equation for tau = (tau+ + tau-)/2 (paper Eq. neqn10), derived
+/// The closed equation for tau = (tau+ + tau-)/2 (paper Eq. (29)), derived
 /// from the generator's drifts ±Sigma - g: with u = 1 - r (tau - tau(v_r)),
 /// (Sigma² - g²) tau'' - 2 g (lambda + r + g') tau' = -(2 lambda + r + g') u.
 /// The paper prints (Sigma² - g²) tau'' + 2 g (lambda + r - g') tau'
 /// = (g' - 2 lambda - r) u, i.e. the same with g → -g (consistent with its
-/// sign-flipped Eqs. neqn26-27). The computed profile satisfies the former
+/// sign-flipped Eqs. (26)-(27)). The computed profile satisfies the former
 /// to discretisation accuracy and violates the latter.
 #[test]
 fn closed_tau_equation_with_correct_signs() {

@@ -90,7 +90,7 @@ fn backward_equations_match_euler_simulation() {
     }
 }
 
-/// The paper's Eqs. (neqn26-27) print the drifts as g(v) ± Sigma. Solved as
+/// The paper's Eqs. (26)-(27) print the drifts as g(v) ± Sigma. Solved as
 /// printed (with the paper's boundary conditions) they miss the simulation
 /// by far more than 10 standard errors, while the generator's ±Sigma - g(v)
 /// agrees (previous test).

@@ -1,4 +1,4 @@
-//! The paper's Eq. 18 estimate of D_eff (fit <x²> = 2 D t + c on the grid
+//! The paper's Eq. (36) estimate of D_eff (fit <x²> = 2 D t + c on the grid
 //! times of [burn_in, t_max]) carried per particle by both samplers
 //! (`Observables::msd_fit_d`, `SimSummary::d_eff_msd`): equal to the fit of
 //! the ensemble <x²>, and within 4 standard errors of the exact Newtonian D_eff.
@@ -48,7 +48,7 @@ fn per_particle_fit_is_the_fit_of_the_ensemble_msd() {
 
 #[test]
 fn no_fit_without_symmetry_or_window() {
-    // v_r != 0: <x> drifts, an Eq. 18 fit of <x²> would include the drift.
+    // v_r != 0: <x> drifts, an Eq. (36) fit of <x²> would include the drift.
     let p = models::medium(DragLaw::Tan, 0.9, 2.0, 0.2);
     let spec = SimSpec::new(50, TimeGrid::linear(6.0, 13).unwrap(), 2.0, 5, 3).unwrap();
     let s = sim::simulate(&p, &spec, Method::Exact, &NoProgress)

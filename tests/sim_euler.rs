@@ -1,4 +1,4 @@
-//! Euler particle simulation (paper Eqs. 14-16): exactness against the
+//! Euler particle simulation (paper Eqs. (30)-(32)): exactness against the
 //! exactly solvable Euler chain for linear drag, convergence to the continuum
 //! formulas, equivalence of the two event samplers, reproducibility.
 
@@ -293,7 +293,7 @@ fn lanes_do_not_change_results() {
 /// tanh Sigma = 0.6 lambda = 0.85 (paper Fig. 3b, two maxima) and tan Sigma = 3
 /// lambda = 15 (Fig. 2c, cusp-like zero at the edges). 8000 particles,
 /// t_max = 15, window [5, 15], 20 bins, dt = 1e-3. Reference: the exact
-/// [`R0Density`] (paper Eqs. Neqn17, apeqn18a; its bin masses agree with an
+/// [`R0Density`] (paper Eqs. (34)-(35); its bin masses agree with an
 /// independent midpoint-rule integration of the closed forms to 1.2e-6
 /// relative, <v²> to 2e-7).
 /// - Ensemble snapshot at t_max (independent particles, multinomial counts;
