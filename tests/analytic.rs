@@ -2,9 +2,12 @@
 //! quadrature, the linear-drag Beta law, the stationary forward equations,
 //! agreement with the paper's closed forms, and the regime classification.
 
+mod common;
+
+use common::models;
 use irtp::analytic::linear;
 use irtp::analytic::r0::{paper_formula, regime, EdgeBehaviour, ExtremumKind, R0Density};
-use irtp::{Drag, DragLaw, Params};
+use irtp::{Drag, DragLaw};
 
 /// The paper's parameter sets (Figs. 2, 3) plus extra singular/peaked cases.
 const CASES: [(DragLaw, f64, f64); 12] = [
@@ -204,7 +207,7 @@ fn linear_drag_is_the_beta_law() {
     // Moments <v^{2j}> = Sigma^{2j} Π_{i<j} (1/2 + i)/(lambda + 1/2 + i); <v²> = linear::v2 at r = 0.
     for l in [0.05, 0.3, 1.0, 2.5, 40.0] {
         let d = R0Density::new(DragLaw::Linear, s, l).unwrap();
-        let p = Params::new(DragLaw::Linear, s, l, 0.0, 0.0).unwrap();
+        let p = models::linear(s, l, 0.0, 0.0);
         let v2 = linear::v2(&p).unwrap();
         assert!(
             ((d.v2() - v2) / v2).abs() < 1e-13,
@@ -282,7 +285,7 @@ fn state_densities_near_the_edge() {
 
 #[test]
 fn paper_closed_forms_are_correct_and_wrong_sign_fails() {
-    // Eqs. Neqn17 / apeqn18a equal the derived density up to normalisation...
+    // Eqs. (34) / (35) equal the derived density up to normalisation...
     for (drag, s, l) in CASES {
         let d = R0Density::new(drag, s, l).unwrap();
         let vu = d.bounds().1;
@@ -447,7 +450,7 @@ fn validation() {
     assert!(bad(DragLaw::Tan, 3.0, 0.0).contains("--lambda"));
     assert!(bad(DragLaw::Tan, 3.0, f64::NAN).contains("--lambda"));
     assert!(bad(DragLaw::Tan, 3.0, f64::INFINITY).contains("--lambda"));
-    let p = Params::new(DragLaw::Tan, 3.0, 1.0, 2.0, 0.0).unwrap();
+    let p = models::tan(1.0, 2.0);
     let e = R0Density::from_params(&p).unwrap_err();
     assert!(e.is_input_error() && e.to_string().contains("--rate"));
     let d = R0Density::from_params(&p.with_rate(0.0).unwrap()).unwrap();

@@ -8,6 +8,9 @@
 //! only the velocity must forget v(0) = 0, at rate >= min g' + r; a burn-in
 //! of 15/(min g' + r) leaves an initial-condition bias below e^{-15}.
 
+mod common;
+
+use common::models;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::model::Drag;
 use irtp::parallel::NoProgress;
@@ -65,7 +68,7 @@ fn stationary_v2_matches_fokker_planck() {
 /// times (batch standard error, as in `exact_sim.rs`) vs the FP value.
 #[test]
 fn d_eff_matches_fokker_planck() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.0).unwrap();
+    let p = models::tan(0.9, 2.0);
     let fp = stationary(&p, &StationaryOptions::default()).unwrap();
     // Position variance is stationary in its increments once both the
     // velocity (1/(1+r)) and the noise (1/(2 lambda)) have relaxed.

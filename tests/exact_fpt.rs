@@ -3,6 +3,9 @@
 //! (`irtp::mfpt::euler_first_passage`) shrinking linearly towards the exact
 //! value.
 
+mod common;
+
+use common::models;
 use irtp::mfpt::{euler_first_passage, Problem};
 use irtp::model::Drag;
 use irtp::parallel::NoProgress;
@@ -40,7 +43,7 @@ fn deterministic_limit_is_flow_time() {
 /// the Euler bias is O(dt) and extrapolates to the exact value.
 #[test]
 fn euler_bias_is_linear_in_dt_towards_exact() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.0).unwrap();
+    let p = models::tan(0.9, 2.0);
     let problem = Problem::new(p, 0.0, 0.8).unwrap();
     let n = 600_000;
     let exact = exact_first_passage(&problem, f64::INFINITY, n, 5, &NoProgress)

@@ -5,6 +5,9 @@
 //! `exact_first_passage` (the driver behind `irtp mfpt --method exact`);
 //! plus a downward problem (mirror frame, swapped noise states).
 
+mod common;
+
+use common::models;
 use irtp::mfpt::{solve, BackwardOptions, Problem};
 use irtp::parallel::NoProgress;
 use irtp::sim::exact;
@@ -51,7 +54,7 @@ fn exact_mfpt_matches_backward_equations() {
 
 #[test]
 fn exact_mfpt_downward_matches_backward_equations() {
-    let p = Params::new(DragLaw::Tanh, 0.6, 1.2, 0.5, 0.0).unwrap();
+    let p = models::tanh(1.2, 0.5);
     let prob = Problem::new(p, 0.3, -0.5).unwrap();
     let ode = solve(&prob, &BackwardOptions::default()).unwrap();
     let s = exact::exact_first_passage(&prob, f64::INFINITY, 10_000, 77, &NoProgress)

@@ -3,6 +3,9 @@
 //! per check); the sampler has no time step, so there is no discretisation
 //! bias to allow for.
 
+mod common;
+
+use common::models;
 use irtp::analytic::linear;
 use irtp::model::Drag;
 use irtp::parallel::NoProgress;
@@ -10,10 +13,6 @@ use irtp::sim::exact;
 use irtp::sim::{SimSpec, TimeGrid};
 use irtp::stats::MeanAcc;
 use irtp::{DragLaw, Params};
-
-fn lin(sigma: f64, lambda: f64, r: f64, vr: f64) -> Params {
-    Params::new(DragLaw::Linear, sigma, lambda, r, vr).unwrap()
-}
 
 fn z(est: f64, se: f64, exact: f64) -> f64 {
     (est - exact) / se
@@ -34,7 +33,7 @@ fn linear_stationary_moments() {
     .iter()
     .enumerate()
     {
-        let p = lin(1.0, lambda, r, vr);
+        let p = models::linear(1.0, lambda, r, vr);
         let relax = 1.0 / (1.0f64 + r).min(2.0 * lambda);
         let burn = 15.0 * relax;
         let t_max = burn + 20.0 * relax.max(0.2);
@@ -80,7 +79,7 @@ fn linear_effective_diffusion() {
         .iter()
         .enumerate()
     {
-        let p = lin(1.0, lambda, r, vr);
+        let p = models::linear(1.0, lambda, r, vr);
         let relax = 1.0 / (1.0f64 + r).min(2.0 * lambda);
         let t1 = 20.0 * relax;
         let t2 = t1 + 40.0 * relax;
@@ -114,7 +113,7 @@ fn linear_effective_diffusion() {
 /// Bit-identical results for rayon pools of 1 and 2 threads.
 #[test]
 fn identical_across_thread_counts() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.1).unwrap();
+    let p = models::medium(DragLaw::Tan, 0.9, 2.0, 0.1);
     let spec = SimSpec::new(700, TimeGrid::linear(5.0, 11).unwrap(), 1.0, 30, 7).unwrap();
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
@@ -175,7 +174,7 @@ fn occupation_density_matches_final_histogram() {
 #[test]
 fn matches_richardson_extrapolated_euler() {
     use irtp::sim::euler;
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 10.0, 0.0).unwrap();
+    let p = models::tan(0.5, 10.0);
     let spec = |seed| {
         SimSpec::new(
             3000,
@@ -254,7 +253,7 @@ fn extreme_parameters_stay_finite() {
 #[test]
 fn method_dispatch() {
     use irtp::sim::{simulate, Method};
-    let p = Params::new(DragLaw::Tanh, 0.6, 0.85, 1.0, 0.0).unwrap();
+    let p = models::tanh(0.85, 1.0);
     let spec = SimSpec::new(50, TimeGrid::linear(3.0, 4).unwrap(), 1.0, 8, 2).unwrap();
     let a = simulate(&p, &spec, Method::Exact, &NoProgress).unwrap();
     let b = exact::simulate(&p, &spec, &NoProgress).unwrap();

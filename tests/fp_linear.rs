@@ -2,6 +2,9 @@
 //! `analytic::linear`, for r >= 0 and v_r != 0, including the singular
 //! r = 0 edge (P ∝ (Σ² - v²)^(λ-1), λ < 1).
 
+mod common;
+
+use common::models;
 use irtp::analytic::linear;
 use irtp::fp::{stationary, Mesh, StationaryOptions};
 use irtp::{DragLaw, Params};
@@ -10,21 +13,10 @@ fn rel(a: f64, b: f64) -> f64 {
     (a / b - 1.0).abs()
 }
 
-const CASES: [(f64, f64, f64, f64); 7] = [
-    // (sigma, lambda, r, v_r)
-    (1.0, 0.3, 0.0, 0.0), // singular edges, a = -0.7
-    (1.0, 0.3, 0.5, 0.0), // still singular, a = -0.2
-    (1.0, 0.3, 2.0, 0.0),
-    (1.0, 0.3, 10.0, 0.0),
-    (2.0, 1.5, 0.0, 0.0),
-    (1.0, 0.3, 2.0, 0.3),  // v_r != 0
-    (1.5, 2.0, 1.0, -0.2), // v_r != 0, bounded density
-];
-
 #[test]
 fn moments_and_d_eff_match_closed_forms_to_1e6() {
-    for (s, l, r, vr) in CASES {
-        let p = Params::new(DragLaw::Linear, s, l, r, vr).unwrap();
+    for (s, l, r, vr) in models::LINEAR_CASES {
+        let p = models::linear(s, l, r, vr);
         let st = stationary(&p, &StationaryOptions::default()).unwrap();
         let (v1, v2, d) = (
             linear::v_mean(&p).unwrap(),
@@ -48,8 +40,8 @@ fn moments_and_d_eff_match_closed_forms_to_1e6() {
 
 #[test]
 fn density_is_normalised_and_nonnegative() {
-    for (s, l, r, vr) in CASES {
-        let p = Params::new(DragLaw::Linear, s, l, r, vr).unwrap();
+    for (s, l, r, vr) in models::LINEAR_CASES {
+        let p = models::linear(s, l, r, vr);
         for mesh in [Mesh::Graded, Mesh::Uniform] {
             let st = stationary(
                 &p,
@@ -74,7 +66,7 @@ fn density_is_normalised_and_nonnegative() {
 /// ones like N^-2: measured log-log slopes over N = 2000..32000.
 #[test]
 fn first_order_raw_second_order_extrapolated_for_d_eff() {
-    let p = Params::new(DragLaw::Linear, 1.0, 0.3, 0.0, 0.0).unwrap();
+    let p = models::linear(1.0, 0.3, 0.0, 0.0);
     let exact = linear::d_eff(&p).unwrap();
     let ns = [2000usize, 4000, 8000, 16000, 32000];
     let (mut raw, mut ex) = (Vec::new(), Vec::new());
@@ -105,19 +97,19 @@ fn first_order_raw_second_order_extrapolated_for_d_eff() {
 
 #[test]
 fn lambda_zero_with_reset_has_infinite_d_eff_and_zero_lambda_without_reset_is_rejected() {
-    let p = Params::new(DragLaw::Linear, 1.0, 0.0, 1.0, 0.0).unwrap();
+    let p = models::linear(1.0, 0.0, 1.0, 0.0);
     let st = stationary(&p, &StationaryOptions::default()).unwrap();
     assert!(st.d_eff.is_infinite());
     // Each state relaxes to ±Σ at rate 1 and is reset to 0 at rate r:
     // <v²> = Σ² * 2/((1+r)(2+r)) = 1/3 for r = 1.
     assert!(rel(st.v2, 1.0 / 3.0) < 1e-6, "{}", st.v2);
-    let p0 = Params::new(DragLaw::Linear, 1.0, 0.0, 0.0, 0.0).unwrap();
+    let p0 = models::linear(1.0, 0.0, 0.0, 0.0);
     assert!(stationary(&p0, &StationaryOptions::default()).is_err());
 }
 
 #[test]
 fn bad_options_are_rejected() {
-    let p = Params::new(DragLaw::Tan, 3.0, 1.0, 1.0, 0.0).unwrap();
+    let p = models::tan(1.0, 1.0);
     for (cells, extrapolate) in [(0, false), (15, false), (101, true)] {
         let e = stationary(
             &p,

@@ -3,6 +3,9 @@
 //! lambda = 0.5) and tanh (Sigma = 0.6, regimes a-d), and the convergence
 //! order of <v²> on the graded mesh at a singular edge.
 
+mod common;
+
+use common::models;
 use irtp::analytic::r0::R0Density;
 use irtp::fp::{stationary, Mesh, Stationary, StationaryOptions};
 use irtp::{DragLaw, Params};
@@ -100,7 +103,7 @@ fn distances(st: &Stationary, d: &R0Density) -> (f64, f64) {
 /// <v²> on the graded mesh fall like N^-1 (raw) and N^-2 (extrapolated), monotonically.
 #[test]
 fn convergence_order_at_singular_edge() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 0.0, 0.0).unwrap();
+    let p = models::tan(0.5, 0.0);
     let exact = R0Density::from_params(&p).unwrap().v2();
     let ns = [2000usize, 4000, 8000, 16000, 32000];
     let (mut raw, mut ex) = (Vec::new(), Vec::new());
@@ -136,7 +139,7 @@ fn convergence_order_at_singular_edge() {
 /// sits. The graded mesh restores first order.
 #[test]
 fn uniform_mesh_density_converges_slowly_at_singular_edge() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 0.0, 0.0).unwrap();
+    let p = models::tan(0.5, 0.0);
     let exact = R0Density::from_params(&p).unwrap();
     let l1 = |mesh: Mesh, cells: usize| {
         let st = stationary(

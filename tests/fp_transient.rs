@@ -1,13 +1,15 @@
 //! Explicit upwind time stepping (the paper's way): conservation, positivity,
 //! exact Newtonian <v²>(t), and approach to the direct stationary solve.
 
+mod common;
+
+use common::models;
 use irtp::fp::{stationary, transient, Mesh, StationaryOptions, TransientOptions};
-use irtp::{DragLaw, Params};
 
 #[test]
 fn mass_conserved_every_step_and_density_nonnegative_at_paper_resolution() {
     // Paper Sec. 3: tan, Sigma = 3, 2000 cells; here t_max = 5 to stay fast.
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
+    let p = models::tan(0.5, 2.0);
     let tr = transient(
         &p,
         &TransientOptions {
@@ -42,7 +44,7 @@ fn mass_conserved_every_step_and_density_nonnegative_at_paper_resolution() {
 #[test]
 fn newtonian_v2_of_t_converges_at_first_order() {
     let (s, l, r) = (1.0, 1.0, 0.5);
-    let p = Params::new(DragLaw::Linear, s, l, r, 0.0).unwrap();
+    let p = models::linear(s, l, r, 0.0);
     let (c, k) = (1.0 + 2.0 * l + r, 2.0 + r);
     let exact = |t: f64| {
         2.0 * s * s / c * ((1.0 - (-k * t).exp()) / k - ((-c * t).exp() - (-k * t).exp()) / (k - c))
@@ -84,7 +86,7 @@ fn newtonian_v2_of_t_converges_at_first_order() {
 
 #[test]
 fn long_time_limit_is_the_direct_stationary_solution() {
-    let p = Params::new(DragLaw::Tanh, 0.6, 0.85, 1.0, 0.0).unwrap();
+    let p = models::tanh(0.85, 1.0);
     let n = 500;
     let tr = transient(
         &p,
@@ -128,7 +130,7 @@ fn long_time_limit_is_the_direct_stationary_solution() {
 
 #[test]
 fn bad_options_are_rejected() {
-    let p = Params::new(DragLaw::Tan, 3.0, 1.0, 1.0, 0.0).unwrap();
+    let p = models::tan(1.0, 1.0);
     let base = TransientOptions::default();
     let cases: Vec<(TransientOptions, &str)> = vec![
         (

@@ -1,5 +1,8 @@
 //! Backward-equation MFPT solver against exact answers.
 
+mod common;
+
+use common::models;
 use irtp::mfpt::backward::{fixed_point_upwind, profile, rate_derivative_at_zero};
 use irtp::mfpt::{optimize_rate, solve, BackwardOptions, OptimizeOptions, Problem};
 use irtp::parallel::NoProgress;
@@ -48,7 +51,7 @@ fn gauss<F: Fn(f64) -> f64>(f: F, a: f64, b: f64, panels: usize) -> f64 {
 /// equations gives Sigma D' - g T' = -2 and Sigma T' - g D' = 2 lambda D, hence
 /// D = [(Sigma² - g²) T' + 2g] / (2 lambda Sigma) and
 /// (Sigma² - g²) T'' - 2 g (lambda + g') T' = -2 (2 lambda + g')
-/// (the paper's Eq. neqn10 at r = 0 has the sign of g flipped). For g = v:
+/// (the paper's Eq. (29) at r = 0 has the sign of g flipped). For g = v:
 /// T'(v) = -(4 lambda + 2) (Sigma² - v²)^{-(lambda+1)} ∫_{-Sigma}^v (Sigma² - u²)^lambda du
 /// (the regular solution at v_l = -Sigma), and tau+(v_t) = 0 means
 /// D(v_t) = -T(v_t). Returns (tau, tau+, tau-) at v0.
@@ -95,12 +98,12 @@ fn linear_r0_matches_exact_quadrature() {
 #[test]
 fn second_order_grid_convergence() {
     for p in [
-        problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 0.5),
-        problem(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0, -0.249, 0.5),
+        models::fig7(DragLaw::Tan, 0.5, 2.0, 0.5),
+        models::fig7(DragLaw::Tanh, 0.5, 0.2, 0.5),
         problem(DragLaw::Linear, 1.0, 0.8, 3.0, 0.1, -0.5, 0.7),
         // Targets close to v_u (graded mesh): tan v_u = 1.2490458, tanh 0.6931472.
-        problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 1.2489),
-        problem(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0, -0.249, 0.693),
+        models::fig7(DragLaw::Tan, 0.5, 2.0, 1.2489),
+        models::fig7(DragLaw::Tanh, 0.5, 0.2, 0.693),
     ] {
         let (a, b, c) = (tau(&p, 500), tau(&p, 1000), tau(&p, 2000));
         let order = ((a - b) / (b - c)).abs().log2();
@@ -117,7 +120,7 @@ fn second_order_grid_convergence() {
 /// the same answer at first order.
 #[test]
 fn fixed_point_iteration_agrees_at_first_order() {
-    let p = problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 0.5);
+    let p = models::fig7(DragLaw::Tan, 0.5, 2.0, 0.5);
     let exact = tau(&p, 40_000);
     let e1 = fixed_point_upwind(&p, 1000, 1e-12, 100_000).unwrap().0.tau - exact;
     let e2 = fixed_point_upwind(&p, 2000, 1e-12, 100_000).unwrap().0.tau - exact;
@@ -202,7 +205,7 @@ fn paper_claims_optimal_rate() {
         backward: BackwardOptions::with_cells(4000),
         ..Default::default()
     };
-    let p = problem(DragLaw::Tan, 3.0, 0.5, 0.0, 0.0, -0.249, 0.5);
+    let p = models::fig7(DragLaw::Tan, 0.5, 0.0, 0.5);
     let o = optimize_rate(&p, &opts, &NoProgress).unwrap();
     assert!(o.interior && !o.at_upper_bound, "{o:?}");
     assert!(o.dtau_dr_r0 < 0.0);
@@ -218,7 +221,7 @@ fn paper_claims_optimal_rate() {
     // from 4e3 to 2e5 cells), so a minimum exists at r ≈ 0.010, but tau drops
     // there by only 2.4e-5 relative to r = 0 — invisible on the paper's
     // log-log plot, and tau grows monotonically for r ≥ 0.1.
-    let fast = problem(DragLaw::Tan, 3.0, 50.0, 0.0, 0.0, -0.249, 0.5);
+    let fast = models::fig7(DragLaw::Tan, 50.0, 0.0, 0.5);
     let o = optimize_rate(&fast, &opts, &NoProgress).unwrap();
     assert!(
         o.dtau_dr_r0 < 0.0 && o.r_opt > 0.005 && o.r_opt < 0.02,
@@ -228,7 +231,7 @@ fn paper_claims_optimal_rate() {
     let tail: Vec<f64> = o.grid.iter().filter(|g| g.0 >= 0.1).map(|g| g.1).collect();
     assert!(tail.windows(2).all(|w| w[1] > w[0]));
     for lambda in [0.5, 1.0, 3.0] {
-        let p = problem(DragLaw::Tanh, 0.6, lambda, 0.0, 0.0, -0.249, 0.5);
+        let p = models::fig7(DragLaw::Tanh, lambda, 0.0, 0.5);
         let o = optimize_rate(&p, &opts, &NoProgress).unwrap();
         assert!(!o.interior && o.r_opt == 0.0, "lambda {lambda}: {o:?}");
         assert!(o.dtau_dr_r0 > 0.0);
@@ -238,7 +241,7 @@ fn paper_claims_optimal_rate() {
 
 #[test]
 fn rejects_bad_problems() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0).unwrap();
+    let p = models::tan(0.5, 1.0);
     let vu = 3f64.atan();
     for (v0, vt, name) in [
         (-0.2, vu, "--vt"),
@@ -255,7 +258,7 @@ fn rejects_bad_problems() {
             other => panic!("{v0} {vt}: {other:?}"),
         }
     }
-    let l0 = Params::new(DragLaw::Tan, 3.0, 0.0, 1.0, 0.0).unwrap();
+    let l0 = models::tan(0.0, 1.0);
     assert!(Problem::new(l0, -0.2, 0.5).is_err());
     let ok = Problem::new(p, -0.2, 0.5).unwrap();
     assert!(solve(&ok, &BackwardOptions::with_cells(3)).is_err());
@@ -265,12 +268,12 @@ fn rejects_bad_problems() {
     assert!(serde_json::from_str::<Problem>(&s.replace("0.5", "1.5")).is_err());
 }
 
-/// The closed equation for tau = (tau+ + tau-)/2 (paper Eq. neqn10), derived
+/// The closed equation for tau = (tau+ + tau-)/2 (paper Eq. (29)), derived
 /// from the generator's drifts ±Sigma - g: with u = 1 - r (tau - tau(v_r)),
 /// (Sigma² - g²) tau'' - 2 g (lambda + r + g') tau' = -(2 lambda + r + g') u.
 /// The paper prints (Sigma² - g²) tau'' + 2 g (lambda + r - g') tau'
 /// = (g' - 2 lambda - r) u, i.e. the same with g → -g (consistent with its
-/// sign-flipped Eqs. neqn26-27). The computed profile satisfies the former
+/// sign-flipped Eqs. (26)-(27)). The computed profile satisfies the former
 /// to discretisation accuracy and violates the latter.
 #[test]
 fn closed_tau_equation_with_correct_signs() {

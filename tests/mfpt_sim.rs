@@ -1,5 +1,8 @@
 //! Backward equations against the particle simulation (ground truth).
 
+mod common;
+
+use common::models;
 use irtp::mfpt::backward::profile;
 use irtp::mfpt::simulate::FptSummary;
 use irtp::mfpt::{euler_first_passage, BackwardOptions, DriftSign, Problem};
@@ -87,7 +90,7 @@ fn backward_equations_match_euler_simulation() {
     }
 }
 
-/// The paper's Eqs. (neqn26-27) print the drifts as g(v) ± Sigma. Solved as
+/// The paper's Eqs. (26)-(27) print the drifts as g(v) ± Sigma. Solved as
 /// printed (with the paper's boundary conditions) they miss the simulation
 /// by far more than 10 standard errors, while the generator's ±Sigma - g(v)
 /// agrees (previous test).
@@ -119,7 +122,7 @@ fn paper_printed_sign_disagrees_with_simulation() {
 
 #[test]
 fn bit_identical_for_any_thread_count() {
-    let p = problem(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0, -0.249, 0.5);
+    let p = models::fig7(DragLaw::Tan, 0.5, 2.0, 0.5);
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -134,7 +137,7 @@ fn bit_identical_for_any_thread_count() {
 /// flagged as a lower bound.
 #[test]
 fn censoring_is_reported() {
-    let p = problem(DragLaw::Tanh, 0.6, 0.5, 0.0, 0.0, -0.249, 0.5);
+    let p = models::fig7(DragLaw::Tanh, 0.5, 0.0, 0.5);
     let st = euler_first_passage(&p, 1e-3, 2.0, 400, 4, &NoProgress).unwrap();
     let s = st.summary();
     assert_eq!(s.particles, 400);

@@ -1,12 +1,15 @@
-//! The paper's Eq. 18 estimate of D_eff (fit <x²> = 2 D t + c on the grid
+//! The paper's Eq. (36) estimate of D_eff (fit <x²> = 2 D t + c on the grid
 //! times of [burn_in, t_max]) carried per particle by both samplers
 //! (`Observables::msd_fit_d`, `SimSummary::d_eff_msd`): equal to the fit of
 //! the ensemble <x²>, and within 4 standard errors of the exact Newtonian D_eff.
 
+mod common;
+
+use common::models;
 use irtp::analytic::linear;
 use irtp::parallel::NoProgress;
 use irtp::sim::{self, Method, SimSpec, TimeGrid};
-use irtp::{DragLaw, Params};
+use irtp::DragLaw;
 
 /// OLS slope of y against t, halved, over t >= t0.
 fn half_slope(t: &[f64], y: &[f64], t0: f64) -> f64 {
@@ -28,7 +31,7 @@ fn half_slope(t: &[f64], y: &[f64], t0: f64) -> f64 {
 
 #[test]
 fn per_particle_fit_is_the_fit_of_the_ensemble_msd() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.0).unwrap();
+    let p = models::tan(0.9, 2.0);
     let spec = SimSpec::new(600, TimeGrid::linear(12.0, 25).unwrap(), 4.0, 5, 3).unwrap();
     for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
         let o = sim::simulate(&p, &spec, method, &NoProgress).unwrap();
@@ -45,8 +48,8 @@ fn per_particle_fit_is_the_fit_of_the_ensemble_msd() {
 
 #[test]
 fn no_fit_without_symmetry_or_window() {
-    // v_r != 0: <x> drifts, an Eq. 18 fit of <x²> would include the drift.
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.2).unwrap();
+    // v_r != 0: <x> drifts, an Eq. (36) fit of <x²> would include the drift.
+    let p = models::medium(DragLaw::Tan, 0.9, 2.0, 0.2);
     let spec = SimSpec::new(50, TimeGrid::linear(6.0, 13).unwrap(), 2.0, 5, 3).unwrap();
     let s = sim::simulate(&p, &spec, Method::Exact, &NoProgress)
         .unwrap()
@@ -69,7 +72,7 @@ fn no_fit_without_symmetry_or_window() {
 #[test]
 fn matches_exact_newtonian_d_eff() {
     for (i, &(lambda, r)) in [(0.5, 0.0), (1.0, 3.0)].iter().enumerate() {
-        let p = Params::new(DragLaw::Linear, 1.0, lambda, r, 0.0).unwrap();
+        let p = models::linear(1.0, lambda, r, 0.0);
         let relax = 1.0 / (1.0f64 + r).min(2.0 * lambda);
         let grid = TimeGrid::linear(60.0 * relax, 31).unwrap();
         let spec = SimSpec::new(5000, grid, 20.0 * relax, 1, 40 + i as u64).unwrap();

@@ -3,10 +3,12 @@
 //! samplers. Counts and event totals agree exactly; sums and sums of squares
 //! agree up to the rounding of a different summation order.
 
+mod common;
+
+use common::models;
 use irtp::parallel::NoProgress;
 use irtp::sim::{self, Method, Observables, SimSpec, TimeGrid};
 use irtp::stats::MeanAcc;
-use irtp::{DragLaw, Params};
 
 fn spec(particles: u64) -> SimSpec {
     SimSpec::new(particles, TimeGrid::linear(3.0, 7).unwrap(), 1.0, 12, 99).unwrap()
@@ -39,7 +41,7 @@ fn all_same(a: &Observables, b: &Observables) {
 
 #[test]
 fn shards_merge_into_the_whole_run() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.0).unwrap();
+    let p = models::tan(0.9, 2.0);
     for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
         let whole = sim::simulate(&p, &spec(1000), method, &NoProgress).unwrap();
         // Uneven split, not on chunk boundaries.

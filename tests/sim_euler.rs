@@ -1,7 +1,10 @@
-//! Euler particle simulation (paper Eqs. 14-16): exactness against the
+//! Euler particle simulation (paper Eqs. (30)-(32)): exactness against the
 //! exactly solvable Euler chain for linear drag, convergence to the continuum
 //! formulas, equivalence of the two event samplers, reproducibility.
 
+mod common;
+
+use common::models;
 use irtp::analytic::linear;
 use irtp::analytic::r0::R0Density;
 use irtp::parallel::NoProgress;
@@ -46,7 +49,7 @@ fn linear_drag_matches_exact_euler_chain() {
         (0.7, 3.0, 0.6),
     ];
     for (i, &(lambda, r, vr)) in cases.iter().enumerate() {
-        let p = Params::new(DragLaw::Linear, 1.0, lambda, r, vr).unwrap();
+        let p = models::linear(1.0, lambda, r, vr);
         let s = spec(8000, 4.0, 9, 1.5, 10, 100 + i as u64);
         let obs = simulate(&p, &s, Method::Euler { dt }, &NoProgress).unwrap();
         let plan = EulerPlan::new(&p, &s, dt).unwrap();
@@ -91,7 +94,7 @@ fn euler_chain_converges_to_continuum() {
         (2.0, 10.0, 0.0),
         (0.7, 3.0, 0.6),
     ] {
-        let p = Params::new(DragLaw::Linear, 1.3, lambda, r, vr).unwrap();
+        let p = models::linear(1.3, lambda, r, vr);
         let exact = linear::v2(&p).unwrap();
         let err = |dt: f64| LinearChain::stationary(&p, dt).unwrap().v2 - exact;
         let (e1, e2, e3) = (err(1e-3), err(1e-4), err(1e-5));
@@ -114,7 +117,7 @@ fn euler_chain_converges_to_continuum() {
 /// velocity histogram.
 #[test]
 fn geometric_and_bernoulli_samplers_agree() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.2).unwrap();
+    let p = models::medium(DragLaw::Tan, 0.5, 2.0, 0.2);
     let s1 = spec(4000, 3.0, 4, 1.0, 12, 11);
     let s2 = spec(4000, 3.0, 4, 1.0, 12, 12);
     let a = euler::simulate_with(&p, &s1, 1e-3, EventSampling::Geometric, &NoProgress).unwrap();
@@ -162,7 +165,7 @@ fn bits(o: &Observables) -> String {
 /// Bit-identical output for 1 and 2 rayon threads (all fields, both samplers).
 #[test]
 fn bit_identical_across_thread_counts() {
-    let p = Params::new(DragLaw::Tanh, 0.6, 0.85, 1.0, 0.1).unwrap();
+    let p = models::medium(DragLaw::Tanh, 0.85, 1.0, 0.1);
     let s = spec(700, 1.0, 5, 0.5, 16, 3);
     for sampling in [EventSampling::Geometric, EventSampling::Bernoulli] {
         let run = |threads: usize| {
@@ -184,7 +187,7 @@ fn bit_identical_across_thread_counts() {
 /// derivation, the chunking, the step order or the sampler changes these.
 #[test]
 fn pinned_values() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
+    let p = models::tan(0.5, 2.0);
     let s = spec(300, 0.5, 3, 0.25, 8, 42);
     let g = simulate(&p, &s, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
     let b = euler::simulate_with(&p, &s, 1e-3, EventSampling::Bernoulli, &NoProgress).unwrap();
@@ -215,7 +218,7 @@ const PINNED: [u64; 6] = [
 /// stability or reset limit are rejected naming the flag.
 #[test]
 fn plan_validation_and_rounding() {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
+    let p = models::tan(0.5, 2.0);
     let s = SimSpec::new(
         10,
         TimeGrid::from_times(vec![0.0, 0.00149, 0.0031, 1.0]).unwrap(),
@@ -259,7 +262,7 @@ fn plan_validation_and_rounding() {
     );
     let ok = spec(10, 1.0, 3, 0.5, 4, 1);
     assert_eq!(name(EulerPlan::new(&p, &ok, 0.1).unwrap_err()), "--dt");
-    let fast = Params::new(DragLaw::Linear, 1.0, 0.5, 20.0, 0.0).unwrap();
+    let fast = models::linear(1.0, 0.5, 20.0, 0.0);
     assert_eq!(name(EulerPlan::new(&fast, &ok, 0.06).unwrap_err()), "--dt");
     assert!(EulerPlan::new(&fast, &ok, 0.04).is_ok());
 }
@@ -290,7 +293,7 @@ fn lanes_do_not_change_results() {
 /// tanh Sigma = 0.6 lambda = 0.85 (paper Fig. 3b, two maxima) and tan Sigma = 3
 /// lambda = 15 (Fig. 2c, cusp-like zero at the edges). 8000 particles,
 /// t_max = 15, window [5, 15], 20 bins, dt = 1e-3. Reference: the exact
-/// [`R0Density`] (paper Eqs. Neqn17, apeqn18a; its bin masses agree with an
+/// [`R0Density`] (paper Eqs. (34)-(35); its bin masses agree with an
 /// independent midpoint-rule integration of the closed forms to 1.2e-6
 /// relative, <v²> to 2e-7).
 /// - Ensemble snapshot at t_max (independent particles, multinomial counts;

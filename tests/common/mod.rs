@@ -1,7 +1,10 @@
-//! Shared helpers of the CLI integration tests: run the `irtp` binary, parse
+//! Shared helpers of the integration tests: run the `irtp` binary, parse
 //! its JSON, and check the bad-input contract (one line, exit 2, nothing
-//! written). Each test crate uses a subset.
+//! written); [`models`] holds the shared parameter sets. Each test crate uses
+//! a subset.
 #![allow(dead_code)]
+
+pub mod models;
 
 use std::path::Path;
 use std::process::{Command, Output};
