@@ -4,9 +4,11 @@ use super::common::NoiseArgs;
 use clap::Args;
 use irtp::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
 use irtp::io::{OutputDir, Provenance};
-use irtp::{DragLaw, Error};
+use irtp::numerics::grid::chebyshev;
+use irtp::{DragLaw, Error, Params};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Flags of `irtp analytic`: the shared `--drag --sigma --lambda`, and its own
 /// `--rate` (default 0, the only admissible value) instead of the resetting flags.
@@ -57,36 +59,36 @@ struct RunParams {
     points: usize,
 }
 
-/// Chebyshev points of the first kind on (v_l, v_u), ascending: interior, and
-/// clustered toward the (possibly singular) edges.
-fn grid(vu: f64, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| -vu * (std::f64::consts::PI * (i as f64 + 0.5) / n as f64).cos())
-        .collect()
+/// The validated inputs of `irtp analytic`.
+struct Config {
+    params: Params,
+    points: usize,
 }
 
-/// Run `irtp analytic`.
-pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
-    let t0 = std::time::Instant::now();
-    let params = args.noise.params(args.rate, 0.0)?;
-    if args.points < 2 {
-        return Err(Error::invalid("--points", args.points, "points >= 2").into());
+impl AnalyticArgs {
+    /// Flags → validated config (the closed form exists only for r = 0).
+    fn config(&self) -> irtp::Result<Config> {
+        let params = self.noise.params(self.rate, 0.0)?;
+        if self.points < 2 {
+            return Err(Error::invalid("--points", self.points, "points >= 2"));
+        }
+        Ok(Config {
+            params,
+            points: self.points,
+        })
     }
-    let d = R0Density::from_params(&params)?;
+}
+
+fn report(params: &Params, d: &R0Density) -> Report {
     let reg = d.regime();
-    let (vl, vu) = d.bounds();
-    let NoiseArgs {
-        drag,
-        sigma,
-        lambda,
-    } = args.noise;
-    let report = Report {
-        drag,
-        sigma,
-        lambda,
-        rate: args.rate,
-        v_lower: vl,
-        v_upper: vu,
+    let (v_lower, v_upper) = d.bounds();
+    Report {
+        drag: params.drag(),
+        sigma: params.sigma(),
+        lambda: params.lambda(),
+        rate: params.rate(),
+        v_lower,
+        v_upper,
         v2: d.v2(),
         v4: d.moment(4),
         regime: reg.label.clone(),
@@ -95,35 +97,53 @@ pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
         edge: reg.edge,
         extrema: reg.extrema.clone(),
         normalisation: d.normalisation(),
+    }
+}
+
+/// density.csv (Chebyshev points: interior, clustered toward the possibly
+/// singular edges), summary.json and run.json.
+fn write(dir: &Path, c: &Config, d: &R0Density, report: &Report, t0: Instant) -> irtp::Result<()> {
+    let mut out = OutputDir::new(dir)?;
+    let (vl, vu) = d.bounds();
+    let rows: Vec<[f64; 3]> = chebyshev(vl, vu, c.points)
+        .into_iter()
+        .map(|v| [v, d.pdf(v), d.cdf(v)])
+        .collect();
+    out.write_csv("density.csv", &["v", "p", "cdf"], rows)?;
+    out.write_json("summary.json", report)?;
+    let run = RunParams {
+        drag: report.drag,
+        sigma: report.sigma,
+        lambda: report.lambda,
+        rate: report.rate,
+        points: c.points,
     };
+    out.commit_with_provenance(Provenance::new(
+        "analytic",
+        "exact r=0 density; adaptive Gauss-Kronrod normalisation",
+        None,
+        run,
+        t0.elapsed().as_secs_f64(),
+    ))?;
+    Ok(())
+}
+
+/// Run `irtp analytic`.
+pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let c = args.config()?;
+    let d = R0Density::from_params(&c.params)?;
+    let report = report(&c.params, &d);
     if let Some(dir) = &args.out {
-        let mut out = OutputDir::new(dir)?;
-        let rows: Vec<[f64; 3]> = grid(vu, args.points)
-            .into_iter()
-            .map(|v| [v, d.pdf(v), d.cdf(v)])
-            .collect();
-        out.write_csv("density.csv", &["v", "p", "cdf"], rows)?;
-        out.write_json("summary.json", &report)?;
-        let run = RunParams {
-            drag,
-            sigma,
-            lambda,
-            rate: args.rate,
-            points: args.points,
-        };
-        out.commit_with_provenance(Provenance::new(
-            "analytic",
-            "exact r=0 density; adaptive Gauss-Kronrod normalisation",
-            None,
-            run,
-            t0.elapsed().as_secs_f64(),
-        ))?;
+        write(dir, &c, &d, &report, t0)?;
     }
     if args.json {
         super::print_json(&report)?;
     } else {
+        let (drag, sigma, lambda) = (report.drag, report.sigma, report.lambda);
+        let (vl, vu) = (report.v_lower, report.v_upper);
         println!("{drag} drag, Sigma = {sigma}, lambda = {lambda}, r = 0: v in ({vl:.6}, {vu:.6})");
-        println!("regime {}", reg.description);
+        println!("regime {}", report.regime_description);
         println!("<v^2> = {:.15e}   <v^4> = {:.15e}", report.v2, report.v4);
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());

@@ -6,6 +6,7 @@ use super::progress::Bar;
 use clap::{Args, Subcommand, ValueEnum};
 use irtp::fp::{self, Mesh, StationaryOptions, TransientOptions};
 use irtp::io::{OutputDir, Provenance};
+use irtp::Params;
 use serde_json::json;
 use std::time::Instant;
 
@@ -81,16 +82,40 @@ pub fn run(args: FpArgs) -> anyhow::Result<()> {
     }
 }
 
+impl StationaryArgs {
+    /// Flags → model and solver options (the solver validates the options).
+    fn config(&self) -> irtp::Result<(Params, StationaryOptions)> {
+        let params = self.model.params()?;
+        let opts = StationaryOptions {
+            cells: self.cells,
+            mesh: match self.mesh {
+                MeshArg::Graded => Mesh::Graded,
+                MeshArg::Uniform => Mesh::Uniform,
+            },
+            extrapolate: !self.no_extrapolate,
+        };
+        Ok((params, opts))
+    }
+}
+
+impl TransientArgs {
+    /// Flags → model and solver options: `--samples` recording times in
+    /// [0, t_max], `--snapshots` density times in (0, t_max].
+    fn config(&self) -> irtp::Result<(Params, TransientOptions)> {
+        let params = self.model.params()?;
+        let opts = TransientOptions::sampled(
+            self.cells,
+            self.t_max,
+            self.samples,
+            self.snapshots,
+            self.cfl,
+        )?;
+        Ok((params, opts))
+    }
+}
+
 fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
-    let params = a.model.params()?;
-    let opts = StationaryOptions {
-        cells: a.cells,
-        mesh: match a.mesh {
-            MeshArg::Graded => Mesh::Graded,
-            MeshArg::Uniform => Mesh::Uniform,
-        },
-        extrapolate: !a.no_extrapolate,
-    };
+    let (params, opts) = a.config()?;
     let start = Instant::now();
     let s = fp::stationary(&params, &opts)?;
     let wall = start.elapsed().as_secs_f64();
@@ -144,27 +169,8 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
 }
 
 fn transient(a: TransientArgs) -> anyhow::Result<()> {
-    let params = a.model.params()?;
-    let t_max = irtp::error::finite("--t-max", a.t_max)?;
-    if !(t_max > 0.0) {
-        return Err(irtp::Error::invalid("--t-max", t_max, "t_max > 0").into());
-    }
-    if a.samples < 2 {
-        return Err(irtp::Error::invalid("--samples", a.samples, "samples >= 2").into());
-    }
-    let times = (0..a.samples)
-        .map(|k| t_max * k as f64 / (a.samples - 1) as f64)
-        .collect();
-    let snapshot_times = (1..=a.snapshots)
-        .map(|k| t_max * k as f64 / a.snapshots as f64)
-        .collect();
-    let opts = TransientOptions {
-        cells: a.cells,
-        t_max,
-        times,
-        snapshot_times,
-        cfl: a.cfl,
-    };
+    let (params, opts) = a.config()?;
+    let t_max = opts.t_max;
     let bar = Bar::new("fp transient", 1);
     let start = Instant::now();
     let res = fp::transient_with_progress(&params, &opts, &bar);

@@ -4,18 +4,20 @@
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
 //!
-//! To add a particle method: a [`Method`] variant and an arm in [`simulate`].
+//! To add a particle method: a [`Method`] variant, its arm in `SimArgs::config`
+//! and the library's `irtp::mfpt::particles`.
 
 use super::common::{ModelArgs, OutputArgs};
 use super::progress::Bar;
 use clap::{Args, Subcommand, ValueEnum};
-use irtp::error::finite;
 use irtp::io::{OutputDir, Provenance};
-use irtp::mfpt::backward::{profile, BackwardOptions};
+use irtp::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
 use irtp::mfpt::simulate::FptSummary;
-use irtp::mfpt::{self, OptimizeOptions, Problem, ScanAxis};
+use irtp::mfpt::{self, particles, OptimizeOptions, Problem, ScanAxis, ScanPoint};
+use irtp::sim::Method as SimMethod;
 use irtp::Error;
 use serde::Serialize;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// `irtp mfpt`.
@@ -156,42 +158,63 @@ pub fn run(args: MfptArgs) -> anyhow::Result<()> {
     }
 }
 
-fn build(p: &ProblemArgs, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
-    let params = p.model.params()?;
-    let v0 =
-        p.v0.ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
-    let problem = Problem::new(params, v0, vt)?;
-    let opts = BackwardOptions::with_cells(p.cells);
-    opts.validate()?;
-    Ok((problem, opts))
+/// A particle estimate: sampler, number of particles, time cap.
+struct ParticleRun {
+    method: SimMethod,
+    particles: u64,
+    t_max: f64,
 }
 
-/// Validate the simulation flags before anything runs.
-fn check_sim(s: &SimArgs, problem: &Problem) -> irtp::Result<()> {
-    if s.method != Method::Ode && s.particles < 2 {
-        return Err(Error::invalid("--particles", s.particles, "particles >= 2"));
-    }
-    match s.method {
-        Method::Ode => Ok(()),
-        Method::Euler => mfpt::EulerFpt::new(*problem, s.dt, s.t_max).map(|_| ()),
-        Method::Exact => irtp::sim::exact::check_t_max(s.t_max).map(|_| ()),
+impl ProblemArgs {
+    /// Flags → validated problem (start v_0, target `vt`) and mesh.
+    fn config(&self, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
+        let params = self.model.params()?;
+        let v0 = self
+            .v0
+            .ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
+        let problem = Problem::new(params, v0, vt)?;
+        let opts = BackwardOptions::with_cells(self.cells);
+        opts.validate()?;
+        Ok((problem, opts))
     }
 }
 
-/// Particle estimate with the requested method.
-fn simulate(s: &SimArgs, problem: &Problem, seed: u64, label: &str) -> irtp::Result<FptSummary> {
-    let bar = Bar::new(label, s.particles);
-    let stats = match s.method {
-        Method::Euler => {
-            mfpt::euler_first_passage(problem, s.dt, s.t_max, s.particles, seed, &bar)?
+impl SimArgs {
+    /// Flags → particle run (`None` for the ODE), checked against every
+    /// problem it will run on before anything runs.
+    fn config(&self, problems: &[Problem]) -> irtp::Result<Option<ParticleRun>> {
+        let method = match self.method {
+            Method::Ode => return Ok(None),
+            Method::Euler => SimMethod::Euler { dt: self.dt },
+            Method::Exact => SimMethod::Exact,
+        };
+        for p in problems {
+            particles::check(p, method, self.particles, self.t_max)?;
         }
-        Method::Exact => {
-            irtp::sim::exact::exact_first_passage(problem, s.t_max, s.particles, seed, &bar)?
-        }
-        Method::Ode => unreachable!("ode is not a particle method"),
-    };
+        Ok(Some(ParticleRun {
+            method,
+            particles: self.particles,
+            t_max: self.t_max,
+        }))
+    }
+}
+
+/// Particle estimate of one problem.
+fn estimate(
+    run: &ParticleRun,
+    problem: &Problem,
+    seed: u64,
+    label: &str,
+) -> irtp::Result<FptSummary> {
+    let bar = Bar::new(label, run.particles);
+    let stats =
+        particles::first_passage(problem, run.method, run.t_max, run.particles, seed, &bar)?;
     bar.finish();
     Ok(stats.summary())
+}
+
+fn open_out(dir: &Option<PathBuf>) -> irtp::Result<Option<OutputDir>> {
+    dir.as_ref().map(OutputDir::new).transpose()
 }
 
 #[derive(Serialize)]
@@ -225,6 +248,59 @@ struct Report {
     seed: Option<u64>,
 }
 
+impl Report {
+    fn ode(problem: Problem, s: &BackwardSolution) -> Self {
+        Report {
+            method: Method::Ode,
+            problem,
+            tau: s.tau,
+            tau_plus: s.tau_plus,
+            tau_minus: s.tau_minus,
+            cells: Some(s.cells),
+            error_estimate: Some(s.error_estimate),
+            tau_err: None,
+            tau_plus_err: None,
+            tau_minus_err: None,
+            particles: None,
+            censored: None,
+            mean_is_lower_bound: None,
+            dt: None,
+            t_max: None,
+            seed: None,
+        }
+    }
+
+    fn particles(
+        m: Method,
+        problem: Problem,
+        run: &ParticleRun,
+        s: &FptSummary,
+        seed: u64,
+    ) -> Self {
+        Report {
+            method: m,
+            problem,
+            tau: s.tau,
+            tau_plus: s.tau_plus,
+            tau_minus: s.tau_minus,
+            cells: None,
+            error_estimate: None,
+            tau_err: Some(s.tau_err),
+            tau_plus_err: Some(s.tau_plus_err),
+            tau_minus_err: Some(s.tau_minus_err),
+            particles: Some(s.particles),
+            censored: Some(s.censored),
+            mean_is_lower_bound: Some(s.mean_is_lower_bound),
+            dt: match run.method {
+                SimMethod::Euler { dt } => Some(dt),
+                SimMethod::Exact => None,
+            },
+            t_max: Some(run.t_max),
+            seed: Some(seed),
+        }
+    }
+}
+
 fn print_lines(v: &serde_json::Value) {
     if let Some(obj) = v.as_object() {
         for (k, x) in obj {
@@ -235,83 +311,49 @@ fn print_lines(v: &serde_json::Value) {
     }
 }
 
+/// The validated inputs of `irtp mfpt`.
+struct DirectConfig {
+    problem: Problem,
+    backward: BackwardOptions,
+    particles: Option<ParticleRun>,
+}
+
+impl DirectArgs {
+    fn config(&self) -> irtp::Result<DirectConfig> {
+        let vt = self
+            .vt
+            .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
+        let (problem, backward) = self.problem.config(vt)?;
+        let particles = self.sim.config(&[problem])?;
+        Ok(DirectConfig {
+            problem,
+            backward,
+            particles,
+        })
+    }
+}
+
 fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
-    let vt =
-        a.vt.ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
-    let (problem, opts) = build(&a.problem, vt)?;
-    check_sim(&a.sim, &problem)?;
-    let out = match &a.output.out {
-        Some(d) => Some(OutputDir::new(d)?),
-        None => None,
-    };
+    let c = a.config()?;
+    let out = open_out(&a.output.out)?;
     let t0 = Instant::now();
-    let mut prof = None;
-    let report = match a.sim.method {
-        Method::Ode => {
-            let s = mfpt::solve(&problem, &opts)?;
-            prof = Some(profile(&problem, &opts)?);
-            Report {
-                method: Method::Ode,
-                problem,
-                tau: s.tau,
-                tau_plus: s.tau_plus,
-                tau_minus: s.tau_minus,
-                cells: Some(s.cells),
-                error_estimate: Some(s.error_estimate),
-                tau_err: None,
-                tau_plus_err: None,
-                tau_minus_err: None,
-                particles: None,
-                censored: None,
-                mean_is_lower_bound: None,
-                dt: None,
-                t_max: None,
-                seed: None,
-            }
+    let (report, prof) = match &c.particles {
+        None => {
+            let s = mfpt::solve(&c.problem, &c.backward)?;
+            let prof = profile(&c.problem, &c.backward)?;
+            (Report::ode(c.problem, &s), Some(prof))
         }
-        m => {
-            let s = simulate(&a.sim, &problem, a.output.seed, "mfpt")?;
-            Report {
-                method: m,
-                problem,
-                tau: s.tau,
-                tau_plus: s.tau_plus,
-                tau_minus: s.tau_minus,
-                cells: None,
-                error_estimate: None,
-                tau_err: Some(s.tau_err),
-                tau_plus_err: Some(s.tau_plus_err),
-                tau_minus_err: Some(s.tau_minus_err),
-                particles: Some(s.particles),
-                censored: Some(s.censored),
-                mean_is_lower_bound: Some(s.mean_is_lower_bound),
-                dt: (m == Method::Euler).then_some(a.sim.dt),
-                t_max: Some(a.sim.t_max),
-                seed: Some(a.output.seed),
-            }
+        Some(run) => {
+            let s = estimate(run, &c.problem, a.output.seed, "mfpt")?;
+            let r = Report::particles(a.sim.method, c.problem, run, &s, a.output.seed);
+            (r, None)
         }
     };
     let wall = t0.elapsed().as_secs_f64();
-    let mut written = None;
-    if let Some(mut dir) = out {
-        dir.write_json("mfpt.json", &report)?;
-        if let Some(p) = &prof {
-            let rows = (0..p.v.len())
-                .map(|i| {
-                    let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
-                    [p.v[i], tp, tm, 0.5 * (tp + tm)]
-                })
-                .collect::<Vec<_>>();
-            dir.write_csv("profile.csv", &["v0", "tau_plus", "tau_minus", "tau"], rows)?;
-        }
-        written = Some(dir.commit_with_provenance(Provenance::new(
-            "mfpt",
-            method_name(report.method),
-            report.seed,
-            &report,
-            wall,
-        ))?);
-    }
+    let written = match out {
+        Some(dir) => Some(write_direct(dir, &report, prof.as_ref(), wall)?),
+        None => None,
+    };
     let v = serde_json::to_value(&report)?;
     if a.output.json {
         super::print_json(&v)?;
@@ -322,6 +364,32 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// mfpt.json, profile.csv (ODE only) and run.json.
+fn write_direct(
+    mut dir: OutputDir,
+    report: &Report,
+    prof: Option<&Profile>,
+    wall: f64,
+) -> irtp::Result<Vec<PathBuf>> {
+    dir.write_json("mfpt.json", report)?;
+    if let Some(p) = prof {
+        let rows = (0..p.v.len())
+            .map(|i| {
+                let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
+                [p.v[i], tp, tm, 0.5 * (tp + tm)]
+            })
+            .collect::<Vec<_>>();
+        dir.write_csv("profile.csv", &["v0", "tau_plus", "tau_minus", "tau"], rows)?;
+    }
+    dir.commit_with_provenance(Provenance::new(
+        "mfpt",
+        method_name(report.method),
+        report.seed,
+        report,
+        wall,
+    ))
+}
+
 fn method_name(m: Method) -> &'static str {
     match m {
         Method::Ode => "backward-box",
@@ -330,87 +398,59 @@ fn method_name(m: Method) -> &'static str {
     }
 }
 
-fn scan_values(a: &ScanArgs) -> irtp::Result<Vec<f64>> {
-    let from = finite("--from", a.from)?;
-    let to = finite("--to", a.to)?;
-    if a.points < 2 {
-        return Err(Error::invalid("--points", a.points, "points >= 2"));
-    }
-    if a.log && !(from > 0.0 && to > 0.0) {
-        return Err(Error::invalid(
-            "--from",
-            from,
-            "from > 0 and to > 0 with --log",
-        ));
-    }
-    let k = a.points;
-    Ok((0..k)
-        .map(|i| {
-            // Endpoints exact; base-10 powers so that decades come out as typed (0.01, not 0.010000000000000004).
-            let f = i as f64 / (k - 1) as f64;
-            if i == 0 {
-                from
-            } else if i == k - 1 {
-                to
-            } else if a.log {
-                10f64.powf(from.log10() * (1.0 - f) + to.log10() * f)
-            } else {
-                from * (1.0 - f) + to * f
-            }
-        })
-        .collect())
+/// The validated inputs of `irtp mfpt scan`.
+struct ScanConfig {
+    base: Problem,
+    axis: ScanAxis,
+    values: Vec<f64>,
+    /// The problem at every value.
+    problems: Vec<Problem>,
+    backward: BackwardOptions,
+    particles: Option<ParticleRun>,
 }
 
-fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
-    let values = scan_values(&a)?;
-    let (axis, vt) = match a.over {
-        Over::Vt => (ScanAxis::Vt, values[0]),
-        Over::Rate => (
-            ScanAxis::Rate,
-            a.vt.ok_or_else(|| {
-                Error::invalid(
-                    "--vt",
-                    "missing",
-                    "a target velocity (required with --over rate)",
-                )
-            })?,
-        ),
-    };
-    let (base, opts) = build(&a.problem, vt)?;
-    // Validate every point (and the simulation flags there) before any work.
-    let problems = values
-        .iter()
-        .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
-        .collect::<irtp::Result<Vec<_>>>()?;
-    for p in &problems {
-        check_sim(&a.sim, p)?;
+impl ScanArgs {
+    /// Flags → validated config: every point (and the particle flags
+    /// there) is checked before any work.
+    fn config(&self) -> irtp::Result<ScanConfig> {
+        let values = mfpt::optimize::scan_values(self.from, self.to, self.points, self.log)?;
+        let (axis, vt) = match self.over {
+            Over::Vt => (ScanAxis::Vt, values[0]),
+            Over::Rate => (
+                ScanAxis::Rate,
+                self.vt.ok_or_else(|| {
+                    Error::invalid(
+                        "--vt",
+                        "missing",
+                        "a target velocity (required with --over rate)",
+                    )
+                })?,
+            ),
+        };
+        let (base, backward) = self.problem.config(vt)?;
+        let problems = values
+            .iter()
+            .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
+            .collect::<irtp::Result<Vec<_>>>()?;
+        let particles = self.sim.config(&problems)?;
+        Ok(ScanConfig {
+            base,
+            axis,
+            values,
+            problems,
+            backward,
+            particles,
+        })
     }
-    let out = match &a.output.out {
-        Some(d) => Some(OutputDir::new(d)?),
-        None => None,
-    };
-    let t0 = Instant::now();
-    let bar = Bar::new("mfpt scan", values.len() as u64);
-    let points = mfpt::scan(&base, axis, &values, &opts, &bar)?;
-    bar.finish();
-    let sims = if a.sim.method == Method::Ode {
-        None
-    } else {
-        // Common random numbers: every point uses the same seed, so the
-        // curve is smooth and differences between points are precise.
-        Some(
-            problems
-                .iter()
-                .enumerate()
-                .map(|(i, p)| simulate(&a.sim, p, a.output.seed, &format!("point {}", i + 1)))
-                .collect::<irtp::Result<Vec<_>>>()?,
-        )
-    };
-    let wall = t0.elapsed().as_secs_f64();
-    let xname = match a.over {
-        Over::Vt => "vt",
-        Over::Rate => "rate",
-    };
+}
+
+/// Scan results as a table: header and rows.
+struct Table {
+    header: Vec<&'static str>,
+    rows: Vec<Vec<f64>>,
+}
+
+fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSummary]>) -> Table {
     let mut header = vec![xname, "tau", "tau_plus", "tau_minus", "error_estimate"];
     if sims.is_some() {
         header.extend([
@@ -423,13 +463,13 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
             "censored",
         ]);
     }
-    let rows: Vec<Vec<f64>> = points
+    let rows = points
         .iter()
         .enumerate()
         .map(|(i, p)| {
             let s = &p.solution;
             let mut row = vec![p.x, s.tau, s.tau_plus, s.tau_minus, s.error_estimate];
-            if let Some(sims) = &sims {
+            if let Some(sims) = sims {
                 let m = &sims[i];
                 row.extend([
                     m.tau,
@@ -444,22 +484,51 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
             row
         })
         .collect();
-    #[derive(Serialize)]
-    struct Params<'a> {
-        base: &'a Problem,
-        over: &'a str,
-        values: &'a [f64],
-        cells: usize,
-        method: Method,
-        particles: Option<u64>,
-        dt: Option<f64>,
-        t_max: Option<f64>,
-    }
-    let sim = a.sim.method != Method::Ode;
-    let params = Params {
-        base: &base,
+    Table { header, rows }
+}
+
+#[derive(Serialize)]
+struct ScanParams<'a> {
+    base: &'a Problem,
+    over: &'a str,
+    values: &'a [f64],
+    cells: usize,
+    method: Method,
+    particles: Option<u64>,
+    dt: Option<f64>,
+    t_max: Option<f64>,
+}
+
+fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
+    let c = a.config()?;
+    let out = open_out(&a.output.out)?;
+    let t0 = Instant::now();
+    let bar = Bar::new("mfpt scan", c.values.len() as u64);
+    let points = mfpt::scan(&c.base, c.axis, &c.values, &c.backward, &bar)?;
+    bar.finish();
+    // Common random numbers: every point uses the same seed, so the
+    // curve is smooth and differences between points are precise.
+    let sims = match &c.particles {
+        None => None,
+        Some(run) => Some(
+            c.problems
+                .iter()
+                .enumerate()
+                .map(|(i, p)| estimate(run, p, a.output.seed, &format!("point {}", i + 1)))
+                .collect::<irtp::Result<Vec<_>>>()?,
+        ),
+    };
+    let wall = t0.elapsed().as_secs_f64();
+    let xname = match a.over {
+        Over::Vt => "vt",
+        Over::Rate => "rate",
+    };
+    let table = scan_table(xname, &points, sims.as_deref());
+    let sim = c.particles.is_some();
+    let params = ScanParams {
+        base: &c.base,
         over: xname,
-        values: &values,
+        values: &c.values,
         cells: a.problem.cells,
         method: a.sim.method,
         particles: sim.then_some(a.sim.particles),
@@ -468,7 +537,7 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
     };
     let mut written = None;
     if let Some(mut dir) = out {
-        dir.write_csv("mfpt_scan.csv", &header, &rows)?;
+        dir.write_csv("mfpt_scan.csv", &table.header, &table.rows)?;
         written = Some(dir.commit_with_provenance(Provenance::new(
             "mfpt scan",
             method_name(a.sim.method),
@@ -478,20 +547,10 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         ))?);
     }
     if a.output.json {
-        let objs: Vec<serde_json::Map<String, serde_json::Value>> = rows
-            .iter()
-            .map(|r| {
-                header
-                    .iter()
-                    .zip(r)
-                    .map(|(h, x)| (h.to_string(), serde_json::json!(x)))
-                    .collect()
-            })
-            .collect();
-        super::print_json(&objs)?;
+        super::print_json(&table_json(&table))?;
     } else {
-        println!("{}", header.join(","));
-        for r in &rows {
+        println!("{}", table.header.join(","));
+        for r in &table.rows {
             let s: Vec<String> = r.iter().map(|x| irtp::io::format_float(*x)).collect();
             println!("{}", s.join(","));
         }
@@ -500,47 +559,60 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One JSON object per row, keyed by the header.
+fn table_json(t: &Table) -> Vec<serde_json::Map<String, serde_json::Value>> {
+    t.rows
+        .iter()
+        .map(|r| {
+            t.header
+                .iter()
+                .zip(r)
+                .map(|(h, x)| (h.to_string(), serde_json::json!(x)))
+                .collect()
+        })
+        .collect()
+}
+
+impl OptimizeArgs {
+    /// Flags → validated problem and search range (checked before any
+    /// output is created).
+    fn config(&self) -> irtp::Result<(Problem, OptimizeOptions)> {
+        let (problem, backward) = self.problem.config(self.vt)?;
+        let opts = OptimizeOptions {
+            r_min: self.r_min,
+            r_max: self.r_max,
+            grid_points: self.grid_points,
+            backward,
+        };
+        opts.validate()?;
+        Ok((problem, opts))
+    }
+}
+
+#[derive(Serialize)]
+struct OptimizeSummary<'a> {
+    r_opt: f64,
+    tau_opt: f64,
+    tau_plus_opt: f64,
+    tau_minus_opt: f64,
+    tau_r0: f64,
+    dtau_dr_r0: f64,
+    interior: bool,
+    at_upper_bound: bool,
+    problem: &'a Problem,
+    r_min: f64,
+    r_max: f64,
+}
+
 fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
-    let (problem, backward) = build(&a.problem, a.vt)?;
-    let opts = OptimizeOptions {
-        r_min: a.r_min,
-        r_max: a.r_max,
-        grid_points: a.grid_points,
-        backward,
-    };
-    // Validate the range before creating any output.
-    let r_min = finite("--r-min", a.r_min)?;
-    let r_max = finite("--r-max", a.r_max)?;
-    if !(r_min > 0.0) {
-        return Err(Error::invalid("--r-min", r_min, "r_min > 0").into());
-    }
-    if !(r_max > r_min) {
-        return Err(Error::invalid("--r-max", r_max, format!("r_max > r_min = {r_min}")).into());
-    }
-    let out = match &a.output.out {
-        Some(d) => Some(OutputDir::new(d)?),
-        None => None,
-    };
+    let (problem, opts) = a.config()?;
+    let out = open_out(&a.output.out)?;
     let t0 = Instant::now();
-    let bar = Bar::new("mfpt optimize", a.grid_points as u64);
+    let bar = Bar::new("mfpt optimize", opts.grid_points as u64);
     let best = mfpt::optimize_rate(&problem, &opts, &bar)?;
     bar.finish();
     let wall = t0.elapsed().as_secs_f64();
-    #[derive(Serialize)]
-    struct Summary<'a> {
-        r_opt: f64,
-        tau_opt: f64,
-        tau_plus_opt: f64,
-        tau_minus_opt: f64,
-        tau_r0: f64,
-        dtau_dr_r0: f64,
-        interior: bool,
-        at_upper_bound: bool,
-        problem: &'a Problem,
-        r_min: f64,
-        r_max: f64,
-    }
-    let summary = Summary {
+    let summary = OptimizeSummary {
         r_opt: best.r_opt,
         tau_opt: best.tau_opt,
         tau_plus_opt: best.tau_plus_opt,
@@ -550,8 +622,8 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
         interior: best.interior,
         at_upper_bound: best.at_upper_bound,
         problem: &problem,
-        r_min,
-        r_max,
+        r_min: opts.r_min,
+        r_max: opts.r_max,
     };
     let mut written = None;
     if let Some(mut dir) = out {

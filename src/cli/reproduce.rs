@@ -55,22 +55,29 @@ impl Drop for BarProgress {
     }
 }
 
+impl ReproduceArgs {
+    /// Flags → the figures (paper order, no duplicates) and their options.
+    fn config(&self) -> (Vec<Which>, Options) {
+        let mut which: Vec<Which> = Vec::new();
+        for s in &self.figures {
+            match s {
+                Selection::All => which.extend(Which::ALL),
+                Selection::One(w) => which.push(*w),
+            }
+        }
+        which.sort_by_key(|w| *w as u8);
+        which.dedup();
+        let opts = Options {
+            quick: self.quick,
+            seed: self.seed,
+        };
+        (which, opts)
+    }
+}
+
 /// Run the subcommand.
 pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
-    let mut which: Vec<Which> = Vec::new();
-    for s in &args.figures {
-        match s {
-            Selection::All => which.extend(Which::ALL),
-            Selection::One(w) => which.push(*w),
-        }
-    }
-    // Paper order, no duplicates.
-    which.sort_by_key(|w| *w as u8);
-    which.dedup();
-    let opts = Options {
-        quick: args.quick,
-        seed: args.seed,
-    };
+    let (which, opts) = args.config();
     // Validate the output directory before computing anything.
     let out = OutputDir::new(&args.out)?;
     let t0 = std::time::Instant::now();

@@ -6,7 +6,8 @@ use clap::{Args, ValueEnum};
 use irtp::io::{OutputDir, Provenance};
 use irtp::sim::euler::{self, EulerPlan, EventSampling};
 use irtp::sim::exact;
-use irtp::sim::{Observables, SimSpec, TimeGrid};
+use irtp::sim::{Observables, SimSpec, SimSummary, TimeGrid};
+use irtp::Params;
 use serde::Serialize;
 use std::io::Write;
 use std::time::Instant;
@@ -108,153 +109,222 @@ struct JsonOut<'a> {
     out: Option<String>,
 }
 
+/// The Euler scheme's setup: step, event sampler and step plan.
+struct EulerSetup {
+    dt: f64,
+    events: EventSampling,
+    plan: EulerPlan,
+}
+
+/// The validated inputs of `irtp simulate`.
+struct Config {
+    params: Params,
+    spec: SimSpec,
+    /// `None`: the exact sampler.
+    euler: Option<EulerSetup>,
+}
+
+impl Config {
+    fn method(&self) -> &'static str {
+        match self.euler {
+            Some(_) => "euler",
+            None => "exact",
+        }
+    }
+    fn dt(&self) -> Option<f64> {
+        self.euler.as_ref().map(|e| e.dt)
+    }
+    fn events(&self) -> Option<EventSampling> {
+        self.euler.as_ref().map(|e| e.events)
+    }
+}
+
+impl SimulateArgs {
+    /// Flags → validated config, before anything touches the file system.
+    fn config(&self) -> irtp::Result<Config> {
+        let params = self.model.params()?;
+        let grid = match self.grid {
+            GridArg::Linear => TimeGrid::linear(self.t_max, self.samples)?,
+            GridArg::Log => TimeGrid::log(self.t_min, self.t_max, self.samples)?,
+        };
+        let spec = SimSpec::new(
+            self.particles,
+            grid,
+            self.burn_in,
+            self.bins,
+            self.output.seed,
+        )?;
+        let euler = match self.method {
+            MethodArg::Euler => Some(self.euler_setup(&params, &spec)?),
+            MethodArg::Exact => {
+                self.reject_euler_flags()?;
+                None
+            }
+        };
+        Ok(Config {
+            params,
+            spec,
+            euler,
+        })
+    }
+
+    fn euler_setup(&self, params: &Params, spec: &SimSpec) -> irtp::Result<EulerSetup> {
+        let dt = self.dt.unwrap_or(1e-3);
+        let plan = EulerPlan::new(params, spec, dt)?;
+        let events = match self.events.unwrap_or(EventsArg::Geometric) {
+            EventsArg::Geometric => EventSampling::Geometric,
+            EventsArg::Bernoulli => EventSampling::Bernoulli,
+        };
+        Ok(EulerSetup { dt, events, plan })
+    }
+
+    /// The exact sampler takes neither `--dt` nor `--events`.
+    fn reject_euler_flags(&self) -> irtp::Result<()> {
+        if let Some(dt) = self.dt {
+            return Err(irtp::Error::invalid(
+                "--dt",
+                dt,
+                "only with --method euler (the exact sampler has no time step)",
+            ));
+        }
+        if let Some(e) = self.events {
+            return Err(irtp::Error::invalid(
+                "--events",
+                format!("{e:?}").to_lowercase(),
+                "only with --method euler (the exact sampler draws exact event times)",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Run the subcommand.
 pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
-    // Validate everything before touching the file system.
-    let params = a.model.params()?;
-    let grid = match a.grid {
-        GridArg::Linear => TimeGrid::linear(a.t_max, a.samples)?,
-        GridArg::Log => TimeGrid::log(a.t_min, a.t_max, a.samples)?,
-    };
-    let spec = SimSpec::new(a.particles, grid, a.burn_in, a.bins, a.output.seed)?;
-    // Euler: (dt, event sampler, plan); the exact sampler takes neither flag.
-    let euler_setup = match a.method {
-        MethodArg::Euler => {
-            let dt = a.dt.unwrap_or(1e-3);
-            let plan = EulerPlan::new(&params, &spec, dt)?;
-            let events = match a.events.unwrap_or(EventsArg::Geometric) {
-                EventsArg::Geometric => EventSampling::Geometric,
-                EventsArg::Bernoulli => EventSampling::Bernoulli,
-            };
-            Some((dt, events, plan))
-        }
-        MethodArg::Exact => {
-            if let Some(dt) = a.dt {
-                return Err(irtp::Error::invalid(
-                    "--dt",
-                    dt,
-                    "only with --method euler (the exact sampler has no time step)",
-                )
-                .into());
-            }
-            if let Some(e) = a.events {
-                return Err(irtp::Error::invalid(
-                    "--events",
-                    format!("{e:?}").to_lowercase(),
-                    "only with --method euler (the exact sampler draws exact event times)",
-                )
-                .into());
-            }
-            None
-        }
-    };
-    let method = match a.method {
-        MethodArg::Euler => "euler",
-        MethodArg::Exact => "exact",
-    };
-    let (dt, events) = match &euler_setup {
-        Some((dt, ev, _)) => (Some(*dt), Some(*ev)),
-        None => (None, None),
-    };
+    let c = a.config()?;
     let out = a.output.out.as_ref().map(OutputDir::new).transpose()?;
 
-    let bar = Bar::new("simulate", spec.particles);
+    let bar = Bar::new("simulate", c.spec.particles);
     let start = Instant::now();
-    let obs = match &euler_setup {
-        Some((dt, ev, _)) => euler::simulate_with(&params, &spec, *dt, *ev, &bar)?,
-        None => exact::simulate(&params, &spec, &bar)?,
+    let obs = match &c.euler {
+        Some(e) => euler::simulate_with(&c.params, &c.spec, e.dt, e.events, &bar)?,
+        None => exact::simulate(&c.params, &c.spec, &bar)?,
     };
     let wall = start.elapsed().as_secs_f64();
     bar.finish();
     let summary = obs.summary();
 
     let out_path = out.as_ref().map(|o| o.target().display().to_string());
-    if let Some(mut o) = out {
-        o.write_csv(
-            "moments.csv",
-            &Observables::MOMENT_HEADER,
-            obs.moment_rows(),
-        )?;
-        o.write_csv(
-            "density.csv",
-            &Observables::DENSITY_HEADER,
-            obs.density_rows(),
-        )?;
-        let run_params = RunParameters {
-            model: &params,
-            particles: spec.particles,
-            dt,
-            t_max: spec.grid.t_max(),
-            samples: a.samples,
-            grid: a.grid,
-            t_min: (a.grid == GridArg::Log).then_some(a.t_min),
-            burn_in: a.burn_in,
-            bins: a.bins,
-            events,
-            seed: spec.seed,
-            steps_per_particle: euler_setup.as_ref().map(|(_, _, p)| p.steps),
-        };
-        o.commit_with_provenance(Provenance::new(
-            "simulate",
-            method,
-            Some(spec.seed),
-            run_params,
-            wall,
-        ))?;
+    if let Some(o) = out {
+        write(o, &a, &c, &obs, wall)?;
     }
-
     let rate = summary.steps as f64 / wall;
     if a.output.json {
         super::print_json(&JsonOut {
-            method,
-            events,
-            dt,
+            method: c.method(),
+            events: c.events(),
+            dt: c.dt(),
             summary,
             wall_time_s: wall,
             particle_steps_per_s: rate,
             out: out_path,
         })?;
     } else {
-        let s = &summary;
-        let model = format!(
-            "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
-            params.drag(),
-            params.sigma(),
-            params.lambda(),
-            params.rate(),
-            params.reset_velocity()
-        );
-        let mut text = match &euler_setup {
-            Some((dt, ev, plan)) => format!(
-                "euler ({} events), {model}: {} particles x {} steps of dt = {dt} in {wall:.2} s ({rate:.3e} particle-steps/s)\n",
-                format!("{ev:?}").to_lowercase(),
-                s.particles,
-                plan.steps
-            ),
-            None => format!(
-                "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)\n",
-                s.particles, s.steps
-            ),
-        };
-        text += &format!(
-            "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
-            s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
-        );
-        text += &format!(
-            "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
-            s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
-        );
-        if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
-            text += &format!(
-                "Eq. 18 fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
-                a.burn_in, s.t_max, d, e
-            );
-        }
-        if let Some(p) = out_path {
-            text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
-        }
+        let text = text_report(&a, &c, &summary, wall, out_path);
         // The results are already on disk; a closed pipe (`| head`) is not an error.
         let _ = std::io::stdout().lock().write_all(text.as_bytes());
     }
     Ok(())
+}
+
+/// moments.csv, density.csv and run.json.
+fn write(
+    mut o: OutputDir,
+    a: &SimulateArgs,
+    c: &Config,
+    obs: &Observables,
+    wall: f64,
+) -> irtp::Result<()> {
+    o.write_csv(
+        "moments.csv",
+        &Observables::MOMENT_HEADER,
+        obs.moment_rows(),
+    )?;
+    o.write_csv(
+        "density.csv",
+        &Observables::DENSITY_HEADER,
+        obs.density_rows(),
+    )?;
+    let run_params = RunParameters {
+        model: &c.params,
+        particles: c.spec.particles,
+        dt: c.dt(),
+        t_max: c.spec.grid.t_max(),
+        samples: a.samples,
+        grid: a.grid,
+        t_min: (a.grid == GridArg::Log).then_some(a.t_min),
+        burn_in: a.burn_in,
+        bins: a.bins,
+        events: c.events(),
+        seed: c.spec.seed,
+        steps_per_particle: c.euler.as_ref().map(|e| e.plan.steps),
+    };
+    o.commit_with_provenance(Provenance::new(
+        "simulate",
+        c.method(),
+        Some(c.spec.seed),
+        run_params,
+        wall,
+    ))?;
+    Ok(())
+}
+
+/// The text-mode report.
+fn text_report(
+    a: &SimulateArgs,
+    c: &Config,
+    s: &SimSummary,
+    wall: f64,
+    out_path: Option<String>,
+) -> String {
+    let p = &c.params;
+    let rate = s.steps as f64 / wall;
+    let model = format!(
+        "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
+        p.drag(),
+        p.sigma(),
+        p.lambda(),
+        p.rate(),
+        p.reset_velocity()
+    );
+    let mut text = match &c.euler {
+        Some(e) => format!(
+            "euler ({} events), {model}: {} particles x {} steps of dt = {} in {wall:.2} s ({rate:.3e} particle-steps/s)\n",
+            format!("{:?}", e.events).to_lowercase(),
+            s.particles,
+            e.plan.steps,
+            e.dt
+        ),
+        None => format!(
+            "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)\n",
+            s.particles, s.steps
+        ),
+    };
+    text += &format!(
+        "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
+        s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
+    );
+    text += &format!(
+        "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
+        s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
+    );
+    if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
+        text += &format!(
+            "Eq. 18 fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
+            a.burn_in, s.t_max, d, e
+        );
+    }
+    if let Some(p) = out_path {
+        text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
+    }
+    text
 }

@@ -38,6 +38,33 @@ impl Default for TransientOptions {
     }
 }
 
+impl TransientOptions {
+    /// Options recording `<v²>` at `samples` equally spaced times in
+    /// [0, t_max] and the density at `snapshots` equally spaced times in
+    /// (0, t_max] (both grids end exactly at t_max). Validates `t_max` and
+    /// `samples` here; [`transient`] validates the rest.
+    pub fn sampled(
+        cells: usize,
+        t_max: f64,
+        samples: usize,
+        snapshots: usize,
+        cfl: f64,
+    ) -> Result<Self> {
+        let times = crate::sim::TimeGrid::linear(t_max, samples)?
+            .times()
+            .to_vec();
+        let snapshot_times =
+            crate::numerics::grid::linspace(0.0, t_max, snapshots.saturating_add(1)).split_off(1);
+        Ok(TransientOptions {
+            cells,
+            t_max,
+            times,
+            snapshot_times,
+            cfl,
+        })
+    }
+}
+
 /// Density at one time.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Snapshot {
@@ -251,4 +278,42 @@ fn step(g: &Grid, lambda: f64, r: f64, h: f64, m: &[[f64; 2]], next: &mut [[f64;
     next[g.reset_minus][1] += reset_m;
     let total: f64 = next.iter().map(|c| c[0] + c[1]).sum();
     (total - 1.0).abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampled_grids() {
+        let o = TransientOptions::sampled(100, 2.0, 5, 4, 0.5).unwrap();
+        assert_eq!(o.times, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
+        assert_eq!(o.snapshot_times, vec![0.5, 1.0, 1.5, 2.0]);
+        // Both grids end exactly at t_max, also where t·n/n would round.
+        let t = 0.1 + 0.2;
+        let o = TransientOptions::sampled(100, t, 7, 3, 0.5).unwrap();
+        assert_eq!((o.times[6], o.snapshot_times[2]), (t, t));
+        let o = TransientOptions::sampled(100, 1.0, 2, 0, 0.5).unwrap();
+        assert!(o.snapshot_times.is_empty());
+    }
+
+    #[test]
+    fn sampled_validates_t_max_then_samples() {
+        let name = |r: Result<TransientOptions>| match r.unwrap_err() {
+            Error::InvalidParameter { name, .. } => name,
+            e => panic!("{e}"),
+        };
+        assert_eq!(
+            name(TransientOptions::sampled(100, f64::NAN, 1, 1, 0.5)),
+            "--t-max"
+        );
+        assert_eq!(
+            name(TransientOptions::sampled(100, 0.0, 5, 1, 0.5)),
+            "--t-max"
+        );
+        assert_eq!(
+            name(TransientOptions::sampled(100, 1.0, 1, 1, 0.5)),
+            "--samples"
+        );
+    }
 }

@@ -20,9 +20,11 @@
 //! - [`backward`]: direct O(N) second-order solve of the backward equations.
 //! - [`simulate`]: first-passage statistics from particles (Euler, pluggable).
 //! - [`optimize`]: scans and the optimal resetting rate.
+//! - [`particles`]: the particle estimate by either sampler.
 
 pub mod backward;
 pub mod optimize;
+pub mod particles;
 pub mod simulate;
 
 use crate::error::{finite, Error, Result};

@@ -6,6 +6,7 @@ use super::backward::{
 };
 use super::Problem;
 use crate::error::{finite, Error, Result};
+use crate::numerics::grid;
 use crate::parallel::{self, Progress};
 use serde::{Deserialize, Serialize};
 
@@ -175,25 +176,8 @@ pub fn optimize_rate(
     opts: &OptimizeOptions,
     progress: &dyn Progress,
 ) -> Result<Optimum> {
-    let r_min = finite("--r-min", opts.r_min)?;
-    let r_max = finite("--r-max", opts.r_max)?;
-    if !(r_min > 0.0) {
-        return Err(Error::invalid("--r-min", r_min, "r_min > 0"));
-    }
-    if !(r_max > r_min) {
-        return Err(Error::invalid(
-            "--r-max",
-            r_max,
-            format!("r_max > r_min = {r_min}"),
-        ));
-    }
-    if opts.grid_points < 3 {
-        return Err(Error::invalid(
-            "--grid-points",
-            opts.grid_points,
-            "at least 3",
-        ));
-    }
+    opts.validate()?;
+    let (r_min, r_max) = (opts.r_min, opts.r_max);
     base.with_rate(r_max)?;
     let bo = &opts.backward;
     let (tau0, d0) = rate_derivative_at_zero(base, bo)?;
@@ -246,4 +230,101 @@ pub fn optimize_rate(
         at_upper_bound: at_upper_bound && r_opt > 0.0,
         grid,
     })
+}
+
+impl OptimizeOptions {
+    /// Check the search range: finite 0 < r_min < r_max and at least 3 grid
+    /// points (the backward options are checked where they are used).
+    pub fn validate(&self) -> Result<()> {
+        let r_min = finite("--r-min", self.r_min)?;
+        let r_max = finite("--r-max", self.r_max)?;
+        if !(r_min > 0.0) {
+            return Err(Error::invalid("--r-min", r_min, "r_min > 0"));
+        }
+        if !(r_max > r_min) {
+            return Err(Error::invalid(
+                "--r-max",
+                r_max,
+                format!("r_max > r_min = {r_min}"),
+            ));
+        }
+        if self.grid_points < 3 {
+            return Err(Error::invalid(
+                "--grid-points",
+                self.grid_points,
+                "at least 3",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The values of a [`scan`]: `points` (>= 2) values from `from` to `to`, both
+/// exact, equally spaced, or log-spaced with `log` (then from, to > 0).
+pub fn scan_values(from: f64, to: f64, points: usize, log: bool) -> Result<Vec<f64>> {
+    let from = finite("--from", from)?;
+    let to = finite("--to", to)?;
+    if points < 2 {
+        return Err(Error::invalid("--points", points, "points >= 2"));
+    }
+    if log && !(from > 0.0 && to > 0.0) {
+        return Err(Error::invalid(
+            "--from",
+            from,
+            "from > 0 and to > 0 with --log",
+        ));
+    }
+    Ok(if log {
+        grid::logspace(from, to, points)
+    } else {
+        grid::linspace(from, to, points)
+    })
+}
+
+#[cfg(test)]
+mod range_tests {
+    use super::*;
+
+    fn name(e: Error) -> &'static str {
+        match e {
+            Error::InvalidParameter { name, .. } => name,
+            e => panic!("{e}"),
+        }
+    }
+
+    #[test]
+    fn scan_values_grids_and_checks() {
+        assert_eq!(
+            scan_values(0.1, 0.5, 5, false).unwrap(),
+            [0.1, 0.2, 0.3, 0.4, 0.5]
+        );
+        assert_eq!(scan_values(0.5, -0.5, 3, false).unwrap(), [0.5, 0.0, -0.5]);
+        assert_eq!(
+            scan_values(0.01, 100.0, 5, true).unwrap(),
+            [0.01, 0.1, 1.0, 10.0, 100.0]
+        );
+        let bad = |f, t, n, l| name(scan_values(f, t, n, l).unwrap_err());
+        assert_eq!(bad(f64::NAN, 1.0, 3, false), "--from");
+        assert_eq!(bad(0.0, f64::INFINITY, 3, false), "--to");
+        assert_eq!(bad(0.0, 1.0, 1, false), "--points");
+        assert_eq!(bad(0.0, 1.0, 3, true), "--from");
+        assert_eq!(bad(1.0, -1.0, 3, true), "--from");
+    }
+
+    #[test]
+    fn optimize_options_validate() {
+        assert!(OptimizeOptions::default().validate().is_ok());
+        let with = |r_min, r_max, grid_points| OptimizeOptions {
+            r_min,
+            r_max,
+            grid_points,
+            ..OptimizeOptions::default()
+        };
+        let bad = |o: OptimizeOptions| name(o.validate().unwrap_err());
+        assert_eq!(bad(with(f64::NAN, 1.0, 5)), "--r-min");
+        assert_eq!(bad(with(0.0, 1.0, 5)), "--r-min");
+        assert_eq!(bad(with(1.0, f64::INFINITY, 5)), "--r-max");
+        assert_eq!(bad(with(1.0, 1.0, 5)), "--r-max");
+        assert_eq!(bad(with(0.1, 1.0, 2)), "--grid-points");
+    }
 }

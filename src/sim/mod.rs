@@ -68,9 +68,7 @@ impl TimeGrid {
         if samples < 2 {
             return Err(Error::invalid("--samples", samples, "samples >= 2"));
         }
-        let times = (0..samples)
-            .map(|k| t_max * k as f64 / (samples - 1) as f64)
-            .collect();
+        let times = crate::numerics::grid::linspace(0.0, t_max, samples);
         Ok(TimeGrid { times })
     }
 
