@@ -4,8 +4,8 @@
 //! `cargo run --release --example efficiency`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use irtp::model::drag::Flow;
-use irtp::model::Drag;
+use irtp::model::drag::{Cubic, Linear, Tan, Tanh};
+use irtp::model::{Drag, FlowMap};
 use irtp::parallel::NoProgress;
 use irtp::sim::exact::{self, DeficitTable};
 use irtp::sim::{SimSpec, TimeGrid};
@@ -13,14 +13,20 @@ use irtp::{DragLaw, Params};
 use rand::Rng as _;
 
 fn kernels(c: &mut Criterion) {
-    for (d, sigma) in [
-        (DragLaw::Tan, 3.0),
-        (DragLaw::Tanh, 0.6),
-        (DragLaw::Linear, 1.0),
-    ] {
-        let f = Flow::new(d, sigma);
-        let vu = d.inverse(sigma);
-        c.bench_function(&format!("flow_velocity/{d}"), |b| {
+    kernels_for(c, Tan, 3.0);
+    kernels_for(c, Tanh, 0.6);
+    kernels_for(c, Linear, 1.0);
+    kernels_for(c, Cubic, 3.0);
+}
+
+/// Flow velocity (plain and accelerated), flow time and deficit lookup of
+/// one law, monomorphised as the sampler runs it.
+fn kernels_for<D: Drag>(c: &mut Criterion, d: D, sigma: f64) {
+    let name = d.name();
+    let f = d.flow(sigma);
+    let vu = d.inverse(sigma);
+    let bench_velocity = |c: &mut Criterion, label: &str, f: &D::Flow| {
+        c.bench_function(&format!("{label}/{name}"), |b| {
             let mut k = 0u32;
             b.iter(|| {
                 k = k.wrapping_add(1);
@@ -29,24 +35,16 @@ fn kernels(c: &mut Criterion) {
                 black_box(f.velocity(black_box(v0), black_box(t)))
             })
         });
-        let guide = irtp::model::drag::InverseGuide::new(&f);
-        c.bench_function(&format!("flow_velocity_guided/{d}"), |b| {
-            let mut k = 0u32;
-            b.iter(|| {
-                k = k.wrapping_add(1);
-                let v0 = -0.9 * vu + 1.8 * vu * ((k % 97) as f64 / 97.0);
-                let t = 0.05 + (k % 13) as f64 * 0.3;
-                black_box(f.velocity_guided(black_box(v0), black_box(t), &guide))
-            })
-        });
-        c.bench_function(&format!("flow_time/{d}"), |b| {
-            b.iter(|| black_box(f.time(black_box(-0.5 * vu), black_box(0.8 * vu))))
-        });
-        let t = DeficitTable::new(&d, sigma, -vu, vu).unwrap();
-        c.bench_function(&format!("deficit_table/{d}"), |b| {
-            b.iter(|| black_box(t.deficits(black_box(-0.5 * vu), black_box(0.8 * vu))))
-        });
-    }
+    };
+    bench_velocity(c, "flow_velocity", &f);
+    bench_velocity(c, "flow_velocity_guided", &f.clone().accelerated());
+    c.bench_function(&format!("flow_time/{name}"), |b| {
+        b.iter(|| black_box(f.time(black_box(-0.5 * vu), black_box(0.8 * vu))))
+    });
+    let t = DeficitTable::new(&d, sigma, -vu, vu).unwrap();
+    c.bench_function(&format!("deficit_table/{name}"), |b| {
+        b.iter(|| black_box(t.deficits(black_box(-0.5 * vu), black_box(0.8 * vu))))
+    });
 }
 
 fn particles(c: &mut Criterion) {

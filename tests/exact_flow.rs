@@ -2,8 +2,8 @@
 //! quadrature defaults of the `Drag` trait, and displacement vs a fine
 //! numerical integration of v(t).
 
-use irtp::model::drag::{Flow, InverseGuide};
-use irtp::model::{Drag, DragLaw};
+use irtp::model::drag::{AnyFlow, TabulatedFlow};
+use irtp::model::{Drag, DragLaw, FlowMap};
 use proptest::prelude::*;
 use std::sync::OnceLock;
 
@@ -13,8 +13,12 @@ use std::sync::OnceLock;
 struct Generic(DragLaw);
 
 impl Drag for Generic {
+    type Flow = TabulatedFlow<Generic>;
     fn name(&self) -> &'static str {
         "generic"
+    }
+    fn flow(&self, s: f64) -> TabulatedFlow<Generic> {
+        TabulatedFlow::new(*self, s)
     }
     fn force(&self, v: f64) -> f64 {
         self.0.force(v)
@@ -121,9 +125,9 @@ proptest! {
         let s = if plus { sigma } else { -sigma };
         let va = -vu + 2.0 * vu * xa;
         let t = 10f64.powf(lt);
-        let f = Flow::new(d, s);
-        let g = guide(case, plus);
-        let (a, b) = (f.velocity(va, t), f.velocity_guided(va, t, g));
+        let f = d.flow(s);
+        let g = guided(case, plus);
+        let (a, b) = (f.velocity(va, t), g.velocity(va, t));
         prop_assert!((a - b).abs() <= 1e-12, "{d} s={s} va={va} t={t}: {a} vs {b}");
     }
 }
@@ -137,7 +141,7 @@ proptest! {
     fn potential_difference_is_flow_time(case in 0usize..7, plus: bool, xa in 0.0005f64..0.9995, ld in 0.0f64..12.0) {
         let (d, s, vs, va, vb) = setup(case, plus, xa, ld);
         prop_assume!(vb != vs);
-        let f = Flow::new(d, s);
+        let f = d.flow(s);
         let (pa, pb) = (f.potential(va), f.potential(vb));
         let t = f.time(va, vb);
         let tp = (pa - pb) / f.rate();
@@ -146,13 +150,13 @@ proptest! {
     }
 }
 
-/// Guides for every case and sign, built once.
-fn guide(case: usize, plus: bool) -> &'static InverseGuide {
-    static GUIDES: OnceLock<Vec<InverseGuide>> = OnceLock::new();
+/// Accelerated flows (tabulated inverse potential) for every case and sign, built once.
+fn guided(case: usize, plus: bool) -> &'static AnyFlow {
+    static GUIDES: OnceLock<Vec<AnyFlow>> = OnceLock::new();
     let all = GUIDES.get_or_init(|| {
         CASES
             .iter()
-            .flat_map(|&(d, sigma)| [sigma, -sigma].map(|s| InverseGuide::new(&Flow::new(d, s))))
+            .flat_map(|&(d, sigma)| [sigma, -sigma].map(|s| d.flow(s).accelerated()))
             .collect()
     });
     &all[2 * case + usize::from(!plus)]

@@ -47,23 +47,10 @@ const LAYER: f64 = 0.2;
 /// Largest grading exponent (a -> -1 would ask for q -> infinity).
 pub(crate) const MAX_GRADING: f64 = 40.0;
 
-/// Σ - g(v_u - x) for 0 ≤ x ≤ v_u, free of cancellation as x -> 0 (the
-/// drift of the + state at distance x below v_u; by oddness of g, |drift| of
-/// the - state at distance x above v_l). Exact identities:
-/// tan: Σ - tan(v_u - x) = (1+Σ²) tan x / (1 + Σ tan x);
-/// tanh: Σ - tanh(v_u - x) = (1-Σ²) tanh x / (1 - Σ tanh x).
+/// Σ - g(v_u - x) for 0 ≤ x ≤ v_u, free of cancellation as x -> 0: the
+/// law's [`Drag::edge_drift`].
 pub(crate) fn edge_drift(drag: DragLaw, sigma: f64, x: f64) -> f64 {
-    match drag {
-        DragLaw::Tan => {
-            let t = x.tan();
-            (1.0 + sigma * sigma) * t / (1.0 + sigma * t)
-        }
-        DragLaw::Tanh => {
-            let t = x.tanh();
-            (1.0 - sigma * sigma) * t / (1.0 - sigma * t)
-        }
-        DragLaw::Linear => x,
-    }
+    drag.edge_drift(sigma, x)
 }
 
 /// A mesh with its upwind rates. Cell i is `[edges[i], edges[i+1]]`.

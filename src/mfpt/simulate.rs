@@ -10,6 +10,7 @@
 
 use super::Problem;
 use crate::error::{finite, Error, Result};
+use crate::model::Drag;
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use crate::stats::MeanAcc;
@@ -179,12 +180,11 @@ impl EulerFpt {
 
     /// One particle's first passage.
     pub fn sample(&self, rng: &mut Rng, start_plus: bool) -> FptSample {
-        use crate::model::DragLaw;
-        match self.problem.params().drag() {
-            DragLaw::Tan => self.run(rng, start_plus, f64::tan),
-            DragLaw::Tanh => self.run(rng, start_plus, f64::tanh),
-            DragLaw::Linear => self.run(rng, start_plus, |v| v),
-        }
+        crate::with_drag!(self.problem.params().drag(), |d| self.run(
+            rng,
+            start_plus,
+            |v| d.force(v)
+        ))
     }
 
     #[inline(always)]

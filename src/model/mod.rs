@@ -2,6 +2,8 @@
 
 pub mod drag;
 pub mod params;
+pub mod reset;
 
-pub use drag::{Drag, DragLaw};
+pub use drag::{Drag, DragLaw, FlowMap};
 pub use params::{Params, RawParams};
+pub use reset::{Reset, ResetRule};

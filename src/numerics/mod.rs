@@ -3,6 +3,8 @@
 //! finder and point grids. Neutral ground so that `model` does not depend on
 //! `analytic`.
 
+pub mod chebyshev;
+pub mod fastmath;
 pub mod grid;
 pub mod quad;
 pub mod root;

@@ -23,9 +23,9 @@
 //!
 //! Implementation: the drag law and sampler are matched once per run and the
 //! kernel is monomorphised; [`LANES`] particles are integrated side by side
-//! (bit-identical to one at a time); g(v) uses the Cephes [`tan`] and an
-//! expm1-based [`tanh`] (within 3 ulp of libm, platform-independent) instead
-//! of `DragLaw::force`.
+//! (bit-identical to one at a time); g(v) is [`Drag::fast_force`] (for tan
+//! and tanh the kernels of [`crate::numerics::fastmath`], within 3 ulp of
+//! libm and platform-independent).
 //!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
@@ -36,7 +36,7 @@
 
 use super::{Observables, SimSpec};
 use crate::error::{Error, Result};
-use crate::model::{DragLaw, Params};
+use crate::model::{Drag, DragLaw, Params};
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use rand::Rng as _;
@@ -195,118 +195,10 @@ pub fn simulate_with_lanes(
     let plan = EulerPlan::new(params, spec, dt)?;
     // Match the drag law and sampler once, outside the hot loop: the kernel
     // is monomorphised per (law, sampler) and has no dispatch per step.
-    macro_rules! go {
-        ($f:expr) => {
-            match sampling {
-                EventSampling::Geometric => {
-                    run::<_, Geometric>($f, params, spec, &plan, lanes, progress)
-                }
-                EventSampling::Bernoulli => {
-                    run::<_, Bernoulli>($f, params, spec, &plan, lanes, progress)
-                }
-            }
-        };
-    }
-    Ok(match params.drag() {
-        DragLaw::Tan => go!(Tan),
-        DragLaw::Tanh => go!(Tanh),
-        DragLaw::Linear => go!(Linear),
-    })
-}
-
-// Zero-sized drag types so each law gets its own compiled kernel.
-#[derive(Clone, Copy)]
-struct Tan;
-#[derive(Clone, Copy)]
-struct Tanh;
-#[derive(Clone, Copy)]
-struct Linear;
-
-trait Force: Copy + Send + Sync {
-    fn g(self, v: f64) -> f64;
-}
-impl Force for Tan {
-    #[inline(always)]
-    fn g(self, v: f64) -> f64 {
-        tan(v)
-    }
-}
-impl Force for Tanh {
-    #[inline(always)]
-    fn g(self, v: f64) -> f64 {
-        tanh(v)
-    }
-}
-impl Force for Linear {
-    #[inline(always)]
-    fn g(self, v: f64) -> f64 {
-        v
-    }
-}
-
-/// tan(x), Cephes algorithm (Moshier): Cody-Waite reduction by π/4 in three
-/// parts, then tan z ≈ z + z³ P(z²)/Q(z²) on |z| ≤ π/4, and -1/tan for the
-/// odd octants. Relative error ≲ 2 ulp (tested against `f64::tan` below).
-/// Hand-written because the platform libm `tan` costs ~18 ns and dominates
-/// the Euler step (the linear-drag step costs ~4 ns); this kernel is ~3x
-/// faster and identical on every platform (bit reproducibility across libms).
-#[inline(always)]
-#[allow(clippy::excessive_precision)] // Cephes coefficients quoted verbatim
-pub fn tan(xx: f64) -> f64 {
-    const P: [f64; 3] = [
-        -1.309_369_391_813_837_776_46e4,
-        1.153_516_648_385_874_161_40e6,
-        -1.795_652_519_764_848_779_88e7,
-    ];
-    const Q: [f64; 4] = [
-        1.368_129_634_706_929_546_78e4,
-        -1.320_892_344_402_109_674_47e6,
-        2.500_838_018_233_579_158_39e7,
-        -5.386_957_559_294_546_298_81e7,
-    ];
-    const DP1: f64 = 7.853_981_554_508_209_228_515_625e-1;
-    const DP2: f64 = 7.946_627_356_147_928_367_14e-9;
-    const DP3: f64 = 3.061_616_997_868_382_943_07e-17;
-    let x = xx.abs();
-    if !(x < 1.073_741_824e9) {
-        return xx.tan(); // huge or non-finite: reduction would lose accuracy
-    }
-    let mut y = (x * (4.0 * std::f64::consts::FRAC_1_PI)).floor();
-    let mut j = y as u64 & 15;
-    if j & 1 == 1 {
-        j += 1;
-        y += 1.0;
-    }
-    let z = ((x - y * DP1) - y * DP2) - y * DP3;
-    let zz = z * z;
-    let p = (P[0] * zz + P[1]) * zz + P[2];
-    let q = (((zz + Q[0]) * zz + Q[1]) * zz + Q[2]) * zz + Q[3];
-    let mut t = z + z * (zz * p / q);
-    if j & 2 != 0 {
-        t = -1.0 / t;
-    }
-    if xx < 0.0 {
-        -t
-    } else {
-        t
-    }
-}
-
-/// tanh(x) = expm1(2x) / (expm1(2x) + 2), accurate for small |x| too
-/// (expm1 avoids cancellation); faster than the platform `tanh`.
-#[inline(always)]
-pub fn tanh(x: f64) -> f64 {
-    let a = x.abs();
-    if !(a < 22.0) {
-        return x.tanh(); // |tanh| = 1 to double precision, or NaN
-    }
-    let e = (2.0 * a).exp_m1();
-    let t = e / (e + 2.0);
-    if x < 0.0 {
-        -t
-    } else {
-        t
-    }
+    Ok(crate::with_drag!(params.drag(), |d| match sampling {
+        EventSampling::Geometric => run::<_, Geometric>(d, params, spec, &plan, lanes, progress),
+        EventSampling::Bernoulli => run::<_, Bernoulli>(d, params, spec, &plan, lanes, progress),
+    }))
 }
 
 /// Reset / flip decisions of one particle (steps 3 and 4 of the module docs).
@@ -385,8 +277,8 @@ impl Events for Bernoulli {
     }
 }
 
-fn run<F: Force, E: Events>(
-    f: F,
+fn run<D: Drag, E: Events>(
+    f: &D,
     params: &Params,
     spec: &SimSpec,
     plan: &EulerPlan,
@@ -451,8 +343,8 @@ fn run<F: Force, E: Events>(
     total
 }
 
-struct Kernel<'a, F> {
-    f: F,
+struct Kernel<'a, D> {
+    f: &'a D,
     sigma: f64,
     v_r: f64,
     lo: f64,
@@ -476,7 +368,7 @@ pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
     1u64.saturating_add((u.ln() / ln_1mp) as u64)
 }
 
-impl<F: Force> Kernel<'_, F> {
+impl<D: Drag> Kernel<'_, D> {
     #[inline(always)]
     fn bin(&self, v: f64) -> usize {
         let i = ((v - self.lo) * self.scale) as isize;
@@ -532,7 +424,7 @@ impl<F: Force> Kernel<'_, F> {
                 if ev[l].reset(n, &mut rng[l]) {
                     v[l] = self.v_r;
                 } else {
-                    v[l] += dt * (eta[l] - self.f.g(v[l]));
+                    v[l] += dt * (eta[l] - self.f.fast_force(v[l]));
                 }
                 // 4. flip
                 if ev[l].flip(n, &mut rng[l]) {
@@ -715,38 +607,6 @@ mod tests {
             let se_var = ((mu4 - var * var) / reps as f64).sqrt();
             assert!((acc.variance() - var).abs() < 4.0 * se_var, "{acc:?}");
         }
-    }
-
-    /// Max relative error in units of 2^-52 against the platform libm.
-    fn max_ulps(f: fn(f64) -> f64, g: fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
-        let n = 400_000;
-        (0..=n)
-            .map(|i| lo + (hi - lo) * i as f64 / n as f64)
-            .map(|x| {
-                let (a, b) = (f(x), g(x));
-                if b == 0.0 {
-                    (a - b).abs() / f64::MIN_POSITIVE
-                } else {
-                    ((a - b) / b).abs() / f64::EPSILON
-                }
-            })
-            .fold(0.0, f64::max)
-    }
-
-    #[test]
-    fn fast_tan_and_tanh_are_accurate() {
-        let h = std::f64::consts::FRAC_PI_2;
-        let tan_err = max_ulps(tan, f64::tan, -h + 1e-9, h - 1e-9);
-        assert!(tan_err < 3.0, "tan: {tan_err} ulp");
-        let tiny = max_ulps(tan, f64::tan, -1e-6, 1e-6);
-        assert!(tiny < 2.0, "tan near 0: {tiny} ulp");
-        let tanh_err = max_ulps(tanh, f64::tanh, -25.0, 25.0);
-        assert!(tanh_err < 3.0, "tanh: {tanh_err} ulp");
-        let tiny = max_ulps(tanh, f64::tanh, -1e-6, 1e-6);
-        assert!(tiny < 3.0, "tanh near 0: {tiny} ulp");
-        assert_eq!(tan(0.0), 0.0);
-        assert_eq!(tanh(0.0), 0.0);
-        assert!(tan(f64::NAN).is_nan() && tanh(f64::NAN).is_nan());
     }
 
     #[test]

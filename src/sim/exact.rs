@@ -28,17 +28,13 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 
 use crate::error::{Error, Result};
-use crate::model::drag::{Flow, InverseGuide};
+use crate::model::drag::{AnyFlow, FlowMap};
 use crate::model::{Drag, Params};
+use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use crate::sim::{Observables, SimSpec};
 use rand::Rng as _;
-
-/// Chebyshev degree (number of nodes) per table piece.
-const NODES: usize = 16;
-/// Coefficients of the antiderivative on one piece (degree NODES).
-const NC: usize = NODES + 1;
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on
@@ -87,7 +83,8 @@ impl DeficitTable {
             stack.push((a, b));
         }
         while let Some((a, b)) = stack.pop() {
-            let (ok, c) = fit_piece(&f, a, b);
+            let fit = chebyshev::fit(&f, a, b);
+            let (ok, c) = (fit.resolved(1e-14), fit.anti);
             if ok || b - a < min_width {
                 if !ok {
                     return Err(Error::Numerical {
@@ -142,7 +139,7 @@ impl DeficitTable {
         let n = self.coef.len();
         let p = self.bounds[1..n].partition_point(|&b| b <= v);
         let (a, b) = (self.bounds[p], self.bounds[p + 1]);
-        let x = ((2.0 * v - a - b) / (b - a)).clamp(-1.0, 1.0);
+        let x = chebyshev::to_unit(v, a, b);
         let c = &self.coef[p];
         let o = &self.offset[p];
         let r = clenshaw2(c, x);
@@ -158,86 +155,10 @@ impl DeficitTable {
     }
 }
 
-/// Two Chebyshev series Σ_j `c_j[k]` T_j(x), k = 0, 1, in one Clenshaw pass
-/// (independent recurrences interleaved for instruction-level parallelism).
-#[inline]
-fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
-    let (mut b1, mut b2) = ([0.0f64; 2], [0.0f64; 2]);
-    let x2 = 2.0 * x;
-    for cj in c[1..].iter().rev() {
-        let b0 = [x2 * b1[0] + (cj[0] - b2[0]), x2 * b1[1] + (cj[1] - b2[1])];
-        b2 = b1;
-        b1 = b0;
-    }
-    [x * b1[0] + (c[0][0] - b2[0]), x * b1[1] + (c[0][1] - b2[1])]
-}
-
-/// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
-#[inline]
-fn clenshaw(c: &[f64; NC], x: f64) -> f64 {
-    let (mut b1, mut b2) = (0.0, 0.0);
-    let x2 = 2.0 * x;
-    for &ck in c[1..].iter().rev() {
-        // Plain mul/add: without a target FMA unit, mul_add is a slow soft call.
-        let b0 = x2 * b1 + (ck - b2);
-        b2 = b1;
-        b1 = b0;
-    }
-    x * b1 + (c[0] - b2)
-}
-
-/// Chebyshev fit of both integrands on [a, b] and their antiderivatives
-/// (zero at a). Returns whether the fit is resolved to machine precision.
-fn fit_piece(f: &dyn Fn(f64) -> [f64; 2], a: f64, b: f64) -> (bool, [[f64; NC]; 2]) {
-    let n = NODES;
-    let h = 0.5 * (b - a);
-    let mid = 0.5 * (a + b);
-    let vals: Vec<[f64; 2]> = (0..n)
-        .map(|j| {
-            let x = (std::f64::consts::PI * (j as f64 + 0.5) / n as f64).cos();
-            f(mid + h * x)
-        })
-        .collect();
-    let mut out = [[0.0; NC]; 2];
-    let mut ok = true;
-    for k in 0..2 {
-        // Coefficients c_j of f = c_0/2 + Σ_{j≥1} c_j T_j.
-        let mut c = [0.0; NODES + 2];
-        for (j, cj) in c.iter_mut().enumerate().take(n) {
-            let mut s = 0.0;
-            for (i, v) in vals.iter().enumerate() {
-                s += v[k] * (std::f64::consts::PI * j as f64 * (i as f64 + 0.5) / n as f64).cos();
-            }
-            *cj = 2.0 * s / n as f64;
-        }
-        let scale = c[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let tail = c[n - 3..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        if !(tail <= 1e-14 * scale.max(f64::MIN_POSITIVE)) && scale > 0.0 {
-            ok = false;
-        }
-        if !vals.iter().all(|v| v[k].is_finite()) {
-            ok = false;
-        }
-        // Antiderivative: C_j = h (c_{j-1} - c_{j+1}) / (2j), C_0 from F(-1) = 0.
-        let d = &mut out[k];
-        for j in 1..NC {
-            d[j] = h * (c[j - 1] - c[j + 1]) / (2.0 * j as f64);
-        }
-        let mut at_minus1 = 0.0;
-        for (j, dj) in d.iter().enumerate().skip(1) {
-            at_minus1 += if j % 2 == 0 { *dj } else { -*dj };
-        }
-        d[0] = -at_minus1;
-    }
-    (ok, out)
-}
-
 /// Everything fixed for a run: parameters, tables, histogram geometry.
-struct Sampler {
-    /// Flows for s = +Sigma (index 0) and s = -Sigma (index 1).
-    flows: [Flow; 2],
-    /// Their tabulated inverse potentials (Newton starting points).
-    guides: [InverseGuide; 2],
+struct Sampler<F> {
+    /// Flows for s = +Sigma (index 0) and s = -Sigma (index 1), accelerated.
+    flows: [F; 2],
     lambda: f64,
     total_rate: f64,
     vr: f64,
@@ -245,7 +166,7 @@ struct Sampler {
     tables: [DeficitTable; 2],
     /// Flow time across bin k in full, per noise state (0 where never crossed).
     tau: [Vec<f64>; 2],
-    /// Flow potential (see [`Flow::potential`]) at every edge, per noise state.
+    /// Flow potential (see [`FlowMap::potential`]) at every edge, per noise state.
     phi_edges: [Vec<f64>; 2],
     /// Ψ(v_r) of each table (segment start after a reset).
     psi_vr: [[f64; 2]; 2],
@@ -264,14 +185,13 @@ struct Scratch {
     cross: [Vec<i64>; 2],
 }
 
-impl Sampler {
-    fn new(params: &Params, spec: &SimSpec) -> Result<Self> {
-        let drag = params.drag();
+impl<F: FlowMap> Sampler<F> {
+    fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
         let sigma = params.sigma();
         let (lo, hi) = params.bounds();
         let tables = [
-            DeficitTable::new(&drag, sigma, lo, hi)?,
-            DeficitTable::new(&drag, -sigma, lo, hi)?,
+            DeficitTable::new(drag, sigma, lo, hi)?,
+            DeficitTable::new(drag, -sigma, lo, hi)?,
         ];
         let b = spec.bins;
         let mut edges: Vec<f64> = (0..=b)
@@ -287,7 +207,10 @@ impl Sampler {
                 .map(|k| fin(drag.flow_time(-sigma, edges[k + 1], edges[k])))
                 .collect(),
         ];
-        let flows = [Flow::new(drag, sigma), Flow::new(drag, -sigma)];
+        let flows = [
+            drag.flow(sigma).accelerated(),
+            drag.flow(-sigma).accelerated(),
+        ];
         let phi_edges = [
             edges.iter().map(|&e| flows[0].potential(e)).collect(),
             edges.iter().map(|&e| flows[1].potential(e)).collect(),
@@ -295,10 +218,8 @@ impl Sampler {
         let vr = params.reset_velocity();
         let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
         let phi_vr = [flows[0].potential(vr), flows[1].potential(vr)];
-        let guides = [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])];
         Ok(Sampler {
             flows,
-            guides,
             phi_edges,
             psi_vr,
             phi_vr,
@@ -374,26 +295,25 @@ impl Sampler {
             let t_end = (t + gap).min(self.t_max);
             let si = usize::from(!plus);
             let flow = &self.flows[si];
-            let guide = &self.guides[si];
             let table = &self.tables[si];
             let vs = table.fixed_point();
             // Moments at grid times inside (t, t_end].
             while k < self.times.len() && self.times[k] <= t_end {
                 let dt = self.times[k] - t;
-                let vk = flow.velocity_guided(v, dt, guide);
+                let vk = flow.velocity(v, dt);
                 let xk = x + vs * dt - table.deficits(v, vk).0;
                 obs.record(k, vk, xk);
                 msd += obs.msd_term(k, xk);
                 k += 1;
             }
             let dt = t_end - t;
-            let vb = flow.velocity_guided(v, dt, guide);
+            let vb = flow.velocity(v, dt);
             let psi_a = psi_start.unwrap_or_else(|| table.psi(v));
             let psi_b = table.psi(vb);
             // Stationary window [burn_in, t_max].
             if t_end > self.burn_in {
                 let (va, psi_w, phi_w, dw) = if t < self.burn_in {
-                    let va = flow.velocity_guided(v, self.burn_in - t, guide);
+                    let va = flow.velocity(v, self.burn_in - t);
                     (va, table.psi(va), None, t_end - self.burn_in)
                 } else {
                     // After a reset the start potential is the precomputed one.
@@ -453,7 +373,17 @@ fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
 /// observables as the Euler method; `steps` counts events (flips + resets).
 /// Bit-identical for any thread count.
 pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Result<Observables> {
-    let sampler = Sampler::new(params, spec)?;
+    crate::with_drag!(params.drag(), |d| simulate_drag(d, params, spec, progress))
+}
+
+/// [`simulate`] for one law's type (monomorphised).
+fn simulate_drag<D: Drag>(
+    drag: &D,
+    params: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<Observables> {
+    let sampler = Sampler::new(drag, params, spec)?;
     let template = Observables::new(spec, params);
     let b = spec.bins;
     let (obs, _) = parallel::reduce(
@@ -488,35 +418,41 @@ pub fn first_passage(
     t_max: f64,
     rng: &mut Rng,
 ) -> (Option<f64>, u64) {
-    FirstPassage::with_guides(params, false).run(v0, vt, start_plus, t_max, rng)
+    FirstPassage::for_drag(&params.drag(), params, false).run(v0, vt, start_plus, t_max, rng)
 }
 
 /// Prepared exact first-passage sampler for one parameter set (flows and
-/// their tabulated inverse potentials built once); see [`first_passage`].
+/// their acceleration tables built once); see [`first_passage`].
 #[derive(Clone, Debug)]
-pub struct FirstPassage {
-    flows: [Flow; 2],
-    guides: Option<[InverseGuide; 2]>,
+pub struct FirstPassage<F = AnyFlow> {
+    flows: [F; 2],
     lambda: f64,
     total_rate: f64,
     vr: f64,
 }
 
 impl FirstPassage {
-    /// Prepare for `params`.
+    /// Prepare for `params` (any law, dispatched per call; engines use
+    /// [`FirstPassage::for_drag`] with the law's own type).
     pub fn new(params: &Params) -> Self {
-        Self::with_guides(params, true)
+        Self::for_drag(&params.drag(), params, true)
     }
+}
 
-    fn with_guides(params: &Params, guided: bool) -> Self {
-        let flows = [
-            Flow::new(params.drag(), params.sigma()),
-            Flow::new(params.drag(), -params.sigma()),
-        ];
-        let guides = guided.then(|| [InverseGuide::new(&flows[0]), InverseGuide::new(&flows[1])]);
+impl<F: FlowMap> FirstPassage<F> {
+    /// Prepare for `params` with the flows of `drag` (accelerated: built
+    /// once for many particles).
+    pub fn for_drag<D: Drag<Flow = F>>(drag: &D, params: &Params, accelerated: bool) -> Self {
+        let flow = |s: f64| {
+            let f = drag.flow(s);
+            if accelerated {
+                f.accelerated()
+            } else {
+                f
+            }
+        };
         FirstPassage {
-            flows,
-            guides,
+            flows: [flow(params.sigma()), flow(-params.sigma())],
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             vr: params.reset_velocity(),
@@ -551,10 +487,7 @@ impl FirstPassage {
             if t + gap >= t_max {
                 return (None, events);
             }
-            v = match &self.guides {
-                Some(g) => flow.velocity_guided(v, gap, &g[si]),
-                None => flow.velocity(v, gap),
-            };
+            v = flow.velocity(v, gap);
             t += gap;
             events += 1;
             if rng.gen::<f64>() * self.total_rate < self.lambda {
@@ -614,16 +547,13 @@ pub fn exact_first_passage(
         return Err(Error::invalid("--particles", particles, "particles >= 2"));
     }
     let (cp, swapped) = problem.canonical();
-    let fpt = FirstPassage::new(cp.params());
-    Ok(crate::mfpt::first_passage_stats(
-        particles,
-        seed,
-        progress,
-        |_, rng, plus| {
+    Ok(crate::with_drag!(cp.params().drag(), |d| {
+        let fpt = FirstPassage::for_drag(d, cp.params(), true);
+        crate::mfpt::first_passage_stats(particles, seed, progress, |_, rng, plus| {
             let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
             crate::mfpt::FptSample { time, work }
-        },
-    ))
+        })
+    }))
 }
 
 #[cfg(test)]

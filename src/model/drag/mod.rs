@@ -1,0 +1,367 @@
+//! Drag laws g(v) behind the [`Drag`] trait: one file per law, one registry.
+//!
+//! Between noise flips and resets the velocity follows the deterministic flow
+//! dv/dt = s - g(v) with s = ±Sigma (Eq. (5)). Its fixed point v* = g⁻¹(s)
+//! bounds the velocity: v ∈ (-g⁻¹(Sigma), g⁻¹(Sigma)) (Eqs. (8)-(10)).
+//!
+//! - [`tan`], [`tanh`], [`linear`]: the paper's laws (Table 1), each a unit
+//!   struct implementing [`Drag`] with its closed forms as overrides.
+//! - [`cubic`]: g = v + v³/3, a law given only by g and g' (the default path).
+//! - [`closed`]: the closed-form flow [`ClosedFlow`] shared by those laws.
+//! - [`tabulated`]: [`TabulatedFlow`], the fast exact-to-rounding flow of a law
+//!   that gives only g and g' (the default path of a new law).
+//! - [`registry`]: [`DragLaw`] (parse, serialise) and the one dispatch
+//!   [`with_drag!`](crate::with_drag) that monomorphises a method for every law.
+//!
+//! A new law is one new file implementing [`Drag`] plus one line in the
+//! registry (`docs/extending.md`).
+
+pub mod closed;
+pub mod cubic;
+pub mod linear;
+pub mod registry;
+pub mod tabulated;
+pub mod tan;
+pub mod tanh;
+
+pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
+pub use cubic::Cubic;
+pub use linear::Linear;
+pub use registry::{AnyFlow, DragLaw};
+pub use tabulated::TabulatedFlow;
+pub use tan::Tan;
+pub use tanh::Tanh;
+
+use crate::numerics::{quad, root};
+use std::fmt;
+
+/// The exact deterministic flow dv/dt = s - g(v) for one noise value s, with
+/// everything a sampler needs precomputed. All maps are monotone in time.
+pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
+    /// The fixed point v* = g⁻¹(s).
+    fn fixed_point(&self) -> f64;
+    /// g'(v*), the rate of the exponential approach to v*.
+    fn rate(&self) -> f64;
+    /// Flow time from va to vb: 0 if equal, +∞ if vb is not reached (behind
+    /// va, at or beyond v*).
+    fn time(&self, va: f64, vb: f64) -> f64;
+    /// The flow potential Φ with t(va → vb) = (Φ(va) - Φ(vb)) / g'(v*) for any
+    /// vb reached from va; -∞ at v*. A difference of potentials loses about
+    /// 1e-16 |Φ| absolute accuracy ([`FlowMap::time`] does not).
+    fn potential(&self, v: f64) -> f64;
+    /// Velocity after flowing for time t ≥ 0 from v0 (inverse of
+    /// [`FlowMap::time`]; tends to v* but never passes it).
+    fn velocity(&self, v0: f64, t: f64) -> f64;
+    /// The same flow with its acceleration tables built (for many calls).
+    /// Results agree with the plain flow to rounding.
+    fn accelerated(self) -> Self {
+        self
+    }
+}
+
+/// A velocity-dependent drag force g(v): odd, continuous, strictly
+/// increasing. A law must give [`Drag::name`], [`Drag::force`],
+/// [`Drag::derivative`] and its flow type; every other method has a robust
+/// default (numerical inverse, sampled slope bound, quadrature flows) that
+/// laws with closed forms override.
+pub trait Drag: Clone + Send + Sync + fmt::Debug {
+    /// The exact flow of this law ([`TabulatedFlow<Self>`] for a law with no
+    /// closed forms).
+    type Flow: FlowMap;
+
+    /// Short name (`tan`, `tanh`, `linear`).
+    fn name(&self) -> &'static str;
+    /// The drag force g(v).
+    fn force(&self, v: f64) -> f64;
+    /// Its derivative g'(v).
+    fn derivative(&self, v: f64) -> f64;
+    /// The flow dv/dt = s - g(v).
+    fn flow(&self, s: f64) -> Self::Flow;
+
+    /// The inverse g⁻¹(f): the fixed point of dv/dt = f - g(v). Default:
+    /// bracketed root of g(v) = |f| (exactly odd).
+    fn inverse(&self, f: f64) -> f64 {
+        numeric_inverse(self, f)
+    }
+    /// sup_v g(v): the noise amplitude Sigma must stay strictly below it.
+    fn force_limit(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]:
+    /// sets the Euler stability limit dt < 1/max g' and the FP CFL number.
+    /// Default: the largest of 2049 samples and the edges, plus 1 % margin.
+    fn max_derivative(&self, sigma: f64) -> f64 {
+        sampled_max_derivative(self, sigma)
+    }
+    /// g(v) as the Euler kernel evaluates it (a faster kernel of the same
+    /// function where one exists, e.g. Cephes tan).
+    #[inline(always)]
+    fn fast_force(&self, v: f64) -> f64 {
+        self.force(v)
+    }
+
+    /// The drift s - g(v). Override with a form that stays accurate near
+    /// the fixed point v* = g⁻¹(s), where s - g(v) ≈ g'(v*) (v* - v) cancels.
+    #[inline]
+    fn drift(&self, s: f64, v: f64) -> f64 {
+        s - self.force(v)
+    }
+
+    /// The drift s - g(v* - u) at distance u from the fixed point, accurate
+    /// as u → 0 (v* - u itself rounds, so drift(s, v) cannot resolve u below
+    /// ulp(v*)). Default: u times the mean of g' over [v* - u, v*] by
+    /// 8-point Gauss-Legendre when that interval is short and misses v = 0
+    /// (no cancellation), the plain difference otherwise.
+    #[inline]
+    fn drift_at_distance(&self, s: f64, u: f64) -> f64 {
+        let vs = self.inverse(s);
+        if u.abs() <= 0.25 * vs.abs() {
+            u * mean_derivative(self, vs - u, vs)
+        } else {
+            self.drift(s, vs - u)
+        }
+    }
+
+    /// Sigma - g(v_u - x), 0 ≤ x ≤ v_u: the drift of the + state at distance
+    /// x below the upper edge (by oddness, |drift| of the - state above the
+    /// lower edge), free of cancellation as x → 0. Sets the FP mesh's edge
+    /// rates.
+    #[inline]
+    fn edge_drift(&self, sigma: f64, x: f64) -> f64 {
+        self.drift_at_distance(sigma, x)
+    }
+
+    /// Flow time t(va → vb) = ∫_{va}^{vb} dv / (s - g(v)): 0 if vb = va and
+    /// +∞ if vb is not reached. Default: quadrature in w = ln|v* - v| (the
+    /// approach to v* is exponential, so the integrand is smooth in w).
+    fn flow_time(&self, s: f64, va: f64, vb: f64) -> f64 {
+        quadrature_time(self, s, va, vb)
+    }
+
+    /// Velocity after flowing for time t ≥ 0 from v0 (inverse of
+    /// [`Drag::flow_time`]). Default: safeguarded Newton on the quadrature.
+    fn flow_velocity(&self, s: f64, v0: f64, t: f64) -> f64 {
+        quadrature_velocity(self, s, v0, t)
+    }
+
+    /// Deficit integrals along the flow from va to vb:
+    /// (∫ (v* - v) dt, ∫ (v* - v)² dt) = ∫_{va}^{vb} (v* - v)^k / (s - g(v)) dv,
+    /// k = 1, 2. Their integrands are smooth up to v* (→ 1/g'(v*) and → 0).
+    fn flow_deficits(&self, s: f64, va: f64, vb: f64) -> (f64, f64) {
+        quadrature_deficits(self, s, va, vb)
+    }
+
+    /// Displacement ∫_0^t v dt' along the flow from v0 = v(0):
+    /// x = v* t - ∫ (v* - v) dt (no large cancellation).
+    fn flow_displacement(&self, s: f64, v0: f64, t: f64) -> f64 {
+        let vs = self.inverse(s);
+        let vb = self.flow_velocity(s, v0, t);
+        vs * t - self.flow_deficits(s, v0, vb).0
+    }
+}
+
+/// Mean of g' over [a, b] by 8-point Gauss-Legendre (exact for degree 15).
+#[inline]
+fn mean_derivative<D: Drag>(d: &D, a: f64, b: f64) -> f64 {
+    const X: [f64; 4] = [
+        0.183_434_642_495_649_8,
+        0.525_532_409_916_329,
+        0.796_666_477_413_626_7,
+        0.960_289_856_497_536_3,
+    ];
+    const W: [f64; 4] = [
+        0.362_683_783_378_362,
+        0.313_706_645_877_887_3,
+        0.222_381_034_453_374_5,
+        0.101_228_536_290_376_3,
+    ];
+    let (m, h) = (0.5 * (a + b), 0.5 * (b - a));
+    let mut sum = 0.0;
+    for i in 0..4 {
+        sum += W[i] * (d.derivative(m - h * X[i]) + d.derivative(m + h * X[i]));
+    }
+    0.5 * sum
+}
+
+/// g⁻¹(f) for an odd increasing g: expand a bracket from 0, then bisect to
+/// the last bit (g is only assumed continuous, so no Newton). Exactly odd.
+fn numeric_inverse<D: Drag>(d: &D, f: f64) -> f64 {
+    let a = f.abs();
+    if !(a > 0.0) {
+        return if a == 0.0 { 0.0 } else { f64::NAN };
+    }
+    if !(a < d.force_limit()) {
+        return f64::INFINITY.copysign(f);
+    }
+    let mut hi = 1.0f64;
+    while d.force(hi) < a {
+        hi *= 2.0;
+        if !hi.is_finite() {
+            return f64::INFINITY.copysign(f);
+        }
+    }
+    let mut lo = 0.0f64;
+    // Bisection halves the bracket: ~1100 steps reach adjacent doubles from
+    // any finite bracket, so the loop always terminates with a converged root.
+    loop {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if d.force(mid) < a {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let r = if a - d.force(lo) <= d.force(hi) - a {
+        lo
+    } else {
+        hi
+    };
+    r.copysign(f)
+}
+
+/// Largest of 2049 samples of g' on [-v_u, v_u] (and at the edges), with a
+/// 1 % margin for the slope between samples.
+fn sampled_max_derivative<D: Drag>(d: &D, sigma: f64) -> f64 {
+    let vu = d.inverse(sigma);
+    let n = 2048;
+    let mut m = d.derivative(vu).max(d.derivative(-vu));
+    for i in 0..=n {
+        let v = -vu + 2.0 * vu * i as f64 / n as f64;
+        let g1 = d.derivative(v);
+        if g1.is_finite() {
+            m = m.max(g1);
+        }
+    }
+    1.01 * m
+}
+
+/// [`Drag::flow_time`] by quadrature in w = ln|v* - v|.
+fn quadrature_time<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> f64 {
+    let vs = d.inverse(s);
+    let (ua, ub) = (vs - va, vs - vb);
+    if vb == va {
+        return 0.0;
+    }
+    if !reachable(ua, ub) {
+        return f64::INFINITY;
+    }
+    // t = ∫_{wb}^{wa} u / (s - g(v* - u)) dw, u = ±e^w: bounded, smooth.
+    let sg = ua.signum();
+    let f = |w: f64| {
+        let u = sg * w.exp();
+        u / d.drift_at_distance(s, u)
+    };
+    quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14)
+}
+
+/// [`Drag::flow_velocity`] by safeguarded Newton on [`quadrature_time`]:
+/// H(w) = t - t(v0 → v(w)) increases with w = ln|v* - v|, H'(w) = u / (s - g(v)).
+fn quadrature_velocity<D: Drag>(d: &D, s: f64, v0: f64, t: f64) -> f64 {
+    let vs = d.inverse(s);
+    let ua = vs - v0;
+    if t <= 0.0 || ua == 0.0 {
+        return v0;
+    }
+    let sg = ua.signum();
+    let wa = ua.abs().ln();
+    let h = |w: f64| {
+        let u = sg * w.exp();
+        let v = vs - u;
+        let tt = d.flow_time(s, v0, v);
+        (t - tt, u / d.drift_at_distance(s, u), 0.0)
+    };
+    let g1 = d.derivative(vs).max(f64::MIN_POSITIVE);
+    let w = root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
+    vs - sg * w.exp()
+}
+
+/// [`Drag::flow_deficits`] by adaptive quadrature in v with the accurate
+/// drift (the default, and the tan and tanh laws).
+pub fn quadrature_deficits<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> (f64, f64) {
+    let vs = d.inverse(s);
+    if vb == va {
+        return (0.0, 0.0);
+    }
+    let f1 = |v: f64| {
+        let u = vs - v;
+        if u == 0.0 {
+            1.0 / d.derivative(vs)
+        } else {
+            u / d.drift_at_distance(s, u)
+        }
+    };
+    let f2 = |v: f64| (vs - v) * f1(v);
+    (
+        quad::integrate(&f1, va, vb, 1e-14),
+        quad::integrate(&f2, va, vb, 1e-14),
+    )
+}
+
+/// Is vb (distance ub to v*) reached by the flow from va (distance ua)?
+#[inline]
+pub(crate) fn reachable(ua: f64, ub: f64) -> bool {
+    ua != 0.0 && ub != 0.0 && ua.signum() == ub.signum() && ub.abs() <= ua.abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn derivative_matches_finite_difference() {
+        for d in DragLaw::ALL {
+            for &v in &[-0.9, -0.3, 0.0, 0.2, 0.7] {
+                let h = 1e-6;
+                let fd = (d.force(v + h) - d.force(v - h)) / (2.0 * h);
+                assert!((fd - d.derivative(v)).abs() < 1e-8, "{d} at {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn inverse_is_inverse() {
+        for d in DragLaw::ALL {
+            for &f in &[-0.9, -0.1, 0.0, 0.4, 0.95] {
+                assert!((d.force(d.inverse(f)) - f).abs() < 1e-14);
+                assert!((d.force(numeric_inverse(&d, f)) - f).abs() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn max_derivative_bounds_derivative_on_interval() {
+        for (d, sigma) in [
+            (DragLaw::Tan, 3.0),
+            (DragLaw::Tanh, 0.6),
+            (DragLaw::Linear, 2.0),
+        ] {
+            let vu = d.inverse(sigma);
+            let m = d.max_derivative(sigma);
+            let ms = sampled_max_derivative(&d, sigma);
+            assert!(ms >= m && ms <= 1.0101 * m, "{d}: {ms} vs {m}");
+            for i in 0..=100 {
+                let v = -vu + 2.0 * vu * i as f64 / 100.0;
+                assert!(d.derivative(v) <= m * (1.0 + 1e-12));
+            }
+        }
+    }
+
+    #[test]
+    fn gauss_legendre_drift_matches_closed_form() {
+        for (d, s) in [(DragLaw::Tan, 3.0), (DragLaw::Tanh, -0.6)] {
+            let vs = d.inverse(s);
+            for &u in &[1e-12, 1e-6, 1e-3, 0.1 * vs.abs()] {
+                let u = u.copysign(vs);
+                let exact = d.drift_at_distance(s, u);
+                let gl = u * mean_derivative(&d, vs - u, vs);
+                assert!(
+                    (gl / exact - 1.0).abs() < 1e-13,
+                    "{d} u={u}: {gl} vs {exact}"
+                );
+            }
+        }
+    }
+}

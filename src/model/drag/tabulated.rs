@@ -1,0 +1,262 @@
+//! The flow of a law that gives only g and g': tabulated once per noise
+//! value, then exact to about 1e-14 at the cost of a few polynomial sums.
+//!
+//! In the canonical frame (s ≥ 0, u = v* - v ≥ 0) the flow potential is
+//! Φ(u) = ln u + R(u), t(va → vb) = (Φ(ua) - Φ(ub)) / k with k = g'(v*), and
+//! R'(u) = k / (s - g(v* - u)) - 1/u is bounded and smooth (the approach to
+//! v* is exponential, so the log singularity is all of Φ's). R' is fitted by
+//! piecewise Chebyshev series on [u_min, 2 v*] (dyadic pieces towards 0,
+//! adaptive pieces elsewhere, a break at v = 0 where g may be non-smooth) and
+//! integrated exactly; below u_min = 1e-9 v*, R is linear. A velocity solve
+//! is a safeguarded Newton iteration in δ = ln(u/ua) on
+//! δ + R(ua e^δ) - R(ua) + k t = 0, whose slope 1 + u R'(u) = u k / drift lies
+//! in (0, ∞); two or three steps converge from the linearised start.
+//! Velocities outside [-|v*|, |v*|] (never reached when |s| = Sigma) fall
+//! back to the trait's quadrature.
+
+use super::{quadrature_time, quadrature_velocity, reachable, Drag, FlowMap};
+use crate::numerics::chebyshev::{self, clenshaw, NC};
+use std::sync::Arc;
+
+/// Largest number of pieces (a law this rough is rejected).
+const MAX_PIECES: usize = 4096;
+
+/// R(u) and R'(u) on piecewise Chebyshev series.
+#[derive(Debug)]
+struct Table {
+    /// Piece boundaries, increasing: u_min, ..., 2 v*.
+    bounds: Vec<f64>,
+    /// Per piece: R' series and R antiderivative series.
+    slope: Vec<[f64; NC]>,
+    anti: Vec<[f64; NC]>,
+    /// R at each piece's left end.
+    offset: Vec<f64>,
+    /// R'(u_min): R(u) = R'(u_min) u below u_min.
+    slope_min: f64,
+    /// max |R| over the table (bracket for the velocity solve).
+    r_max: f64,
+}
+
+impl Table {
+    fn build<D: Drag>(drag: &D, s: f64, vs: f64, k: f64) -> Option<Table> {
+        let r1 = |u: f64| [k / drag.drift_at_distance(s, u) - 1.0 / u];
+        let u_min = 1e-9 * vs;
+        let mut pieces: Vec<(f64, f64, chebyshev::Fit<1>)> = Vec::new();
+        let mut a = u_min;
+        while 2.0 * a <= 0.5 * vs {
+            pieces.push((a, 2.0 * a, chebyshev::fit(&r1, a, 2.0 * a)));
+            a *= 2.0;
+        }
+        for (lo, hi) in [(a, vs), (vs, 2.0 * vs)] {
+            let mut stack = vec![(lo, hi)];
+            while let Some((pa, pb)) = stack.pop() {
+                let f = chebyshev::fit(&r1, pa, pb);
+                // Resolved when the series' truncation error, integrated over
+                // the piece, is below 1e-15 absolute in R.
+                let ok = f.finite && f.tail[0] * (pb - pa) <= 1e-15 * f.scale[0].max(1.0);
+                if ok || pb - pa < 1e-12 * vs {
+                    if !f.finite || pieces.len() > MAX_PIECES {
+                        return None;
+                    }
+                    pieces.push((pa, pb, f));
+                } else {
+                    let m = 0.5 * (pa + pb);
+                    stack.push((m, pb));
+                    stack.push((pa, m));
+                }
+            }
+        }
+        if !pieces.iter().all(|p| p.2.finite) {
+            return None;
+        }
+        let slope_min = clenshaw(&pieces[0].2.series[0], -1.0);
+        let mut t = Table {
+            bounds: vec![u_min],
+            slope: Vec::with_capacity(pieces.len()),
+            anti: Vec::with_capacity(pieces.len()),
+            offset: Vec::with_capacity(pieces.len()),
+            slope_min,
+            r_max: (slope_min * u_min).abs(),
+        };
+        let mut acc = slope_min * u_min;
+        for (_, b, f) in pieces {
+            t.bounds.push(b);
+            t.offset.push(acc);
+            acc += clenshaw(&f.anti[0], 1.0);
+            t.r_max = t.r_max.max(acc.abs());
+            t.slope.push(f.series[0]);
+            t.anti.push(f.anti[0]);
+        }
+        t.r_max = t.r_max.max(acc.abs());
+        Some(t)
+    }
+
+    /// (R(u), R'(u)) for 0 ≤ u ≤ 2 v*.
+    #[inline]
+    fn eval(&self, u: f64) -> (f64, f64) {
+        if u < self.bounds[0] {
+            return (self.slope_min * u, self.slope_min);
+        }
+        let n = self.slope.len();
+        let p = self.bounds[1..n].partition_point(|&b| b <= u);
+        let x = chebyshev::to_unit(u, self.bounds[p], self.bounds[p + 1]);
+        (
+            self.offset[p] + clenshaw(&self.anti[p], x),
+            clenshaw(&self.slope[p], x),
+        )
+    }
+}
+
+/// The flow of a law without closed forms (see the module docs).
+#[derive(Clone, Debug)]
+pub struct TabulatedFlow<D> {
+    drag: D,
+    /// The signed noise value.
+    s: f64,
+    /// +1, or -1 when s < 0 was reflected.
+    refl: f64,
+    /// Canonical fixed point g⁻¹(|s|) > 0.
+    vs: f64,
+    /// g'(v*).
+    k: f64,
+    /// ln of a quarter ulp of v*: below it v* - v rounds to 0.
+    tiny_w: f64,
+    /// None when s = 0 or the law is too rough to tabulate: every call then
+    /// uses the trait's quadrature.
+    table: Option<Arc<Table>>,
+}
+
+impl<D: Drag> TabulatedFlow<D> {
+    /// Tabulate the flow of `drag` with noise value `s`.
+    pub fn new(drag: D, s: f64) -> Self {
+        let a = s.abs();
+        let vs = drag.inverse(a);
+        let k = drag.derivative(vs);
+        let usable = vs > 0.0 && vs.is_finite() && k > 0.0 && k.is_finite();
+        let table = if usable {
+            Table::build(&drag, a, vs, k).map(Arc::new)
+        } else {
+            None
+        };
+        TabulatedFlow {
+            drag,
+            s,
+            refl: if s < 0.0 { -1.0 } else { 1.0 },
+            vs,
+            k,
+            tiny_w: (vs * f64::EPSILON * 0.25).max(1e-300).ln(),
+            table,
+        }
+    }
+
+    /// The table, if v (canonical distance u) lies on it.
+    #[inline]
+    fn on_table(&self, u: f64) -> Option<&Table> {
+        self.table
+            .as_deref()
+            .filter(|_| u >= 0.0 && u <= 2.0 * self.vs)
+    }
+
+    /// Velocity in the canonical frame from distance ua ∈ (0, 2 v*].
+    fn velocity_canonical(&self, tb: &Table, v0: f64, ua: f64, t: f64) -> f64 {
+        let kt = self.k * t;
+        let (r_a, r1_a) = tb.eval(ua);
+        let wa = ua.ln();
+        // F(δ) = δ + R(ua e^δ) - R(ua) + k t, increasing; F(0) = k t > 0.
+        let f = |dl: f64| {
+            let u = ua * dl.exp();
+            let (r, r1) = tb.eval(u);
+            (dl + (r - r_a) + kt, 1.0 + u * r1)
+        };
+        let mut lo = -kt - 2.0 * tb.r_max - 1.0;
+        if lo + wa < self.tiny_w {
+            if f(self.tiny_w - wa).0 >= 0.0 {
+                return self.vs; // the answer is within rounding of v*
+            }
+            lo = self.tiny_w - wa;
+        }
+        let mut hi = 0.0;
+        let mut dl = if kt < 0.5 {
+            -kt / (1.0 + ua * r1_a)
+        } else {
+            (r_a - kt).min(0.0)
+        }
+        .max(lo);
+        for _ in 0..100 {
+            let (fv, d) = f(dl);
+            if fv > 0.0 {
+                hi = dl;
+            } else {
+                lo = dl;
+            }
+            let mut next = dl - fv / d;
+            if !(next > lo && next < hi) {
+                next = 0.5 * (lo + hi);
+            }
+            if (next - dl).abs() <= 4.0 * f64::EPSILON * dl.abs().max(1e-300) || hi - lo <= 0.0 {
+                dl = next;
+                break;
+            }
+            dl = next;
+        }
+        if kt < 0.5 {
+            v0 - ua * dl.exp_m1()
+        } else {
+            self.vs - ua * dl.exp()
+        }
+    }
+}
+
+impl<D: Drag> FlowMap for TabulatedFlow<D> {
+    fn fixed_point(&self) -> f64 {
+        self.refl * self.vs
+    }
+
+    fn rate(&self) -> f64 {
+        self.k
+    }
+
+    fn time(&self, va: f64, vb: f64) -> f64 {
+        let (ca, cb) = (self.refl * va, self.refl * vb);
+        let (ua, ub) = (self.vs - ca, self.vs - cb);
+        if vb == va {
+            return 0.0;
+        }
+        if !reachable(ua, ub) {
+            return f64::INFINITY;
+        }
+        match (self.on_table(ua), self.on_table(ub)) {
+            (Some(tb), Some(_)) => {
+                let (ra, rb) = (tb.eval(ua).0, tb.eval(ub).0);
+                (((cb - ca) / ub).ln_1p() + ra - rb) / self.k
+            }
+            _ => quadrature_time(&self.drag, self.s, va, vb),
+        }
+    }
+
+    fn potential(&self, v: f64) -> f64 {
+        let u = self.vs - self.refl * v;
+        match self.on_table(u) {
+            Some(tb) => u.ln() + tb.eval(u).0,
+            // Off the table: Φ(v) = Φ(v_ref) + k t(v → v_ref), v_ref = ∓v*
+            // the table's far end, reached from v (below v*) in time t.
+            None if u > 2.0 * self.vs && self.table.is_some() => {
+                let v_far = -self.refl * self.vs;
+                self.potential(v_far) + self.k * quadrature_time(&self.drag, self.s, v, v_far)
+            }
+            None => f64::NAN,
+        }
+    }
+
+    fn velocity(&self, v0: f64, t: f64) -> f64 {
+        let c0 = self.refl * v0;
+        let ua = self.vs - c0;
+        if !(t > 0.0) || ua == 0.0 {
+            return v0;
+        }
+        match self.on_table(ua) {
+            Some(tb) => self.refl * self.velocity_canonical(tb, c0, ua, t),
+            None => quadrature_velocity(&self.drag, self.s, v0, t),
+        }
+    }
+}

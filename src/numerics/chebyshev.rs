@@ -1,0 +1,136 @@
+//! Piecewise Chebyshev tables: fit a few smooth functions on a piece by
+//! interpolation at Chebyshev points, integrate the series exactly, and sum
+//! series by Clenshaw's recurrence. Hand-written because the tables are
+//! evaluated once per event in the exact sampler: a fixed-degree,
+//! allocation-free kernel is faster than any general crate.
+
+/// Interpolation nodes per piece (series degree NODES - 1).
+pub const NODES: usize = 16;
+/// Coefficients of an antiderivative series (degree NODES).
+pub const NC: usize = NODES + 1;
+
+/// Chebyshev fit of K functions on one piece [a, b].
+#[derive(Clone, Debug)]
+pub struct Fit<const K: usize> {
+    /// Series of each function, Σ_j c_j T_j(x) with x ∈ [-1, 1] (c_0 already
+    /// halved, last coefficient 0), ready for [`clenshaw`].
+    pub series: [[f64; NC]; K],
+    /// Antiderivatives (zero at a), in the same variable.
+    pub anti: [[f64; NC]; K],
+    /// Largest of the last three coefficients, per function.
+    pub tail: [f64; K],
+    /// Largest coefficient, per function.
+    pub scale: [f64; K],
+    /// All sampled values finite.
+    pub finite: bool,
+}
+
+impl<const K: usize> Fit<K> {
+    /// Resolved to relative accuracy `rel`: every function's tail at most
+    /// `rel` times its scale (or identically zero), and all values finite.
+    pub fn resolved(&self, rel: f64) -> bool {
+        self.finite
+            && (0..K).all(|k| {
+                !(self.scale[k] > 0.0) || self.tail[k] <= rel * self.scale[k].max(f64::MIN_POSITIVE)
+            })
+    }
+}
+
+/// Fit `f` (K functions at once) on [a, b].
+pub fn fit<const K: usize>(f: &dyn Fn(f64) -> [f64; K], a: f64, b: f64) -> Fit<K> {
+    let n = NODES;
+    let h = 0.5 * (b - a);
+    let mid = 0.5 * (a + b);
+    let vals: Vec<[f64; K]> = (0..n)
+        .map(|j| {
+            let x = (std::f64::consts::PI * (j as f64 + 0.5) / n as f64).cos();
+            f(mid + h * x)
+        })
+        .collect();
+    let mut out = Fit {
+        series: [[0.0; NC]; K],
+        anti: [[0.0; NC]; K],
+        tail: [0.0; K],
+        scale: [0.0; K],
+        finite: vals.iter().all(|v| v.iter().all(|x| x.is_finite())),
+    };
+    for k in 0..K {
+        // Coefficients c_j of f = c_0/2 + Σ_{j≥1} c_j T_j.
+        let mut c = [0.0; NODES + 2];
+        for (j, cj) in c.iter_mut().enumerate().take(n) {
+            let mut s = 0.0;
+            for (i, v) in vals.iter().enumerate() {
+                s += v[k] * (std::f64::consts::PI * j as f64 * (i as f64 + 0.5) / n as f64).cos();
+            }
+            *cj = 2.0 * s / n as f64;
+        }
+        out.scale[k] = c[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        out.tail[k] = c[n - 3..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        // Antiderivative: C_j = h (c_{j-1} - c_{j+1}) / (2j), C_0 from F(-1) = 0.
+        let d = &mut out.anti[k];
+        for j in 1..NC {
+            d[j] = h * (c[j - 1] - c[j + 1]) / (2.0 * j as f64);
+        }
+        let mut at_minus1 = 0.0;
+        for (j, dj) in d.iter().enumerate().skip(1) {
+            at_minus1 += if j % 2 == 0 { *dj } else { -*dj };
+        }
+        d[0] = -at_minus1;
+        out.series[k][..n].copy_from_slice(&c[..n]);
+        out.series[k][0] *= 0.5;
+    }
+    out
+}
+
+/// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
+#[inline]
+pub fn clenshaw(c: &[f64; NC], x: f64) -> f64 {
+    let (mut b1, mut b2) = (0.0, 0.0);
+    let x2 = 2.0 * x;
+    for &ck in c[1..].iter().rev() {
+        // Plain mul/add: without a target FMA unit, mul_add is a slow soft call.
+        let b0 = x2 * b1 + (ck - b2);
+        b2 = b1;
+        b1 = b0;
+    }
+    x * b1 + (c[0] - b2)
+}
+
+/// Two Chebyshev series Σ_j `c_j[k]` T_j(x), k = 0, 1, in one Clenshaw pass
+/// (independent recurrences interleaved for instruction-level parallelism).
+#[inline]
+pub fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
+    let (mut b1, mut b2) = ([0.0f64; 2], [0.0f64; 2]);
+    let x2 = 2.0 * x;
+    for cj in c[1..].iter().rev() {
+        let b0 = [x2 * b1[0] + (cj[0] - b2[0]), x2 * b1[1] + (cj[1] - b2[1])];
+        b2 = b1;
+        b1 = b0;
+    }
+    [x * b1[0] + (c[0][0] - b2[0]), x * b1[1] + (c[0][1] - b2[1])]
+}
+
+/// Map v ∈ [a, b] to x ∈ [-1, 1] (clamped against rounding).
+#[inline]
+pub fn to_unit(v: f64, a: f64, b: f64) -> f64 {
+    ((2.0 * v - a - b) / (b - a)).clamp(-1.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fits_and_integrates_exp() {
+        let f = fit(&|x: f64| [x.exp(), x.sin()], 0.5, 1.5);
+        assert!(f.resolved(1e-14));
+        for &v in &[0.5, 0.8, 1.2, 1.5] {
+            let x = to_unit(v, 0.5, 1.5);
+            assert!((clenshaw(&f.series[0], x) - v.exp()).abs() < 1e-14);
+            assert!((clenshaw(&f.anti[0], x) - (v.exp() - 0.5f64.exp())).abs() < 1e-14);
+            assert!((clenshaw(&f.anti[1], x) - (0.5f64.cos() - v.cos())).abs() < 1e-14);
+        }
+        let g = fit(&|x: f64| [1.0 / (x - 0.49)], 0.5, 1.5);
+        assert!(!g.resolved(1e-14));
+    }
+}
