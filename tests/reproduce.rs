@@ -41,13 +41,27 @@ fn reproduce_all_quick() {
             "{f}"
         );
         assert!(csv.lines().count() > 20, "{f}.csv has data");
-        let png = std::fs::read(out.join(format!("{f}.png"))).unwrap();
-        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{f}.png");
-        let svg = std::fs::read_to_string(out.join(format!("{f}.svg"))).unwrap();
-        assert!(svg.contains("<svg"), "{f}.svg");
+        if cfg!(feature = "plot") {
+            let png = std::fs::read(out.join(format!("{f}.png"))).unwrap();
+            assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{f}.png");
+            let svg = std::fs::read_to_string(out.join(format!("{f}.svg"))).unwrap();
+            assert!(svg.contains("<svg"), "{f}.svg");
+        } else {
+            assert!(!out.join(format!("{f}.png")).exists(), "{f}.png");
+        }
     }
     for f in ["claims.json", "claims.md", "parameters.json", "run.json"] {
         assert!(out.join(f).is_file(), "{f}");
+    }
+    // Without the `plot` feature the report and stdout say why there are no images.
+    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let note = "need the cargo feature `plot`";
+    if cfg!(feature = "plot") {
+        assert!(report.contains("![fig2](fig2.png)"), "{report}");
+        assert!(!report.contains(note) && !stdout.contains(note), "{stdout}");
+    } else {
+        assert!(report.contains(note) && stdout.contains(note), "{stdout}");
     }
     let run: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();

@@ -8,7 +8,8 @@ use irtp::parallel::Progress;
 use std::path::PathBuf;
 
 /// Regenerate the paper's figures 1, 2, 3, 5, 6, 7: data (CSV), plots (PNG,
-/// SVG), parameters.json, claims.json / claims.md and run.json in DIR.
+/// SVG; with the cargo feature `plot`, on by default), parameters.json,
+/// claims.json / claims.md, REPORT.md and run.json in DIR.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
     /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, or all.
@@ -94,5 +95,8 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
         args.out.display(),
         t0.elapsed().as_secs_f64()
     );
+    if !figures::IMAGES {
+        println!("{}", figures::NO_IMAGES);
+    }
     Ok(())
 }

@@ -16,6 +16,63 @@ pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Res
     exact::simulate(params, spec, progress)
 }
 
+/// The moments the figures use at one recording time (named columns of
+/// [`Observables::moment_rows`]).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Moments {
+    /// Time.
+    pub t: f64,
+    /// <v²> and its standard error.
+    pub v2: f64,
+    /// Standard error of `v2`.
+    pub v2_err: f64,
+    /// <x>.
+    pub x_mean: f64,
+    /// <x²>.
+    pub x2: f64,
+    /// Standard error of `x2`.
+    pub x2_err: f64,
+}
+
+/// Moments at every recording time of a simulation.
+pub fn moments(obs: &Observables) -> Vec<Moments> {
+    obs.moment_rows()
+        .into_iter()
+        .map(|r| Moments {
+            t: r[0],
+            v2: r[3],
+            v2_err: r[4],
+            x_mean: r[5],
+            x2: r[7],
+            x2_err: r[8],
+        })
+        .collect()
+}
+
+/// One histogram bin of a simulation's time-averaged stationary density
+/// (named columns of [`Observables::density_rows`]).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct DensityBin {
+    /// Bin centre.
+    pub v: f64,
+    /// Density.
+    pub p: f64,
+    /// Standard error of `p`.
+    pub p_err: f64,
+}
+
+/// The time-averaged density of a simulation, bin by bin.
+pub fn density_bins(obs: &Observables) -> Vec<DensityBin> {
+    obs.density_rows()
+        .into_iter()
+        .map(|d| DensityBin {
+            v: d[0],
+            p: d[1],
+            p_err: d[2],
+        })
+        .collect()
+}
+
 /// A stationary density on a velocity mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct Density {

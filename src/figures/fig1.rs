@@ -4,9 +4,11 @@
 //! solid lines: stationary <v²> from the Fokker-Planck density (paper Eq. 17);
 //! dashed lines: <v²>(t) from the time-dependent FP equations (paper's method).
 
-use super::compute;
+use super::compute::{self, Moments};
 use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
-use super::{curve_seed, fmt_num, Claim, FigureOutput, Options, Stage, Verdict, Which};
+use super::{
+    curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
+};
 use crate::error::Result;
 use crate::model::{DragLaw, Params};
 use crate::parallel::Progress;
@@ -88,115 +90,219 @@ pub fn medium_title(m: &Medium) -> String {
     format!("{name}, Σ = {}", fmt_num(m.sigma))
 }
 
-/// Compute Fig. 1.
-pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
-    let spec = Spec::new(opts.quick);
-    let mut fig = Figure::new("fig1", "Fig. 1: mean-squared velocity ⟨v²⟩(t), λ = 0.5", 2);
-    let mut claims = Vec::new();
+/// One curve of Fig. 1 (a medium and a reset rate).
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// Simulated moments at the recording times.
+    pub sim: Vec<Moments>,
+    /// <v²> of the time-dependent FP equations at the same times.
+    pub v2_transient: Vec<f64>,
+    /// Stationary numbers.
+    pub stationary: Stationary,
+}
+
+/// Stationary <v²> of one curve: simulation time average against FP (Eq. 17).
+#[derive(Clone, Debug, Serialize)]
+pub struct Stationary {
+    /// Drag law.
+    pub drag: DragLaw,
+    /// Sigma.
+    pub sigma: f64,
+    /// Reset rate.
+    pub r: f64,
+    /// Simulated <v²>, time average over [burn_in, t_max].
+    pub v2_sim_time_avg: f64,
+    /// Its standard error.
+    pub v2_sim_err: f64,
+    /// Stationary <v²> of the FP density.
+    pub v2_fp: f64,
+    /// (sim - FP) / SE.
+    pub z: f64,
+    /// Largest |sim - FP(t)| / FP(t) at t >= burn_in.
+    pub max_rel_dev_sim_vs_fp_transient_after_burn_in: f64,
+}
+
+/// Numbers behind one medium's claim.
+#[derive(Clone, Debug, Serialize)]
+pub struct V2Values {
+    /// Largest |z| over the rates.
+    pub max_abs_z: f64,
+    /// FP <v²> per rate.
+    pub v2_fp: Vec<f64>,
+    /// The rates.
+    pub rates: Vec<f64>,
+}
+
+/// Compute every curve: `[medium][rate]`.
+pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
     let n_stages = spec.media.len() * spec.rates.len();
-    let mut rows = Vec::new();
-    for (mi, m) in spec.media.iter().enumerate() {
-        let label = ["(a)", "(b)"][mi];
+    (0..spec.media.len())
+        .map(|mi| {
+            (0..spec.rates.len())
+                .map(|ri| {
+                    let k = mi * spec.rates.len() + ri;
+                    compute_curve(spec, mi, ri, opts, &Stage::new(progress, k, n_stages))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn compute_curve(
+    spec: &Spec,
+    mi: usize,
+    ri: usize,
+    opts: &Options,
+    progress: &dyn Progress,
+) -> Result<Curve> {
+    let (m, r) = (spec.media[mi], spec.rates[ri]);
+    let k = mi * spec.rates.len() + ri;
+    let (t_max, burn_in) = (spec.t_max[mi], spec.burn_in[mi]);
+    let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
+    let sim_spec = SimSpec::new(
+        spec.particles,
+        TimeGrid::linear(t_max, spec.samples)?,
+        burn_in,
+        1,
+        curve_seed(opts.seed, Which::Fig1, k as u64),
+    )?;
+    let obs = compute::simulate(&params, &sim_spec, progress)?;
+    let fp = compute::fp_stationary(&params, spec.fp_cells)?;
+    let sim = compute::moments(&obs);
+    // The paper's FP method in time (uniform mesh, explicit upwind).
+    let times: Vec<f64> = sim.iter().map(|s| s.t).collect();
+    let v2_transient = compute::fp_transient_v2(&params, spec.fp_transient_cells[mi], &times)?;
+    let mut dev: f64 = 0.0;
+    for (s, &y) in sim.iter().zip(&v2_transient) {
+        if s.t >= burn_in {
+            dev = dev.max(((s.v2 - y) / y).abs());
+        }
+    }
+    let s = obs.summary();
+    let stationary = Stationary {
+        drag: m.drag,
+        sigma: m.sigma,
+        r,
+        v2_sim_time_avg: s.v2,
+        v2_sim_err: s.v2_err,
+        v2_fp: fp.v2,
+        z: (s.v2 - fp.v2) / s.v2_err,
+        max_rel_dev_sim_vs_fp_transient_after_burn_in: dev,
+    };
+    Ok(Curve {
+        sim,
+        v2_transient,
+        stationary,
+    })
+}
+
+/// Draw Fig. 1: points (simulation), solid (Eq. 17), dashed (FP(t)).
+pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
+    let mut fig = Figure::new("fig1", "Fig. 1: mean-squared velocity ⟨v²⟩(t), λ = 0.5", 2);
+    for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let mut panel = Panel::new(
-            label,
+            ["(a)", "(b)"][mi],
             medium_title(m),
             Axis::linear("t"),
             Axis::linear("⟨v²⟩"),
         );
         panel.legend_title = Some("solid: Eq. 17, dashed: FP(t)".into());
-        let (t_max, burn_in) = (spec.t_max[mi], spec.burn_in[mi]);
-        let grid = TimeGrid::linear(t_max, spec.samples)?;
-        let mut worst_z: f64 = 0.0;
-        let mut ss = Vec::new();
-        for (ri, &r) in spec.rates.iter().enumerate() {
-            let k = mi * spec.rates.len() + ri;
-            let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
-            let sim_spec = SimSpec::new(
-                spec.particles,
-                grid.clone(),
-                burn_in,
-                1,
-                curve_seed(opts.seed, Which::Fig1, k as u64),
-            )?;
-            let obs = compute::simulate(&params, &sim_spec, &Stage::new(progress, k, n_stages))?;
-            let fp = compute::fp_stationary(&params, spec.fp_cells)?;
+        for (ri, (c, &r)) in row.iter().zip(&spec.rates).enumerate() {
             let lab = Some(format!("r = {}", fmt_num(r)));
-            let rows_k = obs.moment_rows();
+            let times: Vec<f64> = c.sim.iter().map(|s| s.t).collect();
+            let v2_fp = c.stationary.v2_fp;
             panel.series.push(Series::points(
                 lab.clone(),
                 Color::Palette(ri),
                 "simulation",
-                rows_k.iter().map(|r| r[0]).collect(),
-                rows_k.iter().map(|r| r[3]).collect(),
-                rows_k.iter().map(|r| r[4]).collect(),
+                times.clone(),
+                c.sim.iter().map(|s| s.v2).collect(),
+                c.sim.iter().map(|s| s.v2_err).collect(),
             ));
             panel.series.push(Series::line(
                 lab.clone(),
                 Color::Palette(ri),
                 Dash::Solid,
                 "fp_stationary",
-                vec![0.0, t_max],
-                vec![fp.v2, fp.v2],
+                vec![0.0, spec.t_max[mi]],
+                vec![v2_fp, v2_fp],
             ));
-            // The paper's FP method in time (uniform mesh, explicit upwind), dashed.
-            let times: Vec<f64> = rows_k.iter().map(|r| r[0]).collect();
-            let tr = compute::fp_transient_v2(&params, spec.fp_transient_cells[mi], &times)?;
-            let mut dev: f64 = 0.0;
-            for (row, &y) in rows_k.iter().zip(&tr) {
-                if row[0] >= burn_in {
-                    dev = dev.max(((row[3] - y) / y).abs());
-                }
-            }
             panel.series.push(Series::line(
                 lab,
                 Color::Palette(ri),
                 Dash::Dashed,
                 "fp_transient",
                 times,
-                tr,
+                c.v2_transient.clone(),
             ));
-            let s = obs.summary();
-            let z = (s.v2 - fp.v2) / s.v2_err;
-            worst_z = worst_z.max(z.abs());
-            ss.push(fp.v2);
-            rows.push(serde_json::json!({
-                "drag": m.drag, "sigma": m.sigma, "r": r,
-                "v2_sim_time_avg": s.v2, "v2_sim_err": s.v2_err, "v2_fp": fp.v2, "z": z,
-                "max_rel_dev_sim_vs_fp_transient_after_burn_in": dev,
-            }));
         }
-        let decreasing = ss.windows(2).all(|w| w[1] < w[0]);
-        claims.push(Claim {
-            id: format!("v2_ss_{}", m.drag),
-            figure: "fig1",
-            paper: format!(
-                "{}: <v²>(t) relaxes to the Eq. 17 value, which decreases as r increases",
-                m.drag
-            ),
-            ours: format!(
-                "FP <v²>_ss = [{}] for r = [{}] ({}); simulation time average over [{}, {}] vs FP: max |z| = {:.2} (limit max(4, 1 % Bonferroni) = {:.2})",
-                ss.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", "),
-                spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
-                if decreasing { "decreasing" } else { "NOT monotone" },
-                fmt_num(burn_in),
-                fmt_num(t_max),
-                worst_z,
-                super::z_crit(spec.rates.len())
-            ),
-            verdict: if decreasing && worst_z < super::z_crit(spec.rates.len()) {
-                Verdict::Agrees
-            } else {
-                Verdict::Differs
-            },
-            values: serde_json::json!({ "max_abs_z": worst_z, "v2_fp": ss, "rates": spec.rates }),
-        });
         fig.panels.push(panel);
     }
+    fig
+}
+
+/// One claim per medium: the stationary <v²> decreases with r and the
+/// simulation relaxes to it.
+pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
+    let z_crit = super::z_crit(spec.rates.len());
+    let list = |x: &[f64], f: &dyn Fn(f64) -> String| {
+        x.iter().map(|&x| f(x)).collect::<Vec<_>>().join(", ")
+    };
+    spec.media
+        .iter()
+        .zip(curves)
+        .enumerate()
+        .map(|(mi, (m, row))| {
+            let worst_z = row
+                .iter()
+                .fold(0.0, |w: f64, c| w.max(c.stationary.z.abs()));
+            let ss: Vec<f64> = row.iter().map(|c| c.stationary.v2_fp).collect();
+            let decreasing = ss.windows(2).all(|w| w[1] < w[0]);
+            Claim {
+                id: format!("v2_ss_{}", m.drag),
+                figure: "fig1",
+                paper: format!(
+                    "{}: <v²>(t) relaxes to the Eq. 17 value, which decreases as r increases",
+                    m.drag
+                ),
+                ours: format!(
+                    "FP <v²>_ss = [{}] for r = [{}] ({}); simulation time average over [{}, {}] vs FP: max |z| = {:.2} (limit max(4, 1 % Bonferroni) = {:.2})",
+                    list(&ss, &|x| format!("{x:.4}")),
+                    list(&spec.rates, &fmt_num),
+                    if decreasing { "decreasing" } else { "NOT monotone" },
+                    fmt_num(spec.burn_in[mi]),
+                    fmt_num(spec.t_max[mi]),
+                    worst_z,
+                    z_crit
+                ),
+                verdict: if decreasing && worst_z < z_crit {
+                    Verdict::Agrees
+                } else {
+                    Verdict::Differs
+                },
+                values: to_json(&V2Values {
+                    max_abs_z: worst_z,
+                    v2_fp: ss,
+                    rates: spec.rates.clone(),
+                }),
+            }
+        })
+        .collect()
+}
+
+/// Compute Fig. 1.
+pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
+    let spec = Spec::new(opts.quick);
+    let curves = compute(&spec, opts, progress)?;
+    let stationary: Vec<&Stationary> = curves.iter().flatten().map(|c| &c.stationary).collect();
     Ok(FigureOutput {
         which: Which::Fig1,
-        figure: fig,
-        parameters: serde_json::json!({ "spec": spec, "stationary": rows }),
-        claims,
+        figure: plot(&spec, &curves),
+        parameters: Parameters {
+            stationary: Some(to_json(&stationary)),
+            ..Parameters::of(&spec)
+        },
+        claims: claims(&spec, &curves),
         wall_time_s: 0.0,
     })
 }

@@ -3,10 +3,12 @@
 //! particle simulation on a log time grid (particles start at x = 0, v = 0);
 //! grey guides: t² (dotted, ballistic) and t (dashed, diffusive).
 
-use super::compute;
+use super::compute::{self, Moments};
 use super::fig1::{medium_title, Medium, MEDIA};
 use super::plot::{Axis, Color, Dash, Figure, Note, Panel, Series};
-use super::{curve_seed, fmt_num, Claim, FigureOutput, Options, Stage, Verdict, Which};
+use super::{
+    curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
+};
 use crate::error::Result;
 use crate::model::Params;
 use crate::parallel::Progress;
@@ -64,18 +66,114 @@ pub fn local_slopes(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Compute Fig. 5.
-pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
-    let spec = Spec::new(opts.quick);
-    let grid = TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?;
+/// Shape of one simulated <x²>(t) curve and its late-time diffusion coefficient.
+#[derive(Clone, Debug, Serialize)]
+pub struct Msd {
+    /// Reset rate.
+    pub r: f64,
+    /// Log-log slope between the first two times.
+    pub slope_first: f64,
+    /// Log-log slope between the last two times.
+    pub slope_last: f64,
+    /// First time after the steepest point where the slope falls below 1.5.
+    pub t_crossover: f64,
+    /// D from <x²> = 2 D t + c (Eq. 18) on the last decade of times.
+    pub d_fit_last_decade: f64,
+    /// Exact D_eff of the FP solver.
+    pub d_eff_exact: f64,
+    /// d_fit_last_decade / d_eff_exact.
+    pub d_ratio: f64,
+    /// <x²> at the last time.
+    pub x2_final: Option<f64>,
+    /// Its standard error.
+    pub x2_final_err: Option<f64>,
+}
+
+/// One curve of Fig. 5 (a medium and a reset rate).
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// Simulated moments at the recording times t > 0.
+    pub sim: Vec<Moments>,
+    /// Shape and diffusion numbers.
+    pub msd: Msd,
+}
+
+/// Compute every curve: `[medium][rate]`.
+pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
+    let n_stages = spec.media.len() * spec.rates.len();
+    (0..spec.media.len())
+        .map(|mi| {
+            (0..spec.rates.len())
+                .map(|ri| {
+                    let k = mi * spec.rates.len() + ri;
+                    compute_curve(spec, mi, ri, opts, &Stage::new(progress, k, n_stages))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn compute_curve(
+    spec: &Spec,
+    mi: usize,
+    ri: usize,
+    opts: &Options,
+    progress: &dyn Progress,
+) -> Result<Curve> {
+    let (m, r) = (spec.media[mi], spec.rates[ri]);
+    let k = mi * spec.rates.len() + ri;
+    let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
+    let sim_spec = SimSpec::new(
+        spec.particles,
+        TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?,
+        spec.t_max / 2.0,
+        1,
+        curve_seed(opts.seed, Which::Fig5, k as u64),
+    )?;
+    let obs = compute::simulate(&params, &sim_spec, progress)?;
+    let sim: Vec<Moments> = compute::moments(&obs)
+        .into_iter()
+        .filter(|s| s.t > 0.0)
+        .collect();
+    let t: Vec<f64> = sim.iter().map(|s| s.t).collect();
+    let y: Vec<f64> = sim.iter().map(|s| s.x2).collect();
+    let sl = local_slopes(&t, &y);
+    let peak = sl.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
+    // Crossover: first time after the steepest point where the slope falls below 1.5.
+    let imax = sl.iter().position(|s| s.1 == peak).unwrap_or(0);
+    let cross = sl[imax..]
+        .iter()
+        .find(|s| s.1 < 1.5)
+        .map_or(f64::NAN, |s| s.0);
+    // Late regime, paper Eq. 18: <x²> = 2 D t + c fitted on the last
+    // decade of times, against the exact D_eff of the FP solver.
+    let late: Vec<&Moments> = sim.iter().filter(|s| s.t >= spec.t_max / 10.0).collect();
+    let lt: Vec<f64> = late.iter().map(|s| s.t).collect();
+    let ly: Vec<f64> = late.iter().map(|s| s.x2).collect();
+    let d_fit = super::fig6::ols_slope(&lt, &ly) / 2.0;
+    let d_exact = compute::d_eff(&params)?;
+    let msd = Msd {
+        r,
+        slope_first: sl.first().map_or(f64::NAN, |s| s.1),
+        slope_last: sl.last().map_or(f64::NAN, |s| s.1),
+        t_crossover: cross,
+        d_fit_last_decade: d_fit,
+        d_eff_exact: d_exact,
+        d_ratio: d_fit / d_exact,
+        x2_final: sim.last().map(|s| s.x2),
+        x2_final_err: sim.last().map(|s| s.x2_err),
+    };
+    Ok(Curve { sim, msd })
+}
+
+/// Draw Fig. 5: simulated <x²>(t) on log-log axes with t² and t guides.
+pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new(
         "fig5",
         "Fig. 5: mean-squared displacement ⟨x²⟩(t), λ = 0.5",
         2,
     );
-    let n_stages = spec.media.len() * spec.rates.len();
-    let mut claims = Vec::new();
-    for (mi, m) in spec.media.iter().enumerate() {
+    for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let mut panel = Panel::new(
             ["(a)", "(b)"][mi],
             medium_title(m),
@@ -83,137 +181,112 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             Axis::log("⟨x²⟩"),
         );
         panel.legend_title = Some(format!("λ = {}", fmt_num(spec.lambda)));
-        let mut rows = Vec::new();
-        let mut first: Option<(Vec<f64>, Vec<f64>)> = None;
-        let mut finals = Vec::new();
-        for (ri, &r) in spec.rates.iter().enumerate() {
-            let k = mi * spec.rates.len() + ri;
-            let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
-            let sim_spec = SimSpec::new(
-                spec.particles,
-                grid.clone(),
-                spec.t_max / 2.0,
-                1,
-                curve_seed(opts.seed, Which::Fig5, k as u64),
-            )?;
-            let obs = compute::simulate(&params, &sim_spec, &Stage::new(progress, k, n_stages))?;
-            let mr: Vec<[f64; 9]> = obs
-                .moment_rows()
-                .into_iter()
-                .filter(|r| r[0] > 0.0)
-                .collect();
-            let t: Vec<f64> = mr.iter().map(|r| r[0]).collect();
-            let y: Vec<f64> = mr.iter().map(|r| r[7]).collect();
+        for (ri, (c, &r)) in row.iter().zip(&spec.rates).enumerate() {
             panel.series.push(Series::points(
                 Some(format!("r = {}", fmt_num(r))),
                 Color::Palette(ri),
                 "simulation",
-                t.clone(),
-                y.clone(),
-                mr.iter().map(|r| r[8]).collect(),
+                c.sim.iter().map(|s| s.t).collect(),
+                c.sim.iter().map(|s| s.x2).collect(),
+                c.sim.iter().map(|s| s.x2_err).collect(),
             ));
-            let sl = local_slopes(&t, &y);
-            let early = sl.first().map_or(f64::NAN, |s| s.1);
-            let late = sl.last().map_or(f64::NAN, |s| s.1);
-            let peak = sl.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
-            // Crossover: first time after the steepest point where the slope falls below 1.5.
-            let imax = sl.iter().position(|s| s.1 == peak).unwrap_or(0);
-            let cross = sl[imax..]
-                .iter()
-                .find(|s| s.1 < 1.5)
-                .map_or(f64::NAN, |s| s.0);
-            finals.push(*y.last().unwrap_or(&f64::NAN));
-            // Late regime, paper Eq. 18: <x²> = 2 D t + c fitted on the last
-            // decade of times, against the exact D_eff of the FP solver.
-            let late_idx: Vec<usize> = (0..t.len())
-                .filter(|&i| t[i] >= spec.t_max / 10.0)
-                .collect();
-            let lt: Vec<f64> = late_idx.iter().map(|&i| t[i]).collect();
-            let ly: Vec<f64> = late_idx.iter().map(|&i| y[i]).collect();
-            let d_fit = super::fig6::ols_slope(&lt, &ly) / 2.0;
-            let d_exact = compute::d_eff(&params)?;
-            rows.push(serde_json::json!({
-                "r": r, "slope_first": early, "slope_last": late, "t_crossover": cross,
-                "d_fit_last_decade": d_fit, "d_eff_exact": d_exact, "d_ratio": d_fit / d_exact,
-                "x2_final": y.last(), "x2_final_err": mr.last().map(|r| r[8]),
-            }));
-            if first.is_none() {
-                first = Some((t, y));
-            }
         }
-        // Guides anchored on the r = 0 curve: t² through its value at t = 0.3·(t at peak
-        // slope region) and t through its last point, shifted by a factor 3 to stay clear.
-        if let Some((t, y)) = first {
-            let n = t.len();
-            let i2 = t.iter().position(|&tt| tt >= 0.5).unwrap_or(n / 3);
-            let (t2, y2) = (t[i2], y[i2] * 3.0);
-            let (ta, tb) = (t2 / 8.0, t2 * 6.0);
-            panel.series.push(Series::line(
-                None,
-                Color::Gray,
-                Dash::Dotted,
-                "guide",
-                vec![ta, tb],
-                vec![y2 * (ta / t2).powi(2), y2 * (tb / t2).powi(2)],
-            ));
-            panel.notes.push(Note {
-                text: "t²".into(),
-                x: t2 / 2.5,
-                y: y2 / 6.25 * 4.0,
-            });
-            let (t1, y1) = (t[n - 1], y[n - 1] * 3.0);
-            let (ta, tb) = (t1 / 50.0, t1);
-            panel.series.push(Series::line(
-                None,
-                Color::Gray,
-                Dash::Dashed,
-                "guide",
-                vec![ta, tb],
-                vec![y1 * ta / t1, y1],
-            ));
-            panel.notes.push(Note {
-                text: "t".into(),
-                x: t1 / 12.0,
-                y: y1 / 12.0 * 2.5,
-            });
+        if let Some(first) = row.first() {
+            guides(&mut panel, &first.sim);
         }
-        let decreasing = finals.windows(2).all(|w| w[1] < w[0]);
-        // Diffusive: the linear fit's slope matches 2 D_eff within 10 %.
-        let late_ok = rows
-            .iter()
-            .all(|r| (r["d_ratio"].as_f64().unwrap_or(f64::NAN) - 1.0).abs() < 0.1);
-        let crosses: Vec<f64> = rows
-            .iter()
-            .map(|r| r["t_crossover"].as_f64().unwrap_or(f64::NAN))
-            .collect();
-        let cross_decreasing = crosses.windows(2).all(|w| w[1] <= w[0]);
-        claims.push(Claim {
-            id: format!("msd_crossover_{}", m.drag),
-            figure: "fig5",
-            paper: "ballistic <x²> ~ t² at early times, diffusive ~ t at late times; crossover time and <x²> decrease with r".into(),
-            ours: format!(
-                "{}, r = [{}]: log-log slope at t ≈ {} = [{}]: ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; last decade: log slope [{}], Eq. 18 fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
-                m.drag,
-                spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
-                fmt_num(spec.t_min),
-                rows.iter().map(|r| format!("{:.2}", r["slope_first"].as_f64().unwrap_or(f64::NAN))).collect::<Vec<_>>().join(", "),
-                rows.iter().map(|r| format!("{:.3}", r["slope_last"].as_f64().unwrap_or(f64::NAN))).collect::<Vec<_>>().join(", "),
-                rows.iter().map(|r| format!("{:.3}", r["d_ratio"].as_f64().unwrap_or(f64::NAN))).collect::<Vec<_>>().join(", "),
-                if late_ok { "diffusive" } else { "NOT yet diffusive" },
-                crosses.iter().map(|c| format!("{c:.2}")).collect::<Vec<_>>().join(", "),
-                if cross_decreasing { "decreasing with r" } else { "not monotone in r" },
-                if decreasing { "decreases with r" } else { "NOT monotone in r" },
-            ),
-            verdict: if late_ok && decreasing && cross_decreasing { Verdict::Partly } else { Verdict::Differs },
-            values: serde_json::json!(rows),
-        });
         fig.panels.push(panel);
     }
+    fig
+}
+
+/// t² (dotted) and t (dashed) guides anchored on the r = 0 curve: t² near
+/// t = 0.5 and t through its last point, both shifted up by a factor 3 to
+/// stay clear of the data.
+fn guides(panel: &mut Panel, sim: &[Moments]) {
+    let (t, y): (Vec<f64>, Vec<f64>) = sim.iter().map(|s| (s.t, s.x2)).unzip();
+    let n = t.len();
+    let i2 = t.iter().position(|&tt| tt >= 0.5).unwrap_or(n / 3);
+    let (t2, y2) = (t[i2], y[i2] * 3.0);
+    let (ta, tb) = (t2 / 8.0, t2 * 6.0);
+    panel.series.push(Series::line(
+        None,
+        Color::Gray,
+        Dash::Dotted,
+        "guide",
+        vec![ta, tb],
+        vec![y2 * (ta / t2).powi(2), y2 * (tb / t2).powi(2)],
+    ));
+    panel.notes.push(Note {
+        text: "t²".into(),
+        x: t2 / 2.5,
+        y: y2 / 6.25 * 4.0,
+    });
+    let (t1, y1) = (t[n - 1], y[n - 1] * 3.0);
+    let (ta, tb) = (t1 / 50.0, t1);
+    panel.series.push(Series::line(
+        None,
+        Color::Gray,
+        Dash::Dashed,
+        "guide",
+        vec![ta, tb],
+        vec![y1 * ta / t1, y1],
+    ));
+    panel.notes.push(Note {
+        text: "t".into(),
+        x: t1 / 12.0,
+        y: y1 / 12.0 * 2.5,
+    });
+}
+
+/// One claim per medium: ballistic to diffusive crossover and its r dependence.
+pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
+    spec.media
+        .iter()
+        .zip(curves)
+        .map(|(m, row)| {
+            let rows: Vec<&Msd> = row.iter().map(|c| &c.msd).collect();
+            let list = |f: &dyn Fn(&Msd) -> String| {
+                rows.iter().map(|&r| f(r)).collect::<Vec<_>>().join(", ")
+            };
+            let finals: Vec<f64> = rows.iter().map(|r| r.x2_final.unwrap_or(f64::NAN)).collect();
+            let decreasing = finals.windows(2).all(|w| w[1] < w[0]);
+            // Diffusive: the linear fit's slope matches 2 D_eff within 10 %.
+            let late_ok = rows.iter().all(|r| (r.d_ratio - 1.0).abs() < 0.1);
+            let crosses: Vec<f64> = rows.iter().map(|r| r.t_crossover).collect();
+            let cross_decreasing = crosses.windows(2).all(|w| w[1] <= w[0]);
+            Claim {
+                id: format!("msd_crossover_{}", m.drag),
+                figure: "fig5",
+                paper: "ballistic <x²> ~ t² at early times, diffusive ~ t at late times; crossover time and <x²> decrease with r".into(),
+                ours: format!(
+                    "{}, r = [{}]: log-log slope at t ≈ {} = [{}]: ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; last decade: log slope [{}], Eq. 18 fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
+                    m.drag,
+                    spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
+                    fmt_num(spec.t_min),
+                    list(&|r| format!("{:.2}", r.slope_first)),
+                    list(&|r| format!("{:.3}", r.slope_last)),
+                    list(&|r| format!("{:.3}", r.d_ratio)),
+                    if late_ok { "diffusive" } else { "NOT yet diffusive" },
+                    crosses.iter().map(|c| format!("{c:.2}")).collect::<Vec<_>>().join(", "),
+                    if cross_decreasing { "decreasing with r" } else { "not monotone in r" },
+                    if decreasing { "decreases with r" } else { "NOT monotone in r" },
+                ),
+                verdict: if late_ok && decreasing && cross_decreasing { Verdict::Partly } else { Verdict::Differs },
+                values: to_json(&rows),
+            }
+        })
+        .collect()
+}
+
+/// Compute Fig. 5.
+pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
+    let spec = Spec::new(opts.quick);
+    let curves = compute(&spec, opts, progress)?;
     Ok(FigureOutput {
         which: Which::Fig5,
-        figure: fig,
-        parameters: serde_json::json!({ "spec": spec }),
-        claims,
+        figure: plot(&spec, &curves),
+        parameters: Parameters::of(&spec),
+        claims: claims(&spec, &curves),
         wall_time_s: 0.0,
     })
 }

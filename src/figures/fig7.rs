@@ -11,7 +11,10 @@
 use super::compute;
 use super::fig1::medium_title;
 use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
-use super::{curve_seed, fmt_num, Claim, FigureOutput, Options, Stage, Verdict, Which};
+use super::{
+    curve_seed, fmt_num, json_num, to_json, Claim, FigureOutput, Options, Parameters, Stage,
+    Verdict, Which,
+};
 use crate::error::Result;
 use crate::model::{DragLaw, Params};
 use crate::parallel::Progress;
@@ -112,9 +115,177 @@ impl Spec {
 /// Relative MFPT gain (tau(0) - tau(r*))/tau(0) above which an optimum counts as substantial.
 pub const SUBSTANTIAL: f64 = 0.01;
 
-/// Compute Fig. 7.
-pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
-    let spec = Spec::new(opts.quick);
+/// One simulated first-passage point against the backward equations.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    /// Drag law.
+    pub drag: DragLaw,
+    /// Flip rate.
+    pub lambda: f64,
+    /// Reset rate.
+    pub r: f64,
+    /// Target velocity.
+    pub vt: f64,
+    /// Simulated MFPT.
+    pub tau_sim: f64,
+    /// Its standard error.
+    pub tau_sim_err: f64,
+    /// First-passage samples.
+    pub samples: u64,
+    /// MFPT of the backward equations.
+    pub tau_backward: f64,
+    /// (tau_sim - tau_backward) / tau_sim_err.
+    pub z: f64,
+}
+
+/// The optimal resetting rate of one flip rate.
+#[derive(Clone, Debug, Serialize)]
+pub struct Optimum {
+    /// Drag law.
+    pub drag: DragLaw,
+    /// Sigma.
+    pub sigma: f64,
+    /// Flip rate.
+    pub lambda: f64,
+    /// Target velocity.
+    pub vt: f64,
+    /// Minimising rate; `None` when the minimum is at r = 0.
+    pub optimal_rate: Option<f64>,
+    /// tau at the minimum.
+    pub tau_at_optimum: f64,
+    /// tau without resetting.
+    pub tau_r0: f64,
+    /// d tau / d r at r = 0.
+    pub dtau_dr_r0: f64,
+    /// (tau_r0 - tau_at_optimum) / tau_r0.
+    pub relative_gain: f64,
+    /// Interior optimum with gain above [`SUBSTANTIAL`].
+    pub substantial: bool,
+}
+
+/// A backward-equation line with its simulated points.
+#[derive(Clone, Debug, Default)]
+pub struct Line {
+    /// Abscissae (v_t - v_0, or r).
+    pub x: Vec<f64>,
+    /// tau.
+    pub tau: Vec<f64>,
+    /// Simulated points (abscissa, point).
+    pub points: Vec<(f64, Point)>,
+}
+
+/// One flip rate of one medium.
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// Flip rate.
+    pub lambda: f64,
+    /// tau against v_t - v_0 at `MediumSpec::rate`.
+    pub vs_target: Line,
+    /// tau against r at `MediumSpec::target`.
+    pub vs_rate: Line,
+    /// tau at r = 0 and `MediumSpec::target`.
+    pub tau0: f64,
+    /// Optimal resetting rate.
+    pub optimum: Optimum,
+}
+
+/// Running stage counter: stage index and seed index of the simulated points.
+struct Stages<'a> {
+    progress: &'a dyn Progress,
+    done: usize,
+    total: usize,
+}
+
+impl<'a> Stages<'a> {
+    /// The next stage's progress and its seed index (one past the stage).
+    fn next(&mut self) -> (Stage<'a>, usize) {
+        let st = Stage::new(self.progress, self.done, self.total);
+        self.done += 1;
+        (st, self.done)
+    }
+}
+
+/// Compute every curve: `[medium][lambda]`.
+pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
+    let total: usize = spec
+        .media
+        .iter()
+        .map(|m| m.lambdas.len() * (m.sim_targets.len() + m.sim_rates.len()))
+        .sum();
+    let mut stages = Stages {
+        progress,
+        done: 0,
+        total,
+    };
+    spec.media
+        .iter()
+        .map(|m| {
+            m.lambdas
+                .iter()
+                .map(|&lambda| compute_curve(spec, m, lambda, opts, &mut stages))
+                .collect()
+        })
+        .collect()
+}
+
+fn compute_curve(
+    spec: &Spec,
+    m: &MediumSpec,
+    lambda: f64,
+    opts: &Options,
+    stages: &mut Stages,
+) -> Result<Curve> {
+    let v0 = spec.v0;
+    // (a)/(c): tau against v_t - v_0 at rate m.rate.
+    let pr = Params::new(m.drag, m.sigma, lambda, m.rate, spec.reset_velocity)?;
+    let mut vs_target = Line::default();
+    for &vt in &m.targets {
+        vs_target.x.push(vt - v0);
+        vs_target.tau.push(compute::mfpt(&pr, v0, vt)?);
+    }
+    for &vt in &m.sim_targets {
+        if let Some(p) = sim_point(spec, &pr, vt, opts, stages)? {
+            vs_target.points.push((vt - v0, p));
+        }
+    }
+    // (b)/(d): tau against r at target m.target.
+    let p0 = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
+    let mut vs_rate = Line::default();
+    for &r in &m.rates {
+        vs_rate.x.push(r);
+        vs_rate
+            .tau
+            .push(compute::mfpt(&p0.with_rate(r)?, v0, m.target)?);
+    }
+    for &r in &m.sim_rates {
+        if let Some(p) = sim_point(spec, &p0.with_rate(r)?, m.target, opts, stages)? {
+            vs_rate.points.push((r, p));
+        }
+    }
+    let opt = compute::optimal_rate(&p0, v0, m.target)?;
+    let gain = (opt.tau_r0 - opt.tau_opt) / opt.tau_r0;
+    Ok(Curve {
+        lambda,
+        vs_target,
+        vs_rate,
+        tau0: compute::mfpt(&p0, v0, m.target)?,
+        optimum: Optimum {
+            drag: m.drag,
+            sigma: m.sigma,
+            lambda,
+            vt: m.target,
+            optimal_rate: opt.interior.then_some(opt.r_opt),
+            tau_at_optimum: opt.tau_opt,
+            tau_r0: opt.tau_r0,
+            dtau_dr_r0: opt.dtau_dr_r0,
+            relative_gain: gain,
+            substantial: opt.interior && gain > SUBSTANTIAL,
+        },
+    })
+}
+
+/// Draw Fig. 7: (a)-(d) tau against v_t - v_0 and r, (e) tau_r / tau_0.
+pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new(
         "fig7",
         format!(
@@ -123,21 +294,13 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
         ),
         2,
     );
-    let n_stages: usize = spec
-        .media
-        .iter()
-        .map(|m| m.lambdas.len() * (m.sim_targets.len() + m.sim_rates.len()))
-        .sum();
-    let mut stage = 0usize;
     let mut zoom = Panel::new(
         "(e)",
         "zoom of (b), (d): τ_r/τ_0 at v_t = 0.5".to_string(),
         Axis::log("r"),
         Axis::linear("τ_r(v₀) / τ_0(v₀)").range(0.75, 1.5),
     );
-    let mut points = Vec::new();
-    let mut optima = Vec::new();
-    for (mi, m) in spec.media.iter().enumerate() {
+    for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let med = super::fig1::Medium {
             drag: m.drag,
             sigma: m.sigma,
@@ -154,91 +317,20 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             Axis::log("r"),
             Axis::log("τ_r(v₀)"),
         );
-        for (li, &lambda) in m.lambdas.iter().enumerate() {
-            let lab = Some(format!("λ = {}", fmt_num(lambda)));
+        for (li, c) in row.iter().enumerate() {
+            let lab = Some(format!("λ = {}", fmt_num(c.lambda)));
             let col = Color::Palette(li);
-            let pr = Params::new(m.drag, m.sigma, lambda, m.rate, spec.reset_velocity)?;
-            // (a)/(c): tau against v_t - v_0.
-            let mut lx = Vec::new();
-            let mut ly = Vec::new();
-            for &vt in &m.targets {
-                let tau = compute::mfpt(&pr, spec.v0, vt)?;
-                lx.push(vt - spec.v0);
-                ly.push(tau);
-            }
-            pa.series.push(Series::line(
-                lab.clone(),
-                col,
-                Dash::Solid,
-                "backward",
-                lx,
-                ly,
-            ));
-            let (mut sx, mut sy, mut se) = (vec![], vec![], vec![]);
-            for &vt in &m.sim_targets {
-                let tau = compute::mfpt(&pr, spec.v0, vt)?;
-                let st = Stage::new(progress, stage, n_stages);
-                stage += 1;
-                if let Some((mean, err, n)) = sim_point(&spec, &pr, vt, tau, opts, stage, &st)? {
-                    sx.push(vt - spec.v0);
-                    sy.push(mean);
-                    se.push(err);
-                    points.push(serde_json::json!({"drag": m.drag, "lambda": lambda, "r": m.rate, "vt": vt,
-                        "tau_sim": mean, "tau_sim_err": err, "samples": n, "tau_backward": tau, "z": (mean - tau) / err}));
-                }
-            }
-            pa.series
-                .push(Series::points(lab.clone(), col, "simulation", sx, sy, se));
-            // (b)/(d): tau against r.
-            let p0 = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
-            let mut ly = Vec::new();
-            for &r in &m.rates {
-                ly.push(compute::mfpt(&p0.with_rate(r)?, spec.v0, m.target)?);
-            }
+            push_line(&mut pa, &lab, col, &c.vs_target);
             // Zoom panel (e): tau(r)/tau(0) on a linear axis shows the optimum.
-            let tau0 = compute::mfpt(&p0, spec.v0, m.target)?;
             zoom.series.push(Series::line(
-                Some(format!("{} λ = {}", m.drag, fmt_num(lambda))),
+                Some(format!("{} λ = {}", m.drag, fmt_num(c.lambda))),
                 col,
                 if mi == 0 { Dash::Solid } else { Dash::Dashed },
                 "backward",
-                m.rates.clone(),
-                ly.iter().map(|t| t / tau0).collect(),
+                c.vs_rate.x.clone(),
+                c.vs_rate.tau.iter().map(|t| t / c.tau0).collect(),
             ));
-            pb.series.push(Series::line(
-                lab.clone(),
-                col,
-                Dash::Solid,
-                "backward",
-                m.rates.clone(),
-                ly,
-            ));
-            let (mut sx, mut sy, mut se) = (vec![], vec![], vec![]);
-            for &r in &m.sim_rates {
-                let p = p0.with_rate(r)?;
-                let tau = compute::mfpt(&p, spec.v0, m.target)?;
-                let st = Stage::new(progress, stage, n_stages);
-                stage += 1;
-                if let Some((mean, err, n)) = sim_point(&spec, &p, m.target, tau, opts, stage, &st)?
-                {
-                    sx.push(r);
-                    sy.push(mean);
-                    se.push(err);
-                    points.push(serde_json::json!({"drag": m.drag, "lambda": lambda, "r": r, "vt": m.target,
-                        "tau_sim": mean, "tau_sim_err": err, "samples": n, "tau_backward": tau, "z": (mean - tau) / err}));
-                }
-            }
-            pb.series
-                .push(Series::points(lab, col, "simulation", sx, sy, se));
-            let opt = compute::optimal_rate(&p0, spec.v0, m.target)?;
-            let gain = (opt.tau_r0 - opt.tau_opt) / opt.tau_r0;
-            optima.push(serde_json::json!({
-                "drag": m.drag, "sigma": m.sigma, "lambda": lambda, "vt": m.target,
-                "optimal_rate": opt.interior.then_some(opt.r_opt),
-                "tau_at_optimum": opt.tau_opt, "tau_r0": opt.tau_r0,
-                "dtau_dr_r0": opt.dtau_dr_r0, "relative_gain": gain,
-                "substantial": opt.interior && gain > SUBSTANTIAL,
-            }));
+            push_line(&mut pb, &lab, col, &c.vs_rate);
         }
         // τ spans many decades where it diverges; cap the axes at 10⁴ so the
         // bulk of the curves stays readable (the CSV holds everything).
@@ -263,40 +355,88 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
         vec![1.0, 1.0],
     ));
     fig.panels.push(zoom);
-    // The paper's statements: an optimum for tan at lambda = 0.5 (and small
-    // lambda), none for tan at lambda = 50, none for tanh at any lambda.
-    let find = |drag: DragLaw, lambda: f64| {
-        optima
-            .iter()
-            .find(|o| o["drag"] == serde_json::json!(drag) && o["lambda"].as_f64() == Some(lambda))
-    };
-    let interior = |o: Option<&serde_json::Value>| o.map(|o| !o["optimal_rate"].is_null());
-    let substantial = |o: Option<&serde_json::Value>| o.and_then(|o| o["substantial"].as_bool());
-    let tan_small = substantial(find(DragLaw::Tan, 0.5));
-    let tan_big_interior = interior(find(DragLaw::Tan, 50.0));
-    let tan_big_substantial = substantial(find(DragLaw::Tan, 50.0));
-    let tanh_any = optima
-        .iter()
-        .filter(|o| o["drag"] == serde_json::json!(DragLaw::Tanh))
-        .any(|o| !o["optimal_rate"].is_null());
-    let fmt_opt = |o: &serde_json::Value| match o["optimal_rate"].as_f64() {
+    fig
+}
+
+fn push_line(panel: &mut Panel, lab: &Option<String>, col: Color, line: &Line) {
+    panel.series.push(Series::line(
+        lab.clone(),
+        col,
+        Dash::Solid,
+        "backward",
+        line.x.clone(),
+        line.tau.clone(),
+    ));
+    panel.series.push(Series::points(
+        lab.clone(),
+        col,
+        "simulation",
+        line.points.iter().map(|(x, _)| *x).collect(),
+        line.points.iter().map(|(_, p)| p.tau_sim).collect(),
+        line.points.iter().map(|(_, p)| p.tau_sim_err).collect(),
+    ));
+}
+
+/// The optimal resetting rate, and simulation against backward equations.
+pub fn claims(curves: &[Vec<Curve>]) -> Vec<Claim> {
+    let all = || curves.iter().flatten();
+    let points: Vec<&Point> = all()
+        .flat_map(|c| c.vs_target.points.iter().chain(&c.vs_rate.points))
+        .map(|(_, p)| p)
+        .collect();
+    let worst = points.iter().map(|p| p.z.abs()).fold(0.0, f64::max);
+    let z_crit = super::z_crit(points.len());
+    vec![
+        optimum_claim(&all().map(|c| &c.optimum).collect::<Vec<_>>()),
+        Claim {
+            id: "mfpt_sim_vs_backward".into(),
+            figure: "fig7",
+            paper: "particle simulations agree with the solution of Eqs. (neqn26, neqn27)".into(),
+            ours: format!(
+                "exact first-passage sampler vs backward equations of the simulated process (drift ±Σ - g, not the printed g ± Σ): max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
+                worst,
+                points.len(),
+                z_crit
+            ),
+            verdict: if worst < z_crit { Verdict::Agrees } else { Verdict::Differs },
+            values: to_json(&points),
+        },
+    ]
+}
+
+fn fmt_optimum(o: &Optimum) -> String {
+    match o.optimal_rate {
         Some(r) => format!(
             "{} λ = {}: r* = {:.4}, τ(r*) = {:.4} vs τ(0) = {:.4} (gain {:.2e}, dτ/dr(0) = {:.3e})",
-            o["drag"].as_str().unwrap_or(""),
-            o["lambda"],
+            o.drag,
+            json_num(o.lambda),
             r,
-            o["tau_at_optimum"].as_f64().unwrap_or(f64::NAN),
-            o["tau_r0"].as_f64().unwrap_or(f64::NAN),
-            o["relative_gain"].as_f64().unwrap_or(f64::NAN),
-            o["dtau_dr_r0"].as_f64().unwrap_or(f64::NAN),
+            o.tau_at_optimum,
+            o.tau_r0,
+            o.relative_gain,
+            o.dtau_dr_r0,
         ),
         None => format!(
             "{} λ = {}: none (dτ/dr(0) = {:.3e})",
-            o["drag"].as_str().unwrap_or(""),
-            o["lambda"],
-            o["dtau_dr_r0"].as_f64().unwrap_or(f64::NAN)
+            o.drag,
+            json_num(o.lambda),
+            o.dtau_dr_r0
         ),
-    };
+    }
+}
+
+/// The paper's statements: an optimum for tan at lambda = 0.5 (and small
+/// lambda), none for tan at lambda = 50, none for tanh at any lambda.
+fn optimum_claim(optima: &[&Optimum]) -> Claim {
+    let find =
+        |drag: DragLaw, lambda: f64| optima.iter().find(|o| o.drag == drag && o.lambda == lambda);
+    let tan_small = find(DragLaw::Tan, 0.5).map(|o| o.substantial);
+    let tan_big = find(DragLaw::Tan, 50.0);
+    let tan_big_interior = tan_big.map(|o| o.optimal_rate.is_some());
+    let tan_big_substantial = tan_big.map(|o| o.substantial);
+    let tanh_any = optima
+        .iter()
+        .any(|o| o.drag == DragLaw::Tanh && o.optimal_rate.is_some());
     let verdict = if tan_small == Some(true) && !tanh_any && tan_big_substantial == Some(false) {
         if tan_big_interior == Some(true) {
             // A real but negligible dip (gain below SUBSTANTIAL) at lambda = 50.
@@ -307,13 +447,13 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
     } else {
         Verdict::Differs
     };
-    let mut claims = vec![Claim {
+    Claim {
         id: "optimal_reset_rate".into(),
         figure: "fig7",
         paper: "v_t = 0.5: an optimal resetting rate exists for tan at small/moderate λ (none at λ = 50), and never for tanh".into(),
         ours: format!(
             "backward-equation optimiser over r ∈ {{0}} ∪ [10⁻³, 10³]: {}. Substantial (gain > {}%) optima only for tan; tanh has none at any λ{}",
-            optima.iter().map(fmt_opt).collect::<Vec<_>>().join("; "),
+            optima.iter().map(|o| fmt_optimum(o)).collect::<Vec<_>>().join("; "),
             100.0 * SUBSTANTIAL,
             if tan_big_interior == Some(true) {
                 "; at tan λ = 50 τ(r) is not strictly monotone: dτ/dr(0) < 0 gives a real but negligible dip"
@@ -322,44 +462,35 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
             }
         ),
         verdict,
-        values: serde_json::json!(optima),
-    }];
-    let worst = points
-        .iter()
-        .map(|p| p["z"].as_f64().unwrap_or(f64::NAN).abs())
-        .fold(0.0, f64::max);
-    claims.push(Claim {
-        id: "mfpt_sim_vs_backward".into(),
-        figure: "fig7",
-        paper: "particle simulations agree with the solution of Eqs. (neqn26, neqn27)".into(),
-        ours: format!(
-            "exact first-passage sampler vs backward equations of the simulated process (drift ±Σ - g, not the printed g ± Σ): max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
-            worst,
-            points.len(),
-            super::z_crit(points.len())
-        ),
-        verdict: if worst < super::z_crit(points.len()) { Verdict::Agrees } else { Verdict::Differs },
-        values: serde_json::json!(points),
-    });
+        values: to_json(optima),
+    }
+}
+
+/// Compute Fig. 7.
+pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
+    let spec = Spec::new(opts.quick);
+    let curves = compute(&spec, opts, progress)?;
     Ok(FigureOutput {
         which: Which::Fig7,
-        figure: fig,
-        parameters: serde_json::json!({ "spec": spec }),
-        claims,
+        figure: plot(&spec, &curves),
+        parameters: Parameters::of(&spec),
+        claims: claims(&curves),
         wall_time_s: 0.0,
     })
 }
 
-/// One simulated point, or `None` when the expected cost exceeds the budget.
+/// One simulated point (its progress stage taken from `stages` either way),
+/// or `None` when the expected cost exceeds the budget.
 fn sim_point(
     spec: &Spec,
     p: &Params,
     vt: f64,
-    tau: f64,
     opts: &Options,
-    index: usize,
-    progress: &dyn Progress,
-) -> Result<Option<(f64, f64, u64)>> {
+    stages: &mut Stages,
+) -> Result<Option<Point>> {
+    let tau = compute::mfpt(p, spec.v0, vt)?;
+    let (stage, index) = stages.next();
+    let progress = &stage;
     let per_sample = tau * (p.lambda() + p.rate()) + 2.0;
     let n = ((spec.events_per_point / per_sample).floor() as u64).min(spec.samples);
     if n < spec.min_samples {
@@ -384,5 +515,15 @@ fn sim_point(
             reason: format!("{censored} of {n} particles not arrived by t = {t_cap:.3e}"),
         });
     }
-    Ok(Some((m, e, n)))
+    Ok(Some(Point {
+        drag: p.drag(),
+        lambda: p.lambda(),
+        r: p.rate(),
+        vt,
+        tau_sim: m,
+        tau_sim_err: e,
+        samples: n,
+        tau_backward: tau,
+        z: (m - tau) / e,
+    }))
 }

@@ -1,13 +1,15 @@
 //! Reproduction of the paper's figures 1, 2, 3, 5, 6 and 7 (`irtp reproduce`).
 //!
-//! Each figure module holds its parameter set (a serialisable spec, with a
-//! full and a `quick` size), computes every curve through the library's
-//! solvers (exact event-driven sampler for particles, Fokker-Planck solvers,
-//! backward MFPT equations, analytic r = 0 densities), and returns a
-//! [`plot::Figure`] plus the numeric [`Claim`]s it supports. [`reproduce`]
-//! runs a list of figures and [`write_outputs`] writes CSV, PNG, SVG,
-//! `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and `run.json`
-//! atomically.
+//! Each figure module holds its parameter set (a serialisable `Spec`, with a
+//! full and a `quick` size) and works in three steps: `compute` runs the
+//! library's solvers (exact event-driven sampler for particles, Fokker-Planck
+//! solvers, backward MFPT equations, analytic r = 0 densities) into typed,
+//! serialisable rows; `plot` turns the rows into a [`plot::Figure`]; `claims`
+//! checks the paper's statements against the same rows ([`Claim`]).
+//! [`reproduce`] runs a list of figures and [`write_outputs`] writes CSV,
+//! PNG, SVG, `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and
+//! `run.json` atomically. PNG and SVG need the cargo feature `plot` (on by
+//! default); without it everything else is written and `REPORT.md` says so.
 
 pub mod compute;
 pub mod fig1;
@@ -129,6 +131,38 @@ pub struct Claim {
     pub values: serde_json::Value,
 }
 
+/// Serialise a figure's rows (plain data: cannot fail) for `claims.json`
+/// and `parameters.json`.
+pub fn to_json<T: Serialize + ?Sized>(rows: &T) -> serde_json::Value {
+    serde_json::to_value(rows).expect("figure rows are plain data")
+}
+
+/// A number as JSON writes it (`7.0`, `0.9`, `null` for NaN): how claim
+/// texts print parameter values such as λ.
+pub fn json_num(x: f64) -> String {
+    serde_json::Value::from(x).to_string()
+}
+
+/// A figure's entry in `parameters.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Parameters {
+    /// The figure's parameter set (its `Spec`), as JSON.
+    pub spec: serde_json::Value,
+    /// Per-curve stationary summaries (Fig. 1 only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stationary: Option<serde_json::Value>,
+}
+
+impl Parameters {
+    /// Just the spec.
+    pub fn of<T: Serialize>(spec: &T) -> Self {
+        Parameters {
+            spec: to_json(spec),
+            stationary: None,
+        }
+    }
+}
+
 /// Everything one figure produced.
 #[derive(Clone, Debug)]
 pub struct FigureOutput {
@@ -137,7 +171,7 @@ pub struct FigureOutput {
     /// The plot (its data is also written as `<name>.csv`).
     pub figure: plot::Figure,
     /// The parameter set used (written into parameters.json).
-    pub parameters: serde_json::Value,
+    pub parameters: Parameters,
     /// Claims checked with this figure's data.
     pub claims: Vec<Claim>,
     /// Wall time in seconds.
@@ -260,13 +294,21 @@ pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f6
         opts.seed,
         wall_time_s
     );
+    if !IMAGES {
+        s.push_str(&format!("{NO_IMAGES}\n\n"));
+    }
     for o in outputs {
         let name = o.which.name();
+        let image = if IMAGES {
+            format!("![{name}]({name}.png)\n\n")
+        } else {
+            String::new()
+        };
         s.push_str(&format!(
-            "## {}\n\n![{name}]({name}.png)\n\nWall time {:.1} s. Data: `{name}.csv`.\n\n",
+            "## {}\n\n{image}Wall time {:.1} s. Data: `{name}.csv`.\n\n",
             o.figure.title, o.wall_time_s
         ));
-        if let Some(spec) = o.parameters.get("spec").and_then(|v| v.as_object()) {
+        if let Some(spec) = o.parameters.spec.as_object() {
             s.push_str("| parameter | value |\n|---|---|\n");
             for (k, v) in spec {
                 s.push_str(&format!(
@@ -286,8 +328,17 @@ pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f6
     s
 }
 
-/// Write every figure's CSV, PNG and SVG, `parameters.json`, `claims.json`,
-/// `claims.md` and `run.json` into `dir` (all or nothing).
+/// Whether this build renders PNG and SVG images (cargo feature `plot`).
+pub const IMAGES: bool = cfg!(feature = "plot");
+
+/// What `REPORT.md` and `irtp reproduce` say when images are not rendered.
+pub const NO_IMAGES: &str =
+    "No PNG/SVG images: they need the cargo feature `plot` (on by default), \
+     which this build lacks. The figures' data are in the CSV files.";
+
+/// Write every figure's CSV (and, with the `plot` feature, PNG and SVG),
+/// `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and `run.json`
+/// into `dir` (all or nothing).
 /// Create the [`OutputDir`] first (so a bad `--out` fails before any work).
 pub fn write_outputs(
     mut out: OutputDir,
@@ -301,11 +352,14 @@ pub fn write_outputs(
     for o in outputs {
         let name = o.which.name();
         out.write_bytes(&format!("{name}.csv"), o.figure.data_csv()?)?;
-        let png = out.path(&format!("{name}.png"))?;
-        o.figure.render_png(&png)?;
-        let svg = out.path(&format!("{name}.svg"))?;
-        o.figure.render_svg(&svg)?;
-        params.insert(name.into(), o.parameters.clone());
+        #[cfg(feature = "plot")]
+        {
+            let png = out.path(&format!("{name}.png"))?;
+            o.figure.render_png(&png)?;
+            let svg = out.path(&format!("{name}.svg"))?;
+            o.figure.render_svg(&svg)?;
+        }
+        params.insert(name.into(), to_json(&o.parameters));
         timings.insert(name.into(), serde_json::json!(o.wall_time_s));
         claims.extend(o.claims.iter().cloned());
     }

@@ -1,4 +1,5 @@
-//! A small declarative plotting layer on top of `plotters`.
+//! A small declarative plotting layer: the figure model, its CSV, and the
+//! layout that `plotters` lacks.
 //!
 //! A [`Figure`] is a grid of [`Panel`]s; a panel has two [`Axis`] (linear or
 //! logarithmic each), [`Series`] (lines with a dash pattern, or points with
@@ -9,34 +10,21 @@
 //! corner of the plotting area that hides the least data, or outside the
 //! plotting area when every corner would hide some.
 //!
-//! Log axes are drawn on linear coordinates of log10(value) with decade key
-//! points, so one code path serves all four axis combinations. Rendering goes
-//! to PNG (bitmap backend) and SVG with the embedded DejaVu Sans font (no
-//! system font library needed).
+//! The model and [`Figure::data_csv`] need no plotting library. Rendering
+//! (`render_png`, `render_svg`, module `render`) uses `plotters` and exists
+//! only with the cargo feature `plot` (on by default). What plotters lacks
+//! stays here and is tested without it: data-avoiding legend placement
+//! ([`choose_place`] on [`occupancy`]), clipping of lines to the axes
+//! ([`clip_polyline`]), splitting lines at cusps so thick strokes get no
+//! miter spikes ([`split_sharp`]), tick positions and tick labels.
+// Without the `plot` feature the layout helpers have no caller but their tests.
+#![cfg_attr(not(feature = "plot"), allow(dead_code))]
 
 use crate::error::{Error, Result};
-use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
-use plotters::coord::types::RangedCoordf64;
-use plotters::coord::Shift;
-use plotters::prelude::*;
-use plotters::style::Color as _;
 use serde::Serialize;
-use std::path::Path;
-use std::sync::Once;
 
-/// The embedded sans-serif font (DejaVu Sans, free license, see assets/fonts).
-static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The bytes are a valid TrueType font shipped with the crate.
-        plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-            .map_err(|_| ())
-            .expect("embedded DejaVu Sans is a valid font");
-    });
-}
+#[cfg(feature = "plot")]
+mod render;
 
 /// Axis scale.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -81,10 +69,19 @@ impl Axis {
         self.range = Some((lo, hi));
         self
     }
+    /// Data value to the axis' linear layout units (log10 on a log axis);
+    /// `None` where the value cannot be drawn.
     fn tr(&self, v: f64) -> Option<f64> {
         match self.scale {
             Scale::Linear => v.is_finite().then_some(v),
             Scale::Log => (v > 0.0 && v.is_finite()).then(|| v.log10()),
+        }
+    }
+    /// Inverse of [`Axis::tr`].
+    fn inv(&self, u: f64) -> f64 {
+        match self.scale {
+            Scale::Linear => u,
+            Scale::Log => 10f64.powf(u),
         }
     }
 }
@@ -138,14 +135,12 @@ const PALETTE: [(u8, u8, u8); 10] = [
 ];
 
 impl Color {
-    fn rgb(self) -> RGBColor {
+    /// Red, green, blue.
+    fn rgb(self) -> (u8, u8, u8) {
         match self {
-            Color::Palette(i) => {
-                let (r, g, b) = PALETTE[i % PALETTE.len()];
-                RGBColor(r, g, b)
-            }
-            Color::Black => RGBColor(0, 0, 0),
-            Color::Gray => RGBColor(110, 110, 110),
+            Color::Palette(i) => PALETTE[i % PALETTE.len()],
+            Color::Black => (0, 0, 0),
+            Color::Gray => (110, 110, 110),
         }
     }
 }
@@ -270,18 +265,6 @@ pub struct Figure {
     pub panels: Vec<Panel>,
 }
 
-const TITLE_PX: u32 = 34;
-const FONT_PX: f64 = 17.0;
-const TICK_FONT_PX: f64 = 15.0;
-const LEGEND_FONT_PX: f64 = 15.0;
-
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Io {
-        path: path.display().to_string(),
-        reason: format!("plotting: {e}"),
-    }
-}
-
 impl Figure {
     /// New empty figure.
     pub fn new(name: impl Into<String>, title: impl Into<String>, cols: usize) -> Self {
@@ -294,26 +277,23 @@ impl Figure {
         }
     }
 
-    fn size(&self) -> (u32, u32) {
-        let rows = self.panels.len().div_ceil(self.cols).max(1) as u32;
-        let cols = self.cols.min(self.panels.len().max(1)) as u32;
-        (cols * self.panel_px.0, rows * self.panel_px.1 + TITLE_PX)
+    /// Panel rows and columns of the grid.
+    fn grid(&self) -> (usize, usize) {
+        let rows = self.panels.len().div_ceil(self.cols).max(1);
+        let cols = self.cols.min(self.panels.len().max(1));
+        (rows, cols)
     }
 
     /// Render to a PNG file.
-    pub fn render_png(&self, path: &Path) -> Result<()> {
-        register_font();
-        let root = BitMapBackend::new(path, self.size()).into_drawing_area();
-        self.draw(&root).map_err(|e| plot_err(path, e))?;
-        root.present().map_err(|e| plot_err(path, e))
+    #[cfg(feature = "plot")]
+    pub fn render_png(&self, path: &std::path::Path) -> Result<()> {
+        render::png(self, path)
     }
 
     /// Render to an SVG file.
-    pub fn render_svg(&self, path: &Path) -> Result<()> {
-        register_font();
-        let root = SVGBackend::new(path, self.size()).into_drawing_area();
-        self.draw(&root).map_err(|e| plot_err(path, e))?;
-        root.present().map_err(|e| plot_err(path, e))
+    #[cfg(feature = "plot")]
+    pub fn render_svg(&self, path: &std::path::Path) -> Result<()> {
+        render::svg(self, path)
     }
 
     /// All plotted data in long format:
@@ -328,7 +308,7 @@ impl Figure {
             .map_err(e)?;
         for p in &self.panels {
             let panel = p.label.trim_matches(|c| c == '(' || c == ')');
-            for s in &self.series_of(p) {
+            for s in &p.series {
                 let style = match s.style {
                     Style::Points => "points",
                     Style::Line(Dash::Solid) => "line",
@@ -359,34 +339,6 @@ impl Figure {
             reason: x.to_string(),
         })?;
         Ok(String::from_utf8(bytes).expect("csv of utf-8 strings"))
-    }
-
-    fn series_of<'a>(&self, p: &'a Panel) -> Vec<&'a Series> {
-        p.series.iter().collect()
-    }
-
-    fn draw<DB: DrawingBackend>(
-        &self,
-        root: &DrawingArea<DB, Shift>,
-    ) -> std::result::Result<(), Box<dyn std::error::Error + 'static>>
-    where
-        DB::ErrorType: 'static,
-    {
-        root.fill(&WHITE)?;
-        let (_, h) = root.dim_in_pixel();
-        let (title_area, body) = root.split_vertically(TITLE_PX.min(h));
-        title_area.draw(&Text::new(
-            self.title.clone(),
-            (12, 8),
-            (FAMILY, FONT_PX + 2.0).into_font(),
-        ))?;
-        let rows = self.panels.len().div_ceil(self.cols).max(1);
-        let cols = self.cols.min(self.panels.len().max(1));
-        let areas = body.split_evenly((rows, cols));
-        for (panel, area) in self.panels.iter().zip(areas.iter()) {
-            draw_panel(panel, area)?;
-        }
-        Ok(())
     }
 }
 
@@ -686,26 +638,6 @@ enum Place {
     Outside,
 }
 
-const SAMPLE_PX: i32 = 34;
-const ROW_PX: i32 = 20;
-
-fn legend_size<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    entries: &[Entry],
-    title: Option<&str>,
-) -> (i32, i32) {
-    let font = (FAMILY, LEGEND_FONT_PX).into_font();
-    let mut w = 0i32;
-    for t in entries.iter().map(|e| e.label.as_str()).chain(title) {
-        let (tw, _) = area
-            .estimate_text_size(t, &TextStyle::from(font.clone()))
-            .unwrap_or((8 * t.len() as u32, 14));
-        w = w.max(tw as i32);
-    }
-    let rows = entries.len() as i32 + i32::from(title.is_some());
-    (SAMPLE_PX + 14 + w + 8, rows * ROW_PX + 10)
-}
-
 /// Choose the legend place: the candidate box (fractions of the plotting
 /// area) covering the fewest data points; outside if all cover some.
 fn choose_place(pts: &[(f64, f64)], fw: f64, fh: f64) -> Place {
@@ -789,318 +721,6 @@ fn occupancy(p: &Panel, xr: (f64, f64), yr: (f64, f64)) -> Vec<(f64, f64)> {
     out
 }
 
-type DynErr = Box<dyn std::error::Error + 'static>;
-
-/// Linear f64 coordinate with explicit tick (bold) and grid (light) positions.
-/// (plotters' `WithKeyPoints<RangedCoordf64>` cannot take a label formatter.)
-struct Ticked {
-    inner: RangedCoordf64,
-    bold: Vec<f64>,
-    light: Vec<f64>,
-}
-
-impl Ranged for Ticked {
-    type ValueType = f64;
-    type FormatOption = DefaultFormatting;
-    fn range(&self) -> std::ops::Range<f64> {
-        self.inner.range()
-    }
-    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
-        self.inner.map(value, limit)
-    }
-    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
-        if hint.weight().allow_light_points() {
-            self.light.clone()
-        } else {
-            self.bold.clone()
-        }
-    }
-    fn axis_pixel_range(&self, limit: (i32, i32)) -> std::ops::Range<i32> {
-        self.inner.axis_pixel_range(limit)
-    }
-}
-
-fn draw_panel<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Result<(), DynErr>
-where
-    DB::ErrorType: 'static,
-{
-    let xr = fit_range(&p.x, p.series.iter().flat_map(|s| s.x.iter().copied()));
-    let yvals = p.series.iter().flat_map(|s| {
-        let e = s.y_err.clone();
-        s.y.iter().enumerate().flat_map(move |(i, &y)| {
-            let d = e
-                .as_ref()
-                .map_or(0.0, |e| if e[i].is_finite() { e[i] } else { 0.0 });
-            [y - d, y + d]
-        })
-    });
-    let yr = fit_range(&p.y, yvals.collect::<Vec<_>>().into_iter());
-    let (xt, xminor, xstep) = ticks(&p.x, xr.0, xr.1);
-    let (yt, yminor, ystep) = ticks(&p.y, yr.0, yr.1);
-
-    let entries = legend_entries(p);
-    let (lw, lh) = legend_size(area, &entries, p.legend_title.as_deref());
-    let (aw, ah) = area.dim_in_pixel();
-    // Approximate plotting-area size (margins and label areas subtracted).
-    let (pw, ph) = (aw as f64 - 100.0, ah as f64 - 110.0);
-    let occ = occupancy(p, xr, yr);
-    let place = if entries.is_empty() {
-        Place::Inside(0.0, 0.0)
-    } else {
-        choose_place(&occ, lw as f64 / pw, lh as f64 / ph)
-    };
-    let right_margin = if place == Place::Outside && !entries.is_empty() {
-        lw + 16
-    } else {
-        16
-    };
-
-    let caption = if p.title.is_empty() {
-        p.label.clone()
-    } else {
-        format!("{}  {}", p.label, p.title)
-    };
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FAMILY, FONT_PX))
-        .margin_top(6)
-        .margin_left(8)
-        .margin_bottom(6)
-        .margin_right(right_margin)
-        .x_label_area_size(48)
-        .y_label_area_size(72)
-        .build_cartesian_2d(
-            Ticked {
-                inner: (xr.0..xr.1).into(),
-                bold: xt,
-                light: xminor,
-            },
-            Ticked {
-                inner: (yr.0..yr.1).into(),
-                bold: yt,
-                light: yminor,
-            },
-        )?;
-    let xs = p.x.scale;
-    let ys = p.y.scale;
-    let fx = move |v: &f64| match xs {
-        Scale::Linear => fmt_lin(*v, xstep),
-        Scale::Log => fmt_log(*v),
-    };
-    let fy = move |v: &f64| match ys {
-        Scale::Linear => fmt_lin(*v, ystep),
-        Scale::Log => fmt_log(*v),
-    };
-    chart
-        .configure_mesh()
-        .x_desc(p.x.label.clone())
-        .y_desc(p.y.label.clone())
-        .axis_desc_style((FAMILY, FONT_PX))
-        .label_style((FAMILY, TICK_FONT_PX))
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy)
-        .bold_line_style(RGBColor(225, 225, 225))
-        .light_line_style(RGBColor(243, 243, 243))
-        .draw()?;
-
-    // Lines first, points on top.
-    for s in p
-        .series
-        .iter()
-        .filter(|s| matches!(s.style, Style::Line(_)))
-    {
-        let Style::Line(dash) = s.style else {
-            continue;
-        };
-        let pts: Vec<(f64, f64)> =
-            s.x.iter()
-                .zip(&s.y)
-                .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
-                .collect();
-        let col = s.color.rgb();
-        let width = if s.source == "guide" && dash == Dash::Dashed {
-            1
-        } else {
-            2
-        };
-        let style = ShapeStyle::from(&col).stroke_width(width);
-        let pieces: Vec<Vec<(f64, f64)>> = clip_polyline(&pts, xr, yr)
-            .into_iter()
-            .flat_map(|piece| {
-                let px: Vec<(f64, f64)> = piece
-                    .iter()
-                    .map(|c| {
-                        let b = chart.backend_coord(c);
-                        (b.0 as f64, b.1 as f64)
-                    })
-                    .collect();
-                split_sharp(piece, &px)
-            })
-            .collect();
-        for piece in pieces {
-            match dash {
-                Dash::Solid => {
-                    chart.draw_series(std::iter::once(PathElement::new(piece, style)))?;
-                }
-                Dash::Dashed => {
-                    chart.draw_series(DashedLineSeries::new(piece, 9, 6, style))?;
-                }
-                Dash::Dotted => {
-                    chart.draw_series(DashedLineSeries::new(piece, 2, 4, style))?;
-                }
-            }
-        }
-    }
-    for s in p.series.iter().filter(|s| s.style == Style::Points) {
-        let col = s.color.rgb();
-        let mut pts = Vec::new();
-        let mut bars = Vec::new();
-        for i in 0..s.x.len() {
-            let (Some(x), Some(y)) = (p.x.tr(s.x[i]), p.y.tr(s.y[i])) else {
-                continue;
-            };
-            if x < xr.0 || x > xr.1 || y < yr.0 || y > yr.1 {
-                continue;
-            }
-            pts.push((x, y));
-            if let Some(e) = &s.y_err {
-                let e = e[i];
-                if e.is_finite() && e > 0.0 {
-                    let lo = p.y.tr(s.y[i] - e).unwrap_or(yr.0).max(yr.0);
-                    let hi = p.y.tr(s.y[i] + e).unwrap_or(yr.1).min(yr.1);
-                    bars.push((x, lo, y, hi));
-                }
-            }
-        }
-        // Error bars drawn as paths (plotters' ErrorBar needs an extra feature).
-        let bar_style = ShapeStyle::from(&col).stroke_width(1);
-        let cap = 0.006 * (xr.1 - xr.0);
-        for (x, lo, _y, hi) in bars {
-            chart.draw_series(std::iter::once(PathElement::new(
-                vec![(x, lo), (x, hi)],
-                bar_style,
-            )))?;
-            for yy in [lo, hi] {
-                chart.draw_series(std::iter::once(PathElement::new(
-                    vec![(x - cap, yy), (x + cap, yy)],
-                    bar_style,
-                )))?;
-            }
-        }
-        chart.draw_series(
-            pts.into_iter()
-                .map(|c| Circle::new(c, 3, ShapeStyle::from(&col).filled())),
-        )?;
-    }
-    for n in &p.notes {
-        if let (Some(x), Some(y)) = (p.x.tr(n.x), p.y.tr(n.y)) {
-            if x >= xr.0 && x <= xr.1 && y >= yr.0 && y <= yr.1 {
-                chart.draw_series(std::iter::once(Text::new(
-                    n.text.clone(),
-                    (x, y),
-                    (FAMILY, FONT_PX).into_font().color(&Color::Gray.rgb()),
-                )))?;
-            }
-        }
-    }
-
-    if !entries.is_empty() {
-        let plot = chart.plotting_area();
-        let xrange = plot.get_x_range();
-        let yrange = plot.get_y_range();
-        let (px0, px1) = (xrange.start, xrange.end);
-        let (py0, py1) = (yrange.start, yrange.end);
-        let (ox, oy) = {
-            // Pixel position of the plotting area's top-left corner.
-            let c = chart.backend_coord(&(px0, py1));
-            (c.0, c.1)
-        };
-        let br = chart.backend_coord(&(px1, py0));
-        let (w, h) = (br.0 - ox, br.1 - oy);
-        let (lx, ly) = match place {
-            Place::Inside(fx, fy) => (ox + (fx * w as f64) as i32, oy + (fy * h as f64) as i32),
-            Place::Outside => (br.0 + 10, oy),
-        };
-        draw_legend(
-            area,
-            &entries,
-            p.legend_title.as_deref(),
-            (lx, ly),
-            (lw, lh),
-        )?;
-    }
-    Ok(())
-}
-
-fn draw_legend<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    entries: &[Entry],
-    title: Option<&str>,
-    (x, y): (i32, i32),
-    (w, h): (i32, i32),
-) -> Result<(), DynErr>
-where
-    DB::ErrorType: 'static,
-{
-    // The area's own pixel origin: drawing uses coordinates relative to it.
-    let (ax, ay) = area.get_base_pixel();
-    let (x, y) = (x - ax, y - ay);
-    area.draw(&Rectangle::new(
-        [(x, y), (x + w, y + h)],
-        ShapeStyle::from(&WHITE.mix(0.85)).filled(),
-    ))?;
-    area.draw(&Rectangle::new(
-        [(x, y), (x + w, y + h)],
-        ShapeStyle::from(&RGBColor(190, 190, 190)).stroke_width(1),
-    ))?;
-    let font = (FAMILY, LEGEND_FONT_PX).into_font();
-    let mut row = y + 5;
-    if let Some(t) = title {
-        area.draw(&Text::new(t.to_string(), (x + 8, row + 2), font.clone()))?;
-        row += ROW_PX;
-    }
-    for e in entries {
-        let col = e.color.rgb();
-        let cy = row + ROW_PX / 2;
-        let (x0, x1) = (x + 8, x + 8 + SAMPLE_PX);
-        if let Some(d) = e.dash {
-            let style = ShapeStyle::from(&col).stroke_width(2);
-            match d {
-                Dash::Solid => area.draw(&PathElement::new(vec![(x0, cy), (x1, cy)], style))?,
-                Dash::Dashed => {
-                    for k in (x0..x1).step_by(12) {
-                        area.draw(&PathElement::new(
-                            vec![(k, cy), ((k + 7).min(x1), cy)],
-                            style,
-                        ))?;
-                    }
-                }
-                Dash::Dotted => {
-                    for k in (x0..x1).step_by(5) {
-                        area.draw(&PathElement::new(
-                            vec![(k, cy), ((k + 2).min(x1), cy)],
-                            style,
-                        ))?;
-                    }
-                }
-            }
-        }
-        if e.marker {
-            area.draw(&Circle::new(
-                ((x0 + x1) / 2, cy),
-                4,
-                ShapeStyle::from(&col).filled(),
-            ))?;
-        }
-        area.draw(&Text::new(
-            e.label.clone(),
-            (x1 + 8, cy - (LEGEND_FONT_PX as i32) / 2 - 1),
-            font.clone(),
-        ))?;
-        row += ROW_PX;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1176,99 +796,6 @@ mod tests {
         match choose_place(&pts, 0.3, 0.3) {
             Place::Inside(x, y) => assert!(!(x > 0.5 && y < 0.2), "{x} {y}"),
             Place::Outside => panic!("free corners exist"),
-        }
-    }
-}
-
-#[cfg(test)]
-mod render_tests {
-    use super::*;
-
-    /// Demo figure: all axis combinations, lines, points with error bars, guides.
-    pub(super) fn demo() -> Figure {
-        let mut f = Figure::new("demo", "Demo figure: λ = 0.5, Σ = 3", 2);
-        let t: Vec<f64> = (0..60)
-            .map(|i| 10f64.powf(-2.0 + 5.0 * i as f64 / 59.0))
-            .collect();
-        let mut a = Panel::new("(a)", "log-log", Axis::log("t"), Axis::log("⟨x²⟩"));
-        for (k, d) in [1.0, 0.3, 0.05].iter().enumerate() {
-            let y: Vec<f64> = t.iter().map(|t| t * t / (1.0 + t / d)).collect();
-            let e: Vec<f64> = y.iter().map(|y| 0.1 * y).collect();
-            a.series.push(Series::points(
-                Some(format!("r = {k}")),
-                Color::Palette(k),
-                "simulation",
-                t.iter().step_by(4).copied().collect(),
-                y.iter().step_by(4).copied().collect(),
-                e.iter().step_by(4).copied().collect(),
-            ));
-            a.series.push(Series::line(
-                Some(format!("r = {k}")),
-                Color::Palette(k),
-                Dash::Solid,
-                "fp",
-                t.clone(),
-                y,
-            ));
-        }
-        a.series.push(Series::line(
-            None,
-            Color::Gray,
-            Dash::Dotted,
-            "guide",
-            vec![0.01, 1.0],
-            vec![1e-4, 1.0],
-        ));
-        a.notes.push(Note {
-            text: "t²".into(),
-            x: 0.05,
-            y: 0.01,
-        });
-        a.legend_title = Some("reset rate".into());
-        f.panels.push(a);
-        let v: Vec<f64> = (0..200).map(|i| -1.2 + 2.4 * i as f64 / 199.0).collect();
-        let mut b = Panel::new(
-            "(b)",
-            "linear",
-            Axis::linear("v"),
-            Axis::linear("P(v)").range(0.0, 2.0),
-        );
-        b.series.push(Series::line(
-            Some("r = 0".into()),
-            Color::Black,
-            Dash::Solid,
-            "analytic",
-            v.clone(),
-            v.iter().map(|v| 0.3 / (1.25 - v.abs()).sqrt()).collect(),
-        ));
-        b.series.push(Series::line(
-            Some("r = 5".into()),
-            Color::Palette(1),
-            Dash::Dashed,
-            "fp",
-            v.clone(),
-            v.iter().map(|v| (-3.0 * v.abs()).exp() * 1.4).collect(),
-        ));
-        f.panels.push(b);
-        f
-    }
-
-    #[test]
-    fn renders_png_and_svg() {
-        let dir = tempfile::tempdir().unwrap();
-        let f = demo();
-        let png = dir.path().join("demo.png");
-        let svg = dir.path().join("demo.svg");
-        f.render_png(&png).unwrap();
-        f.render_svg(&svg).unwrap();
-        assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
-        let s = std::fs::read_to_string(&svg).unwrap();
-        assert!(s.contains("<svg") && s.contains("r = 0"));
-        let csv = f.data_csv().unwrap();
-        assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"));
-        if let Ok(d) = std::env::var("IRTP_PLOT_DEMO_DIR") {
-            f.render_png(&std::path::Path::new(&d).join("demo.png"))
-                .unwrap();
         }
     }
 }
