@@ -241,14 +241,14 @@ fn rejects_bad_problems() {
     let p = Params::new(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0).unwrap();
     let vu = 3f64.atan();
     for (v0, vt, name) in [
-        (-0.2, vu, "--vt"),
-        (-0.2, 1.5, "--vt"),
-        (-0.2, f64::NAN, "--vt"),
-        (-0.2, -vu, "--vt"),
-        (-1.3, 0.5, "--v0"),
-        (0.5, 0.5, "--v0"),
-        (f64::INFINITY, 0.5, "--v0"),
-        (0.3, 0.2, "--reset-velocity"),
+        (-0.2, vu, "vt"),
+        (-0.2, 1.5, "vt"),
+        (-0.2, f64::NAN, "vt"),
+        (-0.2, -vu, "vt"),
+        (-1.3, 0.5, "v0"),
+        (0.5, 0.5, "v0"),
+        (f64::INFINITY, 0.5, "v0"),
+        (0.3, 0.2, "reset_velocity"),
     ] {
         match Problem::new(p, v0, vt) {
             Err(irtp::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name, "{v0} {vt}"),

@@ -2,7 +2,6 @@
 
 use super::backward::{
     at_start_or_overflow, profile, rate_derivative_at_zero, BackwardOptions, BackwardSolution,
-    OVERFLOW,
 };
 use super::Problem;
 use crate::error::{finite, Error, Result};
@@ -64,15 +63,13 @@ pub fn scan(
         .map(|((p, &x), s)| {
             let solution = match s {
                 Ok(s) => s,
-                Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => {
-                    BackwardSolution {
-                        tau: f64::INFINITY,
-                        tau_plus: f64::INFINITY,
-                        tau_minus: f64::INFINITY,
-                        cells: opts.cells,
-                        error_estimate: f64::NAN,
-                    }
-                }
+                Err(Error::Overflow { .. }) => BackwardSolution {
+                    tau: f64::INFINITY,
+                    tau_plus: f64::INFINITY,
+                    tau_minus: f64::INFINITY,
+                    cells: opts.cells,
+                    error_estimate: f64::NAN,
+                },
                 Err(e) => return Err(e),
             };
             Ok(ScanPoint {
@@ -137,18 +134,33 @@ fn tau_at(base: &Problem, r: f64, opts: &BackwardOptions) -> Result<f64> {
     Ok(at_start_or_overflow(&base.with_rate(r)?, opts)?.map_or(f64::INFINITY, |s| s.tau))
 }
 
-/// Golden-section minimisation of f on [a, b]; returns (x, f(x)).
+/// Golden-section minimisation of f on [a, b] until the bracket is below
+/// `tol` (1 + |c|); returns (x, f(x)). Each step shrinks the bracket by
+/// 0.618, so 200 steps reach any tolerance above 1e-40 of the initial width;
+/// a bracket that stops shrinking (a tolerance below the rounding of the end
+/// points) is reported as [`Error::NotConverged`].
 fn golden<F: FnMut(f64) -> Result<f64>>(
     mut f: F,
     mut a: f64,
     mut b: f64,
     tol: f64,
 ) -> Result<(f64, f64)> {
+    const STEPS: usize = 200;
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut c = b - g * (b - a);
     let mut d = a + g * (b - a);
     let (mut fc, mut fd) = (f(c)?, f(d)?);
+    let mut steps = 0;
     while (b - a).abs() > tol * (1.0 + c.abs()) {
+        if steps == STEPS {
+            return Err(Error::NotConverged {
+                method: "golden-section search for the optimal reset rate",
+                iterations: STEPS,
+                residual: (b - a).abs(),
+                tolerance: tol * (1.0 + c.abs()),
+            });
+        }
+        steps += 1;
         if fc <= fd {
             b = d;
             d = c;
@@ -175,21 +187,21 @@ pub fn optimize_rate(
     opts: &OptimizeOptions,
     progress: &dyn Progress,
 ) -> Result<Optimum> {
-    let r_min = finite("--r-min", opts.r_min)?;
-    let r_max = finite("--r-max", opts.r_max)?;
+    let r_min = finite("r_min", opts.r_min)?;
+    let r_max = finite("r_max", opts.r_max)?;
     if !(r_min > 0.0) {
-        return Err(Error::invalid("--r-min", r_min, "r_min > 0"));
+        return Err(Error::invalid("r_min", r_min, "r_min > 0"));
     }
     if !(r_max > r_min) {
         return Err(Error::invalid(
-            "--r-max",
+            "r_max",
             r_max,
             format!("r_max > r_min = {r_min}"),
         ));
     }
     if opts.grid_points < 3 {
         return Err(Error::invalid(
-            "--grid-points",
+            "grid_points",
             opts.grid_points,
             "at least 3",
         ));
@@ -246,4 +258,21 @@ pub fn optimize_rate(
         at_upper_bound: at_upper_bound && r_opt > 0.0,
         grid,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn golden_converges_or_reports_why_not() {
+        let f = |x: f64| Ok((x - 0.3) * (x - 0.3));
+        let (x, fx) = golden(f, 0.0, 1.0, 1e-9).unwrap();
+        assert!((x - 0.3).abs() < 1e-8 && fx < 1e-16, "{x} {fx}");
+        // A tolerance that no bracket meets.
+        match golden(f, 0.0, 1.0, -1.0).unwrap_err() {
+            Error::NotConverged { iterations, .. } => assert_eq!(iterations, 200),
+            other => panic!("{other:?}"),
+        }
+    }
 }

@@ -67,7 +67,8 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             let u = sg * w.exp();
             u / self.drift_at_distance(s, u)
         };
-        quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14)
+        // The trait returns f64: a failed quadrature reads as NaN.
+        quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14).unwrap_or(f64::NAN)
     }
 
     /// Velocity after flowing for time t ≥ 0 from v0 (inverse of
@@ -90,8 +91,9 @@ pub trait Drag: Copy + Send + Sync + fmt::Debug {
             (t - tt, u / self.drift_at_distance(s, u), 0.0)
         };
         let g1 = self.derivative(vs).max(f64::MIN_POSITIVE);
-        let w = root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
-        vs - sg * w.exp()
+        // The trait returns f64: a failed root search reads as NaN.
+        root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15)
+            .map_or(f64::NAN, |w| vs - sg * w.exp())
     }
 
     /// Deficit integrals along the flow from va to vb:
@@ -127,9 +129,10 @@ fn quadrature_deficits<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> (f64, f64) {
         }
     };
     let f2 = |v: f64| (vs - v) * f1(v);
+    // The trait returns f64: a failed quadrature reads as NaN.
     (
-        quad::integrate(&f1, va, vb, 1e-14),
-        quad::integrate(&f2, va, vb, 1e-14),
+        quad::integrate(&f1, va, vb, 1e-14).unwrap_or(f64::NAN),
+        quad::integrate(&f2, va, vb, 1e-14).unwrap_or(f64::NAN),
     )
 }
 
@@ -448,14 +451,9 @@ impl Flow {
                         (sn.ln() + s * sg * e - c, dh, d2)
                     }
                 };
-                finish(root::solve_increasing(
-                    &h,
-                    lo.max(-745.0) - wa,
-                    hi - wa,
-                    guess,
-                    1e-6,
-                    0.0,
-                ))
+                // A failed root search reads as NaN (the hot loop returns f64).
+                root::solve_increasing(&h, lo.max(-745.0) - wa, hi - wa, guess, 1e-6, 0.0)
+                    .map_or(f64::NAN, finish)
             }
             DragLaw::Tanh => {
                 let sa = a.sinh();
@@ -491,14 +489,9 @@ impl Flow {
                         (sh.ln() - s * sg * e - c, dh, d2)
                     }
                 };
-                finish(root::solve_increasing(
-                    &h,
-                    lo.max(-745.0) - wa,
-                    hi - wa,
-                    guess,
-                    1e-6,
-                    0.0,
-                ))
+                // A failed root search reads as NaN (the hot loop returns f64).
+                root::solve_increasing(&h, lo.max(-745.0) - wa, hi - wa, guess, 1e-6, 0.0)
+                    .map_or(f64::NAN, finish)
             }
         }
     }
@@ -599,11 +592,7 @@ impl FromStr for DragLaw {
             "tan" => Ok(DragLaw::Tan),
             "tanh" => Ok(DragLaw::Tanh),
             "linear" => Ok(DragLaw::Linear),
-            _ => Err(crate::Error::invalid(
-                "--drag",
-                s,
-                "one of tan, tanh, linear",
-            )),
+            _ => Err(crate::Error::invalid("drag", s, "one of tan, tanh, linear")),
         }
     }
 }
