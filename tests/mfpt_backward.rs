@@ -124,6 +124,28 @@ fn fixed_point_iteration_agrees_at_first_order() {
     assert!(e1.abs() < 1e-2 * exact, "{e1}");
     let ratio = e1 / e2;
     assert!((ratio - 2.0).abs() < 0.2, "first-order ratio {ratio}");
+    // Too few sweeps: a typed non-convergence error, not the last iterate.
+    match fixed_point_upwind(&p, 1000, 1e-12, 5) {
+        Err(irtp::Error::NotConverged {
+            iterations,
+            residual,
+            tolerance,
+            ..
+        }) => assert!(iterations == 5 && residual > tolerance, "{residual}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn overflow_is_a_typed_error() {
+    // Resetting so frequent that tau exceeds 1e308.
+    let p = problem(DragLaw::Tan, 3.0, 0.5, 1500.0, 0.0, -0.249, 1.2);
+    let e = profile(&p, &BackwardOptions::with_cells(2000)).unwrap_err();
+    assert!(matches!(e, irtp::Error::Overflow { .. }), "{e}");
+    assert!(!e.is_input_error());
+    assert!(e.to_string().contains("practically never reached"), "{e}");
+    let at = irtp::mfpt::backward::at_start_or_overflow(&p, &BackwardOptions::with_cells(2000));
+    assert_eq!(at, Ok(None));
 }
 
 #[test]
