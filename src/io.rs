@@ -31,7 +31,7 @@ impl OutputDir {
         let target = target.as_ref().to_path_buf();
         if target.exists() && !target.is_dir() {
             return Err(Error::invalid(
-                "--out",
+                "out",
                 target.display(),
                 "a directory path (it exists and is a file)",
             ));

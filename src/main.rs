@@ -60,10 +60,11 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            let input = e
-                .downcast_ref::<irtp::Error>()
-                .is_some_and(|e| e.is_input_error());
-            eprintln!("irtp: error: {e}");
+            // Library errors name parameters (`t_max`); the user typed flags (`--t-max`).
+            let lib = e.downcast_ref::<irtp::Error>();
+            let input = lib.is_some_and(|e| e.is_input_error());
+            let msg = lib.map_or_else(|| e.to_string(), |l| l.message_with(cli::flag_for));
+            eprintln!("irtp: error: {msg}");
             ExitCode::from(if input { 2 } else { 1 })
         }
     }

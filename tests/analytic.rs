@@ -444,15 +444,15 @@ fn paper_tanh_b_statements_corrected() {
 #[test]
 fn validation() {
     let bad = |d, s, l| R0Density::new(d, s, l).unwrap_err().to_string();
-    assert!(bad(DragLaw::Tan, -1.0, 1.0).contains("--sigma"));
-    assert!(bad(DragLaw::Tan, f64::NAN, 1.0).contains("--sigma"));
-    assert!(bad(DragLaw::Tanh, 1.0, 1.0).contains("--sigma"));
-    assert!(bad(DragLaw::Tan, 3.0, 0.0).contains("--lambda"));
-    assert!(bad(DragLaw::Tan, 3.0, f64::NAN).contains("--lambda"));
-    assert!(bad(DragLaw::Tan, 3.0, f64::INFINITY).contains("--lambda"));
+    assert!(bad(DragLaw::Tan, -1.0, 1.0).contains("invalid sigma = "));
+    assert!(bad(DragLaw::Tan, f64::NAN, 1.0).contains("invalid sigma = "));
+    assert!(bad(DragLaw::Tanh, 1.0, 1.0).contains("invalid sigma = "));
+    assert!(bad(DragLaw::Tan, 3.0, 0.0).contains("invalid lambda = "));
+    assert!(bad(DragLaw::Tan, 3.0, f64::NAN).contains("invalid lambda = "));
+    assert!(bad(DragLaw::Tan, 3.0, f64::INFINITY).contains("invalid lambda = "));
     let p = models::tan(1.0, 2.0);
     let e = R0Density::from_params(&p).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("--rate"));
+    assert!(e.is_input_error() && e.to_string().contains("invalid rate = "));
     let d = R0Density::from_params(&p.with_rate(0.0).unwrap()).unwrap();
     assert_eq!(d.bounds(), p.bounds());
     assert_eq!(d.pdf(2.0), 0.0);

@@ -120,7 +120,7 @@ fn bad_options_are_rejected() {
             },
         )
         .unwrap_err();
-        assert!(e.to_string().contains("--cells"), "{e}");
+        assert!(e.to_string().contains("invalid cells = "), "{e}");
     }
 }
 

@@ -127,6 +127,28 @@ fn fixed_point_iteration_agrees_at_first_order() {
     assert!(e1.abs() < 1e-2 * exact, "{e1}");
     let ratio = e1 / e2;
     assert!((ratio - 2.0).abs() < 0.2, "first-order ratio {ratio}");
+    // Too few sweeps: a typed non-convergence error, not the last iterate.
+    match fixed_point_upwind(&p, 1000, 1e-12, 5) {
+        Err(irtp::Error::NotConverged {
+            iterations,
+            residual,
+            tolerance,
+            ..
+        }) => assert!(iterations == 5 && residual > tolerance, "{residual}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn overflow_is_a_typed_error() {
+    // Resetting so frequent that tau exceeds 1e308.
+    let p = problem(DragLaw::Tan, 3.0, 0.5, 1500.0, 0.0, -0.249, 1.2);
+    let e = profile(&p, &BackwardOptions::with_cells(2000)).unwrap_err();
+    assert!(matches!(e, irtp::Error::Overflow { .. }), "{e}");
+    assert!(!e.is_input_error());
+    assert!(e.to_string().contains("practically never reached"), "{e}");
+    let at = irtp::mfpt::backward::at_start_or_overflow(&p, &BackwardOptions::with_cells(2000));
+    assert_eq!(at, Ok(None));
 }
 
 #[test]
@@ -244,14 +266,14 @@ fn rejects_bad_problems() {
     let p = models::tan(0.5, 1.0);
     let vu = 3f64.atan();
     for (v0, vt, name) in [
-        (-0.2, vu, "--vt"),
-        (-0.2, 1.5, "--vt"),
-        (-0.2, f64::NAN, "--vt"),
-        (-0.2, -vu, "--vt"),
-        (-1.3, 0.5, "--v0"),
-        (0.5, 0.5, "--v0"),
-        (f64::INFINITY, 0.5, "--v0"),
-        (0.3, 0.2, "--reset-velocity"),
+        (-0.2, vu, "vt"),
+        (-0.2, 1.5, "vt"),
+        (-0.2, f64::NAN, "vt"),
+        (-0.2, -vu, "vt"),
+        (-1.3, 0.5, "v0"),
+        (0.5, 0.5, "v0"),
+        (f64::INFINITY, 0.5, "v0"),
+        (0.3, 0.2, "reset_velocity"),
     ] {
         match Problem::new(p, v0, vt) {
             Err(irtp::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name, "{v0} {vt}"),

@@ -258,12 +258,12 @@ fn plan_validation_and_rounding() {
     let late = spec(10, 1.0, 3, 0.9999, 4, 1);
     assert_eq!(
         name(EulerPlan::new(&p, &late, 1e-3).unwrap_err()),
-        "--burn-in"
+        "burn_in"
     );
     let ok = spec(10, 1.0, 3, 0.5, 4, 1);
-    assert_eq!(name(EulerPlan::new(&p, &ok, 0.1).unwrap_err()), "--dt");
+    assert_eq!(name(EulerPlan::new(&p, &ok, 0.1).unwrap_err()), "dt");
     let fast = models::linear(1.0, 0.5, 20.0, 0.0);
-    assert_eq!(name(EulerPlan::new(&fast, &ok, 0.06).unwrap_err()), "--dt");
+    assert_eq!(name(EulerPlan::new(&fast, &ok, 0.06).unwrap_err()), "dt");
     assert!(EulerPlan::new(&fast, &ok, 0.04).is_ok());
 }
 

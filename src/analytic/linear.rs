@@ -26,7 +26,7 @@ use crate::model::{DragLaw, Params};
 fn require_linear(p: &Params) -> Result<()> {
     if p.drag() != DragLaw::Linear {
         return Err(Error::invalid(
-            "--drag",
+            "drag",
             p.drag(),
             "linear (closed forms exist only for Newtonian drag)",
         ));
@@ -57,7 +57,7 @@ pub fn v2(p: &Params) -> Result<f64> {
 pub fn d_eff(p: &Params) -> Result<f64> {
     if !(p.lambda() > 0.0) {
         return Err(Error::invalid(
-            "--lambda",
+            "lambda",
             p.lambda(),
             "lambda > 0 (with lambda = 0 the motion is ballistic)",
         ));

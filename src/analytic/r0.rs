@@ -372,7 +372,7 @@ impl R0Density {
         Params::new(drag, sigma, lambda, 0.0, 0.0)?;
         if !(lambda > 0.0) {
             return Err(Error::invalid(
-                "--lambda",
+                "lambda",
                 lambda,
                 "lambda > 0 (at lambda = 0 there is no stationary density)",
             ));
@@ -393,7 +393,6 @@ impl R0Density {
                 edges: vec![],
                 values: vec![],
                 error: 0.0,
-                converged: true,
             },
             cum: vec![],
             half: 0.0,
@@ -409,15 +408,13 @@ impl R0Density {
             .windows(2)
             .map(|w| quad::gk15(&g, w[0], w[1]).kronrod)
             .sum();
-        let panels = quad::adaptive(&g, &start, REL_TOL * rough, MAX_PANELS);
+        let panels = quad::adaptive(&g, &start, REL_TOL * rough, MAX_PANELS)
+            .map_err(|f| f.in_method("r0 density normalisation"))?;
         let half = panels.total();
-        if !panels.converged || !(half > 0.0) || !half.is_finite() {
+        if !(half > 0.0) || !half.is_finite() {
             return Err(Error::Numerical {
                 method: "r0 density normalisation",
-                reason: format!(
-                    "adaptive quadrature did not converge (integral {half}, error bound {})",
-                    panels.error
-                ),
+                reason: format!("the integral is {half} (error bound {})", panels.error),
             });
         }
         let mut cum = Vec::with_capacity(panels.edges.len());
@@ -439,7 +436,7 @@ impl R0Density {
     pub fn from_params(p: &Params) -> Result<Self> {
         if p.rate() != 0.0 {
             return Err(Error::invalid(
-                "--rate",
+                "rate",
                 p.rate(),
                 "0 (the closed-form density exists only without resetting)",
             ));
@@ -557,13 +554,8 @@ impl R0Density {
             .windows(2)
             .map(|w| quad::gk15(&f, w[0], w[1]).kronrod)
             .sum();
-        let p = quad::adaptive(&f, e, REL_TOL * rough, MAX_PANELS);
-        if !p.converged {
-            return Err(Error::Numerical {
-                method: "r0 density moment",
-                reason: format!("adaptive quadrature did not converge for k = {k}"),
-            });
-        }
+        let p = quad::adaptive(&f, e, REL_TOL * rough, MAX_PANELS)
+            .map_err(|f| f.in_method("r0 density moment"))?;
         Ok(p.total() / self.half)
     }
 
@@ -606,10 +598,9 @@ impl R0Density {
         }
     }
 
-    /// Unnormalised mass between the edge and distance w from it (w ∈ [0, v_u]).
-    /// `relative`: near the edge, integrate afresh to a tolerance relative to the
-    /// tail itself (slower, ~50 µs) instead of the table (absolute ~1e-16, ~1 µs).
-    fn tail(&self, w: f64, relative: bool) -> f64 {
+    /// Unnormalised mass between the edge and distance w from it (w ∈ [0, v_u]),
+    /// from the table (absolute ~1e-16, ~1 µs).
+    fn tail(&self, w: f64) -> f64 {
         if !(w > 0.0) {
             return 0.0;
         }
@@ -617,26 +608,6 @@ impl R0Density {
         let e = &self.panels.edges;
         if u >= e[e.len() - 1] {
             return self.half;
-        }
-        if relative && w <= EDGE_FRACTION * self.vu {
-            // Near the edge: integrate afresh with a tolerance relative to this
-            // tail, so tiny tail masses keep their relative accuracy. Divergent
-            // edge (c < 1): in t = w^c, where the integrand (1/c) φ(t^{1/c}) tends
-            // to a constant; otherwise the density is bounded: directly in w.
-            let (h, p): (Box<dyn Fn(f64) -> f64 + '_>, f64) = if self.c < 1.0 {
-                (
-                    Box::new(|t: f64| self.ln_phi(t.powf(1.0 / self.c)).exp() / self.c),
-                    self.c,
-                )
-            } else {
-                (Box::new(|x: f64| self.ln_unnorm(x).exp()), 1.0)
-            };
-            let start = breakpoints(w, 4, p);
-            let rough: f64 = start
-                .windows(2)
-                .map(|x| quad::gk15(&h, x[0], x[1]).kronrod)
-                .sum();
-            return quad::adaptive(&h, &start, REL_TOL * rough, 4000).total();
         }
         // Last boundary ≤ u.
         let i = e.partition_point(|&x| x <= u) - 1;
@@ -647,6 +618,34 @@ impl R0Density {
             0.0
         };
         self.cum[i] + part
+    }
+
+    /// [`R0Density::tail`], but near the edge integrated afresh to a
+    /// tolerance relative to the tail itself (slower, ~50 µs), so tiny tail
+    /// masses keep their relative accuracy.
+    fn tail_relative(&self, w: f64) -> Result<f64> {
+        if !(w > 0.0 && w <= EDGE_FRACTION * self.vu) {
+            return Ok(self.tail(w));
+        }
+        // Divergent edge (c < 1): in t = w^c, where the integrand (1/c)
+        // φ(t^{1/c}) tends to a constant; otherwise the density is bounded:
+        // directly in w.
+        let (h, p): (Box<dyn Fn(f64) -> f64 + '_>, f64) = if self.c < 1.0 {
+            (
+                Box::new(|t: f64| self.ln_phi(t.powf(1.0 / self.c)).exp() / self.c),
+                self.c,
+            )
+        } else {
+            (Box::new(|x: f64| self.ln_unnorm(x).exp()), 1.0)
+        };
+        let start = breakpoints(w, 4, p);
+        let rough: f64 = start
+            .windows(2)
+            .map(|x| quad::gk15(&h, x[0], x[1]).kronrod)
+            .sum();
+        let panels = quad::adaptive(&h, &start, REL_TOL * rough, 4000)
+            .map_err(|f| f.in_method("r0 density edge mass"))?;
+        Ok(panels.total())
     }
 
     /// Cumulative distribution F(v) = P(V ≤ v), accurate to ~1e-14 absolute.
@@ -660,7 +659,7 @@ impl R0Density {
         if v >= self.vu {
             return 1.0;
         }
-        let t = self.tail(self.vu - v.abs(), false) / (2.0 * self.half);
+        let t = self.tail(self.vu - v.abs()) / (2.0 * self.half);
         if v < 0.0 {
             t
         } else {
@@ -672,8 +671,15 @@ impl R0Density {
     /// ~1e-14 absolute, and ~1e-12 relative for w < 0.01 v_u, even far below
     /// the double spacing at v_u (as long as the mass itself is a normal double).
     /// Costs ~50 µs near the edge; [`R0Density::cdf`] is a ~1 µs table look-up.
+    /// NaN if the quadrature fails (see [`R0Density::try_edge_mass`]).
     pub fn edge_mass(&self, w: f64) -> f64 {
-        self.tail(w.min(self.vu), true) / (2.0 * self.half)
+        self.try_edge_mass(w).unwrap_or(f64::NAN)
+    }
+
+    /// [`R0Density::edge_mass`], or an error if the adaptive quadrature near
+    /// the edge does not converge.
+    pub fn try_edge_mass(&self, w: f64) -> Result<f64> {
+        Ok(self.tail_relative(w.min(self.vu))? / (2.0 * self.half))
     }
 
     /// Probabilities of the bins [e_i, e_{i+1}) (edges ascending; clamped to the
@@ -687,7 +693,7 @@ impl R0Density {
                 if e >= self.vu {
                     0.0
                 } else if e >= 0.0 {
-                    self.tail(self.vu - e, false) / (2.0 * self.half)
+                    self.tail(self.vu - e) / (2.0 * self.half)
                 } else {
                     self.cdf(e)
                 }
@@ -715,7 +721,8 @@ impl R0Density {
         self.try_moment(k).unwrap_or(f64::NAN)
     }
 
-    /// <v^k>, or a [`Error::Numerical`] if the adaptive quadrature fails.
+    /// <v^k>, or an [`Error::NotConverged`] / [`Error::NonFinite`] if the
+    /// adaptive quadrature fails.
     pub fn try_moment(&self, k: u32) -> Result<f64> {
         if k == 2 {
             return Ok(self.v2);

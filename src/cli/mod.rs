@@ -11,6 +11,20 @@ pub mod simulate;
 
 use serde::Serialize;
 
+/// The command-line spelling of a library parameter name: `--` + the name
+/// with `_` → `-` (`t_max` → `--t-max`), except for the names in the table;
+/// a name the CLI already spelt as a flag (`--v0`) is kept.
+pub fn flag_for(name: &str) -> String {
+    const TABLE: &[(&str, &str)] = &[("figure", "FIGURE")];
+    if name.starts_with('-') {
+        return name.to_string();
+    }
+    match TABLE.iter().find(|(lib, _)| *lib == name) {
+        Some((_, flag)) => flag.to_string(),
+        None => format!("--{}", name.replace('_', "-")),
+    }
+}
+
 /// Text-mode note listing the files an output directory received (nothing
 /// when no `--out` was given).
 pub fn print_written(dir: &Option<std::path::PathBuf>, files: &Option<Vec<std::path::PathBuf>>) {

@@ -150,7 +150,7 @@ pub fn mfpt_sim(
     Problem::new(*params, v0, vt)?;
     if !(v0 < vt) {
         return Err(Error::invalid(
-            "--vt",
+            "vt",
             vt,
             format!("vt > v0 = {v0} (upward passage)"),
         ));

@@ -75,7 +75,7 @@ impl FromStr for Which {
             .find(|w| w.name() == s)
             .ok_or_else(|| {
                 Error::invalid(
-                    "FIGURE",
+                    "figure",
                     s,
                     "one of fig1, fig2, fig3, fig5, fig6, fig7, all",
                 )

@@ -6,6 +6,7 @@
 //! cancellation, and the drifts there are evaluated from the distance
 //! (see [`edge_drift`]).
 
+use crate::error::{Error, Result};
 use crate::model::{Drag, DragLaw, Params};
 use serde::{Deserialize, Serialize};
 
@@ -100,12 +101,13 @@ impl Grid {
     /// in every edge cell (it is smooth in s), so first-order upwind converges
     /// like O(1/N) with a smooth error expansion, and Richardson extrapolation
     /// over nested meshes (nl, nu) -> (2nl, 2nu) is valid.
-    pub fn graded(p: &Params, nl: usize, nu: usize) -> Grid {
+    /// Fails if the Newton solve for a node does not converge.
+    pub fn graded(p: &Params, nl: usize, nu: usize) -> Result<Grid> {
         let (vl, vu) = p.bounds();
         let vr = p.reset_velocity();
         let (lo_map, up_map) = half_maps(p);
-        let low = lo_map.distances(nl);
-        let up = up_map.distances(nu);
+        let low = lo_map.distances(nl)?;
+        let up = up_map.distances(nu)?;
         let n = nl + nu;
         let mut xl = Vec::with_capacity(n + 1);
         let mut xu = Vec::with_capacity(n + 1);
@@ -126,7 +128,15 @@ impl Grid {
         for k in (0..nu).rev() {
             widths.push(up[k + 1] - up[k]);
         }
-        Grid::build(p, xl, xu, widths, nl, nl.saturating_sub(1), lo_map.q)
+        Ok(Grid::build(
+            p,
+            xl,
+            xu,
+            widths,
+            nl,
+            nl.saturating_sub(1),
+            lo_map.q,
+        ))
     }
 
     fn build(
@@ -297,37 +307,55 @@ impl HalfMap {
     }
 
     /// Distances 0 = x_0 < x_1 < ... < x_n = len at equally spaced s.
-    fn distances(&self, n: usize) -> Vec<f64> {
-        let (q, kq, len) = (self.q, self.k, self.len);
+    fn distances(&self, n: usize) -> Result<Vec<f64>> {
         let s_tot = self.s_total();
         let mut out = Vec::with_capacity(n + 1);
         out.push(0.0);
         for k in 1..n {
-            let s = s_tot * k as f64 / n as f64;
-            // Solve f(u) = u^q + K u + log_term(u^q) - s = 0 for u = x^(1/q):
-            // f is increasing and convex on u > 0, so Newton from a point with
-            // f >= 0 converges monotonically from above.
-            let mut u = (s / kq).min(s.powf(1.0 / q)).min(len.powf(1.0 / q));
-            for _ in 0..500 {
-                let uq1 = u.powf(q - 1.0);
-                let x = u * uq1;
-                let f = x + kq * u + self.log_term(x) - s;
-                let dlog = if self.beta == 0.0 {
-                    0.0
-                } else {
-                    self.beta * self.ell / (self.ell + len - x)
-                };
-                let du = f / (q * uq1 * (1.0 + dlog) + kq);
-                // Stop at convergence or when rounding makes f <= 0.
-                if !(du > 4e-16 * u) {
-                    break;
-                }
-                u -= du;
-            }
-            out.push(u.powf(q).min(len));
+            out.push(self.distance_at(s_tot * k as f64 / n as f64)?);
         }
-        out.push(len);
-        out
+        out.push(self.len);
+        Ok(out)
+    }
+
+    /// The distance x with s(x) = s: solves
+    /// f(u) = u^q + K u + log_term(u^q) - s = 0 for u = x^(1/q).
+    /// f is increasing and convex on u > 0, so Newton
+    /// from a point with f >= 0 converges monotonically from above; a NaN step
+    /// or 500 steps without convergence are reported.
+    fn distance_at(&self, s: f64) -> Result<f64> {
+        const STEPS: usize = 500;
+        let (q, kq, len) = (self.q, self.k, self.len);
+        let mut u = (s / kq).min(s.powf(1.0 / q)).min(len.powf(1.0 / q));
+        let mut du = f64::INFINITY;
+        for _ in 0..STEPS {
+            let uq1 = u.powf(q - 1.0);
+            let x = u * uq1;
+            let f = x + kq * u + self.log_term(x) - s;
+            let dlog = if self.beta == 0.0 {
+                0.0
+            } else {
+                self.beta * self.ell / (self.ell + len - x)
+            };
+            du = f / (q * uq1 * (1.0 + dlog) + kq);
+            if du.is_nan() {
+                return Err(Error::NonFinite {
+                    method: "fp graded mesh (Newton)",
+                    at: u.powf(q),
+                });
+            }
+            // Stop at convergence or when rounding makes f <= 0.
+            if !(du > 4e-16 * u) {
+                return Ok(u.powf(q).min(len));
+            }
+            u -= du;
+        }
+        Err(Error::NotConverged {
+            method: "fp graded mesh (Newton)",
+            iterations: STEPS,
+            residual: du,
+            tolerance: 4e-16 * u,
+        })
     }
 }
 
@@ -353,7 +381,7 @@ mod tests {
     #[test]
     fn graded_mesh_is_monotone_and_spans_interval() {
         let p = Params::new(DragLaw::Tan, 3.0, 0.5, 0.0, 0.3).unwrap();
-        let g = Grid::graded(&p, 300, 500);
+        let g = Grid::graded(&p, 300, 500).unwrap();
         assert_eq!(g.cells(), 800);
         assert!(g.grading > 19.0);
         assert!(g.widths.iter().all(|&h| h > 0.0));
@@ -368,7 +396,7 @@ mod tests {
     fn large_rate_clusters_cells_at_reset_velocity() {
         let p = Params::new(DragLaw::Tanh, 0.6, 0.5, 1000.0, 0.1).unwrap();
         let (nl, nu) = graded_split(&p, 2000);
-        let g = Grid::graded(&p, nl, nu);
+        let g = Grid::graded(&p, nl, nu).unwrap();
         assert!((g.edges[nl] - 0.1).abs() < 1e-15);
         let mean = (g.edges[2000] - g.edges[0]) / 2000.0;
         // Cells next to v_r are far below the mean width (peak width ~ Σ/r).

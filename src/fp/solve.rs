@@ -166,7 +166,7 @@ mod tests {
                 let p = Params::new(d, s, l, r, 0.1).unwrap();
                 check(&Grid::uniform(&p, 200), l, r);
                 // Moderate grading so that the residual check is well scaled.
-                check(&Grid::graded(&p, 90, 110), l, r);
+                check(&Grid::graded(&p, 90, 110).unwrap(), l, r);
             }
         }
     }
@@ -174,7 +174,7 @@ mod tests {
     #[test]
     fn stationary_solution_is_nonnegative_with_unit_mass() {
         let p = Params::new(DragLaw::Tan, 3.0, 0.5, 1e-6, 0.2).unwrap();
-        let g = Grid::graded(&p, 400, 600);
+        let g = Grid::graded(&p, 400, 600).unwrap();
         let mut b = vec![[0.0; 2]; g.cells()];
         b[g.reset_plus][0] -= 0.5 * p.rate();
         b[g.reset_minus][1] -= 0.5 * p.rate();

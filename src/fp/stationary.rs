@@ -94,21 +94,21 @@ pub struct Stationary {
 fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
     if !(MIN_CELLS..=MAX_CELLS).contains(&o.cells) {
         return Err(Error::invalid(
-            "--cells",
+            "cells",
             o.cells,
             format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
         ));
     }
     if o.extrapolate && o.cells % 2 != 0 {
         return Err(Error::invalid(
-            "--cells",
+            "cells",
             o.cells,
             "an even number (extrapolation uses cells/2 as the coarse mesh)",
         ));
     }
     if !(p.lambda() > 0.0) && !(p.rate() > 0.0) {
         return Err(Error::invalid(
-            "--lambda",
+            "lambda",
             p.lambda(),
             "lambda > 0 when rate = 0 (otherwise each state sits at its edge forever)",
         ));
@@ -119,9 +119,9 @@ fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
 /// Mesh with `n` cells, `halves` times refined (each refinement splits every
 /// cell in two in the mesh parameter): the graded mesh splits its cells at v_r
 /// in proportion to length, so nested meshes share the same split.
-pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Grid {
+pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Result<Grid> {
     match mesh {
-        Mesh::Uniform => Grid::uniform(p, n << refine),
+        Mesh::Uniform => Ok(Grid::uniform(p, n << refine)),
         Mesh::Graded => {
             let (nl, nu) = super::grid::graded_split(p, n);
             Grid::graded(p, nl << refine, nu << refine)
@@ -211,14 +211,14 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
     check_options(params, opts)?;
     let g = if opts.extrapolate {
-        make_grid(params, opts.mesh, opts.cells / 2, 1)
+        make_grid(params, opts.mesh, opts.cells / 2, 1)?
     } else {
-        make_grid(params, opts.mesh, opts.cells, 0)
+        make_grid(params, opts.mesh, opts.cells, 0)?
     };
     let m = stationary_masses(&g, params)?;
     let fine = moments(&g, params, &m);
     let coarse = if opts.extrapolate {
-        let gc = make_grid(params, opts.mesh, opts.cells / 2, 0);
+        let gc = make_grid(params, opts.mesh, opts.cells / 2, 0)?;
         let mc = stationary_masses(&gc, params)?;
         Some(moments(&gc, params, &mc))
     } else {

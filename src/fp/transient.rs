@@ -137,24 +137,24 @@ pub fn transient_with_progress(
     let n = opts.cells;
     if !(MIN_CELLS..=MAX_CELLS).contains(&n) {
         return Err(Error::invalid(
-            "--cells",
+            "cells",
             n,
             format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
         ));
     }
-    let t_max = finite("--t-max", opts.t_max)?;
+    let t_max = finite("t_max", opts.t_max)?;
     if !(t_max > 0.0) {
-        return Err(Error::invalid("--t-max", t_max, "t_max > 0"));
+        return Err(Error::invalid("t_max", t_max, "t_max > 0"));
     }
-    let cfl = finite("--cfl", opts.cfl)?;
+    let cfl = finite("cfl", opts.cfl)?;
     if !(cfl > 0.0 && cfl <= 1.0) {
-        return Err(Error::invalid("--cfl", cfl, "0 < cfl <= 1"));
+        return Err(Error::invalid("cfl", cfl, "0 < cfl <= 1"));
     }
-    let mut times = check_times("--times", &opts.times, t_max)?;
+    let mut times = check_times("times", &opts.times, t_max)?;
     if times.is_empty() {
         times.push(t_max);
     }
-    let snaps = check_times("--snapshot-times", &opts.snapshot_times, t_max)?;
+    let snaps = check_times("snapshot_times", &opts.snapshot_times, t_max)?;
 
     let g = Grid::uniform(params, n);
     let (lambda, r) = (params.lambda(), params.rate());
@@ -166,7 +166,7 @@ pub fn transient_with_progress(
     let total_steps = (t_max / dt).ceil() as u64;
     if total_steps > 1_000_000_000_000 {
         return Err(Error::invalid(
-            "--t-max",
+            "t_max",
             t_max,
             format!("t_max / dt <= 1e12 steps (dt = {dt:.3e})"),
         ));
@@ -305,15 +305,15 @@ mod tests {
         };
         assert_eq!(
             name(TransientOptions::sampled(100, f64::NAN, 1, 1, 0.5)),
-            "--t-max"
+            "t_max"
         );
         assert_eq!(
             name(TransientOptions::sampled(100, 0.0, 5, 1, 0.5)),
-            "--t-max"
+            "t_max"
         );
         assert_eq!(
             name(TransientOptions::sampled(100, 1.0, 1, 1, 0.5)),
-            "--samples"
+            "samples"
         );
     }
 }

@@ -66,11 +66,7 @@ impl BackwardOptions {
     /// 8 ≤ cells ≤ 2·10⁶ (the band matrix takes ~110 bytes per cell).
     pub fn validate(&self) -> Result<()> {
         if self.cells < 8 || self.cells > 2_000_000 {
-            return Err(Error::invalid(
-                "--cells",
-                self.cells,
-                "8 <= cells <= 2000000",
-            ));
+            return Err(Error::invalid("cells", self.cells, "8 <= cells <= 2000000"));
         }
         Ok(())
     }
@@ -127,7 +123,7 @@ struct Mesh {
     reset: usize,
 }
 
-fn mesh(p: &Problem, cells: usize) -> Mesh {
+fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
     let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
@@ -173,30 +169,46 @@ fn mesh(p: &Problem, cells: usize) -> Mesh {
             } else if weight == 0.0 {
                 a + (b - a) * k as f64 / n as f64
             } else {
-                // Newton on count(x) = k (count is increasing and convex,
-                // so after the first step the iterates approach from above).
-                let target = k as f64;
-                let mut y = x;
-                for _ in 0..50 {
-                    let step = (target - count(y)) / density(y);
-                    let next = (y + step).clamp(x, b);
-                    if (next - y).abs() <= 1e-15 * (1.0 + y.abs()) {
-                        y = next;
-                        break;
-                    }
-                    y = next;
-                }
-                y
+                graded_node(&count, &density, k as f64, x, b)?
             };
             v.push(x);
         }
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
-    Mesh {
+    Ok(Mesh {
         start: find(p.v0()),
         reset: find(p.params().reset_velocity()),
         v,
+    })
+}
+
+/// The node y ∈ [lo, hi] with count(y) = target, by Newton from lo (count
+/// is increasing and convex, so after the first step the iterates approach
+/// from above); [`Error::NotConverged`] if 50 steps do not settle it.
+fn graded_node(
+    count: &dyn Fn(f64) -> f64,
+    density: &dyn Fn(f64) -> f64,
+    target: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<f64> {
+    const STEPS: usize = 50;
+    let mut y = lo;
+    let (mut step, mut tolerance) = (f64::INFINITY, 0.0);
+    for _ in 0..STEPS {
+        let next = (y + (target - count(y)) / density(y)).clamp(lo, hi);
+        (step, tolerance) = ((next - y).abs(), 1e-15 * (1.0 + y.abs()));
+        if step <= tolerance {
+            return Ok(next);
+        }
+        y = next;
     }
+    Err(Error::NotConverged {
+        method: "mfpt mesh grading (Newton)",
+        iterations: STEPS,
+        residual: step,
+        tolerance,
+    })
 }
 
 /// Drifts (a+, a-) at v.
@@ -408,19 +420,18 @@ fn solve_mesh(
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, opts.cells);
+    let m = mesh(&cp, opts.cells)?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
 }
 
-/// Start of the [`Error::Numerical`] reason when tau overflows f64.
-pub const OVERFLOW: &str = "the mean first-passage time exceeds the f64 range";
-
+/// The [`Error::Overflow`] of the backward solve: tau exceeds the f64 range.
 fn overflow() -> Error {
-    Error::Numerical {
+    Error::Overflow {
         method: "mfpt backward solve",
-        reason: format!("{OVERFLOW} (~1e308): the target is practically never reached"),
+        quantity: "the mean first-passage time",
+        meaning: "the target is practically never reached",
     }
 }
 
@@ -431,7 +442,7 @@ pub fn at_start_or_overflow(
 ) -> Result<Option<BackwardSolution>> {
     match profile(problem, opts) {
         Ok(p) => Ok(Some(p.at_start())),
-        Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => Ok(None),
+        Err(Error::Overflow { .. }) => Ok(None),
         Err(e) => Err(e),
     }
 }
@@ -455,7 +466,7 @@ fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile 
 }
 
 /// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
-/// Errors with [`Error::Numerical`] if tau overflows f64.
+/// Errors with [`Error::Overflow`] if tau overflows f64.
 pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
     let fine = profile(problem, opts)?.at_start();
     let half = BackwardOptions {
@@ -483,7 +494,7 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
 pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Result<(f64, f64)> {
     opts.validate()?;
     let (cp, _) = problem.canonical();
-    let m = mesh(&cp, opts.cells);
+    let m = mesh(&cp, opts.cells)?;
     let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
     let sp: Vec<f64> = tp.iter().map(|t| tp[m.reset] - t).collect();
     let sm: Vec<f64> = tm.iter().map(|t| tm[m.reset] - t).collect();
@@ -497,7 +508,8 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
 /// fixed point (Gauss-Seidel sweeps: tau+ downwards from v_t, tau- upwards
 /// from v_l, then the reset values) until the largest change is below `tol`.
 /// Slow (many sweeps) and first order; kept as an independent check of
-/// [`solve`]. Returns the solution and the number of sweeps.
+/// [`solve`]. Returns the solution and the number of sweeps, or
+/// [`Error::NotConverged`] after `max_sweeps`.
 pub fn fixed_point_upwind(
     problem: &Problem,
     cells: usize,
@@ -506,7 +518,7 @@ pub fn fixed_point_upwind(
 ) -> Result<(BackwardSolution, usize)> {
     BackwardOptions::with_cells(cells).validate()?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, cells);
+    let m = mesh(&cp, cells)?;
     let par = &cp.params();
     let (g, sigma, lam, r) = (par.drag(), par.sigma(), par.lambda(), par.rate());
     let n = m.v.len();
@@ -515,8 +527,9 @@ pub fn fixed_point_upwind(
             .map(|&v| drifts(g, sigma, v, DriftSign::Simulated))
             .collect();
     let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
+    let mut change = f64::INFINITY;
     for sweep in 1..=max_sweeps {
-        let mut change = 0.0f64;
+        change = 0.0;
         let rp = tp[m.reset];
         for i in (0..n - 1).rev() {
             let c = a[i].0 / (m.v[i + 1] - m.v[i]);
@@ -541,8 +554,10 @@ pub fn fixed_point_upwind(
             return Ok((prof.at_start(), sweep));
         }
     }
-    Err(Error::Numerical {
+    Err(Error::NotConverged {
         method: "mfpt fixed-point iteration",
-        reason: format!("no convergence to {tol} in {max_sweeps} sweeps"),
+        iterations: max_sweeps,
+        residual: change,
+        tolerance: tol,
     })
 }

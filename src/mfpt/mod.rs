@@ -79,19 +79,19 @@ impl Problem {
     /// there is never reached), v_0 and v_r strictly on the same side of v_t
     /// (a reset must not jump across the target) and inside (v_l, v_u).
     pub fn new(params: Params, v0: f64, vt: f64) -> Result<Self> {
-        let v0 = finite("--v0", v0)?;
-        let vt = finite("--vt", vt)?;
+        let v0 = finite("v0", v0)?;
+        let vt = finite("vt", vt)?;
         let (vl, vu) = params.bounds();
         if !(params.lambda() > 0.0) {
             return Err(Error::invalid(
-                "--lambda",
+                "lambda",
                 params.lambda(),
                 "lambda > 0 for first passage (with lambda = 0 a particle in the -Sigma state never reaches the target)",
             ));
         }
         if !(vt > vl && vt < vu) {
             return Err(Error::invalid(
-                "--vt",
+                "vt",
                 vt,
                 format!(
                     "{vl:.6} < vt < {vu:.6}: the +Sigma state approaches v_u = g^-1(Sigma) = {vu:.6} only asymptotically (drift Sigma - g(v) -> 0), so a target at or beyond v_u (or v_l) is never reached"
@@ -102,7 +102,7 @@ impl Problem {
         let up = v0 < vt;
         if !(v0 > vl && v0 < vu) || v0 == vt {
             return Err(Error::invalid(
-                "--v0",
+                "v0",
                 v0,
                 format!("{vl:.6} < v0 < {vu:.6} and v0 != vt"),
             ));
@@ -117,7 +117,7 @@ impl Problem {
                     "v_r > vt = {vt} (same side as v0, so a reset cannot jump across the target)"
                 )
             };
-            return Err(Error::invalid("--reset-velocity", vr, side));
+            return Err(Error::invalid("reset_velocity", vr, side));
         }
         Ok(Problem { params, v0, vt })
     }

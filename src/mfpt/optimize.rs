@@ -2,7 +2,6 @@
 
 use super::backward::{
     at_start_or_overflow, profile, rate_derivative_at_zero, BackwardOptions, BackwardSolution,
-    OVERFLOW,
 };
 use super::Problem;
 use crate::error::{finite, Error, Result};
@@ -65,15 +64,13 @@ pub fn scan(
         .map(|((p, &x), s)| {
             let solution = match s {
                 Ok(s) => s,
-                Err(Error::Numerical { reason, .. }) if reason.starts_with(OVERFLOW) => {
-                    BackwardSolution {
-                        tau: f64::INFINITY,
-                        tau_plus: f64::INFINITY,
-                        tau_minus: f64::INFINITY,
-                        cells: opts.cells,
-                        error_estimate: f64::NAN,
-                    }
-                }
+                Err(Error::Overflow { .. }) => BackwardSolution {
+                    tau: f64::INFINITY,
+                    tau_plus: f64::INFINITY,
+                    tau_minus: f64::INFINITY,
+                    cells: opts.cells,
+                    error_estimate: f64::NAN,
+                },
                 Err(e) => return Err(e),
             };
             Ok(ScanPoint {
@@ -138,18 +135,33 @@ fn tau_at(base: &Problem, r: f64, opts: &BackwardOptions) -> Result<f64> {
     Ok(at_start_or_overflow(&base.with_rate(r)?, opts)?.map_or(f64::INFINITY, |s| s.tau))
 }
 
-/// Golden-section minimisation of f on [a, b]; returns (x, f(x)).
+/// Golden-section minimisation of f on [a, b] until the bracket is below
+/// `tol` (1 + |c|); returns (x, f(x)). Each step shrinks the bracket by
+/// 0.618, so 200 steps reach any tolerance above 1e-40 of the initial width;
+/// a bracket that stops shrinking (a tolerance below the rounding of the end
+/// points) is reported as [`Error::NotConverged`].
 fn golden<F: FnMut(f64) -> Result<f64>>(
     mut f: F,
     mut a: f64,
     mut b: f64,
     tol: f64,
 ) -> Result<(f64, f64)> {
+    const STEPS: usize = 200;
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut c = b - g * (b - a);
     let mut d = a + g * (b - a);
     let (mut fc, mut fd) = (f(c)?, f(d)?);
+    let mut steps = 0;
     while (b - a).abs() > tol * (1.0 + c.abs()) {
+        if steps == STEPS {
+            return Err(Error::NotConverged {
+                method: "golden-section search for the optimal reset rate",
+                iterations: STEPS,
+                residual: (b - a).abs(),
+                tolerance: tol * (1.0 + c.abs()),
+            });
+        }
+        steps += 1;
         if fc <= fd {
             b = d;
             d = c;
@@ -236,21 +248,21 @@ impl OptimizeOptions {
     /// Check the search range: finite 0 < r_min < r_max and at least 3 grid
     /// points (the backward options are checked where they are used).
     pub fn validate(&self) -> Result<()> {
-        let r_min = finite("--r-min", self.r_min)?;
-        let r_max = finite("--r-max", self.r_max)?;
+        let r_min = finite("r_min", self.r_min)?;
+        let r_max = finite("r_max", self.r_max)?;
         if !(r_min > 0.0) {
-            return Err(Error::invalid("--r-min", r_min, "r_min > 0"));
+            return Err(Error::invalid("r_min", r_min, "r_min > 0"));
         }
         if !(r_max > r_min) {
             return Err(Error::invalid(
-                "--r-max",
+                "r_max",
                 r_max,
                 format!("r_max > r_min = {r_min}"),
             ));
         }
         if self.grid_points < 3 {
             return Err(Error::invalid(
-                "--grid-points",
+                "grid_points",
                 self.grid_points,
                 "at least 3",
             ));
@@ -262,14 +274,14 @@ impl OptimizeOptions {
 /// The values of a [`scan`]: `points` (>= 2) values from `from` to `to`, both
 /// exact, equally spaced, or log-spaced with `log` (then from, to > 0).
 pub fn scan_values(from: f64, to: f64, points: usize, log: bool) -> Result<Vec<f64>> {
-    let from = finite("--from", from)?;
-    let to = finite("--to", to)?;
+    let from = finite("from", from)?;
+    let to = finite("to", to)?;
     if points < 2 {
-        return Err(Error::invalid("--points", points, "points >= 2"));
+        return Err(Error::invalid("points", points, "points >= 2"));
     }
     if log && !(from > 0.0 && to > 0.0) {
         return Err(Error::invalid(
-            "--from",
+            "from",
             from,
             "from > 0 and to > 0 with --log",
         ));
@@ -304,11 +316,11 @@ mod range_tests {
             [0.01, 0.1, 1.0, 10.0, 100.0]
         );
         let bad = |f, t, n, l| name(scan_values(f, t, n, l).unwrap_err());
-        assert_eq!(bad(f64::NAN, 1.0, 3, false), "--from");
-        assert_eq!(bad(0.0, f64::INFINITY, 3, false), "--to");
-        assert_eq!(bad(0.0, 1.0, 1, false), "--points");
-        assert_eq!(bad(0.0, 1.0, 3, true), "--from");
-        assert_eq!(bad(1.0, -1.0, 3, true), "--from");
+        assert_eq!(bad(f64::NAN, 1.0, 3, false), "from");
+        assert_eq!(bad(0.0, f64::INFINITY, 3, false), "to");
+        assert_eq!(bad(0.0, 1.0, 1, false), "points");
+        assert_eq!(bad(0.0, 1.0, 3, true), "from");
+        assert_eq!(bad(1.0, -1.0, 3, true), "from");
     }
 
     #[test]
@@ -321,10 +333,10 @@ mod range_tests {
             ..OptimizeOptions::default()
         };
         let bad = |o: OptimizeOptions| name(o.validate().unwrap_err());
-        assert_eq!(bad(with(f64::NAN, 1.0, 5)), "--r-min");
-        assert_eq!(bad(with(0.0, 1.0, 5)), "--r-min");
-        assert_eq!(bad(with(1.0, f64::INFINITY, 5)), "--r-max");
-        assert_eq!(bad(with(1.0, 1.0, 5)), "--r-max");
-        assert_eq!(bad(with(0.1, 1.0, 2)), "--grid-points");
+        assert_eq!(bad(with(f64::NAN, 1.0, 5)), "r_min");
+        assert_eq!(bad(with(0.0, 1.0, 5)), "r_min");
+        assert_eq!(bad(with(1.0, f64::INFINITY, 5)), "r_max");
+        assert_eq!(bad(with(1.0, 1.0, 5)), "r_max");
+        assert_eq!(bad(with(0.1, 1.0, 2)), "grid_points");
     }
 }

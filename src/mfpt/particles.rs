@@ -11,7 +11,7 @@ use crate::sim::{exact, Method};
 /// method's own limits (Euler: step and time cap; exact: time cap).
 pub fn check(problem: &Problem, method: Method, particles: u64, t_max: f64) -> Result<()> {
     if particles < 2 {
-        return Err(Error::invalid("--particles", particles, "particles >= 2"));
+        return Err(Error::invalid("particles", particles, "particles >= 2"));
     }
     match method {
         Method::Euler { dt } => EulerFpt::new(*problem, dt, t_max).map(|_| ()),
@@ -63,14 +63,14 @@ mod tests {
         assert!(check(&pr, Method::Exact, 10, f64::INFINITY).is_ok());
         assert_eq!(
             name(check(&pr, Method::Exact, 1, -1.0).unwrap_err()),
-            "--particles"
+            "particles"
         );
         assert_eq!(
             name(check(&pr, Method::Exact, 10, 0.0).unwrap_err()),
-            "--t-max"
+            "t_max"
         );
         let bad_dt = Method::Euler { dt: -1.0 };
-        assert_eq!(name(check(&pr, bad_dt, 10, 1e4).unwrap_err()), "--dt");
+        assert_eq!(name(check(&pr, bad_dt, 10, 1e4).unwrap_err()), "dt");
     }
 
     #[test]

@@ -154,7 +154,7 @@ impl EulerFpt {
         let dt = problem.params().check_dt(dt)?;
         if !(problem.params().rate() * dt < 1.0) {
             return Err(Error::invalid(
-                "--dt",
+                "dt",
                 dt,
                 format!(
                     "rate * dt < 1 (the reset probability per step is r dt), i.e. dt < {}",
@@ -162,10 +162,10 @@ impl EulerFpt {
                 ),
             ));
         }
-        let t_max = finite("--t-max", t_max)?;
+        let t_max = finite("t_max", t_max)?;
         if !(t_max >= dt) {
             return Err(Error::invalid(
-                "--t-max",
+                "t_max",
                 t_max,
                 format!("t_max >= dt = {dt}"),
             ));
@@ -266,7 +266,7 @@ pub fn euler_first_passage(
     progress: &dyn Progress,
 ) -> Result<FptStats> {
     if particles < 2 {
-        return Err(Error::invalid("--particles", particles, "particles >= 2"));
+        return Err(Error::invalid("particles", particles, "particles >= 2"));
     }
     Ok(EulerFpt::new(*problem, dt, t_max)?.stats(particles, seed, progress))
 }

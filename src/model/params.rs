@@ -65,7 +65,7 @@ impl Params {
         rate: f64,
         reset_velocity: f64,
     ) -> Result<Self> {
-        let sigma = finite("--sigma", sigma)?;
+        let sigma = finite("sigma", sigma)?;
         let limit = drag.force_limit();
         if !(sigma > 0.0 && sigma < limit) {
             let allowed = if limit.is_finite() {
@@ -73,21 +73,21 @@ impl Params {
             } else {
                 format!("sigma > 0 for {drag} drag")
             };
-            return Err(Error::invalid("--sigma", sigma, allowed));
+            return Err(Error::invalid("sigma", sigma, allowed));
         }
-        let lambda = finite("--lambda", lambda)?;
+        let lambda = finite("lambda", lambda)?;
         if !(lambda >= 0.0) {
-            return Err(Error::invalid("--lambda", lambda, "lambda >= 0"));
+            return Err(Error::invalid("lambda", lambda, "lambda >= 0"));
         }
-        let rate = finite("--rate", rate)?;
+        let rate = finite("rate", rate)?;
         if !(rate >= 0.0) {
-            return Err(Error::invalid("--rate", rate, "rate >= 0"));
+            return Err(Error::invalid("rate", rate, "rate >= 0"));
         }
-        let reset_velocity = finite("--reset-velocity", reset_velocity)?;
+        let reset_velocity = finite("reset_velocity", reset_velocity)?;
         let vu = drag.inverse(sigma);
         if !(reset_velocity > -vu && reset_velocity < vu) {
             return Err(Error::invalid(
-                "--reset-velocity",
+                "reset_velocity",
                 reset_velocity,
                 format!("-{vu:.6} < v_r < {vu:.6} (the open velocity interval for {drag} drag, sigma = {sigma})"),
             ));
@@ -178,11 +178,11 @@ impl Params {
 
     /// Validate an Euler time step against [`Params::max_euler_dt`].
     pub fn check_dt(&self, dt: f64) -> Result<f64> {
-        let dt = finite("--dt", dt)?;
+        let dt = finite("dt", dt)?;
         let max = self.max_euler_dt();
         if !(dt > 0.0 && dt < max) {
             return Err(Error::invalid(
-                "--dt",
+                "dt",
                 dt,
                 format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, so an Euler step cannot leave it)"),
             ));
@@ -234,7 +234,7 @@ mod tests {
         let e = Params::new(DragLaw::Tanh, 1.2, 1.0, 0.0, 0.0).unwrap_err();
         let msg = e.to_string();
         assert!(
-            msg.contains("--sigma") && msg.contains("1.2") && msg.contains("< 1"),
+            msg.starts_with("invalid sigma = 1.2") && msg.contains("< 1"),
             "{msg}"
         );
     }

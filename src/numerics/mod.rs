@@ -1,10 +1,84 @@
 //! Small hand-written numerical kernels shared by the model (exact flow) and
 //! the closed-form densities: Gauss–Kronrod quadrature, a safeguarded root
-//! finder and point grids. Neutral ground so that `model` does not depend on
-//! `analytic`.
+//! finder, Chebyshev tables, fast elementary functions and point grids.
+//! Neutral ground so that `model` does not depend on `analytic`.
+//!
+//! Every iterative kernel reports failure ([`Failure`]) instead of returning
+//! its last iterate: callers either propagate it with `?` (it converts into
+//! [`crate::Error`]) or document their fallback.
 
 pub mod chebyshev;
 pub mod fastmath;
 pub mod grid;
 pub mod quad;
 pub mod root;
+
+/// Why a numerical kernel gave up. Small and `Copy`, so that the exact
+/// sampler's hot loop can return it at no cost; `?` turns it into
+/// [`crate::Error::NotConverged`] or [`crate::Error::NonFinite`].
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Failure {
+    /// The iteration (or panel) budget ran out before the tolerance was met.
+    #[error(
+        "{method}: no convergence after {iterations} iterations \
+         (residual {residual:e}, tolerance {tolerance:e})"
+    )]
+    NotConverged {
+        /// Which kernel.
+        method: &'static str,
+        /// Iterations (root finder) or panels (quadrature) spent.
+        iterations: usize,
+        /// Bracket width (root finder) or error estimate (quadrature) left.
+        residual: f64,
+        /// The tolerance `residual` had to meet.
+        tolerance: f64,
+    },
+    /// The integrand returned NaN or ±∞ on the panel around `at`.
+    #[error("{method}: non-finite value near x = {at}")]
+    NonFinite {
+        /// Which kernel.
+        method: &'static str,
+        /// Panel midpoint.
+        at: f64,
+    },
+}
+
+impl Failure {
+    /// The same failure attributed to `method` (a caller's name for the
+    /// computation, e.g. "r0 density normalisation").
+    pub fn in_method(self, method: &'static str) -> Self {
+        match self {
+            Failure::NotConverged {
+                iterations,
+                residual,
+                tolerance,
+                ..
+            } => Failure::NotConverged {
+                method,
+                iterations,
+                residual,
+                tolerance,
+            },
+            Failure::NonFinite { at, .. } => Failure::NonFinite { method, at },
+        }
+    }
+}
+
+impl From<Failure> for crate::Error {
+    fn from(f: Failure) -> Self {
+        match f {
+            Failure::NotConverged {
+                method,
+                iterations,
+                residual,
+                tolerance,
+            } => crate::Error::NotConverged {
+                method,
+                iterations,
+                residual,
+                tolerance,
+            },
+            Failure::NonFinite { method, at } => crate::Error::NonFinite { method, at },
+        }
+    }
+}

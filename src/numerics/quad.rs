@@ -8,6 +8,11 @@
 //! - [`adaptive`]: globally adaptive, keeps its final panels (r = 0 densities).
 //! - [`integrate`]: locally adaptive recursive bisection to a relative
 //!   tolerance, value only (flow times and deficit integrals of the drag laws).
+//!
+//! Both stop at the first non-finite panel value and within a panel budget,
+//! reporting [`Failure`] instead of an unconverged sum.
+
+use super::Failure;
 
 /// Kronrod abscissae on [-1, 1] (QUADPACK qk15), positive half, descending.
 const XGK: [f64; 8] = [
@@ -82,8 +87,6 @@ pub struct Panels {
     pub values: Vec<f64>,
     /// Σ |K15 - G7| over the panels (a pessimistic error bound).
     pub error: f64,
-    /// Whether the tolerance was met within the panel budget (and the integrand stayed finite).
-    pub converged: bool,
 }
 
 impl Panels {
@@ -98,13 +101,16 @@ impl Panels {
 /// ≤ `tol_abs` (panels with |K15 - G7| ≤ 1e-13 |K15| are final) or `max_panels` is
 /// reached. Global (not per-panel) control matters for endpoint singularities
 /// w^a with small a, whose leftmost panel error shrinks only like h^{1+a}.
-/// Panels are returned in ascending order.
+/// Panels are returned in ascending order. Fails with
+/// [`Failure::NonFinite`] on the first panel with a non-finite K15 or error,
+/// and with [`Failure::NotConverged`] when the budget runs out or a panel
+/// that still misses the tolerance cannot be split at double precision.
 pub fn adaptive<F: Fn(f64) -> f64>(
     f: &F,
     start: &[f64],
     tol_abs: f64,
     max_panels: usize,
-) -> Panels {
+) -> Result<Panels, Failure> {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
     struct P {
@@ -142,13 +148,20 @@ pub fn adaptive<F: Fn(f64) -> f64>(
     // is then far more accurate still, and the integrand's own rounding noise
     // (e.g. exp of a large logarithm) would otherwise keep it splitting forever.
     let round_off = |p: &P| p.e <= 1e-13 * p.k.abs();
+    let non_finite = |p: &P| {
+        (!(p.k.is_finite() && p.e.is_finite())).then_some(Failure::NonFinite {
+            method: ADAPTIVE,
+            at: 0.5 * (p.a + p.b),
+        })
+    };
     let mut heap = BinaryHeap::new();
     let mut done: Vec<P> = Vec::new();
     let mut active = 0.0;
-    let mut finite = true;
     for w in start.windows(2) {
         let p = eval(w[0], w[1]);
-        finite &= p.k.is_finite() && p.e.is_finite();
+        if let Some(fail) = non_finite(&p) {
+            return Err(fail);
+        }
         if round_off(&p) {
             done.push(p);
         } else {
@@ -156,8 +169,8 @@ pub fn adaptive<F: Fn(f64) -> f64>(
             heap.push(p);
         }
     }
-    let mut converged = finite;
-    while finite && active > tol_abs {
+    let mut converged = true;
+    while active > tol_abs {
         if heap.len() + done.len() >= max_panels {
             converged = false;
             break;
@@ -172,9 +185,8 @@ pub fn adaptive<F: Fn(f64) -> f64>(
             continue;
         }
         for q in [eval(p.a, m), eval(m, p.b)] {
-            if !(q.k.is_finite() && q.e.is_finite()) {
-                finite = false;
-                converged = false;
+            if let Some(fail) = non_finite(&q) {
+                return Err(fail);
             }
             if round_off(&q) {
                 done.push(q);
@@ -188,13 +200,20 @@ pub fn adaptive<F: Fn(f64) -> f64>(
             active = heap.iter().map(|p| p.e).sum();
         }
     }
+    if !converged {
+        return Err(Failure::NotConverged {
+            method: ADAPTIVE,
+            iterations: heap.len() + done.len(),
+            residual: heap.iter().chain(&done).map(|p| p.e).sum(),
+            tolerance: tol_abs,
+        });
+    }
     let mut all: Vec<P> = done.into_iter().chain(heap).collect();
     all.sort_by(|x, y| x.a.total_cmp(&y.a));
     let mut out = Panels {
         edges: Vec::with_capacity(all.len() + 1),
         values: Vec::with_capacity(all.len()),
         error: 0.0,
-        converged,
     };
     out.edges.push(start[0]);
     for p in &all {
@@ -202,30 +221,65 @@ pub fn adaptive<F: Fn(f64) -> f64>(
         out.values.push(p.k);
         out.error += p.e;
     }
-    out
+    Ok(out)
 }
+
+const ADAPTIVE: &str = "adaptive Gauss-Kronrod quadrature";
+const LOCAL: &str = "Gauss-Kronrod quadrature";
+/// Recursion depth limit of [`integrate`] (panels down to 2^-60 of the interval).
+const MAX_DEPTH: u32 = 60;
+/// Panel budget of [`integrate`] (K15 evaluations, 15 function calls each).
+const MAX_LOCAL_PANELS: usize = 100_000;
 
 /// Locally adaptive Gauss-Kronrod: ∫_a^b f to relative tolerance `rel` by
-/// recursive bisection (depth ≤ 60) until |K15 - G7| ≤ `rel` |K15(a, b)| on
-/// each panel (the estimate is pessimistic, the result is usually far better).
-pub fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rel: f64) -> f64 {
+/// recursive bisection until |K15 - G7| ≤ `rel` |K15(a, b)| on each panel
+/// (the estimate is pessimistic, the result is usually far better). Fails
+/// with [`Failure::NonFinite`] at the first non-finite panel value (so a NaN
+/// integrand costs one panel, not 2^60), and with [`Failure::NotConverged`]
+/// when a panel misses the tolerance at depth 60 or the budget of 10⁵
+/// panels runs out.
+pub fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rel: f64) -> Result<f64, Failure> {
     if a == b {
-        return 0.0;
+        return Ok(0.0);
     }
     let q = gk15(f, a, b);
-    let (k, g) = (q.kronrod, q.gauss);
-    let tol = (rel * k.abs()).max(1e-300);
-    rec(f, a, b, k, g, tol, 60)
+    let tol = (rel * q.kronrod.abs()).max(1e-300);
+    let mut panels = 1;
+    rec(f, a, b, q, tol, MAX_DEPTH, &mut panels)
 }
 
-fn rec(f: &dyn Fn(f64) -> f64, a: f64, b: f64, k: f64, g: f64, tol: f64, depth: u32) -> f64 {
-    if (k - g).abs() <= tol || depth == 0 {
-        return k;
+fn rec(
+    f: &dyn Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    q: Gk15,
+    tol: f64,
+    depth: u32,
+    panels: &mut usize,
+) -> Result<f64, Failure> {
+    if !(q.kronrod.is_finite() && q.gauss.is_finite()) {
+        return Err(Failure::NonFinite {
+            method: LOCAL,
+            at: 0.5 * (a + b),
+        });
     }
+    let residual = (q.kronrod - q.gauss).abs();
+    if residual <= tol {
+        return Ok(q.kronrod);
+    }
+    if depth == 0 || *panels + 2 > MAX_LOCAL_PANELS {
+        return Err(Failure::NotConverged {
+            method: LOCAL,
+            iterations: *panels,
+            residual,
+            tolerance: tol,
+        });
+    }
+    *panels += 2;
     let m = 0.5 * (a + b);
     let (l, r) = (gk15(f, a, m), gk15(f, m, b));
-    rec(f, a, m, l.kronrod, l.gauss, tol, depth - 1)
-        + rec(f, m, b, r.kronrod, r.gauss, tol, depth - 1)
+    let left = rec(f, a, m, l, tol, depth - 1, panels)?;
+    Ok(left + rec(f, m, b, r, tol, depth - 1, panels)?)
 }
 
 #[cfg(test)]
@@ -251,12 +305,10 @@ mod tests {
     fn adaptive_handles_endpoint_singularity() {
         // ∫_0^1 x^{-1/2} dx = 2 needs many bisections toward 0.
         let f = |x: f64| if x > 0.0 { x.powf(-0.5) } else { 0.0 };
-        let p = adaptive(&f, &[0.0, 1.0], 1e-12, 10_000);
-        assert!(p.converged);
+        let p = adaptive(&f, &[0.0, 1.0], 1e-12, 10_000).unwrap();
         assert!((p.total() - 2.0).abs() < 1e-12, "{}", p.total());
         let g = |x: f64| x.sqrt();
-        let p = adaptive(&g, &[0.0, 0.5, 1.0], 1e-14, 10_000);
-        assert!(p.converged);
+        let p = adaptive(&g, &[0.0, 0.5, 1.0], 1e-14, 10_000).unwrap();
         assert!((p.total() - 2.0 / 3.0).abs() < 1e-14, "{}", p.total());
         assert_eq!(p.edges.len(), p.values.len() + 1);
         assert!(p.edges.windows(2).all(|w| w[0] < w[1]));
@@ -267,12 +319,72 @@ mod tests {
         let f = |x: f64| (3.0 * x).cos() * (-x).exp();
         // ∫_0^2 e^{-x} cos 3x dx = [e^{-x}(3 sin 3x - cos 3x)]_0^2 / 10.
         let exact = ((-2f64).exp() * (3.0 * 6f64.sin() - 6f64.cos()) + 1.0) / 10.0;
-        let v = integrate(&f, 0.0, 2.0, 1e-14);
+        let v = integrate(&f, 0.0, 2.0, 1e-14).unwrap();
         assert!((v - exact).abs() < 1e-15, "{v} vs {exact}");
-        let p = adaptive(&f, &[0.0, 2.0], 1e-15, 10_000);
+        let p = adaptive(&f, &[0.0, 2.0], 1e-15, 10_000).unwrap();
         assert!((p.total() - v).abs() < 1e-15);
-        assert_eq!(integrate(&f, 1.0, 1.0, 1e-14), 0.0);
+        assert_eq!(integrate(&f, 1.0, 1.0, 1e-14), Ok(0.0));
         // Reversed limits flip the sign.
-        assert!((integrate(&f, 2.0, 0.0, 1e-14) + v).abs() < 1e-15);
+        assert!((integrate(&f, 2.0, 0.0, 1e-14).unwrap() + v).abs() < 1e-15);
+    }
+
+    #[test]
+    fn non_finite_integrands_fail_at_once() {
+        use std::cell::Cell;
+        let calls = Cell::new(0usize);
+        let nan = |x: f64| {
+            calls.set(calls.get() + 1);
+            if x > 0.7 {
+                f64::NAN
+            } else {
+                1.0
+            }
+        };
+        let e = integrate(&nan, 0.0, 1.0, 1e-14).unwrap_err();
+        assert!(matches!(e, Failure::NonFinite { .. }), "{e:?}");
+        assert!(calls.get() <= 15, "{} calls", calls.get());
+        let inf = |x: f64| 1.0 / (x - 0.5);
+        let e = integrate(&inf, 0.0, 1.0, 1e-14).unwrap_err();
+        assert!(matches!(e, Failure::NonFinite { .. }), "{e:?}");
+        let e = adaptive(&nan, &[0.0, 0.5, 1.0], 1e-12, 10_000).unwrap_err();
+        assert!(
+            matches!(e, Failure::NonFinite { at, .. } if at > 0.5),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn unresolvable_integrands_report_non_convergence() {
+        // A sawtooth with 2^20 teeth is linear only on panels of depth 20:
+        // ~10⁶ panels, so the budget stops the recursion first.
+        let saw = |x: f64| (x * 1_048_576.0).fract();
+        match integrate(&saw, 0.0, 1.0, 1e-14).unwrap_err() {
+            Failure::NotConverged { iterations, .. } => {
+                assert!(iterations + 2 > MAX_LOCAL_PANELS, "{iterations}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // x^-0.9: the edge panel [0, h] misses 1e-10 relative until
+        // h^0.1 ~ 1e-10, ~330 levels down: the depth limit stops the one
+        // refining branch at level 60 (the old code returned its sum).
+        let sing = |x: f64| x.powf(-0.9);
+        match integrate(&sing, 0.0, 1.0, 1e-10).unwrap_err() {
+            Failure::NotConverged { iterations, .. } => assert!(iterations < 1000, "{iterations}"),
+            other => panic!("{other:?}"),
+        }
+        // The global driver: budget too small for the singularity.
+        let f = |x: f64| if x > 0.0 { x.powf(-0.5) } else { 0.0 };
+        match adaptive(&f, &[0.0, 1.0], 1e-12, 10).unwrap_err() {
+            Failure::NotConverged {
+                iterations,
+                residual,
+                tolerance,
+                ..
+            } => {
+                assert_eq!(iterations, 10);
+                assert!(residual > tolerance, "{residual} {tolerance}");
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

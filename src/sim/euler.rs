@@ -59,7 +59,7 @@ impl std::str::FromStr for EventSampling {
         match s {
             "geometric" => Ok(EventSampling::Geometric),
             "bernoulli" => Ok(EventSampling::Bernoulli),
-            _ => Err(Error::invalid("--events", s, "one of geometric, bernoulli")),
+            _ => Err(Error::invalid("events", s, "one of geometric, bernoulli")),
         }
     }
 }
@@ -89,7 +89,7 @@ impl EulerPlan {
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
             return Err(Error::invalid(
-                "--dt",
+                "dt",
                 dt,
                 format!(
                     "dt < 1/rate = {} (the reset probability per step is rate·dt)",
@@ -104,7 +104,7 @@ impl EulerPlan {
             let n = (t / dt).round();
             if !(n <= max_steps) {
                 return Err(Error::invalid(
-                    "--t-max",
+                    "t_max",
                     t,
                     format!("t_max/dt <= {max_steps:e} steps (dt = {dt})"),
                 ));
@@ -120,7 +120,7 @@ impl EulerPlan {
         let steps = *record_steps.last().expect("non-empty grid");
         if steps == 0 {
             return Err(Error::invalid(
-                "--t-max",
+                "t_max",
                 spec.grid.t_max(),
                 format!("t_max >= dt = {dt}"),
             ));
@@ -128,7 +128,7 @@ impl EulerPlan {
         let burn_in_step = (spec.burn_in / dt).round() as u64;
         if burn_in_step >= steps {
             return Err(Error::invalid(
-                "--burn-in",
+                "burn_in",
                 spec.burn_in,
                 format!("burn_in <= t_max - dt = {}", steps as f64 * dt - dt),
             ));
@@ -494,7 +494,7 @@ impl LinearChain {
     pub fn new(params: &Params, dt: f64) -> Result<Self> {
         if params.drag() != DragLaw::Linear {
             return Err(Error::invalid(
-                "--drag",
+                "drag",
                 params.drag(),
                 "linear (the Euler chain is exactly solvable only for Newtonian drag)",
             ));

@@ -198,14 +198,23 @@ impl<F: FlowMap> Sampler<F> {
             .map(|k| lo + (hi - lo) * k as f64 / b as f64)
             .collect();
         edges[b] = hi;
-        let fin = |t: f64| if t.is_finite() { t } else { 0.0 };
+        // Crossing time of a bin: +∞ (bin not crossed) counts 0; NaN means
+        // the flow-time quadrature failed.
+        let fin = |t: f64, at: f64| match t {
+            t if t.is_nan() => Err(Error::NonFinite {
+                method: "exact sampler bin crossing time",
+                at,
+            }),
+            t if t.is_finite() => Ok(t),
+            _ => Ok(0.0),
+        };
         let tau = [
             (0..b)
-                .map(|k| fin(drag.flow_time(sigma, edges[k], edges[k + 1])))
-                .collect(),
+                .map(|k| fin(drag.flow_time(sigma, edges[k], edges[k + 1]), edges[k]))
+                .collect::<Result<_>>()?,
             (0..b)
-                .map(|k| fin(drag.flow_time(-sigma, edges[k + 1], edges[k])))
-                .collect(),
+                .map(|k| fin(drag.flow_time(-sigma, edges[k + 1], edges[k]), edges[k]))
+                .collect::<Result<_>>()?,
         ];
         let flows = [
             drag.flow(sigma).accelerated(),
@@ -521,11 +530,11 @@ pub fn first_passage_to(
     Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
 }
 
-/// Validate a first-passage time cap (`--t-max`): t_max > 0 (+∞ allowed:
+/// Validate a first-passage time cap (`t_max`): t_max > 0 (+∞ allowed:
 /// with lambda > 0 every particle arrives almost surely).
 pub fn check_t_max(t_max: f64) -> Result<f64> {
     if !(t_max > 0.0) {
-        return Err(Error::invalid("--t-max", t_max, "t_max > 0 (inf allowed)"));
+        return Err(Error::invalid("t_max", t_max, "t_max > 0 (inf allowed)"));
     }
     Ok(t_max)
 }
@@ -544,7 +553,7 @@ pub fn exact_first_passage(
 ) -> Result<crate::mfpt::FptStats> {
     check_t_max(t_max)?;
     if particles < 2 {
-        return Err(Error::invalid("--particles", particles, "particles >= 2"));
+        return Err(Error::invalid("particles", particles, "particles >= 2"));
     }
     let (cp, swapped) = problem.canonical();
     Ok(crate::with_drag!(cp.params().drag(), |d| {

@@ -66,7 +66,7 @@ impl TimeGrid {
     pub fn linear(t_max: f64, samples: usize) -> Result<Self> {
         check_t_max(t_max)?;
         if samples < 2 {
-            return Err(Error::invalid("--samples", samples, "samples >= 2"));
+            return Err(Error::invalid("samples", samples, "samples >= 2"));
         }
         let times = crate::numerics::grid::linspace(0.0, t_max, samples);
         Ok(TimeGrid { times })
@@ -76,17 +76,17 @@ impl TimeGrid {
     /// (for log-log plots of <x²>(t)).
     pub fn log(t_min: f64, t_max: f64, samples: usize) -> Result<Self> {
         check_t_max(t_max)?;
-        let t_min = finite("--t-min", t_min)?;
+        let t_min = finite("t_min", t_min)?;
         if !(t_min > 0.0 && t_min < t_max) {
             return Err(Error::invalid(
-                "--t-min",
+                "t_min",
                 t_min,
                 format!("0 < t_min < t_max = {t_max}"),
             ));
         }
         if samples < 3 {
             return Err(Error::invalid(
-                "--samples",
+                "samples",
                 samples,
                 "samples >= 3 for a log grid",
             ));
@@ -102,19 +102,19 @@ impl TimeGrid {
     /// Explicit, strictly increasing, non-negative, finite times.
     pub fn from_times(times: Vec<f64>) -> Result<Self> {
         if times.is_empty() {
-            return Err(Error::invalid("--times", "[]", "at least one time"));
+            return Err(Error::invalid("times", "[]", "at least one time"));
         }
         for w in times.windows(2) {
             if !(w[1] > w[0]) {
                 return Err(Error::invalid(
-                    "--times",
+                    "times",
                     format!("{:?}", w),
                     "strictly increasing times",
                 ));
             }
         }
         if !(times[0] >= 0.0) || !times.iter().all(|t| t.is_finite()) {
-            return Err(Error::invalid("--times", times[0], "finite times >= 0"));
+            return Err(Error::invalid("times", times[0], "finite times >= 0"));
         }
         Ok(TimeGrid { times })
     }
@@ -138,9 +138,9 @@ impl TimeGrid {
 }
 
 fn check_t_max(t_max: f64) -> Result<f64> {
-    let t = finite("--t-max", t_max)?;
+    let t = finite("t_max", t_max)?;
     if !(t > 0.0) {
-        return Err(Error::invalid("--t-max", t, "t_max > 0"));
+        return Err(Error::invalid("t_max", t, "t_max > 0"));
     }
     Ok(t)
 }
@@ -180,21 +180,21 @@ impl SimSpec {
     ) -> Result<Self> {
         if particles < 2 {
             return Err(Error::invalid(
-                "--particles",
+                "particles",
                 particles,
                 "particles >= 2 (error bars need two samples)",
             ));
         }
-        let burn_in = finite("--burn-in", burn_in)?;
+        let burn_in = finite("burn_in", burn_in)?;
         if !(burn_in >= 0.0 && burn_in < grid.t_max()) {
             return Err(Error::invalid(
-                "--burn-in",
+                "burn_in",
                 burn_in,
                 format!("0 <= burn_in < t_max = {}", grid.t_max()),
             ));
         }
         if !(1..=10_000_000).contains(&bins) {
-            return Err(Error::invalid("--bins", bins, "1 <= bins <= 10000000"));
+            return Err(Error::invalid("bins", bins, "1 <= bins <= 10000000"));
         }
         Ok(SimSpec {
             particles,
@@ -210,7 +210,7 @@ impl SimSpec {
     pub fn shard(mut self, first: u64) -> Result<Self> {
         if first.checked_add(self.particles).is_none() {
             return Err(Error::invalid(
-                "--first-particle",
+                "first_particle",
                 first,
                 "first_particle + particles <= 2^64 - 1",
             ));

@@ -238,7 +238,9 @@ fn sampled_max_derivative<D: Drag>(d: &D, sigma: f64) -> f64 {
     1.01 * m
 }
 
-/// [`Drag::flow_time`] by quadrature in w = ln|v* - v|.
+/// [`Drag::flow_time`] by quadrature in w = ln|v* - v|. The flow methods
+/// return NaN where their quadrature or root finder fails (a non-finite
+/// integrand): callers check, and the samplers refuse non-finite tables.
 fn quadrature_time<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> f64 {
     let vs = d.inverse(s);
     let (ua, ub) = (vs - va, vs - vb);
@@ -254,7 +256,8 @@ fn quadrature_time<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> f64 {
         let u = sg * w.exp();
         u / d.drift_at_distance(s, u)
     };
-    quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14)
+    // Failure (non-finite integrand, unresolved panel) is NaN, never a guess.
+    quad::integrate(&f, ub.abs().ln(), ua.abs().ln(), 1e-14).unwrap_or(f64::NAN)
 }
 
 /// [`Drag::flow_velocity`] by safeguarded Newton on [`quadrature_time`]:
@@ -274,8 +277,8 @@ fn quadrature_velocity<D: Drag>(d: &D, s: f64, v0: f64, t: f64) -> f64 {
         (t - tt, u / d.drift_at_distance(s, u), 0.0)
     };
     let g1 = d.derivative(vs).max(f64::MIN_POSITIVE);
-    let w = root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15);
-    vs - sg * w.exp()
+    root::solve_increasing(&h, -745.0, wa, wa - g1 * t, 1e-9, 1e-15)
+        .map_or(f64::NAN, |w| vs - sg * w.exp())
 }
 
 /// [`Drag::flow_deficits`] by adaptive quadrature in v with the accurate
@@ -295,8 +298,8 @@ pub fn quadrature_deficits<D: Drag>(d: &D, s: f64, va: f64, vb: f64) -> (f64, f6
     };
     let f2 = |v: f64| (vs - v) * f1(v);
     (
-        quad::integrate(&f1, va, vb, 1e-14),
-        quad::integrate(&f2, va, vb, 1e-14),
+        quad::integrate(&f1, va, vb, 1e-14).unwrap_or(f64::NAN),
+        quad::integrate(&f2, va, vb, 1e-14).unwrap_or(f64::NAN),
     )
 }
 

@@ -182,9 +182,7 @@ impl std::str::FromStr for DragLaw {
             .iter()
             .copied()
             .find(|d| d.name() == s)
-            .ok_or_else(|| {
-                crate::Error::invalid("--drag", s, format!("one of {}", DragLaw::names()))
-            })
+            .ok_or_else(|| crate::Error::invalid("drag", s, format!("one of {}", DragLaw::names())))
     }
 }
 

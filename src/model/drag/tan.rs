@@ -137,6 +137,8 @@ impl ClosedForm for Tan {
             }
         };
         let dl = root::solve_increasing(&h, lo.max(-745.0) - wa, hi - wa, guess, 1e-6, 0.0);
-        q.finish(c.vs, dl)
+        // The bracket is rigorous, so a failure means non-finite input: NaN
+        // (the samplers check their outputs), never a last iterate.
+        dl.map_or(f64::NAN, |dl| q.finish(c.vs, dl))
     }
 }
