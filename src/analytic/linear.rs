@@ -20,6 +20,7 @@
 //! Checks: r = 0 gives `<v²>` = Σ²/(1+2λ) and D_eff = Σ²/(2λ) (free telegraph
 //! noise integrated once); r → ∞ gives D_eff ≈ Σ²/(2λ r²), the paper's r⁻².
 
+use crate::model::Reset;
 use crate::error::{Error, Result};
 use crate::model::{DragLaw, Params};
 
@@ -43,14 +44,15 @@ pub fn v_eta(p: &Params) -> Result<f64> {
 /// Stationary `<v>`.
 pub fn v_mean(p: &Params) -> Result<f64> {
     require_linear(p)?;
-    Ok(p.rate() * p.reset_velocity() / (1.0 + p.rate()))
+    let (m1, _) = p.reset().target().moments();
+    Ok(p.rate() * m1 / (1.0 + p.rate()))
 }
 
 /// Stationary `<v²>`.
 pub fn v2(p: &Params) -> Result<f64> {
     let c = v_eta(p)?;
-    let vr = p.reset_velocity();
-    Ok((2.0 * c + p.rate() * vr * vr) / (2.0 + p.rate()))
+    let (_, m2) = p.reset().target().moments();
+    Ok((2.0 * c + p.rate() * m2) / (2.0 + p.rate()))
 }
 
 /// Effective diffusion coefficient D_eff = lim `<(x - <x>)²>/(2t)` (needs λ > 0).

@@ -156,10 +156,7 @@ impl Problem {
         if self.upward() {
             (*self, false)
         } else {
-            let p = self
-                .params
-                .with_reset_velocity(-self.params.reset_velocity())
-                .expect("the velocity interval is symmetric");
+            let p = self.params.mirrored_reset();
             (
                 Problem {
                     params: p,

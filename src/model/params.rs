@@ -1,12 +1,14 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
+use super::reset::{PoissonReset, Reset, ResetRule, Target};
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the IRTP with velocity resetting:
 /// dv/dt = -g(v) + eta(t), eta = ±Sigma flipping at rate lambda (paper Eq. 5-6),
-/// v reset to v_r at rate r with position and noise state kept (paper Eq. 3).
+/// and the resetting rule (today Poissonian to v_r, position and noise state
+/// kept, paper Eq. 3; see [`crate::model::reset`]).
 ///
 /// Construct with [`Params::new`]; every field is then guaranteed admissible.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -15,8 +17,7 @@ pub struct Params {
     drag: DragLaw,
     sigma: f64,
     lambda: f64,
-    rate: f64,
-    reset_velocity: f64,
+    reset: ResetRule,
 }
 
 /// Unvalidated mirror of [`Params`] used for (de)serialisation.
@@ -48,8 +49,8 @@ impl From<Params> for RawParams {
             drag: p.drag,
             sigma: p.sigma,
             lambda: p.lambda,
-            rate: p.rate,
-            reset_velocity: p.reset_velocity,
+            rate: p.rate(),
+            reset_velocity: p.reset_velocity(),
         }
     }
 }
@@ -96,8 +97,10 @@ impl Params {
             drag,
             sigma,
             lambda,
-            rate,
-            reset_velocity,
+            reset: ResetRule::Poisson(PoissonReset {
+                rate,
+                velocity: reset_velocity,
+            }),
         })
     }
 
@@ -108,7 +111,7 @@ impl Params {
             self.sigma,
             self.lambda,
             rate,
-            self.reset_velocity,
+            self.reset_velocity(),
         )
     }
 
@@ -118,8 +121,8 @@ impl Params {
             self.drag,
             self.sigma,
             lambda,
-            self.rate,
-            self.reset_velocity,
+            self.rate(),
+            self.reset_velocity(),
         )
     }
 
@@ -129,7 +132,7 @@ impl Params {
             self.drag,
             self.sigma,
             self.lambda,
-            self.rate,
+            self.rate(),
             reset_velocity,
         )
     }
@@ -148,11 +151,32 @@ impl Params {
     }
     /// Reset rate r.
     pub fn rate(&self) -> f64 {
-        self.rate
+        self.reset.rate()
     }
     /// Reset velocity v_r.
+    ///
+    /// The point target of the resetting rule. The methods that need a point
+    /// target (the FP mesh's reset cell, the backward equations' reset term)
+    /// read it here: a rule with another kind of target extends this match,
+    /// and each such method must then handle it or refuse it.
     pub fn reset_velocity(&self) -> f64 {
-        self.reset_velocity
+        match self.reset.target() {
+            Target::Point(v) => v,
+        }
+    }
+
+    /// The resetting rule: rate, target, noise state at a reset.
+    pub fn reset(&self) -> &ResetRule {
+        &self.reset
+    }
+
+    /// Same parameters with the resetting rule mirrored under v → -v
+    /// (downward first passages run in the mirrored frame).
+    pub fn mirrored_reset(&self) -> Self {
+        Params {
+            reset: self.reset.mirrored(),
+            ..*self
+        }
     }
 
     /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. 8-10).
@@ -193,7 +217,7 @@ impl Params {
     /// Exponent of the stationary density at the upper edge, P ~ (v_u - v)^a,
     /// a = (lambda + r)/g'(v_u) - 1 (negative: integrable divergence).
     pub fn edge_exponent(&self) -> f64 {
-        (self.lambda + self.rate) / self.drag.derivative(self.v_upper()) - 1.0
+        (self.lambda + self.rate()) / self.drag.derivative(self.v_upper()) - 1.0
     }
 }
 

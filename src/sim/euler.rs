@@ -36,6 +36,7 @@
 
 use super::{Observables, SimSpec};
 use crate::error::{Error, Result};
+use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, DragLaw, Params};
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -302,7 +303,7 @@ fn run<D: Drag, E: Events>(
     let kernel = Kernel {
         f,
         sigma: params.sigma(),
-        v_r: params.reset_velocity(),
+        reset: *params.reset(),
         lo,
         scale: spec.bins as f64 / (hi - lo),
         bins: spec.bins,
@@ -346,7 +347,8 @@ fn run<D: Drag, E: Events>(
 struct Kernel<'a, D> {
     f: &'a D,
     sigma: f64,
-    v_r: f64,
+    /// The resetting rule (target and noise state at a reset).
+    reset: ResetRule,
     lo: f64,
     scale: f64,
     bins: usize,
@@ -422,7 +424,9 @@ impl<D: Drag> Kernel<'_, D> {
                 x[l] += v[l] * dt;
                 // 3. reset or Euler drift
                 if ev[l].reset(n, &mut rng[l]) {
-                    v[l] = self.v_r;
+                    v[l] = self.reset.draw_velocity(&mut rng[l]);
+                    let plus = self.reset.draw_noise(eta[l] > 0.0, &mut rng[l]);
+                    eta[l] = if plus { self.sigma } else { -self.sigma };
                 } else {
                     v[l] += dt * (eta[l] - self.f.fast_force(v[l]));
                 }
@@ -483,7 +487,9 @@ pub struct LinearChain {
     dt: f64,
     p: f64,
     rho: f64,
-    v_r: f64,
+    /// <v_r> and <v_r²> of the reset target.
+    vr1: f64,
+    vr2: f64,
     s2: f64,
     /// Moments at the current step.
     pub m: LinearChainMoments,
@@ -500,11 +506,13 @@ impl LinearChain {
             ));
         }
         let dt = params.check_dt(dt)?;
+        let (vr1, vr2) = params.reset().target().moments();
         Ok(LinearChain {
             dt,
             p: params.rate() * dt,
             rho: (-2.0 * params.lambda() * dt).exp(),
-            v_r: params.reset_velocity(),
+            vr1,
+            vr2,
             s2: params.sigma() * params.sigma(),
             m: LinearChainMoments::default(),
         })
@@ -512,7 +520,8 @@ impl LinearChain {
 
     /// Advance one Euler step.
     pub fn step(&mut self) {
-        let (dt, p, rho, vr, s2) = (self.dt, self.p, self.rho, self.v_r, self.s2);
+        let (dt, p, rho, s2) = (self.dt, self.p, self.rho, self.s2);
+        let (vr, vr2) = (self.vr1, self.vr2);
         let a = 1.0 - dt;
         let o = self.m;
         let x = o.x + dt * o.v;
@@ -520,7 +529,7 @@ impl LinearChain {
         self.m = LinearChainMoments {
             v: p * vr + (1.0 - p) * a * o.v,
             v_eta: rho * (1.0 - p) * (a * o.v_eta + dt * s2),
-            v2: p * vr * vr + (1.0 - p) * (a * a * o.v2 + 2.0 * a * dt * o.v_eta + dt * dt * s2),
+            v2: p * vr2 + (1.0 - p) * (a * a * o.v2 + 2.0 * a * dt * o.v_eta + dt * dt * s2),
             x,
             x_v: p * vr * x + (1.0 - p) * (a * (o.x_v + dt * o.v2) + dt * x_eta_pre),
             x_eta: rho * x_eta_pre,
@@ -531,11 +540,11 @@ impl LinearChain {
     /// Stationary E v², E v, E vη of the chain (fixed point of the recursion).
     pub fn stationary(params: &Params, dt: f64) -> Result<LinearChainMoments> {
         let c = LinearChain::new(params, dt)?;
-        let (p, rho, vr, s2) = (c.p, c.rho, c.v_r, c.s2);
+        let (p, rho, vr, vr2, s2) = (c.p, c.rho, c.vr1, c.vr2, c.s2);
         let a = 1.0 - dt;
         let v = p * vr / (1.0 - (1.0 - p) * a);
         let v_eta = rho * (1.0 - p) * dt * s2 / (1.0 - rho * (1.0 - p) * a);
-        let v2 = (p * vr * vr + (1.0 - p) * (2.0 * a * dt * v_eta + dt * dt * s2))
+        let v2 = (p * vr2 + (1.0 - p) * (2.0 * a * dt * v_eta + dt * dt * s2))
             / (1.0 - (1.0 - p) * a * a);
         Ok(LinearChainMoments {
             v,

@@ -29,6 +29,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
+use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
 use crate::parallel::{self, Progress};
@@ -161,14 +162,17 @@ struct Sampler<F> {
     flows: [F; 2],
     lambda: f64,
     total_rate: f64,
-    vr: f64,
+    /// The resetting rule (rate, target, noise state at a reset).
+    reset: ResetRule,
+    /// Its point target, when it has one: Ψ and Φ there are precomputed.
+    point: Option<f64>,
     /// Tables for s = +Sigma (index 0) and s = -Sigma (index 1).
     tables: [DeficitTable; 2],
     /// Flow time across bin k in full, per noise state (0 where never crossed).
     tau: [Vec<f64>; 2],
     /// Flow potential (see [`FlowMap::potential`]) at every edge, per noise state.
     phi_edges: [Vec<f64>; 2],
-    /// Ψ(v_r) of each table (segment start after a reset).
+    /// Ψ(v_r) of each table at the point target (segment start after a reset).
     psi_vr: [[f64; 2]; 2],
     /// Flow potential at v_r, per noise state.
     phi_vr: [f64; 2],
@@ -224,7 +228,9 @@ impl<F: FlowMap> Sampler<F> {
             edges.iter().map(|&e| flows[0].potential(e)).collect(),
             edges.iter().map(|&e| flows[1].potential(e)).collect(),
         ];
-        let vr = params.reset_velocity();
+        let reset = *params.reset();
+        let point = reset.point();
+        let vr = point.unwrap_or(0.0);
         let psi_vr = [tables[0].psi(vr), tables[1].psi(vr)];
         let phi_vr = [flows[0].potential(vr), flows[1].potential(vr)];
         Ok(Sampler {
@@ -233,8 +239,9 @@ impl<F: FlowMap> Sampler<F> {
             psi_vr,
             phi_vr,
             lambda: params.lambda(),
-            total_rate: params.lambda() + params.rate(),
-            vr: params.reset_velocity(),
+            total_rate: params.lambda() + reset.rate(),
+            reset,
+            point,
             tables,
             tau,
             times: spec.grid.times().to_vec(),
@@ -345,8 +352,9 @@ impl<F: FlowMap> Sampler<F> {
                 plus = !plus;
                 psi_start = None;
             } else {
-                v = self.vr;
-                psi_start = Some(self.psi_vr[si]);
+                v = self.reset.draw_velocity(&mut rng);
+                plus = self.reset.draw_noise(plus, &mut rng);
+                psi_start = self.point.map(|_| self.psi_vr[usize::from(!plus)]);
             }
         }
         // Full bin crossings: occupation += (number of crossings) × tau.

@@ -10,6 +10,7 @@
 pub mod euler;
 pub mod exact;
 
+use crate::model::Reset;
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
 use crate::parallel::Progress;
@@ -227,7 +228,7 @@ impl SimSpec {
 pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> Vec<f64> {
     let inside = |t: f64| t >= burn_in;
     let n = times.iter().filter(|&&t| inside(t)).count();
-    if n < 2 || params.reset_velocity() != 0.0 {
+    if n < 2 || params.reset().target().moments().0 != 0.0 {
         return vec![0.0; times.len()];
     }
     let mean = times.iter().filter(|&&t| inside(t)).sum::<f64>() / n as f64;

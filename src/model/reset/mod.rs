@@ -5,8 +5,9 @@
 //! Fokker-Planck mesh), the target's moments for the closed forms, and what
 //! happens to the noise state. Engines call [`Reset::draw_velocity`] and
 //! [`Reset::draw_noise`] at a reset event and never write the rule
-//! themselves; a method that cannot handle a rule's target says so with
-//! [`crate::Error::Unsupported`].
+//! themselves. Methods that need a point target (the Fokker-Planck mesh, the
+//! backward equations, the closed forms) read it through an exhaustive match
+//! on [`Target`], so a new kind of target cannot slip past them unhandled.
 //!
 //! - [`poisson`]: Poissonian resetting to a fixed v_r, noise state kept
 //!   (the paper's Eq. (3)).
