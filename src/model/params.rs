@@ -1,7 +1,7 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
-use super::reset::{PoissonReset, Reset, ResetRule, Target};
+use super::reset::{NoiseAtReset, PoissonReset, Reset, ResetRule, Target};
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -155,13 +155,14 @@ impl Params {
     }
     /// Reset velocity v_r.
     ///
-    /// The point target of the resetting rule. The methods that need a point
-    /// target (the FP mesh's reset cell, the backward equations' reset term)
-    /// read it here: a rule with another kind of target extends this match,
-    /// and each such method must then handle it or refuse it.
+    /// The point target of a resetting rule that keeps the noise state. The
+    /// methods that assume both (the FP mesh's reset cell, the backward
+    /// equations' reset term) read it here: a rule with another kind of
+    /// target or noise handling extends this exhaustive match, and each such
+    /// method must then handle it or refuse it.
     pub fn reset_velocity(&self) -> f64 {
-        match self.reset.target() {
-            Target::Point(v) => v,
+        match (self.reset.target(), self.reset.noise()) {
+            (Target::Point(v), NoiseAtReset::Kept) => v,
         }
     }
 
