@@ -20,8 +20,8 @@
 //! Checks: r = 0 gives `<v²>` = Σ²/(1+2λ) and D_eff = Σ²/(2λ) (free telegraph
 //! noise integrated once); r → ∞ gives D_eff ≈ Σ²/(2λ r²), the paper's r⁻².
 
-use crate::model::Reset;
 use crate::error::{Error, Result};
+use crate::model::Reset;
 use crate::model::{DragLaw, Params};
 
 fn require_linear(p: &Params) -> Result<()> {

@@ -134,28 +134,8 @@ pub fn transient_with_progress(
     opts: &TransientOptions,
     progress: &dyn Progress,
 ) -> Result<Transient> {
-    let n = opts.cells;
-    if !(MIN_CELLS..=MAX_CELLS).contains(&n) {
-        return Err(Error::invalid(
-            "cells",
-            n,
-            format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
-        ));
-    }
-    let t_max = finite("t_max", opts.t_max)?;
-    if !(t_max > 0.0) {
-        return Err(Error::invalid("t_max", t_max, "t_max > 0"));
-    }
-    let cfl = finite("cfl", opts.cfl)?;
-    if !(cfl > 0.0 && cfl <= 1.0) {
-        return Err(Error::invalid("cfl", cfl, "0 < cfl <= 1"));
-    }
-    let mut times = check_times("times", &opts.times, t_max)?;
-    if times.is_empty() {
-        times.push(t_max);
-    }
-    let snaps = check_times("snapshot_times", &opts.snapshot_times, t_max)?;
-
+    let (n, t_max, cfl) = (opts.cells, opts.t_max, opts.cfl);
+    let (times, snaps) = validate(opts)?;
     let g = Grid::uniform(params, n);
     let (lambda, r) = (params.lambda(), params.rate());
     let (al, be) = (&g.out_plus, &g.out_minus);
@@ -197,28 +177,11 @@ pub fn transient_with_progress(
     let report_every = (total_steps / 200).max(1);
     loop {
         while ti < times.len() && times[ti] <= t {
-            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-            for (c, &v) in m.iter().zip(&g.centres) {
-                let w = c[0] + c[1];
-                s0 += w;
-                s1 += w * v;
-                s2 += w * v * v;
-            }
-            out.times.push(times[ti]);
-            out.mass.push(s0);
-            out.v_mean.push(s1);
-            out.v2.push(s2);
+            out.record_moments(times[ti], &m, &g);
             ti += 1;
         }
         while si < snaps.len() && snaps[si] <= t {
-            let pp: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[0] / h).collect();
-            let pm: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
-            out.snapshots.push(Snapshot {
-                t: snaps[si],
-                p: pp.iter().zip(&pm).map(|(a, b)| a + b).collect(),
-                p_plus: pp,
-                p_minus: pm,
-            });
+            out.record_snapshot(snaps[si], &m, &g);
             si += 1;
         }
         let target = match (times.get(ti), snaps.get(si)) {
@@ -246,6 +209,62 @@ pub fn transient_with_progress(
     }
     progress.update(total_steps, total_steps);
     Ok(out)
+}
+
+/// Check the options; returns the recording times (t_max when none) and
+/// the snapshot times.
+fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
+    let n = opts.cells;
+    if !(MIN_CELLS..=MAX_CELLS).contains(&n) {
+        return Err(Error::invalid(
+            "cells",
+            n,
+            format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
+        ));
+    }
+    let t_max = finite("t_max", opts.t_max)?;
+    if !(t_max > 0.0) {
+        return Err(Error::invalid("t_max", t_max, "t_max > 0"));
+    }
+    let cfl = finite("cfl", opts.cfl)?;
+    if !(cfl > 0.0 && cfl <= 1.0) {
+        return Err(Error::invalid("cfl", cfl, "0 < cfl <= 1"));
+    }
+    let mut times = check_times("times", &opts.times, t_max)?;
+    if times.is_empty() {
+        times.push(t_max);
+    }
+    let snaps = check_times("snapshot_times", &opts.snapshot_times, t_max)?;
+    Ok((times, snaps))
+}
+
+impl Transient {
+    /// Record mass, <v> and <v²> of the cell masses `m` at time t.
+    fn record_moments(&mut self, t: f64, m: &[[f64; 2]], g: &Grid) {
+        let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        for (c, &v) in m.iter().zip(&g.centres) {
+            let w = c[0] + c[1];
+            s0 += w;
+            s1 += w * v;
+            s2 += w * v * v;
+        }
+        self.times.push(t);
+        self.mass.push(s0);
+        self.v_mean.push(s1);
+        self.v2.push(s2);
+    }
+
+    /// Record the densities P, P+ and P- of the cell masses `m` at time t.
+    fn record_snapshot(&mut self, t: f64, m: &[[f64; 2]], g: &Grid) {
+        let pp: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[0] / h).collect();
+        let pm: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
+        self.snapshots.push(Snapshot {
+            t,
+            p: pp.iter().zip(&pm).map(|(a, b)| a + b).collect(),
+            p_plus: pp,
+            p_minus: pm,
+        });
+    }
 }
 
 /// One explicit step in conservative form: every transfer (flux through an

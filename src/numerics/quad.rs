@@ -111,30 +111,7 @@ pub fn adaptive<F: Fn(f64) -> f64>(
     tol_abs: f64,
     max_panels: usize,
 ) -> Result<Panels, Failure> {
-    use std::cmp::Ordering;
     use std::collections::BinaryHeap;
-    struct P {
-        a: f64,
-        b: f64,
-        k: f64,
-        e: f64,
-    }
-    impl PartialEq for P {
-        fn eq(&self, o: &Self) -> bool {
-            self.e.total_cmp(&o.e) == Ordering::Equal
-        }
-    }
-    impl Eq for P {}
-    impl PartialOrd for P {
-        fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-            Some(self.cmp(o))
-        }
-    }
-    impl Ord for P {
-        fn cmp(&self, o: &Self) -> Ordering {
-            self.e.total_cmp(&o.e)
-        }
-    }
     let eval = |a: f64, b: f64| {
         let q = gk15(f, a, b);
         P {
@@ -208,20 +185,50 @@ pub fn adaptive<F: Fn(f64) -> f64>(
             tolerance: tol_abs,
         });
     }
-    let mut all: Vec<P> = done.into_iter().chain(heap).collect();
+    Ok(assemble(start[0], done.into_iter().chain(heap).collect()))
+}
+
+/// One panel of [`adaptive`]: [a, b], its K15 value and error estimate,
+/// ordered by error (the heap pops the worst panel first).
+struct P {
+    a: f64,
+    b: f64,
+    k: f64,
+    e: f64,
+}
+
+impl PartialEq for P {
+    fn eq(&self, o: &Self) -> bool {
+        self.e.total_cmp(&o.e) == std::cmp::Ordering::Equal
+    }
+}
+impl Eq for P {}
+impl PartialOrd for P {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for P {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.e.total_cmp(&o.e)
+    }
+}
+
+/// The final panels of [`adaptive`] in order from `start`.
+fn assemble(start: f64, mut all: Vec<P>) -> Panels {
     all.sort_by(|x, y| x.a.total_cmp(&y.a));
     let mut out = Panels {
         edges: Vec::with_capacity(all.len() + 1),
         values: Vec::with_capacity(all.len()),
         error: 0.0,
     };
-    out.edges.push(start[0]);
+    out.edges.push(start);
     for p in &all {
         out.edges.push(p.b);
         out.values.push(p.k);
         out.error += p.e;
     }
-    Ok(out)
+    out
 }
 
 const ADAPTIVE: &str = "adaptive Gauss-Kronrod quadrature";

@@ -10,9 +10,9 @@
 pub mod euler;
 pub mod exact;
 
-use crate::model::Reset;
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
+use crate::model::Reset;
 use crate::parallel::Progress;
 use crate::stats::{merge_all, MeanAcc};
 use serde::{Deserialize, Serialize};
