@@ -26,7 +26,7 @@ pub struct Moments {
     pub v2: f64,
     /// Standard error of `v2`.
     pub v2_err: f64,
-    /// <x>.
+    /// `<x>`.
     pub x_mean: f64,
     /// <x²>.
     pub x2: f64,

@@ -14,9 +14,9 @@
 //! (`render_png`, `render_svg`, module `render`) uses `plotters` and exists
 //! only with the cargo feature `plot` (on by default). What plotters lacks
 //! stays here and is tested without it: data-avoiding legend placement
-//! ([`choose_place`] on [`occupancy`]), clipping of lines to the axes
-//! ([`clip_polyline`]), splitting lines at cusps so thick strokes get no
-//! miter spikes ([`split_sharp`]), tick positions and tick labels.
+//! (`choose_place` on `occupancy`), clipping of lines to the axes
+//! (`clip_polyline`), splitting lines at cusps so thick strokes get no
+//! miter spikes (`split_sharp`), tick positions and tick labels.
 // Without the `plot` feature the layout helpers have no caller but their tests.
 #![cfg_attr(not(feature = "plot"), allow(dead_code))]
 
@@ -505,7 +505,7 @@ fn ticks(axis: &Axis, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>, f64) {
 }
 
 /// Cut a polyline (transformed units) into pieces inside the box
-/// [x0,x1]×[y0,y1] (Liang-Barsky clipping of each segment).
+/// `[x0,x1]×[y0,y1]` (Liang-Barsky clipping of each segment).
 fn clip_polyline(pts: &[(f64, f64)], bx: (f64, f64), by: (f64, f64)) -> Vec<Vec<(f64, f64)>> {
     let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
     let mut cur: Vec<(f64, f64)> = Vec::new();

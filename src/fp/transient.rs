@@ -239,7 +239,7 @@ fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
 }
 
 impl Transient {
-    /// Record mass, <v> and <v²> of the cell masses `m` at time t.
+    /// Record mass, `<v>` and `<v²>` of the cell masses `m` at time t.
     fn record_moments(&mut self, t: f64, m: &[[f64; 2]], g: &Grid) {
         let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
         for (c, &v) in m.iter().zip(&g.centres) {

@@ -12,7 +12,7 @@
 //! antiderivatives once per run as piecewise Chebyshev series ([`DeficitTable`],
 //! built from the trait's quadrature and checked against it to 1e-13), and
 //! the velocity solve starts from a tabulated inverse of the flow potential
-//! ([`InverseGuide`]), so an event costs about one Halley step (three
+//! ([`crate::model::drag::InverseGuide`]), so an event costs about one Halley step (three
 //! transcendental functions), one exponential waiting time and a few
 //! polynomial evaluations. Occupation times come from the flow potential
 //! at precomputed bin edges (no transcendental per crossed edge; bins crossed

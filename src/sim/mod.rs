@@ -223,8 +223,8 @@ impl SimSpec {
 
 /// Least-squares weights w_k with Σ w_k y_k = (slope of y against t over the
 /// times in [burn_in, t_max]) / 2; all zero if fewer than two such times, or
-/// if v_r ≠ 0: then <x> ≠ 0 and <x²> carries the drift, so no Eq. 18 fit
-/// (with v_r = 0 the process is symmetric under (x, v, η) → -(x, v, η) and <x> = 0 exactly).
+/// if v_r ≠ 0: then `<x>` ≠ 0 and `<x²>` carries the drift, so no Eq. 18 fit
+/// (with v_r = 0 the process is symmetric under (x, v, η) → -(x, v, η) and `<x>` = 0 exactly).
 pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> Vec<f64> {
     let inside = |t: f64| t >= burn_in;
     let n = times.iter().filter(|&&t| inside(t)).count();
