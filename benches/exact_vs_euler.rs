@@ -3,7 +3,7 @@
 //! The efficiency comparison at equal statistical error is
 //! `cargo run --release --example efficiency`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use irtp::model::drag::{Cubic, Linear, Tan, Tanh};
 use irtp::model::{Drag, FlowMap};
 use irtp::parallel::NoProgress;
@@ -95,5 +95,35 @@ fn particles(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, kernels, particles);
+/// Events per second of the exact sampler on the Fig. 2 workload (moments at
+/// two times plus a 100-bin histogram, t = 20 per particle) for the closed-form
+/// laws and for `cubic`, a law given only by g and g' (tabulated flow).
+fn events_per_law(c: &mut Criterion) {
+    let mut g = c.benchmark_group("exact_events");
+    g.sample_size(10);
+    for (law, sigma, lambda, r) in [
+        ("tan", 3.0, 0.5, 2.0),
+        ("tanh", 0.6, 0.5, 2.0),
+        ("cubic", 3.0, 0.5, 2.0),
+    ] {
+        let drag: DragLaw = law.parse().expect("registered law");
+        let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();
+        let spec = SimSpec::new(
+            256,
+            TimeGrid::from_times(vec![0.0, 20.0]).unwrap(),
+            5.0,
+            100,
+            1,
+        )
+        .unwrap();
+        let events = exact::simulate(&p, &spec, &NoProgress).unwrap().steps;
+        g.throughput(Throughput::Elements(events));
+        g.bench_function(law, |b| {
+            b.iter(|| black_box(exact::simulate(&p, &spec, &NoProgress).unwrap().steps))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, kernels, particles, events_per_law);
 criterion_main!(benches);
