@@ -1,6 +1,8 @@
 //! Euler first passage: the paper's Euler scheme (Eqs. 14-16) run until the
 //! velocity reaches the target, one particle at a time, with flip and reset
-//! steps drawn as geometric waiting times. Estimates are gathered by
+//! steps drawn as geometric waiting times. The step and the gaps are those
+//! of the particle simulation ([`euler_step`] with the law's fast g,
+//! [`geometric_gap`]). Estimates are gathered by
 //! [`super::estimator::first_passage_stats`]; the entry point is
 //! [`super::solve`] with [`super::Method::Euler`].
 
@@ -10,7 +12,7 @@ use crate::error::{finite, Error, Result};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use rand::Rng as _;
+use crate::sim::euler::{euler_step, geometric_gap};
 use serde::{Deserialize, Serialize};
 
 /// Euler first-passage sampler (paper Eqs. 14-16), step order as in
@@ -60,20 +62,18 @@ impl EulerFpt {
 
     /// One particle's first passage.
     pub fn sample(&self, rng: &mut Rng, start_plus: bool) -> FptSample {
-        crate::with_drag!(self.problem.params().drag(), |d| self.run(
-            rng,
-            start_plus,
-            |v| d.force(v)
-        ))
+        crate::with_drag!(self.problem.params().drag(), |d| self
+            .run(d, rng, start_plus))
     }
 
     #[inline(always)]
-    fn run<G: Fn(f64) -> f64>(&self, rng: &mut Rng, start_plus: bool, g: G) -> FptSample {
+    fn run<D: Drag>(&self, drag: &D, rng: &mut Rng, start_plus: bool) -> FptSample {
         let (p, swapped) = self.problem.canonical();
         let par = &p.params();
         let dt = self.dt;
-        let q = 0.5 * (-(-2.0 * par.lambda() * dt).exp_m1());
-        let pr = par.rate() * dt;
+        // ln(1 - q) and ln(1 - r dt): the geometric gaps of flips and resets.
+        let ln_flip = (-(0.5 * (-(-2.0 * par.lambda() * dt).exp_m1()))).ln_1p();
+        let ln_reset = (-(par.rate() * dt)).ln_1p();
         let (vt, vr) = (p.vt(), par.reset_velocity());
         let max_steps = (self.t_max / dt).floor() as u64;
         let mut s = if start_plus != swapped {
@@ -82,16 +82,16 @@ impl EulerFpt {
             -par.sigma()
         };
         let mut v = p.v0();
-        let mut next_flip = geometric(rng, q);
-        let mut next_reset = geometric(rng, pr);
+        let mut next_flip = geometric_gap(rng, ln_flip);
+        let mut next_reset = geometric_gap(rng, ln_reset);
         let mut step = 0u64;
         while step < max_steps {
             step += 1;
             if step == next_reset {
                 v = vr;
-                next_reset = step + geometric(rng, pr);
+                next_reset = step.saturating_add(geometric_gap(rng, ln_reset));
             } else {
-                v += dt * (s - g(v));
+                v = euler_step(drag, v, s, dt);
                 if v >= vt {
                     return FptSample {
                         time: Some(step as f64 * dt),
@@ -101,7 +101,7 @@ impl EulerFpt {
             }
             if step == next_flip {
                 s = -s;
-                next_flip = step + geometric(rng, q);
+                next_flip = step.saturating_add(geometric_gap(rng, ln_flip));
             }
         }
         FptSample {
@@ -116,46 +116,33 @@ impl EulerFpt {
     }
 }
 
-/// Steps until the first success of independent Bernoulli(p) trials (≥ 1);
-/// u64::MAX when p = 0.
-#[inline]
-fn geometric(rng: &mut Rng, p: f64) -> u64 {
-    if !(p > 0.0) {
-        return u64::MAX;
-    }
-    if p >= 1.0 {
-        return 1;
-    }
-    // U in (0, 1].
-    let u = 1.0 - rng.gen::<f64>();
-    let k = (u.ln() / (-p).ln_1p()).floor();
-    if k >= 1e18 {
-        u64::MAX / 2
-    } else {
-        1 + k as u64
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::{DragLaw, Params};
     use crate::rng;
-    use crate::stats::MeanAcc;
 
+    /// Without flips and resets the passage is the deterministic chain of
+    /// the shared [`euler_step`]: same step count, for every law.
     #[test]
-    fn geometric_mean() {
-        let mut rng = rng::stream(3, 0);
-        let p = 0.01;
-        let mut acc = MeanAcc::new();
-        for _ in 0..200_000 {
-            acc.push(geometric(&mut rng, p) as f64);
+    fn steps_are_the_shared_euler_step() {
+        for (d, sigma) in [
+            (DragLaw::Tan, 3.0),
+            (DragLaw::Tanh, 0.6),
+            (DragLaw::Linear, 1.0),
+        ] {
+            let p = Params::new(d, sigma, 1e-300, 0.0, 0.0).unwrap();
+            let (v0, vt, dt) = (-0.2, 0.5 * p.v_upper(), 1e-3);
+            let pr = Problem::new(p, v0, vt).unwrap();
+            let (mut v, mut n) = (v0, 0u64);
+            while v < vt {
+                v = euler_step(&d, v, sigma, dt);
+                n += 1;
+            }
+            let fpt = EulerFpt::new(pr, dt, 1e3).unwrap();
+            let s = fpt.sample(&mut rng::stream(1, 0), true);
+            assert_eq!(s.work, n, "{d}");
+            assert_eq!(s.time, Some(n as f64 * dt), "{d}");
         }
-        // Mean 1/p = 100, sd ≈ 99.5.
-        assert!(
-            (acc.mean() - 100.0).abs() < 4.0 * acc.sem(),
-            "{}",
-            acc.mean()
-        );
-        assert_eq!(geometric(&mut rng, 0.0), u64::MAX);
     }
 }
