@@ -64,7 +64,7 @@ fn particles(c: &mut Criterion) {
     });
     g.bench_function("first_passage_exact", |b| {
         let mut r = irtp::rng::stream(3, 0);
-        let fpt = exact::FirstPassage::new(&p);
+        let fpt = irtp::mfpt::FirstPassage::new(&p);
         b.iter(|| black_box(fpt.run(0.0, 0.8, true, 1e6, &mut r)))
     });
     // The paper's Euler scheme over the same time span (dt = 1e-3, one

@@ -7,11 +7,11 @@
 //! cargo run --release --example efficiency -- [particles] [fpt_particles]
 //!
 //! Both sides use the library: `irtp::sim::euler` vs `irtp::sim::exact`
-//! (same observables) for <v²>, and `irtp::mfpt::euler_first_passage` vs
-//! `irtp::sim::exact::exact_first_passage` (same driver) for the MFPT, whose
-//! backward-equation value (`irtp::mfpt::solve`) is printed as reference.
+//! (same observables) for <v²>, and `irtp::mfpt::solve` with
+//! `Method::Euler` vs `Method::Exact` (same driver) for the MFPT, whose
+//! backward-equation value (`Method::Backward`) is printed as reference.
 
-use irtp::mfpt::{self, BackwardOptions, Problem};
+use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
 use irtp::parallel::NoProgress;
 use irtp::sim::{euler, exact, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
@@ -93,17 +93,16 @@ fn main() {
     let vt = 0.8;
     let t_cap = 1e4;
     let problem = Problem::new(p, 0.0, vt).unwrap();
-    let ode = mfpt::solve(&problem, &BackwardOptions::default()).unwrap();
-    let (fx, w_fx) = timed(|| {
-        exact::exact_first_passage(&problem, t_cap, fpt_particles, 21, &NoProgress)
-            .unwrap()
-            .summary()
-    });
-    let (fe, w_fe) = timed(|| {
-        mfpt::euler_first_passage(&problem, dt, t_cap, fpt_particles, 22, &NoProgress)
-            .unwrap()
-            .summary()
-    });
+    let solve = |m: Method| mfpt::solve(&problem, &m, &NoProgress).unwrap();
+    let ode = solve(Method::Backward(BackwardOptions::default()));
+    let run = |seed| ParticleOptions {
+        particles: fpt_particles,
+        t_max: t_cap,
+        seed,
+    };
+    let (fx, w_fx) = timed(|| solve(Method::Exact(run(21))).summary().unwrap());
+    let (fe, w_fe) = timed(|| solve(Method::Euler { dt, run: run(22) }).summary().unwrap());
+    let ode = ode.backward().unwrap();
     println!(
         "\nMFPT 0 -> {vt}, {fpt_particles} particles (backward equations: {:.6}):",
         ode.tau

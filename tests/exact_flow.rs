@@ -5,7 +5,18 @@
 use irtp::model::drag::{AnyFlow, TabulatedFlow};
 use irtp::model::{Drag, DragLaw, FlowMap};
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 use std::sync::OnceLock;
+
+/// `cases` cases from a fixed seed: the same inputs on every run.
+fn fixed(cases: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases,
+        rng_seed: RngSeed::Fixed(0x1b5e_7a11),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
 
 /// The same drag law seen only through force/derivative/inverse/drift, so
 /// the trait's generic quadrature defaults run (independent of the closed forms).
@@ -67,7 +78,7 @@ fn setup(case: usize, plus: bool, xa: f64, ldist: f64) -> (DragLaw, f64, f64, f6
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(fixed(2000))]
 
     /// v → t → v to 1e-12 absolute, everywhere including 1e-14 from v*.
     #[test]
@@ -112,7 +123,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(3000))]
+    #![proptest_config(fixed(3000))]
 
     /// The tabulated-inverse starting guess changes only the work, not the
     /// accuracy: guided and unguided velocities agree to 1e-12 (the flows'
@@ -133,7 +144,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(fixed(2000))]
 
     /// Flow potential differences (used for occupation times) reproduce the
     /// flow time up to the rounding of the potentials themselves.
@@ -163,9 +174,9 @@ fn guided(case: usize, plus: bool) -> &'static AnyFlow {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(60))]
+    #![proptest_config(fixed(60))]
 
-    /// Displacement ∫ v dt vs composite Simpson on v(t) with 10^5 intervals.
+    /// Displacement ∫ v dt vs composite Simpson on v(t) (at least 10^5 intervals).
     #[test]
     fn displacement_matches_simpson(case in 0usize..7, plus: bool, xa in 0.001f64..0.999, lt in -3.0f64..1.0) {
         let (d, sigma) = CASES[case];
@@ -173,7 +184,10 @@ proptest! {
         let s = if plus { sigma } else { -sigma };
         let va = -vu + 2.0 * vu * xa;
         let t = 10f64.powf(lt);
-        let n = 100_000;
+        // Simpson's error is O((k h)^4) with k = g'(v*) the approach rate:
+        // resolve the transient (k h <= 0.02), at least 10^5 intervals, even.
+        let k = d.derivative(d.inverse(s));
+        let n = ((50.0 * k * t).ceil() as usize).max(100_000).next_multiple_of(2);
         let h = t / n as f64;
         let mut sum = va + d.flow_velocity(s, va, t);
         for i in 1..n {

@@ -1,17 +1,31 @@
 //! Exact first passage: against a closed form (no noise flips, no resets:
 //! deterministic flow time), and the library Euler scheme's O(dt) bias
-//! (`irtp::mfpt::euler_first_passage`) shrinking linearly towards the exact
+//! (`irtp::mfpt::Method::Euler`) shrinking linearly towards the exact
 //! value.
 
 mod common;
 
 use common::models;
-use irtp::mfpt::{euler_first_passage, Problem};
+use irtp::mfpt::exact::first_passage;
+use irtp::mfpt::{self, FptSummary, Method, ParticleOptions, Problem};
 use irtp::model::Drag;
 use irtp::parallel::NoProgress;
 use irtp::rng;
-use irtp::sim::exact::{exact_first_passage, first_passage};
 use irtp::{DragLaw, Params};
+
+fn run(particles: u64, t_max: f64, seed: u64) -> ParticleOptions {
+    ParticleOptions {
+        particles,
+        t_max,
+        seed,
+    }
+}
+
+/// A particle estimate through `mfpt::solve`.
+fn solve(problem: &Problem, method: Method) -> FptSummary {
+    let r = mfpt::solve(problem, &method, &NoProgress).unwrap();
+    r.summary().expect("particles")
+}
 
 /// lambda = r = 0: the passage time is the deterministic flow time.
 #[test]
@@ -46,9 +60,7 @@ fn euler_bias_is_linear_in_dt_towards_exact() {
     let p = models::tan(0.9, 2.0);
     let problem = Problem::new(p, 0.0, 0.8).unwrap();
     let n = 600_000;
-    let exact = exact_first_passage(&problem, f64::INFINITY, n, 5, &NoProgress)
-        .unwrap()
-        .summary();
+    let exact = solve(&problem, Method::Exact(run(n, f64::INFINITY, 5)));
     assert_eq!(exact.censored, 0);
     let dts = [0.01, 0.02, 0.04];
     // The library's Euler first-passage sampler (irtp::mfpt).
@@ -56,9 +68,8 @@ fn euler_bias_is_linear_in_dt_towards_exact() {
         .iter()
         .enumerate()
         .map(|(j, &dt)| {
-            let a = euler_first_passage(&problem, dt, 1e6, n, 6 + j as u64, &NoProgress)
-                .unwrap()
-                .summary();
+            let run = run(n, 1e6, 6 + j as u64);
+            let a = solve(&problem, Method::Euler { dt, run });
             (dt, a.tau, a.tau_err)
         })
         .collect();

@@ -2,16 +2,33 @@
 //! on the paper's Fig. 7 setting (v_0 = -0.249, v_t = 0.5, v_r = 0):
 //! tau = (tau+ + tau-)/2 within 4 standard errors (backward discretisation
 //! error estimate added in quadrature; it is far smaller), through
-//! `exact_first_passage` (the driver behind `irtp mfpt --method exact`);
+//! `irtp::mfpt::solve` with `Method::Exact` (what `irtp mfpt --method exact` runs);
 //! plus a downward problem (mirror frame, swapped noise states).
 
 mod common;
 
 use common::models;
-use irtp::mfpt::{solve, BackwardOptions, Problem};
+use irtp::mfpt::{
+    self, BackwardOptions, BackwardSolution, FptSummary, Method, ParticleOptions, Problem,
+};
 use irtp::parallel::NoProgress;
-use irtp::sim::exact;
 use irtp::{DragLaw, Params};
+
+/// tau by the backward equations (default mesh), through `mfpt::solve`.
+fn backward(p: &Problem) -> BackwardSolution {
+    let m = Method::Backward(BackwardOptions::default());
+    *mfpt::solve(p, &m, &NoProgress).unwrap().backward().unwrap()
+}
+
+/// tau by exact particles (no time cap), through `mfpt::solve`.
+fn exact(p: &Problem, particles: u64, seed: u64) -> FptSummary {
+    let m = Method::Exact(ParticleOptions {
+        particles,
+        t_max: f64::INFINITY,
+        seed,
+    });
+    mfpt::solve(p, &m, &NoProgress).unwrap().summary().unwrap()
+}
 
 #[test]
 fn exact_mfpt_matches_backward_equations() {
@@ -29,11 +46,8 @@ fn exact_mfpt_matches_backward_equations() {
         let p = Params::new(d, sigma, lambda, r, 0.0).unwrap();
         let (v0, vt) = (-0.249, 0.5);
         let prob = Problem::new(p, v0, vt).unwrap();
-        let ode = solve(&prob, &BackwardOptions::default()).unwrap();
-        let stats =
-            exact::exact_first_passage(&prob, f64::INFINITY, 10_000, 50 + i as u64, &NoProgress)
-                .unwrap();
-        let s = stats.summary();
+        let ode = backward(&prob);
+        let s = exact(&prob, 10_000, 50 + i as u64);
         assert_eq!(s.censored, 0);
         let err = ode.error_estimate;
         let err = if err.is_finite() { err } else { 0.0 };
@@ -56,10 +70,8 @@ fn exact_mfpt_matches_backward_equations() {
 fn exact_mfpt_downward_matches_backward_equations() {
     let p = models::tanh(1.2, 0.5);
     let prob = Problem::new(p, 0.3, -0.5).unwrap();
-    let ode = solve(&prob, &BackwardOptions::default()).unwrap();
-    let s = exact::exact_first_passage(&prob, f64::INFINITY, 10_000, 77, &NoProgress)
-        .unwrap()
-        .summary();
+    let ode = backward(&prob);
+    let s = exact(&prob, 10_000, 77);
     for (est, se, exact) in [
         (s.tau_plus, s.tau_plus_err, ode.tau_plus),
         (s.tau_minus, s.tau_minus_err, ode.tau_minus),

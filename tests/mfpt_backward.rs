@@ -3,8 +3,8 @@
 mod common;
 
 use common::models;
-use irtp::mfpt::backward::{fixed_point_upwind, profile, rate_derivative_at_zero};
-use irtp::mfpt::{optimize_rate, solve, BackwardOptions, OptimizeOptions, Problem};
+use irtp::mfpt::backward::{fixed_point_upwind, profile, rate_derivative_at_zero, solve};
+use irtp::mfpt::{optimize_rate, BackwardOptions, OptimizeOptions, Problem};
 use irtp::parallel::NoProgress;
 use irtp::{DragLaw, Params};
 

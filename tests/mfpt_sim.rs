@@ -4,8 +4,9 @@ mod common;
 
 use common::models;
 use irtp::mfpt::backward::profile;
-use irtp::mfpt::simulate::FptSummary;
-use irtp::mfpt::{euler_first_passage, BackwardOptions, DriftSign, Problem};
+use irtp::mfpt::{
+    self, BackwardOptions, DriftSign, FptStats, FptSummary, Method, ParticleOptions, Problem,
+};
 use irtp::parallel::NoProgress;
 use irtp::{DragLaw, Params};
 
@@ -24,6 +25,24 @@ fn dt_for(r: f64) -> f64 {
     1e-3f64.min(1e-3 / r)
 }
 const PARTICLES: u64 = 6000;
+
+/// Euler first-passage statistics through `mfpt::solve`.
+fn euler_first_passage(
+    p: &Problem,
+    dt: f64,
+    t_max: f64,
+    particles: u64,
+    seed: u64,
+    progress: &NoProgress,
+) -> irtp::Result<FptStats> {
+    let run = ParticleOptions {
+        particles,
+        t_max,
+        seed,
+    };
+    let r = mfpt::solve(p, &Method::Euler { dt, run }, progress)?;
+    Ok(*r.stats().expect("particles"))
+}
 
 fn euler(p: &Problem, seed: u64) -> FptSummary {
     euler_first_passage(

@@ -4,17 +4,19 @@
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
 //!
-//! To add a particle method: a [`Method`] variant, its arm in `SimArgs::config`
-//! and the library's `irtp::mfpt::particles`.
+//! Every method runs through the library's one entry point, `irtp::mfpt::solve`.
+//! To add a method: a [`Method`] variant, its arm in `SimArgs::config` and
+//! the library's `irtp::mfpt::Method`.
 
 use super::common::{ModelArgs, OutputArgs};
 use super::progress::Bar;
 use clap::{Args, Subcommand, ValueEnum};
 use irtp::io::{OutputDir, Provenance};
 use irtp::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
-use irtp::mfpt::simulate::FptSummary;
-use irtp::mfpt::{self, particles, OptimizeOptions, Problem, ScanAxis, ScanPoint};
-use irtp::sim::Method as SimMethod;
+use irtp::mfpt::{
+    self, FptSummary, MfptResult, OptimizeOptions, ParticleOptions, Problem, ScanAxis, ScanPoint,
+};
+use irtp::parallel::NoProgress;
 use irtp::Error;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -158,13 +160,6 @@ pub fn run(args: MfptArgs) -> anyhow::Result<()> {
     }
 }
 
-/// A particle estimate: sampler, number of particles, time cap.
-struct ParticleRun {
-    method: SimMethod,
-    particles: u64,
-    t_max: f64,
-}
-
 impl ProblemArgs {
     /// Flags → validated problem (start v_0, target `vt`) and mesh.
     fn config(&self, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
@@ -180,37 +175,45 @@ impl ProblemArgs {
 }
 
 impl SimArgs {
-    /// Flags → particle run (`None` for the ODE), checked against every
-    /// problem it will run on before anything runs.
-    fn config(&self, problems: &[Problem]) -> irtp::Result<Option<ParticleRun>> {
-        let method = match self.method {
-            Method::Ode => return Ok(None),
-            Method::Euler => SimMethod::Euler { dt: self.dt },
-            Method::Exact => SimMethod::Exact,
-        };
-        for p in problems {
-            particles::check(p, method, self.particles, self.t_max)?;
-        }
-        Ok(Some(ParticleRun {
-            method,
+    /// Flags → the library's method (`backward` for the ODE), checked
+    /// against every problem it will run on before anything runs.
+    fn config(
+        &self,
+        problems: &[Problem],
+        backward: BackwardOptions,
+        seed: u64,
+    ) -> irtp::Result<mfpt::Method> {
+        let run = ParticleOptions {
             particles: self.particles,
             t_max: self.t_max,
-        }))
+            seed,
+        };
+        let method = match self.method {
+            Method::Ode => mfpt::Method::Backward(backward),
+            Method::Euler => mfpt::Method::Euler { dt: self.dt, run },
+            Method::Exact => mfpt::Method::Exact(run),
+        };
+        for p in problems {
+            method.check(p)?;
+        }
+        Ok(method)
     }
 }
 
-/// Particle estimate of one problem.
-fn estimate(
-    run: &ParticleRun,
-    problem: &Problem,
-    seed: u64,
-    label: &str,
-) -> irtp::Result<FptSummary> {
+/// tau of one problem by `method`, with a progress bar for particles.
+fn estimate(method: &mfpt::Method, problem: &Problem, label: &str) -> irtp::Result<MfptResult> {
+    let Some(run) = method.particles() else {
+        return mfpt::solve(problem, method, &NoProgress);
+    };
     let bar = Bar::new(label, run.particles);
-    let stats =
-        particles::first_passage(problem, run.method, run.t_max, run.particles, seed, &bar)?;
+    let result = mfpt::solve(problem, method, &bar)?;
     bar.finish();
-    Ok(stats.summary())
+    Ok(result)
+}
+
+/// The particle summary of a particle method's result.
+fn summary(r: &MfptResult) -> FptSummary {
+    r.summary().expect("a particle method")
 }
 
 fn open_out(dir: &Option<PathBuf>) -> irtp::Result<Option<OutputDir>> {
@@ -270,13 +273,8 @@ impl Report {
         }
     }
 
-    fn particles(
-        m: Method,
-        problem: Problem,
-        run: &ParticleRun,
-        s: &FptSummary,
-        seed: u64,
-    ) -> Self {
+    fn particles(m: Method, problem: Problem, method: &mfpt::Method, s: &FptSummary) -> Self {
+        let run = method.particles().expect("a particle method");
         Report {
             method: m,
             problem,
@@ -291,12 +289,12 @@ impl Report {
             particles: Some(s.particles),
             censored: Some(s.censored),
             mean_is_lower_bound: Some(s.mean_is_lower_bound),
-            dt: match run.method {
-                SimMethod::Euler { dt } => Some(dt),
-                SimMethod::Exact => None,
+            dt: match *method {
+                mfpt::Method::Euler { dt, .. } => Some(dt),
+                _ => None,
             },
             t_max: Some(run.t_max),
-            seed: Some(seed),
+            seed: Some(run.seed),
         }
     }
 }
@@ -315,7 +313,7 @@ fn print_lines(v: &serde_json::Value) {
 struct DirectConfig {
     problem: Problem,
     backward: BackwardOptions,
-    particles: Option<ParticleRun>,
+    method: mfpt::Method,
 }
 
 impl DirectArgs {
@@ -324,11 +322,11 @@ impl DirectArgs {
             .vt
             .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
         let (problem, backward) = self.problem.config(vt)?;
-        let particles = self.sim.config(&[problem])?;
+        let method = self.sim.config(&[problem], backward, self.output.seed)?;
         Ok(DirectConfig {
             problem,
             backward,
-            particles,
+            method,
         })
     }
 }
@@ -337,16 +335,17 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
     let c = a.config()?;
     let out = open_out(&a.output.out)?;
     let t0 = Instant::now();
-    let (report, prof) = match &c.particles {
-        None => {
-            let s = mfpt::solve(&c.problem, &c.backward)?;
+    let (report, prof) = match estimate(&c.method, &c.problem, "mfpt")? {
+        MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (Report::ode(c.problem, &s), Some(prof))
         }
-        Some(run) => {
-            let s = estimate(run, &c.problem, a.output.seed, "mfpt")?;
-            let r = Report::particles(a.sim.method, c.problem, run, &s, a.output.seed);
-            (r, None)
+        r => {
+            let s = summary(&r);
+            (
+                Report::particles(a.sim.method, c.problem, &c.method, &s),
+                None,
+            )
         }
     };
     let wall = t0.elapsed().as_secs_f64();
@@ -406,7 +405,8 @@ struct ScanConfig {
     /// The problem at every value.
     problems: Vec<Problem>,
     backward: BackwardOptions,
-    particles: Option<ParticleRun>,
+    /// How tau is computed at every point besides the backward equations.
+    method: mfpt::Method,
 }
 
 impl ScanArgs {
@@ -432,14 +432,14 @@ impl ScanArgs {
             .iter()
             .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
             .collect::<irtp::Result<Vec<_>>>()?;
-        let particles = self.sim.config(&problems)?;
+        let method = self.sim.config(&problems, backward, self.output.seed)?;
         Ok(ScanConfig {
             base,
             axis,
             values,
             problems,
             backward,
-            particles,
+            method,
         })
     }
 }
@@ -508,15 +508,20 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
     bar.finish();
     // Common random numbers: every point uses the same seed, so the
     // curve is smooth and differences between points are precise.
-    let sims = match &c.particles {
-        None => None,
-        Some(run) => Some(
+    let sim = c.method.particles().is_some();
+    let sims = if sim {
+        let run = |(i, p): (usize, &Problem)| {
+            estimate(&c.method, p, &format!("point {}", i + 1)).map(|r| summary(&r))
+        };
+        Some(
             c.problems
                 .iter()
                 .enumerate()
-                .map(|(i, p)| estimate(run, p, a.output.seed, &format!("point {}", i + 1)))
+                .map(run)
                 .collect::<irtp::Result<Vec<_>>>()?,
-        ),
+        )
+    } else {
+        None
     };
     let wall = t0.elapsed().as_secs_f64();
     let xname = match a.over {
@@ -524,7 +529,6 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         Over::Rate => "rate",
     };
     let table = scan_table(xname, &points, sims.as_deref());
-    let sim = c.particles.is_some();
     let params = ScanParams {
         base: &c.base,
         over: xname,

@@ -4,7 +4,7 @@
 use crate::analytic::r0::R0Density;
 use crate::error::{Error, Result};
 use crate::fp::{self, Mesh, StationaryOptions};
-use crate::mfpt::{self, BackwardOptions, FptSample, OptimizeOptions, Problem};
+use crate::mfpt::{self, BackwardOptions, OptimizeOptions, ParticleOptions, Problem};
 use crate::model::Params;
 use crate::parallel::{NoProgress, Progress};
 use crate::sim::{exact, Observables, SimSpec};
@@ -147,20 +147,15 @@ pub fn mfpt_sim(
     t_cap: f64,
     progress: &dyn Progress,
 ) -> Result<(f64, f64, u64, u64)> {
-    Problem::new(*params, v0, vt)?;
-    if !(v0 < vt) {
-        return Err(Error::invalid(
-            "vt",
-            vt,
-            format!("vt > v0 = {v0} (upward passage)"),
-        ));
-    }
-    let sampler = exact::FirstPassage::new(params);
-    let stats = mfpt::first_passage_stats(samples, seed, progress, |_, rng, plus| {
-        let (time, work) = sampler.run(v0, vt, plus, t_cap, rng);
-        FptSample { time, work }
+    let pr = Problem::new(*params, v0, vt)?;
+    let method = mfpt::Method::Exact(ParticleOptions {
+        particles: samples,
+        t_max: t_cap,
+        seed,
     });
-    let s = stats.summary();
+    let s = mfpt::solve(&pr, &method, progress)?
+        .summary()
+        .expect("a particle method");
     Ok((s.tau, s.tau_err, s.particles, s.censored))
 }
 

@@ -50,7 +50,7 @@ impl TransientOptions {
         snapshots: usize,
         cfl: f64,
     ) -> Result<Self> {
-        let times = crate::sim::TimeGrid::linear(t_max, samples)?
+        let times = crate::numerics::time_grid::TimeGrid::linear(t_max, samples)?
             .times()
             .to_vec();
         let snapshot_times =

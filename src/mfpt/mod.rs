@@ -17,23 +17,33 @@
 //! Targets below v_0 are handled by the reflection v → -v (g is odd, the
 //! noise symmetric): tau±(v_0; v_t, v_r) = tau∓(-v_0; -v_t, -v_r).
 //!
+//! One home for the first-passage problem: [`Problem`], the estimators and
+//! all three methods behind one entry point, [`solve`] with a [`Method`].
+//!
 //! - [`backward`]: direct O(N) second-order solve of the backward equations.
-//! - [`simulate`]: first-passage statistics from particles (Euler, pluggable).
+//! - [`exact`]: exact event-driven particles (the sampler of [`crate::sim::exact`]).
+//! - [`euler`]: Euler particles (the step of [`crate::sim::euler`]).
+//! - [`estimator`]: first-passage statistics of any particle method.
+//! - [`method`]: [`Method`], [`solve`] and its [`MfptResult`].
 //! - [`optimize`]: scans and the optimal resetting rate.
-//! - [`particles`]: the particle estimate by either sampler.
 
 pub mod backward;
+pub mod estimator;
+pub mod euler;
+pub mod exact;
+pub mod method;
 pub mod optimize;
-pub mod particles;
-pub mod simulate;
 
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
-pub use backward::{solve, BackwardOptions, BackwardSolution, DriftSign};
+pub use backward::{BackwardOptions, BackwardSolution, DriftSign};
+pub use estimator::{first_passage_stats, FptSample, FptStats, FptSummary};
+pub use euler::EulerFpt;
+pub use exact::FirstPassage;
+pub use method::{solve, Method, MfptResult, ParticleOptions};
 pub use optimize::{optimize_rate, scan, OptimizeOptions, Optimum, ScanAxis, ScanPoint};
-pub use simulate::{euler_first_passage, first_passage_stats, EulerFpt, FptSample, FptStats};
 
 /// A validated first-passage problem: model parameters, start v_0, target v_t.
 /// Built with [`Problem::new`] (also on deserialisation), so always admissible.

@@ -1,6 +1,7 @@
 //! Small hand-written numerical kernels shared by the model (exact flow) and
 //! the closed-form densities: Gauss–Kronrod quadrature, a safeguarded root
-//! finder, Chebyshev tables, fast elementary functions and point grids.
+//! finder, Chebyshev tables, fast elementary functions, point grids and
+//! validated time grids.
 //! Neutral ground so that `model` does not depend on `analytic`.
 //!
 //! Every iterative kernel reports failure ([`Failure`]) instead of returning
@@ -12,6 +13,7 @@ pub mod fastmath;
 pub mod grid;
 pub mod quad;
 pub mod root;
+pub mod time_grid;
 
 /// Why a numerical kernel gave up. Small and `Copy`, so that the exact
 /// sampler's hot loop can return it at no cost; `?` turns it into

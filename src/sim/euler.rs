@@ -370,6 +370,14 @@ pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
     1u64.saturating_add((u.ln() / ln_1mp) as u64)
 }
 
+/// One Euler step of the velocity, v + dt (s - g(v)) (Eq. 14), with g the
+/// law's [`Drag::fast_force`]: the one step of every Euler engine (this
+/// kernel and the Euler first passage).
+#[inline(always)]
+pub fn euler_step<D: Drag>(drag: &D, v: f64, s: f64, dt: f64) -> f64 {
+    v + dt * (s - drag.fast_force(v))
+}
+
 impl<D: Drag> Kernel<'_, D> {
     #[inline(always)]
     fn bin(&self, v: f64) -> usize {
@@ -428,7 +436,7 @@ impl<D: Drag> Kernel<'_, D> {
                     let plus = self.reset.draw_noise(eta[l] > 0.0, &mut rng[l]);
                     eta[l] = if plus { self.sigma } else { -self.sigma };
                 } else {
-                    v[l] += dt * (eta[l] - self.f.fast_force(v[l]));
+                    v[l] = euler_step(self.f, v[l], eta[l], dt);
                 }
                 // 4. flip
                 if ev[l].flip(n, &mut rng[l]) {

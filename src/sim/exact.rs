@@ -1,4 +1,4 @@
-//! Exact event-driven sampler (issue 6): no time step, no discretisation bias.
+//! Exact event-driven sampler: no time step, no discretisation bias.
 //!
 //! The process is piecewise deterministic: noise flips (rate lambda) and
 //! velocity resets (rate r, v → v_r, noise state kept) happen at the events
@@ -28,7 +28,7 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 
 use crate::error::{Error, Result};
-use crate::model::drag::{AnyFlow, FlowMap};
+use crate::model::drag::FlowMap;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
@@ -377,7 +377,7 @@ impl<F: FlowMap> Sampler<F> {
 /// Exp(rate) waiting time (∞ for rate 0), by the ziggurat sampler of
 /// `rand_distr::Exp1` (exact in distribution, cheaper than -ln U).
 #[inline]
-fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
+pub fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
     if rate > 0.0 {
         let e: f64 = rng.sample(rand_distr::Exp1);
         e / rate
@@ -421,158 +421,6 @@ fn simulate_drag<D: Drag>(
     Ok(obs)
 }
 
-/// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
-/// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
-/// A flow segment is tested with the exact flow time to vt (no overshoot);
-/// a reset to v_r ≥ vt counts as passage at the reset instant. Returns
-/// (passage time, or None if not reached by `t_max`; number of events).
-/// For many particles build a [`FirstPassage`] once instead (faster).
-pub fn first_passage(
-    params: &Params,
-    v0: f64,
-    vt: f64,
-    start_plus: bool,
-    t_max: f64,
-    rng: &mut Rng,
-) -> (Option<f64>, u64) {
-    FirstPassage::for_drag(&params.drag(), params, false).run(v0, vt, start_plus, t_max, rng)
-}
-
-/// Prepared exact first-passage sampler for one parameter set (flows and
-/// their acceleration tables built once); see [`first_passage`].
-#[derive(Clone, Debug)]
-pub struct FirstPassage<F = AnyFlow> {
-    flows: [F; 2],
-    lambda: f64,
-    total_rate: f64,
-    vr: f64,
-}
-
-impl FirstPassage {
-    /// Prepare for `params` (any law, dispatched per call; engines use
-    /// [`FirstPassage::for_drag`] with the law's own type).
-    pub fn new(params: &Params) -> Self {
-        Self::for_drag(&params.drag(), params, true)
-    }
-}
-
-impl<F: FlowMap> FirstPassage<F> {
-    /// Prepare for `params` with the flows of `drag` (accelerated: built
-    /// once for many particles).
-    pub fn for_drag<D: Drag<Flow = F>>(drag: &D, params: &Params, accelerated: bool) -> Self {
-        let flow = |s: f64| {
-            let f = drag.flow(s);
-            if accelerated {
-                f.accelerated()
-            } else {
-                f
-            }
-        };
-        FirstPassage {
-            flows: [flow(params.sigma()), flow(-params.sigma())],
-            lambda: params.lambda(),
-            total_rate: params.lambda() + params.rate(),
-            vr: params.reset_velocity(),
-        }
-    }
-
-    /// One upward first passage, as [`first_passage`].
-    pub fn run(
-        &self,
-        v0: f64,
-        vt: f64,
-        start_plus: bool,
-        t_max: f64,
-        rng: &mut Rng,
-    ) -> (Option<f64>, u64) {
-        if v0 >= vt {
-            return (Some(0.0), 0);
-        }
-        let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-        let mut events = 0u64;
-        loop {
-            let gap = exp_gap(rng, self.total_rate);
-            let si = usize::from(!plus);
-            let flow = &self.flows[si];
-            if plus {
-                let tau = flow.time(v, vt);
-                if tau <= gap {
-                    let hit = t + tau;
-                    return (if hit <= t_max { Some(hit) } else { None }, events);
-                }
-            }
-            if t + gap >= t_max {
-                return (None, events);
-            }
-            v = flow.velocity(v, gap);
-            t += gap;
-            events += 1;
-            if rng.gen::<f64>() * self.total_rate < self.lambda {
-                plus = !plus;
-            } else {
-                v = self.vr;
-                if v >= vt {
-                    return (Some(t), events);
-                }
-            }
-        }
-    }
-}
-
-/// [`first_passage`] in either direction: the first time v(t) reaches `vt`
-/// from `v0` (from below or from above). A downward problem is the upward
-/// one under v → -v (all drag laws are odd): v0, vt and v_r change sign and
-/// the noise states swap, so both directions share one code path.
-pub fn first_passage_to(
-    params: &Params,
-    v0: f64,
-    vt: f64,
-    start_plus: bool,
-    t_max: f64,
-    rng: &mut Rng,
-) -> Result<(Option<f64>, u64)> {
-    if v0 <= vt {
-        return Ok(first_passage(params, v0, vt, start_plus, t_max, rng));
-    }
-    let mirrored = params.with_reset_velocity(-params.reset_velocity())?;
-    Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
-}
-
-/// Validate a first-passage time cap (`t_max`): t_max > 0 (+∞ allowed:
-/// with lambda > 0 every particle arrives almost surely).
-pub fn check_t_max(t_max: f64) -> Result<f64> {
-    if !(t_max > 0.0) {
-        return Err(Error::invalid("t_max", t_max, "t_max > 0 (inf allowed)"));
-    }
-    Ok(t_max)
-}
-
-/// First-passage statistics of `problem` (either direction) by the exact
-/// sampler, through the method-agnostic driver
-/// [`crate::mfpt::first_passage_stats`] (particle i: stream (seed, i), start
-/// state +Sigma for even i). Downward problems run in the mirrored upward
-/// frame ([`crate::mfpt::Problem::canonical`]), where the noise states swap.
-pub fn exact_first_passage(
-    problem: &crate::mfpt::Problem,
-    t_max: f64,
-    particles: u64,
-    seed: u64,
-    progress: &dyn Progress,
-) -> Result<crate::mfpt::FptStats> {
-    check_t_max(t_max)?;
-    if particles < 2 {
-        return Err(Error::invalid("particles", particles, "particles >= 2"));
-    }
-    let (cp, swapped) = problem.canonical();
-    Ok(crate::with_drag!(cp.params().drag(), |d| {
-        let fpt = FirstPassage::for_drag(d, cp.params(), true);
-        crate::mfpt::first_passage_stats(particles, seed, progress, |_, rng, plus| {
-            let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
-            crate::mfpt::FptSample { time, work }
-        })
-    }))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -610,20 +458,6 @@ mod tests {
                     }
                 }
             }
-        }
-    }
-
-    #[test]
-    fn downward_passage_is_mirrored_upward() {
-        use crate::model::DragLaw;
-        let p = Params::new(DragLaw::Tanh, 0.6, 1.2, 0.5, 0.1).unwrap();
-        let q = p.with_reset_velocity(-0.1).unwrap();
-        for i in 0..50 {
-            let (mut a, mut b) = (rng::stream(9, i), rng::stream(9, i));
-            let down = first_passage_to(&p, 0.2, -0.3, i % 2 == 0, 1e3, &mut a).unwrap();
-            let up = first_passage(&q, -0.2, 0.3, i % 2 == 1, 1e3, &mut b);
-            assert_eq!(down, up);
-            assert!(down.0.is_some());
         }
     }
 }

@@ -1,0 +1,233 @@
+//! The one entry point: [`solve`] a [`Problem`] by a [`Method`] (backward
+//! equations, exact particles or Euler particles) into an [`MfptResult`].
+//! To add a method: a [`Method`] variant and its arms in [`Method::check`]
+//! and [`solve`].
+
+use super::backward::{self, BackwardOptions, BackwardSolution};
+use super::estimator::{FptStats, FptSummary};
+use super::euler::EulerFpt;
+use super::{exact, Problem};
+use crate::error::{Error, Result};
+use crate::parallel::Progress;
+use serde::{Deserialize, Serialize};
+
+/// A particle estimate: how many particles, the time cap, the seed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParticleOptions {
+    /// Particles (even indices start in +Sigma, odd in -Sigma); at least 2.
+    pub particles: u64,
+    /// Particles not arrived by `t_max` are counted as censored (excluded
+    /// from the means, which become lower bounds).
+    pub t_max: f64,
+    /// Seed: particle i uses the random stream (seed, i).
+    pub seed: u64,
+}
+
+/// How the mean first-passage time is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "lowercase")]
+pub enum Method {
+    /// The backward equations solved directly (second order, with a
+    /// Richardson error estimate; see [`super::backward`]).
+    Backward(BackwardOptions),
+    /// Exact event-driven particles: no time step, no overshoot
+    /// (see [`super::exact`]); t_max may be +∞.
+    Exact(ParticleOptions),
+    /// The paper's Euler scheme (Eqs. 14-16) with time step `dt`: O(dt)
+    /// bias, including an overshoot of at most dt (see [`super::euler`]).
+    Euler {
+        /// Time step.
+        dt: f64,
+        /// Particles, time cap and seed.
+        #[serde(flatten)]
+        run: ParticleOptions,
+    },
+}
+
+impl Method {
+    /// Short name (`backward`, `exact`, `euler`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Backward(_) => "backward",
+            Method::Exact(_) => "exact",
+            Method::Euler { .. } => "euler",
+        }
+    }
+
+    /// The particle options of a particle method (`None` for the backward
+    /// equations).
+    pub fn particles(&self) -> Option<&ParticleOptions> {
+        match self {
+            Method::Backward(_) => None,
+            Method::Exact(run) | Method::Euler { run, .. } => Some(run),
+        }
+    }
+
+    /// Validate the method for `problem` before anything runs: the backward
+    /// mesh; for particles `particles >= 2`, then the method's own limits
+    /// (Euler: step and time cap; exact: time cap).
+    pub fn check(&self, problem: &Problem) -> Result<()> {
+        if let Some(run) = self.particles() {
+            if run.particles < 2 {
+                return Err(Error::invalid("particles", run.particles, "particles >= 2"));
+            }
+        }
+        match *self {
+            Method::Backward(opts) => opts.validate(),
+            Method::Exact(run) => exact::check_t_max(run.t_max).map(|_| ()),
+            Method::Euler { dt, run } => EulerFpt::new(*problem, dt, run.t_max).map(|_| ()),
+        }
+    }
+}
+
+/// The mean first-passage time of a problem by one method.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", content = "result", rename_all = "lowercase")]
+pub enum MfptResult {
+    /// From the backward equations.
+    Backward(BackwardSolution),
+    /// From particles (exact or Euler): mergeable statistics.
+    Particles(FptStats),
+}
+
+impl MfptResult {
+    /// tau = (tau+ + tau-)/2: the MFPT for a uniformly random initial state.
+    pub fn tau(&self) -> f64 {
+        match self {
+            MfptResult::Backward(s) => s.tau,
+            MfptResult::Particles(s) => s.summary().tau,
+        }
+    }
+    /// The MFPT starting in +Sigma.
+    pub fn tau_plus(&self) -> f64 {
+        match self {
+            MfptResult::Backward(s) => s.tau_plus,
+            MfptResult::Particles(s) => s.summary().tau_plus,
+        }
+    }
+    /// The MFPT starting in -Sigma.
+    pub fn tau_minus(&self) -> f64 {
+        match self {
+            MfptResult::Backward(s) => s.tau_minus,
+            MfptResult::Particles(s) => s.summary().tau_minus,
+        }
+    }
+    /// The backward solution (`None` for particles).
+    pub fn backward(&self) -> Option<&BackwardSolution> {
+        match self {
+            MfptResult::Backward(s) => Some(s),
+            MfptResult::Particles(_) => None,
+        }
+    }
+    /// The particle statistics (`None` for the backward equations).
+    pub fn stats(&self) -> Option<&FptStats> {
+        match self {
+            MfptResult::Backward(_) => None,
+            MfptResult::Particles(s) => Some(s),
+        }
+    }
+    /// Means, standard errors and censoring of a particle estimate.
+    pub fn summary(&self) -> Option<FptSummary> {
+        self.stats().map(FptStats::summary)
+    }
+}
+
+/// The mean first-passage time of `problem` by `method`, validated first
+/// ([`Method::check`]). Particle estimates are bit-identical for any thread
+/// count; `progress` counts particles (the backward solve reports none).
+/// Errors with [`Error::Overflow`] where the backward tau overflows f64.
+pub fn solve(problem: &Problem, method: &Method, progress: &dyn Progress) -> Result<MfptResult> {
+    method.check(problem)?;
+    Ok(match *method {
+        Method::Backward(opts) => MfptResult::Backward(backward::solve(problem, &opts)?),
+        Method::Exact(run) => MfptResult::Particles(exact::stats(
+            problem,
+            run.t_max,
+            run.particles,
+            run.seed,
+            progress,
+        )),
+        Method::Euler { dt, run } => MfptResult::Particles(
+            EulerFpt::new(*problem, dt, run.t_max)?.stats(run.particles, run.seed, progress),
+        ),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{DragLaw, Params};
+    use crate::parallel::NoProgress;
+
+    fn problem() -> Problem {
+        let p = Params::new(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0).unwrap();
+        Problem::new(p, -0.249, 0.1).unwrap()
+    }
+
+    fn run(particles: u64, t_max: f64) -> ParticleOptions {
+        ParticleOptions {
+            particles,
+            t_max,
+            seed: 7,
+        }
+    }
+
+    fn name(e: Error) -> &'static str {
+        match e {
+            Error::InvalidParameter { name, .. } => name,
+            e => panic!("{e}"),
+        }
+    }
+
+    #[test]
+    fn check_particles_first_then_method() {
+        let pr = problem();
+        let euler = |dt, run| Method::Euler { dt, run };
+        assert!(euler(1e-3, run(10, 1e4)).check(&pr).is_ok());
+        assert!(Method::Exact(run(10, f64::INFINITY)).check(&pr).is_ok());
+        let bad = Method::Exact(run(1, -1.0)).check(&pr).unwrap_err();
+        assert_eq!(name(bad), "particles");
+        let bad = Method::Exact(run(10, 0.0)).check(&pr).unwrap_err();
+        assert_eq!(name(bad), "t_max");
+        let bad = euler(-1.0, run(10, 1e4)).check(&pr).unwrap_err();
+        assert_eq!(name(bad), "dt");
+        let bad = Method::Backward(BackwardOptions::with_cells(2));
+        assert_eq!(name(bad.check(&pr).unwrap_err()), "cells");
+    }
+
+    #[test]
+    fn solve_dispatches_to_the_samplers() {
+        let pr = problem();
+        let a = solve(&pr, &Method::Exact(run(20, 1e4)), &NoProgress).unwrap();
+        let b = exact::stats(&pr, 1e4, 20, 7, &NoProgress);
+        assert_eq!(a.stats(), Some(&b));
+        let e = Method::Euler {
+            dt: 1e-2,
+            run: run(20, 1e4),
+        };
+        let a = solve(&pr, &e, &NoProgress).unwrap();
+        let b = EulerFpt::new(pr, 1e-2, 1e4)
+            .unwrap()
+            .stats(20, 7, &NoProgress);
+        assert_eq!(a.stats(), Some(&b));
+        assert_eq!(a.tau(), b.summary().tau);
+        let opts = BackwardOptions::with_cells(400);
+        let a = solve(&pr, &Method::Backward(opts), &NoProgress).unwrap();
+        assert_eq!(a.backward(), Some(&backward::solve(&pr, &opts).unwrap()));
+    }
+
+    #[test]
+    fn method_round_trips_through_json() {
+        for m in [
+            Method::Backward(BackwardOptions::default()),
+            Method::Exact(run(10, 5.0)),
+            Method::Euler {
+                dt: 1e-3,
+                run: run(10, 5.0),
+            },
+        ] {
+            let j = serde_json::to_string(&m).unwrap();
+            assert_eq!(serde_json::from_str::<Method>(&j).unwrap(), m, "{j}");
+        }
+    }
+}
