@@ -382,31 +382,8 @@ fn solve_mesh(
     a.factor()?;
     a.solve(&mut b);
     let mut x = b;
-    if rate > 0.0 {
-        // x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and R± = x±(v_r).
-        // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
-        // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
-        // so the 2×2 system is rewritten in sums of non-negative terms only:
-        // no cancellation even when tau ~ e^{r T} is astronomically large.
-        let mut q = vec![0.0; n];
-        q[n - 1] = 1.0;
-        a.solve(&mut q);
-        a.solve(&mut cp);
-        a.solve(&mut cm);
-        let (kp, km) = (2 * m.reset, 2 * m.reset + 1);
-        let (y1m, y2p) = (cp[km], cm[kp]);
-        let (qp, qm) = (q[kp], q[km]);
-        // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
-        let (m11, m22) = (qp - y2p, qm - y1m);
-        let det = qp * qm - qp * y1m - qm * y2p;
-        if !(det > 0.0) || !det.is_finite() {
-            return Ok(None);
-        }
-        let rp = (x[kp] * m22 - y2p * x[km]) / det;
-        let rm = (m11 * x[km] - y1m * x[kp]) / det;
-        for k in 0..n {
-            x[k] -= rp * cp[k] + rm * cm[k];
-        }
+    if rate > 0.0 && !reset_correction(&a, &mut x, cp, cm, m.reset) {
+        return Ok(None);
     }
     let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
     let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
@@ -414,6 +391,45 @@ fn solve_mesh(
         return Ok(None);
     }
     Ok(Some((tp, tm)))
+}
+
+/// The reset terms of the backward equations by two extra solves with the
+/// factored matrix: x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and
+/// R± = x±(v_r) at the reset node. Returns false when the 2×2 system is
+/// singular or overflows (tau beyond the f64 range).
+fn reset_correction(
+    a: &Band,
+    x: &mut [f64],
+    mut cp: Vec<f64>,
+    mut cm: Vec<f64>,
+    reset: usize,
+) -> bool {
+    let n = x.len();
+    // x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and R± = x±(v_r).
+    // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
+    // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
+    // so the 2×2 system is rewritten in sums of non-negative terms only:
+    // no cancellation even when tau ~ e^{r T} is astronomically large.
+    let mut q = vec![0.0; n];
+    q[n - 1] = 1.0;
+    a.solve(&mut q);
+    a.solve(&mut cp);
+    a.solve(&mut cm);
+    let (kp, km) = (2 * reset, 2 * reset + 1);
+    let (y1m, y2p) = (cp[km], cm[kp]);
+    let (qp, qm) = (q[kp], q[km]);
+    // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
+    let (m11, m22) = (qp - y2p, qm - y1m);
+    let det = qp * qm - qp * y1m - qm * y2p;
+    if !(det > 0.0) || !det.is_finite() {
+        return false;
+    }
+    let rp = (x[kp] * m22 - y2p * x[km]) / det;
+    let rm = (m11 * x[km] - y1m * x[kp]) / det;
+    for k in 0..n {
+        x[k] -= rp * cp[k] + rm * cm[k];
+    }
+    true
 }
 
 /// tau±(v) on the whole mesh, in the user's frame.
