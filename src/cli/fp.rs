@@ -10,7 +10,7 @@ use irtp::Params;
 use serde_json::json;
 use std::time::Instant;
 
-/// Solve the Fokker-Planck equations for P±(v) (paper Eqs. 11-12).
+/// Solve the Fokker-Planck equations for P±(v) (paper Eqs. (11)-(12)).
 #[derive(Args, Debug)]
 pub struct FpArgs {
     #[command(subcommand)]
@@ -19,7 +19,7 @@ pub struct FpArgs {
 
 #[derive(Subcommand, Debug)]
 enum FpCommand {
-    /// Stationary density, <v>, <v²> (Eq. 17) and exact D_eff by a direct O(N) solve.
+    /// Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve.
     Stationary(StationaryArgs),
     /// Time-dependent solution from the paper's initial condition (explicit upwind, Sec. 3).
     Transient(TransientArgs),

@@ -59,7 +59,7 @@ struct ProblemArgs {
 pub enum Method {
     /// Backward equations solved directly (second order, with error estimate).
     Ode,
-    /// Particle simulation with the Euler scheme (paper Eqs. 14-16).
+    /// Particle simulation with the Euler scheme (paper Eqs. (30)-(32)).
     Euler,
     /// Exact event-driven particle sampler: no time step, no overshoot.
     Exact,

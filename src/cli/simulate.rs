@@ -17,7 +17,7 @@ use std::time::Instant;
 pub enum MethodArg {
     /// Exact event-driven sampler: no time step, no discretisation bias.
     Exact,
-    /// Euler scheme of the paper (Eqs. 14-16).
+    /// Euler scheme of the paper (Eqs. (30)-(32)).
     Euler,
 }
 
@@ -319,7 +319,7 @@ fn text_report(
     );
     if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
         text += &format!(
-            "Eq. 18 fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
+            "Eq. (36) fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
             a.burn_in, s.t_max, d, e
         );
     }

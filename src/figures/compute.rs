@@ -84,7 +84,7 @@ pub struct Density {
     pub edges: Vec<f64>,
     /// Density values.
     pub p: Vec<f64>,
-    /// Stationary <v²> (paper Eq. 17), Richardson-extrapolated.
+    /// Stationary <v²> (paper Eq. (33)), Richardson-extrapolated.
     pub v2: f64,
     /// Exact D_eff (discrete Green-Kubo), Richardson-extrapolated.
     pub d_eff: f64,
@@ -110,7 +110,7 @@ pub fn fp_stationary(params: &Params, cells: usize) -> Result<Density> {
     })
 }
 
-/// Analytic r = 0 density (paper Eqs. Neqn17, apeqn18a) at the given velocities.
+/// Analytic r = 0 density (paper Eqs. (34)-(35)) at the given velocities.
 pub fn r0_density(params: &Params, v: &[f64]) -> Result<Vec<f64>> {
     let d = R0Density::new(params.drag(), params.sigma(), params.lambda())?;
     Ok(v.iter().map(|&x| d.pdf(x)).collect())

@@ -1,7 +1,7 @@
 //! Fig. 1: mean-squared velocity <v²>(t) at lambda = 0.5 for several r;
 //! (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6. Points: particle simulation
 //! (all particles start at v = 0, x = 0, eta = ±Sigma equally likely);
-//! solid lines: stationary <v²> from the Fokker-Planck density (paper Eq. 17);
+//! solid lines: stationary <v²> from the Fokker-Planck density (paper Eq. (33));
 //! dashed lines: <v²>(t) from the time-dependent FP equations (paper's method).
 
 use super::compute::{self, Moments};
@@ -101,7 +101,7 @@ pub struct Curve {
     pub stationary: Stationary,
 }
 
-/// Stationary <v²> of one curve: simulation time average against FP (Eq. 17).
+/// Stationary <v²> of one curve: simulation time average against FP (Eq. (33)).
 #[derive(Clone, Debug, Serialize)]
 pub struct Stationary {
     /// Drag law.
@@ -196,7 +196,7 @@ fn compute_curve(
     })
 }
 
-/// Draw Fig. 1: points (simulation), solid (Eq. 17), dashed (FP(t)).
+/// Draw Fig. 1: points (simulation), solid (Eq. (33)), dashed (FP(t)).
 pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new("fig1", "Fig. 1: mean-squared velocity ⟨v²⟩(t), λ = 0.5", 2);
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
@@ -206,7 +206,7 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
             Axis::linear("t"),
             Axis::linear("⟨v²⟩"),
         );
-        panel.legend_title = Some("solid: Eq. 17, dashed: FP(t)".into());
+        panel.legend_title = Some("solid: Eq. (33), dashed: FP(t)".into());
         for (ri, (c, &r)) in row.iter().zip(&spec.rates).enumerate() {
             let lab = Some(format!("r = {}", fmt_num(r)));
             let times: Vec<f64> = c.sim.iter().map(|s| s.t).collect();
@@ -262,7 +262,7 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
                 id: format!("v2_ss_{}", m.drag),
                 figure: "fig1",
                 paper: format!(
-                    "{}: <v²>(t) relaxes to the Eq. 17 value, which decreases as r increases",
+                    "{}: <v²>(t) relaxes to the Eq. (33) value, which decreases as r increases",
                     m.drag
                 ),
                 ours: format!(

@@ -3,7 +3,7 @@
 //! Sigma = 0.6, lambda ∈ {0.5, 0.85, 1.2, 3}. Points: time-averaged
 //! histograms of the particle simulation; coloured lines: stationary
 //! Fokker-Planck solution; black: the analytic r = 0 density (paper Eqs.
-//! Neqn17 and apeqn18a) with its simulation points.
+//! (34)-(35)) with its simulation points.
 //!
 //! Exact facts used by the claims (derived from the stationary forward
 //! equations of the simulated process, state-preserving reset to v_r = 0):
@@ -297,7 +297,7 @@ pub struct FpVsSim {
     pub v2_sim: f64,
     /// Its standard error.
     pub v2_sim_err: f64,
-    /// Stationary <v²> of the FP density (Eq. 17).
+    /// Stationary <v²> of the FP density (Eq. (33)).
     pub v2_fp: f64,
 }
 
@@ -855,7 +855,7 @@ fn agreement_claim(spec: &Spec, data: &Data) -> Claim {
         figure: data.which.name(),
         paper: "particle simulation and FP solution agree; FP at r = 0 reproduces the analytic density".into(),
         ours: format!(
-            "max |sim - FP|/SE over {} bins with |v| < 0.9 v_u and relative SE < 10 %: {:.2} (limit max(4, 1 % Bonferroni) = {:.2}); FP vs analytic r = 0 (|v| < 0.8 v_u): max relative difference {:.2e}; time-averaged <v²> vs FP Eq. 17 over {} curves: max |z| = {:.2}; every curve is worth at least {:.2e} independent stationary samples (Var_ss(v²)/SE²(<v²>))",
+            "max |sim - FP|/SE over {} bins with |v| < 0.9 v_u and relative SE < 10 %: {:.2} (limit max(4, 1 % Bonferroni) = {:.2}); FP vs analytic r = 0 (|v| < 0.8 v_u): max relative difference {:.2e}; time-averaged <v²> vs FP Eq. (33) over {} curves: max |z| = {:.2}; every curve is worth at least {:.2e} independent stationary samples (Var_ss(v²)/SE²(<v²>))",
             bins_total, worst_sim_z, z_bins, worst_r0_rel, rows.len(), worst_v2_z, fewest_equivalent
         ),
         verdict: if worst_sim_z < z_bins && worst_v2_z < z_curves && worst_r0_rel < 0.01 {

@@ -77,7 +77,7 @@ pub struct Msd {
     pub slope_last: f64,
     /// First time after the steepest point where the slope falls below 1.5.
     pub t_crossover: f64,
-    /// D from <x²> = 2 D t + c (Eq. 18) on the last decade of times.
+    /// D from <x²> = 2 D t + c (Eq. (36)) on the last decade of times.
     pub d_fit_last_decade: f64,
     /// Exact D_eff of the FP solver.
     pub d_eff_exact: f64,
@@ -145,7 +145,7 @@ fn compute_curve(
         .iter()
         .find(|s| s.1 < 1.5)
         .map_or(f64::NAN, |s| s.0);
-    // Late regime, paper Eq. 18: <x²> = 2 D t + c fitted on the last
+    // Late regime, paper Eq. (36): <x²> = 2 D t + c fitted on the last
     // decade of times, against the exact D_eff of the FP solver.
     let late: Vec<&Moments> = sim.iter().filter(|s| s.t >= spec.t_max / 10.0).collect();
     let lt: Vec<f64> = late.iter().map(|s| s.t).collect();
@@ -259,7 +259,7 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
                 figure: "fig5",
                 paper: "ballistic <x²> ~ t² at early times, diffusive ~ t at late times; crossover time and <x²> decrease with r".into(),
                 ours: format!(
-                    "{}, r = [{}]: log-log slope at t ≈ {} = [{}]: ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; last decade: log slope [{}], Eq. 18 fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
+                    "{}, r = [{}]: log-log slope at t ≈ {} = [{}]: ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; last decade: log slope [{}], Eq. (36) fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
                     m.drag,
                     spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
                     fmt_num(spec.t_min),

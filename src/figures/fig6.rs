@@ -1,7 +1,7 @@
 //! Fig. 6: effective diffusion coefficient D_eff against r (log-log) for
 //! several lambda; (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6.
 //! Points: simulation, D_eff from a least-squares fit of <x²> = 2 D t + c
-//! (paper Eq. 18) on late times [T/4, T], with its standard error from 32
+//! (paper Eq. (36)) on late times [T/4, T], with its standard error from 32
 //! independent batches of particles; lines: exact D_eff from the
 //! Fokker-Planck (Poisson-equation) solver; grey dotted guide: r⁻².
 
@@ -111,7 +111,7 @@ pub fn wls_slope(x: &[f64], y: &[f64], sy: &[f64]) -> (f64, f64) {
     ((s * sxy - sx * syy) / det, (s / det).sqrt())
 }
 
-/// Simulated D_eff by the MSD fit (Eq. 18) for one parameter set.
+/// Simulated D_eff by the MSD fit (Eq. (36)) for one parameter set.
 pub fn msd_fit(params: &Params, spec: &Spec, seed: u64, progress: &dyn Progress) -> Result<MsdFit> {
     let (l, r) = (params.lambda(), params.rate());
     let t_max = spec.t_factor * (1.0 / (2.0 * l) + 1.0 / (1.0 + r));
@@ -148,7 +148,7 @@ pub struct Point {
     pub lambda: f64,
     /// Reset rate.
     pub r: f64,
-    /// MSD-fit D_eff (Eq. 18).
+    /// MSD-fit D_eff (Eq. (36)).
     pub d_sim: f64,
     /// Its standard error over batches.
     pub d_sim_err: f64,
@@ -362,7 +362,7 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
     claims.push(Claim {
         id: "deff_sim_vs_exact".into(),
         figure: "fig6",
-        paper: "D_eff from fitting the simulated <x²> (Eq. 18)".into(),
+        paper: "D_eff from fitting the simulated <x²> (Eq. (36))".into(),
         ours: format!(
             "MSD-fit D_eff against the exact FP value at every simulated point: max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
             worst_z,

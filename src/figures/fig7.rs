@@ -391,7 +391,7 @@ pub fn claims(curves: &[Vec<Curve>]) -> Vec<Claim> {
         Claim {
             id: "mfpt_sim_vs_backward".into(),
             figure: "fig7",
-            paper: "particle simulations agree with the solution of Eqs. (neqn26, neqn27)".into(),
+            paper: "particle simulations agree with the solution of Eqs. (26)-(27)".into(),
             ours: format!(
                 "exact first-passage sampler vs backward equations of the simulated process (drift ±Σ - g, not the printed g ± Σ): max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
                 worst,

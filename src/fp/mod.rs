@@ -1,10 +1,10 @@
-//! Fokker-Planck solvers for P±(v, t) (paper Eqs. 11-12).
+//! Fokker-Planck solvers for P±(v, t) (paper Eqs. (11)-(12)).
 //!
 //! Forward equations of the simulated process (drift ±Σ - g(v), flips at rate
 //! λ, state-preserving reset to v_r at rate r):
 //!   ∂_t P+ = -∂_v[(Σ - g) P+] + λ (P- - P+) - r P+ + r m+(t) δ(v - v_r),
 //!   ∂_t P- = -∂_v[(-Σ - g) P-] + λ (P+ - P-) - r P- + r m-(t) δ(v - v_r),
-//! with m± = ∫ P± dv and no flux through v_l, v_u. The paper's Eqs. 11-12
+//! with m± = ∫ P± dv and no flux through v_l, v_u. The paper's Eqs. (11)-(12)
 //! write the transport term as ∂_v[(g ∓ Σ) P±] (the same thing) and the
 //! source as (r/2) δ(v): identical for v_r = 0 and m± = ½, which holds in the
 //! stationary state and for all t from the paper's symmetric initial condition.

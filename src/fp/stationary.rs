@@ -1,4 +1,4 @@
-//! Direct stationary solve, `<v>`, `<v²>` (paper Eq. 17) and the exact D_eff.
+//! Direct stationary solve, `<v>`, `<v²>` (paper Eq. (33)) and the exact D_eff.
 
 use super::grid::{Grid, Mesh};
 use super::solve::{solve_free, solve_reset};
@@ -43,13 +43,13 @@ pub struct Moments {
     pub mass: f64,
     /// `<v>_ss`.
     pub v_mean: f64,
-    /// `<v²>_ss` (paper Eq. 17).
+    /// `<v²>_ss` (paper Eq. (33)).
     pub v2: f64,
     /// D_eff = ∫_0^∞ <δv(0) δv(t)>_ss dt (∞ for λ = 0: ballistic).
     pub d_eff: f64,
 }
 
-/// Stationary state of the discrete forward equations (paper Eqs. 11-12 with
+/// Stationary state of the discrete forward equations (paper Eqs. (11)-(12) with
 /// state-preserving reset to v_r).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Stationary {

@@ -28,10 +28,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DriftSign {
-    /// ±Sigma - g(v): the process that is simulated (paper Eq. 5). Correct.
+    /// ±Sigma - g(v): the process that is simulated (paper Eq. (5)). Correct.
     #[default]
     Simulated,
-    /// g(v) ± Sigma as printed in the paper's Eqs. (neqn26-27), with the
+    /// g(v) ± Sigma as printed in the paper's Eqs. (26)-(27), with the
     /// paper's boundary conditions. Kept only to demonstrate the sign error.
     PaperPrinted,
 }
@@ -75,7 +75,7 @@ impl BackwardOptions {
 /// MFPT at v_0 from the backward equations.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BackwardSolution {
-    /// tau = (tau+ + tau-)/2 (paper Eq. neqn9).
+    /// tau = (tau+ + tau-)/2 (paper Eq. (28)).
     pub tau: f64,
     /// Start in the +Sigma state.
     pub tau_plus: f64,

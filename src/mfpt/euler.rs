@@ -1,4 +1,4 @@
-//! Euler first passage: the paper's Euler scheme (Eqs. 14-16) run until the
+//! Euler first passage: the paper's Euler scheme (Eqs. (30)-(32)) run until the
 //! velocity reaches the target, one particle at a time, with flip and reset
 //! steps drawn as geometric waiting times. The step and the gaps are those
 //! of the particle simulation ([`euler_step`] with the law's fast g,
@@ -16,7 +16,7 @@ use crate::rng::Rng;
 use crate::sim::euler::{euler_step, geometric_gap};
 use serde::{Deserialize, Serialize};
 
-/// Euler first-passage sampler (paper Eqs. 14-16), step order as in
+/// Euler first-passage sampler (paper Eqs. (30)-(32)), step order as in
 /// [`crate::sim::euler`]: with probability r dt, v ← v_r (noise kept),
 /// otherwise v ← v + dt (eta - g(v)) and arrival if v ≥ v_t (time = steps·dt,
 /// an overshoot bias of at most dt); then eta flips with probability

@@ -33,7 +33,7 @@ pub enum Method {
     /// Exact event-driven particles: no time step, no overshoot
     /// (see [`super::exact`]); t_max may be +∞.
     Exact(ParticleOptions),
-    /// The paper's Euler scheme (Eqs. 14-16) with time step `dt`: O(dt)
+    /// The paper's Euler scheme (Eqs. (30)-(32)) with time step `dt`: O(dt)
     /// bias, including an overshoot of at most dt (see [`super::euler`]).
     Euler {
         /// Time step.

@@ -10,7 +10,7 @@
 //! (-Sigma - g) tau-' + lambda (tau+ - tau-) + r (tau-(v_r) - tau-) = -1,
 //!
 //! with tau+(v_t) = 0 and regularity at v_l, where the - drift vanishes.
-//! The paper's Eqs. (neqn26-27) print the drifts as g ± Sigma (the sign of g
+//! The paper's Eqs. (26)-(27) print the drifts as g ± Sigma (the sign of g
 //! flipped); [`backward::DriftSign::PaperPrinted`] solves that printed form so
 //! tests can show it disagrees with the particle simulation.
 //!

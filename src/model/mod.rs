@@ -1,4 +1,4 @@
-//! The model: drag laws (paper Table 1), parameters and velocity bounds (Eqs. 5-10).
+//! The model: drag laws (paper Table 1), parameters and velocity bounds (Eqs. (5)-(10)).
 
 pub mod drag;
 pub mod params;

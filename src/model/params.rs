@@ -6,9 +6,9 @@ use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the IRTP with velocity resetting:
-/// dv/dt = -g(v) + eta(t), eta = ±Sigma flipping at rate lambda (paper Eq. 5-6),
+/// dv/dt = -g(v) + eta(t), eta = ±Sigma flipping at rate lambda (paper Eqs. (5)-(6)),
 /// and the resetting rule (today Poissonian to v_r, position and noise state
-/// kept, paper Eq. 3; see [`crate::model::reset`]).
+/// kept, paper Eq. (3); see [`crate::model::reset`]).
 ///
 /// Construct with [`Params::new`]; every field is then guaranteed admissible.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -180,7 +180,7 @@ impl Params {
         }
     }
 
-    /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. 8-10).
+    /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. (8)-(10)).
     pub fn v_upper(&self) -> f64 {
         self.drag.inverse(self.sigma)
     }

@@ -1,13 +1,13 @@
-//! The paper's Euler particle simulation (Eqs. 14-16 with the reset rule Eq. 3).
+//! The paper's Euler particle simulation (Eqs. (30)-(32) with the reset rule Eq. (3)).
 //!
 //! One step n → n+1 (time n·dt → (n+1)·dt), in this exact order:
 //! 1. observe the state (v_n, x_n): record it if n is a grid step, and, if
 //!    n_b ≤ n < N, add dt to the time averages of v, v² and to the occupation
-//!    time of the histogram bin of v_n (left-point rule, like Eq. 15);
-//! 2. x ← x + v·dt with the OLD velocity (Eq. 15);
-//! 3. with probability p = r·dt: v ← v_r (Eq. 3); otherwise
-//!    v ← v + dt·(η - g(v)) (Eq. 14);
-//! 4. with probability q = ½(1 - e^{-2λ dt}) (Eq. 16): η ← -η.
+//!    time of the histogram bin of v_n (left-point rule, like Eq. (31));
+//! 2. x ← x + v·dt with the OLD velocity (Eq. (31));
+//! 3. with probability p = r·dt: v ← v_r (Eq. (3)); otherwise
+//!    v ← v + dt·(η - g(v)) (Eq. (30));
+//! 4. with probability q = ½(1 - e^{-2λ dt}) (Eq. (32)): η ← -η.
 //!
 //! The reset and flip decisions are independent of each other and of the
 //! state; a reset keeps x and η. Particles start at x = 0, v = 0 (as in the
@@ -72,7 +72,7 @@ pub struct EulerPlan {
     pub dt: f64,
     /// Reset probability per step, p = r·dt.
     pub p_reset: f64,
-    /// Flip probability per step, q = ½(1 - e^{-2λ dt}) (Eq. 16).
+    /// Flip probability per step, q = ½(1 - e^{-2λ dt}) (Eq. (32)).
     pub q_flip: f64,
     /// Distinct step indices n_k = round(t_k/dt) of the grid times, increasing.
     pub record_steps: Vec<u64>,
@@ -370,7 +370,7 @@ pub fn geometric_gap(rng: &mut Rng, ln_1mp: f64) -> u64 {
     1u64.saturating_add((u.ln() / ln_1mp) as u64)
 }
 
-/// One Euler step of the velocity, v + dt (s - g(v)) (Eq. 14), with g the
+/// One Euler step of the velocity, v + dt (s - g(v)) (Eq. (30)), with g the
 /// law's [`Drag::fast_force`]: the one step of every Euler engine (this
 /// kernel and the Euler first passage).
 #[inline(always)]

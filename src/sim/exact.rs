@@ -3,7 +3,7 @@
 //! The process is piecewise deterministic: noise flips (rate lambda) and
 //! velocity resets (rate r, v → v_r, noise state kept) happen at the events
 //! of a Poisson process of rate lambda + r; in between, v follows the flow
-//! dv/dt = s - g(v), s = ±Sigma (paper Eq. 5), solved exactly by
+//! dv/dt = s - g(v), s = ±Sigma (paper Eq. (5)), solved exactly by
 //! [`Drag::flow_time`] / [`Drag::flow_velocity`]. Position and the
 //! time integrals of v and v² along a flow segment are
 //! ∫ v dt = v* Δ - I1 and ∫ v² dt = v*² Δ - 2 v* I1 + I2 with the deficit
@@ -19,8 +19,8 @@
 //! in full are counted in a difference array and weighted by their exact
 //! crossing time at the end of the particle).
 //!
-//! Paper references: flow Eq. 5, reset rule Eq. 3 (here to v_r, noise kept),
-//! velocity bounds Eqs. 8-10; the Euler scheme it replaces is Eqs. 14-16.
+//! Paper references: flow Eq. (5), reset rule Eq. (3) (here to v_r, noise kept),
+//! velocity bounds Eqs. (8)-(10); the Euler scheme it replaces is Eqs. (30)-(32).
 //!
 //! Estimators are exact functionals of each path: moments at the grid times
 //! (flow evaluated inside the segment), time averages of v and v² and the

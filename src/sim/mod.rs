@@ -1,4 +1,4 @@
-//! Particle simulation: the paper's Euler scheme (Eqs. 14-16) and the exact
+//! Particle simulation: the paper's Euler scheme (Eqs. (30)-(32)) and the exact
 //! event-driven sampler, sharing one set of mergeable observables.
 //!
 //! A simulation is N independent particles. Particle `i` uses the random
@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "lowercase")]
 pub enum Method {
-    /// The paper's Euler scheme (Eqs. 14-16) with time step `dt`
+    /// The paper's Euler scheme (Eqs. (30)-(32)) with time step `dt`
     /// (geometric waiting times for flips and resets, see [`euler`]).
     Euler {
         /// Time step.
@@ -135,7 +135,7 @@ impl SimSpec {
 
 /// Least-squares weights w_k with Σ w_k y_k = (slope of y against t over the
 /// times in [burn_in, t_max]) / 2; all zero if fewer than two such times, or
-/// if v_r ≠ 0: then `<x>` ≠ 0 and `<x²>` carries the drift, so no Eq. 18 fit
+/// if v_r ≠ 0: then `<x>` ≠ 0 and `<x²>` carries the drift, so no Eq. (36) fit
 /// (with v_r = 0 the process is symmetric under (x, v, η) → -(x, v, η) and `<x>` = 0 exactly).
 pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> Vec<f64> {
     let inside = |t: f64| t >= burn_in;
@@ -193,7 +193,7 @@ pub struct Observables {
     pub density_final: Vec<MeanAcc>,
     /// Work done: Euler steps or exact-sampler events, summed over particles.
     pub steps: u64,
-    /// Paper Eq. 18 per particle: the least-squares slope of x(t_k)² against
+    /// Paper Eq. (36) per particle: the least-squares slope of x(t_k)² against
     /// t_k over the grid times in [burn_in, t_max], halved. Its mean is the
     /// MSD-fit D of <x²> = 2 D t + c on those times (the fit is linear in the
     /// data), its across-particle SE the fit's honest standard error. Empty
@@ -228,7 +228,7 @@ impl Observables {
         }
     }
 
-    /// Contribution of x(t_k) to the particle's Eq. 18 slope (see
+    /// Contribution of x(t_k) to the particle's Eq. (36) slope (see
     /// [`Observables::msd_fit_d`]); samplers sum it over k per particle.
     #[inline]
     pub fn msd_term(&self, k: usize, x: f64) -> f64 {
@@ -405,7 +405,7 @@ pub struct SimSummary {
     pub particles: u64,
     /// Euler steps or exact events, summed over particles.
     pub steps: u64,
-    /// D_eff by the paper's Eq. 18 fit, <x²> = 2 D t + c, over the grid
+    /// D_eff by the paper's Eq. (36) fit, <x²> = 2 D t + c, over the grid
     /// times in [burn_in, t_max] (None with fewer than two such times). Only
     /// meaningful when burn_in is many correlation times; the exact value is
     /// `irtp fp stationary`'s `d_eff`.
