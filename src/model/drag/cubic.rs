@@ -24,4 +24,7 @@ impl Drag for Cubic {
     fn flow(&self, s: f64) -> TabulatedFlow<Cubic> {
         TabulatedFlow::new(*self, s)
     }
+    fn description(&self) -> &'static str {
+        "shear-thickening, g = v + v³/3"
+    }
 }

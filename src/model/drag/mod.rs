@@ -78,6 +78,28 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// The flow dv/dt = s - g(v).
     fn flow(&self, s: f64) -> Self::Flow;
 
+    /// The medium in words, for legends and reports
+    /// (e.g. `shear-thickening, g = tan v`). Default: [`Drag::name`].
+    fn description(&self) -> &'static str {
+        self.name()
+    }
+    /// Some(κ) when g solves the Riccati equation g' = 1 + κ g² (with
+    /// g(0) = 0: g = tan(√κ v)/√κ for κ > 0, tanh(√-κ v)/√-κ for κ < 0,
+    /// v for κ = 0). Such a law has an elementary r = 0 stationary density
+    /// (the paper's Sec. 3 closed forms, [`crate::analytic::r0`]), used
+    /// instead of quadrature. Default: None.
+    fn riccati(&self) -> Option<f64> {
+        None
+    }
+    /// A law's own label of the r = 0 density's regime at (Sigma, lambda)
+    /// and its lambda range in words: the paper's (Sec. 3) (i)-(iv) for tan
+    /// and (a)-(d) for tanh. Default: None (the regime is then labelled by
+    /// its shape, see [`crate::analytic::r0::regime`]).
+    fn regime_label(&self, sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        let _ = (sigma, lambda);
+        None
+    }
+
     /// The inverse g⁻¹(f): the fixed point of dv/dt = f - g(v). Default:
     /// bracketed root of g(v) = |f| (exactly odd).
     fn inverse(&self, f: f64) -> f64 {
