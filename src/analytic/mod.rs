@@ -1,5 +1,5 @@
 //! Closed-form results: the Newtonian (linear-drag) reference case, and the
-//! r = 0 stationary densities of the paper (Eqs. Neqn17, apeqn18a) and of any
+//! r = 0 stationary densities of the paper (Eqs. (34), (35)) and of any
 //! other drag law (by quadrature).
 
 pub mod linear;

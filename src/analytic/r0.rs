@@ -1,5 +1,5 @@
 //! Exact stationary velocity density without resetting (r = 0), its moments,
-//! CDF and the paper's regime classification (Sec. 3, Eqs. Neqn17, apeqn18a).
+//! CDF and the paper's regime classification (Sec. 3, Eqs. (34), (35)).
 //!
 //! # Derivation (from the generator of the simulated process)
 //! L f(v, ±) = (±Σ - g) ∂_v f(v, ±) + λ [f(v, ∓) - f(v, ±)]; its adjoint gives
@@ -20,12 +20,12 @@
 //! - tanh (κ = -1): P ∝ (Σ² - t²)^{c-1} (1 - t²)^{-c},  c = λ/(1-Σ²);
 //! - linear (κ = 0): P ∝ (Σ² - v²)^{λ-1} (a symmetric Beta law, c = λ).
 //!
-//! These coincide with the paper's Eq. Neqn17 (tan) and Eq. apeqn18a (tanh; its
+//! These coincide with the paper's Eq. (34) (tan) and Eq. (35) (tanh; its
 //! absolute value is immaterial since both factors are positive inside the
 //! interval): the paper's r = 0 closed forms are correct for the simulated process
 //! (tested in `tests/analytic.rs`, also against an independent simulation of the
 //! process). The drift-sign slip of the paper's Sec. 2.2 does not enter: its FP
-//! Eqs. p2c4eqn11-12 carry ∂_v[(g ∓ Σ)P±] = -∂_v[(±Σ - g)P±], as derived here.
+//! Eqs. (11)-(12) carry ∂_v[(g ∓ Σ)P±] = -∂_v[(±Σ - g)P±], as derived here.
 //! Paper Fig. 2a: tan, Σ = 3, λ = 0.9 gives a = -0.91. Linear drag:
 //! <v²> = Σ²/(1 + 2λ), as [`crate::analytic::linear::v2`] at r = 0.
 //! Any other law: the exponent is integrated numerically with its logarithmic
@@ -288,7 +288,9 @@ fn shape_label(
 /// Classify the r = 0 density. Boundary values of λ go to the regime whose
 /// description still holds; the description is always computed from the density.
 /// Laws with their own labels ([`Drag::regime_label`]: tan, tanh, linear) keep
-/// them; any other law is labelled by its shape (see [`shape_label`]).
+/// them; any other law is labelled by its shape, `edge/centre/n` (e.g.
+/// `diverges/minimum/2`: divergent edges, a minimum at v = 0, two
+/// off-centre extrema).
 ///
 /// Corrections to the paper (verified in `tests/analytic.rs`):
 /// - tanh (b): the maxima sit at v = ±atanh(√(1-λ)), not ±atanh(1-λ), and v = 0
@@ -349,8 +351,8 @@ fn describe_shape(extrema: &[Extremum]) -> String {
         .join(", ")
 }
 
-/// The paper's unnormalised r = 0 density exactly as printed, Eq. Neqn17 (tan)
-/// and Eq. apeqn18a (tanh, with its absolute value), written for any Riccati
+/// The paper's unnormalised r = 0 density exactly as printed, Eq. (34) (tan)
+/// and Eq. (35) (tanh, with its absolute value), written for any Riccati
 /// law g' = 1 + κg² as ((Σ² - g²)/(1 + κg²))^c / (Σ² - g²), c = λ/(1 + κΣ²)
 /// (linear drag: the Beta law (Σ² - v²)^{λ-1}, which the paper does not
 /// print). Zero outside the open velocity interval; NaN for a law without a

@@ -86,7 +86,7 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// Some(κ) when g solves the Riccati equation g' = 1 + κ g² (with
     /// g(0) = 0: g = tan(√κ v)/√κ for κ > 0, tanh(√-κ v)/√-κ for κ < 0,
     /// v for κ = 0). Such a law has an elementary r = 0 stationary density
-    /// (the paper's Sec. 3 closed forms, [`crate::analytic::r0`]), used
+    /// (the paper's Eqs. (34), (35), [`crate::analytic::r0`]), used
     /// instead of quadrature. Default: None.
     fn riccati(&self) -> Option<f64> {
         None
