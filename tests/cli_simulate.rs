@@ -181,7 +181,7 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
         (&["--grid", "log", "--t-min", "0"], "--t-min"),
         (&["--grid", "log", "--t-min", "1"], "--t-min"),
         (&["--particles", "x"], "--particles"),
-        (&["--drag", "cubic"], "--drag"),
+        (&["--drag", "quartic"], "--drag"),
     ];
     let tmp = tempfile::tempdir().unwrap();
     for (i, (bad, flag)) in cases.iter().enumerate() {
@@ -191,7 +191,7 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
         let o = simulate(&args, "1");
         // Values that do not even parse are clap's errors (with a usage hint);
         // every parameter rule is our one-line message.
-        let unparsable = ["x", "cubic"].contains(&bad[1]);
+        let unparsable = ["x", "quartic"].contains(&bad[1]);
         if unparsable {
             let err = String::from_utf8_lossy(&o.stderr);
             assert_eq!(o.status.code(), Some(2), "{bad:?}: {err}");

@@ -1,6 +1,7 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
 use clap::Args;
+use irtp::model::Drag;
 use irtp::{DragLaw, Params};
 use std::path::PathBuf;
 
@@ -8,8 +9,8 @@ use std::path::PathBuf;
 /// including `analytic`, which has no resetting flags of its own).
 #[derive(Args, Clone, Debug)]
 pub struct NoiseArgs {
-    /// Drag law g(v): tan (shear-thickening), tanh (shear-thinning, needs sigma < 1), linear (Newtonian).
-    #[arg(long, default_value = "tan", value_parser = parse_drag)]
+    /// Drag law g(v) (help text generated from the registry: [`drag_help`]).
+    #[arg(long, default_value = "tan", value_parser = parse_drag, help = drag_help())]
     pub drag: DragLaw,
     /// Noise amplitude Sigma (eta = ±Sigma).
     #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
@@ -40,9 +41,26 @@ pub struct ModelArgs {
     pub reset_velocity: f64,
 }
 
+/// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
+/// law with its description.
+fn drag_help() -> String {
+    let laws: Vec<String> = DragLaw::ALL
+        .iter()
+        .map(|d| {
+            let limit = d.force_limit();
+            if limit.is_finite() {
+                format!("{d} ({}, needs sigma < {limit})", d.description())
+            } else {
+                format!("{d} ({})", d.description())
+            }
+        })
+        .collect();
+    format!("Drag law g(v): {}", laws.join("; "))
+}
+
 fn parse_drag(s: &str) -> Result<DragLaw, String> {
     s.parse::<DragLaw>()
-        .map_err(|_| "expected one of tan, tanh, linear".to_string())
+        .map_err(|_| format!("expected one of {}", DragLaw::names()))
 }
 
 impl ModelArgs {

@@ -10,7 +10,7 @@ use super::{
     curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
 };
 use crate::error::Result;
-use crate::model::{DragLaw, Params};
+use crate::model::{Drag, DragLaw, Params};
 use crate::parallel::Progress;
 use crate::sim::{SimSpec, TimeGrid};
 use serde::Serialize;
@@ -82,12 +82,7 @@ impl Spec {
 
 /// Panel title for a medium.
 pub fn medium_title(m: &Medium) -> String {
-    let name = match m.drag {
-        DragLaw::Tan => "shear-thickening, g = tan v",
-        DragLaw::Tanh => "shear-thinning, g = tanh v",
-        DragLaw::Linear => "Newtonian, g = v",
-    };
-    format!("{name}, Σ = {}", fmt_num(m.sigma))
+    format!("{}, Σ = {}", m.drag.description(), fmt_num(m.sigma))
 }
 
 /// One curve of Fig. 1 (a medium and a reset rate).

@@ -23,12 +23,13 @@ pub const FIG7_V0: f64 = -0.249;
 /// Target velocity v_t of Fig. 7(b) and 7(d).
 pub const FIG7_VT: f64 = 0.5;
 
-/// The paper's Sigma for a drag law (1 for the linear reference).
+/// The paper's Sigma for a drag law (1 for the linear reference and any
+/// other law the paper does not use).
 pub fn paper_sigma(drag: DragLaw) -> f64 {
     match drag {
         DragLaw::Tan => TAN_SIGMA,
         DragLaw::Tanh => TANH_SIGMA,
-        DragLaw::Linear => 1.0,
+        _ => 1.0,
     }
 }
 

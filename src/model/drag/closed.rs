@@ -224,6 +224,20 @@ impl InverseGuide {
         }
     }
 
+    /// A guide from nodes ln u_i at Φ_i = phi0 + i h (at least two), their
+    /// slopes d ln u/dΦ, and the small-u coefficient c of
+    /// ln u ≈ Φ + c e^Φ below phi0 (for flows other than [`ClosedFlow`]).
+    pub(crate) fn from_nodes(phi0: f64, h: f64, lnu: Vec<f64>, dlnu: Vec<f64>, small: f64) -> Self {
+        InverseGuide {
+            phi0,
+            h,
+            inv_h: 1.0 / h,
+            lnu,
+            dlnu,
+            small,
+        }
+    }
+
     /// Estimate of ln u at potential Φ.
     #[inline]
     pub fn ln_u(&self, phi: f64) -> f64 {

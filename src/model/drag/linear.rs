@@ -24,6 +24,27 @@ impl Drag for Linear {
     fn flow(&self, s: f64) -> ClosedFlow<Linear> {
         ClosedFlow::new(Linear, s)
     }
+    fn description(&self) -> &'static str {
+        "Newtonian, g = v"
+    }
+    /// g' = 1.
+    fn riccati(&self) -> Option<f64> {
+        Some(0.0)
+    }
+    /// The paper classifies no linear density; irtp's labels follow tan's:
+    /// (i) lambda < 1 (U-shaped), uniform at lambda = 1, (iii) up to
+    /// lambda = 2 (edges vanish with finite or infinite slope), (iv) beyond.
+    fn regime_label(&self, _sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        Some(if lambda < 1.0 {
+            ("i", "lambda < 1".to_string())
+        } else if lambda == 1.0 {
+            ("uniform", "lambda = 1".to_string())
+        } else if lambda <= 2.0 {
+            ("iii", "1 < lambda <= 2".to_string())
+        } else {
+            ("iv", "lambda > 2".to_string())
+        })
+    }
     #[inline]
     fn inverse(&self, f: f64) -> f64 {
         f.abs().copysign(f)

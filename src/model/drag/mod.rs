@@ -78,6 +78,28 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// The flow dv/dt = s - g(v).
     fn flow(&self, s: f64) -> Self::Flow;
 
+    /// The medium in words, for legends and reports
+    /// (e.g. `shear-thickening, g = tan v`). Default: [`Drag::name`].
+    fn description(&self) -> &'static str {
+        self.name()
+    }
+    /// Some(κ) when g solves the Riccati equation g' = 1 + κ g² (with
+    /// g(0) = 0: g = tan(√κ v)/√κ for κ > 0, tanh(√-κ v)/√-κ for κ < 0,
+    /// v for κ = 0). Such a law has an elementary r = 0 stationary density
+    /// (the paper's Eqs. (34), (35), [`crate::analytic::r0`]), used
+    /// instead of quadrature. Default: None.
+    fn riccati(&self) -> Option<f64> {
+        None
+    }
+    /// A law's own label of the r = 0 density's regime at (Sigma, lambda)
+    /// and its lambda range in words: the paper's (Sec. 3) (i)-(iv) for tan
+    /// and (a)-(d) for tanh. Default: None (the regime is then labelled by
+    /// its shape, see [`crate::analytic::r0::regime`]).
+    fn regime_label(&self, sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        let _ = (sigma, lambda);
+        None
+    }
+
     /// The inverse g⁻¹(f): the fixed point of dv/dt = f - g(v). Default:
     /// bracketed root of g(v) = |f| (exactly odd).
     fn inverse(&self, f: f64) -> f64 {
@@ -110,13 +132,14 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// The drift s - g(v* - u) at distance u from the fixed point, accurate
     /// as u → 0 (v* - u itself rounds, so drift(s, v) cannot resolve u below
     /// ulp(v*)). Default: u times the mean of g' over [v* - u, v*] by
-    /// 8-point Gauss-Legendre when that interval is short and misses v = 0
-    /// (no cancellation), the plain difference otherwise.
+    /// adaptive 8-point Gauss-Legendre when that interval is short and misses
+    /// v = 0 (no cancellation), the plain difference otherwise.
     #[inline]
     fn drift_at_distance(&self, s: f64, u: f64) -> f64 {
         let vs = self.inverse(s);
         if u.abs() <= 0.25 * vs.abs() {
-            u * mean_derivative(self, vs - u, vs)
+            let (a, b) = (vs - u, vs);
+            u * adaptive_mean_derivative(self, a, b, mean_derivative(self, a, b), 16)
         } else {
             self.drift(s, vs - u)
         }
@@ -183,8 +206,28 @@ fn mean_derivative<D: Drag>(d: &D, a: f64, b: f64) -> f64 {
     0.5 * sum
 }
 
+/// Mean of g' over [a, b] from 8-point Gauss-Legendre panels, halved until
+/// the halves agree with the whole (`whole`, its GL value) to 1e-13: the
+/// rule is of order 16, so the halves are then exact to rounding. One level
+/// for the short intervals near v*; several where g' varies fast (tan next
+/// to its pole, Sigma ≫ 1). `depth` caps the recursion.
+fn adaptive_mean_derivative<D: Drag>(d: &D, a: f64, b: f64, whole: f64, depth: u32) -> f64 {
+    let m = 0.5 * (a + b);
+    let (l, r) = (mean_derivative(d, a, m), mean_derivative(d, m, b));
+    let halves = 0.5 * (l + r);
+    if depth == 0 || (halves - whole).abs() <= 1e-13 * halves.abs() {
+        halves
+    } else {
+        0.5 * (adaptive_mean_derivative(d, a, m, l, depth - 1)
+            + adaptive_mean_derivative(d, m, b, r, depth - 1))
+    }
+}
+
 /// g⁻¹(f) for an odd increasing g: expand a bracket from 0, then bisect to
 /// the last bit (g is only assumed continuous, so no Newton). Exactly odd.
+/// g may be increasing only on a bounded interval (tan on (-π/2, π/2)): a
+/// value past its end (not finite, or below g at the bracket's lower end)
+/// counts as above f.
 fn numeric_inverse<D: Drag>(d: &D, f: f64) -> f64 {
     let a = f.abs();
     if !(a > 0.0) {
@@ -193,14 +236,20 @@ fn numeric_inverse<D: Drag>(d: &D, f: f64) -> f64 {
     if !(a < d.force_limit()) {
         return f64::INFINITY.copysign(f);
     }
+    let (mut lo, mut g_lo) = (0.0f64, 0.0f64);
+    let above = |g: f64, g_lo: f64| !(g < a) || g < g_lo;
     let mut hi = 1.0f64;
-    while d.force(hi) < a {
+    loop {
+        let g = d.force(hi);
+        if above(g, g_lo) {
+            break;
+        }
+        (lo, g_lo) = (hi, g);
         hi *= 2.0;
         if !hi.is_finite() {
             return f64::INFINITY.copysign(f);
         }
     }
-    let mut lo = 0.0f64;
     // Bisection halves the bracket: ~1100 steps reach adjacent doubles from
     // any finite bracket, so the loop always terminates with a converged root.
     loop {
@@ -208,16 +257,18 @@ fn numeric_inverse<D: Drag>(d: &D, f: f64) -> f64 {
         if mid <= lo || mid >= hi {
             break;
         }
-        if d.force(mid) < a {
-            lo = mid;
-        } else {
+        let g = d.force(mid);
+        if above(g, g_lo) {
             hi = mid;
+        } else {
+            (lo, g_lo) = (mid, g);
         }
     }
-    let r = if a - d.force(lo) <= d.force(hi) - a {
-        lo
-    } else {
+    let g_hi = d.force(hi);
+    let r = if g_hi >= a && g_hi - a < a - g_lo {
         hi
+    } else {
+        lo
     };
     r.copysign(f)
 }

@@ -16,6 +16,7 @@ macro_rules! drag_laws {
             Tan => Tan,
             Tanh => Tanh,
             Linear => Linear,
+            Cubic => Cubic,
         }
     };
 }
@@ -122,6 +123,15 @@ impl Drag for DragLaw {
     }
     fn flow(&self, s: f64) -> AnyFlow {
         self.any_flow(s)
+    }
+    fn description(&self) -> &'static str {
+        crate::with_drag!(self, |d| d.description())
+    }
+    fn riccati(&self) -> Option<f64> {
+        crate::with_drag!(self, |d| d.riccati())
+    }
+    fn regime_label(&self, sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        crate::with_drag!(self, |d| d.regime_label(sigma, lambda))
     }
     fn inverse(&self, f: f64) -> f64 {
         crate::with_drag!(self, |d| d.inverse(f))

@@ -10,12 +10,17 @@
 //! integrated exactly; below u_min = 1e-9 v*, R is linear. A velocity solve
 //! is a safeguarded Newton iteration in δ = ln(u/ua) on
 //! δ + R(ua e^δ) - R(ua) + k t = 0, whose slope 1 + u R'(u) = u k / drift lies
-//! in (0, ∞); two or three steps converge from the linearised start.
+//! in (0, ∞). [`FlowMap::accelerated`] tabulates the inverse of Φ (Newton
+//! starting points good to ~1e-11), so a solve costs two table evaluations
+//! (R at the start, one Newton step); without it, from the linearised or
+//! asymptotic start, about five.
 //! Velocities outside [-|v*|, |v*|] (never reached when |s| = Sigma) fall
 //! back to the trait's quadrature.
 
+use super::closed::InverseGuide;
 use super::{quadrature_time, quadrature_velocity, reachable, Drag, FlowMap};
-use crate::numerics::chebyshev::{self, clenshaw, NC};
+use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
+use crate::numerics::root;
 use std::sync::Arc;
 
 /// Largest number of pieces (a law this rough is rejected).
@@ -26,9 +31,9 @@ const MAX_PIECES: usize = 4096;
 struct Table {
     /// Piece boundaries, increasing: u_min, ..., 2 v*.
     bounds: Vec<f64>,
-    /// Per piece: R' series and R antiderivative series.
-    slope: Vec<[f64; NC]>,
-    anti: Vec<[f64; NC]>,
+    /// Per piece: the R antiderivative and R' series, interleaved
+    /// (`[j] = [anti_j, slope_j]`) to be summed in one Clenshaw pass.
+    coef: Vec<[[f64; 2]; NC]>,
     /// R at each piece's left end.
     offset: Vec<f64>,
     /// R'(u_min): R(u) = R'(u_min) u below u_min.
@@ -72,8 +77,7 @@ impl Table {
         let slope_min = clenshaw(&pieces[0].2.series[0], -1.0);
         let mut t = Table {
             bounds: vec![u_min],
-            slope: Vec::with_capacity(pieces.len()),
-            anti: Vec::with_capacity(pieces.len()),
+            coef: Vec::with_capacity(pieces.len()),
             offset: Vec::with_capacity(pieces.len()),
             slope_min,
             r_max: (slope_min * u_min).abs(),
@@ -84,8 +88,11 @@ impl Table {
             t.offset.push(acc);
             acc += clenshaw(&f.anti[0], 1.0);
             t.r_max = t.r_max.max(acc.abs());
-            t.slope.push(f.series[0]);
-            t.anti.push(f.anti[0]);
+            let mut c = [[0.0; 2]; NC];
+            for (j, cj) in c.iter_mut().enumerate() {
+                *cj = [f.anti[0][j], f.series[0][j]];
+            }
+            t.coef.push(c);
         }
         t.r_max = t.r_max.max(acc.abs());
         Some(t)
@@ -97,13 +104,45 @@ impl Table {
         if u < self.bounds[0] {
             return (self.slope_min * u, self.slope_min);
         }
-        let n = self.slope.len();
+        let n = self.coef.len();
         let p = self.bounds[1..n].partition_point(|&b| b <= u);
         let x = chebyshev::to_unit(u, self.bounds[p], self.bounds[p + 1]);
-        (
-            self.offset[p] + clenshaw(&self.anti[p], x),
-            clenshaw(&self.slope[p], x),
-        )
+        let [r, r1] = clenshaw2(&self.coef[p], x);
+        (self.offset[p] + r, r1)
+    }
+
+    /// The inverse of Φ(u) = ln u + R(u) as Newton starting points: ln u on
+    /// a uniform Φ grid from u = 1e-6 v* to 2 v* (cubic Hermite, ~1e-11),
+    /// ln u ≈ Φ - R'(0) e^Φ below. None if a node does not converge.
+    fn guide(&self, vs: f64) -> Option<InverseGuide> {
+        const NODES: usize = 2048;
+        let phi = |u: f64| u.ln() + self.eval(u).0;
+        let phi0 = phi(1e-6 * vs);
+        let h = (phi(2.0 * vs) - phi0) / (NODES - 1) as f64;
+        let mut lnu = Vec::with_capacity(NODES);
+        let mut dlnu = Vec::with_capacity(NODES);
+        let mut w = (1e-6 * vs).ln();
+        for i in 0..NODES {
+            let target = phi0 + h * i as f64;
+            // G(w) = w + R(e^w) - Φ increases; |R| ≤ r_max brackets the root.
+            let g = |w: f64| {
+                let u = w.exp();
+                let (r, r1) = self.eval(u);
+                (w + r - target, 1.0 + u * r1, 0.0)
+            };
+            let span = self.r_max + 1.0;
+            w = root::solve_increasing(&g, target - span, target + span, w, 0.0, 1e-10).ok()?;
+            let u = w.exp();
+            lnu.push(w);
+            dlnu.push(1.0 / (1.0 + u * self.eval(u).1));
+        }
+        Some(InverseGuide::from_nodes(
+            phi0,
+            h,
+            lnu,
+            dlnu,
+            -self.slope_min,
+        ))
     }
 }
 
@@ -124,6 +163,9 @@ pub struct TabulatedFlow<D> {
     /// None when s = 0 or the law is too rough to tabulate: every call then
     /// uses the trait's quadrature.
     table: Option<Arc<Table>>,
+    /// Tabulated inverse potential (Newton starting points), once built by
+    /// [`FlowMap::accelerated`].
+    guide: Option<Arc<InverseGuide>>,
 }
 
 impl<D: Drag> TabulatedFlow<D> {
@@ -146,6 +188,7 @@ impl<D: Drag> TabulatedFlow<D> {
             k,
             tiny_w: (vs * f64::EPSILON * 0.25).max(1e-300).ln(),
             table,
+            guide: None,
         }
     }
 
@@ -157,16 +200,20 @@ impl<D: Drag> TabulatedFlow<D> {
             .filter(|_| u >= 0.0 && u <= 2.0 * self.vs)
     }
 
-    /// Velocity in the canonical frame from distance ua ∈ (0, 2 v*].
+    /// Velocity in the canonical frame from distance ua ∈ (0, 2 v*]: Newton
+    /// on F(δ) (module docs) inside a rigorous bracket, from the guide's
+    /// estimate (error ~1e-11, so one step) or, without guide or for very
+    /// short times, the linearised or asymptotic solution.
     fn velocity_canonical(&self, tb: &Table, v0: f64, ua: f64, t: f64) -> f64 {
         let kt = self.k * t;
         let (r_a, r1_a) = tb.eval(ua);
         let wa = ua.ln();
-        // F(δ) = δ + R(ua e^δ) - R(ua) + k t, increasing; F(0) = k t > 0.
+        // F(δ) = δ + R(ua e^δ) - R(ua) + k t, increasing; F(0) = k t > 0 and
+        // F(lo) < 0 since |R| ≤ r_max.
         let f = |dl: f64| {
             let u = ua * dl.exp();
             let (r, r1) = tb.eval(u);
-            (dl + (r - r_a) + kt, 1.0 + u * r1)
+            (dl + (r - r_a) + kt, 1.0 + u * r1, 0.0)
         };
         let mut lo = -kt - 2.0 * tb.r_max - 1.0;
         if lo + wa < self.tiny_w {
@@ -175,35 +222,21 @@ impl<D: Drag> TabulatedFlow<D> {
             }
             lo = self.tiny_w - wa;
         }
-        let mut hi = 0.0;
-        let mut dl = if kt < 0.5 {
-            -kt / (1.0 + ua * r1_a)
-        } else {
-            (r_a - kt).min(0.0)
-        }
-        .max(lo);
-        for _ in 0..100 {
-            let (fv, d) = f(dl);
-            if fv > 0.0 {
-                hi = dl;
+        let guess = match self.guide.as_deref() {
+            Some(g) if kt >= 1e-5 => g.ln_u(wa + r_a - kt) - wa,
+            _ if kt < 0.5 => -kt / (1.0 + ua * r1_a),
+            _ => r_a - kt,
+        };
+        // Newton steps: one below 1e-10 leaves ~1e-20 by quadratic
+        // convergence. Failure (non-finite input) is NaN, never a guess.
+        let dl = root::solve_increasing(&f, lo, 0.0, guess.min(0.0), 0.0, 1e-10);
+        dl.map_or(f64::NAN, |dl| {
+            if kt < 0.5 {
+                v0 - ua * dl.exp_m1()
             } else {
-                lo = dl;
+                self.vs - ua * dl.exp()
             }
-            let mut next = dl - fv / d;
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
-            if (next - dl).abs() <= 4.0 * f64::EPSILON * dl.abs().max(1e-300) || hi - lo <= 0.0 {
-                dl = next;
-                break;
-            }
-            dl = next;
-        }
-        if kt < 0.5 {
-            v0 - ua * dl.exp_m1()
-        } else {
-            self.vs - ua * dl.exp()
-        }
+        })
     }
 }
 
@@ -246,6 +279,16 @@ impl<D: Drag> FlowMap for TabulatedFlow<D> {
             }
             None => f64::NAN,
         }
+    }
+
+    /// Builds the tabulated inverse potential (Newton starting points).
+    fn accelerated(mut self) -> Self {
+        if self.guide.is_none() {
+            if let Some(tb) = self.table.as_deref() {
+                self.guide = tb.guide(self.vs).map(Arc::new);
+            }
+        }
+        self
     }
 
     fn velocity(&self, v0: f64, t: f64) -> f64 {

@@ -26,6 +26,30 @@ impl Drag for Tan {
     fn flow(&self, s: f64) -> ClosedFlow<Tan> {
         ClosedFlow::new(Tan, s)
     }
+    fn description(&self) -> &'static str {
+        "shear-thickening, g = tan v"
+    }
+    /// tan' = 1 + tan².
+    fn riccati(&self) -> Option<f64> {
+        Some(1.0)
+    }
+    /// (i)-(iv): thresholds g'(0) = 1, g'(v_u) = 1+Sigma² and twice that.
+    fn regime_label(&self, sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        let gp = 1.0 + sigma * sigma;
+        let two = 2.0 * gp;
+        Some(if lambda <= 1.0 {
+            ("i", "lambda <= 1".to_string())
+        } else if lambda < gp {
+            ("ii", format!("1 < lambda < 1+Sigma^2 = {gp}"))
+        } else if lambda <= two {
+            (
+                "iii",
+                format!("1+Sigma^2 <= lambda <= 2(1+Sigma^2) = {two}"),
+            )
+        } else {
+            ("iv", format!("lambda > 2(1+Sigma^2) = {two}"))
+        })
+    }
     /// Exactly odd, so v*(-Sigma) = -v*(Sigma) = v_l to the bit.
     #[inline]
     fn inverse(&self, f: f64) -> f64 {

@@ -26,6 +26,31 @@ impl Drag for Tanh {
     fn flow(&self, s: f64) -> ClosedFlow<Tanh> {
         ClosedFlow::new(Tanh, s)
     }
+    fn description(&self) -> &'static str {
+        "shear-thinning, g = tanh v"
+    }
+    /// tanh' = 1 - tanh².
+    fn riccati(&self) -> Option<f64> {
+        Some(-1.0)
+    }
+    /// (a)-(d): thresholds g'(v_u) = 1-Sigma², g'(0) = 1 and 2 g'(v_u); (c)
+    /// as corrected in [`crate::analytic::r0::regime`].
+    fn regime_label(&self, sigma: f64, lambda: f64) -> Option<(&'static str, String)> {
+        let gp = 1.0 - sigma * sigma;
+        let two = 2.0 * gp;
+        Some(if lambda <= gp {
+            ("a", format!("lambda <= 1-Sigma^2 = {gp}"))
+        } else if lambda < 1.0 {
+            ("b", format!("1-Sigma^2 = {gp} < lambda < 1"))
+        } else if lambda <= two {
+            ("c", format!("1 <= lambda <= 2(1-Sigma^2) = {two}"))
+        } else {
+            (
+                "d",
+                format!("lambda >= 1 and lambda > 2(1-Sigma^2) = {two}"),
+            )
+        })
+    }
     /// Exactly odd (libm's atanh(-x) can differ from -atanh(x) in the last bit).
     #[inline]
     fn inverse(&self, f: f64) -> f64 {
