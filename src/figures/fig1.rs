@@ -7,7 +7,8 @@
 use super::compute::{self, Moments};
 use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
 use super::{
-    curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
+    curve_seed, fmt_num, grid_of_curves, to_json, Claim, FigureOutput, Options, Parameters,
+    Verdict, Which,
 };
 use crate::error::Result;
 use crate::model::{Drag, DragLaw, Params};
@@ -130,17 +131,12 @@ pub struct V2Values {
 
 /// Compute every curve: `[medium][rate]`.
 pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
-    let n_stages = spec.media.len() * spec.rates.len();
-    (0..spec.media.len())
-        .map(|mi| {
-            (0..spec.rates.len())
-                .map(|ri| {
-                    let k = mi * spec.rates.len() + ri;
-                    compute_curve(spec, mi, ri, opts, &Stage::new(progress, k, n_stages))
-                })
-                .collect()
-        })
-        .collect()
+    grid_of_curves(
+        spec.media.len(),
+        spec.rates.len(),
+        progress,
+        |mi, ri, stage| compute_curve(spec, mi, ri, opts, stage),
+    )
 }
 
 fn compute_curve(

@@ -189,6 +189,24 @@ pub struct Stage<'a> {
 /// Units of a figure-wide progress bar.
 pub const SCALE: u64 = 1000;
 
+/// `f(i, j, stage)` over a rows × cols grid of curves (medium × rate), each
+/// curve one equally weighted stage of the figure's progress bar, collected
+/// as `[row][col]`; the first error stops the work.
+pub fn grid_of_curves<T>(
+    rows: usize,
+    cols: usize,
+    progress: &dyn Progress,
+    f: impl Fn(usize, usize, &dyn Progress) -> Result<T>,
+) -> Result<Vec<Vec<T>>> {
+    (0..rows)
+        .map(|i| {
+            (0..cols)
+                .map(|j| f(i, j, &Stage::new(progress, i * cols + j, rows * cols)))
+                .collect()
+        })
+        .collect()
+}
+
 impl<'a> Stage<'a> {
     /// Stage `k` of `n` equally weighted stages.
     pub fn new(inner: &'a dyn Progress, k: usize, n: usize) -> Self {
