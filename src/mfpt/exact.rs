@@ -132,7 +132,7 @@ pub fn first_passage_to(
     if v0 <= vt {
         return Ok(first_passage(params, v0, vt, start_plus, t_max, rng));
     }
-    let mirrored = params.with_reset_velocity(-params.reset_velocity())?;
+    let mirrored = params.mirrored_reset();
     Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
 }
 
