@@ -42,6 +42,30 @@ where
     S: Fn(u64, &mut A) + Sync,
     M: Fn(&mut A, A),
 {
+    reduce_chunks(
+        n,
+        &init,
+        |lo, hi, acc| {
+            for i in lo..hi {
+                sample(i, acc);
+            }
+        },
+        merge,
+        progress,
+    )
+}
+
+/// [`reduce`] with the work of a whole chunk in one call: `chunk(lo, hi, acc)`
+/// must add items `lo..hi` to `acc` in index order (it may compute them in
+/// any order, e.g. several side by side). Same chunks, same merge order as
+/// [`reduce`], so the result is bit-identical to it.
+pub fn reduce_chunks<A, I, C, M>(n: u64, init: I, chunk: C, merge: M, progress: &dyn Progress) -> A
+where
+    A: Send,
+    I: Fn() -> A + Sync,
+    C: Fn(u64, u64, &mut A) + Sync,
+    M: Fn(&mut A, A),
+{
     let chunks = n.div_ceil(CHUNK);
     let done = AtomicU64::new(0);
     let parts: Vec<A> = (0..chunks)
@@ -50,9 +74,7 @@ where
             let lo = c * CHUNK;
             let hi = (lo + CHUNK).min(n);
             let mut acc = init();
-            for i in lo..hi {
-                sample(i, &mut acc);
-            }
+            chunk(lo, hi, &mut acc);
             let d = done.fetch_add(hi - lo, Ordering::Relaxed) + (hi - lo);
             progress.update(d, n);
             acc
