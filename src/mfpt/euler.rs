@@ -61,7 +61,7 @@ impl EulerFpt {
     }
 
     /// Run `n` particles: particle i uses the stream (seed, i) and starts
-    /// in +Sigma for even i. [`LANES`] particles advance side by side per
+    /// in +Sigma for even i. Four particles advance side by side per
     /// thread (the step is a serial chain v → g(v) → v, so interleaving
     /// independent particles lets the CPU overlap them); a lane that
     /// finishes takes the chunk's next particle, and results are added in
@@ -185,7 +185,7 @@ impl Chain {
         None
     }
 
-    /// Particles lo..hi, [`LANES`] in flight, added to `acc` in index order.
+    /// Particles lo..hi, `LANES` in flight, added to `acc` in index order.
     fn chunk<D: Drag>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
         let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
         let mut next = lo;
