@@ -64,7 +64,7 @@ impl DeficitTable {
             let f1 = if u == 0.0 {
                 1.0 / g1
             } else {
-                u / drag.drift(s, v)
+                u / drag.drift_at_distance(s, u)
             };
             [f1, u * f1]
         };
