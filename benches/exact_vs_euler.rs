@@ -47,16 +47,22 @@ fn kernels_for<D: Drag>(c: &mut Criterion, d: D, sigma: f64) {
     });
 }
 
-fn particles(c: &mut Criterion) {
-    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
-    let spec = SimSpec::new(
+/// 256 particles to t = 20: moments at t = 0 and 20, a 100-bin histogram
+/// over [5, 20] (the Fig. 2 workload).
+fn fig2_workload() -> SimSpec {
+    SimSpec::new(
         256,
         TimeGrid::from_times(vec![0.0, 20.0]).unwrap(),
         5.0,
         100,
         1,
     )
-    .unwrap();
+    .unwrap()
+}
+
+fn particles(c: &mut Criterion) {
+    let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
+    let spec = fig2_workload();
     let mut g = c.benchmark_group("256_particles_t20");
     g.sample_size(10);
     g.bench_function("exact", |b| {
@@ -108,14 +114,7 @@ fn events_per_law(c: &mut Criterion) {
     ] {
         let drag: DragLaw = law.parse().expect("registered law");
         let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();
-        let spec = SimSpec::new(
-            256,
-            TimeGrid::from_times(vec![0.0, 20.0]).unwrap(),
-            5.0,
-            100,
-            1,
-        )
-        .unwrap();
+        let spec = fig2_workload();
         let events = exact::simulate(&p, &spec, &NoProgress).unwrap().steps;
         g.throughput(Throughput::Elements(events));
         g.bench_function(law, |b| {
