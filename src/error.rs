@@ -62,6 +62,10 @@ pub enum Error {
         /// What went wrong.
         reason: String,
     },
+    /// The caller asked the computation to stop (Ctrl-C in Python, see
+    /// [`crate::parallel::Progress::cancelled`]); nothing was written.
+    #[error("interrupted: the computation was cancelled and nothing was written")]
+    Interrupted,
     /// Input/output failure (writing results).
     #[error("i/o error on {path}: {reason}")]
     Io {

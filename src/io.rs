@@ -199,7 +199,28 @@ impl<P: Serialize> Provenance<P> {
     }
 }
 
+impl<P: Serialize> Provenance<P> {
+    /// Record this command line instead of the process's own.
+    pub fn with_argv(mut self, argv: Vec<String>) -> Self {
+        self.argv = argv;
+        self
+    }
+}
+
 impl OutputDir {
+    /// [`OutputDir::commit_with_provenance`], also returning `run.json`'s
+    /// content as written.
+    pub fn commit_with_provenance_value<P: Serialize>(
+        mut self,
+        mut prov: Provenance<P>,
+    ) -> Result<(serde_json::Value, Vec<PathBuf>)> {
+        prov.files = self.files.clone();
+        prov.files.push("run.json".into());
+        let value = serde_json::to_value(&prov).map_err(|e| io_err(&self.target, e))?;
+        self.write_json("run.json", &value)?;
+        Ok((value, self.commit()?))
+    }
+
     /// Write `run.json` listing every file staged so far, then commit.
     pub fn commit_with_provenance<P: Serialize>(
         mut self,

@@ -8,7 +8,10 @@
 //! at rate r the velocity is reset to v_r (position and noise state kept).
 //!
 //! Modules, one per concept, with dependencies running one way
-//! (binary → figures → {mfpt, fp, sim, analytic} → model → numerics):
+//! (front ends → app → figures → {mfpt, fp, sim, analytic} → model → numerics):
+//! - [`app`]: the commands of the `irtp` program (flags, validation, run,
+//!   output files) as library calls, shared by the binary and the Python
+//!   module.
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
 //!   dispatch; resetting rules behind [`model::Reset`]; validated [`Params`]
@@ -32,10 +35,11 @@
 //!
 //! Equations are cited by the paper's printed numbers; `docs/equations.md`
 //! maps each to its code. The library never prints and never exits; it
-//! returns plain, serialisable result structs. The `irtp` binary is a thin
-//! layer over it.
+//! returns plain, serialisable result structs. The `irtp` binary and the
+//! Python module are thin layers over [`app`].
 
 pub mod analytic;
+pub mod app;
 pub mod error;
 pub mod figures;
 pub mod fp;

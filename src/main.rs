@@ -3,6 +3,7 @@
 mod cli;
 
 use clap::{Parser, Subcommand};
+use irtp::app;
 use std::process::ExitCode;
 
 /// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
@@ -16,25 +17,28 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
-    Analytic(cli::analytic::AnalyticArgs),
+    Analytic(app::analytic::AnalyticArgs),
     /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
-    Simulate(cli::simulate::SimulateArgs),
+    Simulate(app::simulate::SimulateArgs),
     /// Mean first-passage time to a target velocity (backward equations or particles).
-    Mfpt(cli::mfpt::MfptArgs),
+    Mfpt(app::mfpt::MfptArgs),
     /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
-    Fp(cli::fp::FpArgs),
+    Fp(app::fp::FpArgs),
     /// Regenerate the paper's figures (data, plots, claims).
-    Reproduce(cli::reproduce::ReproduceArgs),
+    Reproduce(app::reproduce::ReproduceArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {
-        Command::Analytic(a) => cli::analytic::run(a),
-        Command::Simulate(a) => cli::simulate::run(a),
-        Command::Mfpt(a) => cli::mfpt::run(a),
-        Command::Fp(a) => cli::fp::run(a),
-        Command::Reproduce(a) => cli::reproduce::run(a),
-    }
+    let reporter = cli::progress::Bars;
+    let ctx = app::Context::new(&reporter);
+    let (outcome, json) = match &cli.command {
+        Command::Analytic(a) => (app::analytic::run(a, &ctx)?, a.json),
+        Command::Simulate(a) => (app::simulate::run(a, &ctx)?, a.output.json),
+        Command::Mfpt(a) => (app::mfpt::run(a, &ctx)?, a.json()),
+        Command::Fp(a) => (app::fp::run(a, &ctx)?, a.json()),
+        Command::Reproduce(a) => (app::reproduce::run(a, &ctx)?, false),
+    };
+    cli::present(&outcome, json)
 }
 
 fn main() -> ExitCode {

@@ -18,6 +18,13 @@ pub const CHUNK: u64 = 256;
 pub trait Progress: Sync {
     /// `done` of `total` samples are finished.
     fn update(&self, done: u64, total: u64);
+    /// Whether the caller wants the computation stopped. The parallel loops
+    /// below then skip their remaining chunks, so a long run ends within one
+    /// chunk's work; its (partial) result must be discarded by whoever asked,
+    /// as `crate::app` does by returning [`crate::Error::Interrupted`].
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// Observer that ignores progress.
@@ -74,6 +81,9 @@ where
             let lo = c * CHUNK;
             let hi = (lo + CHUNK).min(n);
             let mut acc = init();
+            if progress.cancelled() {
+                return acc;
+            }
             chunk(lo, hi, &mut acc);
             let d = done.fetch_add(hi - lo, Ordering::Relaxed) + (hi - lo);
             progress.update(d, n);

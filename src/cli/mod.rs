@@ -1,15 +1,11 @@
-//! The `irtp` command line: parse flags, validate into library configs, run,
-//! print JSON / write files. All printing and exit codes live here.
+//! The `irtp` command line: parse flags (defined with the commands in
+//! [`irtp::app`]), run, print JSON or text. All printing and exit codes
+//! live here.
 
-pub mod analytic;
-pub mod common;
-pub mod fp;
-pub mod mfpt;
 pub mod progress;
-pub mod reproduce;
-pub mod simulate;
 
-use serde::Serialize;
+use irtp::app::Outcome;
+use std::io::Write;
 
 /// The command-line spelling of a library parameter name: `--` + the name
 /// with `_` → `-` (`t_max` → `--t-max`), except for the names in the table;
@@ -25,21 +21,22 @@ pub fn flag_for(name: &str) -> String {
     }
 }
 
-/// Text-mode note listing the files an output directory received (nothing
-/// when no `--out` was given).
-pub fn print_written(dir: &Option<std::path::PathBuf>, files: &Option<Vec<std::path::PathBuf>>) {
-    let (Some(dir), Some(files)) = (dir, files) else {
-        return;
+/// Print an outcome: its JSON (one line) with `--json`, else its text
+/// report and the files written. A closed pipe (`| head`) is not an
+/// error: the results are already on disk.
+pub fn present(outcome: &Outcome, json: bool) -> anyhow::Result<()> {
+    let mut text = if json {
+        serde_json::to_string(&outcome.json)? + "\n"
+    } else {
+        outcome.text.clone()
     };
-    let names: Vec<String> = files
-        .iter()
-        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    println!("wrote {}: {}", dir.display(), names.join(", "));
-}
-
-/// Print a value as one JSON object on stdout.
-pub fn print_json<T: Serialize>(value: &T) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string(value)?);
+    if let (false, Some((dir, files))) = (json, &outcome.written) {
+        let names: Vec<String> = files
+            .iter()
+            .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        text += &format!("wrote {}: {}\n", dir.display(), names.join(", "));
+    }
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
     Ok(())
 }

@@ -1,10 +1,12 @@
 //! Progress bars on a terminal, silence otherwise.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use irtp::app::Reporter;
 use irtp::parallel::Progress;
 use std::io::IsTerminal;
 
 /// A progress bar on stderr when it is a terminal; hidden otherwise.
+/// Cleared when dropped.
 pub struct Bar(ProgressBar);
 
 impl Bar {
@@ -23,10 +25,6 @@ impl Bar {
         pb.set_prefix(label.to_string());
         Bar(pb)
     }
-    /// Finish and clear.
-    pub fn finish(&self) {
-        self.0.finish_and_clear();
-    }
 }
 
 impl Progress for Bar {
@@ -35,5 +33,21 @@ impl Progress for Bar {
             self.0.set_length(total);
         }
         self.0.set_position(done);
+    }
+}
+
+impl Drop for Bar {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// The binary's reporter: one terminal bar per stage; never cancels
+/// (Ctrl-C ends the process, and staged output is never committed).
+pub struct Bars;
+
+impl Reporter for Bars {
+    fn stage(&self, label: &str, total: u64) -> Box<dyn Progress + '_> {
+        Box::new(Bar::new(label, total))
     }
 }

@@ -358,12 +358,15 @@ pub const NO_IMAGES: &str =
 /// `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and `run.json`
 /// into `dir` (all or nothing).
 /// Create the [`OutputDir`] first (so a bad `--out` fails before any work).
+/// `argv` is the command line recorded in `run.json`; returns `run.json`'s
+/// content and the files written.
 pub fn write_outputs(
     mut out: OutputDir,
     outputs: &[FigureOutput],
     opts: &Options,
     wall_time_s: f64,
-) -> Result<Vec<PathBuf>> {
+    argv: Vec<String>,
+) -> Result<(serde_json::Value, Vec<PathBuf>)> {
     let mut params = serde_json::Map::new();
     let mut claims = Vec::new();
     let mut timings = serde_json::Map::new();
@@ -387,7 +390,7 @@ pub fn write_outputs(
     out.write_bytes("claims.md", claims_markdown(&claims))?;
     out.write_bytes("REPORT.md", report_markdown(outputs, opts, wall_time_s))?;
     let figs: Vec<&str> = outputs.iter().map(|o| o.which.name()).collect();
-    out.commit_with_provenance(Provenance::new(
+    let prov = Provenance::new(
         format!("reproduce {}", figs.join(" ")),
         "exact event-driven sampler + Fokker-Planck + backward MFPT equations",
         Some(opts.seed),
@@ -397,7 +400,8 @@ pub fn write_outputs(
             "figure_wall_time_s": timings,
         }),
         wall_time_s,
-    ))
+    );
+    out.commit_with_provenance_value(prov.with_argv(argv))
 }
 
 /// Compute several figures, one progress observer per figure.

@@ -204,6 +204,9 @@ pub fn transient_with_progress(
             t = if h == dt { t + dt } else { target };
             if out.steps % report_every == 0 {
                 progress.update(out.steps.min(total_steps), total_steps);
+                if progress.cancelled() {
+                    return Err(Error::Interrupted);
+                }
             }
         }
     }

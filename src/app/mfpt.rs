@@ -6,34 +6,34 @@
 //!
 //! Every method runs through the library's one entry point, `irtp::mfpt::solve`.
 //! To add a method: a [`Method`] variant, its arm in `SimArgs::config` and
-//! the library's `irtp::mfpt::Method`.
+//! the library's [`crate::mfpt::Method`].
 
 use super::common::{ModelArgs, OutputArgs};
-use super::progress::Bar;
-use clap::{Args, Subcommand, ValueEnum};
-use irtp::io::{OutputDir, Provenance};
-use irtp::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
-use irtp::mfpt::{
+use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use crate::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
+use crate::mfpt::{
     self, FptSummary, MfptResult, OptimizeOptions, ParticleOptions, Problem, ScanAxis, ScanPoint,
 };
-use irtp::parallel::NoProgress;
-use irtp::Error;
+use crate::Error;
+use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// `irtp mfpt`.
 #[derive(Args, Debug)]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct MfptArgs {
+    /// `scan` or `optimize`; none: one problem.
     #[command(subcommand)]
-    command: Option<MfptCommand>,
+    pub command: Option<MfptCommand>,
+    /// The flags of one problem.
     #[command(flatten)]
-    direct: DirectArgs,
+    pub direct: DirectArgs,
 }
 
+/// The subcommands of `irtp mfpt`.
 #[derive(Subcommand, Debug)]
-enum MfptCommand {
+pub enum MfptCommand {
     /// tau against the target velocity or the reset rate (paper Fig. 7).
     Scan(ScanArgs),
     /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]; --rate is ignored).
@@ -82,8 +82,9 @@ struct SimArgs {
     t_max: f64,
 }
 
+/// `irtp mfpt` for one problem.
 #[derive(Args, Debug)]
-struct DirectArgs {
+pub struct DirectArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity v_t (v_l < v_t < v_u).
@@ -95,8 +96,9 @@ struct DirectArgs {
     output: OutputArgs,
 }
 
+/// `irtp mfpt scan`.
 #[derive(Args, Debug)]
-struct ScanArgs {
+pub struct ScanArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity (needed with --over rate).
@@ -123,16 +125,18 @@ struct ScanArgs {
     output: OutputArgs,
 }
 
+/// The scanned quantity of `irtp mfpt scan`.
 #[derive(ValueEnum, Clone, Copy, Debug)]
-enum Over {
+pub enum Over {
     /// Target velocity v_t.
     Vt,
     /// Reset rate r.
     Rate,
 }
 
+/// `irtp mfpt optimize`.
 #[derive(Args, Debug)]
-struct OptimizeArgs {
+pub struct OptimizeArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity v_t.
@@ -151,18 +155,29 @@ struct OptimizeArgs {
     output: OutputArgs,
 }
 
-/// Entry point.
-pub fn run(args: MfptArgs) -> anyhow::Result<()> {
-    match args.command {
-        None => run_direct(args.direct),
-        Some(MfptCommand::Scan(a)) => run_scan(a),
-        Some(MfptCommand::Optimize(a)) => run_optimize(a),
+impl MfptArgs {
+    /// Whether `--json` was given.
+    pub fn json(&self) -> bool {
+        match &self.command {
+            None => self.direct.output.json,
+            Some(MfptCommand::Scan(a)) => a.output.json,
+            Some(MfptCommand::Optimize(a)) => a.output.json,
+        }
+    }
+}
+
+/// Run `irtp mfpt [scan | optimize]`.
+pub fn run(args: &MfptArgs, ctx: &Context) -> crate::Result<Outcome> {
+    match &args.command {
+        None => run_direct(&args.direct, ctx),
+        Some(MfptCommand::Scan(a)) => run_scan(a, ctx),
+        Some(MfptCommand::Optimize(a)) => run_optimize(a, ctx),
     }
 }
 
 impl ProblemArgs {
     /// Flags → validated problem (start v_0, target `vt`) and mesh.
-    fn config(&self, vt: f64) -> irtp::Result<(Problem, BackwardOptions)> {
+    fn config(&self, vt: f64) -> crate::Result<(Problem, BackwardOptions)> {
         let params = self.model.params()?;
         let v0 = self
             .v0
@@ -182,7 +197,7 @@ impl SimArgs {
         problems: &[Problem],
         backward: BackwardOptions,
         seed: u64,
-    ) -> irtp::Result<mfpt::Method> {
+    ) -> crate::Result<mfpt::Method> {
         let run = ParticleOptions {
             particles: self.particles,
             t_max: self.t_max,
@@ -200,24 +215,23 @@ impl SimArgs {
     }
 }
 
-/// tau of one problem by `method`, with a progress bar for particles.
-fn estimate(method: &mfpt::Method, problem: &Problem, label: &str) -> irtp::Result<MfptResult> {
-    let Some(run) = method.particles() else {
-        return mfpt::solve(problem, method, &NoProgress);
-    };
-    let bar = Bar::new(label, run.particles);
-    let result = mfpt::solve(problem, method, &bar)?;
-    bar.finish();
+/// tau of one problem by `method`, with a progress stage for particles.
+fn estimate(
+    method: &mfpt::Method,
+    problem: &Problem,
+    label: &str,
+    ctx: &Context,
+) -> crate::Result<MfptResult> {
+    let total = method.particles().map_or(1, |run| run.particles);
+    let bar = ctx.reporter.stage(label, total);
+    let result = mfpt::solve(problem, method, bar.as_ref())?;
+    ctx.check()?;
     Ok(result)
 }
 
 /// The particle summary of a particle method's result.
 fn summary(r: &MfptResult) -> FptSummary {
     r.summary().expect("a particle method")
-}
-
-fn open_out(dir: &Option<PathBuf>) -> irtp::Result<Option<OutputDir>> {
-    dir.as_ref().map(OutputDir::new).transpose()
 }
 
 #[derive(Serialize)]
@@ -299,14 +313,17 @@ impl Report {
     }
 }
 
-fn print_lines(v: &serde_json::Value) {
+/// `key = value` lines of a JSON object (its `problem` left out).
+fn text_lines(v: &serde_json::Value) -> String {
+    let mut text = String::new();
     if let Some(obj) = v.as_object() {
         for (k, x) in obj {
             if k != "problem" {
-                println!("{k} = {x}");
+                text += &format!("{k} = {x}\n");
             }
         }
     }
+    text
 }
 
 /// The validated inputs of `irtp mfpt`.
@@ -317,7 +334,7 @@ struct DirectConfig {
 }
 
 impl DirectArgs {
-    fn config(&self) -> irtp::Result<DirectConfig> {
+    fn config(&self) -> crate::Result<DirectConfig> {
         let vt = self
             .vt
             .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
@@ -331,11 +348,11 @@ impl DirectArgs {
     }
 }
 
-fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
+fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = open_out(&a.output.out)?;
+    let out = open_out(a.output.out.as_deref())?;
     let t0 = Instant::now();
-    let (report, prof) = match estimate(&c.method, &c.problem, "mfpt")? {
+    let (report, prof) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (Report::ode(c.problem, &s), Some(prof))
@@ -349,44 +366,27 @@ fn run_direct(a: DirectArgs) -> anyhow::Result<()> {
         }
     };
     let wall = t0.elapsed().as_secs_f64();
-    let written = match out {
-        Some(dir) => Some(write_direct(dir, &report, prof.as_ref(), wall)?),
-        None => None,
+    let json = to_value(&report);
+    let computed = Computed {
+        method: method_name(report.method).into(),
+        seed: report.seed,
+        json: json.clone(),
+        parameters: json.clone(),
+        tables: prof.as_ref().map(profile_table).into_iter().collect(),
+        json_files: vec![("mfpt.json", json.clone())],
+        text: text_lines(&json),
+        wall_time_s: wall,
     };
-    let v = serde_json::to_value(&report)?;
-    if a.output.json {
-        super::print_json(&v)?;
-    } else {
-        print_lines(&v);
-        super::print_written(&a.output.out, &written);
-    }
-    Ok(())
+    finish("mfpt", computed, out, ctx)
 }
 
-/// mfpt.json, profile.csv (ODE only) and run.json.
-fn write_direct(
-    mut dir: OutputDir,
-    report: &Report,
-    prof: Option<&Profile>,
-    wall: f64,
-) -> irtp::Result<Vec<PathBuf>> {
-    dir.write_json("mfpt.json", report)?;
-    if let Some(p) = prof {
-        let rows = (0..p.v.len())
-            .map(|i| {
-                let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
-                [p.v[i], tp, tm, 0.5 * (tp + tm)]
-            })
-            .collect::<Vec<_>>();
-        dir.write_csv("profile.csv", &["v0", "tau_plus", "tau_minus", "tau"], rows)?;
-    }
-    dir.commit_with_provenance(Provenance::new(
-        "mfpt",
-        method_name(report.method),
-        report.seed,
-        report,
-        wall,
-    ))
+/// `profile.csv`: tau± and their mean against the start velocity.
+fn profile_table(p: &Profile) -> Table {
+    let rows = (0..p.v.len()).map(|i| {
+        let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
+        [p.v[i], tp, tm, 0.5 * (tp + tm)]
+    });
+    Table::from_rows("profile", &["v0", "tau_plus", "tau_minus", "tau"], rows)
 }
 
 fn method_name(m: Method) -> &'static str {
@@ -412,7 +412,7 @@ struct ScanConfig {
 impl ScanArgs {
     /// Flags → validated config: every point (and the particle flags
     /// there) is checked before any work.
-    fn config(&self) -> irtp::Result<ScanConfig> {
+    fn config(&self) -> crate::Result<ScanConfig> {
         let values = mfpt::optimize::scan_values(self.from, self.to, self.points, self.log)?;
         let (axis, vt) = match self.over {
             Over::Vt => (ScanAxis::Vt, values[0]),
@@ -431,7 +431,7 @@ impl ScanArgs {
         let problems = values
             .iter()
             .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
-            .collect::<irtp::Result<Vec<_>>>()?;
+            .collect::<crate::Result<Vec<_>>>()?;
         let method = self.sim.config(&problems, backward, self.output.seed)?;
         Ok(ScanConfig {
             base,
@@ -442,12 +442,6 @@ impl ScanArgs {
             method,
         })
     }
-}
-
-/// Scan results as a table: header and rows.
-struct Table {
-    header: Vec<&'static str>,
-    rows: Vec<Vec<f64>>,
 }
 
 fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSummary]>) -> Table {
@@ -483,8 +477,8 @@ fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSumma
             }
             row
         })
-        .collect();
-    Table { header, rows }
+        .collect::<Vec<_>>();
+    Table::from_rows("mfpt_scan", &header, rows)
 }
 
 #[derive(Serialize)]
@@ -499,26 +493,28 @@ struct ScanParams<'a> {
     t_max: Option<f64>,
 }
 
-fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
+fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = open_out(&a.output.out)?;
+    let out = open_out(a.output.out.as_deref())?;
     let t0 = Instant::now();
-    let bar = Bar::new("mfpt scan", c.values.len() as u64);
-    let points = mfpt::scan(&c.base, c.axis, &c.values, &c.backward, &bar)?;
-    bar.finish();
+    let points = {
+        let bar = ctx.reporter.stage("mfpt scan", c.values.len() as u64);
+        mfpt::scan(&c.base, c.axis, &c.values, &c.backward, bar.as_ref())?
+    };
+    ctx.check()?;
     // Common random numbers: every point uses the same seed, so the
     // curve is smooth and differences between points are precise.
     let sim = c.method.particles().is_some();
     let sims = if sim {
         let run = |(i, p): (usize, &Problem)| {
-            estimate(&c.method, p, &format!("point {}", i + 1)).map(|r| summary(&r))
+            estimate(&c.method, p, &format!("point {}", i + 1), ctx).map(|r| summary(&r))
         };
         Some(
             c.problems
                 .iter()
                 .enumerate()
                 .map(run)
-                .collect::<irtp::Result<Vec<_>>>()?,
+                .collect::<crate::Result<Vec<_>>>()?,
         )
     } else {
         None
@@ -539,39 +535,41 @@ fn run_scan(a: ScanArgs) -> anyhow::Result<()> {
         dt: (a.sim.method == Method::Euler).then_some(a.sim.dt),
         t_max: sim.then_some(a.sim.t_max),
     };
-    let mut written = None;
-    if let Some(mut dir) = out {
-        dir.write_csv("mfpt_scan.csv", &table.header, &table.rows)?;
-        written = Some(dir.commit_with_provenance(Provenance::new(
-            "mfpt scan",
-            method_name(a.sim.method),
-            sim.then_some(a.output.seed),
-            &params,
-            wall,
-        ))?);
+    let computed = Computed {
+        method: method_name(a.sim.method).into(),
+        seed: sim.then_some(a.output.seed),
+        json: to_value(&table_json(&table)),
+        parameters: to_value(&params),
+        text: table_text(&table),
+        tables: vec![table],
+        json_files: Vec::new(),
+        wall_time_s: wall,
+    };
+    finish("mfpt scan", computed, out, ctx)
+}
+
+/// The table as CSV text.
+fn table_text(t: &Table) -> String {
+    let mut text = t.header.join(",") + "\n";
+    for i in 0..t.len() {
+        let s: Vec<String> = t
+            .columns
+            .iter()
+            .map(|c| crate::io::format_float(c[i]))
+            .collect();
+        text += &(s.join(",") + "\n");
     }
-    if a.output.json {
-        super::print_json(&table_json(&table))?;
-    } else {
-        println!("{}", table.header.join(","));
-        for r in &table.rows {
-            let s: Vec<String> = r.iter().map(|x| irtp::io::format_float(*x)).collect();
-            println!("{}", s.join(","));
-        }
-        super::print_written(&a.output.out, &written);
-    }
-    Ok(())
+    text
 }
 
 /// One JSON object per row, keyed by the header.
 fn table_json(t: &Table) -> Vec<serde_json::Map<String, serde_json::Value>> {
-    t.rows
-        .iter()
-        .map(|r| {
+    (0..t.len())
+        .map(|i| {
             t.header
                 .iter()
-                .zip(r)
-                .map(|(h, x)| (h.to_string(), serde_json::json!(x)))
+                .zip(&t.columns)
+                .map(|(h, c)| (h.clone(), serde_json::json!(c[i])))
                 .collect()
         })
         .collect()
@@ -580,7 +578,7 @@ fn table_json(t: &Table) -> Vec<serde_json::Map<String, serde_json::Value>> {
 impl OptimizeArgs {
     /// Flags → validated problem and search range (checked before any
     /// output is created).
-    fn config(&self) -> irtp::Result<(Problem, OptimizeOptions)> {
+    fn config(&self) -> crate::Result<(Problem, OptimizeOptions)> {
         let (problem, backward) = self.problem.config(self.vt)?;
         let opts = OptimizeOptions {
             r_min: self.r_min,
@@ -608,13 +606,14 @@ struct OptimizeSummary<'a> {
     r_max: f64,
 }
 
-fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
+fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (problem, opts) = a.config()?;
-    let out = open_out(&a.output.out)?;
+    let out = open_out(a.output.out.as_deref())?;
     let t0 = Instant::now();
-    let bar = Bar::new("mfpt optimize", opts.grid_points as u64);
-    let best = mfpt::optimize_rate(&problem, &opts, &bar)?;
-    bar.finish();
+    let best = {
+        let bar = ctx.reporter.stage("mfpt optimize", opts.grid_points as u64);
+        mfpt::optimize_rate(&problem, &opts, bar.as_ref())?
+    };
     let wall = t0.elapsed().as_secs_f64();
     let summary = OptimizeSummary {
         r_opt: best.r_opt,
@@ -629,28 +628,21 @@ fn run_optimize(a: OptimizeArgs) -> anyhow::Result<()> {
         r_min: opts.r_min,
         r_max: opts.r_max,
     };
-    let mut written = None;
-    if let Some(mut dir) = out {
-        dir.write_json("optimum.json", &summary)?;
-        dir.write_csv(
-            "rate_grid.csv",
-            &["rate", "tau"],
-            best.grid.iter().map(|&(r, t)| [r, t]),
-        )?;
-        written = Some(dir.commit_with_provenance(Provenance::new(
-            "mfpt optimize",
-            "backward-box + golden-section",
-            None,
-            &summary,
-            wall,
-        ))?);
-    }
-    let v = serde_json::to_value(&summary)?;
-    if a.output.json {
-        super::print_json(&v)?;
-    } else {
-        print_lines(&v);
-        super::print_written(&a.output.out, &written);
-    }
-    Ok(())
+    let json = to_value(&summary);
+    let grid = Table::from_rows(
+        "rate_grid",
+        &["rate", "tau"],
+        best.grid.iter().map(|&(r, t)| [r, t]),
+    );
+    let computed = Computed {
+        method: "backward-box + golden-section".into(),
+        seed: None,
+        json: json.clone(),
+        parameters: json.clone(),
+        tables: vec![grid],
+        json_files: vec![("optimum.json", json.clone())],
+        text: text_lines(&json),
+        wall_time_s: wall,
+    };
+    finish("mfpt optimize", computed, out, ctx)
 }

@@ -1,12 +1,10 @@
 //! `irtp fp stationary` and `irtp fp transient`: Fokker-Planck solvers.
 
 use super::common::{ModelArgs, OutputArgs};
-use super::print_json;
-use super::progress::Bar;
+use super::{finish, open_out, Computed, Context, Outcome, Table};
+use crate::fp::{self, Mesh, StationaryOptions, TransientOptions};
+use crate::Params;
 use clap::{Args, Subcommand, ValueEnum};
-use irtp::fp::{self, Mesh, StationaryOptions, TransientOptions};
-use irtp::io::{OutputDir, Provenance};
-use irtp::Params;
 use serde_json::json;
 use std::time::Instant;
 
@@ -14,11 +12,11 @@ use std::time::Instant;
 #[derive(Args, Debug)]
 pub struct FpArgs {
     #[command(subcommand)]
-    command: FpCommand,
+    pub command: FpCommand,
 }
 
 #[derive(Subcommand, Debug)]
-enum FpCommand {
+pub enum FpCommand {
     /// Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve.
     Stationary(StationaryArgs),
     /// Time-dependent solution from the paper's initial condition (explicit upwind, Sec. 3).
@@ -26,15 +24,16 @@ enum FpCommand {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
-enum MeshArg {
+pub enum MeshArg {
     /// Cells graded towards the (possibly singular) edges; v_r is a node.
     Graded,
     /// Equal cells (the paper's grid).
     Uniform,
 }
 
+/// `irtp fp stationary`.
 #[derive(Args, Debug)]
-struct StationaryArgs {
+pub struct StationaryArgs {
     #[command(flatten)]
     model: ModelArgs,
     #[command(flatten)]
@@ -51,8 +50,9 @@ struct StationaryArgs {
     no_extrapolate: bool,
 }
 
+/// `irtp fp transient`.
 #[derive(Args, Debug)]
-struct TransientArgs {
+pub struct TransientArgs {
     #[command(flatten)]
     model: ModelArgs,
     #[command(flatten)]
@@ -74,17 +74,27 @@ struct TransientArgs {
     cfl: f64,
 }
 
+impl FpArgs {
+    /// Whether `--json` was given.
+    pub fn json(&self) -> bool {
+        match &self.command {
+            FpCommand::Stationary(a) => a.output.json,
+            FpCommand::Transient(a) => a.output.json,
+        }
+    }
+}
+
 /// Run `irtp fp ...`.
-pub fn run(args: FpArgs) -> anyhow::Result<()> {
-    match args.command {
-        FpCommand::Stationary(a) => stationary(a),
-        FpCommand::Transient(a) => transient(a),
+pub fn run(args: &FpArgs, ctx: &Context) -> crate::Result<Outcome> {
+    match &args.command {
+        FpCommand::Stationary(a) => stationary(a, ctx),
+        FpCommand::Transient(a) => transient(a, ctx),
     }
 }
 
 impl StationaryArgs {
     /// Flags → model and solver options (the solver validates the options).
-    fn config(&self) -> irtp::Result<(Params, StationaryOptions)> {
+    fn config(&self) -> crate::Result<(Params, StationaryOptions)> {
         let params = self.model.params()?;
         let opts = StationaryOptions {
             cells: self.cells,
@@ -101,7 +111,7 @@ impl StationaryArgs {
 impl TransientArgs {
     /// Flags → model and solver options: `--samples` recording times in
     /// [0, t_max], `--snapshots` density times in (0, t_max].
-    fn config(&self) -> irtp::Result<(Params, TransientOptions)> {
+    fn config(&self) -> crate::Result<(Params, TransientOptions)> {
         let params = self.model.params()?;
         let opts = TransientOptions::sampled(
             self.cells,
@@ -114,8 +124,10 @@ impl TransientArgs {
     }
 }
 
-fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
+/// Run `irtp fp stationary`: `density.csv`, `summary.json`, `run.json`.
+pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (params, opts) = a.config()?;
+    let out = open_out(a.output.out.as_deref())?;
     let start = Instant::now();
     let s = fp::stationary(&params, &opts)?;
     let wall = start.elapsed().as_secs_f64();
@@ -134,48 +146,44 @@ fn stationary(a: StationaryArgs) -> anyhow::Result<()> {
         "params": params,
         "wall_time_s": wall,
     });
-    let mut written = None;
-    if let Some(dir) = &a.output.out {
-        let mut out = OutputDir::new(dir)?;
-        out.write_csv(
-            "density.csv",
-            &["v", "p", "p_plus", "p_minus", "dv"],
-            (0..s.cells).map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]]),
-        )?;
-        out.write_json("summary.json", &summary)?;
-        written = Some(out.commit_with_provenance(Provenance::new(
-            "fp stationary",
-            format!("fv-upwind-direct-{}", s.mesh.name()),
-            None,
-            json!({"model": params, "options": opts}),
-            wall,
-        ))?);
-    }
-    if a.output.json {
-        print_json(&summary)?;
-    } else {
-        println!(
-            "<v^2> = {:.12}  <v> = {:.12}  D_eff = {:.12}  ({} cells, {} mesh{})",
-            s.v2,
-            s.v_mean,
-            s.d_eff,
-            s.cells,
-            s.mesh.name(),
-            if s.extrapolated { ", extrapolated" } else { "" }
-        );
-        super::print_written(&a.output.out, &written);
-    }
-    Ok(())
+    let density = Table::from_rows(
+        "density",
+        &["v", "p", "p_plus", "p_minus", "dv"],
+        (0..s.cells).map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]]),
+    );
+    let text = format!(
+        "<v^2> = {:.12}  <v> = {:.12}  D_eff = {:.12}  ({} cells, {} mesh{})\n",
+        s.v2,
+        s.v_mean,
+        s.d_eff,
+        s.cells,
+        s.mesh.name(),
+        if s.extrapolated { ", extrapolated" } else { "" }
+    );
+    let computed = Computed {
+        method: format!("fv-upwind-direct-{}", s.mesh.name()),
+        seed: None,
+        json: summary.clone(),
+        parameters: json!({"model": params, "options": opts}),
+        tables: vec![density],
+        json_files: vec![("summary.json", summary)],
+        text,
+        wall_time_s: wall,
+    };
+    finish("fp stationary", computed, out, ctx)
 }
 
-fn transient(a: TransientArgs) -> anyhow::Result<()> {
+/// Run `irtp fp transient`: `moments.csv`, `snapshots.csv`, `summary.json`,
+/// `run.json`.
+pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (params, opts) = a.config()?;
+    let out = open_out(a.output.out.as_deref())?;
     let t_max = opts.t_max;
-    let bar = Bar::new("fp transient", 1);
     let start = Instant::now();
-    let res = fp::transient_with_progress(&params, &opts, &bar);
-    bar.finish();
-    let tr = res?;
+    let tr = {
+        let bar = ctx.reporter.stage("fp transient", 1);
+        fp::transient_with_progress(&params, &opts, bar.as_ref())?
+    };
     let wall = start.elapsed().as_secs_f64();
     let k = tr.times.len() - 1;
     let summary = json!({
@@ -190,39 +198,37 @@ fn transient(a: TransientArgs) -> anyhow::Result<()> {
         "params": params,
         "wall_time_s": wall,
     });
-    let mut written = None;
-    if let Some(dir) = &a.output.out {
-        let mut out = OutputDir::new(dir)?;
-        out.write_csv(
-            "moments.csv",
-            &["t", "v2", "v_mean", "mass"],
-            (0..tr.times.len()).map(|i| [tr.times[i], tr.v2[i], tr.v_mean[i], tr.mass[i]]),
-        )?;
-        out.write_csv(
-            "snapshots.csv",
-            &["t", "v", "p", "p_plus", "p_minus"],
-            tr.snapshots.iter().flat_map(|s| {
-                let v = &tr.v;
-                (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
-            }),
-        )?;
-        out.write_json("summary.json", &summary)?;
-        written = Some(out.commit_with_provenance(Provenance::new(
-            "fp transient",
-            "fv-upwind-explicit-uniform",
-            None,
-            json!({"model": params, "options": opts}),
-            wall,
-        ))?);
-    }
-    if a.output.json {
-        print_json(&summary)?;
-    } else {
-        println!(
-            "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)",
-            tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
-        );
-        super::print_written(&a.output.out, &written);
-    }
-    Ok(())
+    let moments = Table {
+        name: "moments",
+        header: ["t", "v2", "v_mean", "mass"].map(String::from).to_vec(),
+        columns: vec![
+            tr.times.clone(),
+            tr.v2.clone(),
+            tr.v_mean.clone(),
+            tr.mass.clone(),
+        ],
+    };
+    let snapshots = Table::from_rows(
+        "snapshots",
+        &["t", "v", "p", "p_plus", "p_minus"],
+        tr.snapshots.iter().flat_map(|s| {
+            let v = &tr.v;
+            (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
+        }),
+    );
+    let text = format!(
+        "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)\n",
+        tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
+    );
+    let computed = Computed {
+        method: "fv-upwind-explicit-uniform".into(),
+        seed: None,
+        json: summary.clone(),
+        parameters: json!({"model": params, "options": opts}),
+        tables: vec![moments, snapshots],
+        json_files: vec![("summary.json", summary)],
+        text,
+        wall_time_s: wall,
+    };
+    finish("fp transient", computed, out, ctx)
 }

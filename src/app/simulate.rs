@@ -1,15 +1,13 @@
 //! `irtp simulate`: particle simulation of the IRTP with resetting.
 
 use super::common::{ModelArgs, OutputArgs};
-use super::progress::Bar;
+use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use crate::sim::euler::{self, EulerPlan, EventSampling};
+use crate::sim::exact;
+use crate::sim::{Observables, SimSpec, SimSummary, TimeGrid};
+use crate::Params;
 use clap::{Args, ValueEnum};
-use irtp::io::{OutputDir, Provenance};
-use irtp::sim::euler::{self, EulerPlan, EventSampling};
-use irtp::sim::exact;
-use irtp::sim::{Observables, SimSpec, SimSummary, TimeGrid};
-use irtp::Params;
 use serde::Serialize;
-use std::io::Write;
 use std::time::Instant;
 
 /// Simulation method.
@@ -83,7 +81,7 @@ pub struct SimulateArgs {
 
 #[derive(Serialize)]
 struct RunParameters<'a> {
-    model: &'a irtp::Params,
+    model: &'a Params,
     particles: u64,
     dt: Option<f64>,
     t_max: f64,
@@ -103,7 +101,7 @@ struct JsonOut<'a> {
     events: Option<EventSampling>,
     dt: Option<f64>,
     #[serde(flatten)]
-    summary: irtp::sim::SimSummary,
+    summary: SimSummary,
     wall_time_s: f64,
     particle_steps_per_s: f64,
     out: Option<String>,
@@ -141,7 +139,7 @@ impl Config {
 
 impl SimulateArgs {
     /// Flags → validated config, before anything touches the file system.
-    fn config(&self) -> irtp::Result<Config> {
+    fn config(&self) -> crate::Result<Config> {
         let params = self.model.params()?;
         let grid = match self.grid {
             GridArg::Linear => TimeGrid::linear(self.t_max, self.samples)?,
@@ -168,7 +166,7 @@ impl SimulateArgs {
         })
     }
 
-    fn euler_setup(&self, params: &Params, spec: &SimSpec) -> irtp::Result<EulerSetup> {
+    fn euler_setup(&self, params: &Params, spec: &SimSpec) -> crate::Result<EulerSetup> {
         let dt = self.dt.unwrap_or(1e-3);
         let plan = EulerPlan::new(params, spec, dt)?;
         let events = match self.events.unwrap_or(EventsArg::Geometric) {
@@ -179,16 +177,16 @@ impl SimulateArgs {
     }
 
     /// The exact sampler takes neither `--dt` nor `--events`.
-    fn reject_euler_flags(&self) -> irtp::Result<()> {
+    fn reject_euler_flags(&self) -> crate::Result<()> {
         if let Some(dt) = self.dt {
-            return Err(irtp::Error::invalid(
+            return Err(crate::Error::invalid(
                 "--dt",
                 dt,
                 "only with --method euler (the exact sampler has no time step)",
             ));
         }
         if let Some(e) = self.events {
-            return Err(irtp::Error::invalid(
+            return Err(crate::Error::invalid(
                 "--events",
                 format!("{e:?}").to_lowercase(),
                 "only with --method euler (the exact sampler draws exact event times)",
@@ -198,63 +196,50 @@ impl SimulateArgs {
     }
 }
 
-/// Run the subcommand.
-pub fn run(a: SimulateArgs) -> anyhow::Result<()> {
+/// Run `irtp simulate`: validate, simulate, write `moments.csv`,
+/// `density.csv` and `run.json` when `--out` is given.
+pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = a.output.out.as_ref().map(OutputDir::new).transpose()?;
-
-    let bar = Bar::new("simulate", c.spec.particles);
+    let out = open_out(a.output.out.as_deref())?;
     let start = Instant::now();
-    let obs = match &c.euler {
-        Some(e) => euler::simulate_with(&c.params, &c.spec, e.dt, e.events, &bar)?,
-        None => exact::simulate(&c.params, &c.spec, &bar)?,
+    let obs = {
+        let bar = ctx.reporter.stage("simulate", c.spec.particles);
+        match &c.euler {
+            Some(e) => euler::simulate_with(&c.params, &c.spec, e.dt, e.events, bar.as_ref())?,
+            None => exact::simulate(&c.params, &c.spec, bar.as_ref())?,
+        }
     };
     let wall = start.elapsed().as_secs_f64();
-    bar.finish();
+    ctx.check()?;
     let summary = obs.summary();
-
-    let out_path = out.as_ref().map(|o| o.target().display().to_string());
-    if let Some(o) = out {
-        write(o, &a, &c, &obs, wall)?;
-    }
-    let rate = summary.steps as f64 / wall;
-    if a.output.json {
-        super::print_json(&JsonOut {
-            method: c.method(),
-            events: c.events(),
-            dt: c.dt(),
-            summary,
-            wall_time_s: wall,
-            particle_steps_per_s: rate,
-            out: out_path,
-        })?;
-    } else {
-        let text = text_report(&a, &c, &summary, wall, out_path);
-        // The results are already on disk; a closed pipe (`| head`) is not an error.
-        let _ = std::io::stdout().lock().write_all(text.as_bytes());
-    }
-    Ok(())
+    let json = JsonOut {
+        method: c.method(),
+        events: c.events(),
+        dt: c.dt(),
+        summary: summary.clone(),
+        wall_time_s: wall,
+        particle_steps_per_s: summary.steps as f64 / wall,
+        out: out.as_ref().map(|o| o.target().display().to_string()),
+    };
+    let computed = Computed {
+        method: c.method().to_string(),
+        seed: Some(c.spec.seed),
+        json: to_value(&json),
+        parameters: to_value(&run_parameters(a, &c)),
+        tables: vec![
+            Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
+            Table::from_rows("density", &Observables::DENSITY_HEADER, obs.density_rows()),
+        ],
+        json_files: Vec::new(),
+        text: text_report(a, &c, &summary, wall),
+        wall_time_s: wall,
+    };
+    finish("simulate", computed, out, ctx)
 }
 
-/// moments.csv, density.csv and run.json.
-fn write(
-    mut o: OutputDir,
-    a: &SimulateArgs,
-    c: &Config,
-    obs: &Observables,
-    wall: f64,
-) -> irtp::Result<()> {
-    o.write_csv(
-        "moments.csv",
-        &Observables::MOMENT_HEADER,
-        obs.moment_rows(),
-    )?;
-    o.write_csv(
-        "density.csv",
-        &Observables::DENSITY_HEADER,
-        obs.density_rows(),
-    )?;
-    let run_params = RunParameters {
+/// The `parameters` object of `run.json`.
+fn run_parameters<'a>(a: &SimulateArgs, c: &'a Config) -> RunParameters<'a> {
+    RunParameters {
         model: &c.params,
         particles: c.spec.particles,
         dt: c.dt(),
@@ -267,25 +252,11 @@ fn write(
         events: c.events(),
         seed: c.spec.seed,
         steps_per_particle: c.euler.as_ref().map(|e| e.plan.steps),
-    };
-    o.commit_with_provenance(Provenance::new(
-        "simulate",
-        c.method(),
-        Some(c.spec.seed),
-        run_params,
-        wall,
-    ))?;
-    Ok(())
+    }
 }
 
 /// The text-mode report.
-fn text_report(
-    a: &SimulateArgs,
-    c: &Config,
-    s: &SimSummary,
-    wall: f64,
-    out_path: Option<String>,
-) -> String {
+fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> String {
     let p = &c.params;
     let rate = s.steps as f64 / wall;
     let model = format!(
@@ -322,9 +293,6 @@ fn text_report(
             "Eq. (36) fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
             a.burn_in, s.t_max, d, e
         );
-    }
-    if let Some(p) = out_path {
-        text += &format!("wrote {p}/moments.csv, density.csv, run.json\n");
     }
     text
 }

@@ -1,8 +1,8 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
+use crate::model::Drag;
+use crate::{DragLaw, Params};
 use clap::Args;
-use irtp::model::Drag;
-use irtp::{DragLaw, Params};
 use std::path::PathBuf;
 
 /// Medium and noise flags: `--drag --sigma --lambda` (every subcommand,
@@ -22,7 +22,7 @@ pub struct NoiseArgs {
 
 impl NoiseArgs {
     /// Validate into [`Params`] with the given reset rate and velocity.
-    pub fn params(&self, rate: f64, reset_velocity: f64) -> irtp::Result<Params> {
+    pub fn params(&self, rate: f64, reset_velocity: f64) -> crate::Result<Params> {
         Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity)
     }
 }
@@ -65,7 +65,7 @@ fn parse_drag(s: &str) -> Result<DragLaw, String> {
 
 impl ModelArgs {
     /// Validate into [`Params`].
-    pub fn params(&self) -> irtp::Result<Params> {
+    pub fn params(&self) -> crate::Result<Params> {
         self.noise.params(self.rate, self.reset_velocity)
     }
 }

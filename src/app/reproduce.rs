@@ -1,10 +1,10 @@
 //! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,all} --out DIR [--quick] [--seed N]`.
 
-use super::progress::Bar;
+use super::{Context, Outcome};
+use crate::figures::{self, Options, Which, SCALE};
+use crate::io::OutputDir;
 use clap::Args;
-use irtp::figures::{self, Options, Which, SCALE};
-use irtp::io::OutputDir;
-use irtp::parallel::Progress;
+use serde_json::json;
 use std::path::PathBuf;
 
 /// Regenerate the paper's figures 1, 2, 3, 5, 6, 7: data (CSV), plots (PNG,
@@ -44,18 +44,6 @@ fn parse_figure(s: &str) -> Result<Selection, String> {
         .map_err(|_| "expected one of fig1, fig2, fig3, fig5, fig6, fig7, all".to_string())
 }
 
-struct BarProgress(Bar);
-impl Progress for BarProgress {
-    fn update(&self, done: u64, total: u64) {
-        self.0.update(done, total);
-    }
-}
-impl Drop for BarProgress {
-    fn drop(&mut self) {
-        self.0.finish();
-    }
-}
-
 impl ReproduceArgs {
     /// Flags → the figures (paper order, no duplicates) and their options.
     fn config(&self) -> (Vec<Which>, Options) {
@@ -76,27 +64,39 @@ impl ReproduceArgs {
     }
 }
 
-/// Run the subcommand.
-pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
+/// Run `irtp reproduce`: compute the figures, then write every file
+/// into `--out` (all or nothing).
+pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (which, opts) = args.config();
     // Validate the output directory before computing anything.
     let out = OutputDir::new(&args.out)?;
     let t0 = std::time::Instant::now();
-    let outputs = figures::reproduce(&which, &opts, |w| {
-        Box::new(BarProgress(Bar::new(w.name(), SCALE)))
-    })?;
-    let files = figures::write_outputs(out, &outputs, &opts, t0.elapsed().as_secs_f64())?;
+    let outputs = figures::reproduce(&which, &opts, |w| ctx.reporter.stage(w.name(), SCALE))?;
+    ctx.check()?;
+    let wall = t0.elapsed().as_secs_f64();
+    let (provenance, files) = figures::write_outputs(out, &outputs, &opts, wall, ctx.argv.clone())?;
+    let mut text = String::new();
     for o in &outputs {
-        eprintln!("{}: {:.1} s", o.which.name(), o.wall_time_s);
+        text += &format!("{}: {:.1} s\n", o.which.name(), o.wall_time_s);
     }
-    eprintln!(
-        "wrote {} files to {} in {:.1} s",
-        files.len(),
-        args.out.display(),
-        t0.elapsed().as_secs_f64()
-    );
     if !figures::IMAGES {
-        println!("{}", figures::NO_IMAGES);
+        text += figures::NO_IMAGES;
+        text += "\n";
     }
-    Ok(())
+    let names: Vec<&str> = which.iter().map(|w| w.name()).collect();
+    let claims: Vec<_> = outputs.iter().flat_map(|o| o.claims.iter()).collect();
+    let parameters = provenance["parameters"].clone();
+    Ok(Outcome {
+        command: "reproduce",
+        method: "figures".into(),
+        seed: Some(opts.seed),
+        json: json!({"figures": names, "claims": claims, "files": files}),
+        parameters,
+        tables: Vec::new(),
+        json_files: Vec::new(),
+        text,
+        wall_time_s: wall,
+        provenance,
+        written: Some((args.out.clone(), files)),
+    })
 }

@@ -1,13 +1,13 @@
 //! `irtp analytic`: exact r = 0 stationary density, its regime and moments.
 
 use super::common::NoiseArgs;
+use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use crate::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
+use crate::numerics::grid::chebyshev;
+use crate::{DragLaw, Error, Params};
 use clap::Args;
-use irtp::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
-use irtp::io::{OutputDir, Provenance};
-use irtp::numerics::grid::chebyshev;
-use irtp::{DragLaw, Error, Params};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Flags of `irtp analytic`: the shared `--drag --sigma --lambda`, and its own
@@ -67,7 +67,7 @@ struct Config {
 
 impl AnalyticArgs {
     /// Flags → validated config (the closed form exists only for r = 0).
-    fn config(&self) -> irtp::Result<Config> {
+    fn config(&self) -> crate::Result<Config> {
         let params = self.noise.params(self.rate, 0.0)?;
         if self.points < 2 {
             return Err(Error::invalid("--points", self.points, "points >= 2"));
@@ -100,17 +100,20 @@ fn report(params: &Params, d: &R0Density) -> Report {
     }
 }
 
-/// density.csv (Chebyshev points: interior, clustered toward the possibly
-/// singular edges), summary.json and run.json.
-fn write(dir: &Path, c: &Config, d: &R0Density, report: &Report, t0: Instant) -> irtp::Result<()> {
-    let mut out = OutputDir::new(dir)?;
+/// Run `irtp analytic`: the density at `--points` Chebyshev points
+/// (interior, clustered toward the possibly singular edges) as
+/// `density.csv`, the report as `summary.json`, and `run.json`.
+pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
+    let t0 = Instant::now();
+    let c = args.config()?;
+    let out = open_out(args.out.as_deref())?;
+    let d = R0Density::from_params(&c.params)?;
+    let report = report(&c.params, &d);
     let (vl, vu) = d.bounds();
-    let rows: Vec<[f64; 3]> = chebyshev(vl, vu, c.points)
+    let rows = chebyshev(vl, vu, c.points)
         .into_iter()
-        .map(|v| [v, d.pdf(v), d.cdf(v)])
-        .collect();
-    out.write_csv("density.csv", &["v", "p", "cdf"], rows)?;
-    out.write_json("summary.json", report)?;
+        .map(|v| [v, d.pdf(v), d.cdf(v)]);
+    let density = Table::from_rows("density", &["v", "p", "cdf"], rows);
     let run = RunParams {
         drag: report.drag,
         sigma: report.sigma,
@@ -118,36 +121,26 @@ fn write(dir: &Path, c: &Config, d: &R0Density, report: &Report, t0: Instant) ->
         rate: report.rate,
         points: c.points,
     };
-    out.commit_with_provenance(Provenance::new(
-        "analytic",
-        "exact r=0 density; adaptive Gauss-Kronrod normalisation",
-        None,
-        run,
-        t0.elapsed().as_secs_f64(),
-    ))?;
-    Ok(())
+    let json = to_value(&report);
+    let computed = Computed {
+        method: "exact r=0 density; adaptive Gauss-Kronrod normalisation".into(),
+        seed: None,
+        json: json.clone(),
+        parameters: to_value(&run),
+        tables: vec![density],
+        json_files: vec![("summary.json", json)],
+        text: text_report(&report),
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    };
+    finish("analytic", computed, out, ctx)
 }
 
-/// Run `irtp analytic`.
-pub fn run(args: AnalyticArgs) -> anyhow::Result<()> {
-    let t0 = Instant::now();
-    let c = args.config()?;
-    let d = R0Density::from_params(&c.params)?;
-    let report = report(&c.params, &d);
-    if let Some(dir) = &args.out {
-        write(dir, &c, &d, &report, t0)?;
-    }
-    if args.json {
-        super::print_json(&report)?;
-    } else {
-        let (drag, sigma, lambda) = (report.drag, report.sigma, report.lambda);
-        let (vl, vu) = (report.v_lower, report.v_upper);
-        println!("{drag} drag, Sigma = {sigma}, lambda = {lambda}, r = 0: v in ({vl:.6}, {vu:.6})");
-        println!("regime {}", report.regime_description);
-        println!("<v^2> = {:.15e}   <v^4> = {:.15e}", report.v2, report.v4);
-        if let Some(dir) = &args.out {
-            println!("wrote {}", dir.display());
-        }
-    }
-    Ok(())
+fn text_report(report: &Report) -> String {
+    let (drag, sigma, lambda) = (report.drag, report.sigma, report.lambda);
+    let (vl, vu) = (report.v_lower, report.v_upper);
+    format!(
+        "{drag} drag, Sigma = {sigma}, lambda = {lambda}, r = 0: v in ({vl:.6}, {vu:.6})\n\
+         regime {}\n<v^2> = {:.15e}   <v^4> = {:.15e}\n",
+        report.regime_description, report.v2, report.v4
+    )
 }

@@ -1,0 +1,229 @@
+//! The commands of the `irtp` program as library calls, shared by every
+//! front end (the `irtp` binary, the Python module).
+//!
+//! Each command has one home here: its flags (clap `Args`, which are also the
+//! Python keyword arguments and their defaults), their validation into a
+//! config, the computation, and the files it writes. A front end parses its
+//! input into the `Args`, calls the command's `run` with a [`Context`], and
+//! presents the returned [`Outcome`]: the binary prints its text or JSON; the
+//! Python module hands out its tables as numpy arrays. The same `Args` give
+//! the same numbers, bit for bit, through either.
+//!
+//! Layering: `app` sits above [`crate::figures`] and below the front ends.
+
+pub mod analytic;
+pub mod common;
+pub mod fp;
+pub mod mfpt;
+pub mod reproduce;
+pub mod simulate;
+
+use crate::error::{Error, Result};
+use crate::io::{OutputDir, Provenance};
+use crate::parallel::Progress;
+use serde::Serialize;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// How a front end shows progress and asks a run to stop.
+pub trait Reporter: Sync {
+    /// A progress observer for one stage of work (`label`, `total` units);
+    /// dropping it ends the stage (a terminal bar is cleared).
+    fn stage(&self, label: &str, total: u64) -> Box<dyn Progress + '_>;
+    /// Whether the caller wants the run stopped (then the run returns
+    /// [`Error::Interrupted`] and writes nothing).
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// A reporter that shows nothing and never cancels.
+pub struct Quiet;
+
+impl Reporter for Quiet {
+    fn stage(&self, _label: &str, _total: u64) -> Box<dyn Progress + '_> {
+        Box::new(crate::parallel::NoProgress)
+    }
+}
+
+/// What a run needs from its front end.
+pub struct Context<'a> {
+    /// Progress and cancellation.
+    pub reporter: &'a dyn Reporter,
+    /// The command line recorded in `run.json` (the binary's own argv; the
+    /// Python module records the equivalent `irtp ...` command line).
+    pub argv: Vec<String>,
+}
+
+impl<'a> Context<'a> {
+    /// A context recording this process's command line.
+    pub fn new(reporter: &'a dyn Reporter) -> Self {
+        Context {
+            reporter,
+            argv: std::env::args().collect(),
+        }
+    }
+
+    /// [`Error::Interrupted`] when the reporter asked to stop: a cancelled
+    /// computation's partial result is never returned nor written.
+    pub fn check(&self) -> Result<()> {
+        if self.reporter.cancelled() {
+            Err(Error::Interrupted)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// One result table: the columns of a CSV file the command writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// File stem (`moments` for `moments.csv`).
+    pub name: &'static str,
+    /// Column names, in file order.
+    pub header: Vec<String>,
+    /// Columns (each as long as the table).
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl Table {
+    /// A table from its header and rows.
+    pub fn from_rows<R: AsRef<[f64]>>(
+        name: &'static str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = R>,
+    ) -> Self {
+        let mut columns = vec![Vec::new(); header.len()];
+        for row in rows {
+            for (c, x) in columns.iter_mut().zip(row.as_ref()) {
+                c.push(*x);
+            }
+        }
+        Table {
+            name,
+            header: header.iter().map(|h| h.to_string()).collect(),
+            columns,
+        }
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.columns.first().map_or(0, Vec::len)
+    }
+
+    /// Whether the table has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn write(&self, out: &mut OutputDir) -> Result<()> {
+        let header: Vec<&str> = self.header.iter().map(String::as_str).collect();
+        let rows = (0..self.len()).map(|i| self.columns.iter().map(|c| c[i]).collect::<Vec<_>>());
+        out.write_csv(&format!("{}.csv", self.name), &header, rows)
+    }
+}
+
+/// The result of one command: what `--json` prints, the tables, the
+/// text report and the provenance.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The command (`simulate`, `fp stationary`, ...).
+    pub command: &'static str,
+    /// The numerical method, as recorded in `run.json`.
+    pub method: String,
+    /// The master seed of a stochastic method.
+    pub seed: Option<u64>,
+    /// What `--json` prints (one object, or one object per row for a scan).
+    pub json: Value,
+    /// The `parameters` object of `run.json`.
+    pub parameters: Value,
+    /// The tables (`<name>.csv` in the output directory).
+    pub tables: Vec<Table>,
+    /// Further JSON files of the output directory (`summary.json`, ...).
+    pub json_files: Vec<(&'static str, Value)>,
+    /// The text-mode report (without the list of written files).
+    pub text: String,
+    /// Wall-clock seconds of the computation.
+    pub wall_time_s: f64,
+    /// `run.json` as written (or as it would be written without `--out`).
+    pub provenance: Value,
+    /// The output directory and the files written there, when one was given.
+    pub written: Option<(PathBuf, Vec<PathBuf>)>,
+}
+
+impl Outcome {
+    /// The table with this name.
+    pub fn table(&self, name: &str) -> Option<&Table> {
+        self.tables.iter().find(|t| t.name == name)
+    }
+}
+
+/// The parts of an [`Outcome`] a command computes; [`finish`] adds the
+/// provenance and writes the files.
+pub(crate) struct Computed {
+    pub method: String,
+    pub seed: Option<u64>,
+    pub json: Value,
+    pub parameters: Value,
+    pub tables: Vec<Table>,
+    pub json_files: Vec<(&'static str, Value)>,
+    pub text: String,
+    pub wall_time_s: f64,
+}
+
+/// JSON value of a serialisable result (these never fail: plain structs of
+/// numbers and strings).
+pub(crate) fn to_value<T: Serialize>(v: &T) -> Value {
+    serde_json::to_value(v).expect("result structs serialise to JSON")
+}
+
+/// Open the output directory, if any, before computing (a bad path fails at once).
+pub(crate) fn open_out(dir: Option<&Path>) -> Result<Option<OutputDir>> {
+    dir.map(OutputDir::new).transpose()
+}
+
+/// Check for cancellation, then write the tables, the JSON files and
+/// `run.json` (all or nothing) and assemble the [`Outcome`].
+pub(crate) fn finish(
+    command: &'static str,
+    c: Computed,
+    out: Option<OutputDir>,
+    ctx: &Context,
+) -> Result<Outcome> {
+    ctx.check()?;
+    let prov = Provenance::new(
+        command,
+        c.method.clone(),
+        c.seed,
+        &c.parameters,
+        c.wall_time_s,
+    )
+    .with_argv(ctx.argv.clone());
+    let (provenance, written) = match out {
+        None => (to_value(&prov), None),
+        Some(mut o) => {
+            for t in &c.tables {
+                t.write(&mut o)?;
+            }
+            for (name, v) in &c.json_files {
+                o.write_json(name, v)?;
+            }
+            let target = o.target().to_path_buf();
+            let (prov, files) = o.commit_with_provenance_value(prov)?;
+            (prov, Some((target, files)))
+        }
+    };
+    Ok(Outcome {
+        command,
+        method: c.method,
+        seed: c.seed,
+        json: c.json,
+        parameters: c.parameters,
+        tables: c.tables,
+        json_files: c.json_files,
+        text: c.text,
+        wall_time_s: c.wall_time_s,
+        provenance,
+        written,
+    })
+}
