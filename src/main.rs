@@ -2,43 +2,15 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
-use irtp::app;
+use clap::Parser;
+use irtp::app::{self, Cli};
 use std::process::ExitCode;
-
-/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
-#[derive(Parser, Debug)]
-#[command(name = "irtp", version, about, long_about = None)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
-    Analytic(app::analytic::AnalyticArgs),
-    /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
-    Simulate(app::simulate::SimulateArgs),
-    /// Mean first-passage time to a target velocity (backward equations or particles).
-    Mfpt(app::mfpt::MfptArgs),
-    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
-    Fp(app::fp::FpArgs),
-    /// Regenerate the paper's figures (data, plots, claims).
-    Reproduce(app::reproduce::ReproduceArgs),
-}
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let reporter = cli::progress::Bars;
     let ctx = app::Context::new(&reporter);
-    let (outcome, json) = match &cli.command {
-        Command::Analytic(a) => (app::analytic::run(a, &ctx)?, a.json),
-        Command::Simulate(a) => (app::simulate::run(a, &ctx)?, a.output.json),
-        Command::Mfpt(a) => (app::mfpt::run(a, &ctx)?, a.json()),
-        Command::Fp(a) => (app::fp::run(a, &ctx)?, a.json()),
-        Command::Reproduce(a) => (app::reproduce::run(a, &ctx)?, false),
-    };
-    cli::present(&outcome, json)
+    let outcome = app::run(&cli.command, &ctx)?;
+    cli::present(&outcome, cli.command.json())
 }
 
 fn main() -> ExitCode {

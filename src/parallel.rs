@@ -12,6 +12,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// changing it changes the last bits of every pinned result.
 pub const CHUNK: u64 = 256;
 
+/// Chunks computed side by side before their results are merged (bounds
+/// the memory of a reduction; the result does not depend on it).
+const BLOCK: u64 = 1024;
+
 /// Progress observer: called with the number of samples finished so far
 /// (monotone, from any thread). The library never prints; the binary turns
 /// this into a progress bar.
@@ -75,24 +79,31 @@ where
 {
     let chunks = n.div_ceil(CHUNK);
     let done = AtomicU64::new(0);
-    let parts: Vec<A> = (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            let lo = c * CHUNK;
-            let hi = (lo + CHUNK).min(n);
-            let mut acc = init();
-            if progress.cancelled() {
-                return acc;
-            }
-            chunk(lo, hi, &mut acc);
-            let d = done.fetch_add(hi - lo, Ordering::Relaxed) + (hi - lo);
-            progress.update(d, n);
-            acc
-        })
-        .collect();
     let mut total = init();
-    for p in parts {
-        merge(&mut total, p);
+    // Chunks run in blocks of BLOCK: memory holds at most BLOCK chunk
+    // accumulators whatever n is, and the merge order stays chunk order.
+    for first in (0..chunks).step_by(BLOCK as usize) {
+        if progress.cancelled() {
+            break;
+        }
+        let parts: Vec<A> = (first..chunks.min(first + BLOCK))
+            .into_par_iter()
+            .map(|c| {
+                let lo = c * CHUNK;
+                let hi = (lo + CHUNK).min(n);
+                let mut acc = init();
+                if progress.cancelled() {
+                    return acc;
+                }
+                chunk(lo, hi, &mut acc);
+                let d = done.fetch_add(hi - lo, Ordering::Relaxed) + (hi - lo);
+                progress.update(d, n);
+                acc
+            })
+            .collect();
+        for p in parts {
+            merge(&mut total, p);
+        }
     }
     total
 }

@@ -21,9 +21,58 @@ pub mod simulate;
 use crate::error::{Error, Result};
 use crate::io::{OutputDir, Provenance};
 use crate::parallel::Progress;
+use clap::{Parser, Subcommand};
 use serde::Serialize;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+#[derive(Parser, Debug)]
+#[command(name = "irtp", version, about, long_about = None)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands of `irtp`.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    Analytic(analytic::AnalyticArgs),
+    /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
+    Simulate(simulate::SimulateArgs),
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(mfpt::MfptArgs),
+    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    Fp(fp::FpArgs),
+    /// Regenerate the paper's figures (data, plots, claims).
+    Reproduce(reproduce::ReproduceArgs),
+}
+
+impl Command {
+    /// Whether `--json` was given.
+    pub fn json(&self) -> bool {
+        match self {
+            Command::Analytic(a) => a.json,
+            Command::Simulate(a) => a.output.json,
+            Command::Mfpt(a) => a.json(),
+            Command::Fp(a) => a.json(),
+            Command::Reproduce(_) => false,
+        }
+    }
+}
+
+/// Run a command.
+pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
+    match command {
+        Command::Analytic(a) => analytic::run(a, ctx),
+        Command::Simulate(a) => simulate::run(a, ctx),
+        Command::Mfpt(a) => mfpt::run(a, ctx),
+        Command::Fp(a) => fp::run(a, ctx),
+        Command::Reproduce(a) => reproduce::run(a, ctx),
+    }
+}
 
 /// How a front end shows progress and asks a run to stop.
 pub trait Reporter: Sync {

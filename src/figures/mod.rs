@@ -229,6 +229,9 @@ impl Progress for Stage<'_> {
         let units = ((self.offset + self.weight * f) * SCALE as f64).round() as u64;
         self.inner.update(units.min(SCALE), SCALE);
     }
+    fn cancelled(&self) -> bool {
+        self.inner.cancelled()
+    }
 }
 
 /// A seed for curve `index` of figure `fig`, derived from the master seed.

@@ -316,32 +316,25 @@ fn run<D: Drag, E: Events>(
     // count and for any lane count. Inside a chunk, groups of LANES
     // particles run side by side; the remainder runs one at a time.
     let (n, first) = (spec.particles, spec.first_particle);
-    let chunks = n.div_ceil(parallel::CHUNK);
-    let parts = parallel::map(
-        chunks,
-        |c| {
-            let mut obs = template.clone();
+    parallel::reduce_chunks(
+        n,
+        || template.clone(),
+        |lo, hi, obs| {
             let mut occ = vec![0.0; LANES * spec.bins];
-            let hi = ((c + 1) * parallel::CHUNK).min(n);
-            let mut i = c * parallel::CHUNK;
+            let mut i = lo;
             if lanes == LANES {
                 while i + LANES as u64 <= hi {
-                    kernel.group::<LANES, E>(first + i, &mut obs, &mut occ);
+                    kernel.group::<LANES, E>(first + i, obs, &mut occ);
                     i += LANES as u64;
                 }
             }
             for i in i..hi {
-                kernel.group::<1, E>(first + i, &mut obs, &mut occ);
+                kernel.group::<1, E>(first + i, obs, &mut occ);
             }
-            obs
         },
-        &|done: u64, _total: u64| progress.update((done * parallel::CHUNK).min(n), n),
-    );
-    let mut total = template;
-    for p in &parts {
-        total.merge(p);
-    }
-    total
+        |total, part| total.merge(&part),
+        progress,
+    )
 }
 
 struct Kernel<'a, D> {
