@@ -387,7 +387,11 @@ DOCS: Dict[str, Doc] = {
     ),
     "reproduce": Doc(
         "Regenerate the paper's figures 1, 2, 3, 5, 6, 7 into a directory.",
-        "Data (CSV), plots (PNG, SVG when the extension was built with plotting),\n"
+        "Fig. 1: <v²>(t) against the stationary value Eq. (33); Figs. 2-3:\n"
+        "stationary densities (particles, Fokker-Planck Eqs. (11)-(12), and the\n"
+        "r = 0 closed forms Eqs. (34)-(35)); Figs. 5-6: <x²>(t) and D_eff\n"
+        "(Eq. (36)); Fig. 7: mean first-passage times, Eqs. (26)-(28). Writes\n"
+        "data (CSV), plots (PNG, SVG when the extension was built with plotting),\n"
         "parameters.json, claims.json / claims.md, REPORT.md and run.json; the\n"
         "claims compare each figure with the paper's statements.",
         "ReproduceResult\n"
