@@ -103,7 +103,7 @@ class Option:
             return Optional[base]
         return base
 
-    def convert(self, value: Any, function: str) -> Any:
+    def convert(self, value: Any) -> Any:
         """A Python value → what ``_irtp.run`` takes for this option."""
         if self.name == "drag":
             return Drag(value).name
@@ -216,12 +216,12 @@ class Command:
             if not isinstance(reset, Reset):
                 raise TypeError(f"reset must be a reset rule such as PoissonReset, not {reset!r}")
             for name, value in reset.options().items():
-                put(name, value, "reset=")
+                self.put_model(put, name, value, "reset=")
         if params is not None:
             if not isinstance(params, Params):
                 params = Params.from_mapping(params)
             for name, value in params.options().items():
-                self.put_model(put, name, value)
+                self.put_model(put, name, value, "params=")
         return self.converted({name: value for name, (value, _) in given.items()})
 
     def option_for(self, key: str) -> Option:
@@ -234,18 +234,18 @@ class Command:
             f"unknown keyword '{key}' for irtp.{self.function} (known: {self.known()})"
         )
 
-    def put_model(self, put: Callable[[str, Any, str], None], name: str, value: Any) -> None:
-        """A field of ``params=``; a reset velocity 0 is dropped by commands
-        without resetting flags (``analytic``)."""
+    def put_model(self, put: Callable[[str, Any, str], None], name: str, value: Any,
+                  source: str) -> None:
+        """A field of a model object; a reset velocity 0 is dropped by commands
+        without that flag (``analytic``)."""
         if name not in self.by_name:
             if name == "reset_velocity" and value == 0.0:
                 return
-            raise ValueError(f"irtp.{self.function} takes no {name} (given by params=)")
-        put(name, value, "params=")
+            raise ValueError(f"irtp.{self.function} takes no {name} (given by {source})")
+        put(name, value, source)
 
     def converted(self, options: Dict[str, Any]) -> Dict[str, Any]:
-        out = {name: self.by_name[name].convert(value, self.function)
-               for name, value in options.items()}
+        out = {name: self.by_name[name].convert(value) for name, value in options.items()}
         missing = [o.py for o in self.options if o.required and o.name not in out]
         if missing:
             raise TypeError(
@@ -264,7 +264,8 @@ class Command:
             raise ValueError(f"invalid threads = {threads!r}: allowed threads >= 1")
         rep = reporter(progress)
         try:
-            raw = _irtp.run(self.command, options, rep, None if threads is None else int(threads))
+            raw = _irtp.run(self.command, options, progress=rep,
+                            threads=None if threads is None else int(threads))
         except ValueError as e:
             raise ValueError(self.message(str(e))) from None
         except _irtp.NumericalError as e:

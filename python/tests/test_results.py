@@ -96,6 +96,8 @@ def test_params_fill_only_what_they_set():
     res = irtp.analytic(params=irtp.Params(lambda_=0.9, reset=irtp.PoissonReset(0.0)),
                         points=11)
     assert res.summary["rate"] == 0.0
+    res = irtp.analytic(lambda_=0.9, reset=irtp.PoissonReset(0.0), points=11)
+    assert res.summary["rate"] == 0.0
     with pytest.raises(ValueError, match="reset_velocity"):
         irtp.analytic(params=irtp.Params(reset=irtp.PoissonReset(0.0, velocity=0.3)))
 
