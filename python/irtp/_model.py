@@ -200,10 +200,12 @@ class Params:
         values: Dict[str, Any] = {}
         if drag is not None:
             values["drag"] = Drag(drag)
-        for attr, value in (("sigma", sigma), ("lambda_", lambda_), ("rate", rate),
-                            ("reset_velocity", reset_velocity)):
-            if value is not None:
-                values[attr] = _number(attr, value)
+        fields: Tuple[Tuple[str, Any], ...] = (
+            ("sigma", sigma), ("lambda_", lambda_), ("rate", rate),
+            ("reset_velocity", reset_velocity))
+        for attr, given in fields:
+            if given is not None:
+                values[attr] = _number(attr, given)
         self._values = values
 
     @classmethod

@@ -76,7 +76,7 @@ class Result:
 
     def __init__(self, raw: Dict[str, Any]) -> None:
         self.command: str = raw["command"]
-        self.method: str = raw.get("method")
+        self.method: str = raw.get("method") or ""
         self.seed: Optional[int] = raw.get("seed")
         self.summary: Any = raw.get("summary")
         self.params: Dict[str, Any] = raw.get("parameters") or {}
@@ -102,7 +102,7 @@ class Result:
         if isinstance(summary, dict) and name in summary and isinstance(summary[name], _SCALARS):
             return summary[name]
         raise AttributeError(
-            f"{type(self).__name__} of irtp.{FUNCTION.get(self.__dict__.get('command'), '?')} "
+            f"{type(self).__name__} of irtp.{FUNCTION.get(self.__dict__.get('command', ''), '?')} "
             f"has no column or summary value {name!r} (columns: {', '.join(columns) or 'none'})"
         )
 
