@@ -1,0 +1,83 @@
+"""irtp: the inertial run-and-tumble particle with velocity resetting.
+
+Python interface of the Rust library and CLI ``irtp`` for the model of
+Howlader, Mondal & Das, "Velocity resetting of inertial run-and-tumble
+particles in non-Newtonian media": dv/dt = -g(v) + eta(t) (Eq. (5)), telegraph
+noise ±Sigma flipping at rate lambda (Eq. (6)), velocity reset to v_r at rate r
+(Eq. (3)).
+
+One function per CLI command, keywords named as the flags (``lambda_`` and
+``from_`` for the Python keywords), the same numbers bit for bit:
+
+- :func:`simulate`: particles (exact sampler or Euler, Eqs. (30)-(32))
+- :func:`analytic`: the r = 0 density, Eqs. (34)-(35)
+- :func:`fp_stationary`, :func:`fp_transient`: Fokker-Planck, Eqs. (11)-(12)
+- :func:`mfpt`, :func:`mfpt_scan`, :func:`mfpt_optimize`: first passage,
+  Eqs. (26)-(28)
+- :func:`reproduce`: the paper's figures
+
+Model pieces: :class:`Drag`, :class:`PoissonReset`, :class:`Params`.
+Results: :class:`Result` (numpy columns as attributes, ``summary``,
+``params``, ``provenance``, ``to_dict()``, ``to_pandas()``). Numerical
+failures raise :class:`NumericalError` (a RuntimeError).
+"""
+
+from . import _irtp
+from ._api import (
+    analytic,
+    fp_stationary,
+    fp_transient,
+    mfpt,
+    mfpt_optimize,
+    mfpt_scan,
+    reproduce,
+    simulate,
+)
+from ._irtp import NumericalError
+from ._model import Drag, Params, PoissonReset, Reset, drag_laws
+from ._results import (
+    AnalyticResult,
+    FpStationaryResult,
+    FpTransientResult,
+    MfptOptimizeResult,
+    MfptResult,
+    MfptScanResult,
+    ReproduceResult,
+    Result,
+    SimulateResult,
+)
+
+__version__: str = _irtp.__version__
+
+for _cls in (Drag, Reset, PoissonReset, Params, Result, SimulateResult, AnalyticResult,
+             FpStationaryResult, FpTransientResult, MfptResult, MfptScanResult,
+             MfptOptimizeResult, ReproduceResult):
+    _cls.__module__ = "irtp"
+del _cls
+
+__all__ = [
+    "simulate",
+    "analytic",
+    "fp_stationary",
+    "fp_transient",
+    "mfpt",
+    "mfpt_scan",
+    "mfpt_optimize",
+    "reproduce",
+    "Drag",
+    "Reset",
+    "PoissonReset",
+    "Params",
+    "drag_laws",
+    "NumericalError",
+    "Result",
+    "SimulateResult",
+    "AnalyticResult",
+    "FpStationaryResult",
+    "FpTransientResult",
+    "MfptResult",
+    "MfptScanResult",
+    "MfptOptimizeResult",
+    "ReproduceResult",
+    "__version__",
+]

@@ -1,0 +1,370 @@
+# Type stubs of the public API of irtp. The defaults live in the Rust CLI
+# definitions (help(irtp.simulate) shows them); here they are written `...`.
+
+import os
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    Iterator,
+    List,
+    Literal,
+    Mapping,
+    Optional,
+    Tuple,
+    Union,
+    overload,
+)
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+Array = npt.NDArray[np.float64]
+PathLike = Union[str, "os.PathLike[str]"]
+DragName = Literal["tan", "tanh", "linear", "cubic"]
+ProgressArg = Union[bool, Callable[[str, int, int], None]]
+ParamsArg = Union["Params", Mapping[str, Any], None]
+
+class NumericalError(RuntimeError):
+    """A numerical failure of a solver or sampler."""
+
+class Drag:
+    def __init__(self, name: Union[str, Drag]) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def force_limit(self) -> float: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __hash__(self) -> int: ...
+
+def drag_laws() -> List[Drag]: ...
+
+class Reset:
+    def options(self) -> Dict[str, float]: ...
+
+class PoissonReset(Reset):
+    def __init__(self, rate: float, velocity: float = 0.0) -> None: ...
+    @property
+    def rate(self) -> float: ...
+    @property
+    def velocity(self) -> float: ...
+    def options(self) -> Dict[str, float]: ...
+
+class Params:
+    def __init__(
+        self,
+        drag: Union[str, Drag, None] = None,
+        sigma: Optional[float] = None,
+        lambda_: Optional[float] = None,
+        reset: Optional[Reset] = None,
+        *,
+        rate: Optional[float] = None,
+        reset_velocity: Optional[float] = None,
+        **kwargs: Any,
+    ) -> None: ...
+    @classmethod
+    def from_mapping(cls, m: Mapping[str, Any]) -> Params: ...
+    @property
+    def drag(self) -> Optional[Drag]: ...
+    @property
+    def sigma(self) -> Optional[float]: ...
+    @property
+    def lambda_(self) -> Optional[float]: ...
+    @property
+    def rate(self) -> Optional[float]: ...
+    @property
+    def reset_velocity(self) -> Optional[float]: ...
+    @property
+    def reset(self) -> Optional[PoissonReset]: ...
+    def options(self) -> Dict[str, Any]: ...
+    def replace(self, **changes: Any) -> Params: ...
+    def __iter__(self) -> Iterator[Tuple[str, Any]]: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __hash__(self) -> int: ...
+
+class Result:
+    command: str
+    method: str
+    seed: Optional[int]
+    summary: Any
+    params: Dict[str, Any]
+    provenance: Dict[str, Any]
+    tables: Dict[str, Dict[str, Array]]
+    text: str
+    out: Optional[str]
+    files: Optional[List[str]]
+    def __getattr__(self, name: str) -> Any: ...
+    def to_dict(self, lists: bool = False) -> Dict[str, Any]: ...
+    def to_pandas(self, table: Optional[str] = None) -> Any: ...
+
+class SimulateResult(Result):
+    summary: Dict[str, Any]
+    # moments
+    t: Array
+    v_mean: Array
+    v_mean_err: Array
+    v2: Array
+    v2_err: Array
+    x_mean: Array
+    x_mean_err: Array
+    x2: Array
+    x2_err: Array
+    # density
+    v: Array
+    p: Array
+    p_err: Array
+    p_final: Array
+    p_final_err: Array
+    # summary
+    particles: int
+    steps: int
+    v2_final: float
+    v2_final_err: float
+    x2_final: float
+    x2_final_err: float
+    d_eff_msd: Optional[float]
+    d_eff_msd_err: Optional[float]
+    wall_time_s: float
+
+class AnalyticResult(Result):
+    summary: Dict[str, Any]
+    v: Array
+    p: Array
+    cdf: Array
+    regime: str
+    regime_description: str
+    v_lower: float
+    v_upper: float
+    v2: float
+    v4: float
+    edge_exponent: float
+
+class FpStationaryResult(Result):
+    summary: Dict[str, Any]
+    v: Array
+    p: Array
+    p_plus: Array
+    p_minus: Array
+    dv: Array
+    v2: float
+    v_mean: float
+    d_eff: float
+    cells: int
+    mass: float
+
+class FpTransientResult(Result):
+    summary: Dict[str, Any]
+    # moments (snapshots: tables["snapshots"])
+    t: Array
+    v2: Array
+    v_mean: Array
+    mass: Array
+    v: Array
+    p: Array
+    p_plus: Array
+    p_minus: Array
+    v2_final: float
+    v_mean_final: float
+    mass_error_max: float
+    dt: float
+    steps: int
+    cells: int
+
+class MfptResult(Result):
+    summary: Dict[str, Any]
+    # profile (method "ode" only; then tau is the column, summary["tau"] the value)
+    v0: Array
+    tau_plus: Any
+    tau_minus: Any
+    tau: Any
+    tau_err: float
+    error_estimate: float
+    particles: int
+    censored: int
+
+class MfptScanResult(Result):
+    summary: List[Dict[str, Any]]
+    vt: Array
+    rate: Array
+    tau: Array
+    tau_plus: Array
+    tau_minus: Array
+    error_estimate: Array
+    tau_sim: Array
+    tau_sim_err: Array
+    tau_plus_sim: Array
+    tau_plus_sim_err: Array
+    tau_minus_sim: Array
+    tau_minus_sim_err: Array
+    censored: Array
+
+class MfptOptimizeResult(Result):
+    summary: Dict[str, Any]
+    rate: Array
+    tau: Array
+    r_opt: float
+    tau_opt: float
+    tau_plus_opt: float
+    tau_minus_opt: float
+    tau_r0: float
+    dtau_dr_r0: float
+    interior: bool
+    at_upper_bound: bool
+    r_min: float
+    r_max: float
+
+class ReproduceResult(Result):
+    summary: Dict[str, Any]
+
+def simulate(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    particles: int = ...,
+    dt: Optional[float] = ...,
+    t_max: float = ...,
+    samples: int = ...,
+    grid: Literal["linear", "log"] = ...,
+    t_min: float = ...,
+    burn_in: float = ...,
+    bins: int = ...,
+    method: Literal["exact", "euler"] = ...,
+    events: Optional[Literal["geometric", "bernoulli"]] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> SimulateResult: ...
+def analytic(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    points: int = ...,
+    out: Optional[PathLike] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> AnalyticResult: ...
+def fp_stationary(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    cells: int = ...,
+    mesh: Literal["graded", "uniform"] = ...,
+    no_extrapolate: bool = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> FpStationaryResult: ...
+def fp_transient(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    t_max: float,
+    cells: int = ...,
+    samples: int = ...,
+    snapshots: int = ...,
+    cfl: float = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> FpTransientResult: ...
+def mfpt(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    v0: float,
+    cells: int = ...,
+    vt: float,
+    method: Literal["ode", "backward", "exact", "euler"] = ...,
+    particles: int = ...,
+    dt: float = ...,
+    t_max: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> MfptResult: ...
+def mfpt_scan(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    v0: float,
+    cells: int = ...,
+    vt: Optional[float] = ...,
+    over: Literal["vt", "rate"],
+    from_: float,
+    to: float,
+    points: int = ...,
+    log: bool = ...,
+    method: Literal["ode", "backward", "exact", "euler"] = ...,
+    particles: int = ...,
+    dt: float = ...,
+    t_max: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> MfptScanResult: ...
+def mfpt_optimize(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    v0: float,
+    cells: int = ...,
+    vt: float,
+    r_min: float = ...,
+    r_max: float = ...,
+    grid_points: int = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> MfptOptimizeResult: ...
+def reproduce(
+    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "all"],
+    out: PathLike,
+    quick: bool = ...,
+    seed: int = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> ReproduceResult: ...

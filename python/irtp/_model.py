@@ -1,0 +1,271 @@
+"""Model pieces as small Python objects: the drag law, the reset rule and a
+parameter set. They only carry values; the Rust side validates them (one
+home for every rule), so an invalid ``sigma`` is reported by the function
+that runs, with the CLI's message.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Tuple
+
+from . import _irtp
+
+_LAWS: Optional[Dict[str, Dict[str, Any]]] = None
+
+
+def _laws() -> Dict[str, Dict[str, Any]]:
+    """The registry of the Rust crate, read once: ``{name: info}`` in CLI order."""
+    global _LAWS
+    if _LAWS is None:
+        _LAWS = {d["name"]: dict(d) for d in _irtp.drag_laws()}
+    return _LAWS
+
+
+def _known_laws() -> str:
+    return ", ".join(_laws())
+
+
+class Drag:
+    """A drag law g(v) of the equation of motion dv/dt = -g(v) + eta(t), Eq. (5).
+
+    ``Drag("tan")`` (shear-thickening, Table 1), ``Drag("tanh")``
+    (shear-thinning, needs Sigma < 1), ``Drag("linear")`` (Newtonian) and
+    ``Drag("cubic")`` (g = v + v³/3); the list comes from the Rust registry
+    (:func:`drag_laws`). Accepted by every function as ``drag=`` and by
+    :class:`Params`; a plain string works too.
+
+    Attributes
+    ----------
+    name : str
+        The registry name (what ``--drag`` takes).
+    description : str
+        One line, e.g. "shear-thickening, g = tan v".
+    force_limit : float
+        The largest admissible Sigma (exclusive); ``inf`` when unbounded.
+    """
+
+    __slots__ = ("_name",)
+
+    def __init__(self, name: "str | Drag") -> None:
+        if isinstance(name, Drag):
+            name = name.name
+        if not isinstance(name, str) or name not in _laws():
+            raise ValueError(
+                f"unknown drag law {name!r} (known: {_known_laws()})"
+            )
+        self._name = name
+
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @property
+    def description(self) -> str:
+        return str(_laws()[self._name]["description"])
+
+    @property
+    def force_limit(self) -> float:
+        return float(_laws()[self._name]["force_limit"])
+
+    def __str__(self) -> str:
+        return self._name
+
+    def __repr__(self) -> str:
+        return f"Drag({self._name!r})"
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Drag):
+            return self._name == other._name
+        if isinstance(other, str):
+            return self._name == other
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self._name)
+
+
+def drag_laws() -> List[Drag]:
+    """Every registered drag law, in the CLI's order."""
+    return [Drag(name) for name in _laws()]
+
+
+def _number(name: str, value: Any) -> float:
+    """A real number as float (bools refused: ``sigma=True`` is a typo)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number, not {type(value).__name__}")
+    return float(value)
+
+
+class Reset:
+    """Base class of reset rules: ``options()`` gives the CLI options it sets."""
+
+    __slots__ = ()
+
+    def options(self) -> Dict[str, float]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class PoissonReset(Reset):
+    """Poissonian velocity resetting, the paper's protocol (Eq. (3)).
+
+    At rate ``rate`` (r) the velocity jumps to ``velocity`` (v_r); position
+    and noise state are kept. Maps to the options ``rate`` and
+    ``reset_velocity``. ``PoissonReset(0)`` is no resetting.
+    """
+
+    __slots__ = ("_rate", "_velocity")
+
+    def __init__(self, rate: float, velocity: float = 0.0) -> None:
+        self._rate = _number("rate", rate)
+        self._velocity = _number("velocity", velocity)
+
+    @property
+    def rate(self) -> float:
+        return self._rate
+
+    @property
+    def velocity(self) -> float:
+        return self._velocity
+
+    def options(self) -> Dict[str, float]:
+        return {"rate": self._rate, "reset_velocity": self._velocity}
+
+    def __repr__(self) -> str:
+        return f"PoissonReset(rate={self._rate!r}, velocity={self._velocity!r})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PoissonReset):
+            return NotImplemented
+        return (self._rate, self._velocity) == (other._rate, other._velocity)
+
+    def __hash__(self) -> int:
+        return hash((PoissonReset, self._rate, self._velocity))
+
+
+# Python attribute -> CLI option name of the model fields, in CLI order.
+_FIELDS: Tuple[Tuple[str, str], ...] = (
+    ("drag", "drag"),
+    ("sigma", "sigma"),
+    ("lambda_", "lambda"),
+    ("rate", "rate"),
+    ("reset_velocity", "reset_velocity"),
+)
+
+
+class Params:
+    """A model parameter set: drag law, Sigma, lambda and the reset rule.
+
+    Eq. (5) with telegraph noise ±Sigma flipping at rate lambda (Eq. (6))
+    and resetting v -> v_r at rate r (Eq. (3)). Fields left out (``None``)
+    take each command's own default (``analytic`` has rate 0, the others
+    rate 2). Pass it to any function as ``params=``; a field also given as
+    its own keyword raises ValueError.
+
+    ``Params(drag="tanh", sigma=0.6, lambda_=0.85, reset=PoissonReset(1.0))``
+    is the same as ``Params(drag="tanh", sigma=0.6, lambda_=0.85, rate=1.0,
+    reset_velocity=0.0)``. ``lambda`` may be given as ``**{"lambda": x}``.
+    """
+
+    __slots__ = ("_values",)
+
+    def __init__(
+        self,
+        drag: "str | Drag | None" = None,
+        sigma: Optional[float] = None,
+        lambda_: Optional[float] = None,
+        reset: Optional[Reset] = None,
+        *,
+        rate: Optional[float] = None,
+        reset_velocity: Optional[float] = None,
+        **kwargs: Any,
+    ) -> None:
+        if "lambda" in kwargs:
+            if lambda_ is not None:
+                raise ValueError("lambda_ given twice (as lambda_= and as lambda=)")
+            lambda_ = kwargs.pop("lambda")
+        if kwargs:
+            bad = ", ".join(sorted(kwargs))
+            raise ValueError(
+                f"unknown keyword {bad} for irtp.Params "
+                "(known: drag, sigma, lambda_, reset, rate, reset_velocity)"
+            )
+        if reset is not None:
+            if not isinstance(reset, Reset):
+                raise TypeError(f"reset must be a reset rule such as PoissonReset, not {reset!r}")
+            for key, value in reset.options().items():
+                if {"rate": rate, "reset_velocity": reset_velocity}[key] is not None:
+                    raise ValueError(f"{key} given twice (by reset= and by {key}=)")
+            rate, reset_velocity = reset.options()["rate"], reset.options()["reset_velocity"]
+        values: Dict[str, Any] = {}
+        if drag is not None:
+            values["drag"] = Drag(drag)
+        fields: Tuple[Tuple[str, Any], ...] = (
+            ("sigma", sigma), ("lambda_", lambda_), ("rate", rate),
+            ("reset_velocity", reset_velocity))
+        for attr, given in fields:
+            if given is not None:
+                values[attr] = _number(attr, given)
+        self._values = values
+
+    @classmethod
+    def from_mapping(cls, m: Mapping[str, Any]) -> "Params":
+        """From a mapping with the keys of run.json's model (``drag``, ``sigma``,
+        ``lambda``, ``rate``, ``reset_velocity``), e.g. ``result.summary["params"]``
+        of :func:`fp_stationary` or ``result.params["model"]``."""
+        return cls(**dict(m))
+
+    drag = property(lambda self: self._values.get("drag"), doc="Drag law (or None: default).")
+    sigma = property(lambda self: self._values.get("sigma"), doc="Noise amplitude Sigma.")
+    lambda_ = property(lambda self: self._values.get("lambda_"), doc="Flip rate lambda.")
+    rate = property(lambda self: self._values.get("rate"), doc="Reset rate r.")
+    reset_velocity = property(
+        lambda self: self._values.get("reset_velocity"), doc="Reset velocity v_r."
+    )
+
+    @property
+    def reset(self) -> Optional[PoissonReset]:
+        """The reset rule when the rate is set (velocity 0 unless given)."""
+        if self.rate is None:
+            return None
+        return PoissonReset(self.rate, self.reset_velocity or 0.0)
+
+    def options(self) -> Dict[str, Any]:
+        """The fields that are set, under the CLI's option names (``lambda``)."""
+        out: Dict[str, Any] = {}
+        for attr, cli in _FIELDS:
+            if attr in self._values:
+                value = self._values[attr]
+                out[cli] = value.name if isinstance(value, Drag) else value
+        return out
+
+    def replace(self, **changes: Any) -> "Params":
+        """A copy with some fields changed (``None`` unsets a field)."""
+        current: Dict[str, Any] = dict(self._values)
+        if "lambda" in changes:
+            changes["lambda_"] = changes.pop("lambda")
+        if "reset" in changes:
+            reset = changes.pop("reset")
+            current.pop("rate", None)
+            current.pop("reset_velocity", None)
+            if reset is not None:
+                current["rate"] = reset.options()["rate"]
+                current["reset_velocity"] = reset.options()["reset_velocity"]
+        current.update(changes)
+        return Params(**{k: v for k, v in current.items() if v is not None})
+
+    def __iter__(self) -> Iterator[Tuple[str, Any]]:
+        return iter(self.options().items())
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{attr}={self._values[attr]!r}" for attr, _ in _FIELDS
+                          if attr in self._values)
+        return f"Params({inner})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Params):
+            return NotImplemented
+        return self.options() == other.options()
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self.options().items())))
