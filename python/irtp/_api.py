@@ -352,8 +352,8 @@ DOCS: Dict[str, Doc] = {
         "MfptResult\n"
         "    ``summary`` holds tau, tau_plus, tau_minus and error_estimate (ode) or\n"
         "        tau_err, particles, censored (particles). ode also returns the\n"
-        "        table profile: v0, tau_plus, tau_minus, tau over the mesh (so\n"
-        "        ``res.tau`` is that column; the scalar is ``res.summary['tau']``).",
+        "        table profile: v0, tau_plus, tau_minus, tau over the mesh (in\n"
+        "        ``res.tables['profile']``; ``res.tau`` is the scalar answer).",
         ">>> res = irtp.mfpt(v0=-0.249, vt=0.5, method='backward')\n"
         ">>> res.summary['tau'] > 0\n"
         "True",

@@ -74,6 +74,10 @@ class Result:
     works.
     """
 
+    # Whether summary scalars shadow columns of the same name (mfpt: ``res.tau``
+    # is the answer, the profile's column stays in ``res.tables``).
+    _summary_first = False
+
     def __init__(self, raw: Dict[str, Any]) -> None:
         self.command: str = raw["command"]
         self.method: str = raw.get("method") or ""
@@ -96,10 +100,13 @@ class Result:
         if name.startswith("_"):
             raise AttributeError(name)
         columns = self.__dict__.get("_columns", {})
+        summary = self.__dict__.get("summary")
+        scalar = isinstance(summary, dict) and isinstance(summary.get(name), _SCALARS)
+        if scalar and name in summary and self._summary_first:
+            return summary[name]
         if name in columns:
             return columns[name]
-        summary = self.__dict__.get("summary")
-        if isinstance(summary, dict) and name in summary and isinstance(summary[name], _SCALARS):
+        if scalar and name in summary:
             return summary[name]
         raise AttributeError(
             f"{type(self).__name__} of irtp.{FUNCTION.get(self.__dict__.get('command', ''), '?')} "
@@ -200,7 +207,11 @@ class FpTransientResult(Result):
 
 
 class MfptResult(Result):
-    """Result of :func:`irtp.mfpt`: table "profile" (backward equations only)."""
+    """Result of :func:`irtp.mfpt`: ``res.tau``, ``res.tau_plus``, ``res.tau_minus``
+    are the answer (scalars); table "profile" (backward equations only) holds
+    tau against the start velocity in ``res.tables["profile"]``."""
+
+    _summary_first = True
 
 
 class MfptScanResult(Result):
