@@ -14,8 +14,12 @@ import pytest
 
 SCRIPT = textwrap.dedent(
     """
+    import signal
     import sys
     import irtp
+    # Python's own Ctrl-C handler, even if this process inherited SIGINT
+    # ignored (POSIX does that to jobs started with `&` by a script).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     print("started", flush=True)
     try:
         irtp.simulate(particles=10**9, t_max=1000.0, samples=11, out=sys.argv[1], threads=2)
