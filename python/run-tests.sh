@@ -7,7 +7,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 venv="${IRTP_VENV:-target/py-venv}"
 rm -rf "$venv"
-python3 -m venv "$venv"
+if ! python3 -m venv "$venv"; then
+  # Debian's python3 ships venv separately.
+  sudo_=""; [ "$(id -u)" -ne 0 ] && sudo_="sudo"
+  $sudo_ apt-get install -y python3-venv
+  rm -rf "$venv"
+  python3 -m venv "$venv"
+fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 "$venv/bin/python" -m pip install --quiet "./python[test]"
 # The CLI the bit-identity tests compare with (the same crate, this checkout).

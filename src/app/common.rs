@@ -9,7 +9,7 @@ use std::path::PathBuf;
 /// including `analytic`, which has no resetting flags of its own).
 #[derive(Args, Clone, Debug)]
 pub struct NoiseArgs {
-    /// Drag law g(v) (help text generated from the registry: [`drag_help`]).
+    /// Drag law g(v) (help text generated from the registry by `drag_help`).
     #[arg(long, default_value = "tan", value_parser = parse_drag, help = drag_help())]
     pub drag: DragLaw,
     /// Noise amplitude Sigma (eta = ±Sigma).

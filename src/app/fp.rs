@@ -17,7 +17,10 @@ pub struct FpArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum FpCommand {
-    /// Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve.
+    /// Stationary density, `<v>`, `<v²>` (Eq. (33)) and exact D_eff by a direct O(N) solve.
+    #[command(
+        about = "Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve."
+    )]
     Stationary(StationaryArgs),
     /// Time-dependent solution from the paper's initial condition (explicit upwind, Sec. 3).
     Transient(TransientArgs),
