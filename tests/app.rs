@@ -83,8 +83,8 @@ fn outcome_tables_are_the_written_csv_files() {
     ];
     let ctx = Context::new(&app::Quiet);
     let o = app::run(&cli(&args).command, &ctx).unwrap();
-    assert_eq!(o.tables.len(), 2);
-    for t in &o.tables {
+    assert_eq!(o.results.tables.len(), 2);
+    for t in &o.results.tables {
         let text = std::fs::read_to_string(out.join(format!("{}.csv", t.name))).unwrap();
         let mut lines = text.lines();
         assert_eq!(lines.next().unwrap(), t.header.join(","));

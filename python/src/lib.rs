@@ -79,17 +79,11 @@ fn value(v: &Bound<'_, PyAny>, name: &str) -> PyResult<Value> {
 }
 
 /// The outcome as the dict the Python layer wraps.
-fn outcome_to_py<'py>(py: Python<'py>, o: Outcome) -> PyResult<Bound<'py, PyDict>> {
+fn outcome_to_py<'py>(py: Python<'py>, outcome: Outcome) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("command", o.command)?;
-    d.set_item("method", &o.method)?;
-    d.set_item("seed", o.seed)?;
-    d.set_item("summary", json_to_py(py, &o.json)?)?;
-    d.set_item("parameters", json_to_py(py, &o.parameters)?)?;
-    d.set_item("provenance", json_to_py(py, &o.provenance)?)?;
-    d.set_item("text", &o.text)?;
-    d.set_item("wall_time_s", o.wall_time_s)?;
-    let (out, files) = match &o.written {
+    d.set_item("command", outcome.command)?;
+    d.set_item("provenance", json_to_py(py, &outcome.provenance)?)?;
+    let (out, files) = match &outcome.written {
         Some((dir, files)) => {
             let f: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
             (Some(dir.display().to_string()), Some(f))
@@ -98,6 +92,13 @@ fn outcome_to_py<'py>(py: Python<'py>, o: Outcome) -> PyResult<Bound<'py, PyDict
     };
     d.set_item("out", out)?;
     d.set_item("files", files)?;
+    let o = outcome.results;
+    d.set_item("method", &o.method)?;
+    d.set_item("seed", o.seed)?;
+    d.set_item("summary", json_to_py(py, &o.json)?)?;
+    d.set_item("parameters", json_to_py(py, &o.parameters)?)?;
+    d.set_item("text", &o.text)?;
+    d.set_item("wall_time_s", o.wall_time_s)?;
     let tables = PyDict::new(py);
     for t in o.tables {
         let cols = PyDict::new(py);

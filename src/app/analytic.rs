@@ -1,7 +1,7 @@
 //! `irtp analytic`: exact r = 0 stationary density, its regime and moments.
 
 use super::common::NoiseArgs;
-use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
 use crate::numerics::grid::chebyshev;
 use crate::{DragLaw, Error, Params};
@@ -122,7 +122,7 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
         points: c.points,
     };
     let json = to_value(&report);
-    let computed = Computed {
+    let results = Results {
         method: "exact r=0 density; adaptive Gauss-Kronrod normalisation".into(),
         seed: None,
         json: json.clone(),
@@ -132,7 +132,7 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
         text: text_report(&report),
         wall_time_s: t0.elapsed().as_secs_f64(),
     };
-    finish("analytic", computed, out, ctx)
+    finish("analytic", results, out, ctx)
 }
 
 fn text_report(report: &Report) -> String {

@@ -1,7 +1,7 @@
 //! `irtp fp stationary` and `irtp fp transient`: Fokker-Planck solvers.
 
 use super::common::{ModelArgs, OutputArgs};
-use super::{finish, open_out, Computed, Context, Outcome, Table};
+use super::{finish, open_out, Context, Outcome, Results, Table};
 use crate::fp::{self, Mesh, StationaryOptions, TransientOptions};
 use crate::Params;
 use clap::{Args, Subcommand, ValueEnum};
@@ -163,7 +163,7 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
         s.mesh.name(),
         if s.extrapolated { ", extrapolated" } else { "" }
     );
-    let computed = Computed {
+    let results = Results {
         method: format!("fv-upwind-direct-{}", s.mesh.name()),
         seed: None,
         json: summary.clone(),
@@ -173,7 +173,7 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
         text,
         wall_time_s: wall,
     };
-    finish("fp stationary", computed, out, ctx)
+    finish("fp stationary", results, out, ctx)
 }
 
 /// Run `irtp fp transient`: `moments.csv`, `snapshots.csv`, `summary.json`,
@@ -223,7 +223,7 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
         "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)\n",
         tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
     );
-    let computed = Computed {
+    let results = Results {
         method: "fv-upwind-explicit-uniform".into(),
         seed: None,
         json: summary.clone(),
@@ -233,5 +233,5 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
         text,
         wall_time_s: wall,
     };
-    finish("fp transient", computed, out, ctx)
+    finish("fp transient", results, out, ctx)
 }

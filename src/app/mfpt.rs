@@ -9,7 +9,7 @@
 //! the library's [`crate::mfpt::Method`].
 
 use super::common::{ModelArgs, OutputArgs};
-use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
 use crate::mfpt::{
     self, FptSummary, MfptResult, OptimizeOptions, ParticleOptions, Problem, ScanAxis, ScanPoint,
@@ -367,7 +367,7 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
     };
     let wall = t0.elapsed().as_secs_f64();
     let json = to_value(&report);
-    let computed = Computed {
+    let results = Results {
         method: method_name(report.method).into(),
         seed: report.seed,
         json: json.clone(),
@@ -377,7 +377,7 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
         text: text_lines(&json),
         wall_time_s: wall,
     };
-    finish("mfpt", computed, out, ctx)
+    finish("mfpt", results, out, ctx)
 }
 
 /// `profile.csv`: tau± and their mean against the start velocity.
@@ -535,7 +535,7 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
         dt: (a.sim.method == Method::Euler).then_some(a.sim.dt),
         t_max: sim.then_some(a.sim.t_max),
     };
-    let computed = Computed {
+    let results = Results {
         method: method_name(a.sim.method).into(),
         seed: sim.then_some(a.output.seed),
         json: to_value(&table_json(&table)),
@@ -545,7 +545,7 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
         json_files: Vec::new(),
         wall_time_s: wall,
     };
-    finish("mfpt scan", computed, out, ctx)
+    finish("mfpt scan", results, out, ctx)
 }
 
 /// The table as CSV text.
@@ -634,7 +634,7 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> crate::Result<Outcome> {
         &["rate", "tau"],
         best.grid.iter().map(|&(r, t)| [r, t]),
     );
-    let computed = Computed {
+    let results = Results {
         method: "backward-box + golden-section".into(),
         seed: None,
         json: json.clone(),
@@ -644,5 +644,5 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> crate::Result<Outcome> {
         text: text_lines(&json),
         wall_time_s: wall,
     };
-    finish("mfpt optimize", computed, out, ctx)
+    finish("mfpt optimize", results, out, ctx)
 }

@@ -172,12 +172,24 @@ impl Table {
     }
 }
 
-/// The result of one command: what `--json` prints, the tables, the
-/// text report and the provenance.
+/// The result of one command: what it computed, its provenance and the
+/// files it wrote.
 #[derive(Clone, Debug)]
 pub struct Outcome {
     /// The command (`simulate`, `fp stationary`, ...).
     pub command: &'static str,
+    /// What the command computed.
+    pub results: Results,
+    /// `run.json` as written (or as it would be written without `--out`).
+    pub provenance: Value,
+    /// The output directory and the files written there, when one was given.
+    pub written: Option<(PathBuf, Vec<PathBuf>)>,
+}
+
+/// What a command computed: what `--json` prints, the tables and the text
+/// report; [`Outcome`] adds the provenance and the files written.
+#[derive(Clone, Debug)]
+pub struct Results {
     /// The numerical method, as recorded in `run.json`.
     pub method: String,
     /// The master seed of a stochastic method.
@@ -194,30 +206,13 @@ pub struct Outcome {
     pub text: String,
     /// Wall-clock seconds of the computation.
     pub wall_time_s: f64,
-    /// `run.json` as written (or as it would be written without `--out`).
-    pub provenance: Value,
-    /// The output directory and the files written there, when one was given.
-    pub written: Option<(PathBuf, Vec<PathBuf>)>,
 }
 
-impl Outcome {
+impl Results {
     /// The table with this name.
     pub fn table(&self, name: &str) -> Option<&Table> {
         self.tables.iter().find(|t| t.name == name)
     }
-}
-
-/// The parts of an [`Outcome`] a command computes; [`finish`] adds the
-/// provenance and writes the files.
-pub(crate) struct Computed {
-    pub method: String,
-    pub seed: Option<u64>,
-    pub json: Value,
-    pub parameters: Value,
-    pub tables: Vec<Table>,
-    pub json_files: Vec<(&'static str, Value)>,
-    pub text: String,
-    pub wall_time_s: f64,
 }
 
 /// JSON value of a serialisable result (these never fail: plain structs of
@@ -235,26 +230,27 @@ pub(crate) fn open_out(dir: Option<&Path>) -> Result<Option<OutputDir>> {
 /// `run.json` (all or nothing) and assemble the [`Outcome`].
 pub(crate) fn finish(
     command: &'static str,
-    c: Computed,
+    results: Results,
     out: Option<OutputDir>,
     ctx: &Context,
 ) -> Result<Outcome> {
     ctx.check()?;
+    let r = &results;
     let prov = Provenance::new(
         command,
-        c.method.clone(),
-        c.seed,
-        &c.parameters,
-        c.wall_time_s,
+        r.method.clone(),
+        r.seed,
+        &r.parameters,
+        r.wall_time_s,
     )
     .with_argv(ctx.argv.clone());
     let (provenance, written) = match out {
         None => (to_value(&prov), None),
         Some(mut o) => {
-            for t in &c.tables {
+            for t in &r.tables {
                 t.write(&mut o)?;
             }
-            for (name, v) in &c.json_files {
+            for (name, v) in &r.json_files {
                 o.write_json(name, v)?;
             }
             let target = o.target().to_path_buf();
@@ -264,14 +260,7 @@ pub(crate) fn finish(
     };
     Ok(Outcome {
         command,
-        method: c.method,
-        seed: c.seed,
-        json: c.json,
-        parameters: c.parameters,
-        tables: c.tables,
-        json_files: c.json_files,
-        text: c.text,
-        wall_time_s: c.wall_time_s,
+        results,
         provenance,
         written,
     })

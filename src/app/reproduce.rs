@@ -1,6 +1,6 @@
 //! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,all} --out DIR [--quick] [--seed N]`.
 
-use super::{Context, Outcome};
+use super::{Context, Outcome, Results};
 use crate::figures::{self, Options, Which, SCALE};
 use crate::io::OutputDir;
 use clap::Args;
@@ -86,8 +86,7 @@ pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
     let names: Vec<&str> = which.iter().map(|w| w.name()).collect();
     let claims: Vec<_> = outputs.iter().flat_map(|o| o.claims.iter()).collect();
     let parameters = provenance["parameters"].clone();
-    Ok(Outcome {
-        command: "reproduce",
+    let results = Results {
         method: "figures".into(),
         seed: Some(opts.seed),
         json: json!({"figures": names, "claims": claims, "files": files}),
@@ -96,6 +95,10 @@ pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
         json_files: Vec::new(),
         text,
         wall_time_s: wall,
+    };
+    Ok(Outcome {
+        command: "reproduce",
+        results,
         provenance,
         written: Some((args.out.clone(), files)),
     })

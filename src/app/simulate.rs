@@ -1,7 +1,7 @@
 //! `irtp simulate`: particle simulation of the IRTP with resetting.
 
 use super::common::{ModelArgs, OutputArgs};
-use super::{finish, open_out, to_value, Computed, Context, Outcome, Table};
+use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::sim::euler::{self, EulerPlan, EventSampling};
 use crate::sim::exact;
 use crate::sim::{Observables, SimSpec, SimSummary, TimeGrid};
@@ -221,7 +221,7 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
         particle_steps_per_s: summary.steps as f64 / wall,
         out: out.as_ref().map(|o| o.target().display().to_string()),
     };
-    let computed = Computed {
+    let results = Results {
         method: c.method().to_string(),
         seed: Some(c.spec.seed),
         json: to_value(&json),
@@ -234,7 +234,7 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
         text: text_report(a, &c, &summary, wall),
         wall_time_s: wall,
     };
-    finish("simulate", computed, out, ctx)
+    finish("simulate", results, out, ctx)
 }
 
 /// The `parameters` object of `run.json`.

@@ -26,9 +26,9 @@ pub fn flag_for(name: &str) -> String {
 /// error: the results are already on disk.
 pub fn present(outcome: &Outcome, json: bool) -> anyhow::Result<()> {
     let mut text = if json {
-        serde_json::to_string(&outcome.json)? + "\n"
+        serde_json::to_string(&outcome.results.json)? + "\n"
     } else {
-        outcome.text.clone()
+        outcome.results.text.clone()
     };
     if let (false, Some((dir, files))) = (json, &outcome.written) {
         let names: Vec<String> = files

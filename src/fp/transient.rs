@@ -203,15 +203,22 @@ pub fn transient_with_progress(
             out.steps += 1;
             t = if h == dt { t + dt } else { target };
             if out.steps % report_every == 0 {
-                progress.update(out.steps.min(total_steps), total_steps);
-                if progress.cancelled() {
-                    return Err(Error::Interrupted);
-                }
+                report(progress, out.steps, total_steps)?;
             }
         }
     }
     progress.update(total_steps, total_steps);
     Ok(out)
+}
+
+/// Report `steps` of `total` done; [`Error::Interrupted`] when the caller
+/// asked to stop.
+fn report(progress: &dyn Progress, steps: u64, total: u64) -> Result<()> {
+    progress.update(steps.min(total), total);
+    if progress.cancelled() {
+        return Err(Error::Interrupted);
+    }
+    Ok(())
 }
 
 /// Check the options; returns the recording times (t_max when none) and
