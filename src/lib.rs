@@ -8,7 +8,9 @@
 //! at rate r the velocity is reset to v_r (position and noise state kept).
 //!
 //! Modules, one per concept, with dependencies running one way
-//! (front ends → app → figures → {mfpt, fp, sim, analytic} → model → numerics):
+//! (front ends → sweep → app → figures → {mfpt, fp, sim, analytic} → model → numerics):
+//! - [`sweep`]: parameter sweeps over TOML plans, sharded, resumable,
+//!   merged into one table; SLURM job arrays.
 //! - [`app`]: the commands of the `irtp` program (flags, validation, run,
 //!   output files) as library calls, shared by the binary and the Python
 //!   module.
@@ -51,6 +53,7 @@ pub mod parallel;
 pub mod rng;
 pub mod sim;
 pub mod stats;
+pub mod sweep;
 
 pub use error::{Error, Result};
 pub use model::{Drag, DragLaw, Params};

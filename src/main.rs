@@ -2,15 +2,39 @@
 
 mod cli;
 
-use clap::Parser;
-use irtp::app::{self, Cli};
+use clap::{Parser, Subcommand};
+use irtp::app;
 use std::process::ExitCode;
 
-fn run(cli: Cli) -> anyhow::Result<()> {
-    let reporter = cli::progress::Bars;
-    let ctx = app::Context::new(&reporter);
-    let outcome = app::run(&cli.command, &ctx)?;
-    cli::present(&outcome, cli.command.json())
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+#[derive(Parser, Debug)]
+#[command(name = "irtp", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: TopCommand,
+}
+
+/// The library's commands ([`app::Command`]) and the sweeps.
+#[derive(Subcommand, Debug)]
+enum TopCommand {
+    #[command(flatten)]
+    App(app::Command),
+    /// Parameter sweeps from a TOML plan: run (sharded, resumable), merge, status, SLURM arrays.
+    Sweep(cli::sweep::SweepArgs),
+}
+
+/// Run the command; the exit code on success (0; `sweep` may report 3).
+fn run(cli: Cli) -> anyhow::Result<u8> {
+    match cli.command {
+        TopCommand::App(command) => {
+            let reporter = cli::progress::Bars;
+            let ctx = app::Context::new(&reporter);
+            let outcome = app::run(&command, &ctx)?;
+            cli::present(&outcome, command.json())?;
+            Ok(0)
+        }
+        TopCommand::Sweep(a) => cli::sweep::run(a),
+    }
 }
 
 fn main() -> ExitCode {
@@ -34,7 +58,7 @@ fn main() -> ExitCode {
         }
     };
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(e) => {
             // Library errors name parameters (`t_max`); the user typed flags (`--t-max`).
             let lib = e.downcast_ref::<irtp::Error>();

@@ -1,7 +1,7 @@
 //! The module layering, checked on the source text.
 //!
 //! front ends (the binary `src/main.rs`, `src/cli`; the Python module in
-//! `python/`) → `app` → `figures` → {`mfpt`, `fp`, `sim`,
+//! `python/`) → `sweep` → `app` → `figures` → {`mfpt`, `fp`, `sim`,
 //! `analytic`} → `model` → `numerics`. A module may import from its own
 //! layer's allowed siblings ([`SIBLINGS`]) and from any layer below it.
 //! `error`, `rng`, `parallel`, `stats`, `io` are utilities: importable from
@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 
 /// Layers of the library's top-level modules, highest first.
 const LAYERS: &[&[&str]] = &[
+    &["sweep"],
     &["app"],
     &["figures"],
     &["mfpt", "fp", "sim", "analytic"],

@@ -1,15 +1,14 @@
 //! `irtp._irtp`: the Rust side of the Python package `irtp`, a thin layer
 //! over [`irtp::app`]. Python keywords become the equivalent `irtp` command
-//! line ([`argv`]), which the CLI's own definitions parse; the command runs
+//! line ([`irtp::app::keywords`]), which the CLI's own definitions parse; the command runs
 //! off the Python thread ([`runner`]); the [`irtp::app::Outcome`] comes back
 //! as a dict whose tables are numpy arrays (each column's buffer is moved
 //! into its array, not copied). The pure-Python layer (`python/irtp/`)
 //! builds the public functions, result objects and progress bars on it.
 
-mod argv;
 mod runner;
 
-use argv::Value;
+use irtp::app::keywords::{self as argv, Value};
 use irtp::app::Outcome;
 use irtp::model::Drag;
 use irtp::DragLaw;

@@ -60,14 +60,14 @@ struct RunParams {
 }
 
 /// The validated inputs of `irtp analytic`.
-struct Config {
+pub(crate) struct Config {
     params: Params,
     points: usize,
 }
 
 impl AnalyticArgs {
     /// Flags → validated config (the closed form exists only for r = 0).
-    fn config(&self) -> crate::Result<Config> {
+    pub(crate) fn config(&self) -> crate::Result<Config> {
         let params = self.noise.params(self.rate, 0.0)?;
         if self.points < 2 {
             return Err(Error::invalid("--points", self.points, "points >= 2"));

@@ -87,6 +87,16 @@ impl FpArgs {
     }
 }
 
+impl FpArgs {
+    /// Validate the flags without solving.
+    pub(crate) fn validate(&self) -> crate::Result<()> {
+        match &self.command {
+            FpCommand::Stationary(a) => a.config().map(drop),
+            FpCommand::Transient(a) => a.config().map(drop),
+        }
+    }
+}
+
 /// Run `irtp fp ...`.
 pub fn run(args: &FpArgs, ctx: &Context) -> crate::Result<Outcome> {
     match &args.command {

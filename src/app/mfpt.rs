@@ -166,6 +166,17 @@ impl MfptArgs {
     }
 }
 
+impl MfptArgs {
+    /// Validate the flags (every point of a scan) without solving.
+    pub(crate) fn validate(&self) -> crate::Result<()> {
+        match &self.command {
+            None => self.direct.config().map(drop),
+            Some(MfptCommand::Scan(a)) => a.config().map(drop),
+            Some(MfptCommand::Optimize(a)) => a.config().map(drop),
+        }
+    }
+}
+
 /// Run `irtp mfpt [scan | optimize]`.
 pub fn run(args: &MfptArgs, ctx: &Context) -> crate::Result<Outcome> {
     match &args.command {

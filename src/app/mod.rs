@@ -14,6 +14,7 @@
 pub mod analytic;
 pub mod common;
 pub mod fp;
+pub mod keywords;
 pub mod mfpt;
 pub mod reproduce;
 pub mod simulate;
@@ -60,6 +61,18 @@ impl Command {
             Command::Fp(a) => a.json(),
             Command::Reproduce(_) => false,
         }
+    }
+}
+
+/// Validate a command's flags as its run would (ranges, combinations),
+/// without computing anything.
+pub fn validate(command: &Command) -> Result<()> {
+    match command {
+        Command::Analytic(a) => a.config().map(drop),
+        Command::Simulate(a) => a.config().map(drop),
+        Command::Mfpt(a) => a.validate(),
+        Command::Fp(a) => a.validate(),
+        Command::Reproduce(_) => Ok(()),
     }
 }
 

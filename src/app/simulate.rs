@@ -115,7 +115,7 @@ struct EulerSetup {
 }
 
 /// The validated inputs of `irtp simulate`.
-struct Config {
+pub(crate) struct Config {
     params: Params,
     spec: SimSpec,
     /// `None`: the exact sampler.
@@ -139,7 +139,7 @@ impl Config {
 
 impl SimulateArgs {
     /// Flags → validated config, before anything touches the file system.
-    fn config(&self) -> crate::Result<Config> {
+    pub(crate) fn config(&self) -> crate::Result<Config> {
         let params = self.model.params()?;
         let grid = match self.grid {
             GridArg::Linear => TimeGrid::linear(self.t_max, self.samples)?,

@@ -3,6 +3,7 @@
 //! live here.
 
 pub mod progress;
+pub mod sweep;
 
 use irtp::app::Outcome;
 use std::io::Write;

@@ -18,12 +18,19 @@ impl Bar {
             ProgressBar::hidden()
         };
         pb.set_style(
-            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {pos}/{len} ({eta})")
+            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {pos}/{len} ({eta}) {msg}")
                 .expect("valid template")
                 .progress_chars("=> "),
         );
         pb.set_prefix(label.to_string());
         Bar(pb)
+    }
+
+    /// Show a short message after the counts (e.g. failures).
+    pub fn message(&self, msg: &str) {
+        if self.0.message() != msg {
+            self.0.set_message(msg.to_string());
+        }
     }
 }
 

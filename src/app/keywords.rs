@@ -1,10 +1,12 @@
-//! Python keyword arguments → the equivalent `irtp` command line, parsed by
-//! the CLI's own clap definitions ([`irtp::app::Cli`]): the keywords, their
-//! defaults, validation and help text have one home, and the same keywords
-//! give the same numbers as the same flags.
+//! Keyword arguments (the Python module's keywords, a sweep plan's
+//! parameters) → the equivalent `irtp` command line, parsed by the CLI's own
+//! clap definitions ([`Cli`]): the keywords, their defaults, validation and
+//! help text have one home, and the same keywords give the same numbers as
+//! the same flags. A keyword is a flag without `--`, with `-` written `_`
+//! (`--t-max` → `t_max`).
 
+use super::Cli;
 use clap::{Arg, ArgAction, Command, CommandFactory};
-use irtp::app::Cli;
 use std::any::TypeId;
 
 /// The commands a Python function can run.
@@ -19,12 +21,18 @@ pub const COMMANDS: [&str; 8] = [
     "reproduce",
 ];
 
-/// A keyword argument's value, as taken from Python.
+/// A keyword argument's value.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Value {
+    /// A switch (`true`: the flag is given).
     Bool(bool),
+    /// An integer.
     Int(i128),
+    /// A number (written in its shortest form that parses back exactly).
     Float(f64),
+    /// A string or path.
     Str(String),
+    /// Several positional values.
     List(Vec<String>),
 }
 
@@ -47,7 +55,8 @@ pub fn command(path: &str) -> Result<Command, String> {
     Ok(cur)
 }
 
-/// The Python function of a command (`fp stationary` → `fp_stationary`).
+/// How an error names a command: its Python function (`fp stationary` →
+/// `irtp.fp_stationary`).
 pub fn function(path: &str) -> String {
     format!("irtp.{}", path.replace(' ', "_"))
 }

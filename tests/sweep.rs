@@ -1,0 +1,226 @@
+//! `irtp sweep`: plans checked before work, shards that merge into the
+//! single run's table, resume after SIGKILL, foreign directories refused.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn irtp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_irtp"))
+        .args(args)
+        .output()
+        .expect("run irtp")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = irtp(args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// A seeded plan: 3 x 2 simulate points crossed with a zipped pair.
+const PLAN: &str = r#"
+command = "simulate"
+seed = 7
+
+[fixed]
+particles = 300
+t_max = 2.0
+burn_in = 1.0
+samples = 5
+bins = 10
+
+[axes]
+sigma = [1.0, 2.0, 3.0]
+rate = { from = 0.5, to = 2.0, points = 2, spacing = "log" }
+
+[[zip]]
+lambda = [0.5, 2.0]
+reset_velocity = [0.0, 0.1]
+"#;
+
+fn write_plan(dir: &Path, text: &str) -> String {
+    write_plan_as(dir, "plan.toml", text)
+}
+
+fn write_plan_as(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+/// results.csv without the wall_time_s column (it times the run).
+fn table(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let wall = header.iter().position(|h| h == "wall_time_s").unwrap();
+    let mut out = vec![header.join(",")];
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let cells: Vec<&str> = rec
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != wall)
+            .map(|(_, c)| c)
+            .collect();
+        out.push(cells.join(","));
+    }
+    out
+}
+
+#[test]
+fn shards_merge_into_the_single_run_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(tmp.path(), PLAN);
+    let single = tmp.path().join("single");
+    ok(&["sweep", "run", &plan, "--out", single.to_str().unwrap()]);
+    let reference = table(&single);
+    assert_eq!(reference.len(), 1 + 12, "12 points");
+    assert!(
+        reference.iter().skip(1).all(|r| r.contains(",ok,")),
+        "{reference:?}"
+    );
+    for n in [2, 7] {
+        let dirs: Vec<String> = (1..=n)
+            .map(|k| {
+                let d = tmp.path().join(format!("n{n}-k{k}"));
+                let d = d.to_str().unwrap().to_string();
+                ok(&[
+                    "sweep",
+                    "run",
+                    &plan,
+                    "--out",
+                    &d,
+                    "--shard",
+                    &format!("{k}/{n}"),
+                ]);
+                d
+            })
+            .collect();
+        let mut args = vec!["sweep", "merge"];
+        args.extend(dirs.iter().map(String::as_str));
+        ok(&args);
+        assert_eq!(table(Path::new(&dirs[0])), reference, "{n} shards");
+    }
+}
+
+#[test]
+fn resumes_after_sigkill_without_losing_or_mixing_points() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(
+        tmp.path(),
+        &PLAN.replace("particles = 300", "particles = 4000"),
+    );
+    let whole = tmp.path().join("whole");
+    ok(&["sweep", "run", &plan, "--out", whole.to_str().unwrap()]);
+    let out = tmp.path().join("killed");
+    // Kill at several moments (fixed, spread over the run), then finish.
+    for delay_ms in [40u64, 120, 250, 400] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_irtp"))
+            .args(["sweep", "run", &plan, "--out", out.to_str().unwrap()])
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+        let status = irtp(&["sweep", "status", out.to_str().unwrap()]);
+        let code = status.status.code();
+        assert!(
+            code == Some(0) || code == Some(3),
+            "{code:?} {}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+    }
+    ok(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+    assert_eq!(table(&out), table(&whole));
+    let s = ok(&["sweep", "status", out.to_str().unwrap()]);
+    assert!(s.contains("12 finished (0 failed), 0 missing"), "{s}");
+}
+
+#[test]
+fn bad_plans_are_refused_before_any_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str); 7] = [
+        ("command = \"simulate\"\ncolour = 1\n", "colour"),
+        (
+            "command = \"simulate\"\n[axes]\nsigma = \"three\"\n",
+            "sigma",
+        ),
+        ("command = \"simulate\"\n[axes]\nsigma = []\n", "sigma"),
+        ("command = \"simulate\"\n[fixed]\nwidth = 2\n", "width"),
+        ("command = \"simulate\"\n[fixed]\nseed = 2\n", "seed"),
+        ("command = \"reproduce\"\n", "command"),
+        (
+            "command = \"simulate\"\n[fixed]\ndrag = \"tanh\"\n[axes]\nsigma = [0.5, 1.5]\n",
+            "point 1",
+        ),
+    ];
+    for (text, needle) in cases {
+        let plan = write_plan(tmp.path(), text);
+        let out = tmp.path().join("out");
+        let o = irtp(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{text}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{text}: {err}");
+        assert!(!out.exists(), "{text}: nothing written");
+    }
+}
+
+#[test]
+fn foreign_points_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(tmp.path(), PLAN);
+    let out = tmp.path().join("out");
+    ok(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+    // Another plan into the same directory: its points are foreign there.
+    let other = write_plan_as(
+        tmp.path(),
+        "other.toml",
+        &PLAN.replace("seed = 7", "seed = 8"),
+    );
+    let o = irtp(&["sweep", "run", &other, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not a point of this plan"));
+    // A point whose statepoint was edited.
+    let ws = out.join("workspace");
+    let first = std::fs::read_dir(&ws)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    std::fs::write(
+        first.join("signac_statepoint.json"),
+        "{\"command\": \"simulate\"}",
+    )
+    .unwrap();
+    let o = irtp(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("other parameters"), "{err}");
+}
+
+#[test]
+fn a_failing_point_is_recorded_and_the_sweep_goes_on() {
+    let tmp = tempfile::tempdir().unwrap();
+    // r = 1e6 from v0 far below vt: tau overflows (a numerical failure), r = 1 is fine.
+    let plan = write_plan(
+        tmp.path(),
+        "command = \"mfpt\"\n[fixed]\nv0 = -0.249\nvt = 0.5\ncells = 2000\n[axes]\nrate = [1.0, 1e6]\n",
+    );
+    let out = tmp.path().join("out");
+    ok(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+    let t = table(&out);
+    assert!(t[1].contains(",ok,"), "{t:?}");
+    assert!(t[2].contains(",failed,numerical failure in mfpt"), "{t:?}");
+    let s = ok(&["sweep", "status", out.to_str().unwrap()]);
+    assert!(
+        s.contains("2 finished (1 failed)") && s.contains("--retry-failed"),
+        "{s}"
+    );
+}
