@@ -209,7 +209,18 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
             None => exact::simulate(&c.params, &c.spec, bar.as_ref())?,
         }
     };
-    let wall = start.elapsed().as_secs_f64();
+    report(a, &c, &obs, start.elapsed().as_secs_f64(), out, ctx)
+}
+
+/// The outcome of a simulation's observables: JSON, tables, text, files.
+fn report(
+    a: &SimulateArgs,
+    c: &Config,
+    obs: &Observables,
+    wall: f64,
+    out: Option<crate::io::OutputDir>,
+    ctx: &Context,
+) -> crate::Result<Outcome> {
     ctx.check()?;
     let summary = obs.summary();
     let json = JsonOut {
@@ -225,16 +236,75 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
         method: c.method().to_string(),
         seed: Some(c.spec.seed),
         json: to_value(&json),
-        parameters: to_value(&run_parameters(a, &c)),
+        parameters: to_value(&run_parameters(a, c)),
         tables: vec![
             Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
             Table::from_rows("density", &Observables::DENSITY_HEADER, obs.density_rows()),
         ],
         json_files: Vec::new(),
-        text: text_report(a, &c, &summary, wall),
+        text: text_report(a, c, &summary, wall),
         wall_time_s: wall,
     };
     finish("simulate", results, out, ctx)
+}
+
+/// A simulation in parts: the run `a` describes, cut into `parts`
+/// contiguous ranges of particle units ([`crate::sim::simulate_units`]),
+/// each computable anywhere; [`Parts::assemble`] of all parts' unit totals
+/// gives [`run`]'s outcome, bit for bit.
+pub struct Parts<'a> {
+    args: &'a SimulateArgs,
+    config: Config,
+    method: crate::sim::Method,
+    /// Number of parts.
+    pub parts: u64,
+}
+
+impl<'a> Parts<'a> {
+    /// `parts` parts of the run `a` (at least one unit of particles each).
+    pub fn new(a: &'a SimulateArgs, parts: u64) -> crate::Result<Parts<'a>> {
+        let config = a.config()?;
+        let method = match &config.euler {
+            None => crate::sim::Method::Exact,
+            Some(e) if e.events == EventSampling::Geometric => crate::sim::Method::Euler { dt: e.dt },
+            Some(_) => {
+                return Err(crate::Error::invalid(
+                    "events",
+                    "bernoulli",
+                    "geometric (the default) when a run is cut into parts",
+                ))
+            }
+        };
+        let units = crate::sim::unit_count(config.spec.particles);
+        if !(parts >= 1 && parts <= units) {
+            return Err(crate::Error::invalid(
+                "particle_parts",
+                parts,
+                format!("1 ..= {units} for {} particles (parts of whole {}-particle units)", config.spec.particles, crate::parallel::UNIT),
+            ));
+        }
+        Ok(Parts { args: a, config, method, parts })
+    }
+
+    /// The unit totals of part `k` (0-based).
+    pub fn compute(&self, k: u64, ctx: &Context) -> crate::Result<Vec<Observables>> {
+        let units = crate::sim::unit_count(self.config.spec.particles);
+        let range = k * units / self.parts..(k + 1) * units / self.parts;
+        let c = &self.config;
+        let bar = ctx.reporter.stage("simulate part", c.spec.particles);
+        let r = crate::sim::simulate_units(&c.params, &c.spec, self.method, range, bar.as_ref())?;
+        ctx.check()?;
+        Ok(r)
+    }
+
+    /// The outcome of the whole run from every part's unit totals (in part
+    /// order) and the parts' summed wall time: written to `--out` as [`run`] would.
+    pub fn assemble(&self, units: &[Observables], wall: f64, ctx: &Context) -> crate::Result<Outcome> {
+        let c = &self.config;
+        let out = open_out(self.args.output.out.as_deref())?;
+        let obs = crate::sim::combine_units(&c.params, &c.spec, self.method, units)?;
+        report(self.args, c, &obs, wall, out, ctx)
+    }
 }
 
 /// The `parameters` object of `run.json`.

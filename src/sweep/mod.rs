@@ -11,6 +11,7 @@
 //!
 //! Layering: `sweep` sits above [`crate::app`], below the binary.
 
+pub mod parts;
 pub mod plan;
 pub mod slurm;
 pub mod store;
@@ -75,13 +76,15 @@ impl Tally for () {
 pub struct RunReport {
     /// Points of the plan.
     pub points: usize,
-    /// Points of this shard.
-    pub shard_points: usize,
-    /// Points this run computed.
+    /// Work items of the plan (points, or their parts with `particle_parts`).
+    pub items: usize,
+    /// Work items of this shard.
+    pub shard_items: usize,
+    /// Items this run computed.
     pub ran: usize,
     /// Of those, failed.
     pub failed: usize,
-    /// Points of this shard already finished before the run.
+    /// Items of this shard already finished before the run.
     pub skipped: usize,
     /// The table, when every point of the plan is finished.
     pub table: Option<PathBuf>,
@@ -90,50 +93,76 @@ pub struct RunReport {
 /// Options of a run.
 #[derive(Clone, Copy, Debug)]
 pub struct RunOptions {
-    /// This run's share of the points.
+    /// This run's share of the work items.
     pub shard: Shard,
     /// Run failed points again (else a failure is a finished point).
     pub retry_failed: bool,
 }
 
-/// Run the points of `plan` this shard takes and has not finished, in
-/// parallel, into `root`; write `results.csv` when the whole plan is done.
+/// Whether an item still needs work.
+fn pending(plan: &Plan, store: &Store, it: &parts::Item, retry: bool) -> bool {
+    let open = match store.result(it.point) {
+        None => true,
+        Some(r) => retry && r.status != "ok",
+    };
+    match it.part {
+        None => open,
+        Some(k) => open && !(parts::path(store, it.point, k).exists() && plan.particle_parts > 1),
+    }
+}
+
+/// Run the work items of `plan` this shard takes and has not finished, in
+/// parallel, into `root`; assemble split points whose parts are all there;
+/// write `results.csv` when the whole plan is done.
 pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Result<RunReport> {
     let store = Store::open(root, plan)?;
     write_provenance(&store, plan, opts.shard)?;
-    let mine: Vec<Point> = plan.points().filter(|p| opts.shard.has(p.index)).collect();
-    let todo: Vec<&Point> = mine
-        .iter()
-        .filter(|p| match store.result(p) {
-            None => true,
-            Some(r) => opts.retry_failed && r.status != "ok",
-        })
-        .collect();
+    let points: Vec<Point> = plan.points().collect();
+    let all = parts::items(plan, &points);
+    let mine: Vec<parts::Item> = all.iter().enumerate().filter(|(i, _)| opts.shard.has(*i)).map(|(_, it)| *it).collect();
+    let todo: Vec<&parts::Item> = mine.iter().filter(|it| pending(plan, &store, it, opts.retry_failed)).collect();
     let (done, failed) = (AtomicU64::new(0), AtomicU64::new(0));
     let total = todo.len() as u64;
     tally.update(0, 0, total);
-    todo.par_iter().try_for_each(|p| -> Result<()> {
-        let r = run_point(plan, &store, p)?;
-        if r.status != "ok" {
-            failed.fetch_add(1, Ordering::Relaxed);
-        }
+    todo.par_iter().try_for_each(|it| -> Result<()> {
+        let ok = match it.part {
+            None => run_point(plan, &store, it.point)?.status == "ok",
+            Some(k) => parts::run_part(plan, &store, it.point, k)?,
+        };
+        failed.fetch_add(u64::from(!ok), Ordering::Relaxed);
         let d = done.fetch_add(1, Ordering::Relaxed) + 1;
         tally.update(d, failed.load(Ordering::Relaxed), total);
         Ok(())
     })?;
+    assemble_ready(plan, &store, &points, opts.retry_failed)?;
     let counts = table::counts(plan, &store);
-    let table = if counts.missing == 0 {
-        Some(write_table(plan, &store)?.0)
-    } else {
-        None
-    };
+    let table = if counts.missing == 0 { Some(write_table(plan, &store)?.0) } else { None };
     Ok(RunReport {
         points: plan.len(),
-        shard_points: mine.len(),
+        items: all.len(),
+        shard_items: mine.len(),
         ran: todo.len(),
         failed: failed.into_inner() as usize,
         skipped: mine.len() - todo.len(),
         table,
+    })
+}
+
+/// Assemble every split point whose parts are all stored and which has no
+/// result yet (or a failed one, with `retry`).
+fn assemble_ready(plan: &Plan, store: &Store, points: &[Point], retry: bool) -> Result<()> {
+    if plan.particle_parts <= 1 {
+        return Ok(());
+    }
+    points.par_iter().try_for_each(|p| -> Result<()> {
+        let open = match store.result(p) {
+            None => true,
+            Some(r) => retry && r.status != "ok",
+        };
+        if open && parts::complete(plan, store, p) {
+            parts::assemble(plan, store, p)?;
+        }
+        Ok(())
     })
 }
 
@@ -143,20 +172,20 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
 fn run_point(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
     store.begin(plan, p)?;
     let t0 = std::time::Instant::now();
-    let argv = plan
-        .argv(p, Some(&store.dir(p)))
-        .map_err(|e| bad_point(p, e))?;
+    let argv = plan.argv(p, Some(&store.dir(p))).map_err(|e| bad_point(p, e))?;
     let cli = keywords::parse(&plan.command, &argv).map_err(|e| bad_point(p, e))?;
-    let ctx = Context {
-        reporter: &Quiet,
-        argv,
-    };
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        app::run(&cli.command, &ctx)
-    }));
-    let wall_time_s = t0.elapsed().as_secs_f64();
-    let r = match outcome {
-        Ok(Ok(o)) => PointResult {
+    let ctx = Context { reporter: &Quiet, argv };
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| app::run(&cli.command, &ctx)))
+        .unwrap_or_else(|_| Err(Error::Numerical { method: "irtp", reason: "internal error (a panic); please report it".into() }));
+    let r = point_result(p, outcome, t0.elapsed().as_secs_f64());
+    store.finish(p, &r)?;
+    Ok(r)
+}
+
+/// A point's record from its command's outcome.
+fn point_result(p: &Point, outcome: Result<app::Outcome>, wall_time_s: f64) -> PointResult {
+    match outcome {
+        Ok(o) => PointResult {
             status: "ok".into(),
             error: None,
             method: Some(o.results.method.clone()),
@@ -164,15 +193,8 @@ fn run_point(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
             wall_time_s,
             summary: stable_summary(o.results.json),
         },
-        Ok(Err(e)) => failed(p, e.message_with(|n| n.to_string()), wall_time_s),
-        Err(_) => failed(
-            p,
-            "internal error (a panic); please report it".into(),
-            wall_time_s,
-        ),
-    };
-    store.finish(p, &r)?;
-    Ok(r)
+        Err(e) => failed(p, e.message_with(|n| n.to_string()), wall_time_s),
+    }
 }
 
 fn failed(p: &Point, error: String, wall_time_s: f64) -> PointResult {
@@ -295,6 +317,8 @@ pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<Counts> {
             table::take_point(&src_store, &store, &p)?;
         }
     }
+    let points: Vec<Point> = plan.points().collect();
+    assemble_ready(&plan, &store, &points, false)?;
     Ok(write_table(&plan, &store)?.1)
 }
 

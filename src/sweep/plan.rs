@@ -339,6 +339,7 @@ impl Plan {
             let cli = keywords::parse(&self.command, &argv)
                 .map_err(|e| at_point(&p, bad("parameters", "…", e)))?;
             crate::app::validate(&cli.command).map_err(|e| at_point(&p, e))?;
+            super::parts::check(self, &p, &cli)?;
         }
         Ok(())
     }

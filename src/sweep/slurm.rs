@@ -78,7 +78,8 @@ fn quote(p: &Path) -> String {
 /// Write `slurm/run.sbatch`, `slurm/merge.sbatch` and `slurm/submit.sh`
 /// into the sweep directory `root` (absolute), whose `plan.toml` is `plan`.
 pub fn write_scripts(plan: &Plan, root: &Path, o: &SlurmOptions) -> Result<Scripts> {
-    let (tasks, per) = layout(plan.len() as u64, o)?;
+    let items = plan.len() as u64 * plan.particle_parts;
+    let (tasks, per) = layout(items, o)?;
     let dir = root.join("slurm");
     std::fs::create_dir_all(&dir).map_err(|e| Error::Io {
         path: dir.display().to_string(),
@@ -101,7 +102,7 @@ pub fn write_scripts(plan: &Plan, root: &Path, o: &SlurmOptions) -> Result<Scrip
     }
     run += &format!("#SBATCH --output={}/task-%A_%a.out\n", dir.display());
     run += &format!(
-        "# {} points, at most {per} per task: task i runs shard i+1 of {tasks}.\nset -euo pipefail\n\
+        "# {items} work items ({} points), at most {per} per task: task i runs shard i+1 of {tasks}.\nset -euo pipefail\n\
          export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-{}}}\"\n\
          exec {exe} sweep run {rootq}/plan.toml --out {rootq} --shard \"$((SLURM_ARRAY_TASK_ID + 1))/{tasks}\"\n",
         plan.len(),

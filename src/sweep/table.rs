@@ -126,7 +126,7 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
 /// result; when both do, the results must agree (up to timing).
 pub fn take_point(src: &Store, dst: &Store, p: &Point) -> Result<()> {
     let Some(theirs) = src.result(p) else {
-        return Ok(());
+        return take_parts(src, dst, p);
     };
     if let Some(ours) = dst.result(p) {
         let same = ours.status == theirs.status
@@ -147,6 +147,26 @@ pub fn take_point(src: &Store, dst: &Store, p: &Point) -> Result<()> {
         return Ok(());
     }
     copy_dir(&src.dir(p), &dst.dir(p))
+}
+
+/// Copy the stored parts of an unfinished split point that `dst` lacks.
+fn take_parts(src: &Store, dst: &Store, p: &Point) -> Result<()> {
+    let Ok(entries) = fs::read_dir(src.dir(p)) else {
+        return Ok(());
+    };
+    let io = |p: &Path, e: std::io::Error| Error::Io { path: p.display().to_string(), reason: e.to_string() };
+    for entry in entries {
+        let entry = entry.map_err(|e| io(&src.dir(p), e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let wanted = (name.starts_with("part-") && name.ends_with(".json")) || name == "signac_statepoint.json";
+        let to = dst.dir(p).join(&name);
+        if wanted && !to.exists() {
+            fs::create_dir_all(dst.dir(p)).map_err(|e| io(&dst.dir(p), e))?;
+            let bytes = fs::read(entry.path()).map_err(|e| io(&entry.path(), e))?;
+            write_atomic(&to, &bytes)?;
+        }
+    }
+    Ok(())
 }
 
 /// Copy a point directory: files first, `result.json` last (so the copy is
