@@ -194,8 +194,8 @@ pub struct SimSpec {
     /// stream (seed, index), so disjoint shards of one run (e.g. SLURM array
     /// tasks) merge with [`Observables::merge`] into the statistics of the
     /// whole run (sums, counts and sums of squares add; the rounding of the
-    /// sums depends on the split unless the shards are whole units: for
-    /// bit-identical shards use [`simulate_units`] and [`combine_units`]).
+    /// sums depends on the split). For shards that merge bit for bit, run
+    /// the whole spec's units with [`simulate_units`] and [`combine_units`].
     #[serde(default)]
     pub first_particle: u64,
 }
