@@ -34,14 +34,15 @@
 //! run has N = n_{K-1} steps and the averaging window is steps
 //! n_b = round(burn_in/dt) .. N-1.
 
-use super::{Observables, SimSpec};
+use super::{Observables, Part, SimSpec};
 use crate::error::{Error, Result};
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, DragLaw, Params};
-use crate::parallel::{self, Progress};
+use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use rand::Rng as _;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// How the per-step reset and flip decisions are drawn (same law, see module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -193,13 +194,58 @@ pub fn simulate_with_lanes(
     lanes: usize,
     progress: &dyn Progress,
 ) -> Result<Observables> {
+    let whole = simulate_part(params, spec, dt, sampling, lanes, Part::Whole, progress)?;
+    Ok(whole.into_iter().next().expect("one total"))
+}
+
+/// The unit totals of units `units` of [`simulate`]'s run (see
+/// [`crate::sim::simulate_units`]).
+pub fn simulate_units(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    units: Range<u64>,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    let (sampling, part) = (EventSampling::Geometric, Part::Units(units));
+    simulate_part(params, spec, dt, sampling, LANES, part, progress)
+}
+
+fn simulate_part(
+    params: &Params,
+    spec: &SimSpec,
+    dt: f64,
+    sampling: EventSampling,
+    lanes: usize,
+    part: Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
     let plan = EulerPlan::new(params, spec, dt)?;
+    let p = &part;
     // Match the drag law and sampler once, outside the hot loop: the kernel
     // is monomorphised per (law, sampler) and has no dispatch per step.
     Ok(crate::with_drag!(params.drag(), |d| match sampling {
-        EventSampling::Geometric => run::<_, Geometric>(d, params, spec, &plan, lanes, progress),
-        EventSampling::Bernoulli => run::<_, Bernoulli>(d, params, spec, &plan, lanes, progress),
+        EventSampling::Geometric => run::<_, Geometric>(d, params, spec, &plan, lanes, p, progress),
+        EventSampling::Bernoulli => run::<_, Bernoulli>(d, params, spec, &plan, lanes, p, progress),
     }))
+}
+
+/// The empty observables of an Euler run: recorded at the plan's steps.
+pub(crate) fn template(params: &Params, spec: &SimSpec, plan: &EulerPlan) -> Observables {
+    let mut template = Observables::new(spec, params);
+    let k = plan.record_steps.len();
+    // Recording happens at whole steps: the fit uses the times actually recorded.
+    template.times = plan.record_times();
+    template.msd_weights = super::msd_fit_weights(&template.times, spec.burn_in, params);
+    for a in [
+        &mut template.v,
+        &mut template.v2,
+        &mut template.x,
+        &mut template.x2,
+    ] {
+        a.truncate(k);
+    }
+    template
 }
 
 /// Reset / flip decisions of one particle (steps 3 and 4 of the module docs).
@@ -284,22 +330,11 @@ fn run<D: Drag, E: Events>(
     spec: &SimSpec,
     plan: &EulerPlan,
     lanes: usize,
+    part: &Part,
     progress: &dyn Progress,
-) -> Observables {
+) -> Vec<Observables> {
     let (lo, hi) = params.bounds();
-    let mut template = Observables::new(spec, params);
-    let k = plan.record_steps.len();
-    // Recording happens at whole steps: the fit uses the times actually recorded.
-    template.times = plan.record_times();
-    template.msd_weights = super::msd_fit_weights(&template.times, spec.burn_in, params);
-    for a in [
-        &mut template.v,
-        &mut template.v2,
-        &mut template.x,
-        &mut template.x2,
-    ] {
-        a.truncate(k);
-    }
+    let template = template(params, spec, plan);
     let kernel = Kernel {
         f,
         sigma: params.sigma(),
@@ -312,11 +347,11 @@ fn run<D: Drag, E: Events>(
     };
     // Chunks of parallel::CHUNK consecutive particles, reduced exactly like
     // parallel::reduce (each chunk from an empty accumulator in particle
-    // order, chunks merged in index order): bit-identical for any thread
-    // count and for any lane count. Inside a chunk, groups of LANES
+    // order, chunks merged in index order into their unit, units in order):
+    // bit-identical for any thread count and for any lane count. Inside a chunk, groups of LANES
     // particles run side by side; the remainder runs one at a time.
     let (n, first) = (spec.particles, spec.first_particle);
-    parallel::reduce_chunks(
+    part.reduce(
         n,
         || template.clone(),
         |lo, hi, obs| {

@@ -32,10 +32,11 @@ use crate::model::drag::FlowMap;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
-use crate::parallel::{self, Progress};
+use crate::parallel::Progress;
 use crate::rng::{self, Rng};
-use crate::sim::{Observables, SimSpec};
+use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
+use std::ops::Range;
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on
@@ -390,20 +391,45 @@ pub fn exp_gap(rng: &mut Rng, rate: f64) -> f64 {
 /// observables as the Euler method; `steps` counts events (flips + resets).
 /// Bit-identical for any thread count.
 pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Result<Observables> {
-    crate::with_drag!(params.drag(), |d| simulate_drag(d, params, spec, progress))
+    Ok(simulate_part(params, spec, Part::Whole, progress)?.remove(0))
 }
 
-/// [`simulate`] for one law's type (monomorphised).
+/// The unit totals of units `units` of [`simulate`]'s run (see
+/// [`crate::sim::simulate_units`]).
+pub fn simulate_units(
+    params: &Params,
+    spec: &SimSpec,
+    units: Range<u64>,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    simulate_part(params, spec, Part::Units(units), progress)
+}
+
+fn simulate_part(
+    params: &Params,
+    spec: &SimSpec,
+    part: Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    crate::with_drag!(params.drag(), |d| simulate_drag(
+        d, params, spec, part, progress
+    ))
+}
+
+/// [`simulate_part`] for one law's type (monomorphised). The accumulator
+/// carries the per-chunk [`Scratch`]; only its observables are the result.
 fn simulate_drag<D: Drag>(
     drag: &D,
     params: &Params,
     spec: &SimSpec,
+    part: Part,
     progress: &dyn Progress,
-) -> Result<Observables> {
+) -> Result<Vec<Observables>> {
     let sampler = Sampler::new(drag, params, spec)?;
     let template = Observables::new(spec, params);
     let b = spec.bins;
-    let (obs, _) = parallel::reduce(
+    let first = spec.first_particle;
+    let totals = part.reduce(
         spec.particles,
         || {
             (
@@ -414,11 +440,15 @@ fn simulate_drag<D: Drag>(
                 },
             )
         },
-        |i, (obs, sc)| sampler.particle(spec.first_particle + i, obs, sc),
+        |lo, hi, (obs, sc)| {
+            for i in lo..hi {
+                sampler.particle(first + i, obs, sc);
+            }
+        },
         |a, b| a.0.merge(&b.0),
         progress,
     );
-    Ok(obs)
+    Ok(totals.into_iter().map(|(obs, _)| obs).collect())
 }
 
 #[cfg(test)]

@@ -3,8 +3,10 @@
 //!
 //! A simulation is N independent particles. Particle `i` uses the random
 //! stream [`crate::rng::stream`]`(seed, i)`, and particles are reduced with
-//! [`crate::parallel::reduce`], so results are bit-identical for any thread
-//! count. Each method implements "simulate one particle and add it to an
+//! [`crate::parallel`]'s fixed tree (chunks of 256 particles into units of
+//! 4096, units in order), so results are bit-identical for any thread
+//! count, and a run split into unit-aligned shards ([`simulate_units`],
+//! [`combine_units`]) merges into the same bits. Each method implements "simulate one particle and add it to an
 //! [`Observables`] accumulator"; everything downstream is shared.
 
 pub mod euler;
@@ -15,9 +17,10 @@ pub use crate::numerics::time_grid::TimeGrid;
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
 use crate::model::Reset;
-use crate::parallel::Progress;
+use crate::parallel::{self, Progress};
 use crate::stats::{merge_all, MeanAcc};
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// Particle simulation method.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -58,6 +61,120 @@ pub fn simulate(
     }
 }
 
+/// Number of units of a run of `particles` particles: unit `u` holds the
+/// particles `u * UNIT .. min((u + 1) * UNIT, particles)` of the run
+/// ([`crate::parallel::UNIT`] = 4096), counted from `spec.first_particle`.
+pub fn unit_count(particles: u64) -> u64 {
+    parallel::unit_count(particles)
+}
+
+/// A shard of the run [`simulate`] would do: the totals of units `units`
+/// (in order; `spec.particles` is the size of the WHOLE run). Shards cover a
+/// contiguous range of units each and may run in separate processes or on
+/// separate machines; [`combine_units`] of all unit totals in unit order
+/// equals [`simulate`]'s result bit for bit, however the units were split.
+/// The totals survive a JSON round trip exactly (serde_json with
+/// `float_roundtrip`), so shards can be stored as JSON.
+pub fn simulate_units(
+    params: &Params,
+    spec: &SimSpec,
+    method: Method,
+    units: Range<u64>,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    let count = unit_count(spec.particles);
+    if !(units.start <= units.end && units.end <= count) {
+        return Err(Error::invalid(
+            "units",
+            format!("{units:?}"),
+            format!(
+                "start <= end <= {count} (units of {} particles)",
+                parallel::UNIT
+            ),
+        ));
+    }
+    match method {
+        Method::Euler { dt } => euler::simulate_units(params, spec, dt, units, progress),
+        Method::Exact => exact::simulate_units(params, spec, units, progress),
+    }
+}
+
+/// Merge unit totals of [`simulate_units`] (same `params`, `spec`,
+/// `method`), in the order given, into the empty observables of the run.
+/// With every unit of the run in unit order, this is [`simulate`]'s result
+/// bit for bit. A unit from a different run geometry (recording times,
+/// histogram, fit weights) is refused.
+pub fn combine_units(
+    params: &Params,
+    spec: &SimSpec,
+    method: Method,
+    units: &[Observables],
+) -> Result<Observables> {
+    let mut total = empty(params, spec, method)?;
+    for (u, o) in units.iter().enumerate() {
+        let same = o.times == total.times
+            && o.msd_weights == total.msd_weights
+            && (o.v_lo, o.v_hi) == (total.v_lo, total.v_hi)
+            && o.density_time.len() == total.density_time.len()
+            && o.density_final.len() == total.density_final.len()
+            && [&o.v, &o.v2, &o.x, &o.x2]
+                .iter()
+                .all(|a| a.len() == total.times.len());
+        if !same {
+            return Err(Error::invalid(
+                "units",
+                u,
+                "unit totals of this run (same times, histogram and fit weights)",
+            ));
+        }
+        total.merge(o);
+    }
+    Ok(total)
+}
+
+/// The empty observables a run of `method` starts from (the Euler scheme
+/// records at whole steps, so its times are the plan's).
+fn empty(params: &Params, spec: &SimSpec, method: Method) -> Result<Observables> {
+    Ok(match method {
+        Method::Euler { dt } => {
+            let plan = euler::EulerPlan::new(params, spec, dt)?;
+            euler::template(params, spec, &plan)
+        }
+        Method::Exact => Observables::new(spec, params),
+    })
+}
+
+/// Which part of a run a sampler reduces: all of it (one total), or the
+/// unit totals of some units. Both go through the same reduction loop.
+#[derive(Clone, Debug)]
+pub(crate) enum Part {
+    Whole,
+    Units(Range<u64>),
+}
+
+impl Part {
+    /// [`parallel::reduce_chunks`] (one total) or [`parallel::reduce_units`].
+    pub(crate) fn reduce<A, I, C, M>(
+        &self,
+        n: u64,
+        init: I,
+        chunk: C,
+        merge: M,
+        progress: &dyn Progress,
+    ) -> Vec<A>
+    where
+        A: Send,
+        I: Fn() -> A + Sync,
+        C: Fn(u64, u64, &mut A) + Sync,
+        M: Fn(&mut A, A),
+    {
+        match self {
+            Part::Whole => vec![parallel::reduce_chunks(n, init, chunk, merge, progress)],
+            Part::Units(u) => parallel::reduce_units(n, u.clone(), init, chunk, merge, progress),
+        }
+    }
+}
+
 /// What to measure and for how many particles (method-independent).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SimSpec {
@@ -76,8 +193,9 @@ pub struct SimSpec {
     /// `first_particle .. first_particle + particles`, each from its own
     /// stream (seed, index), so disjoint shards of one run (e.g. SLURM array
     /// tasks) merge with [`Observables::merge`] into the statistics of the
-    /// whole run (sums, counts and sums of squares add; only the rounding of
-    /// the sums depends on the split).
+    /// whole run (sums, counts and sums of squares add; the rounding of the
+    /// sums depends on the split). For shards that merge bit for bit, run
+    /// the whole spec's units with [`simulate_units`] and [`combine_units`].
     #[serde(default)]
     pub first_particle: u64,
 }
