@@ -224,3 +224,93 @@ fn a_failing_point_is_recorded_and_the_sweep_goes_on() {
         "{s}"
     );
 }
+
+#[test]
+fn points_split_into_particle_parts_merge_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    // 3 units and a bit of particles per point, in 3 parts: 2 points x 3 parts = 6 items.
+    let whole_plan = r#"
+command = "simulate"
+seed = 3
+[fixed]
+particles = 12400
+t_max = 0.5
+burn_in = 0.25
+samples = 3
+bins = 8
+[axes]
+method = ["exact", "euler"]
+"#;
+    let split_plan = format!("particle_parts = 3\n{whole_plan}");
+    let whole = write_plan_as(tmp.path(), "whole.toml", whole_plan);
+    let split = write_plan_as(tmp.path(), "split.toml", &split_plan);
+    let reference = tmp.path().join("whole");
+    ok(&["sweep", "run", &whole, "--out", reference.to_str().unwrap()]);
+    let one = tmp.path().join("split-one");
+    let s = ok(&["sweep", "run", &split, "--out", one.to_str().unwrap()]);
+    assert!(s.contains("2 points, 6 work items"), "{s}");
+    assert_eq!(table(&one), table(&reference), "parts in one run");
+    // 4 shards over the 6 items: every point's parts land in different shards.
+    let dirs: Vec<String> = (1..=4)
+        .map(|k| {
+            let d = tmp
+                .path()
+                .join(format!("k{k}"))
+                .to_str()
+                .unwrap()
+                .to_string();
+            ok(&[
+                "sweep",
+                "run",
+                &split,
+                "--out",
+                &d,
+                "--shard",
+                &format!("{k}/4"),
+            ]);
+            d
+        })
+        .collect();
+    let mut args = vec!["sweep", "merge"];
+    args.extend(dirs.iter().map(String::as_str));
+    ok(&args);
+    assert_eq!(
+        table(Path::new(&dirs[0])),
+        table(&reference),
+        "parts across shards"
+    );
+    // The assembled outputs are the whole run's, byte for byte.
+    let id = std::fs::read_dir(reference.join("workspace"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .file_name();
+    for f in ["moments.csv", "density.csv"] {
+        let a = std::fs::read(reference.join("workspace").join(&id).join(f)).unwrap();
+        let b = std::fs::read(Path::new(&dirs[0]).join("workspace").join(&id).join(f)).unwrap();
+        assert_eq!(a, b, "{f}");
+    }
+}
+
+#[test]
+fn too_many_parts_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(
+        tmp.path(),
+        "command = \"simulate\"\nparticle_parts = 3\n[fixed]\nparticles = 5000\n",
+    );
+    let o = irtp(&[
+        "sweep",
+        "run",
+        &plan,
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("particle_parts") && err.contains("1 ..= 2"),
+        "{err}"
+    );
+}

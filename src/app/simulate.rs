@@ -266,7 +266,9 @@ impl<'a> Parts<'a> {
         let config = a.config()?;
         let method = match &config.euler {
             None => crate::sim::Method::Exact,
-            Some(e) if e.events == EventSampling::Geometric => crate::sim::Method::Euler { dt: e.dt },
+            Some(e) if e.events == EventSampling::Geometric => {
+                crate::sim::Method::Euler { dt: e.dt }
+            }
             Some(_) => {
                 return Err(crate::Error::invalid(
                     "events",
@@ -280,10 +282,19 @@ impl<'a> Parts<'a> {
             return Err(crate::Error::invalid(
                 "particle_parts",
                 parts,
-                format!("1 ..= {units} for {} particles (parts of whole {}-particle units)", config.spec.particles, crate::parallel::UNIT),
+                format!(
+                    "1 ..= {units} for {} particles (parts of whole {}-particle units)",
+                    config.spec.particles,
+                    crate::parallel::UNIT
+                ),
             ));
         }
-        Ok(Parts { args: a, config, method, parts })
+        Ok(Parts {
+            args: a,
+            config,
+            method,
+            parts,
+        })
     }
 
     /// The unit totals of part `k` (0-based).
@@ -299,7 +310,12 @@ impl<'a> Parts<'a> {
 
     /// The outcome of the whole run from every part's unit totals (in part
     /// order) and the parts' summed wall time: written to `--out` as [`run`] would.
-    pub fn assemble(&self, units: &[Observables], wall: f64, ctx: &Context) -> crate::Result<Outcome> {
+    pub fn assemble(
+        &self,
+        units: &[Observables],
+        wall: f64,
+        ctx: &Context,
+    ) -> crate::Result<Outcome> {
         let c = &self.config;
         let out = open_out(self.args.output.out.as_deref())?;
         let obs = crate::sim::combine_units(&c.params, &c.spec, self.method, units)?;

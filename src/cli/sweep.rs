@@ -125,12 +125,13 @@ fn run_points(a: RunArgs) -> anyhow::Result<u8> {
     let r = sweep::run(&plan, &a.out, opts, &bar)?;
     drop(bar);
     println!(
-        "{}: shard {}/{} has {} of {} points: ran {} ({} failed), {} already finished",
+        "{}: {} points, {} work items; shard {}/{} has {}: ran {} ({} failed), {} already finished",
         a.out.display(),
+        r.points,
+        r.items,
         a.shard.k,
         a.shard.n,
-        r.shard_points,
-        r.points,
+        r.shard_items,
         r.ran,
         r.failed,
         r.skipped
@@ -185,7 +186,8 @@ fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
     };
     let s = slurm::write_scripts(&plan, &root, &o)?;
     println!(
-        "{} points in {} array tasks of at most {} points: {}, {}",
+        "{} work items ({} points) in {} array tasks of at most {} items: {}, {}",
+        plan.len() as u64 * plan.particle_parts,
         plan.len(),
         s.tasks,
         s.points_per_task,

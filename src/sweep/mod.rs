@@ -119,8 +119,16 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
     write_provenance(&store, plan, opts.shard)?;
     let points: Vec<Point> = plan.points().collect();
     let all = parts::items(plan, &points);
-    let mine: Vec<parts::Item> = all.iter().enumerate().filter(|(i, _)| opts.shard.has(*i)).map(|(_, it)| *it).collect();
-    let todo: Vec<&parts::Item> = mine.iter().filter(|it| pending(plan, &store, it, opts.retry_failed)).collect();
+    let mine: Vec<parts::Item> = all
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| opts.shard.has(*i))
+        .map(|(_, it)| *it)
+        .collect();
+    let todo: Vec<&parts::Item> = mine
+        .iter()
+        .filter(|it| pending(plan, &store, it, opts.retry_failed))
+        .collect();
     let (done, failed) = (AtomicU64::new(0), AtomicU64::new(0));
     let total = todo.len() as u64;
     tally.update(0, 0, total);
@@ -136,7 +144,11 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
     })?;
     assemble_ready(plan, &store, &points, opts.retry_failed)?;
     let counts = table::counts(plan, &store);
-    let table = if counts.missing == 0 { Some(write_table(plan, &store)?.0) } else { None };
+    let table = if counts.missing == 0 {
+        Some(write_table(plan, &store)?.0)
+    } else {
+        None
+    };
     Ok(RunReport {
         points: plan.len(),
         items: all.len(),
@@ -172,11 +184,23 @@ fn assemble_ready(plan: &Plan, store: &Store, points: &[Point], retry: bool) -> 
 fn run_point(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
     store.begin(plan, p)?;
     let t0 = std::time::Instant::now();
-    let argv = plan.argv(p, Some(&store.dir(p))).map_err(|e| bad_point(p, e))?;
+    let argv = plan
+        .argv(p, Some(&store.dir(p)))
+        .map_err(|e| bad_point(p, e))?;
     let cli = keywords::parse(&plan.command, &argv).map_err(|e| bad_point(p, e))?;
-    let ctx = Context { reporter: &Quiet, argv };
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| app::run(&cli.command, &ctx)))
-        .unwrap_or_else(|_| Err(Error::Numerical { method: "irtp", reason: "internal error (a panic); please report it".into() }));
+    let ctx = Context {
+        reporter: &Quiet,
+        argv,
+    };
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        app::run(&cli.command, &ctx)
+    }))
+    .unwrap_or_else(|_| {
+        Err(Error::Numerical {
+            method: "irtp",
+            reason: "internal error (a panic); please report it".into(),
+        })
+    });
     let r = point_result(p, outcome, t0.elapsed().as_secs_f64());
     store.finish(p, &r)?;
     Ok(r)

@@ -54,21 +54,42 @@ pub fn path(store: &Store, p: &Point, k: u64) -> PathBuf {
 }
 
 /// The point's arguments as `irtp simulate` parses them.
-fn simulate_args(plan: &Plan, store: &Store, p: &Point) -> Result<crate::app::simulate::SimulateArgs> {
-    let argv = plan.argv(p, Some(&store.dir(p))).map_err(|e| Error::invalid("plan", p.index, e))?;
-    match keywords::parse(&plan.command, &argv).map_err(|e| Error::invalid("plan", p.index, e))?.command {
+fn simulate_args(
+    plan: &Plan,
+    store: &Store,
+    p: &Point,
+) -> Result<crate::app::simulate::SimulateArgs> {
+    let argv = plan
+        .argv(p, Some(&store.dir(p)))
+        .map_err(|e| Error::invalid("plan", p.index, e))?;
+    match keywords::parse(&plan.command, &argv)
+        .map_err(|e| Error::invalid("plan", p.index, e))?
+        .command
+    {
         Command::Simulate(a) => Ok(a),
-        _ => Err(Error::invalid("particle_parts", plan.particle_parts, "only with command = \"simulate\"")),
+        _ => Err(Error::invalid(
+            "particle_parts",
+            plan.particle_parts,
+            "only with command = \"simulate\"",
+        )),
     }
 }
 
 /// Check that every point can be cut into the plan's parts.
 pub fn check(plan: &Plan, p: &Point, cli: &crate::app::Cli) -> Result<()> {
     match &cli.command {
-        Command::Simulate(a) if plan.particle_parts > 1 => Parts::new(a, plan.particle_parts).map(drop),
+        Command::Simulate(a) if plan.particle_parts > 1 => {
+            Parts::new(a, plan.particle_parts).map(drop)
+        }
         _ => Ok(()),
     }
-    .map_err(|e| Error::invalid("plan", format!("point {}", p.index), e.message_with(|n| n.to_string())))
+    .map_err(|e| {
+        Error::invalid(
+            "plan",
+            format!("point {}", p.index),
+            e.message_with(|n| n.to_string()),
+        )
+    })
 }
 
 /// Compute part `k` of point `p` and store it; a failure of the computation
@@ -82,13 +103,25 @@ pub fn run_part(plan: &Plan, store: &Store, p: &Point, k: u64) -> Result<bool> {
     let wall_time_s = t0.elapsed().as_secs_f64();
     match units {
         Ok(units) => {
-            let part = Part { part: k, parts: plan.particle_parts, wall_time_s, units };
-            let text = serde_json::to_string(&part).map_err(|e| Error::Io { path: path(store, p, k).display().to_string(), reason: e.to_string() })?;
+            let part = Part {
+                part: k,
+                parts: plan.particle_parts,
+                wall_time_s,
+                units,
+            };
+            let text = serde_json::to_string(&part).map_err(|e| Error::Io {
+                path: path(store, p, k).display().to_string(),
+                reason: e.to_string(),
+            })?;
             write_atomic(&path(store, p, k), text.as_bytes())?;
             Ok(true)
         }
         Err(e) => {
-            let msg = format!("part {k} of {}: {}", plan.particle_parts, e.message_with(|n| n.to_string()));
+            let msg = format!(
+                "part {k} of {}: {}",
+                plan.particle_parts,
+                e.message_with(|n| n.to_string())
+            );
             store.finish(p, &super::failed(p, msg, wall_time_s))?;
             Ok(false)
         }
@@ -106,18 +139,36 @@ pub fn assemble(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
     let mut wall = 0.0;
     for k in 0..plan.particle_parts {
         let file = path(store, p, k);
-        let text = std::fs::read_to_string(&file).map_err(|e| Error::Io { path: file.display().to_string(), reason: e.to_string() })?;
-        let part: Part = serde_json::from_str(&text).map_err(|e| Error::Io { path: file.display().to_string(), reason: format!("not a stored part: {e}") })?;
+        let text = std::fs::read_to_string(&file).map_err(|e| Error::Io {
+            path: file.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        let part: Part = serde_json::from_str(&text).map_err(|e| Error::Io {
+            path: file.display().to_string(),
+            reason: format!("not a stored part: {e}"),
+        })?;
         if part.part != k || part.parts != plan.particle_parts {
-            return Err(Error::Io { path: file.display().to_string(), reason: format!("holds part {} of {}, expected {k} of {}", part.part, part.parts, plan.particle_parts) });
+            return Err(Error::Io {
+                path: file.display().to_string(),
+                reason: format!(
+                    "holds part {} of {}, expected {k} of {}",
+                    part.part, part.parts, plan.particle_parts
+                ),
+            });
         }
         wall += part.wall_time_s;
         units.extend(part.units);
     }
     let a = simulate_args(plan, store, p)?;
-    let argv = plan.argv(p, Some(&store.dir(p))).map_err(|e| Error::invalid("plan", p.index, e))?;
-    let ctx = Context { reporter: &Quiet, argv };
-    let outcome = Parts::new(&a, plan.particle_parts).and_then(|parts| parts.assemble(&units, wall, &ctx));
+    let argv = plan
+        .argv(p, Some(&store.dir(p)))
+        .map_err(|e| Error::invalid("plan", p.index, e))?;
+    let ctx = Context {
+        reporter: &Quiet,
+        argv,
+    };
+    let outcome =
+        Parts::new(&a, plan.particle_parts).and_then(|parts| parts.assemble(&units, wall, &ctx));
     let r = super::point_result(p, outcome, wall);
     store.finish(p, &r)?;
     Ok(r)

@@ -154,11 +154,15 @@ fn take_parts(src: &Store, dst: &Store, p: &Point) -> Result<()> {
     let Ok(entries) = fs::read_dir(src.dir(p)) else {
         return Ok(());
     };
-    let io = |p: &Path, e: std::io::Error| Error::Io { path: p.display().to_string(), reason: e.to_string() };
+    let io = |p: &Path, e: std::io::Error| Error::Io {
+        path: p.display().to_string(),
+        reason: e.to_string(),
+    };
     for entry in entries {
         let entry = entry.map_err(|e| io(&src.dir(p), e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        let wanted = (name.starts_with("part-") && name.ends_with(".json")) || name == "signac_statepoint.json";
+        let wanted = (name.starts_with("part-") && name.ends_with(".json"))
+            || name == "signac_statepoint.json";
         let to = dst.dir(p).join(&name);
         if wanted && !to.exists() {
             fs::create_dir_all(dst.dir(p)).map_err(|e| io(&dst.dir(p), e))?;
