@@ -151,6 +151,8 @@ pub struct Provenance<P: Serialize> {
     pub software: &'static str,
     /// Crate version.
     pub version: &'static str,
+    /// Git revision of the build, when built from a checkout.
+    pub git_revision: Option<&'static str>,
     /// What was run (e.g. "simulate", "fp stationary").
     pub command: String,
     /// Full command line as typed.
@@ -183,6 +185,7 @@ impl<P: Serialize> Provenance<P> {
         Provenance {
             software: "irtp",
             version: env!("CARGO_PKG_VERSION"),
+            git_revision: option_env!("IRTP_GIT_REVISION"),
             command: command.into(),
             argv: std::env::args().collect(),
             method: method.into(),
