@@ -643,7 +643,12 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> crate::Result<Outcome> {
     let grid = Table::from_rows(
         "rate_grid",
         &["rate", "tau"],
-        best.grid.iter().map(|&(r, t)| [r, t]),
+        // Rates where tau exceeds the f64 range (the target is practically
+        // never reached) have no number to tabulate: left out.
+        best.grid
+            .iter()
+            .filter(|(_, t)| t.is_finite())
+            .map(|&(r, t)| [r, t]),
     );
     let results = Results {
         method: "backward-box + golden-section".into(),

@@ -239,6 +239,24 @@ pub(crate) fn open_out(dir: Option<&Path>) -> Result<Option<OutputDir>> {
     dir.map(OutputDir::new).transpose()
 }
 
+/// A non-finite number in a result table is never returned nor written.
+fn refuse_non_finite(command: &'static str, tables: &[Table]) -> Result<()> {
+    for t in tables {
+        for (h, c) in t.header.iter().zip(&t.columns) {
+            if let Some((i, x)) = c.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(Error::Numerical {
+                    method: command,
+                    reason: format!(
+                        "{h} = {x} in row {i} of {}.csv: the computation overflowed for these parameters; refused",
+                        t.name
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Check for cancellation, then write the tables, the JSON files and
 /// `run.json` (all or nothing) and assemble the [`Outcome`].
 pub(crate) fn finish(
@@ -249,6 +267,12 @@ pub(crate) fn finish(
 ) -> Result<Outcome> {
     ctx.check()?;
     let r = &results;
+    // First-passage tables mark a tau beyond the f64 range (the target is
+    // practically never reached) as inf, point by point; every other table
+    // holds only finite numbers.
+    if !command.starts_with("mfpt") {
+        refuse_non_finite(command, &r.tables)?;
+    }
     let prov = Provenance::new(
         command,
         r.method.clone(),

@@ -207,6 +207,28 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
     }
 }
 
+/// 0 <= <v²> <= max(v_l², v_u²) and D_eff >= 0, or the answer is refused:
+/// a violation means the mesh does not resolve the density.
+fn check_invariants(params: &Params, v2: f64, d_eff: f64) -> Result<()> {
+    let (lo, hi) = params.bounds();
+    let v2_max = lo.powi(2).max(hi.powi(2));
+    let refuse = |what: String| Error::Numerical {
+        method: "fp stationary",
+        reason: format!(
+            "{what}: the mesh does not resolve the density at lambda = {}, rate = {}; refused",
+            params.lambda(),
+            params.rate()
+        ),
+    };
+    if !(v2 >= 0.0 && v2 <= v2_max) {
+        return Err(refuse(format!("<v^2> = {v2:e} outside [0, {v2_max:e}]")));
+    }
+    if !(d_eff >= 0.0) {
+        return Err(refuse(format!("D_eff = {d_eff:e} < 0")));
+    }
+    Ok(())
+}
+
 /// Solve the stationary forward equations directly (no time stepping), in O(N).
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
     check_options(params, opts)?;
@@ -242,6 +264,7 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
             });
         }
     }
+    check_invariants(params, v2, d_eff)?;
     let p_plus: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[0] / h).collect();
     let p_minus: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
     let p = p_plus.iter().zip(&p_minus).map(|(a, b)| a + b).collect();

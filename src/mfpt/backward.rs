@@ -456,11 +456,52 @@ pub fn at_start_or_overflow(
     problem: &Problem,
     opts: &BackwardOptions,
 ) -> Result<Option<BackwardSolution>> {
-    match profile(problem, opts) {
-        Ok(p) => Ok(Some(p.at_start())),
+    match profile(problem, opts).and_then(|p| verified(problem, p.at_start())) {
+        Ok(s) => Ok(Some(s)),
         Err(Error::Overflow { .. }) => Ok(None),
         Err(e) => Err(e),
     }
+}
+
+/// A rigorous lower bound on tau. Reaching v_t takes a reset-free stretch
+/// (since the start, or since the last reset) at least as long as the
+/// fastest flow (noise +Sigma throughout, in the upward frame) from v_0, or
+/// from v_r, to v_t; with T* the shorter of the two flow times, the first
+/// time the time since the last reset reaches T* has mean (e^{r T*} - 1)/r
+/// (T* at r = 0). +∞ when that exceeds the f64 range.
+pub fn lower_bound(problem: &Problem) -> f64 {
+    let (cp, _) = problem.canonical();
+    let p = cp.params();
+    let flow = |from: f64| p.drag().flow_time(p.sigma(), from, cp.vt());
+    let r = p.rate();
+    if r > 0.0 {
+        let t = flow(cp.v0()).min(flow(p.reset_velocity()));
+        (r * t).exp_m1() / r
+    } else {
+        flow(cp.v0())
+    }
+}
+
+/// The solution, if tau respects [`lower_bound`]: an overflowing bound is
+/// [`Error::Overflow`] (the target is practically never reached), a violated
+/// one a numerical failure (the mesh does not resolve the solution).
+fn verified(problem: &Problem, s: BackwardSolution) -> Result<BackwardSolution> {
+    let bound = lower_bound(problem);
+    if !bound.is_finite() {
+        return Err(overflow());
+    }
+    if !(s.tau >= bound * (1.0 - 1e-9)) {
+        return Err(Error::Numerical {
+            method: "mfpt backward solve",
+            reason: format!(
+                "tau = {:e} is below its lower bound {bound:e} (r = {}): the mesh does not resolve \
+                 the solution at this reset rate; refused (more --cells, or a smaller rate)",
+                s.tau,
+                problem.params().rate()
+            ),
+        });
+    }
+    Ok(s)
 }
 
 fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
@@ -484,7 +525,7 @@ fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile 
 /// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
 /// Errors with [`Error::Overflow`] if tau overflows f64.
 pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
-    let fine = profile(problem, opts)?.at_start();
+    let fine = verified(problem, profile(problem, opts)?.at_start())?;
     let half = BackwardOptions {
         cells: (opts.cells / 2).max(8),
         ..*opts
