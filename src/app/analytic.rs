@@ -22,7 +22,7 @@ pub struct AnalyticArgs {
     #[arg(long, short = 'r', default_value_t = 0.0, allow_hyphen_values = true)]
     pub rate: f64,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).
-    #[arg(long, default_value_t = 1001, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 1001, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     pub points: usize,
     /// Directory to write density.csv and run.json into.
     #[arg(long)]

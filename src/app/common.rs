@@ -58,6 +58,35 @@ fn drag_help() -> String {
     format!("Drag law g(v): {}", laws.join("; "))
 }
 
+/// Largest count accepted in scientific notation (every integer up to it is
+/// an exact f64).
+const MAX_FLOAT_COUNT: f64 = 9_007_199_254_740_992.0; // 2^53
+
+/// A count flag (`--particles`, `--cells`, ...): an integer, also in
+/// scientific notation when it is a whole number (`1e6`, `2.5e3`).
+pub fn parse_count(s: &str) -> Result<u64, String> {
+    if let Ok(n) = s.parse::<u64>() {
+        return Ok(n);
+    }
+    let whole = "a whole number >= 0, such as 20000 or 2e4";
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a count: expected {whole}"))?;
+    if !(x >= 0.0 && x.fract() == 0.0 && x <= MAX_FLOAT_COUNT) {
+        return Err(format!(
+            "not a count: expected {whole} (at most 2^53 in scientific notation)"
+        ));
+    }
+    Ok(x as u64)
+}
+
+/// [`parse_count`] for sizes (`--cells`, `--bins`, ...).
+pub fn parse_size(s: &str) -> Result<usize, String> {
+    let n = parse_count(s)?;
+    usize::try_from(n).map_err(|_| format!("{n} is too large for this machine"))
+}
+
 fn parse_drag(s: &str) -> Result<DragLaw, String> {
     s.parse::<DragLaw>()
         .map_err(|_| format!("expected one of {}", DragLaw::names()))

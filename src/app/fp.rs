@@ -42,7 +42,7 @@ pub struct StationaryArgs {
     #[command(flatten)]
     output: OutputArgs,
     /// Number of finite-volume cells (even when extrapolating).
-    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
     /// Cell placement.
     #[arg(long, value_enum, default_value = "graded")]
@@ -64,13 +64,13 @@ pub struct TransientArgs {
     #[arg(long, allow_hyphen_values = true)]
     t_max: f64,
     /// Number of uniform cells (paper: 2000 for tan, 1000 for tanh).
-    #[arg(long, default_value_t = 2000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 2000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
     /// Number of equally spaced recording times of <v²>(t) in [0, t_max].
-    #[arg(long, default_value_t = 101, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 101, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     samples: usize,
     /// Number of equally spaced density snapshots in (0, t_max].
-    #[arg(long, default_value_t = 5, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 5, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     snapshots: usize,
     /// Courant number in (0, 1].
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]

@@ -49,7 +49,7 @@ struct ProblemArgs {
     #[arg(long, required = true, allow_hyphen_values = true)]
     v0: Option<f64>,
     /// Cells of the backward-equation mesh on [v_l, v_t].
-    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
 }
 
@@ -72,7 +72,7 @@ struct SimArgs {
     #[arg(long, value_enum, default_value = "ode")]
     method: Method,
     /// Particles (half start in +Sigma, half in -Sigma).
-    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = super::common::parse_count)]
     particles: u64,
     /// Euler time step (O(dt) bias, including an overshoot of at most dt).
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
@@ -114,7 +114,7 @@ pub struct ScanArgs {
     #[arg(long, allow_hyphen_values = true)]
     to: f64,
     /// Number of values (>= 2).
-    #[arg(long, default_value_t = 21, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 21, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     points: usize,
     /// Logarithmic spacing (needs from, to > 0).
     #[arg(long)]
@@ -149,7 +149,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1e3, allow_hyphen_values = true)]
     r_max: f64,
     /// Points of the coarse log grid.
-    #[arg(long, default_value_t = 61, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 61, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     grid_points: usize,
     #[command(flatten)]
     output: OutputArgs,

@@ -46,7 +46,7 @@ pub struct SimulateArgs {
     #[command(flatten)]
     pub output: OutputArgs,
     /// Number of independent particles.
-    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 20_000, allow_hyphen_values = true, value_parser = super::common::parse_count)]
     pub particles: u64,
     /// Euler time step (must be < 1/max g'(v) and < 1/rate) [default with
     /// --method euler: 1e-3; not accepted by the exact method, which has no step].
@@ -56,7 +56,7 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 20.0, allow_hyphen_values = true)]
     pub t_max: f64,
     /// Number of recording times for the moments.
-    #[arg(long, default_value_t = 201, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 201, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     pub samples: usize,
     /// Recording grid.
     #[arg(long, value_enum, default_value_t = GridArg::Linear)]
@@ -68,7 +68,7 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub burn_in: f64,
     /// Histogram bins on (v_l, v_u).
-    #[arg(long, default_value_t = 100, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 100, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     pub bins: usize,
     /// Simulation method.
     #[arg(long, value_enum, default_value_t = MethodArg::Exact)]
