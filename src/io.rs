@@ -6,7 +6,8 @@ use serde::Serialize;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
+/// The [`Error::Io`] of an operation on `path`.
+pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Io {
         path: path.display().to_string(),
         reason: e.to_string(),

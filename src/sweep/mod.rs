@@ -101,10 +101,7 @@ pub struct RunOptions {
 
 /// Whether an item still needs work.
 fn pending(plan: &Plan, store: &Store, it: &parts::Item, retry: bool) -> bool {
-    let open = match store.result(it.point) {
-        None => true,
-        Some(r) => retry && r.status != "ok",
-    };
+    let open = store.unfinished(it.point, retry);
     match it.part {
         None => open,
         Some(k) => open && !(parts::path(store, it.point, k).exists() && plan.particle_parts > 1),
@@ -167,11 +164,7 @@ fn assemble_ready(plan: &Plan, store: &Store, points: &[Point], retry: bool) -> 
         return Ok(());
     }
     points.par_iter().try_for_each(|p| -> Result<()> {
-        let open = match store.result(p) {
-            None => true,
-            Some(r) => retry && r.status != "ok",
-        };
-        if open && parts::complete(plan, store, p) {
+        if store.unfinished(p, retry) && parts::complete(plan, store, p) {
             parts::assemble(plan, store, p)?;
         }
         Ok(())
@@ -286,10 +279,7 @@ fn write_provenance(store: &Store, plan: &Plan, shard: Shard) -> Result<()> {
         "git_revision": option_env!("IRTP_GIT_REVISION"),
     });
     let dir = store.root.join("runs");
-    std::fs::create_dir_all(&dir).map_err(|e| Error::Io {
-        path: dir.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    std::fs::create_dir_all(&dir).map_err(|e| crate::io::io_err(&dir, e))?;
     let name = format!(
         "{host}-{}-{now}-shard{}of{}.json",
         std::process::id(),
@@ -305,10 +295,8 @@ fn write_provenance(store: &Store, plan: &Plan, shard: Shard) -> Result<()> {
 /// Read the plan a sweep directory holds.
 pub fn plan_of(root: &Path) -> Result<Plan> {
     let path = root.join("plan.toml");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        reason: format!("{e} (not a sweep directory?)"),
-    })?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| crate::io::io_err(&path, format!("{e} (not a sweep directory?)")))?;
     Plan::parse(&text)
 }
 

@@ -10,6 +10,7 @@ use super::store::{write_atomic, PointResult, Store};
 use crate::app::simulate::Parts;
 use crate::app::{keywords, Command, Context, Quiet};
 use crate::error::{Error, Result};
+use crate::io::io_err;
 use crate::sim::Observables;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -109,10 +110,7 @@ pub fn run_part(plan: &Plan, store: &Store, p: &Point, k: u64) -> Result<bool> {
                 wall_time_s,
                 units,
             };
-            let text = serde_json::to_string(&part).map_err(|e| Error::Io {
-                path: path(store, p, k).display().to_string(),
-                reason: e.to_string(),
-            })?;
+            let text = serde_json::to_string(&part).map_err(|e| io_err(&path(store, p, k), e))?;
             write_atomic(&path(store, p, k), text.as_bytes())?;
             Ok(true)
         }
@@ -139,14 +137,9 @@ pub fn assemble(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
     let mut wall = 0.0;
     for k in 0..plan.particle_parts {
         let file = path(store, p, k);
-        let text = std::fs::read_to_string(&file).map_err(|e| Error::Io {
-            path: file.display().to_string(),
-            reason: e.to_string(),
-        })?;
-        let part: Part = serde_json::from_str(&text).map_err(|e| Error::Io {
-            path: file.display().to_string(),
-            reason: format!("not a stored part: {e}"),
-        })?;
+        let text = std::fs::read_to_string(&file).map_err(|e| io_err(&file, e))?;
+        let part: Part = serde_json::from_str(&text)
+            .map_err(|e| io_err(&file, format!("not a stored part: {e}")))?;
         if part.part != k || part.parts != plan.particle_parts {
             return Err(Error::Io {
                 path: file.display().to_string(),

@@ -81,10 +81,7 @@ pub fn write_scripts(plan: &Plan, root: &Path, o: &SlurmOptions) -> Result<Scrip
     let items = plan.len() as u64 * plan.particle_parts;
     let (tasks, per) = layout(items, o)?;
     let dir = root.join("slurm");
-    std::fs::create_dir_all(&dir).map_err(|e| Error::Io {
-        path: dir.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    std::fs::create_dir_all(&dir).map_err(|e| crate::io::io_err(&dir, e))?;
     let mut head = String::from("#!/bin/bash\n");
     if let Some(p) = &o.partition {
         head += &format!("#SBATCH --partition={p}\n");

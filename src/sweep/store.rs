@@ -9,6 +9,7 @@
 
 use super::plan::{statepoint, Plan, Point};
 use crate::error::{Error, Result};
+use crate::io::io_err as io;
 use serde::{Deserialize, Serialize};
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -28,13 +29,6 @@ pub struct PointResult {
     pub wall_time_s: f64,
     /// The command's JSON summary (what `--json` prints).
     pub summary: serde_json::Value,
-}
-
-fn io(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Io {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    }
 }
 
 /// Write `bytes` to `path` atomically (temporary file, then rename).
@@ -91,6 +85,15 @@ impl Store {
     /// The finished result of a point, if any.
     pub fn result(&self, p: &Point) -> Option<PointResult> {
         read_json(&self.dir(p).join("result.json")).ok()
+    }
+
+    /// Whether point `p` still needs work: no result yet, or a failed one
+    /// when failures are retried.
+    pub fn unfinished(&self, p: &Point, retry: bool) -> bool {
+        match self.result(p) {
+            None => true,
+            Some(r) => retry && r.status != "ok",
+        }
     }
 
     /// Record a point's statepoint (before it runs).

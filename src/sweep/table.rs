@@ -6,6 +6,7 @@
 use super::plan::{text, Plan, Point};
 use super::store::{write_atomic, PointResult, Store};
 use crate::error::{Error, Result};
+use crate::io::io_err as io;
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -77,10 +78,7 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
     header.extend(extra.iter().map(|k| format!("result.{k}")));
     let mut w = csv::Writer::from_writer(Vec::new());
     let path = store.root.join("results.csv");
-    let csv_err = |e: csv::Error| Error::Io {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    };
+    let csv_err = |e: csv::Error| io(&path, e);
     w.write_record(&header).map_err(csv_err)?;
     let mut counts = Counts::default();
     for (p, r) in points.iter().zip(&results) {
@@ -114,10 +112,7 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
         }
         w.write_record(&row).map_err(csv_err)?;
     }
-    let bytes = w.into_inner().map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let bytes = w.into_inner().map_err(|e| io(&path, e))?;
     write_atomic(&path, &bytes)?;
     Ok((path, counts))
 }
@@ -154,10 +149,6 @@ fn take_parts(src: &Store, dst: &Store, p: &Point) -> Result<()> {
     let Ok(entries) = fs::read_dir(src.dir(p)) else {
         return Ok(());
     };
-    let io = |p: &Path, e: std::io::Error| Error::Io {
-        path: p.display().to_string(),
-        reason: e.to_string(),
-    };
     for entry in entries {
         let entry = entry.map_err(|e| io(&src.dir(p), e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
@@ -176,10 +167,6 @@ fn take_parts(src: &Store, dst: &Store, p: &Point) -> Result<()> {
 /// Copy a point directory: files first, `result.json` last (so the copy is
 /// finished only when complete).
 fn copy_dir(from: &Path, to: &Path) -> Result<()> {
-    let io = |p: &Path, e: std::io::Error| Error::Io {
-        path: p.display().to_string(),
-        reason: e.to_string(),
-    };
     fs::create_dir_all(to).map_err(|e| io(to, e))?;
     let mut names: Vec<String> = Vec::new();
     for entry in fs::read_dir(from).map_err(|e| io(from, e))? {
