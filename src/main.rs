@@ -37,25 +37,47 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
     }
 }
 
+/// A command line clap refused. Help and version go to stdout (exit 0). A
+/// missing subcommand (bare `irtp`, `irtp fp`) prints the usage to stderr;
+/// every other usage error is one line on stderr naming what is wrong,
+/// including the names of missing required flags (exit 2).
+fn usage_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if !e.use_stderr() {
+        let _ = e.print();
+        return ExitCode::SUCCESS;
+    }
+    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        let _ = e.print();
+        return ExitCode::from(2);
+    }
+    eprintln!(
+        "irtp: error: {} (see --help)",
+        one_line(&e.render().to_string())
+    );
+    ExitCode::from(2)
+}
+
+/// clap's message in one line: its first line, continued by the indented
+/// lines that follow a trailing colon (the list of missing flags).
+fn one_line(rendered: &str) -> String {
+    let mut lines = rendered.lines().filter(|l| !l.trim().is_empty());
+    let first = lines.next().unwrap_or("");
+    let mut msg = first.strip_prefix("error: ").unwrap_or(first).to_string();
+    if msg.ends_with(':') {
+        let items: Vec<&str> = lines
+            .take_while(|l| l.starts_with(' '))
+            .map(str::trim)
+            .collect();
+        msg = format!("{} {}", msg, items.join(", "));
+    }
+    msg
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
-        Err(e) => {
-            // Help/version go to stdout (exit 0). Usage errors: clap's first line only, so that
-            // every input error is one line on stderr (exit 2).
-            if !e.use_stderr() {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            let rendered = e.render().to_string();
-            let first = rendered
-                .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("");
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("irtp: error: {first} (see --help)");
-            return ExitCode::from(2);
-        }
+        Err(e) => return usage_error(e),
     };
     match run(cli) {
         Ok(code) => ExitCode::from(code),

@@ -59,6 +59,10 @@ const REL_TOL: f64 = 1e-14;
 /// Tails P(V > v_u - w) with w below this fraction of v_u are integrated afresh
 /// with a relative tolerance (see [`R0Density::edge_mass`]).
 const EDGE_FRACTION: f64 = 0.01;
+/// Above this edge exponent c the r = 0 density of a Riccati law is
+/// evaluated in its cancellation-free form ([`R0Density::stable_ln_unnorm`]);
+/// below, the paper's form, whose rounding c·1e-16·|ln q| is harmless.
+const STABLE_FORM_C: f64 = 1e4;
 /// Panel budget of the adaptive quadrature.
 const MAX_PANELS: usize = 20_000;
 /// Solutions of g'(v) = λ on (0, v_u) are bracketed on this many grid
@@ -162,7 +166,17 @@ pub struct Regime {
 /// the law's derivative at v_u = g⁻¹(Σ).
 fn edge_slope(drag: DragLaw, sigma: f64) -> f64 {
     match drag.riccati() {
-        Some(kappa) => 1.0 + kappa * sigma * sigma,
+        Some(kappa) => {
+            let d = 1.0 + kappa * sigma * sigma;
+            if kappa < 0.0 && d < 1e-3 {
+                // Σ → 1/√|κ| (tanh: Σ → 1): 1 - |κ|Σ² carries the rounding
+                // of Σ² relative to d; (1 - √|κ|Σ)(1 + √|κ|Σ) does not.
+                let r = (-kappa).sqrt() * sigma;
+                (1.0 - r) * (1.0 + r)
+            } else {
+                d
+            }
+        }
         None => drag.derivative(drag.inverse(sigma)),
     }
 }
@@ -651,6 +665,35 @@ impl R0Density {
         ((-r * r).ln_1p(), ln_q(kappa, g))
     }
 
+    /// ln P (unnormalised, 0 at v = 0) of a Riccati law whose exponent
+    /// c = λ/D, D = 1 + κΣ², is huge (tanh with Σ → 1). The paper's form
+    /// a ln s - c ln q subtracts two terms of size c·|ln q|, whose rounding
+    /// alone (c·1e-16·|ln q|) swamps ln P. Exactly, a ln s - c ln q =
+    /// c ln(s/q) - ln s with s/q = 1 - y, y = g²D/(Σ²q), so where y < 1/2
+    /// ln P = (λ/D) ln_1p(-y) - ln s, free of cancellation (→ -λg²/(Σ²q) as
+    /// D → 0); closer to the edge (q ~ D, where P is already negligible)
+    /// ln(s/q) = ln s - ln q is accurate. ln q = -2 ln cosh(√|κ| v) for κ < 0
+    /// (no cancellation in 1 - |κ|g²).
+    fn stable_ln_unnorm(&self, kappa: f64, w: f64) -> f64 {
+        let v = self.vu - w;
+        let (s2, d) = (self.sigma * self.sigma, edge_slope(self.drag, self.sigma));
+        let g = self.drag.force(v);
+        let lq = if kappa < 0.0 {
+            let x = ((-kappa).sqrt() * v).abs();
+            -2.0 * (x + (-2.0 * x).exp().ln_1p() - std::f64::consts::LN_2)
+        } else {
+            ln_q(kappa, g)
+        };
+        let ls = if self.in_bulk(w) {
+            (-g * g / s2).ln_1p()
+        } else {
+            self.edge_terms(kappa, w).0 + w.ln()
+        };
+        let y = g * g * d / (s2 * lq.exp());
+        let ln_ratio = if y < 0.5 { (-y).ln_1p() } else { ls - lq };
+        self.c * ln_ratio - ls
+    }
+
     /// The bulk formulas are used for w > v_u/2, the edge identities below.
     fn in_bulk(&self, w: f64) -> bool {
         w > 0.5 * self.vu
@@ -668,6 +711,9 @@ impl R0Density {
     /// ln φ(w) with φ = P_unnorm / w^a (= (s/w)^a q^{-c} for a Riccati law).
     fn ln_phi(&self, w: f64) -> f64 {
         match &self.form {
+            Form::Riccati(kappa) if self.c > STABLE_FORM_C => {
+                self.stable_ln_unnorm(*kappa, w) - self.a * w.ln()
+            }
             Form::Riccati(kappa) if self.in_bulk(w) => {
                 let (ls, lq) = self.bulk_terms(*kappa, w);
                 self.a * (ls - w.ln()) - self.c * lq
@@ -691,6 +737,7 @@ impl R0Density {
     /// edge.
     fn ln_unnorm(&self, w: f64) -> f64 {
         match &self.form {
+            Form::Riccati(kappa) if self.c > STABLE_FORM_C => self.stable_ln_unnorm(*kappa, w),
             Form::Riccati(kappa) if self.in_bulk(w) => {
                 let (ls, lq) = self.bulk_terms(*kappa, w);
                 self.a * ls - self.c * lq

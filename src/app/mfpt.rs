@@ -425,23 +425,31 @@ impl ScanArgs {
     /// there) is checked before any work.
     fn config(&self) -> crate::Result<ScanConfig> {
         let values = mfpt::optimize::scan_values(self.from, self.to, self.points, self.log)?;
-        let (axis, vt) = match self.over {
-            Over::Vt => (ScanAxis::Vt, values[0]),
-            Over::Rate => (
-                ScanAxis::Rate,
-                self.vt.ok_or_else(|| {
-                    Error::invalid(
-                        "--vt",
-                        "missing",
-                        "a target velocity (required with --over rate)",
-                    )
-                })?,
-            ),
-        };
-        let (base, backward) = self.problem.config(vt)?;
+        let (axis, vt) =
+            match (self.over, self.vt) {
+                (Over::Vt, Some(vt)) => return Err(Error::invalid(
+                    "--vt",
+                    vt,
+                    "only with --over rate (with --over vt the targets run from --from to --to)",
+                )),
+                (Over::Vt, None) => (ScanAxis::Vt, values[0]),
+                (Over::Rate, vt) => (
+                    ScanAxis::Rate,
+                    vt.ok_or_else(|| {
+                        Error::invalid(
+                            "--vt",
+                            "missing",
+                            "a target velocity (required with --over rate)",
+                        )
+                    })?,
+                ),
+            };
+        let scanned = |i: usize, e: Error| blame_scan_end(e, axis, i, (self.from, self.to));
+        let (base, backward) = self.problem.config(vt).map_err(|e| scanned(0, e))?;
         let problems = values
             .iter()
-            .map(|&x| mfpt::optimize::scan_problem(&base, axis, x))
+            .enumerate()
+            .map(|(i, &x)| mfpt::optimize::scan_problem(&base, axis, x).map_err(|e| scanned(i, e)))
             .collect::<crate::Result<Vec<_>>>()?;
         let method = self.sim.config(&problems, backward, self.output.seed)?;
         Ok(ScanConfig {
@@ -452,6 +460,27 @@ impl ScanArgs {
             backward,
             method,
         })
+    }
+}
+
+/// A scanned point's error names the scanned parameter (`vt`, `rate`); the
+/// user typed `--from` / `--to`. The points run from `--from` to `--to`, so
+/// the first point failing is `--from` itself or lies towards `--to`.
+fn blame_scan_end(e: Error, axis: ScanAxis, point: usize, (from, to): (f64, f64)) -> Error {
+    let scanned = match axis {
+        ScanAxis::Vt => "vt",
+        ScanAxis::Rate => "rate",
+    };
+    match e {
+        Error::InvalidParameter { name, allowed, .. } if name == scanned => {
+            let (flag, value) = if point == 0 {
+                ("--from", from)
+            } else {
+                ("--to", to)
+            };
+            Error::invalid(flag, value, allowed)
+        }
+        other => other,
     }
 }
 

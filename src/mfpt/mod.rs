@@ -118,16 +118,21 @@ impl Problem {
             ));
         }
         if (up && !(vr < vt)) || (!up && !(vr > vt)) {
-            let side = if up {
-                format!(
-                    "v_r < vt = {vt} (same side as v0, so a reset cannot jump across the target)"
-                )
+            // v0 is always given explicitly, v_r often left at its default:
+            // name v0, and say how to move either.
+            let (side, start) = if vr < vt {
+                ("<", "above")
             } else {
-                format!(
-                    "v_r > vt = {vt} (same side as v0, so a reset cannot jump across the target)"
-                )
+                (">", "below")
             };
-            return Err(Error::invalid("reset_velocity", vr, side));
+            return Err(Error::invalid(
+                "v0",
+                v0,
+                format!(
+                    "v0 {side} vt = {vt}, on the side of the reset velocity v_r = {vr} (a reset \
+                     cannot jump across the target); to start {start} vt, choose v_r {start} vt too"
+                ),
+            ));
         }
         Ok(Problem { params, v0, vt })
     }

@@ -23,6 +23,8 @@ pub struct Fit<const K: usize> {
     pub scale: [f64; K],
     /// All sampled values finite.
     pub finite: bool,
+    /// Half the piece width, (b - a) / 2.
+    pub half_width: f64,
 }
 
 impl<const K: usize> Fit<K> {
@@ -33,6 +35,27 @@ impl<const K: usize> Fit<K> {
             && (0..K).all(|k| {
                 !(self.scale[k] > 0.0) || self.tail[k] <= rel * self.scale[k].max(f64::MIN_POSITIVE)
             })
+    }
+
+    /// [`resolved`](Self::resolved), or else resolved down to the rounding
+    /// noise of the sampled values: a function evaluated at an abscissa of
+    /// size `abscissa` carries an error of about |f'| ulp(abscissa) from the
+    /// abscissa's own rounding, which no refinement removes (a steep drag law
+    /// near its pole: tan at Sigma = 3000). |f'| is bounded by the series,
+    /// Σ j² |c_j| / half_width.
+    pub fn resolved_to_noise(&self, rel: f64, abscissa: f64) -> bool {
+        self.resolved(rel)
+            || (self.finite
+                && (0..K).all(|k| {
+                    let slope: f64 = self.series[k]
+                        .iter()
+                        .enumerate()
+                        .map(|(j, c)| (j * j) as f64 * c.abs())
+                        .sum::<f64>()
+                        / self.half_width;
+                    let noise = 8.0 * f64::EPSILON * abscissa.abs() * slope;
+                    self.tail[k] <= (rel * self.scale[k]).max(noise)
+                }))
     }
 }
 
@@ -53,6 +76,7 @@ pub fn fit<const K: usize>(f: &dyn Fn(f64) -> [f64; K], a: f64, b: f64) -> Fit<K
         tail: [0.0; K],
         scale: [0.0; K],
         finite: vals.iter().all(|v| v.iter().all(|x| x.is_finite())),
+        half_width: h,
     };
     for k in 0..K {
         // Coefficients c_j of f = c_0/2 + Σ_{j≥1} c_j T_j.

@@ -86,7 +86,8 @@ impl DeficitTable {
         }
         while let Some((a, b)) = stack.pop() {
             let fit = chebyshev::fit(&f, a, b);
-            let (ok, c) = (fit.resolved(1e-14), fit.anti);
+            let abscissa = a.abs().max(b.abs()).max(vs.abs());
+            let (ok, c) = (fit.resolved_to_noise(1e-14, abscissa), fit.anti);
             if ok || b - a < min_width {
                 if !ok {
                     return Err(Error::Numerical {

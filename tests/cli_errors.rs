@@ -1,0 +1,65 @@
+//! Errors name what the user typed: the missing flags, the flag whose value
+//! is wrong (never a flag left at its default), the end of a scanned range;
+//! bare `irtp` prints the usage. Every input error: exit 2, one line.
+
+use std::process::Command;
+
+fn irtp(args: &[&str]) -> (Option<i32>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_irtp"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn one_line_error(args: &[&str]) -> String {
+    let (code, err) = irtp(args);
+    assert_eq!(code, Some(2), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    err
+}
+
+#[test]
+fn bare_command_prints_usage() {
+    for args in [&[][..], &["fp"][..]] {
+        let (code, err) = irtp(args);
+        assert_eq!(code, Some(2));
+        assert!(err.contains("Usage:"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn missing_required_flags_are_named() {
+    let err = one_line_error(&["mfpt", "--vt", "0.5"]);
+    assert!(err.contains("--v0"), "{err}");
+    let err = one_line_error(&["mfpt"]);
+    assert!(err.contains("--v0") && err.contains("--vt"), "{err}");
+}
+
+#[test]
+fn the_typed_flag_is_blamed() {
+    // v_r is left at its default 0: the start v0 is on the wrong side.
+    let err = one_line_error(&["mfpt", "--v0", "0.8", "--vt", "0.5"]);
+    assert!(err.starts_with("irtp: error: invalid --v0 = 0.8"), "{err}");
+    let scan = ["mfpt", "scan", "--over", "vt", "--v0", "0"];
+    let err = one_line_error(&[&scan[..], &["--from", "0.2", "--to", "5"]].concat());
+    assert!(err.starts_with("irtp: error: invalid --to = 5"), "{err}");
+    let err = one_line_error(&[&scan[..], &["--from", "-5", "--to", "-0.2"]].concat());
+    assert!(err.starts_with("irtp: error: invalid --from = -5"), "{err}");
+    let rate = ["mfpt", "scan", "--over", "rate", "--v0", "0", "--vt", "0.5"];
+    let err = one_line_error(&[&rate[..], &["--from", "-1", "--to", "5"]].concat());
+    assert!(err.starts_with("irtp: error: invalid --from = -1"), "{err}");
+}
+
+#[test]
+fn flags_that_do_not_apply_are_refused() {
+    let err = one_line_error(&[
+        "mfpt", "scan", "--over", "vt", "--v0", "0", "--from", "0.2", "--to", "0.5", "--vt", "0.3",
+    ]);
+    assert!(err.contains("--vt") && err.contains("--over rate"), "{err}");
+    let err = one_line_error(&["simulate", "--dt", "0.01"]);
+    assert!(err.contains("--dt"), "{err}");
+}
