@@ -1,5 +1,7 @@
 //! Error type shared by the whole library. The binary maps every variant to a
-//! one-line message and exit code 2 (bad input) or 1 (runtime failure).
+//! one-line message and an exit code: 2 for bad input (a parameter out of
+//! range, a run over its work or memory budget), 4 for a numerical failure,
+//! 1 for i/o (see README, "Exit codes").
 //!
 //! Parameters are named as the library names them (`sigma`, `t_max`,
 //! `reset_velocity`); the binary translates those names to its flags.
@@ -66,6 +68,25 @@ pub enum Error {
     /// [`crate::parallel::Progress::cancelled`]); nothing was written.
     #[error("interrupted: the computation was cancelled and nothing was written")]
     Interrupted,
+    /// The work or memory a run is estimated to need exceeds its budget
+    /// (`max_work`, `max_memory`): refused before it starts.
+    #[error(
+        "too costly: estimated {estimate:.2e} {unit} from {}, above {limit_name} = {limit:e}; \
+         reduce them or raise {limit_name}",
+        drivers.join(", ")
+    )]
+    TooCostly {
+        /// What is counted: "particle events", "cell updates", "bytes of memory", ...
+        unit: &'static str,
+        /// The estimate.
+        estimate: f64,
+        /// The parameters the estimate grows with (library names).
+        drivers: Vec<&'static str>,
+        /// The budget parameter (`max_work` or `max_memory`).
+        limit_name: &'static str,
+        /// Its value.
+        limit: f64,
+    },
     /// Input/output failure (writing results).
     #[error("i/o error on {path}: {reason}")]
     Io {
@@ -85,14 +106,29 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             name,
-            value: value.to_string(),
+            value: short_number(value.to_string()),
             allowed: allowed.into(),
         }
     }
 
+    /// True for a numerical failure of a method (exit code 4): no answer it
+    /// could verify.
+    pub fn is_numerical(&self) -> bool {
+        matches!(
+            self,
+            Error::Overflow { .. }
+                | Error::NotConverged { .. }
+                | Error::NonFinite { .. }
+                | Error::Numerical { .. }
+        )
+    }
+
     /// True for errors caused by bad user input (exit code 2).
     pub fn is_input_error(&self) -> bool {
-        matches!(self, Error::InvalidParameter { .. })
+        matches!(
+            self,
+            Error::InvalidParameter { .. } | Error::TooCostly { .. }
+        )
     }
 
     /// The message, with the parameter name of an [`Error::InvalidParameter`]
@@ -105,8 +141,32 @@ impl Error {
                 value,
                 allowed,
             } => format!("invalid {} = {value}: allowed {allowed}", rename(name)),
+            Error::TooCostly {
+                unit,
+                estimate,
+                drivers,
+                limit_name,
+                limit,
+            } => {
+                let names: Vec<String> = drivers.iter().map(|d| rename(d)).collect();
+                let budget = rename(limit_name);
+                format!(
+                    "too costly: estimated {estimate:.2e} {unit} from {}, above {budget} = \
+                     {limit:e}; reduce them or raise {budget}",
+                    names.join(", ")
+                )
+            }
             other => other.to_string(),
         }
+    }
+}
+
+/// A number printed by `Display` in full (`1e300` as 301 digits) in
+/// scientific notation instead; any other text unchanged.
+fn short_number(s: String) -> String {
+    match s.parse::<f64>() {
+        Ok(x) if s.len() > 17 && x.is_finite() => format!("{x:e}"),
+        _ => s,
     }
 }
 

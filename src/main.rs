@@ -84,10 +84,13 @@ fn main() -> ExitCode {
         Err(e) => {
             // Library errors name parameters (`t_max`); the user typed flags (`--t-max`).
             let lib = e.downcast_ref::<irtp::Error>();
-            let input = lib.is_some_and(|e| e.is_input_error());
             let msg = lib.map_or_else(|| e.to_string(), |l| l.message_with(cli::flag_for));
             eprintln!("irtp: error: {msg}");
-            ExitCode::from(if input { 2 } else { 1 })
+            ExitCode::from(match lib {
+                Some(l) if l.is_input_error() => 2,
+                Some(l) if l.is_numerical() => 4,
+                _ => 1,
+            })
         }
     }
 }

@@ -55,7 +55,7 @@ fn extreme_reset_rates_are_refused_not_answered() {
             out.to_str().unwrap(),
         ]);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "r = {rate}: {err}");
+        assert_eq!(o.status.code(), Some(4), "r = {rate}: {err}");
         assert!(err.contains("exceeds the f64 range"), "{err}");
         assert!(!out.exists());
     }
@@ -72,7 +72,7 @@ fn extreme_reset_rates_are_refused_not_answered() {
 fn unresolved_stationary_density_is_refused() {
     let o = irtp(&["fp", "stationary", "--lambda", "1e9"]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(err.contains("does not resolve the density"), "{err}");
     assert!(o.stdout.is_empty());
 }
@@ -94,7 +94,7 @@ fn non_finite_results_are_refused() {
         out.to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(
         err.contains("overflowed") && err.lines().count() == 1,
         "{err}"

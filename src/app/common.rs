@@ -111,4 +111,7 @@ pub struct OutputArgs {
     /// Print one JSON object with the results on stdout.
     #[arg(long)]
     pub json: bool,
+    /// `--max-work --max-memory`.
+    #[command(flatten)]
+    pub budget: super::budget::BudgetArgs,
 }

@@ -117,6 +117,10 @@ impl StationaryArgs {
             },
             extrapolate: !self.no_extrapolate,
         };
+        // Measured: about 2.4 µs (~100 operations) and 128 bytes per cell
+        // (2e6 cells: 4.8 s, 255 MB); 256 leaves room.
+        let cost = super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"]);
+        self.output.budget.check(&cost)?;
         Ok((params, opts))
     }
 }
@@ -133,6 +137,15 @@ impl TransientArgs {
             self.snapshots,
             self.cfl,
         )?;
+        let plan = crate::fp::transient_plan(&params, &opts)?;
+        let c = self.cells as f64;
+        self.output.budget.check(&super::budget::Cost {
+            work: c * plan.steps as f64,
+            unit: "cell updates",
+            drivers: vec!["cells", "t_max", "lambda", "rate", "cfl"],
+            memory: c * (128.0 + 16.0 * self.snapshots as f64) + 64.0 * self.samples as f64,
+            memory_drivers: vec!["cells", "snapshots", "samples"],
+        })?;
         Ok((params, opts))
     }
 }

@@ -12,6 +12,7 @@
 //! Layering: `app` sits above [`crate::figures`] and below the front ends.
 
 pub mod analytic;
+pub mod budget;
 pub mod common;
 pub mod fp;
 pub mod keywords;

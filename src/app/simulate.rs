@@ -141,6 +141,7 @@ impl SimulateArgs {
     /// Flags → validated config, before anything touches the file system.
     pub(crate) fn config(&self) -> crate::Result<Config> {
         let params = self.model.params()?;
+        self.output.budget.check(&self.cost(&params)?)?;
         let grid = match self.grid {
             GridArg::Linear => TimeGrid::linear(self.t_max, self.samples)?,
             GridArg::Log => TimeGrid::log(self.t_min, self.t_max, self.samples)?,
@@ -164,6 +165,41 @@ impl SimulateArgs {
             spec,
             euler,
         })
+    }
+
+    /// Work and memory, from the flags before anything is allocated: Euler
+    /// steps, or exact-sampler events (flips and resets at rate lambda + r,
+    /// plus one flow evaluation per recording time).
+    fn cost(&self, p: &Params) -> crate::Result<super::budget::Cost> {
+        let t_max = crate::error::finite("t_max", self.t_max)?;
+        let samples = self.samples as f64;
+        let (per, unit, drivers) = match self.method {
+            MethodArg::Euler => (
+                t_max / self.dt.unwrap_or(1e-3) + samples,
+                "Euler particle steps",
+                vec!["particles", "t_max", "dt"],
+            ),
+            MethodArg::Exact => (
+                (p.lambda() + p.rate()) * t_max + samples + 1.0,
+                "particle events",
+                vec!["particles", "lambda", "rate", "t_max", "samples"],
+            ),
+        };
+        // A step refused by validation (dt <= 0, NaN) gives a meaningless
+        // estimate: leave the refusal to the check that names it.
+        let per = if !per.is_finite() || per < 0.0 {
+            0.0
+        } else {
+            per
+        };
+        Ok(super::budget::particles(
+            self.particles,
+            per,
+            unit,
+            drivers,
+            self.samples,
+            self.bins,
+        ))
     }
 
     fn euler_setup(&self, params: &Params, spec: &SimSpec) -> crate::Result<EulerSetup> {

@@ -27,4 +27,7 @@ mod transient;
 
 pub use grid::Mesh;
 pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
-pub use transient::{transient, transient_with_progress, Snapshot, Transient, TransientOptions};
+pub use transient::{
+    plan as transient_plan, transient, transient_with_progress, Plan as TransientPlan, Snapshot,
+    Transient, TransientOptions,
+};

@@ -123,6 +123,42 @@ fn check_times(name: &'static str, ts: &[f64], t_max: f64) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// The time step and the number of steps of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plan {
+    /// Time step: the Courant number over the largest total outflow rate.
+    pub dt: f64,
+    /// Steps to t_max.
+    pub steps: u64,
+}
+
+/// The step and step count [`transient`] will use (O(cells), no
+/// integration): for estimating the cost before a run.
+pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
+    validate(opts)?;
+    plan_on(params, opts, &Grid::uniform(params, opts.cells))
+}
+
+fn plan_on(params: &Params, opts: &TransientOptions, g: &Grid) -> Result<Plan> {
+    let (lambda, r) = (params.lambda(), params.rate());
+    let max_rate = (0..opts.cells)
+        .map(|i| g.out_plus[i].max(g.out_minus[i]) + lambda + r)
+        .fold(0.0, f64::max);
+    let dt = opts.cfl / max_rate;
+    let steps = (opts.t_max / dt).ceil();
+    if !(steps <= 1e12) {
+        return Err(Error::invalid(
+            "t_max",
+            opts.t_max,
+            format!("t_max / dt <= 1e12 steps (dt = {dt:.3e})"),
+        ));
+    }
+    Ok(Plan {
+        dt,
+        steps: steps as u64,
+    })
+}
+
 /// Integrate the forward equations from the paper's initial condition.
 pub fn transient(params: &Params, opts: &TransientOptions) -> Result<Transient> {
     transient_with_progress(params, opts, &NoProgress)
@@ -134,23 +170,14 @@ pub fn transient_with_progress(
     opts: &TransientOptions,
     progress: &dyn Progress,
 ) -> Result<Transient> {
-    let (n, t_max, cfl) = (opts.cells, opts.t_max, opts.cfl);
+    let n = opts.cells;
     let (times, snaps) = validate(opts)?;
     let g = Grid::uniform(params, n);
+    let Plan {
+        dt,
+        steps: total_steps,
+    } = plan_on(params, opts, &g)?;
     let (lambda, r) = (params.lambda(), params.rate());
-    let (al, be) = (&g.out_plus, &g.out_minus);
-    let max_rate = (0..n)
-        .map(|i| al[i].max(be[i]) + lambda + r)
-        .fold(0.0, f64::max);
-    let dt = cfl / max_rate;
-    let total_steps = (t_max / dt).ceil() as u64;
-    if total_steps > 1_000_000_000_000 {
-        return Err(Error::invalid(
-            "t_max",
-            t_max,
-            format!("t_max / dt <= 1e12 steps (dt = {dt:.3e})"),
-        ));
-    }
 
     let (vl, vu) = params.bounds();
     let (i0p, i0m) = uniform_target(n, vl, vu, 0.0);

@@ -83,6 +83,34 @@ impl From<Problem> for RawProblem {
     }
 }
 
+/// v0 and v_r on opposite sides of vt. v0 is always given explicitly and
+/// v_r is often left at its default 0: blame v0 then, else v_r.
+fn wrong_side(v0: f64, vt: f64, vr: f64) -> Error {
+    let why = "a reset cannot jump across the target";
+    if vr == 0.0 {
+        let (side, start) = if vr < vt {
+            ("<", "above")
+        } else {
+            (">", "below")
+        };
+        Error::invalid(
+            "v0",
+            v0,
+            format!(
+                "v0 {side} vt = {vt}, on the side of the reset velocity v_r = {vr} ({why}); \
+                 to start {start} vt, choose v_r {start} vt too"
+            ),
+        )
+    } else {
+        let side = if v0 < vt { "<" } else { ">" };
+        Error::invalid(
+            "reset_velocity",
+            vr,
+            format!("v_r {side} vt = {vt}, on the side of v0 = {v0} ({why})"),
+        )
+    }
+}
+
 impl Problem {
     /// Validate: lambda > 0 (else the - state never arrives), v_l < v_t < v_u
     /// (the ± state only approaches v_u / v_l asymptotically, so a target
@@ -118,21 +146,7 @@ impl Problem {
             ));
         }
         if (up && !(vr < vt)) || (!up && !(vr > vt)) {
-            // v0 is always given explicitly, v_r often left at its default:
-            // name v0, and say how to move either.
-            let (side, start) = if vr < vt {
-                ("<", "above")
-            } else {
-                (">", "below")
-            };
-            return Err(Error::invalid(
-                "v0",
-                v0,
-                format!(
-                    "v0 {side} vt = {vt}, on the side of the reset velocity v_r = {vr} (a reset \
-                     cannot jump across the target); to start {start} vt, choose v_r {start} vt too"
-                ),
-            ));
+            return Err(wrong_side(v0, vt, vr));
         }
         Ok(Problem { params, v0, vt })
     }
