@@ -4,7 +4,7 @@ The extension calls ``callback(label, done, total)`` from the calling thread
 about every 100 ms while it works and once at the end. ``progress=True``
 shows a bar: ``tqdm.auto`` when tqdm is installed (a widget in Jupyter, text
 in a terminal), else one self-overwriting line on stderr. Either names the
-unit of the stage (particles, points, per cent of a figure...) and estimates
+unit of the stage (particles, points, time steps, per cent of a figure...) and estimates
 the time left from the average rate since the stage began, shown once 5 %
 is done and a second has passed (a recent-rate estimate jumps when chunks
 take uneven time).
@@ -29,7 +29,7 @@ def unit_of(label: str) -> str:
     if label == "mfpt optimize":
         return "grid points"
     if label == "fp transient":
-        return "solves"
+        return "time steps"
     if label.startswith("fig"):
         return "%"
     return "steps"

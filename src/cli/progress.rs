@@ -1,6 +1,6 @@
 //! Progress bars on a terminal, silence otherwise.
 //!
-//! Each bar names its unit (particles, points, grid points, per cent of a
+//! Each bar names its unit (particles, points, grid points, time steps, per cent of a
 //! figure...) and estimates the time left from the average rate since the
 //! stage began (elapsed · (1 - f) / f at fraction f done), not from
 //! indicatif's recent-rate estimate, which jumps when chunks take uneven
@@ -29,7 +29,7 @@ pub fn unit_of(label: &str) -> Unit {
         l if l.starts_with("point ") => Unit::Count("particles"),
         "mfpt scan" | "points" => Unit::Count("points"),
         "mfpt optimize" => Unit::Count("grid points"),
-        "fp transient" => Unit::Count("solves"),
+        "fp transient" => Unit::Count("time steps"),
         l if l.starts_with("fig") => Unit::Percent,
         _ => Unit::Count("steps"),
     }
