@@ -17,6 +17,39 @@ fn claim<'a>(claims: &'a [Value], id: &str) -> &'a Value {
         .unwrap_or_else(|| panic!("claim {id} missing"))
 }
 
+/// Legend text each figure must show: what its points and lines are.
+fn legend_entries(fig: &str) -> &'static [&'static str] {
+    match fig {
+        "fig1" => &[
+            "exact sampler, 4",
+            "stationary FP, Eq. (33)",
+            "transient FP",
+            "r = 10",
+        ],
+        "fig2" | "fig3" => &[
+            "exact sampler, ",
+            "Fokker-Planck (FP), stationary",
+            "analytic r = 0, Eq. (3",
+            "r = 0, FP",
+        ],
+        "fig5" => &[
+            "exact sampler, 2",
+            "guide (ballistic)",
+            "guide (diffusive)",
+            "r = 10",
+        ],
+        "fig6" => &[
+            "exact sampler (",
+            "fit of Eq. (36)",
+            "(FP generator)",
+            "guide",
+            "λ = 5",
+        ],
+        "fig7" => &["exact sampler, ", "backward eqs. (26)-(27)", "tanh λ = 5"],
+        _ => &[],
+    }
+}
+
 #[test]
 fn reproduce_all_quick() {
     let tmp = tempfile::tempdir().unwrap();
@@ -46,6 +79,13 @@ fn reproduce_all_quick() {
             assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{f}.png");
             let svg = std::fs::read_to_string(out.join(format!("{f}.svg"))).unwrap();
             assert!(svg.contains("<svg"), "{f}.svg");
+            // Every figure says what its marks are, and no markup shows raw.
+            for entry in legend_entries(f) {
+                assert!(svg.contains(entry), "{f}.svg lacks legend entry {entry:?}");
+            }
+            for raw in ["_{", "D_eff", "P_s", "τ_r", "v_t"] {
+                assert!(!svg.contains(raw), "{f}.svg shows raw markup {raw:?}");
+            }
         } else {
             assert!(!out.join(format!("{f}.png")).exists(), "{f}.png");
         }

@@ -3,15 +3,44 @@
 The extension calls ``callback(label, done, total)`` from the calling thread
 about every 100 ms while it works and once at the end. ``progress=True``
 shows a bar: ``tqdm.auto`` when tqdm is installed (a widget in Jupyter, text
-in a terminal), else one self-overwriting line on stderr.
+in a terminal), else one self-overwriting line on stderr. Either names the
+unit of the stage (particles, points, time steps, per cent of a figure...) and estimates
+the time left from the average rate since the stage began, shown once 5 %
+is done and a second has passed (a recent-rate estimate jumps when chunks
+take uneven time).
 """
 
 from __future__ import annotations
 
 import sys
+import time
 from typing import Any, Callable, Optional
 
 Callback = Callable[[str, int, int], None]
+
+
+def unit_of(label: str) -> str:
+    """What the stage ``label`` counts ("%" for a figure's progress); the
+    same table as the command-line bars."""
+    if label in ("simulate", "simulate part", "mfpt") or label.startswith("point "):
+        return "particles"
+    if label in ("mfpt scan", "points"):
+        return "points"
+    if label == "mfpt optimize":
+        return "grid points"
+    if label == "fp transient":
+        return "time steps"
+    if label.startswith("fig"):
+        return "%"
+    return "steps"
+
+
+def time_left(elapsed: float, fraction: float) -> Optional[float]:
+    """Seconds left at ``fraction`` done after ``elapsed`` seconds (average
+    rate so far); None until 5 % is done and a second has passed."""
+    if not (0.05 <= fraction < 1.0) or elapsed < 1.0:
+        return None
+    return elapsed * (1.0 - fraction) / fraction
 
 
 class _TqdmBars:
@@ -23,10 +52,17 @@ class _TqdmBars:
         self._bar: Any = None
 
     def __call__(self, label: str, done: int, total: int) -> None:
+        unit = unit_of(label)
+        if unit == "%":
+            # A figure's progress: per cent of the figure.
+            done, total = (100 * done // total if total else 100), 100
         if label != self._label or self._bar is None:
             self.close()
             self._label = label
-            self._bar = self._tqdm(total=total, desc=label, leave=True)
+            # smoothing=0: the rate averaged since the start, not the recent one.
+            self._bar = self._tqdm(
+                total=total, desc=label, unit=f" {unit}", leave=True, smoothing=0
+            )
         if self._bar.total != total:
             self._bar.total = total
         self._bar.n = done
@@ -39,16 +75,26 @@ class _TqdmBars:
 
 
 class _TextLine:
-    """``label: done/total (pct%)`` on stderr, rewritten in place."""
+    """``label: done/total unit (pct%), ~N s left`` on stderr, rewritten in place."""
 
     def __init__(self, stream: Any = None) -> None:
         self._stream = stream
         self._open = False
+        self._label: Optional[str] = None
+        self._t0 = 0.0
 
     def __call__(self, label: str, done: int, total: int) -> None:
         stream = self._stream or sys.stderr
-        pct = 100.0 * done / total if total else 100.0
-        stream.write(f"\r{label}: {done}/{total} ({pct:.0f}%)")
+        if label != self._label:
+            self._label, self._t0 = label, time.monotonic()
+        frac = done / total if total else 1.0
+        unit = unit_of(label)
+        counts = f"{100 * frac:.0f}% of the figure" if unit == "%" else (
+            f"{done}/{total} {unit} ({100 * frac:.0f}%)"
+        )
+        left = time_left(time.monotonic() - self._t0, frac)
+        eta = f", ~{left:.0f} s left" if left is not None else ""
+        stream.write(f"\r{label}: {counts}{eta}\033[K")
         stream.flush()
         self._open = True
 

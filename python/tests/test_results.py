@@ -129,6 +129,15 @@ def test_progress_true_without_tqdm_writes_a_line(monkeypatch, capsys):
     irtp.fp_transient(t_max=0.5, cells=100, progress=True)
     err = capsys.readouterr().err
     assert "fp transient" in err and err.endswith("\n")
+    assert " time steps (100%)" in err, "the bar names its unit"
+
+
+def test_progress_estimate_waits_for_enough_work():
+    from irtp._progress import time_left, unit_of
+
+    assert time_left(10.0, 0.25) == 30.0
+    assert time_left(10.0, 0.01) is None and time_left(0.5, 0.5) is None
+    assert unit_of("simulate") == "particles" and unit_of("fig7") == "%"
 
 
 def test_signature_defaults_come_from_the_cli_definitions():

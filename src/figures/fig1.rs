@@ -5,7 +5,7 @@
 //! dashed lines: <v²>(t) from the time-dependent FP equations (paper's method).
 
 use super::compute::{self, Moments};
-use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
+use super::plot::{fmt_count, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
     curve_seed, fmt_num, grid_of_curves, to_json, Claim, FigureOutput, Options, Parameters,
     Verdict, Which,
@@ -190,6 +190,14 @@ fn compute_curve(
 /// Draw Fig. 1: points (simulation), solid (Eq. (33)), dashed (FP(t)).
 pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new("fig1", "Fig. 1: mean-squared velocity ⟨v²⟩(t), λ = 0.5", 2);
+    fig.key = vec![
+        Key::points(format!(
+            "exact sampler, {} particles",
+            fmt_count(spec.particles)
+        )),
+        Key::line("stationary FP, Eq. (33)", Color::Gray, Dash::Solid),
+        Key::line("transient FP, Eqs. (11)-(12)", Color::Gray, Dash::Dashed),
+    ];
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let mut panel = Panel::new(
             ["(a)", "(b)"][mi],
@@ -197,7 +205,6 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
             Axis::linear("t"),
             Axis::linear("⟨v²⟩"),
         );
-        panel.legend_title = Some("solid: Eq. (33), dashed: FP(t)".into());
         for (ri, (c, &r)) in row.iter().zip(&spec.rates).enumerate() {
             let lab = Some(format!("r = {}", fmt_num(r)));
             let times: Vec<f64> = c.sim.iter().map(|s| s.t).collect();

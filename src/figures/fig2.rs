@@ -19,7 +19,7 @@
 
 use super::compute::{self, Density, DensityBin};
 use super::fig1::medium_title;
-use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
+use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
     curve_seed, fmt_num, json_num, to_json, Claim, FigureOutput, Options, Parameters, Stage,
     Verdict, Which,
@@ -653,20 +653,20 @@ pub fn plot(spec: &Spec, data: &Data) -> Figure {
     let mut fig = Figure::new(
         data.which.name(),
         format!(
-            "Fig. {}: stationary velocity density P_s(v), {}",
+            "Fig. {}: stationary velocity density P_{{s}}(v), {}",
             if data.which == Which::Fig2 { 2 } else { 3 },
             medium_title(&m)
         ),
         2,
     );
+    fig.key = key(spec, data);
     for (li, pd) in data.panels.iter().enumerate() {
         let mut panel = Panel::new(
             ["(a)", "(b)", "(c)", "(d)"][li % 4],
             format!("λ = {}", fmt_num(pd.lambda)),
             Axis::linear("v"),
-            Axis::linear("P_s(v)"),
+            Axis::linear("P_{s}(v)"),
         );
-        panel.legend_title = Some("points: sim., lines: FP".into());
         for (ri, c) in pd.curves.iter().enumerate() {
             plot_curve(&mut panel, ri, c);
         }
@@ -676,6 +676,30 @@ pub fn plot(spec: &Spec, data: &Data) -> Figure {
         fig.panels.push(panel);
     }
     fig
+}
+
+/// What the marks are: simulation points, FP lines, and the analytic
+/// r = 0 density (Eq. (34) for tan, (35) for tanh).
+fn key(spec: &Spec, data: &Data) -> Vec<Key> {
+    let n = count_range(
+        data.panels
+            .iter()
+            .flat_map(|pd| pd.curves.iter().map(|c| c.fp_vs_sim.particles)),
+    );
+    let eq = if spec.drag == crate::model::DragLaw::Tan {
+        34
+    } else {
+        35
+    };
+    vec![
+        Key::points(format!("exact sampler, {n} particles per curve")),
+        Key::line("Fokker-Planck (FP), stationary", Color::Gray, Dash::Solid),
+        Key::line(
+            format!("analytic r = 0, Eq. ({eq})"),
+            Color::Black,
+            Dash::Solid,
+        ),
+    ]
 }
 
 fn plot_curve(panel: &mut Panel, ri: usize, c: &Curve) {

@@ -5,7 +5,7 @@
 
 use super::compute::{self, Moments};
 use super::fig1::{medium_title, Medium, MEDIA};
-use super::plot::{Axis, Color, Dash, Figure, Note, Panel, Series};
+use super::plot::{fmt_count, Axis, Color, Dash, Figure, Key, Note, Panel, Series};
 use super::{
     curve_seed, fmt_num, grid_of_curves, to_json, Claim, FigureOutput, Options, Parameters,
     Verdict, Which,
@@ -169,6 +169,14 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
         "Fig. 5: mean-squared displacement ⟨x²⟩(t), λ = 0.5",
         2,
     );
+    fig.key = vec![
+        Key::points(format!(
+            "exact sampler, {} particles",
+            fmt_count(spec.particles)
+        )),
+        Key::line("t² guide (ballistic)", Color::Gray, Dash::Dotted),
+        Key::line("t guide (diffusive)", Color::Gray, Dash::Dashed),
+    ];
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let mut panel = Panel::new(
             ["(a)", "(b)"][mi],

@@ -7,7 +7,7 @@
 
 use super::compute;
 use super::fig1::{medium_title, Medium, MEDIA};
-use super::plot::{Axis, Color, Dash, Figure, Note, Panel, Series};
+use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Note, Panel, Series};
 use super::{
     curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
 };
@@ -294,15 +294,26 @@ fn exponent(spec: &Spec, base: &Params, points: &[Point]) -> Result<Option<Expon
 pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new(
         "fig6",
-        "Fig. 6: effective diffusion coefficient D_eff(r)",
+        "Fig. 6: effective diffusion coefficient D_{eff}(r)",
         2,
     );
+    let n = count_range(
+        curves
+            .iter()
+            .flatten()
+            .flat_map(|c| c.points.iter().map(|p| p.particles)),
+    );
+    fig.key = vec![
+        Key::points(format!("exact sampler ({n} particles), fit of Eq. (36)")),
+        Key::line("exact D_{eff} (FP generator)", Color::Gray, Dash::Solid),
+        Key::line("r⁻² guide", Color::Gray, Dash::Dotted),
+    ];
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let mut panel = Panel::new(
             ["(a)", "(b)"][mi],
             medium_title(m),
             Axis::log("r"),
-            Axis::log("D_eff"),
+            Axis::log("D_{eff}"),
         );
         for (li, c) in row.iter().enumerate() {
             let lab = Some(format!("λ = {}", fmt_num(c.lambda)));

@@ -10,7 +10,7 @@
 
 use super::compute;
 use super::fig1::medium_title;
-use super::plot::{Axis, Color, Dash, Figure, Panel, Series};
+use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
     curve_seed, fmt_num, json_num, to_json, Claim, FigureOutput, Options, Parameters, Stage,
     Verdict, Which,
@@ -289,17 +289,23 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new(
         "fig7",
         format!(
-            "Fig. 7: mean first-passage time τ_r(v₀), v₀ = {}, v_r = {}",
+            "Fig. 7: mean first-passage time τ_{{r}}(v₀), v₀ = {}, v_{{r}} = {}",
             spec.v0, spec.reset_velocity
         ),
         2,
     );
     let mut zoom = Panel::new(
         "(e)",
-        "zoom of (b), (d): τ_r/τ_0 at v_t = 0.5".to_string(),
+        "zoom of (b), (d): τ_{r}/τ_{0} at v_{t} = 0.5".to_string(),
         Axis::log("r"),
-        Axis::linear("τ_r(v₀) / τ_0(v₀)").range(0.75, 1.5),
+        Axis::linear("τ_{r}(v₀) / τ_{0}(v₀)").range(0.75, 1.5),
     );
+    fig.key = key(curves
+        .iter()
+        .flatten()
+        .flat_map(|c| [&c.vs_target, &c.vs_rate]));
+    zoom.legend_title = Some("backward eqs. (26)-(27)".into());
+    zoom.key = vec![Key::line("τ_{r} = τ_{0}", Color::Gray, Dash::Dotted)];
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let med = super::fig1::Medium {
             drag: m.drag,
@@ -308,14 +314,14 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
         let mut pa = Panel::new(
             ["(a)", "(c)"][mi],
             format!("{}, r = {}", medium_title(&med), fmt_num(m.rate)),
-            Axis::linear("v_t - v₀"),
-            Axis::log("τ_r(v₀)"),
+            Axis::linear("v_{t} - v₀"),
+            Axis::log("τ_{r}(v₀)"),
         );
         let mut pb = Panel::new(
             ["(b)", "(d)"][mi],
-            format!("{}, v_t = {}", medium_title(&med), fmt_num(m.target)),
+            format!("{}, v_{{t}} = {}", medium_title(&med), fmt_num(m.target)),
             Axis::log("r"),
-            Axis::log("τ_r(v₀)"),
+            Axis::log("τ_{r}(v₀)"),
         );
         for (li, c) in row.iter().enumerate() {
             let lab = Some(format!("λ = {}", fmt_num(c.lambda)));
@@ -356,6 +362,21 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     ));
     fig.panels.push(zoom);
     fig
+}
+
+/// What the marks are: sampler points (with the number of first passages
+/// behind each) and backward-equation lines.
+fn key<'a>(lines: impl Iterator<Item = &'a Line>) -> Vec<Key> {
+    let n = count_range(lines.flat_map(|l| l.points.iter().map(|(_, p)| p.samples)));
+    let points = if n.is_empty() {
+        "exact sampler".to_string()
+    } else {
+        format!("exact sampler, {n} passages")
+    };
+    vec![
+        Key::points(points),
+        Key::line("backward eqs. (26)-(27)", Color::Gray, Dash::Solid),
+    ]
 }
 
 fn push_line(panel: &mut Panel, lab: &Option<String>, col: Color, line: &Line) {

@@ -6,9 +6,16 @@
 //! vertical error bars) and free text [`Note`]s (guide-line labels such as
 //! "t²"). Series with the same legend label and colour share one legend entry
 //! showing both the marker and the line, so simulation points and solver
-//! lines of one parameter set read as one item. The legend goes into the
-//! corner of the plotting area that hides the least data, or outside the
+//! lines of one parameter set read as one item; a panel's [`Key`] entries
+//! follow them and say what each kind of mark is (which points are
+//! simulation, which lines which solver). The legend goes into a free
+//! corner of the plotting area (one that hides no data), or outside the
 //! plotting area when every corner would hide some.
+//!
+//! Titles, axis labels and legend text may write a subscript as `_{...}`
+//! (`D_{eff}`, `τ_{r}`): the renderer lowers it and sets it smaller
+//! ([`rich_segments`]). Tick labels of one axis share one format: the same
+//! number of decimals, or all in scientific notation ([`tick_labels`]).
 //!
 //! The model and [`Figure::data_csv`] need no plotting library. Rendering
 //! (`render_png`, `render_svg`, module `render`) uses `plotters` and exists
@@ -233,6 +240,44 @@ pub struct Panel {
     pub notes: Vec<Note>,
     /// Optional heading of the legend (e.g. "r =").
     pub legend_title: Option<String>,
+    /// Legend entries after the series' ones saying what each kind of mark
+    /// is (e.g. grey points: "exact sampler, 4000 particles").
+    pub key: Vec<Key>,
+}
+
+/// A legend entry of its own, not tied to a series: what a marker or line
+/// style means in this panel.
+#[derive(Clone, Debug, Serialize)]
+pub struct Key {
+    /// Text (may hold `_{...}` subscripts).
+    pub label: String,
+    /// Colour of the sample.
+    pub color: Color,
+    /// Line sample, if any.
+    pub dash: Option<Dash>,
+    /// Marker sample.
+    pub marker: bool,
+}
+
+impl Key {
+    /// Grey markers: what the points are.
+    pub fn points(label: impl Into<String>) -> Self {
+        Key {
+            label: label.into(),
+            color: Color::Gray,
+            dash: None,
+            marker: true,
+        }
+    }
+    /// A line sample: what lines of this colour and pattern are.
+    pub fn line(label: impl Into<String>, color: Color, dash: Dash) -> Self {
+        Key {
+            label: label.into(),
+            color,
+            dash: Some(dash),
+            marker: false,
+        }
+    }
 }
 
 impl Panel {
@@ -246,7 +291,19 @@ impl Panel {
             series: Vec::new(),
             notes: Vec::new(),
             legend_title: None,
+            key: Vec::new(),
         }
+    }
+
+    /// The legend as text, one line per row: the heading (if any), then the
+    /// entries, subscript markup removed (what a reader sees).
+    pub fn legend_lines(&self) -> Vec<String> {
+        let entries = legend_entries(self);
+        self.legend_title
+            .iter()
+            .chain(entries.iter().map(|e| &e.label))
+            .map(|t| plain_text(t))
+            .collect()
     }
 }
 
@@ -263,6 +320,9 @@ pub struct Figure {
     pub panel_px: (u32, u32),
     /// Panels in reading order.
     pub panels: Vec<Panel>,
+    /// What each kind of mark means in every panel (e.g. grey points:
+    /// "exact sampler, 4000 particles"), a row of samples under the title.
+    pub key: Vec<Key>,
 }
 
 impl Figure {
@@ -274,7 +334,35 @@ impl Figure {
             cols: cols.max(1),
             panel_px: (640, 480),
             panels: Vec::new(),
+            key: Vec::new(),
         }
+    }
+
+    /// Every legend as text: the figure's key first, then each panel's
+    /// [`Panel::legend_lines`] (subscript markup removed).
+    pub fn legend_lines(&self) -> Vec<String> {
+        self.key
+            .iter()
+            .map(|k| plain_text(&k.label))
+            .chain(self.panels.iter().flat_map(|p| p.legend_lines()))
+            .collect()
+    }
+
+    /// The figure key in rows that fit `width` pixels (indices into `key`),
+    /// text widths estimated from the character count.
+    fn key_rows(&self, width: u32, font_px: f64, sample_px: u32) -> Vec<Vec<usize>> {
+        let mut rows: Vec<Vec<usize>> = Vec::new();
+        let mut used = width;
+        for (i, k) in self.key.iter().enumerate() {
+            let w = key_item_width(&k.label, font_px, sample_px);
+            if used + w > width.saturating_sub(24) || rows.is_empty() {
+                rows.push(Vec::new());
+                used = 12;
+            }
+            rows.last_mut().expect("a row").push(i);
+            used += w;
+        }
+        rows
     }
 
     /// Panel rows and columns of the grid.
@@ -340,6 +428,12 @@ impl Figure {
         })?;
         Ok(String::from_utf8(bytes).expect("csv of utf-8 strings"))
     }
+}
+
+/// Estimated width of one figure-key item: sample, text, gap.
+fn key_item_width(label: &str, font_px: f64, sample_px: u32) -> u32 {
+    let chars = plain_text(label).chars().count() as f64;
+    sample_px + 8 + (0.6 * font_px * chars) as u32 + 28
 }
 
 /// Data range of an axis in transformed units, with a margin.
@@ -417,22 +511,15 @@ fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     (major, minor)
 }
 
-fn fmt_lin(v: f64, step: f64) -> String {
-    if v.abs() < 1e-12 * step.max(1e-300) {
-        return "0".into();
-    }
-    // Enough decimals for the step itself (0.25 needs two, 0.2 one).
-    let dec = (0..12)
+/// Decimals that write `x` exactly enough for a tick (0.25 needs two, 0.2 one).
+fn decimals(x: f64) -> usize {
+    let x = x.abs();
+    (0..12)
         .find(|&d| {
             let f = 10f64.powi(d);
-            ((step * f).round() - step * f).abs() < 1e-6 * step * f
+            ((x * f).round() - x * f).abs() < 1e-6 * (x * f).max(1e-300)
         })
-        .unwrap_or(12) as usize;
-    let a = v.abs();
-    if !(1e-3..1e5).contains(&a) {
-        return fmt_sci(v);
-    }
-    format!("{v:.dec$}")
+        .unwrap_or(12) as usize
 }
 
 fn superscript(s: &str) -> String {
@@ -454,39 +541,115 @@ fn superscript(s: &str) -> String {
         .collect()
 }
 
-fn fmt_sci(v: f64) -> String {
-    let e = v.abs().log10().floor() as i32;
-    let m = v / 10f64.powi(e);
-    if (m.abs() - 1.0).abs() < 1e-9 {
-        format!(
-            "{}10{}",
-            if v < 0.0 { "-" } else { "" },
-            superscript(&e.to_string())
-        )
-    } else {
-        format!("{m:.1}×10{}", superscript(&e.to_string()))
+/// `m.d×10ᵏ` with `dec` mantissa decimals ("0" for zero).
+fn fmt_sci(v: f64, dec: usize) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let mut e = v.abs().log10().floor() as i32;
+    let mut m = v / 10f64.powi(e);
+    if (m.abs() * 10f64.powi(dec as i32)).round() >= 10f64.powi(dec as i32 + 1) {
+        e += 1;
+        m /= 10.0;
+    }
+    format!("{m:.dec$}×10{}", superscript(&e.to_string()))
+}
+
+/// Labels of the ticks of one axis (positions in layout units, log10 on a
+/// log axis), all in one format: decades of a log axis as 10ᵏ; otherwise
+/// plain numbers with one number of decimals, or all in scientific notation
+/// when some tick is below 10⁻³ or at least 10⁵ in magnitude.
+fn tick_labels(axis: &Axis, ticks: &[f64], step: f64) -> Vec<String> {
+    if axis.scale == Scale::Log && ticks.iter().all(|u| (u - u.round()).abs() < 1e-9) {
+        return ticks
+            .iter()
+            .map(|u| format!("10{}", superscript(&(u.round() as i32).to_string())))
+            .collect();
+    }
+    let vals: Vec<f64> = match axis.scale {
+        // Snap to the step so that 0.6000000000000001 reads 0.6 and -0 reads 0.
+        Scale::Linear => ticks
+            .iter()
+            .map(|&v| (v / step).round() * step)
+            .map(|v| if v == 0.0 { 0.0 } else { v })
+            .collect(),
+        Scale::Log => ticks.iter().map(|&u| axis.inv(u)).collect(),
+    };
+    let sci = vals
+        .iter()
+        .any(|&v| v != 0.0 && !(1e-3..1e5).contains(&v.abs()));
+    if sci {
+        let dec = match axis.scale {
+            Scale::Linear => 1,
+            Scale::Log => 0,
+        };
+        return vals.iter().map(|&v| fmt_sci(v, dec)).collect();
+    }
+    let dec = match axis.scale {
+        Scale::Linear => decimals(step),
+        Scale::Log => vals.iter().map(|&v| decimals(v)).max().unwrap_or(0),
+    };
+    vals.iter().map(|v| format!("{v:.dec$}")).collect()
+}
+
+/// The label of the tick nearest to `u` (layout units) among `ticks`.
+fn label_at(ticks: &[f64], labels: &[String], u: f64) -> String {
+    ticks
+        .iter()
+        .zip(labels)
+        .min_by(|a, b| (a.0 - u).abs().total_cmp(&(b.0 - u).abs()))
+        .map(|(_, l)| l.clone())
+        .unwrap_or_default()
+}
+
+/// A count with thin spaces between groups of three digits: "1 000 000".
+pub fn fmt_count(n: u64) -> String {
+    let d = n.to_string();
+    let mut out = String::new();
+    for (i, c) in d.chars().enumerate() {
+        if i > 0 && (d.len() - i) % 3 == 0 {
+            out.push('\u{2009}');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// "N" when all counts are N, "N–M" for a range, "" for none.
+pub fn count_range(counts: impl IntoIterator<Item = u64>) -> String {
+    let (lo, hi) = counts
+        .into_iter()
+        .fold((u64::MAX, 0), |(a, b), n| (a.min(n), b.max(n)));
+    match (lo, hi) {
+        (u64::MAX, _) => String::new(),
+        (a, b) if a == b => fmt_count(a),
+        (a, b) => format!("{}–{}", fmt_count(a), fmt_count(b)),
     }
 }
 
-fn fmt_log(v: f64) -> String {
-    let x = 10f64.powf(v);
-    let k = v.round();
-    if (v - k).abs() < 1e-9 {
-        let k = k as i32;
-        return match k {
-            -2..=3 => {
-                let d = (-k).max(0) as usize;
-                format!("{:.d$}", 10f64.powi(k))
-            }
-            _ => format!("10{}", superscript(&k.to_string())),
+/// Text and subscript markup `_{...}` as (text, is_subscript) pieces.
+pub fn rich_segments(s: &str) -> Vec<(String, bool)> {
+    let mut out: Vec<(String, bool)> = Vec::new();
+    let mut rest = s;
+    while let Some(i) = rest.find("_{") {
+        let Some(j) = rest[i + 2..].find('}') else {
+            break;
         };
+        if i > 0 {
+            out.push((rest[..i].to_string(), false));
+        }
+        out.push((rest[i + 2..i + 2 + j].to_string(), true));
+        rest = &rest[i + 3 + j..];
     }
-    if (1e-2..1e4).contains(&x) {
-        let d = (-(x.log10().floor()) as i32).max(0) as usize;
-        format!("{x:.d$}")
-    } else {
-        fmt_sci(x)
+    if !rest.is_empty() {
+        out.push((rest.to_string(), false));
     }
+    out
+}
+
+/// `s` without subscript markup: "D_{eff}" → "Deff".
+pub fn plain_text(s: &str) -> String {
+    rich_segments(s).into_iter().map(|(t, _)| t).collect()
 }
 
 /// Ticks for an axis in transformed units and the label step (linear only).
@@ -628,6 +791,12 @@ fn legend_entries(p: &Panel) -> Vec<Entry> {
             }
         }
     }
+    out.extend(p.key.iter().map(|k| Entry {
+        label: k.label.clone(),
+        color: k.color,
+        dash: k.dash,
+        marker: k.marker,
+    }));
     out
 }
 
@@ -654,6 +823,10 @@ fn choose_place(pts: &[(f64, f64)], fw: f64, fh: f64) -> Place {
         (0.5 - fw / 2.0, 1.0 - fh - m),
         (1.0 - fw - m, 0.5 - fh / 2.0),
         (m, 0.5 - fh / 2.0),
+        // Corners set in from the frame, clear of lines along its edges
+        // (a density that diverges at the ends of the velocity range).
+        (1.0 - fw - 4.0 * m, 4.0 * m),
+        (4.0 * m, 4.0 * m),
     ];
     let pad = 0.01;
     let mut best = (usize::MAX, Place::Outside);
@@ -754,13 +927,75 @@ mod tests {
         );
         let (maj, _) = log_ticks(-2.1, 1.2);
         assert_eq!(maj, vec![-2.0, -1.0, 0.0, 1.0]);
-        assert_eq!(fmt_log(-2.0), "0.01");
-        assert_eq!(fmt_log(4.0), "10⁴");
-        assert_eq!(fmt_log(2f64.log10()), "2");
-        assert_eq!(fmt_lin(0.25, 0.25), "0.25");
-        assert_eq!(fmt_lin(0.5, 0.25), "0.50");
-        assert_eq!(fmt_lin(0.4, 0.2), "0.4");
-        assert_eq!(fmt_lin(10.0, 5.0), "10");
+    }
+
+    #[test]
+    fn tick_labels_of_one_axis_share_one_format() {
+        let lin = Axis::linear("x");
+        let t = [0.0, 0.25, 0.5, 0.75, 1.0, 1.25];
+        assert_eq!(
+            tick_labels(&lin, &t, 0.25),
+            ["0.00", "0.25", "0.50", "0.75", "1.00", "1.25"]
+        );
+        let t = nice_ticks(-1.2, 1.2, 6);
+        assert_eq!(
+            tick_labels(&lin, &t, 0.5),
+            ["-1.0", "-0.5", "0.0", "0.5", "1.0"]
+        );
+        assert_eq!(tick_labels(&lin, &[0.0, 5.0, 10.0], 5.0), ["0", "5", "10"]);
+        assert_eq!(
+            tick_labels(&lin, &[0.0, 1e5, 2e5], 1e5),
+            ["0", "1.0×10⁵", "2.0×10⁵"]
+        );
+        let log = Axis::log("y");
+        assert_eq!(
+            tick_labels(&log, &[-2.0, -1.0, 0.0, 1.0, 4.0], 1.0),
+            ["10⁻²", "10⁻¹", "10⁰", "10¹", "10⁴"]
+        );
+        let (maj, _) = log_ticks(-0.8, 0.5);
+        assert_eq!(tick_labels(&log, &maj, 1.0), ["0.2", "0.5", "1.0", "2.0"]);
+        assert_eq!(
+            tick_labels(&log, &[-4.0, 2f64.log10() - 4.0], 1.0),
+            ["1×10⁻⁴", "2×10⁻⁴"]
+        );
+        assert_eq!(label_at(&[0.0, 1.0], &["a".into(), "b".into()], 0.9), "b");
+    }
+
+    #[test]
+    fn subscript_markup() {
+        assert_eq!(
+            rich_segments("D_{eff}(r), τ_{r}"),
+            [
+                ("D".to_string(), false),
+                ("eff".to_string(), true),
+                ("(r), τ".to_string(), false),
+                ("r".to_string(), true)
+            ]
+        );
+        assert_eq!(plain_text("P_{s}(v)"), "Ps(v)");
+        assert_eq!(fmt_count(1_000_000), "1\u{2009}000\u{2009}000");
+        assert_eq!(fmt_count(200), "200");
+        assert_eq!(count_range([2000, 1000, 1500]), "1\u{2009}000–2\u{2009}000");
+        assert_eq!(count_range([4000, 4000]), "4\u{2009}000");
+        assert_eq!(plain_text("a_b {c}"), "a_b {c}");
+    }
+
+    #[test]
+    fn key_entries_follow_series_entries() {
+        let mut p = Panel::new("(a)", "", Axis::linear("x"), Axis::linear("y"));
+        p.legend_title = Some("r =".into());
+        p.series.push(Series::line(
+            Some("1".into()),
+            Color::Palette(0),
+            Dash::Solid,
+            "fp",
+            vec![0.0, 1.0],
+            vec![0.0, 1.0],
+        ));
+        p.key.push(Key::points("exact sampler"));
+        p.key
+            .push(Key::line("D_{eff}, FP", Color::Gray, Dash::Solid));
+        assert_eq!(p.legend_lines(), ["r =", "1", "exact sampler", "Deff, FP"]);
     }
 
     #[test]

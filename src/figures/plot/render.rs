@@ -5,11 +5,13 @@
 //! plotters does the mapping (linear, or its `log_scale` coordinates), the
 //! error bars (`ErrorBar`) and the dashed and dotted strokes, in the plot and
 //! in the legend; the layout it lacks (ranges, ticks, legend placement,
-//! clipping, cusp splitting) comes from the parent module.
+//! clipping, cusp splitting) comes from the parent module. Titles, axis
+//! labels and legend text are drawn here piece by piece so that `_{...}`
+//! subscripts come out lowered and smaller.
 
 use super::{
-    choose_place, clip_polyline, fit_range, fmt_lin, fmt_log, legend_entries, occupancy,
-    split_sharp, ticks, Axis, Color, Dash, Entry, Figure, Panel, Place, Scale, Style,
+    choose_place, clip_polyline, fit_range, label_at, legend_entries, occupancy, rich_segments,
+    split_sharp, tick_labels, ticks, Axis, Color, Dash, Entry, Figure, Panel, Place, Scale, Style,
 };
 use crate::error::{Error, Result};
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
@@ -37,9 +39,19 @@ fn register_font() {
 }
 
 const TITLE_PX: u32 = 34;
+/// Height of one row of the figure key under the title.
+const KEY_ROW_PX: u32 = 22;
 const FONT_PX: f64 = 17.0;
 const TICK_FONT_PX: f64 = 15.0;
 const LEGEND_FONT_PX: f64 = 15.0;
+/// Subscripts: size relative to the text and drop of their top edge.
+const SUB_SIZE: f64 = 0.72;
+const SUB_DROP: f64 = 0.42;
+/// Height reserved above a panel's plotting area for its caption.
+const CAPTION_PX: u32 = 28;
+/// Label areas: below the plotting area (ticks and x label) and left of it.
+const X_LABEL_AREA: u32 = 52;
+const Y_LABEL_AREA: u32 = 72;
 /// Legend: width of the line/marker sample and height of a row.
 const SAMPLE_PX: i32 = 34;
 const ROW_PX: i32 = 20;
@@ -65,10 +77,13 @@ fn rgb(c: Color) -> RGBColor {
 /// Pixel size of the whole figure.
 fn size(fig: &Figure) -> (u32, u32) {
     let (rows, cols) = fig.grid();
-    (
-        cols as u32 * fig.panel_px.0,
-        rows as u32 * fig.panel_px.1 + TITLE_PX,
-    )
+    let w = cols as u32 * fig.panel_px.0;
+    (w, rows as u32 * fig.panel_px.1 + header_px(fig, w))
+}
+
+/// Height of the title and the key rows under it.
+fn header_px(fig: &Figure, width: u32) -> u32 {
+    TITLE_PX + KEY_ROW_PX * fig.key_rows(width, LEGEND_FONT_PX, SAMPLE_PX as u32).len() as u32
 }
 
 /// Render to a PNG file.
@@ -95,13 +110,28 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let (_, h) = root.dim_in_pixel();
-    let (title_area, body) = root.split_vertically(TITLE_PX.min(h));
-    title_area.draw(&Text::new(
-        fig.title.clone(),
-        (12, 8),
-        (FAMILY, FONT_PX + 2.0).into_font(),
-    ))?;
+    let (w, h) = root.dim_in_pixel();
+    let (title_area, body) = root.split_vertically(header_px(fig, w).min(h));
+    draw_rich(&title_area, &fig.title, (12, 8), FONT_PX + 2.0, false)?;
+    for (i, row) in fig
+        .key_rows(w, LEGEND_FONT_PX, SAMPLE_PX as u32)
+        .iter()
+        .enumerate()
+    {
+        let mut x = 12;
+        let cy = (TITLE_PX + KEY_ROW_PX * i as u32) as i32 + ROW_PX / 2 - 2;
+        for &k in row {
+            let key = &fig.key[k];
+            let e = Entry {
+                label: key.label.clone(),
+                color: key.color,
+                dash: key.dash,
+                marker: key.marker,
+            };
+            draw_entry(&title_area, &e, (x, cy))?;
+            x += SAMPLE_PX + 8 + rich_width(&title_area, &key.label, LEGEND_FONT_PX) + 28;
+        }
+    }
     let areas = body.split_evenly(fig.grid());
     for (panel, area) in fig.panels.iter().zip(areas.iter()) {
         draw_panel(panel, area)?;
@@ -195,7 +225,8 @@ fn layout<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Layou
     let (lw, lh) = legend_size(area, &entries, p.legend_title.as_deref());
     let (aw, ah) = area.dim_in_pixel();
     // Approximate plotting-area size (margins and label areas subtracted).
-    let (pw, ph) = (aw as f64 - 100.0, ah as f64 - 110.0);
+    let pw = aw as f64 - f64::from(8 + 16 + Y_LABEL_AREA);
+    let ph = ah as f64 - f64::from(6 + CAPTION_PX + 6 + X_LABEL_AREA);
     let place = if entries.is_empty() {
         Place::Inside(0.0, 0.0)
     } else {
@@ -231,37 +262,115 @@ where
     } else {
         format!("{}  {}", p.label, p.title)
     };
+    let cw = rich_width(area, &caption, FONT_PX);
+    let aw = area.dim_in_pixel().0 as i32;
+    draw_rich(area, &caption, ((aw - cw) / 2, 6), FONT_PX, false)?;
     let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FAMILY, FONT_PX))
-        .margin_top(6)
+        .margin_top(6 + CAPTION_PX)
         .margin_left(8)
         .margin_bottom(6)
         .margin_right(right_margin)
-        .x_label_area_size(48)
-        .y_label_area_size(72)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
         .build_cartesian_2d(
             AxisCoord::new(&p.x, l.xr, &xt, &xminor),
             AxisCoord::new(&p.y, l.yr, &yt, &yminor),
         )?;
-    let label = |scale: Scale, step: f64| {
-        move |v: &f64| match scale {
-            Scale::Linear => fmt_lin(*v, step),
-            Scale::Log => fmt_log(v.log10()),
+    // One format for all tick labels of an axis (plotters asks per value).
+    let label = |axis: &Axis, t: Vec<f64>, step: f64| {
+        let labels = tick_labels(axis, &t, step);
+        let scale = axis.scale;
+        move |v: &f64| {
+            let u = match scale {
+                Scale::Linear => *v,
+                Scale::Log => v.log10(),
+            };
+            label_at(&t, &labels, u)
         }
     };
-    let (fx, fy) = (label(p.x.scale, xstep), label(p.y.scale, ystep));
+    let (fx, fy) = (label(&p.x, xt, xstep), label(&p.y, yt, ystep));
     chart
         .configure_mesh()
-        .x_desc(p.x.label.clone())
-        .y_desc(p.y.label.clone())
-        .axis_desc_style((FAMILY, FONT_PX))
         .label_style((FAMILY, TICK_FONT_PX))
         .x_label_formatter(&fx)
         .y_label_formatter(&fy)
         .bold_line_style(RGBColor(225, 225, 225))
         .light_line_style(RGBColor(243, 243, 243))
         .draw()?;
+    axis_labels(p, area, &chart)?;
     Ok(chart)
+}
+
+/// The axis labels, centred below and left of the plotting area (the y
+/// label reading upwards).
+fn axis_labels<DB: DrawingBackend>(
+    p: &Panel,
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart<'_, DB>,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let plot = chart.plotting_area();
+    let (xrange, yrange) = (plot.get_x_range(), plot.get_y_range());
+    let (ax, ay) = area.get_base_pixel();
+    let tl = chart.backend_coord(&(xrange.start, yrange.end));
+    let br = chart.backend_coord(&(xrange.end, yrange.start));
+    let (l, t, r, b) = (tl.0 - ax, tl.1 - ay, br.0 - ax, br.1 - ay);
+    let w = rich_width(area, &p.x.label, FONT_PX);
+    let y = b + X_LABEL_AREA as i32 - FONT_PX as i32 - 4;
+    draw_rich(area, &p.x.label, ((l + r - w) / 2, y), FONT_PX, false)?;
+    let h = rich_width(area, &p.y.label, FONT_PX);
+    let x = l - Y_LABEL_AREA as i32 + 2;
+    draw_rich(area, &p.y.label, (x, (t + b + h) / 2), FONT_PX, true)
+}
+
+/// Width in pixels of `text` (with `_{...}` subscripts) at `px` font size.
+fn rich_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px: f64) -> i32 {
+    rich_segments(text)
+        .iter()
+        .map(|(t, sub)| text_width(area, t, if *sub { SUB_SIZE * px } else { px }))
+        .sum()
+}
+
+fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, t: &str, px: f64) -> i32 {
+    let font = (FAMILY, px).into_font();
+    area.estimate_text_size(t, &TextStyle::from(font))
+        .map(|(w, _)| w as i32)
+        .unwrap_or((0.6 * px) as i32 * t.chars().count() as i32)
+}
+
+/// Draw `text` with its `_{...}` subscripts lowered and smaller, from
+/// (x, y) (area pixels): the top left of the text, or with `upwards` the
+/// bottom left of text reading upwards.
+fn draw_rich<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    (x, y): (i32, i32),
+    px: f64,
+    upwards: bool,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let mut along = 0;
+    for (t, sub) in rich_segments(text) {
+        let (size, drop) = if sub {
+            (SUB_SIZE * px, (SUB_DROP * px) as i32)
+        } else {
+            (px, 0)
+        };
+        let w = text_width(area, &t, size);
+        let font = (FAMILY, size).into_font();
+        if upwards {
+            let font = font.transform(FontTransform::Rotate270);
+            area.draw(&Text::new(t, (x + drop, y - along), font))?;
+        } else {
+            area.draw(&Text::new(t, (x + along, y + drop), font))?;
+        }
+        along += w;
+    }
+    Ok(())
 }
 
 fn draw_panel<DB: DrawingBackend>(
@@ -431,13 +540,9 @@ fn legend_size<DB: DrawingBackend>(
     entries: &[Entry],
     title: Option<&str>,
 ) -> (i32, i32) {
-    let font = (FAMILY, LEGEND_FONT_PX).into_font();
     let mut w = 0i32;
     for t in entries.iter().map(|e| e.label.as_str()).chain(title) {
-        let (tw, _) = area
-            .estimate_text_size(t, &TextStyle::from(font.clone()))
-            .unwrap_or((8 * t.len() as u32, 14));
-        w = w.max(tw as i32);
+        w = w.max(rich_width(area, t, LEGEND_FONT_PX));
     }
     let rows = entries.len() as i32 + i32::from(title.is_some());
     (SAMPLE_PX + 14 + w + 8, rows * ROW_PX + 10)
@@ -464,42 +569,51 @@ where
         [(x, y), (x + w, y + h)],
         ShapeStyle::from(&RGBColor(190, 190, 190)).stroke_width(1),
     ))?;
-    let font = (FAMILY, LEGEND_FONT_PX).into_font();
     let mut row = y + 5;
     if let Some(t) = title {
-        area.draw(&Text::new(t.to_string(), (x + 8, row + 2), font.clone()))?;
+        draw_rich(area, t, (x + 8, row + 2), LEGEND_FONT_PX, false)?;
         row += ROW_PX;
     }
     for e in entries {
-        let col = rgb(e.color);
-        let cy = row + ROW_PX / 2;
-        let (x0, x1) = (x + 8, x + 8 + SAMPLE_PX);
-        let sample = vec![(x0, cy), (x1, cy)];
-        let style = ShapeStyle::from(&col).stroke_width(2);
-        match e.dash {
-            Some(Dash::Solid) => area.draw(&PathElement::new(sample, style))?,
-            Some(Dash::Dashed) => {
-                area.draw(&DashedPathElement::new(sample, DASHED.0, DASHED.1, style))?
-            }
-            Some(Dash::Dotted) => {
-                area.draw(&DashedPathElement::new(sample, DOTTED.0, DOTTED.1, style))?
-            }
-            None => {}
-        }
-        if e.marker {
-            area.draw(&Circle::new(
-                ((x0 + x1) / 2, cy),
-                4,
-                ShapeStyle::from(&col).filled(),
-            ))?;
-        }
-        area.draw(&Text::new(
-            e.label.clone(),
-            (x1 + 8, cy - (LEGEND_FONT_PX as i32) / 2 - 1),
-            font.clone(),
-        ))?;
+        draw_entry(area, e, (x + 8, row + ROW_PX / 2))?;
         row += ROW_PX;
     }
+    Ok(())
+}
+
+/// One legend entry: line and/or marker sample from x0, then its text;
+/// `cy` is the vertical centre.
+fn draw_entry<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    e: &Entry,
+    (x0, cy): (i32, i32),
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let col = rgb(e.color);
+    let x1 = x0 + SAMPLE_PX;
+    let sample = vec![(x0, cy), (x1, cy)];
+    let style = ShapeStyle::from(&col).stroke_width(2);
+    match e.dash {
+        Some(Dash::Solid) => area.draw(&PathElement::new(sample, style))?,
+        Some(Dash::Dashed) => {
+            area.draw(&DashedPathElement::new(sample, DASHED.0, DASHED.1, style))?
+        }
+        Some(Dash::Dotted) => {
+            area.draw(&DashedPathElement::new(sample, DOTTED.0, DOTTED.1, style))?
+        }
+        None => {}
+    }
+    if e.marker {
+        area.draw(&Circle::new(
+            ((x0 + x1) / 2, cy),
+            4,
+            ShapeStyle::from(&col).filled(),
+        ))?;
+    }
+    let ty = cy - (LEGEND_FONT_PX as i32) / 2 - 1;
+    draw_rich(area, &e.label, (x1 + 8, ty), LEGEND_FONT_PX, false)?;
     Ok(())
 }
 
