@@ -87,7 +87,7 @@ struct SimArgs {
     /// restricted mean E[min(T, t-max)], is its lower bound `tau_lower_bound` (tau > rmst).
     /// With --out, survival.csv holds the Kaplan-Meier survival curve S(t) (t, survival,
     /// survival_err, at_risk); a scan adds censored_fraction, rmst_sim, rmst_sim_err columns
-    /// and leaves tau_sim empty (nan) at censored points.
+    /// and writes tau_sim as nan (JSON null) at censored points.
     #[arg(long, default_value_t = 1e4, allow_hyphen_values = true)]
     t_max: f64,
 }
