@@ -53,8 +53,8 @@ pub fn edges(t_max: f64) -> &'static [f64] {
 }
 
 /// Arrival counts per bin of the grid of `t_max`, by starting noise state:
-/// bin j < edges.len() holds the arrivals in (edges[j-1], edges[j]]
-/// (bin 0 from t = 0), the last bin those in (edges[last], t_max].
+/// bin `j < edges.len()` holds the arrivals in `(edges[j-1], edges[j]]`
+/// (bin 0 from t = 0), the last bin those in `(edges[last], t_max]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Arrivals {
     /// Particles started in +Sigma.
