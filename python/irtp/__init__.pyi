@@ -181,10 +181,19 @@ class MfptResult(Result):
     tau_plus: Any
     tau_minus: Any
     tau: Any
-    tau_err: float
+    tau_err: Optional[float]
     error_estimate: float
     particles: int
     censored: int
+    # particles: censoring (tau is None when censored > 0) and table survival
+    censored_fraction: float
+    rmst: float
+    rmst_err: float
+    tau_lower_bound: Optional[float]
+    t_max: float
+    survival: Array
+    survival_err: Array
+    at_risk: Array
 
 class MfptScanResult(Result):
     summary: List[Dict[str, Any]]
@@ -201,6 +210,9 @@ class MfptScanResult(Result):
     tau_minus_sim: Array
     tau_minus_sim_err: Array
     censored: Array
+    censored_fraction: Array
+    rmst_sim: Array
+    rmst_sim_err: Array
 
 class MfptOptimizeResult(Result):
     summary: Dict[str, Any]

@@ -347,13 +347,18 @@ DOCS: Dict[str, Doc] = {
         "Eqs. (26)-(27) of the simulated process (drift ±sigma - g(v); the paper\n"
         "prints g(v) ± sigma) by a second-order box scheme; tau = (tau+ + tau-)/2,\n"
         "Eq. (28). method='exact' and 'euler' estimate Eq. (24) from first-passage\n"
-        "particles (exact event-driven sampler, or Eqs. (30)-(32)); particles not\n"
-        "arrived by t_max are counted as censored.",
+        "particles (exact event-driven sampler, or Eqs. (30)-(32)). Particles not\n"
+        "arrived by t_max are censored: then tau is None (never a mean of the\n"
+        "arrived ones) and rmst ± rmst_err, the restricted mean E[min(T, t_max)],\n"
+        "is its lower bound tau_lower_bound.",
         "MfptResult\n"
         "    ``summary`` holds tau, tau_plus, tau_minus and error_estimate (ode) or\n"
-        "        tau_err, particles, censored (particles). ode also returns the\n"
-        "        table profile: v0, tau_plus, tau_minus, tau over the mesh (in\n"
-        "        ``res.tables['profile']``; ``res.tau`` is the scalar answer).",
+        "        tau_err, particles, censored, censored_fraction, rmst, rmst_err,\n"
+        "        tau_lower_bound (particles). ode also returns the table profile:\n"
+        "        v0, tau_plus, tau_minus, tau over the mesh (in\n"
+        "        ``res.tables['profile']``; ``res.tau`` is the scalar answer);\n"
+        "        particles the table survival: t, survival, survival_err, at_risk\n"
+        "        (the Kaplan-Meier curve of the first-passage times).",
         ">>> res = irtp.mfpt(v0=-0.249, vt=0.5, method='backward')\n"
         ">>> res.summary['tau'] > 0\n"
         "True",
@@ -367,7 +372,9 @@ DOCS: Dict[str, Doc] = {
         "MfptScanResult\n"
         "    mfpt_scan: <vt or rate>, tau, tau_plus, tau_minus, error_estimate\n"
         "        [+ tau_sim, tau_sim_err, tau_plus_sim, tau_plus_sim_err,\n"
-        "        tau_minus_sim, tau_minus_sim_err, censored with particles]\n"
+        "        tau_minus_sim, tau_minus_sim_err, censored, censored_fraction,\n"
+        "        rmst_sim, rmst_sim_err with particles; tau_sim* are nan where\n"
+        "        censored > 0, rmst_sim bounds tau there]\n"
         "        (``points`` rows); ``summary`` is the list of rows.",
         ">>> res = irtp.mfpt_scan(v0=-0.249, vt=0.5, over='rate', from_=0.01, to=100,\n"
         "...                      points=41, log=True)\n"

@@ -25,7 +25,8 @@ _KEY_NUMBERS = {
     "analytic": ("regime", "v2", "v4", "v_lower", "v_upper"),
     "fp stationary": ("v2", "v_mean", "d_eff", "cells"),
     "fp transient": ("v2_final", "v_mean_final", "mass_error_max", "steps", "cells"),
-    "mfpt": ("tau", "tau_err", "error_estimate", "tau_plus", "tau_minus", "censored"),
+    "mfpt": ("tau", "tau_err", "error_estimate", "tau_plus", "tau_minus", "censored",
+             "censored_fraction", "tau_lower_bound", "rmst_err"),
     "mfpt optimize": ("r_opt", "tau_opt", "tau_r0", "interior", "at_upper_bound"),
     "reproduce": ("figures",),
 }
@@ -209,7 +210,11 @@ class FpTransientResult(Result):
 class MfptResult(Result):
     """Result of :func:`irtp.mfpt`: ``res.tau``, ``res.tau_plus``, ``res.tau_minus``
     are the answer (scalars); table "profile" (backward equations only) holds
-    tau against the start velocity in ``res.tables["profile"]``."""
+    tau against the start velocity in ``res.tables["profile"]``. Particles:
+    table "survival" (``res.t``, ``res.survival``, ``res.survival_err``,
+    ``res.at_risk``: the Kaplan-Meier curve); when any particle is censored
+    (``res.censored > 0``), ``res.tau`` is None and ``res.tau_lower_bound``
+    (= ``res.rmst`` ± ``res.rmst_err``, the restricted mean) bounds it."""
 
     _summary_first = True
 

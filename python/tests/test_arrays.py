@@ -18,7 +18,7 @@ CASES = [
     ("fp_transient", dict(t_max=0.5, cells=120, samples=6, snapshots=3),
      {"moments": 6, "snapshots": 3 * 120}),
     ("mfpt", dict(v0=-0.249, vt=0.5, cells=400), {"profile": None}),
-    ("mfpt", dict(v0=-0.249, vt=0.5, method="exact", particles=100), {}),
+    ("mfpt", dict(v0=-0.249, vt=0.5, method="exact", particles=100), {"survival": None}),
     ("mfpt_scan", dict(v0=-0.249, vt=0.5, over="rate", from_=0.1, to=1.0, points=4,
                        cells=400), {"mfpt_scan": 4}),
     ("mfpt_optimize", dict(v0=-0.249, vt=0.5, cells=400, grid_points=9), {"rate_grid": None}),
@@ -33,6 +33,7 @@ COLUMNS = {
     ("fp_transient", "moments"): ["t", "v2", "v_mean", "mass"],
     ("fp_transient", "snapshots"): ["t", "v", "p", "p_plus", "p_minus"],
     ("mfpt", "profile"): ["v0", "tau_plus", "tau_minus", "tau"],
+    ("mfpt", "survival"): ["t", "survival", "survival_err", "at_risk"],
     ("mfpt_scan", "mfpt_scan"): ["rate", "tau", "tau_plus", "tau_minus", "error_estimate"],
     ("mfpt_optimize", "rate_grid"): ["rate", "tau"],
 }

@@ -63,7 +63,8 @@ def test_to_pandas():
     fp = irtp.fp_stationary(cells=200).to_pandas()
     assert isinstance(fp, pd.DataFrame) and len(fp) == 200
     exact = irtp.mfpt(v0=-0.249, vt=0.5, method="exact", particles=50).to_pandas()
-    assert len(exact) == 1 and exact["tau"].iloc[0] > 0
+    assert list(exact.columns) == ["t", "survival", "survival_err", "at_risk"]
+    assert exact["survival"].iloc[0] == 1.0 and exact["survival"].iloc[-1] == 0.0
     assert len(sim.to_pandas("moments")) == 7
 
 
@@ -186,3 +187,18 @@ def test_version():
 def test_nan_free_summary_numbers():
     res = irtp.mfpt_optimize(v0=-0.249, vt=0.5, cells=400, grid_points=9)
     assert math.isfinite(res.r_opt) and res.interior in (True, False)
+
+
+def test_censored_mfpt_withholds_tau_and_gives_the_bound():
+    res = irtp.mfpt(v0=0.0, vt=0.5, rate=60.0, t_max=1.0, method="exact", particles=2000)
+    assert res.tau is None and res.summary["tau"] is None and res.tau_err is None
+    assert 0 < res.censored < res.particles
+    assert res.censored_fraction == res.censored / res.particles
+    assert res.tau_lower_bound == res.rmst and 0 < res.rmst <= 1.0 and res.rmst_err > 0
+    assert isinstance(res.survival, np.ndarray) and res.survival.dtype == np.float64
+    assert res.t[0] == 0.0 and res.t[-1] == 1.0 and res.at_risk[-1] == res.censored
+    assert res.survival is res.tables["survival"]["survival"]
+    assert "tau_lower_bound = " in repr(res) and res.text.startswith("CENSORED: ")
+    ok = irtp.mfpt(v0=-0.249, vt=0.5, method="exact", particles=500)
+    assert ok.censored == 0 and ok.tau_lower_bound is None and ok.rmst == ok.tau
+    assert ok.survival[-1] == 0.0

@@ -5,6 +5,10 @@
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
 //!
 //! Every method runs through the library's one entry point, `irtp::mfpt::solve`.
+//! Particle methods never present a mean over censored samples: when any
+//! particle has not arrived by `--t-max`, tau is null and the restricted mean
+//! `rmst` is reported as `tau_lower_bound`, flagged in the text report; the
+//! Kaplan-Meier curve is `survival.csv` ([`crate::mfpt::survival`]).
 //! To add a method: a [`Method`] variant, its arm in `SimArgs::config` and
 //! the library's [`crate::mfpt::Method`].
 
@@ -13,6 +17,7 @@ use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
 use crate::mfpt::{
     self, FptSummary, MfptResult, OptimizeOptions, ParticleOptions, Problem, ScanAxis, ScanPoint,
+    SurvivalCurve,
 };
 use crate::Error;
 use clap::{Args, Subcommand, ValueEnum};
@@ -77,7 +82,12 @@ struct SimArgs {
     /// Euler time step (O(dt) bias, including an overshoot of at most dt).
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     dt: f64,
-    /// Particles not arrived by t-max are counted as censored (means become lower bounds).
+    /// Censoring time of the particles. If any has not arrived by t-max, tau is not reported
+    /// (null; `censored`, `censored_fraction` say how many) and `rmst` ± `rmst_err`, the
+    /// restricted mean E[min(T, t-max)], is its lower bound `tau_lower_bound` (tau > rmst).
+    /// With --out, survival.csv holds the Kaplan-Meier survival curve S(t) (t, survival,
+    /// survival_err, at_risk); a scan adds censored_fraction, rmst_sim, rmst_sim_err columns
+    /// and writes tau_sim as nan (JSON null) at censored points.
     #[arg(long, default_value_t = 1e4, allow_hyphen_values = true)]
     t_max: f64,
 }
@@ -279,11 +289,12 @@ fn estimate(
 fn summary(r: &MfptResult) -> FptSummary {
     r.summary().expect("a particle method")
 }
-
+/// What `irtp mfpt --json` prints.
 #[derive(Serialize)]
 struct Report {
     method: Method,
     problem: Problem,
+    /// null (NaN) for particles when any is censored.
     tau: f64,
     tau_plus: f64,
     tau_minus: f64,
@@ -291,24 +302,27 @@ struct Report {
     cells: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     error_estimate: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tau_err: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tau_plus_err: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tau_minus_err: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    particles: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    censored: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mean_is_lower_bound: Option<bool>,
+    #[serde(flatten)]
+    sim: Option<SimReport>,
+}
+
+/// The particle methods' part of [`Report`].
+#[derive(Serialize)]
+struct SimReport {
+    tau_err: f64,
+    tau_plus_err: f64,
+    tau_minus_err: f64,
+    particles: u64,
+    censored: u64,
+    censored_fraction: f64,
+    rmst: f64,
+    rmst_err: f64,
+    /// rmst when any particle is censored (tau > rmst), else null.
+    tau_lower_bound: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     dt: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    t_max: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    seed: Option<u64>,
+    t_max: f64,
+    seed: u64,
 }
 
 impl Report {
@@ -321,20 +335,29 @@ impl Report {
             tau_minus: s.tau_minus,
             cells: Some(s.cells),
             error_estimate: Some(s.error_estimate),
-            tau_err: None,
-            tau_plus_err: None,
-            tau_minus_err: None,
-            particles: None,
-            censored: None,
-            mean_is_lower_bound: None,
-            dt: None,
-            t_max: None,
-            seed: None,
+            sim: None,
         }
     }
 
     fn particles(m: Method, problem: Problem, method: &mfpt::Method, s: &FptSummary) -> Self {
         let run = method.particles().expect("a particle method");
+        let sim = SimReport {
+            tau_err: s.tau_err,
+            tau_plus_err: s.tau_plus_err,
+            tau_minus_err: s.tau_minus_err,
+            particles: s.particles,
+            censored: s.censored,
+            censored_fraction: s.censored_fraction,
+            rmst: s.rmst,
+            rmst_err: s.rmst_err,
+            tau_lower_bound: s.tau_lower_bound,
+            dt: match *method {
+                mfpt::Method::Euler { dt, .. } => Some(dt),
+                _ => None,
+            },
+            t_max: run.t_max,
+            seed: run.seed,
+        };
         Report {
             method: m,
             problem,
@@ -343,20 +366,49 @@ impl Report {
             tau_minus: s.tau_minus,
             cells: None,
             error_estimate: None,
-            tau_err: Some(s.tau_err),
-            tau_plus_err: Some(s.tau_plus_err),
-            tau_minus_err: Some(s.tau_minus_err),
-            particles: Some(s.particles),
-            censored: Some(s.censored),
-            mean_is_lower_bound: Some(s.mean_is_lower_bound),
-            dt: match *method {
-                mfpt::Method::Euler { dt, .. } => Some(dt),
-                _ => None,
-            },
-            t_max: Some(run.t_max),
-            seed: Some(run.seed),
+            sim: Some(sim),
         }
     }
+
+    fn seed(&self) -> Option<u64> {
+        self.sim.as_ref().map(|s| s.seed)
+    }
+}
+
+/// The flag of a censored particle estimate, leading the text report.
+fn censoring_note(s: &FptSummary) -> String {
+    if s.censored == 0 {
+        return String::new();
+    }
+    format!(
+        "CENSORED: {} of {} particles ({:.4}%) had not reached vt by t_max = {}: tau is NOT estimated \
+         (the mean of the arrived particles is no estimate of it).\n\
+         tau > rmst = {} ± {} (the restricted mean E[min(T, t_max)], a lower bound); \
+         a larger --t-max estimates tau.\n",
+        s.censored,
+        s.particles,
+        100.0 * s.censored_fraction,
+        s.t_max,
+        s.rmst,
+        s.rmst_err
+    )
+}
+
+/// `survival.csv`: the Kaplan-Meier survival curve of the passage times.
+fn survival_table(c: &SurvivalCurve) -> Table {
+    let rows = (0..c.t.len()).map(|i| {
+        [
+            c.t[i],
+            c.survival[i],
+            c.survival_err[i],
+            c.at_risk[i] as f64,
+        ]
+    });
+    Table::from_rows(
+        "survival",
+        &["t", "survival", "survival_err", "at_risk"],
+        rows,
+    )
 }
 
 /// `key = value` lines of a JSON object (its `problem` left out).
@@ -398,16 +450,21 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
     let out = open_out(a.output.out.as_deref())?;
     let t0 = Instant::now();
-    let (report, prof) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
+    let (report, table, note) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
-            (Report::ode(c.problem, &s), Some(prof))
+            (
+                Report::ode(c.problem, &s),
+                profile_table(&prof),
+                String::new(),
+            )
         }
-        r => {
-            let s = summary(&r);
+        MfptResult::Particles(st) => {
+            let s = st.summary();
             (
                 Report::particles(a.sim.method, c.problem, &c.method, &s),
-                None,
+                survival_table(&st.survival()),
+                censoring_note(&s),
             )
         }
     };
@@ -415,12 +472,12 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
     let json = to_value(&report);
     let results = Results {
         method: method_name(report.method).into(),
-        seed: report.seed,
+        seed: report.seed(),
         json: json.clone(),
         parameters: json.clone(),
-        tables: prof.as_ref().map(profile_table).into_iter().collect(),
+        tables: vec![table],
         json_files: vec![("mfpt.json", json.clone())],
-        text: text_lines(&json),
+        text: note + &text_lines(&json),
         wall_time_s: wall,
     };
     finish("mfpt", results, out, ctx)
@@ -539,6 +596,9 @@ fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSumma
             "tau_minus_sim",
             "tau_minus_sim_err",
             "censored",
+            "censored_fraction",
+            "rmst_sim",
+            "rmst_sim_err",
         ]);
     }
     let rows = points
@@ -557,12 +617,28 @@ fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSumma
                     m.tau_minus,
                     m.tau_minus_err,
                     m.censored as f64,
+                    m.censored_fraction,
+                    m.rmst,
+                    m.rmst_err,
                 ]);
             }
             row
         })
         .collect::<Vec<_>>();
     Table::from_rows("mfpt_scan", &header, rows)
+}
+
+/// The flag of scan points with censored particles, after the table text.
+fn scan_note(sims: &[FptSummary]) -> String {
+    let k = sims.iter().filter(|s| s.censored > 0).count();
+    if k == 0 {
+        return String::new();
+    }
+    format!(
+        "# CENSORED at {k} of {} points (censored > 0): tau_sim is NOT estimated there (nan); \
+         tau > rmst_sim, the restricted mean E[min(T, t_max)]; a larger --t-max estimates tau.\n",
+        sims.len()
+    )
 }
 
 #[derive(Serialize)]
@@ -609,6 +685,7 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
         Over::Rate => "rate",
     };
     let table = scan_table(xname, &points, sims.as_deref());
+    let note = sims.as_deref().map_or(String::new(), scan_note);
     let params = ScanParams {
         base: &c.base,
         over: xname,
@@ -624,7 +701,7 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
         seed: sim.then_some(a.output.seed),
         json: to_value(&table_json(&table)),
         parameters: to_value(&params),
-        text: table_text(&table),
+        text: table_text(&table) + &note,
         tables: vec![table],
         json_files: Vec::new(),
         wall_time_s: wall,

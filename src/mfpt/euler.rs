@@ -72,7 +72,7 @@ impl EulerFpt {
         crate::with_drag!(self.problem.params().drag(), |d| {
             parallel::reduce_chunks(
                 n,
-                FptStats::default,
+                || FptStats::new(self.t_max),
                 |lo, hi, acc| c.chunk(d, lo, hi, acc),
                 |a, b| a.merge(&b),
                 progress,
@@ -259,10 +259,10 @@ mod tests {
             let fpt = EulerFpt::new(Problem::new(p, v0, vt).unwrap(), 1e-3, t_max).unwrap();
             let n = 600; // two full chunks and a partial one
             let c = Chain::new(&fpt, 7);
-            let mut one = FptStats::default();
+            let mut one = FptStats::new(t_max);
             let mut parts = Vec::new();
             for lo in (0..n).step_by(parallel::CHUNK as usize) {
-                let mut acc = FptStats::default();
+                let mut acc = FptStats::new(t_max);
                 for i in lo..(lo + parallel::CHUNK).min(n) {
                     let mut lane = c.start(i);
                     let sample = loop {

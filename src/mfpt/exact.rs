@@ -160,7 +160,7 @@ pub(super) fn stats(
     let (cp, swapped) = problem.canonical();
     crate::with_drag!(cp.params().drag(), |d| {
         let fpt = FirstPassage::for_drag(d, cp.params(), true);
-        first_passage_stats(particles, seed, progress, |_, rng, plus| {
+        first_passage_stats(particles, seed, t_max, progress, |_, rng, plus| {
             let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
             FptSample { time, work }
         })

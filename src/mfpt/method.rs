@@ -16,8 +16,9 @@ use serde::{Deserialize, Serialize};
 pub struct ParticleOptions {
     /// Particles (even indices start in +Sigma, odd in -Sigma); at least 2.
     pub particles: u64,
-    /// Particles not arrived by `t_max` are counted as censored (excluded
-    /// from the means, which become lower bounds).
+    /// Particles not arrived by `t_max` are counted as censored: tau is
+    /// then not estimated, the restricted mean E[min(T, t_max)] bounds it
+    /// from below ([`super::FptSummary`]).
     pub t_max: f64,
     /// Seed: particle i uses the random stream (seed, i).
     pub seed: u64,
@@ -81,7 +82,7 @@ impl Method {
 }
 
 /// The mean first-passage time of a problem by one method.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", content = "result", rename_all = "lowercase")]
 pub enum MfptResult {
     /// From the backward equations.
@@ -91,7 +92,8 @@ pub enum MfptResult {
 }
 
 impl MfptResult {
-    /// tau = (tau+ + tau-)/2: the MFPT for a uniformly random initial state.
+    /// tau = (tau+ + tau-)/2: the MFPT for a uniformly random initial state
+    /// (NaN for particles when any is censored; see [`FptSummary`]).
     pub fn tau(&self) -> f64 {
         match self {
             MfptResult::Backward(s) => s.tau,

@@ -24,6 +24,7 @@
 //! - [`exact`]: exact event-driven particles (the sampler of [`crate::sim::exact`]).
 //! - [`euler`]: Euler particles (the step of [`crate::sim::euler`]).
 //! - [`estimator`]: first-passage statistics of any particle method.
+//! - [`survival`]: the Kaplan-Meier survival curve of censored passage times.
 //! - [`method`]: [`Method`], [`solve`] and its [`MfptResult`].
 //! - [`optimize`]: scans and the optimal resetting rate.
 
@@ -33,6 +34,7 @@ pub mod euler;
 pub mod exact;
 pub mod method;
 pub mod optimize;
+pub mod survival;
 
 use crate::error::{finite, Error, Result};
 use crate::model::Params;
@@ -44,6 +46,7 @@ pub use euler::EulerFpt;
 pub use exact::FirstPassage;
 pub use method::{solve, Method, MfptResult, ParticleOptions};
 pub use optimize::{optimize_rate, scan, OptimizeOptions, Optimum, ScanAxis, ScanPoint};
+pub use survival::SurvivalCurve;
 
 /// A validated first-passage problem: model parameters, start v_0, target v_t.
 /// Built with [`Problem::new`] (also on deserialisation), so always admissible.
