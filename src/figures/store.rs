@@ -127,10 +127,12 @@ impl Dir {
             .into_iter()
             .filter_map(|w| read_record(path, w).map(|r| (w, r)))
             .collect();
-        let ours = records
-            .iter()
-            .any(|(w, _)| path.join(format!("{}.json", w.name())).is_file())
-            || run.as_ref().is_some_and(|r| is_reproduce(r));
+        // A figure record (complete or not) or the index makes the
+        // directory one of `irtp reproduce`: its file names are irtp's.
+        let ours = Which::ALL
+            .into_iter()
+            .any(|w| read_provenance(&path.join(format!("{}.json", w.name()))).is_some())
+            || run.as_ref().is_some_and(is_reproduce);
         let also: Vec<String> = match ours {
             true => Which::ALL
                 .into_iter()
