@@ -16,14 +16,77 @@ pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
 
 /// An output directory whose files are first written to a hidden staging
 /// directory and moved into place by [`OutputDir::commit`]. Dropping it
-/// uncommitted (error, panic) removes the staging directory, so a failed run
-/// leaves nothing half-written behind.
+/// uncommitted (error, panic, cancellation) removes the staging directory, so
+/// a failed run leaves nothing half-written behind. A process killed outright
+/// (SIGKILL) cannot clean up: its staging directory `.NAME.partial-PID`
+/// records the host, and the next `OutputDir` of the same target removes it
+/// once that process is gone (a live process, or one on another host of a
+/// shared file system, keeps its staging directory).
 #[derive(Debug)]
 pub struct OutputDir {
     target: PathBuf,
     staging: PathBuf,
     files: Vec<String>,
+    /// Files of a previous irtp run in `target` to remove at commit.
+    replaced: Vec<String>,
+    /// `run.json` of a previous run this one must match (same parameters).
+    previous: Option<serde_json::Value>,
+    /// Warnings for the user (files left alone under `--force`).
+    warnings: Vec<String>,
     committed: bool,
+}
+
+/// The file in a staging directory naming the host of the process that owns it.
+const HOST_FILE: &str = ".irtp-host";
+
+/// This machine's host name.
+fn host_name() -> String {
+    gethostname::gethostname().to_string_lossy().into_owned()
+}
+
+/// Whether process `pid` exists on this host (`kill(pid, 0)`; a process of
+/// another user counts as alive). Without Unix signals, always true.
+#[cfg(unix)]
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return true;
+    };
+    // SAFETY: signal 0 sends nothing; the call only checks that `pid` exists.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+#[cfg(not(unix))]
+fn process_alive(_pid: u32) -> bool {
+    true
+}
+
+/// Remove the staging directories `.NAME.partial-PID` in `parent` left by
+/// processes of this host that no longer run (killed with SIGKILL, power
+/// loss). Best effort: what cannot be read or removed is left alone.
+fn remove_stale_staging(parent: &Path, name: &str) {
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = fs::read_dir(parent) else {
+        return;
+    };
+    let host = host_name();
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(pid) = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&prefix))
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid == 0 || pid == std::process::id() {
+            continue;
+        }
+        let owner = fs::read_to_string(e.path().join(HOST_FILE));
+        if owner.is_ok_and(|h| h.trim() == host) && !process_alive(pid) {
+            let _ = fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 impl OutputDir {
@@ -46,17 +109,58 @@ impl OutputDir {
             _ => PathBuf::from("."),
         };
         fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
+        remove_stale_staging(&parent, &name);
         let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
         if staging.exists() {
             fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
         }
         fs::create_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+        let owner = staging.join(HOST_FILE);
+        fs::write(&owner, host_name()).map_err(|e| io_err(&owner, e))?;
         Ok(OutputDir {
             target,
             staging,
             files: Vec::new(),
+            replaced: Vec::new(),
+            previous: None,
+            warnings: Vec::new(),
             committed: false,
         })
+    }
+
+    /// Remove these files of a previous irtp run (names relative to the
+    /// target) when committing: what this run writes replaces them, the rest
+    /// goes.
+    pub fn replacing(mut self, files: Vec<String>) -> Self {
+        self.replaced = files;
+        self
+    }
+
+    /// Record the `run.json` of a previous run the new one must match
+    /// (checked by the caller before committing).
+    pub fn expecting(mut self, run: serde_json::Value) -> Self {
+        self.previous = Some(run);
+        self
+    }
+
+    /// The previous run's `run.json` given to [`OutputDir::expecting`].
+    pub fn previous(&self) -> Option<&serde_json::Value> {
+        self.previous.as_ref()
+    }
+
+    /// Add a warning for the user.
+    pub fn warn(&mut self, w: String) {
+        self.warnings.push(w);
+    }
+
+    /// The warnings added so far.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Files staged so far (relative to the target, in staging order).
+    pub fn files(&self) -> &[String] {
+        &self.files
     }
 
     /// Final directory.
@@ -108,10 +212,24 @@ impl OutputDir {
         fs::write(&p, bytes).map_err(|e| io_err(&p, e))
     }
 
-    /// Move every staged file into the target directory (each move atomic)
-    /// and remove the staging directory. Returns the final paths.
+    /// Remove the replaced files of a previous run that this run does not
+    /// write, then move every staged file into the target directory (each
+    /// move atomic, in staging order: a provenance file staged last marks the
+    /// set complete) and remove the staging directory. Returns the final paths.
     pub fn commit(mut self) -> Result<Vec<PathBuf>> {
         fs::create_dir_all(&self.target).map_err(|e| io_err(&self.target, e))?;
+        for f in self.replaced.iter().filter(|f| !self.files.contains(f)) {
+            let p = self.target.join(f);
+            let gone = if p.is_dir() {
+                fs::remove_dir_all(&p)
+            } else {
+                fs::remove_file(&p)
+            };
+            match gone {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&p, e)),
+                _ => {}
+            }
+        }
         let mut out = Vec::with_capacity(self.files.len());
         for f in &self.files {
             let from = self.staging.join(f);
@@ -134,6 +252,101 @@ impl Drop for OutputDir {
             let _ = fs::remove_dir_all(&self.staging);
         }
     }
+}
+
+/// What an output directory holds before a run writes into it: the
+/// `run.json` of a previous irtp run, the entries that run wrote, and
+/// everything else (entries irtp did not write).
+#[derive(Debug, Default)]
+pub struct Previous {
+    /// `run.json` of the previous irtp run, when there is one.
+    pub run: Option<serde_json::Value>,
+    /// Top-level entries irtp wrote (its provenance lists them), present now.
+    pub ours: Vec<String>,
+    /// Top-level entries irtp did not write.
+    pub foreign: Vec<String>,
+}
+
+impl Previous {
+    /// Survey `dir` (missing: empty). Entries listed by its `run.json`, the
+    /// `run.json` itself and the names in `also` (listed by further
+    /// provenance files of the caller) count as irtp's.
+    pub fn read(dir: &Path, also: &[String]) -> Result<Self> {
+        let mut prev = Previous::default();
+        let entries = match fs::read_dir(dir) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(prev),
+            Err(e) => return Err(io_err(dir, e)),
+        };
+        prev.run = read_provenance(&dir.join("run.json"));
+        let mut listed: Vec<String> = also.to_vec();
+        if let Some(files) = prev.run.as_ref().and_then(|r| r["files"].as_array()) {
+            listed.extend(
+                files
+                    .iter()
+                    .filter_map(|f| f.as_str())
+                    .map(|f| f.split('/').next().unwrap_or(f).to_string()),
+            );
+            listed.push("run.json".into());
+        }
+        let mut names: Vec<String> = entries
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<std::io::Result<_>>()
+            .map_err(|e| io_err(dir, e))?;
+        names.sort();
+        for n in names {
+            if listed.contains(&n) {
+                prev.ours.push(n);
+            } else {
+                prev.foreign.push(n);
+            }
+        }
+        Ok(prev)
+    }
+
+    /// The previous run's `command` (`simulate`, `fp stationary`, ...).
+    pub fn command(&self) -> Option<&str> {
+        self.run.as_ref().and_then(|r| r["command"].as_str())
+    }
+
+    /// `a, b, c and 4 more`: the first entries irtp did not write.
+    pub fn foreign_list(&self) -> String {
+        let shown: Vec<&str> = self.foreign.iter().take(3).map(String::as_str).collect();
+        match self.foreign.len() - shown.len() {
+            0 => shown.join(", "),
+            n => format!("{} and {n} more", shown.join(", ")),
+        }
+    }
+}
+
+impl Previous {
+    /// The `--force` warning naming the files irtp did not write in `dir`.
+    pub fn left_alone(&self, dir: &Path) -> String {
+        format!(
+            "--out {}: left alone {}, which irtp did not write",
+            dir.display(),
+            self.foreign_list()
+        )
+    }
+}
+
+/// The refusal of an `--out` directory that holds `what` (bad input).
+pub fn out_in_use(dir: &Path, what: String) -> Error {
+    Error::invalid(
+        "out",
+        dir.display(),
+        format!(
+            "an empty directory or one holding this same run; it holds {what} \
+             (choose another directory, or --force to replace irtp's outputs there)"
+        ),
+    )
+}
+
+/// An irtp provenance file (`"software": "irtp"`), if `path` holds one.
+pub fn read_provenance(path: &Path) -> Option<serde_json::Value> {
+    let text = fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    (v["software"] == "irtp").then_some(v)
 }
 
 /// Shortest representation that round-trips exactly.

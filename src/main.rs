@@ -23,13 +23,24 @@ enum TopCommand {
     Sweep(cli::sweep::SweepArgs),
 }
 
-/// Run the command; the exit code on success (0; `sweep` may report 3).
+/// Run the command; the exit code on success (0; `sweep` may report 3;
+/// 130 or 143 after SIGINT or SIGTERM).
 fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         TopCommand::App(command) => {
+            cli::signals::install()?;
             let reporter = cli::progress::Bars;
             let ctx = app::Context::new(&reporter);
-            let outcome = app::run(&command, &ctx)?;
+            let outcome = match (app::run(&command, &ctx), cli::signals::received()) {
+                (Err(_), Some((code, name))) => {
+                    eprintln!(
+                        "irtp: interrupted by {name}: stopped; unfinished results were not written \
+                         (figures `reproduce` finished are kept)"
+                    );
+                    return Ok(code);
+                }
+                (outcome, _) => outcome?,
+            };
             cli::present(&outcome, command.json())?;
             Ok(0)
         }

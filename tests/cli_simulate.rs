@@ -119,7 +119,7 @@ fn run_to(dir: &Path, threads: &str, extra: &[&str]) -> (Vec<u8>, Vec<u8>) {
 #[test]
 fn identical_files_for_one_and_two_threads() {
     let tmp = tempfile::tempdir().unwrap();
-    for extra in [
+    for (i, extra) in [
         &[][..],
         &["--method", "euler"][..],
         &[
@@ -132,9 +132,13 @@ fn identical_files_for_one_and_two_threads() {
             "--sigma",
             "0.6",
         ][..],
-    ] {
-        let a = run_to(&tmp.path().join("a"), "1", extra);
-        let b = run_to(&tmp.path().join("b"), "2", extra);
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        // One directory per run: --out over another run is refused.
+        let a = run_to(&tmp.path().join(format!("a{i}")), "1", extra);
+        let b = run_to(&tmp.path().join(format!("b{i}")), "2", extra);
         assert_eq!(a, b);
     }
 }

@@ -27,6 +27,9 @@ pub struct AnalyticArgs {
     /// Directory to write density.csv and run.json into.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// `--force`.
+    #[command(flatten)]
+    pub force: super::common::ForceArgs,
     /// Print one JSON object with the results on stdout.
     #[arg(long)]
     pub json: bool,
@@ -116,7 +119,7 @@ fn report(params: &Params, d: &R0Density) -> Report {
 pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
     let t0 = Instant::now();
     let c = args.config()?;
-    let out = open_out(args.out.as_deref())?;
+    let out = open_out("analytic", args.out.as_deref(), args.force.force)?;
     let d = R0Density::from_params(&c.params)?;
     let report = report(&c.params, &d);
     let (vl, vu) = d.bounds();

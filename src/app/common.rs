@@ -108,10 +108,23 @@ pub struct OutputArgs {
     /// Directory to write CSV files and run.json into.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// `--force`.
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Print one JSON object with the results on stdout.
     #[arg(long)]
     pub json: bool,
     /// `--max-work --max-memory`.
     #[command(flatten)]
     pub budget: super::budget::BudgetArgs,
+}
+
+/// `--force`, of every command with `--out`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ForceArgs {
+    /// Write into an --out that holds another run or files irtp did not write:
+    /// the previous run's outputs (as its run.json lists them) are replaced,
+    /// other files are left alone (and named in a warning).
+    #[arg(long)]
+    pub force: bool,
 }

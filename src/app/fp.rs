@@ -153,7 +153,11 @@ impl TransientArgs {
 /// Run `irtp fp stationary`: `density.csv`, `summary.json`, `run.json`.
 pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (params, opts) = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out(
+        "fp stationary",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
     let start = Instant::now();
     let s = fp::stationary(&params, &opts)?;
     let wall = start.elapsed().as_secs_f64();
@@ -203,7 +207,11 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
 /// `run.json`.
 pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (params, opts) = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out(
+        "fp transient",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
     let t_max = opts.t_max;
     let start = Instant::now();
     let tr = {

@@ -448,7 +448,7 @@ impl DirectArgs {
 
 fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
     let (report, table, note) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
         MfptResult::Backward(s) => {
@@ -655,7 +655,7 @@ struct ScanParams<'a> {
 
 fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out("mfpt scan", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
     let points = {
         let bar = ctx.reporter.stage("mfpt scan", c.values.len() as u64);
@@ -777,7 +777,11 @@ struct OptimizeSummary<'a> {
 
 fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (problem, opts) = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out(
+        "mfpt optimize",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
     let t0 = Instant::now();
     let best = {
         let bar = ctx.reporter.stage("mfpt optimize", opts.grid_points as u64);

@@ -21,7 +21,7 @@ pub mod reproduce;
 pub mod simulate;
 
 use crate::error::{Error, Result};
-use crate::io::{OutputDir, Provenance};
+use crate::io::{out_in_use, OutputDir, Previous, Provenance};
 use crate::parallel::Progress;
 use clap::{Parser, Subcommand};
 use serde::Serialize;
@@ -198,6 +198,8 @@ pub struct Outcome {
     pub provenance: Value,
     /// The output directory and the files written there, when one was given.
     pub written: Option<(PathBuf, Vec<PathBuf>)>,
+    /// Warnings for the user (files in `--out` that `--force` left alone).
+    pub warnings: Vec<String>,
 }
 
 /// What a command computed: what `--json` prints, the tables and the text
@@ -235,9 +237,78 @@ pub(crate) fn to_value<T: Serialize>(v: &T) -> Value {
     serde_json::to_value(v).expect("result structs serialise to JSON")
 }
 
-/// Open the output directory, if any, before computing (a bad path fails at once).
-pub(crate) fn open_out(dir: Option<&Path>) -> Result<Option<OutputDir>> {
-    dir.map(OutputDir::new).transpose()
+/// Open the output directory, if any, before computing (a bad path fails at
+/// once). A directory holding files irtp did not write, or the outputs of
+/// another command, is refused unless `force`; a previous run of the same
+/// command is replaced at commit (without `force`, only by a run with the
+/// same parameters: checked by [`finish`]).
+pub(crate) fn open_out(
+    command: &str,
+    dir: Option<&Path>,
+    force: bool,
+) -> Result<Option<OutputDir>> {
+    let Some(dir) = dir else {
+        return Ok(None);
+    };
+    let out = OutputDir::new(dir)?;
+    let prev = Previous::read(dir, &[])?;
+    let other = prev.command().filter(|c| *c != command);
+    if !force {
+        if !prev.foreign.is_empty() {
+            return Err(out_in_use(
+                dir,
+                format!("{}, which irtp did not write", prev.foreign_list()),
+            ));
+        }
+        if let Some(c) = other {
+            return Err(out_in_use(dir, format!("the outputs of `irtp {c}`")));
+        }
+    }
+    let mut out = out.replacing(prev.ours.clone());
+    if force && !prev.foreign.is_empty() {
+        out.warn(prev.left_alone(dir));
+    }
+    match prev.run {
+        Some(run) if !force => Ok(Some(out.expecting(run))),
+        _ => Ok(Some(out)),
+    }
+}
+
+/// Refuse to replace a previous run of the same command with other
+/// parameters, method or seed.
+fn same_run(out: &OutputDir, prov: &Value) -> Result<()> {
+    let Some(prev) = out.previous() else {
+        return Ok(());
+    };
+    let mut differ: Vec<String> = ["method", "seed"]
+        .into_iter()
+        .filter(|k| prev[k] != prov[k])
+        .map(String::from)
+        .collect();
+    match (
+        prev["parameters"].as_object(),
+        prov["parameters"].as_object(),
+    ) {
+        (Some(a), Some(b)) => differ.extend(
+            a.keys()
+                .chain(b.keys().filter(|k| !a.contains_key(*k)))
+                .filter(|k| a.get(*k) != b.get(*k))
+                .cloned(),
+        ),
+        _ if prev["parameters"] != prov["parameters"] => differ.push("parameters".into()),
+        _ => {}
+    }
+    if differ.is_empty() {
+        return Ok(());
+    }
+    Err(out_in_use(
+        out.target(),
+        format!(
+            "a run of `irtp {}` with other {}",
+            prov["command"].as_str().unwrap_or("?"),
+            differ.join(", ")
+        ),
+    ))
 }
 
 /// A non-finite number in a result table is never returned nor written.
@@ -282,9 +353,12 @@ pub(crate) fn finish(
         r.wall_time_s,
     )
     .with_argv(ctx.argv.clone());
+    let mut warnings = Vec::new();
     let (provenance, written) = match out {
         None => (to_value(&prov), None),
         Some(mut o) => {
+            same_run(&o, &to_value(&prov))?;
+            warnings = o.warnings().to_vec();
             for t in &r.tables {
                 t.write(&mut o)?;
             }
@@ -301,5 +375,6 @@ pub(crate) fn finish(
         results,
         provenance,
         written,
+        warnings,
     })
 }

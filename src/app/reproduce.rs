@@ -1,15 +1,17 @@
 //! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,all} --out DIR [--quick] [--seed N]`.
 
+use super::common::ForceArgs;
 use super::{Context, Outcome, Results};
-use crate::figures::{self, Options, Which, SCALE};
-use crate::io::OutputDir;
+use crate::figures::{self, store, Options, Which, SCALE};
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
 
 /// Regenerate the paper's figures 1, 2, 3, 5, 6, 7: data (CSV), plots (PNG,
 /// SVG; with the cargo feature `plot`, on by default), parameters.json,
-/// claims.json / claims.md, REPORT.md and run.json in DIR.
+/// claims.json / claims.md, REPORT.md and run.json in DIR. Each figure is
+/// committed when finished (with its provenance `<fig>.json`); rerun, the
+/// same command skips the figures already finished.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
     /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, or all.
@@ -18,6 +20,9 @@ pub struct ReproduceArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+    /// `--force`.
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Small sizes for CI (seconds): same code path, fewer particles and points.
     #[arg(long)]
     pub quick: bool,
@@ -64,27 +69,38 @@ impl ReproduceArgs {
     }
 }
 
-/// Run `irtp reproduce`: compute the figures, then write every file
-/// into `--out` (all or nothing).
+/// Run `irtp reproduce`: compute the figures one by one, committing each
+/// finished figure into `--out` (skipping those already there from the same
+/// options and build), the index after each.
 pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
     let (which, opts) = args.config();
-    // Validate the output directory before computing anything.
-    let out = OutputDir::new(&args.out)?;
+    // Refuse a bad or occupied output directory before computing anything.
+    let mut dir = store::Dir::open(&args.out, &opts, args.force.force)?;
     let t0 = std::time::Instant::now();
-    let outputs = figures::reproduce(&which, &opts, |w| ctx.reporter.stage(w.name(), SCALE))?;
-    ctx.check()?;
-    let wall = t0.elapsed().as_secs_f64();
-    let (provenance, files) = figures::write_outputs(out, &outputs, &opts, wall, ctx.argv.clone())?;
     let mut text = String::new();
-    for o in &outputs {
-        text += &format!("{}: {:.1} s\n", o.which.name(), o.wall_time_s);
+    for &w in &which {
+        if dir.finished(w).is_some() {
+            text += &format!(
+                "{}: skipped (finished in --out, same parameters and build)\n",
+                w.name()
+            );
+            continue;
+        }
+        let progress = ctx.reporter.stage(w.name(), SCALE);
+        let o = figures::run_figure(w, &opts, progress.as_ref())?;
+        drop(progress);
+        ctx.check()?;
+        dir.commit_figure(&o, &ctx.argv)?;
+        text += &format!("{}: {:.1} s\n", w.name(), o.wall_time_s);
     }
+    let wall = t0.elapsed().as_secs_f64();
+    let (provenance, files) = dir.write_index(&ctx.argv)?;
     if !figures::IMAGES {
         text += figures::NO_IMAGES;
         text += "\n";
     }
     let names: Vec<&str> = which.iter().map(|w| w.name()).collect();
-    let claims: Vec<_> = outputs.iter().flat_map(|o| o.claims.iter()).collect();
+    let claims = dir.claims(&which);
     let parameters = provenance["parameters"].clone();
     let results = Results {
         method: "figures".into(),
@@ -101,5 +117,6 @@ pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
         results,
         provenance,
         written: Some((args.out.clone(), files)),
+        warnings: dir.warnings.clone(),
     })
 }

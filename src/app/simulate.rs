@@ -236,7 +236,7 @@ impl SimulateArgs {
 /// `density.csv` and `run.json` when `--out` is given.
 pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
     let c = a.config()?;
-    let out = open_out(a.output.out.as_deref())?;
+    let out = open_out("simulate", a.output.out.as_deref(), a.output.force.force)?;
     let start = Instant::now();
     let obs = {
         let bar = ctx.reporter.stage("simulate", c.spec.particles);
@@ -353,7 +353,11 @@ impl<'a> Parts<'a> {
         ctx: &Context,
     ) -> crate::Result<Outcome> {
         let c = &self.config;
-        let out = open_out(self.args.output.out.as_deref())?;
+        let out = open_out(
+            "simulate",
+            self.args.output.out.as_deref(),
+            self.args.output.force.force,
+        )?;
         let obs = crate::sim::combine_units(&c.params, &c.spec, self.method, units)?;
         report(self.args, c, &obs, wall, out, ctx)
     }

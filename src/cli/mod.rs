@@ -3,6 +3,7 @@
 //! live here.
 
 pub mod progress;
+pub mod signals;
 pub mod sweep;
 
 use irtp::app::Outcome;
@@ -39,5 +40,8 @@ pub fn present(outcome: &Outcome, json: bool) -> anyhow::Result<()> {
         text += &format!("wrote {}: {}\n", dir.display(), names.join(", "));
     }
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    for w in &outcome.warnings {
+        eprintln!("irtp: warning: {w}");
+    }
     Ok(())
 }

@@ -106,6 +106,9 @@ impl Progress for Bar {
         }
         self.0.set_position(done);
     }
+    fn cancelled(&self) -> bool {
+        super::signals::stop_requested()
+    }
 }
 
 impl Drop for Bar {
@@ -114,13 +117,16 @@ impl Drop for Bar {
     }
 }
 
-/// The binary's reporter: one terminal bar per stage; never cancels
-/// (Ctrl-C ends the process, and staged output is never committed).
+/// The binary's reporter: one terminal bar per stage; cancels on Ctrl-C or
+/// SIGTERM ([`super::signals`]).
 pub struct Bars;
 
 impl Reporter for Bars {
     fn stage(&self, label: &str, total: u64) -> Box<dyn Progress + '_> {
         Box::new(Bar::new(label, total))
+    }
+    fn cancelled(&self) -> bool {
+        super::signals::stop_requested()
     }
 }
 

@@ -6,10 +6,12 @@
 //! solvers, backward MFPT equations, analytic r = 0 densities) into typed,
 //! serialisable rows; `plot` turns the rows into a [`plot::Figure`]; `claims`
 //! checks the paper's statements against the same rows ([`Claim`]).
-//! [`reproduce`] runs a list of figures and [`write_outputs`] writes CSV,
-//! PNG, SVG, `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and
-//! `run.json` atomically. PNG and SVG need the cargo feature `plot` (on by
-//! default); without it everything else is written and `REPORT.md` says so.
+//! [`run_figure`] computes one figure and [`store::Dir`] commits it (CSV,
+//! PNG, SVG and its provenance `<fig>.json`, atomically) and rewrites the
+//! index (`parameters.json`, `claims.json`, `claims.md`, `REPORT.md`,
+//! `run.json`); a rerun skips finished figures. PNG and SVG need the cargo
+//! feature `plot` (on by default); without it everything else is written and
+//! `REPORT.md` says so.
 
 pub mod compute;
 pub mod fig1;
@@ -18,12 +20,11 @@ pub mod fig5;
 pub mod fig6;
 pub mod fig7;
 pub mod plot;
+pub mod store;
 
 use crate::error::{Error, Result};
-use crate::io::{OutputDir, Provenance};
 use crate::parallel::Progress;
 use serde::Serialize;
-use std::path::PathBuf;
 use std::str::FromStr;
 
 /// Which figure to reproduce.
@@ -102,16 +103,6 @@ pub enum Verdict {
     Partly,
     /// Our numbers contradict the paper's statement.
     Differs,
-}
-
-impl Verdict {
-    fn as_str(self) -> &'static str {
-        match self {
-            Verdict::Agrees => "agrees",
-            Verdict::Partly => "partly",
-            Verdict::Differs => "differs",
-        }
-    }
 }
 
 /// One numeric claim, computed by code.
@@ -256,24 +247,6 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
     Ok(out)
 }
 
-/// Claims as a markdown table (paper | ours | verdict).
-pub fn claims_markdown(claims: &[Claim]) -> String {
-    let mut s = String::from(
-        "| figure | id | claim (paper) | our number | verdict |\n|---|---|---|---|---|\n",
-    );
-    for c in claims {
-        s.push_str(&format!(
-            "| {} | {} | {} | {} | {} |\n",
-            c.figure,
-            c.id,
-            c.paper.replace('|', "\\|"),
-            c.ours.replace('|', "\\|"),
-            c.verdict.as_str()
-        ));
-    }
-    s
-}
-
 fn json_short(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::Array(a) if a.len() > 12 => format!(
@@ -302,53 +275,6 @@ fn json_short(v: &serde_json::Value) -> String {
     }
 }
 
-/// A markdown report: figures, parameter sets, claims table, timings.
-pub fn report_markdown(outputs: &[FigureOutput], opts: &Options, wall_time_s: f64) -> String {
-    let mut s = format!(
-        "# irtp reproduce: {} ({} run, seed {})\n\nTotal wall time {:.1} s.\n\n",
-        outputs
-            .iter()
-            .map(|o| o.which.name())
-            .collect::<Vec<_>>()
-            .join(", "),
-        if opts.quick { "quick" } else { "full" },
-        opts.seed,
-        wall_time_s
-    );
-    if !IMAGES {
-        s.push_str(&format!("{NO_IMAGES}\n\n"));
-    }
-    for o in outputs {
-        let name = o.which.name();
-        let image = if IMAGES {
-            format!("![{name}]({name}.png)\n\n")
-        } else {
-            String::new()
-        };
-        s.push_str(&format!(
-            "## {}\n\n{image}Wall time {:.1} s. Data: `{name}.csv`.\n\n",
-            o.figure.title, o.wall_time_s
-        ));
-        if let Some(spec) = o.parameters.spec.as_object() {
-            s.push_str("| parameter | value |\n|---|---|\n");
-            for (k, v) in spec {
-                s.push_str(&format!(
-                    "| {k} | {} |\n",
-                    json_short(v).replace('|', "\\|")
-                ));
-            }
-            s.push('\n');
-        }
-    }
-    s.push_str("## Claims\n\n");
-    let claims: Vec<Claim> = outputs
-        .iter()
-        .flat_map(|o| o.claims.iter().cloned())
-        .collect();
-    s.push_str(&claims_markdown(&claims));
-    s
-}
-
 /// Whether this build renders PNG and SVG images (cargo feature `plot`).
 pub const IMAGES: bool = cfg!(feature = "plot");
 
@@ -356,71 +282,6 @@ pub const IMAGES: bool = cfg!(feature = "plot");
 pub const NO_IMAGES: &str =
     "No PNG/SVG images: they need the cargo feature `plot` (on by default), \
      which this build lacks. The figures' data are in the CSV files.";
-
-/// Write every figure's CSV (and, with the `plot` feature, PNG and SVG),
-/// `parameters.json`, `claims.json`, `claims.md`, `REPORT.md` and `run.json`
-/// into `dir` (all or nothing).
-/// Create the [`OutputDir`] first (so a bad `--out` fails before any work).
-/// `argv` is the command line recorded in `run.json`; returns `run.json`'s
-/// content and the files written.
-pub fn write_outputs(
-    mut out: OutputDir,
-    outputs: &[FigureOutput],
-    opts: &Options,
-    wall_time_s: f64,
-    argv: Vec<String>,
-) -> Result<(serde_json::Value, Vec<PathBuf>)> {
-    let mut params = serde_json::Map::new();
-    let mut claims = Vec::new();
-    let mut timings = serde_json::Map::new();
-    for o in outputs {
-        let name = o.which.name();
-        out.write_bytes(&format!("{name}.csv"), o.figure.data_csv()?)?;
-        #[cfg(feature = "plot")]
-        {
-            let png = out.path(&format!("{name}.png"))?;
-            o.figure.render_png(&png)?;
-            let svg = out.path(&format!("{name}.svg"))?;
-            o.figure.render_svg(&svg)?;
-        }
-        params.insert(name.into(), to_json(&o.parameters));
-        timings.insert(name.into(), serde_json::json!(o.wall_time_s));
-        claims.extend(o.claims.iter().cloned());
-    }
-    let params = serde_json::Value::Object(params);
-    out.write_json("parameters.json", &params)?;
-    out.write_json("claims.json", &claims)?;
-    out.write_bytes("claims.md", claims_markdown(&claims))?;
-    out.write_bytes("REPORT.md", report_markdown(outputs, opts, wall_time_s))?;
-    let figs: Vec<&str> = outputs.iter().map(|o| o.which.name()).collect();
-    let prov = Provenance::new(
-        format!("reproduce {}", figs.join(" ")),
-        "exact event-driven sampler + Fokker-Planck + backward MFPT equations",
-        Some(opts.seed),
-        serde_json::json!({
-            "quick": opts.quick,
-            "figures": params,
-            "figure_wall_time_s": timings,
-        }),
-        wall_time_s,
-    );
-    out.commit_with_provenance_value(prov.with_argv(argv))
-}
-
-/// Compute several figures, one progress observer per figure.
-pub fn reproduce<'a>(
-    which: &[Which],
-    opts: &Options,
-    progress_for: impl Fn(Which) -> Box<dyn Progress + 'a>,
-) -> Result<Vec<FigureOutput>> {
-    which
-        .iter()
-        .map(|&w| {
-            let p = progress_for(w);
-            run_figure(w, opts, p.as_ref())
-        })
-        .collect()
-}
 
 /// Complementary error function (W. J. Cody's rational approximations are
 /// overkill here: Numerical Recipes' erfcc, relative error < 1.2e-7, is

@@ -356,6 +356,9 @@ impl Plan {
         }
         if let Some(dir) = out {
             opts.push(("out".into(), Value::Str(dir.display().to_string())));
+            // The point directory also holds the sweep's own files
+            // (statepoint, parts, result), which the command leaves alone.
+            opts.push(("force".into(), Value::Bool(true)));
         }
         keywords::build(&self.command, opts)
     }
