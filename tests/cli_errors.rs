@@ -62,4 +62,101 @@ fn flags_that_do_not_apply_are_refused() {
     assert!(err.contains("--vt") && err.contains("--over rate"), "{err}");
     let err = one_line_error(&["simulate", "--dt", "0.01"]);
     assert!(err.contains("--dt"), "{err}");
+    let cases: [(&[&str], &str); 7] = [
+        (&["fp", "stationary", "--seed", "3"], "--seed"),
+        (
+            &["fp", "transient", "--t-max", "1", "--seed", "3"],
+            "--seed",
+        ),
+        (
+            &["mfpt", "--v0", "0", "--vt", "0.5", "--seed", "3"],
+            "--seed",
+        ),
+        (
+            &["mfpt", "--v0", "0", "--vt", "0.5", "--dt", "0.01"],
+            "--dt",
+        ),
+        (
+            &[
+                "mfpt", "--v0", "0", "--vt", "0.5", "--method", "exact", "--dt", "0.01",
+            ],
+            "--dt",
+        ),
+        (
+            &["mfpt", "--v0", "0", "--vt", "0.5", "--particles", "100"],
+            "--particles",
+        ),
+        (
+            &[
+                "mfpt", "optimize", "--v0", "0", "--vt", "0.5", "--rate", "3",
+            ],
+            "--rate",
+        ),
+    ];
+    for (args, flag) in cases {
+        let err = one_line_error(args);
+        assert!(
+            err.starts_with(&format!("irtp: error: invalid {flag} =")),
+            "{args:?}: {err}"
+        );
+    }
+    // The same flags where they apply.
+    let (code, err) = irtp(&[
+        "mfpt",
+        "--v0",
+        "0",
+        "--vt",
+        "0.5",
+        "--method",
+        "euler",
+        "--dt",
+        "0.01",
+        "--seed",
+        "3",
+        "--particles",
+        "200",
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+}
+
+#[test]
+fn runs_over_budget_are_refused_before_starting() {
+    let cases: [(&[&str], &str); 5] = [
+        (&["simulate", "--particles", "1000000000000"], "--particles"),
+        (&["simulate", "--t-max", "1e300"], "--t-max"),
+        (&["simulate", "--lambda", "1e9"], "--lambda"),
+        (
+            &["fp", "transient", "--t-max", "10", "--rate", "1e9"],
+            "--rate",
+        ),
+        (
+            &[
+                "mfpt", "scan", "--over", "vt", "--from", "0.1", "--to", "1", "--points", "1e8",
+                "--v0", "0",
+            ],
+            "--points",
+        ),
+    ];
+    for (args, flag) in cases {
+        let start = std::time::Instant::now();
+        let err = one_line_error(args);
+        assert!(
+            err.contains("too costly") && err.contains(flag),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("--max-work"), "{err}");
+        assert!(
+            start.elapsed().as_secs_f64() < 10.0,
+            "{args:?} took {:?}",
+            start.elapsed()
+        );
+    }
+    let err = one_line_error(&["analytic", "--points", "1e9"]);
+    assert!(
+        err.contains("bytes of memory") && err.contains("--max-memory"),
+        "{err}"
+    );
+    // Raising the budget lets it through the check (here: into the next one).
+    let err = one_line_error(&["simulate", "--samples", "1e9", "--max-memory", "1e20"]);
+    assert!(err.contains("--max-work"), "{err}");
 }

@@ -273,7 +273,8 @@ fn rejects_bad_problems() {
         (-1.3, 0.5, "v0"),
         (0.5, 0.5, "v0"),
         (f64::INFINITY, 0.5, "v0"),
-        (0.3, 0.2, "reset_velocity"),
+        // v_r = 0 (the default) below vt, v0 above: the start is blamed.
+        (0.3, 0.2, "v0"),
     ] {
         match Problem::new(p, v0, vt) {
             Err(irtp::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name, "{v0} {vt}"),

@@ -27,15 +27,19 @@ impl NoiseArgs {
     }
 }
 
+/// The reset rate when `--rate` is not given.
+pub const DEFAULT_RATE: f64 = 2.0;
+
 /// Model flags: `--drag --sigma --lambda --rate --reset-velocity`.
 #[derive(Args, Clone, Debug)]
 pub struct ModelArgs {
     /// `--drag --sigma --lambda`.
     #[command(flatten)]
     pub noise: NoiseArgs,
-    /// Velocity reset rate r.
-    #[arg(long, short = 'r', default_value_t = 2.0, allow_hyphen_values = true)]
-    pub rate: f64,
+    /// Velocity reset rate r [default: 2; not accepted by `mfpt optimize`,
+    /// which searches r].
+    #[arg(long, short = 'r', allow_hyphen_values = true)]
+    pub rate: Option<f64>,
     /// Reset velocity v_r.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub reset_velocity: f64,
@@ -95,16 +99,19 @@ fn parse_drag(s: &str) -> Result<DragLaw, String> {
 impl ModelArgs {
     /// Validate into [`Params`].
     pub fn params(&self) -> crate::Result<Params> {
-        self.noise.params(self.rate, self.reset_velocity)
+        self.noise
+            .params(self.rate.unwrap_or(DEFAULT_RATE), self.reset_velocity)
     }
 }
 
 /// Output flags: `--seed --out --json`.
 #[derive(Args, Clone, Debug)]
 pub struct OutputArgs {
-    /// Master seed; particle i uses a stream derived from (seed, i).
-    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
-    pub seed: u64,
+    /// Master seed; particle i uses a stream derived from (seed, i)
+    /// [default: 1; only for particle methods: a deterministic solver
+    /// refuses it].
+    #[arg(long, allow_hyphen_values = true)]
+    pub seed: Option<u64>,
     /// Directory to write CSV files and run.json into.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -117,6 +124,25 @@ pub struct OutputArgs {
     /// `--max-work --max-memory`.
     #[command(flatten)]
     pub budget: super::budget::BudgetArgs,
+}
+
+impl OutputArgs {
+    /// The master seed of a particle method (1 when `--seed` is not given).
+    pub fn seed(&self) -> u64 {
+        self.seed.unwrap_or(1)
+    }
+
+    /// Refuse `--seed` where nothing is random (`what`: the computation).
+    pub fn no_seed(&self, what: &str) -> crate::Result<()> {
+        match self.seed {
+            Some(s) => Err(crate::Error::invalid(
+                "--seed",
+                s,
+                format!("only with a particle method ({what} is deterministic)"),
+            )),
+            None => Ok(()),
+        }
+    }
 }
 
 /// `--force`, of every command with `--out`.

@@ -109,6 +109,7 @@ impl StationaryArgs {
     /// Flags → model and solver options (the solver validates the options).
     fn config(&self) -> crate::Result<(Params, StationaryOptions)> {
         let params = self.model.params()?;
+        self.output.no_seed("fp stationary")?;
         let opts = StationaryOptions {
             cells: self.cells,
             mesh: match self.mesh {
@@ -130,6 +131,7 @@ impl TransientArgs {
     /// [0, t_max], `--snapshots` density times in (0, t_max].
     fn config(&self) -> crate::Result<(Params, TransientOptions)> {
         let params = self.model.params()?;
+        self.output.no_seed("fp transient")?;
         let opts = TransientOptions::sampled(
             self.cells,
             self.t_max,

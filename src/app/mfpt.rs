@@ -41,7 +41,7 @@ pub struct MfptArgs {
 pub enum MfptCommand {
     /// tau against the target velocity or the reset rate (paper Fig. 7).
     Scan(ScanArgs),
-    /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]; --rate is ignored).
+    /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]).
     Optimize(OptimizeArgs),
 }
 
@@ -76,20 +76,23 @@ struct SimArgs {
     /// Method: ode (backward equations), euler or exact (particles).
     #[arg(long, value_enum, default_value = "ode")]
     method: Method,
-    /// Particles (half start in +Sigma, half in -Sigma).
-    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = super::common::parse_count)]
-    particles: u64,
-    /// Euler time step (O(dt) bias, including an overshoot of at most dt).
-    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
-    dt: f64,
+    /// Particles (half start in +Sigma, half in -Sigma) [default: 10000;
+    /// particle methods only].
+    #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_count)]
+    particles: Option<u64>,
+    /// Euler time step (O(dt) bias, including an overshoot of at most dt)
+    /// [default: 1e-3; --method euler only].
+    #[arg(long, allow_hyphen_values = true)]
+    dt: Option<f64>,
     /// Censoring time of the particles. If any has not arrived by t-max, tau is not reported
     /// (null; `censored`, `censored_fraction` say how many) and `rmst` ± `rmst_err`, the
     /// restricted mean E[min(T, t-max)], is its lower bound `tau_lower_bound` (tau > rmst).
     /// With --out, survival.csv holds the Kaplan-Meier survival curve S(t) (t, survival,
     /// survival_err, at_risk); a scan adds censored_fraction, rmst_sim, rmst_sim_err columns
     /// and writes tau_sim as nan (JSON null) at censored points.
-    #[arg(long, default_value_t = 1e4, allow_hyphen_values = true)]
-    t_max: f64,
+    /// [default: 1e4; particle methods only]
+    #[arg(long, allow_hyphen_values = true)]
+    t_max: Option<f64>,
 }
 
 /// `irtp mfpt` for one problem.
@@ -177,6 +180,15 @@ impl MfptArgs {
 }
 
 impl MfptArgs {
+    /// Whether the chosen method is a particle method (takes `--seed`).
+    pub fn uses_seed(&self) -> bool {
+        match &self.command {
+            None => self.direct.sim.method != Method::Ode,
+            Some(MfptCommand::Scan(a)) => a.sim.method != Method::Ode,
+            Some(MfptCommand::Optimize(_)) => false,
+        }
+    }
+
     /// Validate the flags (every point of a scan) without solving.
     pub(crate) fn validate(&self) -> crate::Result<()> {
         match &self.command {
@@ -211,6 +223,44 @@ impl ProblemArgs {
 }
 
 impl SimArgs {
+    fn particles(&self) -> u64 {
+        self.particles.unwrap_or(10_000)
+    }
+    fn dt(&self) -> f64 {
+        self.dt.unwrap_or(1e-3)
+    }
+    fn t_max(&self) -> f64 {
+        self.t_max.unwrap_or(1e4)
+    }
+
+    /// A flag of a method not chosen is an error, never ignored.
+    fn reject_inapplicable(&self, output: &OutputArgs) -> crate::Result<()> {
+        let particle_only = [
+            ("--particles", self.particles.map(|n| n.to_string())),
+            ("--t-max", self.t_max.map(|t| t.to_string())),
+        ];
+        if self.method == Method::Ode {
+            output.no_seed("the backward-equation method (--method ode)")?;
+            for (flag, value) in particle_only {
+                if let Some(v) = value {
+                    return Err(Error::invalid(
+                        flag,
+                        v,
+                        "only with a particle method (--method exact or euler)",
+                    ));
+                }
+            }
+        }
+        match (self.method, self.dt) {
+            (Method::Euler, _) | (_, None) => Ok(()),
+            (_, Some(dt)) => Err(Error::invalid(
+                "--dt",
+                dt,
+                "only with --method euler (the other methods have no time step)",
+            )),
+        }
+    }
+
     /// Flags → the library's method (`backward` for the ODE), checked
     /// against every problem it will run on before anything runs.
     fn config(
@@ -219,14 +269,15 @@ impl SimArgs {
         backward: BackwardOptions,
         output: &OutputArgs,
     ) -> crate::Result<mfpt::Method> {
+        self.reject_inapplicable(output)?;
         let run = ParticleOptions {
-            particles: self.particles,
-            t_max: self.t_max,
-            seed: output.seed,
+            particles: self.particles(),
+            t_max: self.t_max(),
+            seed: output.seed(),
         };
         let method = match self.method {
             Method::Ode => mfpt::Method::Backward(backward),
-            Method::Euler => mfpt::Method::Euler { dt: self.dt, run },
+            Method::Euler => mfpt::Method::Euler { dt: self.dt(), run },
             Method::Exact => mfpt::Method::Exact(run),
         };
         for p in problems {
@@ -692,13 +743,13 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> crate::Result<Outcome> {
         values: &c.values,
         cells: a.problem.cells,
         method: a.sim.method,
-        particles: sim.then_some(a.sim.particles),
-        dt: (a.sim.method == Method::Euler).then_some(a.sim.dt),
-        t_max: sim.then_some(a.sim.t_max),
+        particles: sim.then_some(a.sim.particles()),
+        dt: (a.sim.method == Method::Euler).then_some(a.sim.dt()),
+        t_max: sim.then_some(a.sim.t_max()),
     };
     let results = Results {
         method: method_name(a.sim.method).into(),
-        seed: sim.then_some(a.output.seed),
+        seed: sim.then_some(a.output.seed()),
         json: to_value(&table_json(&table)),
         parameters: to_value(&params),
         text: table_text(&table) + &note,
@@ -740,6 +791,14 @@ impl OptimizeArgs {
     /// Flags → validated problem and search range (checked before any
     /// output is created).
     fn config(&self) -> crate::Result<(Problem, OptimizeOptions)> {
+        if let Some(r) = self.problem.model.rate {
+            return Err(Error::invalid(
+                "--rate",
+                r,
+                "not with mfpt optimize, which searches r over {0} ∪ [--r-min, --r-max]",
+            ));
+        }
+        self.output.no_seed("mfpt optimize")?;
         let (problem, backward) = self.problem.config(self.vt)?;
         let opts = OptimizeOptions {
             r_min: self.r_min,

@@ -77,6 +77,17 @@ pub fn validate(command: &Command) -> Result<()> {
     }
 }
 
+/// Whether a command draws random numbers (so takes `--seed`): simulations
+/// and particle first-passage methods; the deterministic solvers refuse a
+/// seed.
+pub fn uses_seed(command: &Command) -> bool {
+    match command {
+        Command::Simulate(_) | Command::Reproduce(_) => true,
+        Command::Analytic(_) | Command::Fp(_) => false,
+        Command::Mfpt(a) => a.uses_seed(),
+    }
+}
+
 /// Run a command.
 pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
     match command {

@@ -151,7 +151,7 @@ impl SimulateArgs {
             grid,
             self.burn_in,
             self.bins,
-            self.output.seed,
+            self.output.seed(),
         )?;
         let euler = match self.method {
             MethodArg::Euler => Some(self.euler_setup(&params, &spec)?),

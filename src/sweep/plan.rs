@@ -304,7 +304,8 @@ impl Plan {
             params.extend(g.names.iter().cloned().zip(g.rows[pick].iter().cloned()));
         }
         params.extend(self.fixed.iter().cloned());
-        let seed = self.seeded.then(|| self.point_seed(&params));
+        let seed =
+            (self.seeded && self.draws_random_numbers(&params)).then(|| self.point_seed(&params));
         let id = hex(&Sha256::digest(
             statepoint(&self.command, &params, seed).to_string(),
         ))[..32]
@@ -320,6 +321,16 @@ impl Plan {
     /// All points, in plan order.
     pub fn points(&self) -> impl Iterator<Item = Point> + '_ {
         (0..self.len()).map(|i| self.point(i))
+    }
+
+    /// Whether the point's computation is random (a particle method): only
+    /// then it gets a seed (a deterministic solver refuses `--seed`). A point
+    /// whose flags do not parse counts as random; `check_points` reports it.
+    fn draws_random_numbers(&self, params: &[(String, Value)]) -> bool {
+        keywords::build(&self.command, params.to_vec())
+            .ok()
+            .and_then(|argv| keywords::parse(&self.command, &argv).ok())
+            .is_none_or(|cli| crate::app::uses_seed(&cli.command))
     }
 
     /// The seed of a point: the first 8 bytes of SHA-256(plan seed,
