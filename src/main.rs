@@ -15,6 +15,8 @@ struct Cli {
 }
 
 /// The library's commands ([`app::Command`]) and the sweeps.
+// Parsed once per run: the size of the largest flag set costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 enum TopCommand {
     #[command(flatten)]

@@ -38,6 +38,8 @@ pub struct Cli {
 }
 
 /// The commands of `irtp`.
+// Parsed once per run: the size of the largest flag set costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.

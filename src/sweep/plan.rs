@@ -330,7 +330,7 @@ impl Plan {
         keywords::build(&self.command, params.to_vec())
             .ok()
             .and_then(|argv| keywords::parse(&self.command, &argv).ok())
-            .is_none_or(|cli| crate::app::uses_seed(&cli.command))
+            .map_or(true, |cli| crate::app::uses_seed(&cli.command))
     }
 
     /// The seed of a point: the first 8 bytes of SHA-256(plan seed,
