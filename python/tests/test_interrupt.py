@@ -22,7 +22,8 @@ SCRIPT = textwrap.dedent(
     signal.signal(signal.SIGINT, signal.default_int_handler)
     print("started", flush=True)
     try:
-        irtp.simulate(particles=10**9, t_max=1000.0, samples=11, out=sys.argv[1], threads=2)
+        irtp.simulate(particles=10**9, t_max=1000.0, samples=11, out=sys.argv[1], threads=2,
+                      max_work=1e20)
     except KeyboardInterrupt:
         print("KeyboardInterrupt", flush=True)
         sys.exit(42)
