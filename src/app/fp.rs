@@ -193,10 +193,10 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
     let results = Results {
         method: format!("fv-upwind-direct-{}", s.mesh.name()),
         seed: None,
-        json: summary.clone(),
+        json: summary,
         parameters: json!({"model": params, "options": opts}),
         tables: vec![density],
-        json_files: vec![("summary.json", summary)],
+        json_files: Vec::new(),
         text,
         wall_time_s: wall,
     };
@@ -257,10 +257,10 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
     let results = Results {
         method: "fv-upwind-explicit-uniform".into(),
         seed: None,
-        json: summary.clone(),
+        json: summary,
         parameters: json!({"model": params, "options": opts}),
         tables: vec![moments, snapshots],
-        json_files: vec![("summary.json", summary)],
+        json_files: Vec::new(),
         text,
         wall_time_s: wall,
     };

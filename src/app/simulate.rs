@@ -95,16 +95,35 @@ struct RunParameters<'a> {
     steps_per_particle: Option<u64>,
 }
 
+/// The `results` of `irtp simulate`: both methods have the same keys, a
+/// count of work is `steps` (Euler time steps, summed over particles) or
+/// `events` (the exact sampler's flips, resets and recording stops), the
+/// other `null`.
 #[derive(Serialize)]
 struct JsonOut<'a> {
     method: &'a str,
-    events: Option<EventSampling>,
+    /// The Euler scheme's event sampler (`--events`).
+    event_sampling: Option<EventSampling>,
     dt: Option<f64>,
     #[serde(flatten)]
     summary: SimSummary,
+    events: Option<u64>,
     wall_time_s: f64,
-    particle_steps_per_s: f64,
+    particle_steps_per_s: Option<f64>,
+    events_per_s: Option<f64>,
     out: Option<String>,
+}
+
+impl JsonOut<'_> {
+    /// The summary with its count of work under its name: `steps` for
+    /// Euler, `events` for the exact sampler.
+    fn to_value(&self) -> serde_json::Value {
+        let mut v = to_value(self);
+        if self.events.is_some() {
+            v["steps"] = serde_json::Value::Null;
+        }
+        v
+    }
 }
 
 /// The Euler scheme's setup: step, event sampler and step plan.
@@ -259,19 +278,23 @@ fn report(
 ) -> crate::Result<Outcome> {
     ctx.check()?;
     let summary = obs.summary();
+    let rate = summary.steps as f64 / wall;
+    let exact = c.euler.is_none();
     let json = JsonOut {
         method: c.method(),
-        events: c.events(),
+        event_sampling: c.events(),
         dt: c.dt(),
         summary: summary.clone(),
+        events: exact.then_some(summary.steps),
         wall_time_s: wall,
-        particle_steps_per_s: summary.steps as f64 / wall,
+        particle_steps_per_s: (!exact).then_some(rate),
+        events_per_s: exact.then_some(rate),
         out: out.as_ref().map(|o| o.target().display().to_string()),
     };
     let results = Results {
         method: c.method().to_string(),
         seed: Some(c.spec.seed),
-        json: to_value(&json),
+        json: json.to_value(),
         parameters: to_value(&run_parameters(a, c)),
         tables: vec![
             Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
