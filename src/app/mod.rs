@@ -14,6 +14,7 @@
 pub mod analytic;
 pub mod budget;
 pub mod common;
+pub mod format;
 pub mod fp;
 pub mod keywords;
 pub mod mfpt;

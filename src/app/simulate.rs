@@ -1,6 +1,7 @@
 //! `irtp simulate`: particle simulation of the IRTP with resetting.
 
 use super::common::{ModelArgs, OutputArgs};
+use super::format::{fmt_pm, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::sim::euler::{self, EulerPlan, EventSampling};
 use crate::sim::exact;
@@ -404,43 +405,46 @@ fn run_parameters<'a>(a: &SimulateArgs, c: &'a Config) -> RunParameters<'a> {
     }
 }
 
-/// The text-mode report.
+/// The text-mode report (numbers to their significant digits).
 fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> String {
     let p = &c.params;
-    let rate = s.steps as f64 / wall;
+    let rate = fmt_sig(s.steps as f64 / wall);
     let model = format!(
         "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
         p.drag(),
-        p.sigma(),
-        p.lambda(),
-        p.rate(),
-        p.reset_velocity()
+        fmt_sig(p.sigma()),
+        fmt_sig(p.lambda()),
+        fmt_sig(p.rate()),
+        fmt_sig(p.reset_velocity())
     );
+    let (burn_in, t_max) = (fmt_sig(a.burn_in), fmt_sig(s.t_max));
     let mut text = match &c.euler {
         Some(e) => format!(
-            "euler ({} events), {model}: {} particles x {} steps of dt = {} in {wall:.2} s ({rate:.3e} particle-steps/s)\n",
+            "euler ({} event sampling), {model}: {} particles x {} steps of dt = {} in {wall:.2} s ({rate} particle-steps/s)\n",
             format!("{:?}", e.events).to_lowercase(),
             s.particles,
             e.plan.steps,
-            e.dt
+            fmt_sig(e.dt)
         ),
         None => format!(
-            "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)\n",
+            "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate} events/s)\n",
             s.particles, s.steps
         ),
     };
     text += &format!(
-        "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
-        s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
+        "stationary <v^2> = {}, <v> = {} (time average over [{burn_in}, {t_max}])\n",
+        fmt_pm(s.v2, s.v2_err),
+        fmt_pm(s.v_mean, s.v_mean_err)
     );
     text += &format!(
-        "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
-        s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
+        "at t = {t_max}: <v^2> = {}, <x^2> = {}\n",
+        fmt_pm(s.v2_final, s.v2_final_err),
+        fmt_pm(s.x2_final, s.x2_final_err)
     );
     if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
         text += &format!(
-            "Eq. (36) fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
-            a.burn_in, s.t_max, d, e
+            "Eq. (36) fit <x^2> = 2 D t + c over [{burn_in}, {t_max}]: D = {}\n",
+            fmt_pm(d, e)
         );
     }
     text
