@@ -221,7 +221,7 @@ fn censored_results_are_bit_identical_for_any_thread_count() {
             let out = irtp_env(&all, &[("RAYON_NUM_THREADS", threads)]);
             assert_success(&out);
             let csv = std::fs::read(dir.join("survival.csv")).unwrap();
-            (out.stdout, csv)
+            (json(&out).to_string(), csv)
         };
         let one = run("1");
         assert_eq!(one, run("2"), "{case:?}");
@@ -253,11 +253,10 @@ fn censored_results_are_bit_identical_for_any_thread_count() {
         "3000",
         "--json",
     ];
-    let one = irtp_env(&scan, &[("RAYON_NUM_THREADS", "1")]);
-    assert_success(&one);
+    let one = json(&irtp_env(&scan, &[("RAYON_NUM_THREADS", "1")])).to_string();
     assert_eq!(
-        one.stdout,
-        irtp_env(&scan, &[("RAYON_NUM_THREADS", "2")]).stdout
+        one,
+        json(&irtp_env(&scan, &[("RAYON_NUM_THREADS", "2")])).to_string()
     );
 }
 

@@ -40,7 +40,8 @@ fn exact_is_default_with_euler_outputs() {
     let je = run(Some("euler"), &de);
     let jx = run(None, &dx);
     assert_eq!(jx["method"], "exact");
-    assert!(jx["dt"].is_null() && jx["events"].is_null());
+    assert!(jx["dt"].is_null() && jx["event_sampling"].is_null() && jx["steps"].is_null());
+    assert!(jx["events"].as_u64().unwrap() > 0 && je["events"].is_null());
     assert_eq!(keys(&je), keys(&jx));
     assert_eq!(jx["particles"], 200);
     assert!(jx["v2"].as_f64().unwrap() > 0.0);

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{assert_rejected, irtp, json, read_json};
+use common::{assert_rejected, irtp, json, read_json, summary};
 
 #[test]
 fn stationary_json_and_files() {
@@ -28,6 +28,12 @@ fn stationary_json_and_files() {
         dir.to_str().unwrap(),
     ]);
     let v = json(&out);
+    // summary.json is exactly the object --json printed.
+    let printed = summary(&out);
+    assert_eq!(read_json(&dir.join("summary.json")), printed);
+    assert_eq!(printed["command"], "fp stationary");
+    assert_eq!(printed["params"]["model"]["rate"], 2.0);
+    assert_eq!(printed["provenance"]["version"], env!("CARGO_PKG_VERSION"));
     // Exact: <vη> = 1/3.6, <v²> = (2<vη> + r v_r²)/(2 + r).
     let v2 = (2.0 / 3.6 + 2.0 * 0.09) / 4.0;
     assert!((v["v2"].as_f64().unwrap() / v2 - 1.0).abs() < 1e-6);
@@ -75,7 +81,7 @@ fn transient_json_and_files() {
     assert!((v["mass"].as_f64().unwrap() - 1.0).abs() < 1e-12);
     assert!(v["dt"].as_f64().unwrap() > 0.0);
     let m = std::fs::read_to_string(dir.join("moments.csv")).unwrap();
-    assert_eq!(m.lines().next(), Some("t,v2,v_mean,mass"));
+    assert_eq!(m.lines().next(), Some("t,v_mean,v2,mass"));
     assert_eq!(m.lines().count(), 12);
     let s = std::fs::read_to_string(dir.join("snapshots.csv")).unwrap();
     assert_eq!(s.lines().next(), Some("t,v,p,p_plus,p_minus"));

@@ -41,6 +41,13 @@ fn csv_cell(path: &Path, row: usize, column: &str) -> f64 {
         .expect("number")
 }
 
+/// The number stored under `key` of the `results` object of the one-line
+/// `--json` object.
+fn result_number(json: &str, key: &str) -> Option<f64> {
+    let start = json.find("\"results\":")? + "\"results\":".len();
+    json_number(&json[start..], key)
+}
+
 /// The number stored under top-level `key` of a one-line JSON object, parsed
 /// from its text with Rust's correctly rounded parser (serde_json's default
 /// float parsing may be off by one ulp, which would defeat a bitwise pin).
@@ -51,7 +58,12 @@ fn json_number(json: &str, key: &str) -> Option<f64> {
     while i < b.len() {
         match b[i] {
             b'{' | b'[' => depth += 1,
-            b'}' | b']' => depth -= 1,
+            b'}' | b']' => {
+                depth -= 1;
+                if depth == 0 {
+                    return None;
+                }
+            }
             b'"' => {
                 let start = i + 1;
                 i += 1;
@@ -93,7 +105,7 @@ fn check(case: &Case) -> Vec<String> {
     let mut failures = Vec::new();
     for pin in case.pins {
         let (what, got, want) = match pin {
-            Pin::Json(key, want) => (key.to_string(), json_number(json, key), *want),
+            Pin::Json(key, want) => (key.to_string(), result_number(json, key), *want),
             Pin::Csv(file, row, col, want) => (
                 format!("{file}[{row}].{col}"),
                 Some(csv_cell(&out_dir.join(file), *row, col)),
@@ -143,7 +155,7 @@ const CASES: &[Case] = &[
             Pin::Json("x2_final", 4.949447383986677),
             Pin::Json("d_eff_msd", 0.5924517083229309),
             Pin::Json("d_eff_msd_err", 0.015616443721909344),
-            Pin::Json("steps", 25105.0),
+            Pin::Json("events", 25105.0),
             Pin::Csv("density.csv", 2, "p", 0.3233710851644944),
             Pin::Csv("density.csv", 7, "p_final", 0.312238357166986),
             Pin::Csv("moments.csv", 3, "x2", 3.3932943026071536),
@@ -178,7 +190,7 @@ const CASES: &[Case] = &[
             Pin::Json("v2", 0.0669429760759855),
             Pin::Json("v_mean", 0.0025842106570053585),
             Pin::Json("x2_final", 0.508268263438847),
-            Pin::Json("steps", 18603.0),
+            Pin::Json("events", 18603.0),
             Pin::Csv("density.csv", 0, "p", 0.057328809812960915),
             Pin::Csv("density.csv", 5, "p", 1.4018563824265589),
         ],
@@ -214,7 +226,7 @@ const CASES: &[Case] = &[
             Pin::Json("v2", 0.24600157616775256),
             Pin::Json("v_mean", 0.1417019938936818),
             Pin::Json("x2_final", 2.4187982182210224),
-            Pin::Json("steps", 14967.0),
+            Pin::Json("events", 14967.0),
             Pin::Csv("density.csv", 4, "p", 0.529300778933965),
         ],
     },

@@ -64,6 +64,7 @@ fn extreme_reset_rates_are_refused_not_answered() {
         "mfpt", "optimize", "--v0", "-0.249", "--vt", "0.5", "--r-max", "1e9", "--json",
     ]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = &v["results"];
     assert_eq!(v["at_upper_bound"], false, "{v}");
     assert!(v["r_opt"].as_f64().unwrap() < 10.0, "{v}");
 }
@@ -169,6 +170,7 @@ fn exact_sampler_handles_steep_tan_media() {
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let j = &j["results"];
         let (v2, err) = (j["v2"].as_f64().unwrap(), j["v2_err"].as_f64().unwrap());
         let exact = irtp::analytic::r0::R0Density::new(DragLaw::Tan, sigma.parse().unwrap(), 0.5)
             .unwrap()

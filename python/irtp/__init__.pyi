@@ -121,7 +121,8 @@ class SimulateResult(Result):
     p_final_err: Array
     # summary
     particles: int
-    steps: int
+    steps: Optional[int]  # Euler time steps summed over particles (None for "exact")
+    events: Optional[int]  # exact sampler's events summed over particles (None for "euler")
     v2_final: float
     v2_final_err: float
     x2_final: float

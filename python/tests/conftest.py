@@ -23,7 +23,7 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 
 # Summary keys that measure time or echo the output path: everything else
 # must be bit-identical between Python and the CLI.
-VOLATILE = {"wall_time_s", "particle_steps_per_s", "out"}
+VOLATILE = {"wall_time_s", "particle_steps_per_s", "events_per_s", "out"}
 
 
 def irtp_bin() -> pathlib.Path:

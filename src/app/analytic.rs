@@ -1,6 +1,7 @@
 //! `irtp analytic`: exact r = 0 stationary density, its regime and moments.
 
 use super::common::NoiseArgs;
+use super::format::{fmt_digits, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
 use crate::numerics::grid::chebyshev;
@@ -138,10 +139,10 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
     let results = Results {
         method: "exact r=0 density; adaptive Gauss-Kronrod normalisation".into(),
         seed: None,
-        json: json.clone(),
+        json,
         parameters: to_value(&run),
         tables: vec![density],
-        json_files: vec![("summary.json", json)],
+        json_files: Vec::new(),
         text: text_report(&report),
         wall_time_s: t0.elapsed().as_secs_f64(),
     };
@@ -149,11 +150,17 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
 }
 
 fn text_report(report: &Report) -> String {
-    let (drag, sigma, lambda) = (report.drag, report.sigma, report.lambda);
-    let (vl, vu) = (report.v_lower, report.v_upper);
+    let f = fmt_sig;
     format!(
-        "{drag} drag, Sigma = {sigma}, lambda = {lambda}, r = 0: v in ({vl:.6}, {vu:.6})\n\
-         regime {}\n<v^2> = {:.15e}   <v^4> = {:.15e}\n",
-        report.regime_description, report.v2, report.v4
+        "{} drag, Sigma = {}, lambda = {}, r = 0: v in ({}, {})\n\
+         regime {}\n<v^2> = {}   <v^4> = {}\n",
+        report.drag,
+        f(report.sigma),
+        f(report.lambda),
+        f(report.v_lower),
+        f(report.v_upper),
+        report.regime_description,
+        fmt_digits(report.v2, 15),
+        fmt_digits(report.v4, 15)
     )
 }

@@ -1,6 +1,7 @@
 //! `irtp fp stationary` and `irtp fp transient`: Fokker-Planck solvers.
 
 use super::common::{ModelArgs, OutputArgs};
+use super::format::{fmt_digits, fmt_sig};
 use super::{finish, open_out, Context, Outcome, Results, Table};
 use crate::fp::{self, Mesh, StationaryOptions, TransientOptions};
 use crate::Params;
@@ -184,10 +185,10 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
         (0..s.cells).map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]]),
     );
     let text = format!(
-        "<v^2> = {:.12}  <v> = {:.12}  D_eff = {:.12}  ({} cells, {} mesh{})\n",
-        s.v2,
-        s.v_mean,
-        s.d_eff,
+        "<v^2> = {}  <v> = {}  D_eff = {}  ({} cells, {} mesh{})\n",
+        fmt_digits(s.v2, 12),
+        fmt_digits(s.v_mean, 12),
+        fmt_digits(s.d_eff, 12),
         s.cells,
         s.mesh.name(),
         if s.extrapolated { ", extrapolated" } else { "" }
@@ -195,10 +196,10 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
     let results = Results {
         method: format!("fv-upwind-direct-{}", s.mesh.name()),
         seed: None,
-        json: summary.clone(),
+        json: summary,
         parameters: json!({"model": params, "options": opts}),
         tables: vec![density],
-        json_files: vec![("summary.json", summary)],
+        json_files: Vec::new(),
         text,
         wall_time_s: wall,
     };
@@ -236,11 +237,11 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
     });
     let moments = Table {
         name: "moments",
-        header: ["t", "v2", "v_mean", "mass"].map(String::from).to_vec(),
+        header: ["t", "v_mean", "v2", "mass"].map(String::from).to_vec(),
         columns: vec![
             tr.times.clone(),
-            tr.v2.clone(),
             tr.v_mean.clone(),
+            tr.v2.clone(),
             tr.mass.clone(),
         ],
     };
@@ -253,16 +254,21 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
         }),
     );
     let text = format!(
-        "<v^2>(t = {t_max}) = {:.12}  mass error max = {:.1e}  dt = {:.3e}  ({} steps, {} cells)\n",
-        tr.v2[k], tr.mass_error_max, tr.dt, tr.steps, tr.cells
+        "<v^2>(t = {}) = {}  mass error max = {:.1e}  dt = {}  ({} time steps, {} cells)\n",
+        fmt_sig(t_max),
+        fmt_digits(tr.v2[k], 12),
+        tr.mass_error_max,
+        fmt_sig(tr.dt),
+        tr.steps,
+        tr.cells
     );
     let results = Results {
         method: "fv-upwind-explicit-uniform".into(),
         seed: None,
-        json: summary.clone(),
+        json: summary,
         parameters: json!({"model": params, "options": opts}),
         tables: vec![moments, snapshots],
-        json_files: vec![("summary.json", summary)],
+        json_files: Vec::new(),
         text,
         wall_time_s: wall,
     };

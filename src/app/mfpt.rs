@@ -432,16 +432,15 @@ fn censoring_note(s: &FptSummary) -> String {
         return String::new();
     }
     format!(
-        "CENSORED: {} of {} particles ({:.4}%) had not reached vt by t_max = {}: tau is NOT estimated \
+        "CENSORED: {} of {} particles ({}%) had not reached vt by t_max = {}: tau is NOT estimated \
          (the mean of the arrived particles is no estimate of it).\n\
-         tau > rmst = {} ± {} (the restricted mean E[min(T, t_max)], a lower bound); \
+         tau > rmst = {} (the restricted mean E[min(T, t_max)], a lower bound); \
          a larger --t-max estimates tau.\n",
         s.censored,
         s.particles,
-        100.0 * s.censored_fraction,
-        s.t_max,
-        s.rmst,
-        s.rmst_err
+        super::format::fmt_sig(100.0 * s.censored_fraction),
+        super::format::fmt_sig(s.t_max),
+        super::format::fmt_pm(s.rmst, s.rmst_err)
     )
 }
 
@@ -462,15 +461,33 @@ fn survival_table(c: &SurvivalCurve) -> Table {
     )
 }
 
-/// `key = value` lines of a JSON object (its `problem` left out).
+/// `key = value` lines of a JSON object (its `problem` left out): a value
+/// with an `<key>_err` beside it as `value ± error` (2 significant digits
+/// of the error), other numbers to 10 significant digits.
 fn text_lines(v: &serde_json::Value) -> String {
     let mut text = String::new();
-    if let Some(obj) = v.as_object() {
-        for (k, x) in obj {
-            if k != "problem" {
-                text += &format!("{k} = {x}\n");
-            }
+    let Some(obj) = v.as_object() else {
+        return text;
+    };
+    let err_of = |k: &str| obj.get(&format!("{k}_err")).and_then(|e| e.as_f64());
+    for (k, x) in obj {
+        let paired = k
+            .strip_suffix("_err")
+            .is_some_and(|base| obj.get(base).is_some_and(|b| b.is_f64()));
+        if k == "problem" || paired {
+            continue;
         }
+        let shown = match (x, err_of(k)) {
+            (serde_json::Value::Number(n), Some(e)) if n.is_f64() => {
+                super::format::fmt_pm(n.as_f64().unwrap_or(f64::NAN), e)
+            }
+            (serde_json::Value::Number(n), _) if n.is_f64() => {
+                super::format::fmt_digits(n.as_f64().unwrap_or(f64::NAN), 10)
+            }
+            (serde_json::Value::String(s), _) => s.clone(),
+            _ => x.to_string(),
+        };
+        text += &format!("{k} = {shown}\n");
     }
     text
 }
@@ -538,9 +555,9 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> crate::Result<Outcome> {
 fn profile_table(p: &Profile) -> Table {
     let rows = (0..p.v.len()).map(|i| {
         let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
-        [p.v[i], tp, tm, 0.5 * (tp + tm)]
+        [p.v[i], 0.5 * (tp + tm), tp, tm]
     });
-    Table::from_rows("profile", &["v0", "tau_plus", "tau_minus", "tau"], rows)
+    Table::from_rows("profile", &["v0", "tau", "tau_plus", "tau_minus"], rows)
 }
 
 fn method_name(m: Method) -> &'static str {

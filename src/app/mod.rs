@@ -14,6 +14,7 @@
 pub mod analytic;
 pub mod budget;
 pub mod common;
+pub mod format;
 pub mod fp;
 pub mod keywords;
 pub mod mfpt;
@@ -209,6 +210,8 @@ pub struct Outcome {
     pub results: Results,
     /// `run.json` as written (or as it would be written without `--out`).
     pub provenance: Value,
+    /// `summary.json` as written (and as `--json` prints it): see [`summary`].
+    pub summary: Value,
     /// The output directory and the files written there, when one was given.
     pub written: Option<(PathBuf, Vec<PathBuf>)>,
     /// Warnings for the user (files in `--out` that `--force` left alone).
@@ -229,7 +232,8 @@ pub struct Results {
     pub parameters: Value,
     /// The tables (`<name>.csv` in the output directory).
     pub tables: Vec<Table>,
-    /// Further JSON files of the output directory (`summary.json`, ...).
+    /// Further JSON files of the output directory (`mfpt.json`, ...);
+    /// `summary.json` is written by [`finish`] for every command.
     pub json_files: Vec<(&'static str, Value)>,
     /// The text-mode report (without the list of written files).
     pub text: String,
@@ -324,6 +328,41 @@ fn same_run(out: &OutputDir, prov: &Value) -> Result<()> {
     ))
 }
 
+/// The schema name of `summary.json` and of the `--json` object.
+pub const SUMMARY_SCHEMA: &str = "irtp.summary/1";
+
+/// The keys of `run.json` repeated under `provenance` in `summary.json`.
+const PROVENANCE_KEYS: [&str; 8] = [
+    "software",
+    "version",
+    "git_revision",
+    "argv",
+    "seed",
+    "threads",
+    "wall_time_s",
+    "finished_unix",
+];
+
+/// The one output object of every command, written as `summary.json` and
+/// printed by `--json`: `schema`, `command`, `method`, `params` (the run
+/// parameters, as in `run.json`), `results` (what the command computed,
+/// each value with its error where it has one) and `provenance` (the
+/// version, revision, seed, command line and time of `run.json`).
+pub fn summary(command: &str, r: &Results, run: &Value) -> Value {
+    let provenance: serde_json::Map<String, Value> = PROVENANCE_KEYS
+        .iter()
+        .map(|k| (k.to_string(), run[*k].clone()))
+        .collect();
+    serde_json::json!({
+        "schema": SUMMARY_SCHEMA,
+        "command": command,
+        "method": r.method,
+        "params": r.parameters,
+        "results": r.json,
+        "provenance": provenance,
+    })
+}
+
 /// A non-finite number in a result table is never returned nor written.
 fn refuse_non_finite(command: &'static str, tables: &[Table]) -> Result<()> {
     for t in tables {
@@ -367,6 +406,7 @@ pub(crate) fn finish(
     )
     .with_argv(ctx.argv.clone());
     let mut warnings = Vec::new();
+    let summary = summary(command, r, &to_value(&prov));
     let (provenance, written) = match out {
         None => (to_value(&prov), None),
         Some(mut o) => {
@@ -378,6 +418,7 @@ pub(crate) fn finish(
             for (name, v) in &r.json_files {
                 o.write_json(name, v)?;
             }
+            o.write_json("summary.json", &summary)?;
             let target = o.target().to_path_buf();
             let (prov, files) = o.commit_with_provenance_value(prov)?;
             (prov, Some((target, files)))
@@ -387,6 +428,7 @@ pub(crate) fn finish(
         command,
         results,
         provenance,
+        summary,
         written,
         warnings,
     })

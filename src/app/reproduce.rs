@@ -112,10 +112,12 @@ pub fn run(args: &ReproduceArgs, ctx: &Context) -> crate::Result<Outcome> {
         text,
         wall_time_s: wall,
     };
+    let summary = super::summary("reproduce", &results, &provenance);
     Ok(Outcome {
         command: "reproduce",
         results,
         provenance,
+        summary,
         written: Some((args.out.clone(), files)),
         warnings: dir.warnings.clone(),
     })

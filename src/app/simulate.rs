@@ -1,6 +1,7 @@
 //! `irtp simulate`: particle simulation of the IRTP with resetting.
 
 use super::common::{ModelArgs, OutputArgs};
+use super::format::{fmt_pm, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::sim::euler::{self, EulerPlan, EventSampling};
 use crate::sim::exact;
@@ -95,16 +96,35 @@ struct RunParameters<'a> {
     steps_per_particle: Option<u64>,
 }
 
+/// The `results` of `irtp simulate`: both methods have the same keys, a
+/// count of work is `steps` (Euler time steps, summed over particles) or
+/// `events` (the exact sampler's flips, resets and recording stops), the
+/// other `null`.
 #[derive(Serialize)]
 struct JsonOut<'a> {
     method: &'a str,
-    events: Option<EventSampling>,
+    /// The Euler scheme's event sampler (`--events`).
+    event_sampling: Option<EventSampling>,
     dt: Option<f64>,
     #[serde(flatten)]
     summary: SimSummary,
+    events: Option<u64>,
     wall_time_s: f64,
-    particle_steps_per_s: f64,
+    particle_steps_per_s: Option<f64>,
+    events_per_s: Option<f64>,
     out: Option<String>,
+}
+
+impl JsonOut<'_> {
+    /// The summary with its count of work under its name: `steps` for
+    /// Euler, `events` for the exact sampler.
+    fn to_value(&self) -> serde_json::Value {
+        let mut v = to_value(self);
+        if self.events.is_some() {
+            v["steps"] = serde_json::Value::Null;
+        }
+        v
+    }
 }
 
 /// The Euler scheme's setup: step, event sampler and step plan.
@@ -259,19 +279,23 @@ fn report(
 ) -> crate::Result<Outcome> {
     ctx.check()?;
     let summary = obs.summary();
+    let rate = summary.steps as f64 / wall;
+    let exact = c.euler.is_none();
     let json = JsonOut {
         method: c.method(),
-        events: c.events(),
+        event_sampling: c.events(),
         dt: c.dt(),
         summary: summary.clone(),
+        events: exact.then_some(summary.steps),
         wall_time_s: wall,
-        particle_steps_per_s: summary.steps as f64 / wall,
+        particle_steps_per_s: (!exact).then_some(rate),
+        events_per_s: exact.then_some(rate),
         out: out.as_ref().map(|o| o.target().display().to_string()),
     };
     let results = Results {
         method: c.method().to_string(),
         seed: Some(c.spec.seed),
-        json: to_value(&json),
+        json: json.to_value(),
         parameters: to_value(&run_parameters(a, c)),
         tables: vec![
             Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
@@ -381,43 +405,46 @@ fn run_parameters<'a>(a: &SimulateArgs, c: &'a Config) -> RunParameters<'a> {
     }
 }
 
-/// The text-mode report.
+/// The text-mode report (numbers to their significant digits).
 fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> String {
     let p = &c.params;
-    let rate = s.steps as f64 / wall;
+    let rate = fmt_sig(s.steps as f64 / wall);
     let model = format!(
         "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
         p.drag(),
-        p.sigma(),
-        p.lambda(),
-        p.rate(),
-        p.reset_velocity()
+        fmt_sig(p.sigma()),
+        fmt_sig(p.lambda()),
+        fmt_sig(p.rate()),
+        fmt_sig(p.reset_velocity())
     );
+    let (burn_in, t_max) = (fmt_sig(a.burn_in), fmt_sig(s.t_max));
     let mut text = match &c.euler {
         Some(e) => format!(
-            "euler ({} events), {model}: {} particles x {} steps of dt = {} in {wall:.2} s ({rate:.3e} particle-steps/s)\n",
+            "euler ({} event sampling), {model}: {} particles x {} steps of dt = {} in {wall:.2} s ({rate} particle-steps/s)\n",
             format!("{:?}", e.events).to_lowercase(),
             s.particles,
             e.plan.steps,
-            e.dt
+            fmt_sig(e.dt)
         ),
         None => format!(
-            "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate:.3e} events/s)\n",
+            "exact (event-driven, no time step), {model}: {} particles, {} events in {wall:.2} s ({rate} events/s)\n",
             s.particles, s.steps
         ),
     };
     text += &format!(
-        "stationary <v^2> = {:.6} ± {:.6}, <v> = {:.6} ± {:.6} (time average over [{}, {}])\n",
-        s.v2, s.v2_err, s.v_mean, s.v_mean_err, a.burn_in, s.t_max
+        "stationary <v^2> = {}, <v> = {} (time average over [{burn_in}, {t_max}])\n",
+        fmt_pm(s.v2, s.v2_err),
+        fmt_pm(s.v_mean, s.v_mean_err)
     );
     text += &format!(
-        "at t = {}: <v^2> = {:.6} ± {:.6}, <x^2> = {:.6} ± {:.6}\n",
-        s.t_max, s.v2_final, s.v2_final_err, s.x2_final, s.x2_final_err
+        "at t = {t_max}: <v^2> = {}, <x^2> = {}\n",
+        fmt_pm(s.v2_final, s.v2_final_err),
+        fmt_pm(s.x2_final, s.x2_final_err)
     );
     if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
         text += &format!(
-            "Eq. (36) fit <x^2> = 2 D t + c over [{}, {}]: D = {:.6} ± {:.6}\n",
-            a.burn_in, s.t_max, d, e
+            "Eq. (36) fit <x^2> = 2 D t + c over [{burn_in}, {t_max}]: D = {}\n",
+            fmt_pm(d, e)
         );
     }
     text

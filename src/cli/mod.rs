@@ -28,7 +28,7 @@ pub fn flag_for(name: &str) -> String {
 /// error: the results are already on disk.
 pub fn present(outcome: &Outcome, json: bool) -> anyhow::Result<()> {
     let mut text = if json {
-        serde_json::to_string(&outcome.results.json)? + "\n"
+        serde_json::to_string(&outcome.summary)? + "\n"
     } else {
         outcome.results.text.clone()
     };

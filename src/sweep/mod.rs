@@ -236,7 +236,7 @@ fn bad_point(p: &Point, e: String) -> Error {
 /// The summary without what changes from run to run (timings, the output path).
 fn stable_summary(mut v: serde_json::Value) -> serde_json::Value {
     if let Some(o) = v.as_object_mut() {
-        for k in ["wall_time_s", "particle_steps_per_s", "out"] {
+        for k in ["wall_time_s", "particle_steps_per_s", "events_per_s", "out"] {
             o.shift_remove(k);
         }
     }

@@ -35,12 +35,24 @@ pub fn assert_success(out: &Output) {
     );
 }
 
-/// The single JSON value a successful `--json` run prints on one stdout line.
-pub fn json(out: &Output) -> serde_json::Value {
+/// The single JSON object a successful `--json` run prints on one stdout
+/// line (the `summary.json` schema: schema, command, method, params,
+/// results, provenance).
+pub fn summary(out: &Output) -> serde_json::Value {
     assert_success(out);
     let s = String::from_utf8(out.stdout.clone()).unwrap();
     assert_eq!(s.lines().count(), 1, "one JSON line: {s}");
-    serde_json::from_str(&s).expect("one JSON value")
+    let v: serde_json::Value = serde_json::from_str(&s).expect("one JSON value");
+    assert_eq!(v["schema"], "irtp.summary/1", "{s}");
+    for k in ["command", "method", "params", "results", "provenance"] {
+        assert!(v.get(k).is_some(), "no {k} in {s}");
+    }
+    v
+}
+
+/// The `results` of a successful `--json` run's object ([`summary`]).
+pub fn json(out: &Output) -> serde_json::Value {
+    summary(out)["results"].clone()
 }
 
 /// Parse a JSON file (e.g. an output directory's run.json).
