@@ -536,9 +536,8 @@ fn mfpt_direct(case: &Case, json: &Value, o: &Outcome) -> Result<(), String> {
             // round-off of the solve, allowed at 1e-12 of the largest tau.
             let col = column(t, c);
             let scale = col.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-            match col.iter().position(|&x| !(x >= -1e-12 * scale)) {
-                Some(i) => return Err(format!("profile {c}[{i}] = {} < 0", col[i])),
-                None => {}
+            if let Some(i) = col.iter().position(|&x| !(x >= -1e-12 * scale)) {
+                return Err(format!("profile {c}[{i}] = {} < 0", col[i]));
             }
         }
     }
