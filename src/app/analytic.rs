@@ -123,6 +123,14 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> crate::Result<Outcome> {
     let out = open_out("analytic", args.out.as_deref(), args.force.force)?;
     let d = R0Density::from_params(&c.params)?;
     let report = report(&c.params, &d);
+    if !(report.v2.is_finite() && report.v4.is_finite()) {
+        return Err(Error::Overflow {
+            method: "analytic",
+            quantity: "<v^4>",
+            meaning:
+                "the velocity bound v_u is too large (v_u^4 beyond ~1e308); use a smaller sigma",
+        });
+    }
     let (vl, vu) = d.bounds();
     let rows = chebyshev(vl, vu, c.points)
         .into_iter()

@@ -133,6 +133,19 @@ impl TransientArgs {
     fn config(&self) -> crate::Result<(Params, TransientOptions)> {
         let params = self.model.params()?;
         self.output.no_seed("fp transient")?;
+        let c = self.cells as f64;
+        let memory = c * (128.0 + 16.0 * self.snapshots as f64)
+            + 64.0 * self.samples as f64
+            + 8.0 * self.snapshots as f64;
+        let memory_drivers = vec!["cells", "snapshots", "samples"];
+        // Memory first: the options allocate the recording times.
+        self.output.budget.check(&super::budget::Cost {
+            work: 0.0,
+            unit: "cell updates",
+            drivers: vec![],
+            memory,
+            memory_drivers: memory_drivers.clone(),
+        })?;
         let opts = TransientOptions::sampled(
             self.cells,
             self.t_max,
@@ -141,13 +154,12 @@ impl TransientArgs {
             self.cfl,
         )?;
         let plan = crate::fp::transient_plan(&params, &opts)?;
-        let c = self.cells as f64;
         self.output.budget.check(&super::budget::Cost {
             work: c * plan.steps as f64,
             unit: "cell updates",
             drivers: vec!["cells", "t_max", "lambda", "rate", "cfl"],
-            memory: c * (128.0 + 16.0 * self.snapshots as f64) + 64.0 * self.samples as f64,
-            memory_drivers: vec!["cells", "snapshots", "samples"],
+            memory,
+            memory_drivers,
         })?;
         Ok((params, opts))
     }
@@ -163,6 +175,15 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
     )?;
     let start = Instant::now();
     let s = fp::stationary(&params, &opts)?;
+    // D_eff grows as 1/lambda (∞ at lambda = 0, ballistic): a tiny lambda > 0
+    // overflows it.
+    if params.lambda() > 0.0 && !s.d_eff.is_finite() {
+        return Err(crate::Error::Overflow {
+            method: "fp stationary",
+            quantity: "D_eff",
+            meaning: "D_eff diverges as lambda -> 0 (ballistic motion)",
+        });
+    }
     let wall = start.elapsed().as_secs_f64();
     let summary = json!({
         "v2": s.v2,

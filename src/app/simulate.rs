@@ -206,8 +206,10 @@ impl SimulateArgs {
             ),
         };
         // A step refused by validation (dt <= 0, NaN) gives a meaningless
-        // estimate: leave the refusal to the check that names it.
-        let per = if !per.is_finite() || per < 0.0 {
+        // estimate: leave the refusal to the check that names it. An
+        // infinite estimate from valid flags (lambda + r overflowing) stays.
+        let bad_dt = self.method == MethodArg::Euler && !(self.dt.unwrap_or(1e-3) > 0.0);
+        let per = if bad_dt || per.is_nan() || per < 0.0 {
             0.0
         } else {
             per

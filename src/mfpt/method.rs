@@ -65,12 +65,13 @@ impl Method {
     }
 
     /// Validate the method for `problem` before anything runs: the backward
-    /// mesh; for particles `particles >= 2`, then the method's own limits
+    /// mesh; for particles `particles >= 4` (two per starting state), then the method's own limits
     /// (Euler: step and time cap; exact: time cap).
     pub fn check(&self, problem: &Problem) -> Result<()> {
         if let Some(run) = self.particles() {
-            if run.particles < 2 {
-                return Err(Error::invalid("particles", run.particles, "particles >= 2"));
+            // Two per starting state (±Sigma), for a standard error.
+            if run.particles < 4 {
+                return Err(Error::invalid("particles", run.particles, "particles >= 4"));
             }
         }
         match *self {

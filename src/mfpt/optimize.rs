@@ -193,6 +193,8 @@ pub fn optimize_rate(
     base.with_rate(r_max)?;
     let bo = &opts.backward;
     let (tau0, d0) = rate_derivative_at_zero(base, bo)?;
+    // The r = 0 solve checked against its lower bound (a mesh too coarse fails).
+    tau_at(base, 0.0, bo)?;
     let k = opts.grid_points;
     let (la, lb) = (r_min.ln(), r_max.ln());
     let rs: Vec<f64> = (0..k)
