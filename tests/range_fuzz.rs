@@ -397,7 +397,25 @@ fn binned_mass(v: &[f64], p: &[f64], vu: f64) -> f64 {
 }
 
 fn simulate(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
-    no_nulls(json, &["events", "dt", "out", "d_eff_msd", "d_eff_msd_err"])?;
+    // Documented: the counters of the other method are null (exact: events,
+    // events_per_s; Euler: steps, particle_steps_per_s, event_sampling, dt).
+    let (own, other): (&[&str], &[&str]) = if json["method"] == "exact" {
+        (
+            &["events", "events_per_s"],
+            &["steps", "particle_steps_per_s", "event_sampling", "dt"],
+        )
+    } else {
+        (
+            &["steps", "particle_steps_per_s", "event_sampling", "dt"],
+            &["events", "events_per_s"],
+        )
+    };
+    let mut nullable = vec!["out", "d_eff_msd", "d_eff_msd_err"];
+    nullable.extend_from_slice(other);
+    no_nulls(json, &nullable)?;
+    for key in own {
+        ensure(!json[*key].is_null(), || format!("{key} is null"))?;
+    }
     finite_tables(o, &[])?;
     in_v2_range("v2", num(json, "v2")?, vu)?;
     in_v2_range("v2_final", num(json, "v2_final")?, vu)?;

@@ -270,6 +270,28 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> crate::Result<Outcome> {
     report(a, &c, &obs, start.elapsed().as_secs_f64(), out, ctx)
 }
 
+/// Every sampled velocity lies in (v_l, v_u), so every mean of v² lies in
+/// [0, v_u²] (to rounding): a simulation that breaks this has lost
+/// precision (tanh within 1e-12 of its limit Sigma = 1) and is refused.
+fn check_invariants(c: &Config, obs: &Observables) -> crate::Result<()> {
+    let (lo, hi) = c.params.bounds();
+    let top = lo.abs().max(hi.abs()).powi(2) * (1.0 + 1e-9);
+    let means = obs.v2.iter().chain(std::iter::once(&obs.v2_time_avg));
+    for (k, m) in means.enumerate() {
+        let v2 = m.mean();
+        if m.n > 0 && !(v2 >= 0.0 && v2 <= top) {
+            return Err(crate::Error::Numerical {
+                method: "simulate",
+                reason: format!(
+                    "a mean of v² is {v2:e} (record {k}), outside [0, v_u² = {top:e}]: the \
+                     sampler lost precision for these parameters; refused"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The outcome of a simulation's observables: JSON, tables, text, files.
 fn report(
     a: &SimulateArgs,
@@ -280,6 +302,7 @@ fn report(
     ctx: &Context,
 ) -> crate::Result<Outcome> {
     ctx.check()?;
+    check_invariants(c, obs)?;
     let summary = obs.summary();
     let rate = summary.steps as f64 / wall;
     let exact = c.euler.is_none();
