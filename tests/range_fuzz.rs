@@ -790,10 +790,11 @@ fn mfpt_method_flags(method: &'static str) -> impl Strategy<Value = Vec<String>>
     })
 }
 
-/// Known limitation, excluded for the particle methods: with Sigma
-/// astronomically large (8e252, tan drag) the exact sampler's passage times
-/// (~1e-253) come out as exactly 0, below the least passage time.
-const MAX_PARTICLE_SIGMA: f64 = 1e100;
+/// With Sigma astronomically large (8e252, tan drag) the exact sampler's
+/// passage times (~1e-253) come out as exactly 0; the method now checks them
+/// against the least passage time and refuses (exit 4), so the whole range
+/// is drawn.
+const MAX_PARTICLE_SIGMA: f64 = f64::INFINITY;
 
 fn mfpt_range(method: &'static str, cases: u32) {
     let s = (problem(), mfpt_method_flags(method))

@@ -193,16 +193,18 @@ impl SimulateArgs {
     fn cost(&self, p: &Params) -> crate::Result<super::budget::Cost> {
         let t_max = crate::error::finite("t_max", self.t_max)?;
         let samples = self.samples as f64;
+        // Each particle also sweeps its histogram once (occupation times).
+        let bins = self.bins as f64;
         let (per, unit, drivers) = match self.method {
             MethodArg::Euler => (
-                t_max / self.dt.unwrap_or(1e-3) + samples,
+                t_max / self.dt.unwrap_or(1e-3) + samples + bins,
                 "Euler particle steps",
-                vec!["particles", "t_max", "dt"],
+                vec!["particles", "t_max", "dt", "bins"],
             ),
             MethodArg::Exact => (
-                (p.lambda() + p.rate()) * t_max + samples + 1.0,
+                (p.lambda() + p.rate()) * t_max + samples + bins + 1.0,
                 "particle events",
-                vec!["particles", "lambda", "rate", "t_max", "samples"],
+                vec!["particles", "lambda", "rate", "t_max", "samples", "bins"],
             ),
         };
         // A step refused by validation (dt <= 0, NaN) gives a meaningless

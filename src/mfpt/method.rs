@@ -141,19 +141,43 @@ impl MfptResult {
 /// Errors with [`Error::Overflow`] where the backward tau overflows f64.
 pub fn solve(problem: &Problem, method: &Method, progress: &dyn Progress) -> Result<MfptResult> {
     method.check(problem)?;
-    Ok(match *method {
-        Method::Backward(opts) => MfptResult::Backward(backward::solve(problem, &opts)?),
-        Method::Exact(run) => MfptResult::Particles(exact::stats(
-            problem,
-            run.t_max,
-            run.particles,
-            run.seed,
-            progress,
-        )),
-        Method::Euler { dt, run } => MfptResult::Particles(
-            EulerFpt::new(*problem, dt, run.t_max)?.stats(run.particles, run.seed, progress),
-        ),
-    })
+    let stats = match *method {
+        Method::Backward(opts) => {
+            return Ok(MfptResult::Backward(backward::solve(problem, &opts)?))
+        }
+        Method::Exact(run) => exact::stats(problem, run.t_max, run.particles, run.seed, progress),
+        Method::Euler { dt, run } => {
+            EulerFpt::new(*problem, dt, run.t_max)?.stats(run.particles, run.seed, progress)
+        }
+    };
+    verify_particles(problem, &stats.summary())?;
+    Ok(MfptResult::Particles(stats))
+}
+
+/// Every passage takes at least the shortest distance to the target (from
+/// v0, or from v_r after a reset) over the largest speed |dv/dt| <= 2 Sigma
+/// on (v_l, v_u): the restricted means of both starting states must respect
+/// it, or the sampler lost precision (tan at Sigma ~ 1e250) and the answer
+/// is refused.
+fn verify_particles(problem: &Problem, s: &super::FptSummary) -> Result<()> {
+    let p = problem.params();
+    let mut distance = (problem.vt() - problem.v0()).abs();
+    if p.rate() > 0.0 {
+        distance = distance.min((problem.vt() - p.reset_velocity()).abs());
+    }
+    let bound = distance / (2.0 * p.sigma()) * (1.0 - 1e-12);
+    for (name, m) in [("rmst_plus", s.rmst_plus), ("rmst_minus", s.rmst_minus)] {
+        if !(m >= bound) {
+            return Err(crate::Error::Numerical {
+                method: "first-passage sampler",
+                reason: format!(
+                    "{name} = {m:e} is below the least passage time {bound:e} (distance / \
+                     (2 Sigma)): the sampler lost precision for these parameters; refused"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
