@@ -233,7 +233,7 @@ pub struct Results {
     /// The tables (`<name>.csv` in the output directory).
     pub tables: Vec<Table>,
     /// Further JSON files of the output directory (`mfpt.json`, ...);
-    /// `summary.json` is written by [`finish`] for every command.
+    /// `summary.json` is written by `finish` for every command.
     pub json_files: Vec<(&'static str, Value)>,
     /// The text-mode report (without the list of written files).
     pub text: String,

@@ -15,7 +15,7 @@
 //! Titles, axis labels and legend text may write a subscript as `_{...}`
 //! (`D_{eff}`, `τ_{r}`): the renderer lowers it and sets it smaller
 //! ([`rich_segments`]). Tick labels of one axis share one format: the same
-//! number of decimals, or all in scientific notation ([`tick_labels`]).
+//! number of decimals, or all in scientific notation (`tick_labels`).
 //!
 //! The model and [`Figure::data_csv`] need no plotting library. Rendering
 //! (`render_png`, `render_svg`, module `render`) uses `plotters` and exists
