@@ -281,7 +281,8 @@ fn check_invariants(c: &Config, obs: &Observables) -> crate::Result<()> {
     let means = obs.v2.iter().chain(std::iter::once(&obs.v2_time_avg));
     for (k, m) in means.enumerate() {
         let v2 = m.mean();
-        if m.n > 0 && !(v2 >= 0.0 && v2 <= top) {
+        // A non-finite mean is the overflow refusal of `finish`, with its own message.
+        if m.n > 0 && v2.is_finite() && !(v2 >= 0.0 && v2 <= top) {
             return Err(crate::Error::Numerical {
                 method: "simulate",
                 reason: format!(
