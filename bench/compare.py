@@ -53,6 +53,8 @@ def rust_run(particles, threads, events):
     out = proc.stdout
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     r = json.loads(out)
+    # `--json` prints the summary object; the simulation's record is under "results".
+    r = r.get("results", r)
     # CPU seconds of the whole process (start-up and the summary included).
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     r["particle_steps_per_cpu_s"] = r["steps"] / cpu
@@ -63,7 +65,10 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--particles", type=int, default=4000)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--bin", default=None, help="the irtp binary (default: target/release/irtp)")
     a = ap.parse_args()
+    global BIN
+    BIN = a.bin or BIN
     configs = []
     for threads in (1, 2):
         configs.append(("numba (bernoulli)", threads,

@@ -255,6 +255,10 @@ trait Events: Sized {
     fn reset(&mut self, n: u64, rng: &mut Rng) -> bool;
     /// Does η flip in step n?
     fn flip(&mut self, n: u64, rng: &mut Rng) -> bool;
+    /// The first step from which [`Events::reset`] or [`Events::flip`] may
+    /// say yes (or draw): the steps before it are quiet. 0 when every step
+    /// draws (the Bernoulli sampler).
+    fn quiet_until(&self) -> u64;
 }
 
 /// Geometric waiting times: step indices of the next reset and flip.
@@ -290,6 +294,10 @@ impl Events for Geometric {
         }
     }
     #[inline(always)]
+    fn quiet_until(&self) -> u64 {
+        self.next_reset.min(self.next_flip)
+    }
+    #[inline(always)]
     fn flip(&mut self, n: u64, rng: &mut Rng) -> bool {
         if n == self.next_flip {
             self.next_flip = n.saturating_add(geometric_gap(rng, self.ln_flip));
@@ -321,6 +329,10 @@ impl Events for Bernoulli {
     #[inline(always)]
     fn flip(&mut self, _n: u64, rng: &mut Rng) -> bool {
         rng.gen::<f64>() < self.q
+    }
+    #[inline(always)]
+    fn quiet_until(&self) -> u64 {
+        0
     }
 }
 
@@ -413,6 +425,38 @@ impl<D: Drag> Kernel<'_, D> {
         i.clamp(0, self.bins as isize - 1) as usize
     }
 
+    /// `count` quiet steps of L particles: steps 1 (window sums, if
+    /// `window`), 2 and 3 (drift) of the module docs, with no record and no
+    /// event.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn quiet<const L: usize>(
+        &self,
+        count: u64,
+        window: bool,
+        v: &mut [f64; L],
+        x: &mut [f64; L],
+        eta: &[f64; L],
+        sv: &mut [f64; L],
+        sv2: &mut [f64; L],
+        occ: &mut [f64],
+    ) {
+        let dt = self.plan.dt;
+        for _ in 0..count {
+            if window {
+                for l in 0..L {
+                    sv[l] += v[l];
+                    sv2[l] += v[l] * v[l];
+                    occ[l * self.bins + self.bin(v[l])] += 1.0;
+                }
+            }
+            for l in 0..L {
+                x[l] += v[l] * dt;
+                v[l] = euler_step(self.f, v[l], eta[l], dt);
+            }
+        }
+    }
+
     /// Particles `first .. first + L`, side by side, following the step order
     /// of the module docs. Per particle, the random stream is consumed as:
     /// η_0 (one uniform), the event sampler's initial draws, then per step the
@@ -437,7 +481,33 @@ impl<D: Drag> Kernel<'_, D> {
         let (mut sv, mut sv2, mut msd) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
         let mut k = 0usize;
         let mut next_rec = plan.record_steps[0];
-        for n in 0..plan.steps {
+        let mut n = 0;
+        while n < plan.steps {
+            // Quiet steps (no record, no event in any lane, the same side of
+            // the window start) run branch-free; the same operations in the
+            // same order as the full step below, so bit-identical.
+            let window = n >= plan.burn_in_step;
+            let mut end = plan.steps.min(next_rec);
+            if !window {
+                end = end.min(plan.burn_in_step);
+            }
+            for e in &ev {
+                end = end.min(e.quiet_until());
+            }
+            if end > n {
+                self.quiet::<L>(
+                    end - n,
+                    window,
+                    &mut v,
+                    &mut x,
+                    &eta,
+                    &mut sv,
+                    &mut sv2,
+                    occ,
+                );
+                n = end;
+                continue;
+            }
             // 1. observe
             if n == next_rec {
                 for l in 0..L {
@@ -471,6 +541,7 @@ impl<D: Drag> Kernel<'_, D> {
                     eta[l] = -eta[l];
                 }
             }
+            n += 1;
         }
         if k < plan.record_steps.len() {
             for l in 0..L {
