@@ -586,6 +586,52 @@ mod tests {
     use super::*;
     use crate::model::DragLaw;
 
+    /// The two segment kinds (tables in Φ, iterative solve) agree to
+    /// rounding: velocity, potential and deficit integrals.
+    #[test]
+    fn table_and_solve_segments_agree() {
+        for (d, sg) in [
+            (DragLaw::Tan, 3.0),
+            (DragLaw::Tanh, 0.6),
+            (DragLaw::Cubic, 3.0),
+        ] {
+            let p = Params::new(d, sg, 1.0, 0.0, 0.0).unwrap();
+            let (lo, hi) = p.bounds();
+            for s in [sg, -sg] {
+                let table = Segments::Table(PotentialTable::new(&d, s).unwrap());
+                let solve = Segments::Solve(
+                    d.flow(s).accelerated(),
+                    DeficitTable::new(&d, s, lo, hi).unwrap(),
+                );
+                for i in 0..=16 {
+                    let v = lo + (hi - lo) * i as f64 / 16.0 * 0.999;
+                    let (a, b) = (table.at(v), solve.at(v));
+                    for dt in [0.0, 1e-6, 0.1, 1.0, 10.0] {
+                        let (ta, sa) = (table.advance(&a, dt), solve.advance(&b, dt));
+                        let (ja, jb) = (
+                            [a.q[0] - ta.q[0], a.q[1] - ta.q[1]],
+                            [b.q[0] - sa.q[0], b.q[1] - sa.q[1]],
+                        );
+                        assert!((ta.v - sa.v).abs() < 1e-14 * (1.0 + hi), "{d} {s} {v} {dt}");
+                        assert!(
+                            ta.phi == sa.phi
+                                || (ta.phi - sa.phi).abs() < 1e-14 * (1.0 + a.phi.abs()),
+                            "{d} {s} {v} {dt}: {} {}",
+                            ta.phi,
+                            sa.phi
+                        );
+                        for k in 0..2 {
+                            assert!(
+                                (ja[k] - jb[k]).abs() < 1e-13 * (1.0 + a.q[k].abs()),
+                                "{d} {s} {v} {dt} {k}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn table_matches_quadrature() {
         // Extreme parameters (g'(v*) ~ 1e6 or 1e-6) lose a few digits: the
