@@ -8,16 +8,21 @@
 //! time integrals of v and v² along a flow segment are
 //! ∫ v dt = v* Δ - I1 and ∫ v² dt = v*² Δ - 2 v* I1 + I2 with the deficit
 //! integrals I_k = ∫ (v* - v)^k dt = ∫ (v* - v)^k / (s - g(v)) dv, whose
-//! integrands are smooth up to the fixed point v*. The sampler tabulates their
-//! antiderivatives once per run as piecewise Chebyshev series ([`DeficitTable`],
-//! built from the trait's quadrature and checked against it to 1e-13), and
-//! the velocity solve starts from a tabulated inverse of the flow potential
-//! ([`crate::model::drag::InverseGuide`]), so an event costs about one Halley step (three
-//! transcendental functions), one exponential waiting time and a few
-//! polynomial evaluations. Occupation times come from the flow potential
-//! at precomputed bin edges (no transcendental per crossed edge; bins crossed
-//! in full are counted in a difference array and weighted by their exact
-//! crossing time at the end of the particle).
+//! integrands are smooth up to the fixed point v*. Along a segment the flow
+//! potential Φ falls at the constant rate g'(v*), so the sampler carries Φ
+//! with v and reads the velocity and the deficit antiderivatives after time
+//! t from one [`PotentialTable`] lookup at Φ - g'(v*) t (a sum of three
+//! degree-11 polynomials and one exponential; tables built once per run,
+//! agreeing with the iterative flow to rounding). An event then costs one
+//! exponential variate, one uniform, that lookup, and after a noise flip
+//! the new flow's potential (closed form) and a second lookup; a reset
+//! starts from the precomputed point at v_r. A flow that does not fit in
+//! the tables (tanh within ~1e-6 of Sigma = 1, tan at huge Sigma) runs the
+//! iterative solve instead ([`Drag::flow_velocity`]'s guided Halley step
+//! with deficit tables in v, [`DeficitTable`]). Occupation times come from
+//! the flow potential at precomputed bin edges (bins crossed in full are
+//! counted in a difference array and weighted by their exact crossing time
+//! at the end of the particle).
 //!
 //! Paper references: flow Eq. (5), reset rule Eq. (3) (here to v_r, noise kept),
 //! velocity bounds Eqs. (8)-(10); the Euler scheme it replaces is Eqs. (30)-(32).

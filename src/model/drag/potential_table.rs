@@ -81,7 +81,7 @@ pub struct PotentialTable<F> {
 impl<F: FlowMap> PotentialTable<F> {
     /// Tabulate the flow of `drag` with noise value `s` ≠ 0 on the
     /// admissible interval [-|v*|, |v*|]. None when the flow does not fit in
-    /// [`MAX_PIECES`] pieces (or a node fails): use the iterative solve.
+    /// 4096 pieces (or a node fails): use the iterative solve.
     pub fn new<D: Drag<Flow = F>>(drag: &D, s: f64) -> Option<Self> {
         let a = s.abs();
         let flow = drag.flow(a);
@@ -197,7 +197,7 @@ impl<F: FlowMap> PotentialTable<F> {
 }
 
 impl<F> Inner<F> {
-    /// (L(Φ) = ln u, [Q_1, Q_2](Φ)) on the table; below it, (u, [Q_1, Q_2]) of
+    /// (L(Φ) = ln u, (Q_1(Φ), Q_2(Φ))) on the table; below it, (u, (Q_1, Q_2)) of
     /// the exponential approach u = u_lo e^{Φ - Φ_lo} (NaN stays NaN).
     #[inline(always)]
     fn series(&self, phi: f64) -> (f64, [f64; 2]) {
@@ -298,7 +298,7 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
     }
 
     /// Cover [a, b] with 2^d equal pieces, the smallest d that resolves
-    /// them all; false past [`MAX_PIECES`] in all.
+    /// them all; None past `MAX_PIECES` in all.
     fn cell(&mut self, a: f64, b: f64) -> Option<u32> {
         'depth: for d in 0..=16u32 {
             let m = 1usize << d;
