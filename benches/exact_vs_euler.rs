@@ -4,7 +4,7 @@
 //! `cargo run --release --example efficiency`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use irtp::model::drag::{Cubic, Linear, Tan, Tanh};
+use irtp::model::drag::{Cubic, Linear, PotentialTable, Tan, Tanh};
 use irtp::model::{Drag, FlowMap};
 use irtp::parallel::NoProgress;
 use irtp::sim::exact::{self, DeficitTable};
@@ -41,6 +41,20 @@ fn kernels_for<D: Drag>(c: &mut Criterion, d: D, sigma: f64) {
     c.bench_function(&format!("flow_time/{name}"), |b| {
         b.iter(|| black_box(f.time(black_box(-0.5 * vu), black_box(0.8 * vu))))
     });
+    // The exact sampler's segment: velocity, potential and both deficit
+    // antiderivatives after time t from two table lookups.
+    if let Some(tab) = PotentialTable::new(&d, sigma) {
+        c.bench_function(&format!("potential_table_advance/{name}"), |b| {
+            let mut k = 0u32;
+            b.iter(|| {
+                k = k.wrapping_add(1);
+                let v0 = -0.9 * vu + 1.8 * vu * ((k % 97) as f64 / 97.0);
+                let t = 0.05 + (k % 13) as f64 * 0.3;
+                let p = tab.at(black_box(v0));
+                black_box(tab.advance(&p, black_box(t)))
+            })
+        });
+    }
     let t = DeficitTable::new(&d, sigma, -vu, vu).unwrap();
     c.bench_function(&format!("deficit_table/{name}"), |b| {
         b.iter(|| black_box(t.deficits(black_box(-0.5 * vu), black_box(0.8 * vu))))

@@ -134,6 +134,47 @@ pub fn clenshaw2(c: &[[f64; 2]; NC], x: f64) -> [f64; 2] {
     [x * b1[0] + (c[0][0] - b2[0]), x * b1[1] + (c[0][1] - b2[1])]
 }
 
+/// The first M Chebyshev coefficients (`c`, as [`clenshaw`] takes them) as
+/// the coefficients of the same polynomial in powers of x: well conditioned
+/// on [-1, 1] for a fast-decaying series (|c_j| ≪ (1+√2)^-j), which
+/// [`power_sum`] then sums without Clenshaw's serial chain.
+pub fn to_power<const M: usize>(c: &[f64]) -> [f64; M] {
+    let mut out = [0.0; M];
+    // T_{j-1} and T_j in powers of x.
+    let (mut prev, mut cur) = ([0.0; M], [0.0; M]);
+    cur[0] = 1.0;
+    for (j, cj) in c.iter().enumerate().take(M) {
+        for (o, t) in out.iter_mut().zip(&cur) {
+            *o += cj * t;
+        }
+        let mut next = [0.0; M];
+        for i in 0..M {
+            let up = if i > 0 { cur[i - 1] } else { 0.0 };
+            next[i] = if j == 0 { up } else { 2.0 * up - prev[i] };
+        }
+        prev = cur;
+        cur = next;
+    }
+    out
+}
+
+/// K polynomials Σ_{j<12} `a_j[k]` x^j at once by Estrin's scheme (depth 4
+/// instead of Horner's 11: the K sums and the pairs within each run in
+/// parallel).
+#[inline(always)]
+pub fn power_sum<const K: usize>(a: &[[f64; K]; 12], x: f64) -> [f64; K] {
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let x8 = x4 * x4;
+    std::array::from_fn(|k| {
+        let p = |j: usize| a[j][k] + a[j + 1][k] * x;
+        let q0 = p(0) + p(2) * x2;
+        let q1 = p(4) + p(6) * x2;
+        let q2 = p(8) + p(10) * x2;
+        (q0 + q1 * x4) + q2 * x8
+    })
+}
+
 /// Map v ∈ [a, b] to x ∈ [-1, 1] (clamped against rounding).
 #[inline]
 pub fn to_unit(v: f64, a: f64, b: f64) -> f64 {
@@ -153,6 +194,15 @@ mod tests {
             assert!((clenshaw(&f.series[0], x) - v.exp()).abs() < 1e-14);
             assert!((clenshaw(&f.anti[0], x) - (v.exp() - 0.5f64.exp())).abs() < 1e-14);
             assert!((clenshaw(&f.anti[1], x) - (0.5f64.cos() - v.cos())).abs() < 1e-14);
+        }
+        // The same series in powers of the unit variable.
+        let mut c = [[0.0; 1]; 12];
+        for (cj, pj) in c.iter_mut().zip(to_power::<12>(&f.series[0])) {
+            cj[0] = pj;
+        }
+        for &v in &[0.5, 0.8, 1.2, 1.5] {
+            let x = to_unit(v, 0.5, 1.5);
+            assert!((power_sum(&c, x)[0] - v.exp()).abs() < 1e-14);
         }
         let g = fit(&|x: f64| [1.0 / (x - 0.49)], 0.5, 1.5);
         assert!(!g.resolved(1e-14));

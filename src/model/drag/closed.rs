@@ -156,6 +156,11 @@ impl<L: ClosedForm> FlowMap for ClosedFlow<L> {
     }
 
     #[inline]
+    fn potential_at_distance(&self, u: f64) -> f64 {
+        self.law.potential_canonical(&self.c, u)
+    }
+
+    #[inline]
     fn velocity(&self, v0: f64, t: f64) -> f64 {
         let v0r = self.refl * v0;
         self.refl * self.velocity_in_frame(v0r, t, self.guide.as_deref())

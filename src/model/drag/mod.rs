@@ -10,6 +10,8 @@
 //! - [`closed`]: the closed-form flow [`ClosedFlow`] shared by those laws.
 //! - [`tabulated`]: [`TabulatedFlow`], the fast exact-to-rounding flow of a law
 //!   that gives only g and g' (the default path of a new law).
+//! - [`potential_table`]: [`PotentialTable`], any law's flow as table
+//!   lookups in the flow potential (the exact sampler's fast path).
 //! - [`registry`]: [`DragLaw`] (parse, serialise) and the one dispatch
 //!   [`with_drag!`](crate::with_drag) that monomorphises a method for every law.
 //!
@@ -19,6 +21,7 @@
 pub mod closed;
 pub mod cubic;
 pub mod linear;
+pub mod potential_table;
 pub mod registry;
 pub mod tabulated;
 pub mod tan;
@@ -27,6 +30,7 @@ pub mod tanh;
 pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
 pub use cubic::Cubic;
 pub use linear::Linear;
+pub use potential_table::{FlowPoint, PotentialTable};
 pub use registry::{AnyFlow, DragLaw};
 pub use tabulated::TabulatedFlow;
 pub use tan::Tan;
@@ -49,6 +53,13 @@ pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
     /// vb reached from va; -∞ at v*. A difference of potentials loses about
     /// 1e-16 |Φ| absolute accuracy ([`FlowMap::time`] does not).
     fn potential(&self, v: f64) -> f64;
+    /// The potential at distance u ≥ 0 from the fixed point, Φ(v* - u) for
+    /// s > 0 (Φ(v* + u) for s < 0), with full relative accuracy in u as
+    /// u → 0 (v* - u itself rounds). Default: through [`FlowMap::potential`].
+    fn potential_at_distance(&self, u: f64) -> f64 {
+        let vs = self.fixed_point();
+        self.potential(vs - u.copysign(vs))
+    }
     /// Velocity after flowing for time t ≥ 0 from v0 (inverse of
     /// [`FlowMap::time`]; tends to v* but never passes it).
     fn velocity(&self, v0: f64, t: f64) -> f64;

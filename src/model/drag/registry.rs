@@ -88,6 +88,9 @@ macro_rules! __drag_registry {
             fn potential(&self, v: f64) -> f64 {
                 match self { $(AnyFlow::$variant(f) => f.potential(v),)+ }
             }
+            fn potential_at_distance(&self, u: f64) -> f64 {
+                match self { $(AnyFlow::$variant(f) => f.potential_at_distance(u),)+ }
+            }
             fn velocity(&self, v0: f64, t: f64) -> f64 {
                 match self { $(AnyFlow::$variant(f) => f.velocity(v0, t),)+ }
             }

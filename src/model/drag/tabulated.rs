@@ -281,6 +281,13 @@ impl<D: Drag> FlowMap for TabulatedFlow<D> {
         }
     }
 
+    fn potential_at_distance(&self, u: f64) -> f64 {
+        match self.on_table(u) {
+            Some(tb) => u.ln() + tb.eval(u).0,
+            None => self.potential(self.fixed_point() - self.refl * u),
+        }
+    }
+
     /// Builds the tabulated inverse potential (Newton starting points).
     fn accelerated(mut self) -> Self {
         if self.guide.is_none() {
