@@ -21,11 +21,13 @@
 //! - [`transient()`]: explicit time stepping from the paper's initial condition.
 
 mod grid;
+mod operator;
 mod solve;
 mod stationary;
 mod transient;
 
 pub use grid::Mesh;
+pub use operator::ForwardOperator;
 pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
 pub use transient::{
     plan as transient_plan, transient, transient_with_progress, Plan as TransientPlan, Snapshot,
