@@ -29,6 +29,8 @@ use super::solve::ResetFactor;
 use super::stationary::{make_grid, MAX_CELLS, MIN_CELLS};
 use crate::error::{Error, Result};
 use crate::model::Params;
+use crate::numerics::trbdf2::ShiftedLinear;
+use crate::numerics::Failure;
 
 /// The factorisation of one shift c.
 #[derive(Clone, Debug)]
@@ -178,9 +180,20 @@ impl ForwardOperator {
 
     /// Solve (I - cA) x = b for c > 0, caching the factorisation of the last
     /// c (so several right-hand sides with one c cost one O(N) sweep each).
-    pub fn solve_shifted_into(&mut self, c: f64, b: &[f64], x: &mut [f64]) -> Result<()> {
+    /// A c that is not finite and positive, or a non-finite solution, is
+    /// reported as [`Failure::NonFinite`] (`?` turns it into [`Error`]).
+    pub fn solve_shifted_into(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        let fail = Failure::NonFinite {
+            method: "fp shifted solve (I - cA) x = b",
+            at: c,
+        };
         if !(c > 0.0 && c.is_finite()) {
-            return Err(Error::invalid("c", c, "0 < c < inf (shifted solve)"));
+            return Err(fail);
         }
         if !matches!(&self.shifted, Some(s) if s.c == c) {
             self.shifted = Some(self.factorise(c));
@@ -202,10 +215,7 @@ impl ForwardOperator {
         if x.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(Error::NonFinite {
-                method: "fp shifted solve",
-                at: c,
-            })
+            Err(fail)
         }
     }
 
@@ -238,6 +248,25 @@ impl ForwardOperator {
             z,
             s_inv,
         }
+    }
+}
+
+impl ShiftedLinear for ForwardOperator {
+    fn dim(&self) -> usize {
+        ForwardOperator::dim(self)
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        ForwardOperator::apply(self, u, out)
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        self.solve_shifted_into(c, b, x)
     }
 }
 

@@ -400,7 +400,10 @@ mod tests {
         eprintln!("errors {e6:e} {e9:e}, steps {} {}", s6.steps, s9.steps);
         // Per-step control of a second-order method: the global error grows
         // like (number of steps) × tolerance ~ tol^(2/3).
-        assert!(e6 < 200.0 * 1e-6 && e9 < 2000.0 * 1e-9, "errors {e6:e} {e9:e}");
+        assert!(
+            e6 < 200.0 * 1e-6 && e9 < 2000.0 * 1e-9,
+            "errors {e6:e} {e9:e}"
+        );
         assert!(e9 < e6 / 50.0, "errors {e6:e} {e9:e}");
         // Local error ~ h³: 1000x tighter → about 10x more steps.
         let ratio = s9.steps as f64 / s6.steps as f64;
