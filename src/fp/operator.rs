@@ -98,6 +98,10 @@ impl ForwardOperator {
         }
     }
 
+    pub(crate) fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
     /// Number of cells (the number of unknowns is twice this).
     pub fn cells(&self) -> usize {
         self.grid.cells()
