@@ -289,15 +289,15 @@ fn step<O: ShiftedLinear>(
     op.solve_shifted(c, &w.rhs, &mut w.err)?;
     stats.solves += 3;
     let mut norm = 0.0f64;
-    for i in 0..n {
-        if !w.un[i].is_finite() {
+    for (i, (&old, &new)) in u.iter().zip(&w.un).enumerate() {
+        if !new.is_finite() {
             return Err(Failure::NonFinite {
                 method: "TR-BDF2 time stepping",
                 at: h,
             }
             .into());
         }
-        let sc = op.atol(i, tol.atol) + tol.rtol * u[i].abs().max(w.un[i].abs());
+        let sc = op.atol(i, tol.atol) + tol.rtol * old.abs().max(new.abs());
         let e = w.err[i].abs();
         norm = norm.max(if sc > 0.0 {
             e / sc
@@ -341,8 +341,8 @@ mod tests {
             3
         }
         fn apply(&self, u: &[f64], out: &mut [f64]) {
-            for i in 0..3 {
-                out[i] = (0..3).map(|j| self.a[i][j] * u[j]).sum();
+            for (o, row) in out.iter_mut().zip(&self.a) {
+                *o = row.iter().zip(u).map(|(a, x)| a * x).sum();
             }
         }
         fn solve_shifted(
