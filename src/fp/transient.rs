@@ -69,9 +69,9 @@ pub struct TransientOptions {
     pub times: Vec<f64>,
     /// Times in [0, t_max] at which the density P(v, t) is stored.
     pub snapshot_times: Vec<f64>,
-    /// [`Scheme::Paper`]: Courant number in (0, 1]: dt = cfl / max_i (outflow
-    /// + flip + reset rate of cell i) ≤ cfl Δv / max|drift|. cfl ≤ 1 keeps
-    /// every cell mass ≥ 0.
+    /// [`Scheme::Paper`]: Courant number in (0, 1]: dt = cfl / max_i (the
+    /// outflow, flip and reset rates of cell i) ≤ cfl Δv / max|drift|.
+    /// cfl ≤ 1 keeps every cell mass ≥ 0.
     pub cfl: f64,
     /// [`Scheme::TrBdf2`]: relative tolerance of the local error of the cell
     /// masses per step (global error ∝ rtol^(2/3)).
@@ -576,11 +576,11 @@ fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
                 ));
             }
             let rtol = finite("rtol", opts.rtol)?;
-            if !(rtol >= 1e-13 && rtol <= 0.1) {
+            if !(1e-13..=0.1).contains(&rtol) {
                 return Err(Error::invalid("rtol", rtol, "1e-13 <= rtol <= 0.1"));
             }
             let atol = finite("atol", opts.atol)?;
-            if !(atol >= 1e-20 && atol <= 0.1) {
+            if !(1e-20..=0.1).contains(&atol) {
                 return Err(Error::invalid("atol", atol, "1e-20 <= atol <= 0.1"));
             }
         }
