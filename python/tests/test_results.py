@@ -127,7 +127,7 @@ def test_progress_true_without_tqdm_writes_a_line(monkeypatch, capsys):
     import irtp._progress as progress
 
     monkeypatch.setattr(progress, "_tqdm", lambda: None)
-    irtp.fp_transient(t_max=0.5, cells=100, progress=True)
+    irtp.fp_transient(t_max=0.5, scheme="paper", cells=100, progress=True)
     err = capsys.readouterr().err
     assert "fp transient" in err and err.endswith("\n")
     assert " time steps (100%)" in err, "the bar names its unit"
