@@ -14,6 +14,7 @@ pub mod grid;
 pub mod quad;
 pub mod root;
 pub mod time_grid;
+pub mod trbdf2;
 
 /// Why a numerical kernel gave up. Small and `Copy`, so that the exact
 /// sampler's hot loop can return it at no cost; `?` turns it into
