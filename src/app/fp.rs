@@ -23,7 +23,8 @@ pub enum FpCommand {
         about = "Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve."
     )]
     Stationary(StationaryArgs),
-    /// Time-dependent solution from the paper's initial condition (explicit upwind, Sec. 3).
+    /// Time-dependent solution from the paper's initial condition (adaptive
+    /// TR-BDF2 on the graded mesh, or the paper's explicit scheme, Sec. 3).
     Transient(TransientArgs),
 }
 
@@ -54,6 +55,15 @@ pub struct StationaryArgs {
     no_extrapolate: bool,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SchemeArg {
+    /// Graded mesh, adaptive TR-BDF2 (L-stable, step set by --rtol/--atol),
+    /// <v>, <v²> Richardson-extrapolated over cells and cells/2.
+    Trbdf2,
+    /// The paper's explicit upwind scheme on a uniform mesh (step set by --cfl).
+    Paper,
+}
+
 /// `irtp fp transient`.
 #[derive(Args, Debug)]
 pub struct TransientArgs {
@@ -64,7 +74,11 @@ pub struct TransientArgs {
     /// Final time.
     #[arg(long, allow_hyphen_values = true)]
     t_max: f64,
-    /// Number of uniform cells (paper: 2000 for tan, 1000 for tanh).
+    /// Time stepping and mesh.
+    #[arg(long, value_enum, default_value = "trbdf2")]
+    scheme: SchemeArg,
+    /// Number of cells: graded, even (trbdf2), or uniform (paper: 2000 for
+    /// tan, 1000 for tanh).
     #[arg(long, default_value_t = 2000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
     /// Number of equally spaced recording times of <v²>(t) in [0, t_max].
@@ -73,9 +87,17 @@ pub struct TransientArgs {
     /// Number of equally spaced density snapshots in (0, t_max].
     #[arg(long, default_value_t = 5, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     snapshots: usize,
-    /// Courant number in (0, 1].
-    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    cfl: f64,
+    /// Courant number in (0, 1] (--scheme paper only) [default: 0.5].
+    #[arg(long, allow_hyphen_values = true)]
+    cfl: Option<f64>,
+    /// Relative tolerance of the local error per step, in [1e-13, 0.1]
+    /// (--scheme trbdf2 only) [default: 1e-6].
+    #[arg(long, allow_hyphen_values = true)]
+    rtol: Option<f64>,
+    /// Absolute tolerance of the local error of the cell masses per step, in
+    /// [1e-20, 0.1] (--scheme trbdf2 only) [default: 1e-10].
+    #[arg(long, allow_hyphen_values = true)]
+    atol: Option<f64>,
 }
 
 impl FpArgs {
@@ -128,13 +150,38 @@ impl StationaryArgs {
 }
 
 impl TransientArgs {
+    /// Refuse the flags of the other scheme (`--cfl` with trbdf2,
+    /// `--rtol`/`--atol` with paper).
+    fn reject_inapplicable(&self) -> crate::Result<()> {
+        let (flags, only) = match self.scheme {
+            SchemeArg::Trbdf2 => (vec![("--cfl", self.cfl)], "only with --scheme paper"),
+            SchemeArg::Paper => (
+                vec![("--rtol", self.rtol), ("--atol", self.atol)],
+                "only with --scheme trbdf2 (the paper scheme's step is set by --cfl)",
+            ),
+        };
+        for (flag, value) in flags {
+            if let Some(v) = value {
+                return Err(crate::Error::invalid(flag, v, only));
+            }
+        }
+        Ok(())
+    }
+
     /// Flags → model and solver options: `--samples` recording times in
     /// [0, t_max], `--snapshots` density times in (0, t_max].
     fn config(&self) -> crate::Result<(Params, TransientOptions)> {
         let params = self.model.params()?;
         self.output.no_seed("fp transient")?;
+        self.reject_inapplicable()?;
         let c = self.cells as f64;
-        let memory = c * (128.0 + 16.0 * self.snapshots as f64)
+        // TR-BDF2 keeps the state, 8 work vectors and the two columns of the
+        // shifted solve on the fine mesh (and half of it on the coarse one).
+        let per_cell = match self.scheme {
+            SchemeArg::Paper => 128.0,
+            SchemeArg::Trbdf2 => 400.0,
+        };
+        let memory = c * (per_cell + 16.0 * self.snapshots as f64)
             + 64.0 * self.samples as f64
             + 8.0 * self.snapshots as f64;
         let memory_drivers = vec!["cells", "snapshots", "samples"];
@@ -146,18 +193,28 @@ impl TransientArgs {
             memory,
             memory_drivers: memory_drivers.clone(),
         })?;
-        let opts = TransientOptions::sampled(
-            self.cells,
-            self.t_max,
-            self.samples,
-            self.snapshots,
-            self.cfl,
-        )?;
+        let defaults = TransientOptions::default();
+        let base = TransientOptions {
+            scheme: match self.scheme {
+                SchemeArg::Trbdf2 => fp::Scheme::TrBdf2,
+                SchemeArg::Paper => fp::Scheme::Paper,
+            },
+            cells: self.cells,
+            cfl: self.cfl.unwrap_or(defaults.cfl),
+            rtol: self.rtol.unwrap_or(defaults.rtol),
+            atol: self.atol.unwrap_or(defaults.atol),
+            ..defaults
+        };
+        let opts = TransientOptions::sampled(self.t_max, self.samples, self.snapshots, base)?;
         let plan = crate::fp::transient_plan(&params, &opts)?;
+        let drivers = match self.scheme {
+            SchemeArg::Paper => vec!["cells", "t_max", "lambda", "rate", "cfl"],
+            SchemeArg::Trbdf2 => vec!["cells", "rtol", "samples", "snapshots"],
+        };
         self.output.budget.check(&super::budget::Cost {
-            work: c * plan.steps as f64,
+            work: plan.work,
             unit: "cell updates",
-            drivers: vec!["cells", "t_max", "lambda", "rate", "cfl"],
+            drivers,
             memory,
             memory_drivers,
         })?;
@@ -251,6 +308,10 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
         "mass_error_max": tr.mass_error_max,
         "dt": tr.dt,
         "steps": tr.steps,
+        "rejected": tr.rejected,
+        "scheme": tr.scheme,
+        "mesh": tr.mesh,
+        "extrapolated": tr.extrapolated,
         "cells": tr.cells,
         "t_max": t_max,
         "params": params,
@@ -274,17 +335,33 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
             (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
         }),
     );
+    let steps = match tr.dt {
+        Some(dt) => format!("dt = {}  ({} time steps", fmt_sig(dt), tr.steps),
+        None => format!(
+            "TR-BDF2 ({} steps, {} rejected, both meshes",
+            tr.steps, tr.rejected
+        ),
+    };
     let text = format!(
-        "<v^2>(t = {}) = {}  mass error max = {:.1e}  dt = {}  ({} time steps, {} cells)\n",
+        "<v^2>(t = {}) = {}  mass error max = {:.1e}  {}, {} cells, {} mesh{})\n",
         fmt_sig(t_max),
         fmt_digits(tr.v2[k], 12),
         tr.mass_error_max,
-        fmt_sig(tr.dt),
-        tr.steps,
-        tr.cells
+        steps,
+        tr.cells,
+        tr.mesh.name(),
+        if tr.extrapolated {
+            ", extrapolated"
+        } else {
+            ""
+        }
     );
+    let method = match tr.scheme {
+        fp::Scheme::Paper => "fv-upwind-explicit-uniform",
+        fp::Scheme::TrBdf2 => "fv-upwind-trbdf2-graded",
+    };
     let results = Results {
-        method: "fv-upwind-explicit-uniform".into(),
+        method: method.into(),
         seed: None,
         json: summary,
         parameters: json!({"model": params, "options": opts}),

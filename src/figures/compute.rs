@@ -203,6 +203,7 @@ pub fn fp_transient_v2(params: &Params, cells: usize, times: &[f64]) -> Result<V
             cells,
             t_max,
             times: times.to_vec(),
+            scheme: fp::Scheme::Paper,
             ..Default::default()
         },
     )?;

@@ -18,16 +18,21 @@
 //! - [`stationary()`]: direct O(N) solve of the stationary equations, graded
 //!   mesh for the singular edges, Richardson extrapolation; exact discrete
 //!   Green-Kubo D_eff.
-//! - [`transient()`]: explicit time stepping from the paper's initial condition.
+//! - [`transient()`]: time stepping from the paper's initial condition:
+//!   adaptive TR-BDF2 on the graded mesh ([`ForwardOperator`]), or the
+//!   paper's explicit scheme on a uniform mesh.
 
 mod grid;
+mod operator;
 mod solve;
 mod stationary;
 mod transient;
 
 pub use grid::Mesh;
+pub use operator::ForwardOperator;
 pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
 pub use transient::{
-    plan as transient_plan, transient, transient_with_progress, Plan as TransientPlan, Snapshot,
-    Transient, TransientOptions,
+    plan as transient_plan, transient, transient_with_progress, trbdf2_step_bound,
+    Plan as TransientPlan, Scheme, Snapshot, Transient, TransientOptions, DEFAULT_ATOL,
+    DEFAULT_RTOL, TRBDF2_STEP_CAP, TRBDF2_UPDATES_PER_STEP,
 };

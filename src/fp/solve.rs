@@ -17,50 +17,80 @@
 use super::grid::Grid;
 
 /// Solve B x = b for r > 0 (B is then a nonsingular, column diagonally
-/// dominant M-matrix with column sums -r).
+/// dominant M-matrix with column sums -r). See [`ResetFactor`].
+pub(crate) fn solve_reset(g: &Grid, lambda: f64, r: f64, b: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let flat: Vec<f64> = b.iter().flatten().copied().collect();
+    let mut x = vec![0.0; flat.len()];
+    ResetFactor::new(g, lambda, r).solve(g, &flat, &mut x);
+    x.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+}
+
+/// The block-Thomas factorisation of B for r > 0, reusable for several
+/// right-hand sides.
 ///
-/// Block Thomas: the pivot blocks are D'_i = [[-(α_i+λ+r), λ+e_i], [λ, -(β_i+λ+r)]]
+/// The pivot blocks are D'_i = [[-(α_i+λ+r), λ+e_i], [λ, -(β_i+λ+r)]]
 /// with e_0 = 0, e_{i+1} = α_i β_{i+1} (λ + e_i) / det_i. Their determinants
 /// are computed as det_i = (α_i + r)(β_i + λ + r) + λ δ_i with
 /// δ_i = β_i + r - e_i ≥ r obeying δ_0 = r,
 /// δ_{i+1} = r + β_{i+1} [(α_i + λ) δ_i + r (β_i + λ + r)] / det_i,
 /// i.e. as sums of positive terms. D'^{-1} ≤ 0 entrywise, so for b ≤ 0 every
 /// intermediate is a sum of like-signed terms and x ≥ 0.
-pub(crate) fn solve_reset(g: &Grid, lambda: f64, r: f64, b: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let n = g.cells();
-    let (al, be) = (&g.out_plus, &g.out_minus);
-    let mut e = vec![0.0; n];
-    let mut det = vec![0.0; n];
-    let mut delta = r;
-    for i in 0..n {
-        det[i] = (al[i] + r) * (be[i] + lambda + r) + lambda * delta;
-        if i + 1 < n {
-            e[i + 1] = al[i] * be[i + 1] * (lambda + e[i]) / det[i];
-            delta = r + be[i + 1] * ((al[i] + lambda) * delta + r * (be[i] + lambda + r)) / det[i];
+#[derive(Clone, Debug)]
+pub(crate) struct ResetFactor {
+    lambda: f64,
+    r: f64,
+    e: Vec<f64>,
+    det: Vec<f64>,
+}
+
+impl ResetFactor {
+    /// Factorise B on `g` with flip rate `lambda` and loss rate `r` > 0.
+    pub fn new(g: &Grid, lambda: f64, r: f64) -> Self {
+        let n = g.cells();
+        let (al, be) = (&g.out_plus, &g.out_minus);
+        let mut e = vec![0.0; n];
+        let mut det = vec![0.0; n];
+        let mut delta = r;
+        for i in 0..n {
+            det[i] = (al[i] + r) * (be[i] + lambda + r) + lambda * delta;
+            if i + 1 < n {
+                e[i + 1] = al[i] * be[i + 1] * (lambda + e[i]) / det[i];
+                delta =
+                    r + be[i + 1] * ((al[i] + lambda) * delta + r * (be[i] + lambda + r)) / det[i];
+            }
+        }
+        ResetFactor { lambda, r, e, det }
+    }
+
+    /// inv(D'_i) y = -(1/det) [[β+λ+r, λ+e], [λ, α+λ+r]] y.
+    fn inv(&self, g: &Grid, i: usize, y0: f64, y1: f64) -> [f64; 2] {
+        let (lambda, r, d) = (self.lambda, self.r, self.det[i]);
+        [
+            -((g.out_minus[i] + lambda + r) * y0 + (lambda + self.e[i]) * y1) / d,
+            -(lambda * y0 + (g.out_plus[i] + lambda + r) * y1) / d,
+        ]
+    }
+
+    /// Solve B x = b on flat interleaved cell values (m+_0, m-_0, m+_1, ...);
+    /// `g` must be the grid the factor was made on.
+    pub fn solve(&self, g: &Grid, b: &[f64], x: &mut [f64]) {
+        let n = g.cells();
+        let (al, be) = (&g.out_plus, &g.out_minus);
+        // Forward sweep (in x): y_i = b_i - L_i D'^{-1}_{i-1} y_{i-1}, L_i = diag(α_{i-1}, 0).
+        x.copy_from_slice(b);
+        for i in 1..n {
+            let z = self.inv(g, i - 1, x[2 * i - 2], x[2 * i - 1]);
+            x[2 * i] -= al[i - 1] * z[0];
+        }
+        // Back substitution: x_i = D'^{-1}_i (y_i - U_i x_{i+1}), U_i = diag(0, β_{i+1}).
+        let last = self.inv(g, n - 1, x[2 * n - 2], x[2 * n - 1]);
+        x[2 * n - 2..].copy_from_slice(&last);
+        for i in (0..n - 1).rev() {
+            let y1 = x[2 * i + 1] - be[i + 1] * x[2 * i + 3];
+            let xi = self.inv(g, i, x[2 * i], y1);
+            x[2 * i..2 * i + 2].copy_from_slice(&xi);
         }
     }
-    // inv(D'_i) = -(1/det) [[β+λ+r, λ+e], [λ, α+λ+r]].
-    let inv = |i: usize, y: [f64; 2]| -> [f64; 2] {
-        let d = det[i];
-        [
-            -((be[i] + lambda + r) * y[0] + (lambda + e[i]) * y[1]) / d,
-            -(lambda * y[0] + (al[i] + lambda + r) * y[1]) / d,
-        ]
-    };
-    // Forward sweep: y_i = b_i - L_i D'^{-1}_{i-1} y_{i-1}, L_i = diag(α_{i-1}, 0).
-    let mut y = b.to_vec();
-    for i in 1..n {
-        let z = inv(i - 1, y[i - 1]);
-        y[i][0] -= al[i - 1] * z[0];
-    }
-    // Back substitution: x_i = D'^{-1}_i (y_i - U_i x_{i+1}), U_i = diag(0, β_{i+1}).
-    let mut x = vec![[0.0; 2]; n];
-    x[n - 1] = inv(n - 1, y[n - 1]);
-    for i in (0..n - 1).rev() {
-        let yi = [y[i][0], y[i][1] - be[i + 1] * x[i + 1][1]];
-        x[i] = inv(i, yi);
-    }
-    x
 }
 
 /// Solve B x = b for r = 0, where B is singular (null vector: the stationary

@@ -1,18 +1,66 @@
-//! Time-dependent forward equations, the paper's way (Sec. 3): explicit
-//! upwind finite volumes on a uniform mesh, no-flux edges, the initial
-//! condition P±(v, 0) = ½ δ(v) placed in the cell of v = 0.
+//! Time-dependent forward equations from the paper's initial condition
+//! P±(v, 0) = ½ δ(v), two schemes on the same upwind finite volumes
+//! (no-flux edges):
+//!
+//! - [`Scheme::TrBdf2`] (default): the singularity-graded mesh of the
+//!   stationary solver and adaptive TR-BDF2 time stepping (Bank et al., IEEE
+//!   Trans. Electron Devices 32, 1985; as the ESDIRK of Hosea & Shampine,
+//!   Appl. Numer. Math. 20, 1996; see [`crate::numerics::trbdf2`]) of the
+//!   discrete generator [`ForwardOperator`]. The method is L-stable, so the
+//!   step is set by the requested accuracy (`rtol`, `atol` on the cell
+//!   masses), not by the smallest cell; every stage is an exact O(N) solve.
+//!   `<v>` and `<v²>` are Richardson-extrapolated over the meshes of N and N/2
+//!   cells (as the stationary solver does), the density is the fine mesh's.
+//! - [`Scheme::Paper`]: the paper's way (Sec. 3): explicit upwind on a
+//!   uniform mesh, the step set by the CFL limit.
 
-use super::grid::{uniform_target, Grid};
+use super::grid::{uniform_target, Grid, Mesh};
+use super::operator::ForwardOperator;
 use super::stationary::{MAX_CELLS, MIN_CELLS};
 use crate::error::{finite, Error, Result};
-use crate::model::Params;
+use crate::model::{Drag, Params};
+use crate::numerics::trbdf2::{self, Tolerances};
 use crate::parallel::{NoProgress, Progress};
 use serde::{Deserialize, Serialize};
+
+/// Time-stepping scheme of [`transient`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Scheme {
+    /// Graded mesh, adaptive TR-BDF2, Richardson-extrapolated moments.
+    #[default]
+    TrBdf2,
+    /// The paper's explicit upwind scheme on a uniform mesh (Sec. 3).
+    Paper,
+}
+
+impl Scheme {
+    /// Name as typed on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Scheme::TrBdf2 => "trbdf2",
+            Scheme::Paper => "paper",
+        }
+    }
+
+    /// Mesh the scheme uses.
+    pub fn mesh(&self) -> Mesh {
+        match self {
+            Scheme::TrBdf2 => Mesh::Graded,
+            Scheme::Paper => Mesh::Uniform,
+        }
+    }
+}
 
 /// Options of [`transient`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TransientOptions {
-    /// Number of uniform cells on (v_l, v_u) (paper: 2000 for tan, 1000 for tanh).
+    /// Time-stepping scheme (and with it the mesh).
+    #[serde(default)]
+    pub scheme: Scheme,
+    /// Number of cells on (v_l, v_u): graded for [`Scheme::TrBdf2`] (even:
+    /// the coarse mesh of the extrapolation has cells/2), uniform for
+    /// [`Scheme::Paper`] (paper: 2000 for tan, 1000 for tanh).
     pub cells: usize,
     /// Final time.
     pub t_max: f64,
@@ -21,19 +69,44 @@ pub struct TransientOptions {
     pub times: Vec<f64>,
     /// Times in [0, t_max] at which the density P(v, t) is stored.
     pub snapshot_times: Vec<f64>,
-    /// Courant number in (0, 1]: dt = cfl / max_i (outflow + flip + reset rate
-    /// of cell i) ≤ cfl Δv / max|drift|. cfl ≤ 1 keeps every cell mass ≥ 0.
+    /// [`Scheme::Paper`]: Courant number in (0, 1]: dt = cfl / max_i (outflow
+    /// + flip + reset rate of cell i) ≤ cfl Δv / max|drift|. cfl ≤ 1 keeps
+    /// every cell mass ≥ 0.
     pub cfl: f64,
+    /// [`Scheme::TrBdf2`]: relative tolerance of the local error of the cell
+    /// masses per step (global error ∝ rtol^(2/3)).
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// [`Scheme::TrBdf2`]: absolute tolerance of the local error of the cell
+    /// masses per step (the masses sum to 1).
+    #[serde(default = "default_atol")]
+    pub atol: f64,
+}
+
+/// Default [`TransientOptions::rtol`].
+pub const DEFAULT_RTOL: f64 = 1e-6;
+/// Default [`TransientOptions::atol`].
+pub const DEFAULT_ATOL: f64 = 1e-10;
+
+fn default_rtol() -> f64 {
+    DEFAULT_RTOL
+}
+
+fn default_atol() -> f64 {
+    DEFAULT_ATOL
 }
 
 impl Default for TransientOptions {
     fn default() -> Self {
         TransientOptions {
+            scheme: Scheme::TrBdf2,
             cells: 2000,
             t_max: 10.0,
             times: Vec::new(),
             snapshot_times: Vec::new(),
             cfl: 0.5,
+            rtol: DEFAULT_RTOL,
+            atol: DEFAULT_ATOL,
         }
     }
 }
@@ -41,26 +114,20 @@ impl Default for TransientOptions {
 impl TransientOptions {
     /// Options recording `<v²>` at `samples` equally spaced times in
     /// [0, t_max] and the density at `snapshots` equally spaced times in
-    /// (0, t_max] (both grids end exactly at t_max). Validates `t_max` and
-    /// `samples` here; [`transient`] validates the rest.
-    pub fn sampled(
-        cells: usize,
-        t_max: f64,
-        samples: usize,
-        snapshots: usize,
-        cfl: f64,
-    ) -> Result<Self> {
+    /// (0, t_max] (both grids end exactly at t_max), the other options from
+    /// `base`. Validates `t_max` and `samples` here; [`transient`] validates
+    /// the rest.
+    pub fn sampled(t_max: f64, samples: usize, snapshots: usize, base: Self) -> Result<Self> {
         let times = crate::numerics::time_grid::TimeGrid::linear(t_max, samples)?
             .times()
             .to_vec();
         let snapshot_times =
             crate::numerics::grid::linspace(0.0, t_max, snapshots.saturating_add(1)).split_off(1);
         Ok(TransientOptions {
-            cells,
             t_max,
             times,
             snapshot_times,
-            cfl,
+            ..base
         })
     }
 }
@@ -83,12 +150,22 @@ pub struct Snapshot {
 pub struct Transient {
     /// Parameters.
     pub params: Params,
-    /// Number of cells.
+    /// Scheme used.
+    pub scheme: Scheme,
+    /// Mesh kind (graded for TR-BDF2, uniform for the paper's scheme).
+    pub mesh: Mesh,
+    /// Number of cells (of the fine mesh).
     pub cells: usize,
-    /// Time step used (steps landing on a requested time are shortened).
-    pub dt: f64,
-    /// Number of steps taken.
+    /// Paper scheme: the time step (steps landing on a requested time are
+    /// shortened). TR-BDF2: None (adaptive).
+    pub dt: Option<f64>,
+    /// Number of (accepted) steps taken, over both meshes for TR-BDF2.
     pub steps: u64,
+    /// TR-BDF2: rejected steps, over both meshes (0 for the paper scheme).
+    pub rejected: u64,
+    /// Whether `v_mean` and `v2` are Richardson-extrapolated over the meshes
+    /// of `cells` and `cells/2` cells (TR-BDF2).
+    pub extrapolated: bool,
     /// Cell centres.
     pub v: Vec<f64>,
     /// Recording times.
@@ -97,11 +174,12 @@ pub struct Transient {
     pub v_mean: Vec<f64>,
     /// `<v²>(t)` (paper Fig. 1).
     pub v2: Vec<f64>,
-    /// Σ P Δv at the recording times.
+    /// Σ P Δv at the recording times (fine mesh).
     pub mass: Vec<f64>,
-    /// max over all steps of |Σ P Δv - 1|.
+    /// |Σ P Δv - 1|, maximum over every step (paper scheme) or over every
+    /// recording and snapshot time of both meshes (TR-BDF2).
     pub mass_error_max: f64,
-    /// Density snapshots.
+    /// Density snapshots (fine mesh).
     pub snapshots: Vec<Snapshot>,
 }
 
@@ -126,18 +204,71 @@ fn check_times(name: &'static str, ts: &[f64], t_max: f64) -> Result<Vec<f64>> {
 /// The time step and the number of steps of a run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plan {
-    /// Time step: the Courant number over the largest total outflow rate.
-    pub dt: f64,
-    /// Steps to t_max.
+    /// Paper scheme: the Courant number over the largest total outflow rate.
+    /// TR-BDF2: None (adaptive).
+    pub dt: Option<f64>,
+    /// Paper scheme: steps to t_max. TR-BDF2: the estimated steps on the fine
+    /// mesh, see [`trbdf2_step_bound`].
     pub steps: u64,
+    /// Cell updates: cells × steps for the paper scheme;
+    /// [`TRBDF2_UPDATES_PER_STEP`] × cells × steps × 1.5 (both meshes) for
+    /// TR-BDF2.
+    pub work: f64,
 }
+
+/// Cell updates per TR-BDF2 step and cell, counted as in the paper scheme's
+/// explicit step (one update ~ 10 flops): a factorisation and 2 unit solves
+/// for the shift, 3 solves, 3 operator applications and the vector updates.
+pub const TRBDF2_UPDATES_PER_STEP: f64 = 12.0;
 
 /// The step and step count [`transient`] will use (O(cells), no
 /// integration): for estimating the cost before a run.
 pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
-    validate(opts)?;
-    plan_on(params, opts, &Grid::uniform(params, opts.cells))
+    let (times, snaps) = validate(opts)?;
+    match opts.scheme {
+        Scheme::Paper => plan_on(params, opts, &Grid::uniform(params, opts.cells)),
+        Scheme::TrBdf2 => {
+            let steps = trbdf2_step_bound(params, opts, merged(&times, &snaps).len());
+            Ok(Plan {
+                dt: None,
+                steps,
+                work: TRBDF2_UPDATES_PER_STEP * 1.5 * opts.cells as f64 * steps as f64,
+            })
+        }
+    }
 }
+
+/// Estimated steps (accepted + rejected) of TR-BDF2 on the fine mesh: an
+/// upper estimate from measurements, for the cost check before a run.
+///
+/// Each output time costs at most 4 steps (the step clipped to land on it
+/// and the controller's recovery). In between, the step follows the moving
+/// front of the initial delta through the cells (cell masses change on the
+/// time scale Δv/Σ until flips and resets have smeared the front), so the
+/// count grows with the mesh (measured ∝ cells^(1/2)), with the tolerances
+/// (local error ∝ h³; measured ∝ (rtol atol)^(-1/6)) and, slowly, with the
+/// number of relaxation times t_max (λ + r + g'(v_r) + 1). The estimate
+///   4 outputs + 10 (rtol atol)^(-1/6) (cells/100)^(1/2) (1 + log10(1 + t_max rate))
+/// exceeded the measured counts by a factor of 7 to 20 (tan Σ = 3 and
+/// tanh Σ = 0.6 at λ = 0.5, r = 0 and 2, 200 to 1600 cells,
+/// 1e-7 <= rtol <= 1e-4, 1e-14 <= atol <= 1e-8). The integrator is stopped
+/// (numerical failure) at [`TRBDF2_STEP_CAP`] times the estimate.
+pub fn trbdf2_step_bound(params: &Params, opts: &TransientOptions, outputs: usize) -> u64 {
+    let rate = 1.0
+        + params.lambda()
+        + params.rate()
+        + params.drag().derivative(params.reset_velocity()).abs();
+    let decades = 1.0 + (opts.t_max * rate).ln_1p() / std::f64::consts::LN_10;
+    let tol = (opts.rtol * opts.atol).powf(-1.0 / 6.0);
+    let mesh = (opts.cells as f64 / 100.0).sqrt();
+    (4.0 * outputs as f64 + 10.0 * tol * mesh * decades)
+        .ceil()
+        .min(1e15) as u64
+}
+
+/// The TR-BDF2 integrator gives up after this many times the estimated
+/// steps ([`trbdf2_step_bound`]) on one mesh.
+pub const TRBDF2_STEP_CAP: u64 = 10;
 
 fn plan_on(params: &Params, opts: &TransientOptions, g: &Grid) -> Result<Plan> {
     let (lambda, r) = (params.lambda(), params.rate());
@@ -154,9 +285,18 @@ fn plan_on(params: &Params, opts: &TransientOptions, g: &Grid) -> Result<Plan> {
         ));
     }
     Ok(Plan {
-        dt,
+        dt: Some(dt),
         steps: steps as u64,
+        work: opts.cells as f64 * steps,
     })
+}
+
+/// Sorted union of the recording and snapshot times.
+fn merged(times: &[f64], snaps: &[f64]) -> Vec<f64> {
+    let mut all: Vec<f64> = times.iter().chain(snaps).copied().collect();
+    all.sort_by(|a, b| a.total_cmp(b));
+    all.dedup();
+    all
 }
 
 /// Integrate the forward equations from the paper's initial condition.
@@ -170,13 +310,25 @@ pub fn transient_with_progress(
     opts: &TransientOptions,
     progress: &dyn Progress,
 ) -> Result<Transient> {
-    let n = opts.cells;
     let (times, snaps) = validate(opts)?;
+    match opts.scheme {
+        Scheme::Paper => paper(params, opts, &times, &snaps, progress),
+        Scheme::TrBdf2 => run_trbdf2(params, opts, &times, &snaps, progress),
+    }
+}
+
+/// The paper's explicit upwind scheme on a uniform mesh.
+fn paper(
+    params: &Params,
+    opts: &TransientOptions,
+    times: &[f64],
+    snaps: &[f64],
+    progress: &dyn Progress,
+) -> Result<Transient> {
+    let n = opts.cells;
     let g = Grid::uniform(params, n);
-    let Plan {
-        dt,
-        steps: total_steps,
-    } = plan_on(params, opts, &g)?;
+    let plan = plan_on(params, opts, &g)?;
+    let (dt, total_steps) = (plan.dt.expect("explicit step"), plan.steps);
     let (lambda, r) = (params.lambda(), params.rate());
 
     let (vl, vu) = params.bounds();
@@ -188,9 +340,13 @@ pub fn transient_with_progress(
 
     let mut out = Transient {
         params: *params,
+        scheme: Scheme::Paper,
+        mesh: Mesh::Uniform,
         cells: n,
-        dt,
+        dt: Some(dt),
         steps: 0,
+        rejected: 0,
+        extrapolated: false,
         v: g.centres.clone(),
         times: Vec::with_capacity(times.len()),
         v_mean: Vec::with_capacity(times.len()),
@@ -238,6 +394,104 @@ pub fn transient_with_progress(
     Ok(out)
 }
 
+/// TR-BDF2 on the graded meshes of `cells` and `cells/2` cells; moments
+/// Richardson-extrapolated (first-order scheme: X = 2 X_N - X_{N/2}).
+fn run_trbdf2(
+    params: &Params,
+    opts: &TransientOptions,
+    times: &[f64],
+    snaps: &[f64],
+    progress: &dyn Progress,
+) -> Result<Transient> {
+    let all = merged(times, snaps);
+    let bound = trbdf2_step_bound(params, opts, all.len());
+    let tol = Tolerances {
+        rtol: opts.rtol,
+        atol: opts.atol,
+        h0: None,
+        h_max: f64::INFINITY,
+        max_steps: usize::try_from(bound.saturating_mul(TRBDF2_STEP_CAP)).unwrap_or(usize::MAX),
+    };
+    let half = opts.cells / 2;
+    // Progress: outputs done on the coarse mesh, then on the fine one.
+    let total = 2 * all.len() as u64;
+    let coarse = ForwardOperator::refined(params, Mesh::Graded, half, 0)?;
+    let c = integrate_mesh(params, coarse, &tol, times, snaps, &all, |k| {
+        report(progress, k as u64, total)
+    })?;
+    let fine = ForwardOperator::refined(params, Mesh::Graded, half, 1)?;
+    let f = integrate_mesh(params, fine, &tol, times, snaps, &all, |k| {
+        report(progress, (all.len() + k) as u64, total)
+    })?;
+    progress.update(total, total);
+    let ex = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect();
+    Ok(Transient {
+        params: *params,
+        scheme: Scheme::TrBdf2,
+        mesh: Mesh::Graded,
+        cells: 2 * half,
+        dt: None,
+        steps: f.steps + c.steps,
+        rejected: f.rejected + c.rejected,
+        extrapolated: true,
+        v: f.v,
+        times: times.to_vec(),
+        v_mean: ex(&f.v_mean, &c.v_mean),
+        v2: ex(&f.v2, &c.v2),
+        mass: f.mass,
+        mass_error_max: f.mass_error_max.max(c.mass_error_max),
+        snapshots: f.snapshots,
+    })
+}
+
+/// One mesh's TR-BDF2 run from the paper's initial condition: moments at
+/// `times`, densities at `snaps` (`all`: their sorted union).
+fn integrate_mesh(
+    params: &Params,
+    mut op: ForwardOperator,
+    tol: &Tolerances,
+    times: &[f64],
+    snaps: &[f64],
+    all: &[f64],
+    mut report: impl FnMut(usize) -> Result<()>,
+) -> Result<Transient> {
+    let mut u = op.point_mass(0.0);
+    let mut out = Transient {
+        params: *params,
+        scheme: Scheme::TrBdf2,
+        mesh: Mesh::Graded,
+        cells: op.cells(),
+        dt: None,
+        steps: 0,
+        rejected: 0,
+        extrapolated: false,
+        v: op.centres().to_vec(),
+        times: Vec::with_capacity(times.len()),
+        v_mean: Vec::with_capacity(times.len()),
+        v2: Vec::with_capacity(times.len()),
+        mass: Vec::with_capacity(times.len()),
+        mass_error_max: 0.0,
+        snapshots: Vec::with_capacity(snaps.len()),
+    };
+    let g = op.grid().clone();
+    let stats = trbdf2::integrate(&mut op, &mut u, all, tol, |k, t, u| {
+        let m: Vec<[f64; 2]> = u.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+        let m = &m[..];
+        let mass: f64 = u.iter().sum();
+        out.mass_error_max = out.mass_error_max.max((mass - 1.0).abs());
+        if times.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
+            out.record_moments(t, m, &g);
+        }
+        if snaps.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
+            out.record_snapshot(t, m, &g);
+        }
+        report(k + 1)
+    })?;
+    out.steps = stats.steps as u64;
+    out.rejected = stats.rejected as u64;
+    Ok(out)
+}
+
 /// Report `steps` of `total` done; [`Error::Interrupted`] when the caller
 /// asked to stop.
 fn report(progress: &dyn Progress, steps: u64, total: u64) -> Result<()> {
@@ -263,9 +517,30 @@ fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
     if !(t_max > 0.0) {
         return Err(Error::invalid("t_max", t_max, "t_max > 0"));
     }
-    let cfl = finite("cfl", opts.cfl)?;
-    if !(cfl > 0.0 && cfl <= 1.0) {
-        return Err(Error::invalid("cfl", cfl, "0 < cfl <= 1"));
+    match opts.scheme {
+        Scheme::Paper => {
+            let cfl = finite("cfl", opts.cfl)?;
+            if !(cfl > 0.0 && cfl <= 1.0) {
+                return Err(Error::invalid("cfl", cfl, "0 < cfl <= 1"));
+            }
+        }
+        Scheme::TrBdf2 => {
+            if n % 2 != 0 {
+                return Err(Error::invalid(
+                    "cells",
+                    n,
+                    "an even number (TR-BDF2 extrapolates from the mesh of cells/2)",
+                ));
+            }
+            let rtol = finite("rtol", opts.rtol)?;
+            if !(rtol >= 1e-13 && rtol <= 0.1) {
+                return Err(Error::invalid("rtol", rtol, "1e-13 <= rtol <= 0.1"));
+            }
+            let atol = finite("atol", opts.atol)?;
+            if !(atol >= 1e-20 && atol <= 0.1) {
+                return Err(Error::invalid("atol", atol, "1e-20 <= atol <= 0.1"));
+            }
+        }
     }
     let mut times = check_times("times", &opts.times, t_max)?;
     if times.is_empty() {
@@ -342,14 +617,14 @@ mod tests {
 
     #[test]
     fn sampled_grids() {
-        let o = TransientOptions::sampled(100, 2.0, 5, 4, 0.5).unwrap();
+        let o = TransientOptions::sampled(2.0, 5, 4, TransientOptions::default()).unwrap();
         assert_eq!(o.times, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
         assert_eq!(o.snapshot_times, vec![0.5, 1.0, 1.5, 2.0]);
         // Both grids end exactly at t_max, also where t·n/n would round.
         let t = 0.1 + 0.2;
-        let o = TransientOptions::sampled(100, t, 7, 3, 0.5).unwrap();
+        let o = TransientOptions::sampled(t, 7, 3, TransientOptions::default()).unwrap();
         assert_eq!((o.times[6], o.snapshot_times[2]), (t, t));
-        let o = TransientOptions::sampled(100, 1.0, 2, 0, 0.5).unwrap();
+        let o = TransientOptions::sampled(1.0, 2, 0, TransientOptions::default()).unwrap();
         assert!(o.snapshot_times.is_empty());
     }
 
@@ -360,15 +635,30 @@ mod tests {
             e => panic!("{e}"),
         };
         assert_eq!(
-            name(TransientOptions::sampled(100, f64::NAN, 1, 1, 0.5)),
+            name(TransientOptions::sampled(
+                f64::NAN,
+                1,
+                1,
+                TransientOptions::default()
+            )),
             "t_max"
         );
         assert_eq!(
-            name(TransientOptions::sampled(100, 0.0, 5, 1, 0.5)),
+            name(TransientOptions::sampled(
+                0.0,
+                5,
+                1,
+                TransientOptions::default()
+            )),
             "t_max"
         );
         assert_eq!(
-            name(TransientOptions::sampled(100, 1.0, 1, 1, 0.5)),
+            name(TransientOptions::sampled(
+                1.0,
+                1,
+                1,
+                TransientOptions::default()
+            )),
             "samples"
         );
     }

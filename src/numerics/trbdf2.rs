@@ -289,15 +289,15 @@ fn step<O: ShiftedLinear>(
     op.solve_shifted(c, &w.rhs, &mut w.err)?;
     stats.solves += 3;
     let mut norm = 0.0f64;
-    for i in 0..n {
-        if !w.un[i].is_finite() {
+    for (i, (&old, &new)) in u.iter().zip(&w.un).enumerate() {
+        if !new.is_finite() {
             return Err(Failure::NonFinite {
                 method: "TR-BDF2 time stepping",
                 at: h,
             }
             .into());
         }
-        let sc = op.atol(i, tol.atol) + tol.rtol * u[i].abs().max(w.un[i].abs());
+        let sc = op.atol(i, tol.atol) + tol.rtol * old.abs().max(new.abs());
         let e = w.err[i].abs();
         norm = norm.max(if sc > 0.0 {
             e / sc
@@ -341,8 +341,8 @@ mod tests {
             3
         }
         fn apply(&self, u: &[f64], out: &mut [f64]) {
-            for i in 0..3 {
-                out[i] = (0..3).map(|j| self.a[i][j] * u[j]).sum();
+            for (o, row) in out.iter_mut().zip(&self.a) {
+                *o = row.iter().zip(u).map(|(a, x)| a * x).sum();
             }
         }
         fn solve_shifted(
@@ -400,7 +400,10 @@ mod tests {
         eprintln!("errors {e6:e} {e9:e}, steps {} {}", s6.steps, s9.steps);
         // Per-step control of a second-order method: the global error grows
         // like (number of steps) × tolerance ~ tol^(2/3).
-        assert!(e6 < 200.0 * 1e-6 && e9 < 2000.0 * 1e-9, "errors {e6:e} {e9:e}");
+        assert!(
+            e6 < 200.0 * 1e-6 && e9 < 2000.0 * 1e-9,
+            "errors {e6:e} {e9:e}"
+        );
         assert!(e9 < e6 / 50.0, "errors {e6:e} {e9:e}");
         // Local error ~ h³: 1000x tighter → about 10x more steps.
         let ratio = s9.steps as f64 / s6.steps as f64;

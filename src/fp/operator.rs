@@ -1,0 +1,399 @@
+//! The discrete forward generator as a linear operator, for implicit time
+//! stepping (TR-BDF2, see [`crate::numerics::trbdf2`]) and moment chains.
+//!
+//! Unknowns are the cell masses in the interleaved order
+//! (m+_0, m-_0, m+_1, m-_1, ...). The operator is A = B + R, the generator of
+//! the Markov jump process on (cell, state) that the stationary solver uses
+//! (see [`super::solve`]): B moves mass between cells (upwind transport),
+//! flips states at rate λ and removes mass at the reset rate r; R re-injects
+//! the removed mass, r Σ_i m±_i, into the reset target cell of the same state.
+//! Every column of A sums to zero (mass is conserved) and its off-diagonal
+//! entries are ≥ 0 (positivity).
+//!
+//! Shifted solves (I - cA) x = b are done without subtractions where the
+//! signs allow it: I - cA = -c (B' + R) with B' = B - I/c, which is B with the
+//! loss rate r + 1/c, solved by the block-Thomas factorisation of
+//! [`super::solve`]; R = E Fᵀ has rank 2 (E: the two target unit vectors,
+//! F = r (1+, 1-): the state sums) and is added by the
+//! Sherman-Morrison-Woodbury formula
+//!   (B' + E Fᵀ)^{-1} y = w - Z S^{-1} Fᵀ w,  w = B'^{-1} y, Z = B'^{-1} E,
+//!   S = I + Fᵀ Z (2×2).
+//! B'^{-1} ≤ 0 entrywise, so Z ≤ 0; the column sums of B' are -(r + 1/c), so
+//! each column of S sums to s = 1/(1 + rc) exactly, and S's diagonal is formed
+//! as s plus the magnitude of its off-diagonal entry: det S = s² + s(|S01| +
+//! |S10|) and S^{-1} ≥ 0. For b ≥ 0 the solution is then a sum of
+//! non-negative terms.
+
+use super::grid::{Grid, Mesh};
+use super::solve::ResetFactor;
+use super::stationary::{make_grid, MAX_CELLS, MIN_CELLS};
+use crate::error::{Error, Result};
+use crate::model::Params;
+use crate::numerics::trbdf2::ShiftedLinear;
+use crate::numerics::Failure;
+
+/// The factorisation of one shift c.
+#[derive(Clone, Debug)]
+struct Shifted {
+    c: f64,
+    factor: ResetFactor,
+    /// Z = B'^{-1} E, the responses to unit sources in the + and - target cells.
+    z: [Vec<f64>; 2],
+    /// S^{-1} (row-major).
+    s_inv: [[f64; 2]; 2],
+}
+
+/// The discrete forward generator A (transport, flips, reset removal and
+/// re-injection) on a finite-volume mesh, acting on flat interleaved cell
+/// masses (m+_0, m-_0, m+_1, ...).
+#[derive(Clone, Debug)]
+pub struct ForwardOperator {
+    grid: Grid,
+    lambda: f64,
+    rate: f64,
+    /// Cell-centre velocity of every unknown (each centre twice).
+    velocities: Vec<f64>,
+    shifted: Option<Shifted>,
+}
+
+impl ForwardOperator {
+    /// The operator of `params` on a `mesh` of `cells` cells (the stationary
+    /// solver's meshes: the graded one has v_r as a node).
+    pub fn new(params: &Params, mesh: Mesh, cells: usize) -> Result<Self> {
+        Self::refined(params, mesh, cells, 0)
+    }
+
+    /// The operator on the mesh of `cells` cells refined `refine` times (each
+    /// refinement halves every cell in the mesh parameter, so the meshes are
+    /// nested, as Richardson extrapolation needs).
+    pub fn refined(params: &Params, mesh: Mesh, cells: usize, refine: usize) -> Result<Self> {
+        if !(MIN_CELLS..=MAX_CELLS).contains(&cells) {
+            return Err(Error::invalid(
+                "cells",
+                cells,
+                format!("{MIN_CELLS} <= cells <= {MAX_CELLS}"),
+            ));
+        }
+        if !(refine <= 20 && (cells << refine) <= MAX_CELLS) {
+            return Err(Error::invalid(
+                "cells",
+                cells,
+                format!("cells * 2^refine <= {MAX_CELLS} (refine = {refine})"),
+            ));
+        }
+        Ok(Self::on_grid(
+            params,
+            make_grid(params, mesh, cells, refine)?,
+        ))
+    }
+
+    pub(crate) fn on_grid(params: &Params, grid: Grid) -> Self {
+        let velocities = grid.centres.iter().flat_map(|&v| [v, v]).collect();
+        ForwardOperator {
+            grid,
+            lambda: params.lambda(),
+            rate: params.rate(),
+            velocities,
+            shifted: None,
+        }
+    }
+
+    pub(crate) fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// Number of cells (the number of unknowns is twice this).
+    pub fn cells(&self) -> usize {
+        self.grid.cells()
+    }
+
+    /// Number of unknowns, 2 × cells.
+    pub fn dim(&self) -> usize {
+        2 * self.grid.cells()
+    }
+
+    /// Cell centres (one per cell).
+    pub fn centres(&self) -> &[f64] {
+        &self.grid.centres
+    }
+
+    /// Cell widths (one per cell; exact also where edges round together).
+    pub fn widths(&self) -> &[f64] {
+        &self.grid.widths
+    }
+
+    /// Cell edges (cells + 1).
+    pub fn edges(&self) -> &[f64] {
+        &self.grid.edges
+    }
+
+    /// Cell-centre velocity of every unknown, in the interleaved order
+    /// (length [`dim`](Self::dim): v_0, v_0, v_1, v_1, ...). This is the v of
+    /// the source of the position-moment chain dM_k/dt = A M_k + k v M_{k-1}
+    /// (elementwise product).
+    pub fn velocities(&self) -> &[f64] {
+        &self.velocities
+    }
+
+    /// Masses of ½ δ(v - w) in each noise state: ½ in the cell containing w,
+    /// or, if w is a node, in the cell on the side each state moves to (right
+    /// for +, left for -), as for the reset target. The paper's initial
+    /// condition is w = 0.
+    pub fn point_mass(&self, w: f64) -> Vec<f64> {
+        let (kp, km) = target(&self.grid, w);
+        let mut u = vec![0.0; self.dim()];
+        u[2 * kp] = 0.5;
+        u[2 * km + 1] = 0.5;
+        u
+    }
+
+    /// Mass, `<v>` and `<v²>` of the cell masses `u` (cell-centre quadrature).
+    pub fn moments(&self, u: &[f64]) -> [f64; 3] {
+        let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        for (c, &v) in u.chunks_exact(2).zip(&self.grid.centres) {
+            let w = c[0] + c[1];
+            s0 += w;
+            s1 += w * v;
+            s2 += w * v * v;
+        }
+        [s0, s1, s2]
+    }
+
+    /// out = A u.
+    pub fn apply(&self, u: &[f64], out: &mut [f64]) {
+        let g = &self.grid;
+        let n = g.cells();
+        let (al, be, l, r) = (&g.out_plus, &g.out_minus, self.lambda, self.rate);
+        let (mut up, mut um) = (0.0, 0.0);
+        for i in 0..n {
+            let (p, m) = (u[2 * i], u[2 * i + 1]);
+            up += p;
+            um += m;
+            let left = if i > 0 { al[i - 1] * u[2 * i - 2] } else { 0.0 };
+            let right = if i + 1 < n {
+                be[i + 1] * u[2 * i + 3]
+            } else {
+                0.0
+            };
+            out[2 * i] = left - (al[i] + l + r) * p + l * m;
+            out[2 * i + 1] = l * p - (be[i] + l + r) * m + right;
+        }
+        out[2 * g.reset_plus] += r * up;
+        out[2 * g.reset_minus + 1] += r * um;
+    }
+
+    /// Solve (I - cA) x = b for c > 0, caching the factorisation of the last
+    /// c (so several right-hand sides with one c cost one O(N) sweep each).
+    /// A c that is not finite and positive, or a non-finite solution, is
+    /// reported as [`Failure::NonFinite`] (`?` turns it into [`Error`]).
+    pub fn solve_shifted_into(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        let fail = Failure::NonFinite {
+            method: "fp shifted solve (I - cA) x = b",
+            at: c,
+        };
+        if !(c > 0.0 && c.is_finite()) {
+            return Err(fail);
+        }
+        if !matches!(&self.shifted, Some(s) if s.c == c) {
+            self.shifted = Some(self.factorise(c));
+        }
+        let s = self.shifted.as_ref().expect("factorised above");
+        let g = &self.grid;
+        // (B' + E Fᵀ) x = -b/c.
+        let y: Vec<f64> = b.iter().map(|&bi| -bi / c).collect();
+        s.factor.solve(g, &y, x);
+        let (fp, fm) = state_sums(x);
+        let f = [self.rate * fp, self.rate * fm];
+        let a = [
+            s.s_inv[0][0] * f[0] + s.s_inv[0][1] * f[1],
+            s.s_inv[1][0] * f[0] + s.s_inv[1][1] * f[1],
+        ];
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi -= s.z[0][i] * a[0] + s.z[1][i] * a[1];
+        }
+        if x.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(fail)
+        }
+    }
+
+    /// B' = B(r + 1/c), Z = B'^{-1} E and S^{-1} (see the module docs).
+    fn factorise(&self, c: f64) -> Shifted {
+        let g = &self.grid;
+        let loss = self.rate + 1.0 / c;
+        let factor = ResetFactor::new(g, self.lambda, loss);
+        let unit = |k: usize| {
+            let mut e = vec![0.0; self.dim()];
+            e[k] = 1.0;
+            let mut z = vec![0.0; self.dim()];
+            factor.solve(g, &e, &mut z);
+            z
+        };
+        let z = [unit(2 * g.reset_plus), unit(2 * g.reset_minus + 1)];
+        // Column k of S: s on the sum; the off-diagonal is r Σ Z_k over the
+        // other state (≤ 0), the diagonal s + |off-diagonal|.
+        let s = 1.0 / (1.0 + self.rate * c);
+        let off = [
+            self.rate * state_sums(&z[0]).1,
+            self.rate * state_sums(&z[1]).0,
+        ];
+        let (s00, s11) = (s - off[0], s - off[1]);
+        let det = s * s - s * (off[0] + off[1]);
+        let s_inv = [[s11 / det, -off[1] / det], [-off[0] / det, s00 / det]];
+        Shifted {
+            c,
+            factor,
+            z,
+            s_inv,
+        }
+    }
+}
+
+impl ShiftedLinear for ForwardOperator {
+    fn dim(&self) -> usize {
+        ForwardOperator::dim(self)
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        ForwardOperator::apply(self, u, out)
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        self.solve_shifted_into(c, b, x)
+    }
+}
+
+/// (Σ u+, Σ u-) of interleaved cell values.
+fn state_sums(u: &[f64]) -> (f64, f64) {
+    u.chunks_exact(2)
+        .fold((0.0, 0.0), |(a, b), c| (a + c[0], b + c[1]))
+}
+
+/// Cells receiving + and - mass placed at velocity w: the cell containing w,
+/// or, if w is a node, + to the right cell and - to the left one.
+pub(crate) fn target(g: &Grid, w: f64) -> (usize, usize) {
+    let n = g.cells();
+    // First edge > w: cell k - 1 contains w.
+    let k = g.edges.partition_point(|&e| e <= w);
+    let j = k.saturating_sub(1).min(n - 1);
+    if j >= 1 && g.edges[j] == w {
+        (j, j - 1)
+    } else {
+        (j, j)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::DragLaw;
+
+    fn ops() -> Vec<ForwardOperator> {
+        let mut out = Vec::new();
+        for (d, s, l, r, vr) in [
+            (DragLaw::Tan, 3.0, 0.5, 2.0, 0.0),
+            (DragLaw::Tanh, 0.6, 0.5, 10.0, 0.1),
+            (DragLaw::Linear, 1.0, 0.3, 0.7, -0.2),
+            (DragLaw::Tan, 3.0, 0.5, 0.0, 0.0),
+        ] {
+            let p = Params::new(d, s, l, r, vr).unwrap();
+            out.push(ForwardOperator::new(&p, Mesh::Graded, 300).unwrap());
+            out.push(ForwardOperator::new(&p, Mesh::Uniform, 200).unwrap());
+        }
+        out
+    }
+
+    #[test]
+    fn columns_of_a_sum_to_zero() {
+        for op in ops() {
+            let n = op.dim();
+            let mut col = vec![0.0; n];
+            for j in 0..n {
+                let mut e = vec![0.0; n];
+                e[j] = 1.0;
+                op.apply(&e, &mut col);
+                let scale: f64 = col.iter().map(|x| x.abs()).sum();
+                let sum: f64 = col.iter().sum();
+                assert!(sum.abs() <= 1e-14 * scale, "column {j}: {sum} of {scale}");
+                let off = col.iter().enumerate().filter(|&(i, _)| i != j);
+                assert!(off.clone().all(|(_, &x)| x >= 0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn shifted_solve_satisfies_the_equations() {
+        for mut op in ops() {
+            let n = op.dim();
+            for c in [1e-6, 0.03, 1.0, 1e4] {
+                // Mixed signs, and a non-negative right-hand side.
+                let b1: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+                let b2: Vec<f64> = (0..n).map(|i| ((i * 3) % 5) as f64).collect();
+                for b in [b1, b2] {
+                    let mut x = vec![0.0; n];
+                    op.solve_shifted_into(c, &b, &mut x).unwrap();
+                    let mut ax = vec![0.0; n];
+                    op.apply(&x, &mut ax);
+                    // Residual against the sum of the magnitudes of the terms:
+                    // |b| + |x| + c |A| |x| (|A| x: A with its diagonal negated).
+                    let xa: Vec<f64> = x.iter().map(|v| v.abs()).collect();
+                    let mut ab = vec![0.0; n];
+                    op.apply(&xa, &mut ab);
+                    let scales: Vec<f64> = (0..n)
+                        .map(|i| {
+                            let d = 2.0 * (op.grid.out_plus[i / 2] + op.grid.out_minus[i / 2])
+                                + op.lambda
+                                + op.rate;
+                            b[i].abs() + xa[i] + c * (ab[i] + 2.0 * d * xa[i])
+                        })
+                        .collect();
+                    // Componentwise for b >= 0 (no cancellation anywhere),
+                    // normwise for mixed signs.
+                    let positive = b.iter().all(|&v| v >= 0.0);
+                    let norm = scales.iter().cloned().fold(0.0, f64::max);
+                    for i in 0..n {
+                        let scale = if positive { scales[i] } else { norm };
+                        let res = x[i] - c * ax[i] - b[i];
+                        assert!(
+                            res.abs() <= 1e-13 * scale,
+                            "c = {c}, i = {i}: {res} of {scale}"
+                        );
+                    }
+                    if b.iter().all(|&v| v >= 0.0) {
+                        assert!(x.iter().all(|&v| v >= 0.0));
+                    }
+                    // Mass: 1ᵀx = 1ᵀb.
+                    let (sx, sb) = (x.iter().sum::<f64>(), b.iter().sum::<f64>());
+                    let sa: f64 = b.iter().map(|v| v.abs()).sum();
+                    assert!((sx - sb).abs() <= 1e-12 * sa, "{sx} vs {sb}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn point_mass_targets() {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
+        let op = ForwardOperator::new(&p, Mesh::Graded, 300).unwrap();
+        let u = op.point_mass(0.0);
+        let g = &op.grid;
+        assert_eq!(u[2 * g.reset_plus], 0.5);
+        assert_eq!(u[2 * g.reset_minus + 1], 0.5);
+        let op = ForwardOperator::new(&p, Mesh::Uniform, 201).unwrap();
+        let k = op.centres().iter().position(|&v| v.abs() < 1e-12).unwrap();
+        let u = op.point_mass(0.0);
+        assert_eq!((u[2 * k], u[2 * k + 1]), (0.5, 0.5));
+        assert_eq!(op.moments(&u)[0], 1.0);
+    }
+}
