@@ -148,6 +148,8 @@ fn cli_writes_moments_and_refuses_bad_input() {
         "2",
         "--samples",
         "6",
+        "--t-min",
+        "0.5",
         "--t-max",
         "2",
     ];
@@ -185,7 +187,8 @@ fn cli_writes_moments_and_refuses_bad_input() {
         ("--seed", "1"),
         ("--lambda", "-1"),
     ] {
-        let bad = dir.path().join("bad");
+        let fresh = tempfile::tempdir().unwrap();
+        let bad = fresh.path().join("bad");
         let args: Vec<&str> = base
             .iter()
             .copied()
