@@ -59,7 +59,7 @@ impl MsdArgs {
         let params = self.model.params()?;
         self.output.no_seed("fp msd")?;
         let rtol = finite("rtol", self.rtol)?;
-        if !(rtol >= 1e-14 && rtol <= 1e-3) {
+        if !(1e-14..=1e-3).contains(&rtol) {
             return Err(crate::Error::invalid("rtol", rtol, "1e-14 <= rtol <= 1e-3"));
         }
         if !(1..=fp::MAX_LEVELS).contains(&self.levels) {
@@ -80,7 +80,7 @@ impl MsdArgs {
                 ),
             ));
         }
-        if !(self.samples <= 100_000) {
+        if self.samples > 100_000 {
             return Err(crate::Error::invalid(
                 "samples",
                 self.samples,

@@ -9,9 +9,9 @@
 //! ```
 //!
 //! (∂_t ∫ x^k p = ∫ x^k (-v ∂_x p + A p) = k v M_{k-1} + A M_k after one
-//! integration by parts in x). A rule that also reset x to x_r would add
-//! r x_r^k m(t) δ(v - v_r) - r M_k... in its own reset term; the one rule
-//! keeps x, so the reset term of A is the whole story
+//! integration by parts in x). A rule that also reset x to 0 would replace
+//! the re-injection of M_k (k ≥ 1) by nothing, its own reset source; the one
+//! rule keeps x, so the reset term of A is the whole story
 //! (docs/equations.md, entry (D1)). On the mesh this is the chain operator
 //! C = [[A, 0, 0], [V, A, 0], [0, 2V, A]] with V = diag(cell-centre v): block
 //! lower triangular, so (I - cC) x = b is three shifted solves of A by
@@ -193,7 +193,7 @@ fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
         ));
     }
     let rtol = finite("rtol", o.rtol)?;
-    if !(rtol >= 1e-14 && rtol <= 1e-3) {
+    if !(1e-14..=1e-3).contains(&rtol) {
         return Err(Error::invalid("rtol", rtol, "1e-14 <= rtol <= 1e-3"));
     }
     if !(params.lambda() > 0.0) && !(params.rate() > 0.0) {
@@ -206,7 +206,7 @@ fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
     let mut t = Vec::with_capacity(o.times.len());
     for &x in &o.times {
         let x = finite("times", x)?;
-        if !(x >= 0.0 && x <= 1e9) {
+        if !(0.0..=1e9).contains(&x) {
             return Err(Error::invalid("times", x, "0 <= t <= 1e9"));
         }
         t.push(x);
