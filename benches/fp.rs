@@ -1,10 +1,16 @@
 //! Fokker-Planck solver speed.
-//! Targets: stationary solve at 20,000 cells under 50 ms; the paper-style
-//! explicit time stepping to steady state at the paper's resolution is timed
-//! for reference (tan, Sigma = 3, 2000 cells, to t = 20).
+//! Targets: stationary solve at 20,000 cells under 50 ms; the two transient
+//! schemes at equal accuracy (tan, Sigma = 3, lambda = 0.5, r = 2, to t = 20):
+//! the paper's explicit scheme at its resolution (2000 uniform cells, cfl
+//! 0.5) has <v²>(20) = 0.6538788570, relative error -1.68e-4 against the
+//! reference 0.6539889492 (the state is stationary by t = 20: the stationary
+//! solver, 4e5 and 8e5 graded cells extrapolated, agreeing to 5e-11);
+//! TR-BDF2 on 236 graded cells (extrapolated) at rtol 1e-2, atol 1e-6 has
+//! error +1.68e-4. The ratio of the two times is the speed-up at equal
+//! accuracy.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use irtp::fp::{stationary, transient, Mesh, StationaryOptions, TransientOptions};
+use irtp::fp::{stationary, transient, Mesh, Scheme, StationaryOptions, TransientOptions};
 use irtp::{DragLaw, Params};
 use std::time::Duration;
 
@@ -45,22 +51,36 @@ fn stationary_20k(c: &mut Criterion) {
     g.finish();
 }
 
-fn transient_paper(c: &mut Criterion) {
+fn transient_equal_accuracy(c: &mut Criterion) {
     let mut g = c.benchmark_group("fp_transient");
     g.sample_size(10).measurement_time(Duration::from_secs(20));
     let p = Params::new(DragLaw::Tan, 3.0, 0.5, 2.0, 0.0).unwrap();
-    let o = TransientOptions {
+    let paper = TransientOptions {
+        scheme: Scheme::Paper,
         cells: 2000,
         t_max: 20.0,
         times: vec![20.0],
         snapshot_times: vec![],
         cfl: 0.5,
+        ..Default::default()
     };
-    g.bench_function("tan_s3_l0.5_r2_2000cells_to_t20", |b| {
-        b.iter(|| black_box(transient(&p, &o).unwrap().v2[0]))
-    });
+    let trbdf2 = TransientOptions {
+        scheme: Scheme::TrBdf2,
+        cells: 236,
+        rtol: 1e-2,
+        atol: 1e-6,
+        ..paper.clone()
+    };
+    for (name, o) in [
+        ("paper_2000cells_to_t20", paper),
+        ("trbdf2_236cells_to_t20", trbdf2),
+    ] {
+        g.bench_function(format!("tan_s3_l0.5_r2/{name}"), |b| {
+            b.iter(|| black_box(transient(&p, &o).unwrap().v2[0]))
+        });
+    }
     g.finish();
 }
 
-criterion_group!(benches, stationary_20k, transient_paper);
+criterion_group!(benches, stationary_20k, transient_equal_accuracy);
 criterion_main!(benches);

@@ -126,7 +126,16 @@ fn runs_over_budget_are_refused_before_starting() {
         (&["simulate", "--t-max", "1e300"], "--t-max"),
         (&["simulate", "--lambda", "1e9"], "--lambda"),
         (
-            &["fp", "transient", "--t-max", "10", "--rate", "1e9"],
+            &[
+                "fp",
+                "transient",
+                "--scheme",
+                "paper",
+                "--t-max",
+                "10",
+                "--rate",
+                "1e9",
+            ],
             "--rate",
         ),
         (

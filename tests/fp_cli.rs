@@ -79,7 +79,12 @@ fn transient_json_and_files() {
     let v = json(&out);
     assert!(v["v2_final"].as_f64().unwrap() > 0.0);
     assert!((v["mass"].as_f64().unwrap() - 1.0).abs() < 1e-12);
-    assert!(v["dt"].as_f64().unwrap() > 0.0);
+    // Default scheme: adaptive TR-BDF2 on the graded mesh (no fixed step).
+    assert_eq!(v["scheme"], "trbdf2");
+    assert_eq!(v["mesh"], "graded");
+    assert_eq!(v["extrapolated"], true);
+    assert!(v["dt"].is_null());
+    assert!(v["steps"].as_u64().unwrap() > 0);
     let m = std::fs::read_to_string(dir.join("moments.csv")).unwrap();
     assert_eq!(m.lines().next(), Some("t,v_mean,v2,mass"));
     assert_eq!(m.lines().count(), 12);
@@ -87,6 +92,27 @@ fn transient_json_and_files() {
     assert_eq!(s.lines().next(), Some("t,v,p,p_plus,p_minus"));
     assert_eq!(s.lines().count(), 1 + 2 * 300);
     assert!(dir.join("run.json").exists());
+    let run = std::fs::read_to_string(dir.join("run.json")).unwrap();
+    assert!(run.contains("\"scheme\": \"trbdf2\""), "{run}");
+}
+
+#[test]
+fn paper_scheme_records_its_step() {
+    let out = irtp(&[
+        "fp",
+        "transient",
+        "--scheme",
+        "paper",
+        "--t-max",
+        "0.5",
+        "--cells",
+        "100",
+        "--json",
+    ]);
+    let v = json(&out);
+    assert_eq!(v["scheme"], "paper");
+    assert_eq!(v["mesh"], "uniform");
+    assert!(v["dt"].as_f64().unwrap() > 0.0);
 }
 
 #[test]
@@ -142,8 +168,93 @@ fn bad_input_one_line_exit_2_nothing_written() {
             "--t-max",
         ),
         (
-            vec!["fp", "transient", "--t-max", "1", "--cfl", "2", "--out", d],
+            vec![
+                "fp",
+                "transient",
+                "--scheme",
+                "paper",
+                "--t-max",
+                "1",
+                "--cfl",
+                "2",
+                "--out",
+                d,
+            ],
             "--cfl",
+        ),
+        // Flags of the other scheme.
+        (
+            vec![
+                "fp",
+                "transient",
+                "--t-max",
+                "1",
+                "--cfl",
+                "0.5",
+                "--out",
+                d,
+            ],
+            "--cfl",
+        ),
+        (
+            vec![
+                "fp",
+                "transient",
+                "--scheme",
+                "paper",
+                "--t-max",
+                "1",
+                "--rtol",
+                "1e-6",
+                "--out",
+                d,
+            ],
+            "--rtol",
+        ),
+        (
+            vec![
+                "fp",
+                "transient",
+                "--scheme",
+                "paper",
+                "--t-max",
+                "1",
+                "--atol",
+                "1e-9",
+                "--out",
+                d,
+            ],
+            "--atol",
+        ),
+        (
+            vec!["fp", "transient", "--t-max", "1", "--rtol", "0", "--out", d],
+            "--rtol",
+        ),
+        (
+            vec![
+                "fp",
+                "transient",
+                "--t-max",
+                "1",
+                "--atol",
+                "nan",
+                "--out",
+                d,
+            ],
+            "--atol",
+        ),
+        (
+            vec![
+                "fp",
+                "transient",
+                "--t-max",
+                "1",
+                "--cells",
+                "301",
+                "--out",
+                d,
+            ],
+            "--cells",
         ),
         (
             vec![

@@ -526,7 +526,16 @@ const CASES: &[Case] = &[
     },
     Case {
         name: "fp_transient_tan",
-        args: &["fp", "transient", "--t-max", "2", "--cells", "200"],
+        args: &[
+            "fp",
+            "transient",
+            "--scheme",
+            "paper",
+            "--t-max",
+            "2",
+            "--cells",
+            "200",
+        ],
         pins: &[
             Pin::Json("v2_final", 0.6528622672702848),
             Pin::Json("dt", 0.0010565744925594984),
@@ -538,6 +547,8 @@ const CASES: &[Case] = &[
         args: &[
             "fp",
             "transient",
+            "--scheme",
+            "paper",
             "--drag",
             "tanh",
             "--sigma",
@@ -554,6 +565,14 @@ const CASES: &[Case] = &[
         pins: &[
             Pin::Json("v2_final", 0.05663763868645592),
             Pin::Json("v_mean_final", 8.964982358442503e-18),
+        ],
+    },
+    Case {
+        name: "fp_transient_trbdf2_tan",
+        args: &["fp", "transient", "--t-max", "2", "--cells", "200"],
+        pins: &[
+            Pin::Json("v2_final", 0.6541359527185477),
+            Pin::Json("steps", 3989.0),
         ],
     },
     Case {

@@ -183,7 +183,7 @@ class FpTransientResult(Result):
     v2_final: float
     v_mean_final: float
     mass_error_max: float
-    dt: float
+    dt: Optional[float]
     steps: int
     cells: int
 
@@ -321,10 +321,13 @@ def fp_transient(
     max_work: float = ...,
     max_memory: float = ...,
     t_max: float,
+    scheme: Literal["trbdf2", "paper"] = ...,
     cells: int = ...,
     samples: int = ...,
     snapshots: int = ...,
-    cfl: float = ...,
+    cfl: Optional[float] = ...,
+    rtol: Optional[float] = ...,
+    atol: Optional[float] = ...,
     params: ParamsArg = ...,
     reset: Optional[Reset] = ...,
     progress: ProgressArg = ...,
