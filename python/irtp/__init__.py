@@ -26,6 +26,7 @@ from . import _irtp
 from ._api import (
     analytic,
     fp_stationary,
+    fp_msd,
     fp_transient,
     mfpt,
     mfpt_optimize,
@@ -38,6 +39,7 @@ from ._model import Drag, Params, PoissonReset, Reset, drag_laws
 from ._results import (
     AnalyticResult,
     FpStationaryResult,
+    FpMsdResult,
     FpTransientResult,
     MfptOptimizeResult,
     MfptResult,
@@ -50,7 +52,7 @@ from ._results import (
 __version__: str = _irtp.__version__
 
 for _cls in (Drag, Reset, PoissonReset, Params, Result, SimulateResult, AnalyticResult,
-             FpStationaryResult, FpTransientResult, MfptResult, MfptScanResult,
+             FpStationaryResult, FpTransientResult, FpMsdResult, MfptResult, MfptScanResult,
              MfptOptimizeResult, ReproduceResult):
     _cls.__module__ = "irtp"
 del _cls
@@ -60,6 +62,7 @@ __all__ = [
     "analytic",
     "fp_stationary",
     "fp_transient",
+    "fp_msd",
     "mfpt",
     "mfpt_scan",
     "mfpt_optimize",
@@ -75,6 +78,7 @@ __all__ = [
     "AnalyticResult",
     "FpStationaryResult",
     "FpTransientResult",
+    "FpMsdResult",
     "MfptResult",
     "MfptScanResult",
     "MfptOptimizeResult",

@@ -157,6 +157,18 @@ class FpStationaryResult(Result):
     cells: int
     mass: float
 
+class FpMsdResult(Result):
+    summary: Dict[str, Any]
+    # moments
+    t: Array
+    mass: Array
+    v_mean: Array
+    v2: Array
+    x_mean: Array
+    xv: Array
+    x2: Array
+    alpha: Array
+
 class FpTransientResult(Result):
     summary: Dict[str, Any]
     # moments (snapshots: tables["snapshots"])
@@ -321,6 +333,30 @@ def fp_transient(
     progress: ProgressArg = ...,
     threads: Optional[int] = ...,
 ) -> FpTransientResult: ...
+def fp_msd(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    force: bool = ...,
+    max_work: float = ...,
+    max_memory: float = ...,
+    t_min: float = ...,
+    t_max: float = ...,
+    samples: int = ...,
+    cells: int = ...,
+    levels: int = ...,
+    rtol: float = ...,
+    mesh: Literal["graded", "uniform"] = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> FpMsdResult: ...
 def mfpt(
     *,
     drag: Union[DragName, str, Drag] = ...,

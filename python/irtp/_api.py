@@ -26,6 +26,7 @@ COMMANDS = {
     "analytic": "analytic",
     "fp_stationary": "fp stationary",
     "fp_transient": "fp transient",
+    "fp_msd": "fp msd",
     "mfpt": "mfpt",
     "mfpt_scan": "mfpt scan",
     "mfpt_optimize": "mfpt optimize",
@@ -341,6 +342,19 @@ DOCS: Dict[str, Doc] = {
         ">>> res.t[-1]\n"
         "5.0",
     ),
+    "fp_msd": Doc(
+        "<x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling.",
+        "Solves the chain of x-weighted densities M_k = ∫ x^k P dx (k = 0, 1, 2)\n"
+        "of the forward equations with TR-BDF2 on nested graded meshes and\n"
+        "Richardson extrapolation, from x = v = 0; output times: t = 0 and a log\n"
+        "grid from t_min to t_max.",
+        "FpMsdResult\n"
+        "    moments: t, mass, v_mean, v2, x_mean, xv, x2, alpha (``samples`` rows);\n"
+        "        ``summary`` holds d_eff_slope (-> D_eff) and the final values.",
+        ">>> res = irtp.fp_msd(drag='tanh', sigma=0.6, rate=1, t_min=0.5, t_max=2, samples=6, cells=32, levels=2)\n"
+        ">>> len(res.t)\n"
+        "6",
+    ),
     "mfpt": Doc(
         "Mean first-passage time tau from v0 to the target velocity vt (Sec. 2.2).",
         "method='ode' (alias 'backward', default) solves the backward equations\n"
@@ -493,6 +507,7 @@ simulate = make_function("simulate")
 analytic = make_function("analytic")
 fp_stationary = make_function("fp_stationary")
 fp_transient = make_function("fp_transient")
+fp_msd = make_function("fp_msd")
 mfpt = make_function("mfpt")
 mfpt_scan = make_function("mfpt_scan")
 mfpt_optimize = make_function("mfpt_optimize")

@@ -13,6 +13,7 @@ FUNCTION = {
     "analytic": "analytic",
     "fp stationary": "fp_stationary",
     "fp transient": "fp_transient",
+    "fp msd": "fp_msd",
     "mfpt": "mfpt",
     "mfpt scan": "mfpt_scan",
     "mfpt optimize": "mfpt_optimize",
@@ -207,6 +208,10 @@ class FpTransientResult(Result):
     """Result of :func:`irtp.fp_transient`: tables "moments" and "snapshots"."""
 
 
+class FpMsdResult(Result):
+    """Result of :func:`irtp.fp_msd`: table "moments"."""
+
+
 class MfptResult(Result):
     """Result of :func:`irtp.mfpt`: ``res.tau``, ``res.tau_plus``, ``res.tau_minus``
     are the answer (scalars); table "profile" (backward equations only) holds
@@ -236,6 +241,7 @@ RESULT_CLASS = {
     "analytic": AnalyticResult,
     "fp stationary": FpStationaryResult,
     "fp transient": FpTransientResult,
+    "fp msd": FpMsdResult,
     "mfpt": MfptResult,
     "mfpt scan": MfptScanResult,
     "mfpt optimize": MfptOptimizeResult,

@@ -3,5 +3,6 @@
 //! other drag law (by quadrature).
 
 pub mod linear;
+pub mod linear_moments;
 pub mod r0;
 mod r0_exponent;

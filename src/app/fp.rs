@@ -26,6 +26,12 @@ pub enum FpCommand {
     /// Time-dependent solution from the paper's initial condition (adaptive
     /// TR-BDF2 on the graded mesh, or the paper's explicit scheme, Sec. 3).
     Transient(TransientArgs),
+    /// `<x>(t)`, `<x v>(t)`, `<x²>(t)` and d ln<x²>/d ln t without sampling
+    /// (moment chain of the forward equations, TR-BDF2, Richardson in the mesh).
+    #[command(
+        about = "<x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling (moment chain of the forward equations)."
+    )]
+    Msd(super::fp_msd::MsdArgs),
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -106,6 +112,7 @@ impl FpArgs {
         match &self.command {
             FpCommand::Stationary(a) => a.output.json,
             FpCommand::Transient(a) => a.output.json,
+            FpCommand::Msd(a) => a.output.json,
         }
     }
 }
@@ -116,6 +123,7 @@ impl FpArgs {
         match &self.command {
             FpCommand::Stationary(a) => a.config().map(drop),
             FpCommand::Transient(a) => a.config().map(drop),
+            FpCommand::Msd(a) => a.config().map(drop),
         }
     }
 }
@@ -125,6 +133,7 @@ pub fn run(args: &FpArgs, ctx: &Context) -> crate::Result<Outcome> {
     match &args.command {
         FpCommand::Stationary(a) => stationary(a, ctx),
         FpCommand::Transient(a) => transient(a, ctx),
+        FpCommand::Msd(a) => super::fp_msd::msd(a, ctx),
     }
 }
 

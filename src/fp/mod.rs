@@ -18,17 +18,21 @@
 //! - [`stationary()`]: direct O(N) solve of the stationary equations, graded
 //!   mesh for the singular edges, Richardson extrapolation; exact discrete
 //!   Green-Kubo D_eff.
+//! - [`msd()`]: `<x>(t)`, `<x v>(t)`, `<x²>(t)` without sampling, from the
+//!   chain of x-weighted densities (TR-BDF2 on [`ForwardOperator`]).
 //! - [`transient()`]: time stepping from the paper's initial condition:
 //!   adaptive TR-BDF2 on the graded mesh ([`ForwardOperator`]), or the
 //!   paper's explicit scheme on a uniform mesh.
 
 mod grid;
+mod moments;
 mod operator;
 mod solve;
 mod stationary;
 mod transient;
 
 pub use grid::Mesh;
+pub use moments::{moments as msd, MomentSeries, MsdOptions, MAX_LEVELS, MAX_MSD_CELLS};
 pub use operator::ForwardOperator;
 pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
 pub use transient::{
