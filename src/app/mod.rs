@@ -16,6 +16,7 @@ pub mod budget;
 pub mod common;
 pub mod format;
 pub mod fp;
+pub mod fpt;
 pub mod keywords;
 pub mod mfpt;
 pub mod reproduce;
