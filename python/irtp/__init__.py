@@ -39,6 +39,7 @@ from ._results import (
     AnalyticResult,
     FpStationaryResult,
     FpTransientResult,
+    MfptDistributionResult,
     MfptOptimizeResult,
     MfptResult,
     MfptScanResult,
@@ -51,7 +52,7 @@ __version__: str = _irtp.__version__
 
 for _cls in (Drag, Reset, PoissonReset, Params, Result, SimulateResult, AnalyticResult,
              FpStationaryResult, FpTransientResult, MfptResult, MfptScanResult,
-             MfptOptimizeResult, ReproduceResult):
+             MfptOptimizeResult, MfptDistributionResult, ReproduceResult):
     _cls.__module__ = "irtp"
 del _cls
 
@@ -63,6 +64,7 @@ __all__ = [
     "mfpt",
     "mfpt_scan",
     "mfpt_optimize",
+    "mfpt_distribution",
     "reproduce",
     "Drag",
     "Reset",
@@ -78,6 +80,7 @@ __all__ = [
     "MfptResult",
     "MfptScanResult",
     "MfptOptimizeResult",
+    "MfptDistributionResult",
     "ReproduceResult",
     "__version__",
 ]

@@ -195,10 +195,10 @@ impl DistributionArgs {
         let points = self.points.unwrap_or(201);
         let name = |e: Error| match e {
             Error::InvalidParameter {
-                name,
+                name: "samples",
                 value,
                 allowed,
-            } if name == "samples" => Error::InvalidParameter {
+            } => Error::InvalidParameter {
                 name: "--points",
                 value,
                 allowed,
