@@ -12,7 +12,8 @@ One function per CLI command, keywords named as the flags (``lambda_`` and
 - :func:`simulate`: particles (exact sampler or Euler, Eqs. (30)-(32))
 - :func:`analytic`: the r = 0 density, Eqs. (34)-(35)
 - :func:`fp_stationary`, :func:`fp_transient`: Fokker-Planck, Eqs. (11)-(12)
-- :func:`mfpt`, :func:`mfpt_scan`, :func:`mfpt_optimize`: first passage,
+- :func:`mfpt`, :func:`mfpt_scan`, :func:`mfpt_optimize`,
+  :func:`mfpt_distribution`: first passage,
   Eqs. (26)-(28)
 - :func:`reproduce`: the paper's figures
 
@@ -28,6 +29,7 @@ from ._api import (
     fp_stationary,
     fp_transient,
     mfpt,
+    mfpt_distribution,
     mfpt_optimize,
     mfpt_scan,
     reproduce,
