@@ -49,7 +49,7 @@
 use super::backward::{self, assemble, mesh, Assembly, BackwardOptions, Band, Mesh, Moments};
 use super::Problem;
 use crate::error::{Error, Result};
-use crate::model::{Drag, DragLaw};
+use crate::model::Drag;
 use crate::numerics::trbdf2::{self, ShiftedLinear, Tolerances};
 use crate::numerics::Failure;
 use serde::{Deserialize, Serialize};
@@ -151,66 +151,6 @@ const METHOD: &str = "first-passage distribution: shifted solve (M - cA) x = b";
 /// Unknowns: 2 per node (S+, S- interleaved) and four at v_0 (I+, I-, J+, J-).
 const EXTRA: usize = 4;
 
-/// The no-event part N(v, t) = e^{-(lambda + r) t} 1[t < T_f(v)] of S+
-/// (see the module doc), on the canonical mesh.
-#[derive(Clone)]
-struct NoEvent {
-    /// lambda + r, lambda, r, Sigma and the drag (for the inverse flow).
-    k: f64,
-    lam: f64,
-    rate: f64,
-    sigma: f64,
-    drag: DragLaw,
-    /// Nodes and their flow times T_f(v_i) to v_t (decreasing, 0 at v_t).
-    v: Vec<f64>,
-    tf: Vec<f64>,
-}
-
-impl NoEvent {
-    fn new(cp: &Problem, m: &Mesh) -> Self {
-        let par = cp.params();
-        let (drag, sigma) = (par.drag(), par.sigma());
-        let last = m.v.len() - 1;
-        let mut tf = vec![0.0; m.v.len()];
-        for i in (0..last).rev() {
-            tf[i] = tf[i + 1] + drag.flow_time(sigma, m.v[i], m.v[i + 1]);
-        }
-        NoEvent {
-            k: par.lambda() + par.rate(),
-            lam: par.lambda(),
-            rate: par.rate(),
-            sigma,
-            drag,
-            v: m.v.clone(),
-            tf,
-        }
-    }
-
-    /// Fraction of cell [v_i, v_{i+1}] where T_f(v) > t: exact, through
-    /// the inverse flow from v_i (T_f decreases along the cell).
-    fn cell_fraction(&self, i: usize, t: f64) -> f64 {
-        if t <= self.tf[i + 1] {
-            return 1.0;
-        }
-        if t >= self.tf[i] {
-            return 0.0;
-        }
-        let h = self.v[i + 1] - self.v[i];
-        let vc = self.drag.flow_velocity(self.sigma, self.v[i], self.tf[i] - t);
-        ((vc - self.v[i]) / h).clamp(0.0, 1.0)
-    }
-
-    /// ∫_0^t N(v_i, s) ds and ∫_0^t s N(v_i, s) ds in closed form.
-    fn integrals(&self, i: usize, t: f64) -> (f64, f64) {
-        let tt = t.min(self.tf[i]);
-        if !(self.k > 0.0) {
-            return (tt, 0.5 * tt * tt);
-        }
-        let (k, e) = (self.k, (-self.k * tt).exp());
-        (-(-k * tt).exp_m1() / k, (1.0 - e * (1.0 + k * tt)) / (k * k))
-    }
-}
-
 /// M S' = A S on the mesh (see the module doc), with the integrals at v_0.
 struct TimeOperator {
     /// Cell widths.
@@ -228,13 +168,6 @@ struct TimeOperator {
     cache: Option<(f64, Band, Vec<f64>, Vec<f64>)>,
     /// Scales of the integrals I and J (tau, tau²), for their error weights.
     scales: (f64, f64),
-    /// The no-event part split off (None: S integrated whole).
-    split: Option<NoEvent>,
-    /// The time segment [t0, t1] being integrated (integrator time 0 is
-    /// t0; the point jumps of the forcing are segment ends, so within a
-    /// segment N(v_l), N(v_r) take their limits from inside). None: at an
-    /// output time, right limits.
-    seg: Option<(f64, f64)>,
 }
 
 impl TimeOperator {
@@ -248,50 +181,6 @@ impl TimeOperator {
             borders: cp.params().rate() > 0.0,
             cache: None,
             scales: (1.0, 1.0),
-            split: None,
-            seg: None,
-        }
-    }
-
-    /// The times where the forcing jumps: T_f(v_l) and T_f(v_r) (r > 0).
-    fn jumps(&self) -> Vec<f64> {
-        let Some(ne) = &self.split else {
-            return Vec::new();
-        };
-        let mut j = vec![ne.tf[0]];
-        if self.borders {
-            j.push(ne.tf[self.reset]);
-        }
-        j
-    }
-
-    /// Forcing of M U' = A U + F (absolute time t; see the module doc):
-    /// -lambda N(v_l) on the regularity row, h r N(v_r) on the + cell rows,
-    /// lambda h (cell average of N) on the - cell rows.
-    fn forcing_at(&self, t: f64, out: &mut [f64]) -> bool {
-        let Some(ne) = &self.split else {
-            return false;
-        };
-        let point = |tf: f64| match self.seg {
-            Some((t0, t1)) => tf > t0 && (tf >= t1 || t < tf),
-            None => t < tf,
-        };
-        let decay = (-ne.k * t).exp();
-        let at_reset = if point(ne.tf[self.reset]) { decay } else { 0.0 };
-        out.fill(0.0);
-        out[0] = if point(ne.tf[0]) { -ne.lam * decay } else { 0.0 };
-        for (i, &h) in self.h.iter().enumerate() {
-            out[2 * i + 1] = h * ne.rate * at_reset;
-            out[2 * i + 2] = ne.lam * h * decay * ne.cell_fraction(i, t);
-        }
-        true
-    }
-
-    /// N(v_0, t) (right limit; 0 without the split).
-    fn no_event_at_start(&self, t: f64) -> f64 {
-        match &self.split {
-            Some(ne) if t < ne.tf[self.start] => (-ne.k * t).exp(),
-            _ => 0.0,
         }
     }
 
@@ -328,20 +217,11 @@ impl TimeOperator {
         Ok((b, y1, y2))
     }
 
-    /// f = -dS/dt at the nodes of v_0 at time t: M f_U = -(A U + F) solved
-    /// by the recursions of M (see the module doc), plus the decay
-    /// (lambda + r) N of the no-event part; returns (f+, f-) at v_0.
-    fn density_at_start(&self, s: &[f64], t: f64) -> (f64, f64) {
-        let mut a_s = vec![0.0; self.n + EXTRA];
-        if self.forcing_at(t, &mut a_s) {
-            let mut y = vec![0.0; self.n];
-            self.apply_mesh(s, &mut y);
-            for (a, b) in a_s.iter_mut().zip(&y) {
-                *a += b;
-            }
-        } else {
-            self.apply_mesh(s, &mut a_s[..self.n]);
-        }
+    /// f = -dS/dt at the nodes of v_0: M f = -A S solved by the recursions
+    /// of M (see the module doc); returns (f+, f-) at v_0.
+    fn density_at_start(&self, s: &[f64]) -> (f64, f64) {
+        let mut a_s = vec![0.0; self.n];
+        self.apply_mesh(s, &mut a_s);
         let mut fm = a_s[0];
         for i in 0..self.start {
             fm = -2.0 * a_s[2 * i + 2] / self.h[i] - fm;
@@ -350,8 +230,7 @@ impl TimeOperator {
         for i in (self.start..self.h.len()).rev() {
             fp = -2.0 * a_s[2 * i + 1] / self.h[i] - fp;
         }
-        let k = self.split.as_ref().map_or(0.0, |ne| ne.k);
-        (fp + k * self.no_event_at_start(t), fm)
+        (fp, fm)
     }
 
     /// out = A s on the mesh unknowns.
@@ -438,11 +317,6 @@ impl ShiftedLinear for TimeOperator {
         Ok(())
     }
 
-    fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
-        let t0 = self.seg.map_or(0.0, |s| s.0);
-        self.forcing_at(t0 + t, out)
-    }
-
     fn atol(&self, i: usize, atol: f64) -> f64 {
         // The integrals grow to tau and E[T²]/2: errors on their own scale.
         match i.checked_sub(self.n) {
@@ -498,69 +372,6 @@ fn start_state(op: &mut TimeOperator, t1: f64) -> Result<Vec<f64>> {
     Ok(u)
 }
 
-/// Integrate from the absolute time `from` through the absolute `outputs`
-/// (sorted, >= from), in segments that end at every jump of the forcing,
-/// so that no step straddles one; `observe(t, u)` at each output.
-fn advance(
-    op: &mut TimeOperator,
-    u: &mut [f64],
-    from: f64,
-    outputs: &[f64],
-    tol: &Tolerances,
-    observe: &mut impl FnMut(f64, &[f64]) -> Result<()>,
-) -> Result<trbdf2::Stats> {
-    let mut stats = trbdf2::Stats::default();
-    let Some(&last) = outputs.last() else {
-        return Ok(stats);
-    };
-    let mut ends: Vec<f64> = op.jumps().into_iter().filter(|&b| b > from && b < last).collect();
-    ends.push(last);
-    ends.sort_by(f64::total_cmp);
-    ends.dedup();
-    let (mut t0, mut k) = (from, 0);
-    for e in ends {
-        let first = k;
-        let mut seg = Vec::new();
-        while k < outputs.len() && outputs[k] <= e {
-            seg.push(outputs[k] - t0);
-            k += 1;
-        }
-        let n_out = seg.len();
-        if k == first || outputs[k - 1] < e {
-            seg.push(e - t0);
-        }
-        op.seg = Some((t0, e));
-        let st = trbdf2::integrate(op, u, &seg, tol, |j, _, x| {
-            if j < n_out {
-                observe(outputs[first + j], x)
-            } else {
-                Ok(())
-            }
-        })?;
-        stats.steps += st.steps;
-        stats.rejected += st.rejected;
-        t0 = e;
-    }
-    op.seg = None;
-    Ok(stats)
-}
-
-/// The initial state and its time: U(0) with the split (U+ = 0, U- = 1,
-/// continuous), else S(t_1) after one backward-Euler step (module doc).
-fn initial(op: &mut TimeOperator, times: &[f64], tau: f64) -> Result<(Vec<f64>, f64)> {
-    if op.split.is_some() {
-        let mut u = vec![0.0; op.dim()];
-        for x in u[..op.n].iter_mut().skip(1).step_by(2) {
-            *x = 1.0;
-        }
-        return Ok((u, 0.0));
-    }
-    // t_1 <= every positive output time; earlier output times are t = 0.
-    let first = times.iter().copied().find(|&t| t > 0.0);
-    let t1 = first.map_or(1e-9 * tau, |t| t.min(1e-9 * tau));
-    Ok((start_state(op, t1)?, t1))
-}
-
 /// The first-passage-time distribution of `problem` at the output `times`
 /// (see the module doc). Errors: invalid options or times;
 /// [`Error::Overflow`] where the moments exceed the f64 range; a numerical
@@ -575,50 +386,47 @@ pub fn distribution(
     let moments = backward::moments(problem, &opts.backward)?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.backward.cells)?;
-    let split = (opts.backward.drift == backward::DriftSign::Simulated).then(|| NoEvent::new(&cp, &m));
     let mut op = TimeOperator::new(&cp, &m, &opts.backward);
     op.scales = (moments.tau, moments.second);
-    op.split = split.clone();
     // A second copy of A evaluates f while the integrator holds `op`.
-    let mut view = TimeOperator::new(&cp, &m, &opts.backward);
-    view.split = split;
+    let view = TimeOperator::new(&cp, &m, &opts.backward);
     let start = 2 * m.start;
-    let (mut u, t1) = initial(&mut op, times, moments.tau)?;
+    // t_1 <= every positive output time; earlier output times are t = 0.
+    let first = times.iter().copied().find(|&t| t > 0.0);
+    let t1 = first.map_or(1e-9 * moments.tau, |t| t.min(1e-9 * moments.tau));
+    let mut u = start_state(&mut op, t1)?;
     let mut rec = Record::default();
     for _ in times.iter().take_while(|&&t| t < t1) {
         rec.push(0.0, (1.0, 1.0), (0.0, 0.0));
     }
-    let rest: Vec<f64> = times.iter().copied().filter(|&t| t >= t1).collect();
+    let rest: Vec<f64> = times.iter().filter(|&&t| t >= t1).map(|t| t - t1).collect();
     let tol = Tolerances {
         rtol: opts.rtol,
         atol: opts.atol,
         ..Tolerances::default()
     };
-    let mut observe = |t: f64, x: &[f64]| -> Result<()> {
-        let n0 = view.no_event_at_start(t);
-        rec.push(t, (x[start] + n0, x[start + 1]), view.density_at_start(x, t));
+    let (mut steps, mut rejected) = (0, 0);
+    let mut observe = |_: usize, t: f64, x: &[f64]| -> Result<()> {
+        rec.push(t + t1, (x[start], x[start + 1]), view.density_at_start(x));
         Ok(())
     };
-    let st = advance(&mut op, &mut u, t1, &rest, &tol, &mut observe)?;
-    let (mut steps, mut rejected) = (st.steps, st.rejected);
+    if !rest.is_empty() {
+        let st = trbdf2::integrate(&mut op, &mut u, &rest, &tol, &mut observe)?;
+        (steps, rejected) = (st.steps, st.rejected);
+    }
     // On past the grid, in doubling windows, until the tail is small.
-    let mut t = rest.last().copied().unwrap_or(t1).max(t1);
+    let mut t = t1 + rest.last().copied().unwrap_or(0.0);
     let t_stop = opts.t_stop.unwrap_or(1e3 * moments.tau).max(t);
-    while (u[start] + op.no_event_at_start(t)).max(u[start + 1]) >= opts.tail && t < t_stop {
-        let window = t.max(moments.tau).min(t_stop - t);
-        let st = advance(&mut op, &mut u, t, &[t + window], &tol, &mut |_, _| Ok(()))?;
+    while u[start].max(u[start + 1]) >= opts.tail && t < t_stop {
+        let window = t.min(t_stop - t);
+        let st = trbdf2::integrate(&mut op, &mut u, &[window], &tol, |_, _, _| Ok(()))?;
         (steps, rejected) = (steps + st.steps, rejected + st.rejected);
         t += window;
     }
     let n = op.n;
-    // The no-event part's integrals in closed form (its atom included).
-    let (in0, jn0) = op
-        .split
-        .as_ref()
-        .map_or((0.0, 0.0), |ne| ne.integrals(m.start, t));
     let sw = |p: (f64, f64)| if swapped { (p.1, p.0) } else { p };
-    let i = sw((u[n] + in0, u[n + 1]));
-    let sec = sw((2.0 * (t * u[n] - u[n + 2]) + 2.0 * jn0, 2.0 * (t * u[n + 1] - u[n + 3])));
+    let (i, j) = (sw((u[n], u[n + 1])), sw((u[n + 2], u[n + 3])));
+    let second = |i: f64, j: f64| 2.0 * (t * i - j);
     let (sp, sm): (Vec<f64>, Vec<f64>) = rec.s.iter().map(|&p| sw(p)).unzip();
     let (fp, fm): (Vec<f64>, Vec<f64>) = rec.f.iter().map(|&p| sw(p)).unzip();
     let par = cp.params();
@@ -637,9 +445,9 @@ pub fn distribution(
         mean: 0.5 * (i.0 + i.1),
         mean_plus: i.0,
         mean_minus: i.1,
-        second: 0.5 * (sec.0 + sec.1),
+        second: 0.5 * (second(i.0, j.0) + second(i.1, j.1)),
         t_end: t,
-        tail_mass: 0.5 * (u[start] + op.no_event_at_start(t) + u[start + 1]),
+        tail_mass: 0.5 * (u[start] + u[start + 1]),
         atom_time,
         atom_mass: 0.5 * (atom.0 + atom.1),
         atom_mass_plus: atom.0,
