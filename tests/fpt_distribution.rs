@@ -237,7 +237,22 @@ fn cli_backward_and_exact_write_their_tables() {
     assert!((v["variance"].as_f64().unwrap() - (t2 - tau * tau)).abs() < 1e-9 * t2);
     let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
     assert!(csv.starts_with("t,survival,density,"), "{csv}");
-    assert_eq!(csv.lines().count(), 22);
+    // Rows before 1.3 atom_time are withheld (unreliable pointwise).
+    let from = v["pointwise_from"].as_f64().unwrap();
+    let withheld = v["rows_withheld"].as_u64().unwrap() as usize;
+    assert!((from - 1.3 * v["atom_time"].as_f64().unwrap()).abs() < 1e-12 * from);
+    assert!(withheld > 0 && withheld < 21, "{withheld}");
+    assert_eq!(csv.lines().count(), 1 + 21 - withheld);
+    let first: f64 = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(first >= from, "first row t = {first} < {from}");
     let dir = tmp.path().join("e");
     let mut a = PAPER.to_vec();
     let d = dir.to_str().unwrap();
@@ -255,6 +270,22 @@ fn cli_backward_and_exact_write_their_tables() {
     let h = std::fs::read_to_string(dir.join("histogram.csv")).unwrap();
     assert!(h.starts_with("t_lo,t_hi,density,density_err,count"), "{h}");
     assert!(dir.join("survival.csv").exists());
+}
+
+#[test]
+fn cli_refuses_a_grid_entirely_before_the_reliable_times() {
+    // t_max 0.01 is far below 1.3 x the flow time (~0.2 here): exit 4, one
+    // line naming the cause, nothing written.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let mut a = PAPER.to_vec();
+    a.extend(["--vt", "0.5", "--cells", "200", "--t-max", "0.01"]);
+    a.extend(["--out", dir.to_str().unwrap()]);
+    let out = irtp(&a);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{err}");
+    assert!(err.contains("atom's flow time"), "{err}");
+    assert!(!dir.join("distribution.csv").exists());
 }
 
 #[test]

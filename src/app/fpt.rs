@@ -5,7 +5,9 @@
 //!   times up to `--t-max` ([`crate::mfpt::distribution`]), and the moments
 //!   tau, E[T²], variance and coefficient of variation from the stationary
 //!   equations L T1 = -1, L T2 = -2 T1 ([`crate::mfpt::backward::moments`]);
-//!   `distribution.csv`.
+//!   `distribution.csv`, from 1.3 × the atom's flow time on (earlier rows,
+//!   unreliable pointwise, are withheld; a grid that ends before is refused
+//!   with exit 4).
 //! - `--method exact`: the exact first-passage sampler's arrival-time
 //!   histogram (`histogram.csv`, density with its standard error on the
 //!   fixed log grid of [`crate::mfpt::survival`]) and the Kaplan-Meier
@@ -304,6 +306,11 @@ struct BackwardPart {
     tail_mass: f64,
     atom_time: f64,
     atom_mass: f64,
+    /// Rows of `distribution.csv` start here (1.3 atom_time): earlier
+    /// pointwise values are unreliable and withheld.
+    pointwise_from: f64,
+    /// Output times before `pointwise_from`, withheld.
+    rows_withheld: usize,
     steps: usize,
     rejected_steps: usize,
 }
@@ -335,7 +342,8 @@ pub fn run(a: &DistributionArgs, ctx: &Context) -> crate::Result<Outcome> {
                 mfpt::distribution(&c.problem, grid.times(), opts)?
             };
             ctx.check()?;
-            (backward_report(&c, opts, &d), vec![distribution_table(&d)])
+            let table = distribution_table(&d)?;
+            (backward_report(&c, opts, &d), vec![table])
         }
         Kind::Exact(run) => {
             let st = {
@@ -398,6 +406,8 @@ fn backward_report<'a>(c: &'a Config, opts: &DistributionOptions, d: &Distributi
             tail_mass: d.tail_mass,
             atom_time: d.atom_time,
             atom_mass: d.atom_mass,
+            pointwise_from: d.pointwise_from(),
+            rows_withheld: withheld(d),
             steps: d.steps,
             rejected_steps: d.rejected,
         }),
@@ -451,9 +461,27 @@ fn exact_report<'a>(c: &'a Config, st: &FptStats, seed: u64) -> Report<'a> {
     }
 }
 
-/// `distribution.csv`: S and f (mixture, +, -) at the output times.
-fn distribution_table(d: &Distribution) -> Table {
-    let rows = (0..d.t.len()).map(|i| {
+/// Output times before [`Distribution::pointwise_from`].
+fn withheld(d: &Distribution) -> usize {
+    d.t.iter().filter(|&&t| !(t >= d.pointwise_from())).count()
+}
+
+/// `distribution.csv`: S and f (mixture, +, -) at the output times from
+/// [`Distribution::pointwise_from`] on; a numerical failure (exit 4) when
+/// no output time is that late.
+fn distribution_table(d: &Distribution) -> crate::Result<Table> {
+    let from = withheld(d);
+    if from == d.t.len() {
+        return Err(crate::Error::Numerical {
+            method: "mfpt distribution (backward)",
+            reason: format!(
+                "pointwise S and f are unreliable before 1.3 x the atom's flow time = {:.6} \
+                 (mesh ripples from the atom; the moments are unaffected): raise --t-max",
+                d.pointwise_from()
+            ),
+        });
+    }
+    let rows = (from..d.t.len()).map(|i| {
         [
             d.t[i],
             d.survival[i],
@@ -473,7 +501,7 @@ fn distribution_table(d: &Distribution) -> Table {
         "survival_minus",
         "density_minus",
     ];
-    Table::from_rows("distribution", &header, rows)
+    Ok(Table::from_rows("distribution", &header, rows))
 }
 
 /// `histogram.csv`: the sampled first-passage-time density of the mixture
