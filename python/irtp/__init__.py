@@ -12,7 +12,8 @@ One function per CLI command, keywords named as the flags (``lambda_`` and
 - :func:`simulate`: particles (exact sampler or Euler, Eqs. (30)-(32))
 - :func:`analytic`: the r = 0 density, Eqs. (34)-(35)
 - :func:`fp_stationary`, :func:`fp_transient`: Fokker-Planck, Eqs. (11)-(12)
-- :func:`mfpt`, :func:`mfpt_scan`, :func:`mfpt_optimize`: first passage,
+- :func:`mfpt`, :func:`mfpt_scan`, :func:`mfpt_optimize`,
+  :func:`mfpt_distribution`: first passage,
   Eqs. (26)-(28)
 - :func:`reproduce`: the paper's figures
 
@@ -29,6 +30,7 @@ from ._api import (
     fp_msd,
     fp_transient,
     mfpt,
+    mfpt_distribution,
     mfpt_optimize,
     mfpt_scan,
     reproduce,
@@ -41,6 +43,7 @@ from ._results import (
     FpStationaryResult,
     FpMsdResult,
     FpTransientResult,
+    MfptDistributionResult,
     MfptOptimizeResult,
     MfptResult,
     MfptScanResult,
@@ -53,7 +56,7 @@ __version__: str = _irtp.__version__
 
 for _cls in (Drag, Reset, PoissonReset, Params, Result, SimulateResult, AnalyticResult,
              FpStationaryResult, FpTransientResult, FpMsdResult, MfptResult, MfptScanResult,
-             MfptOptimizeResult, ReproduceResult):
+             MfptOptimizeResult, MfptDistributionResult, ReproduceResult):
     _cls.__module__ = "irtp"
 del _cls
 
@@ -66,6 +69,7 @@ __all__ = [
     "mfpt",
     "mfpt_scan",
     "mfpt_optimize",
+    "mfpt_distribution",
     "reproduce",
     "Drag",
     "Reset",
@@ -82,6 +86,7 @@ __all__ = [
     "MfptResult",
     "MfptScanResult",
     "MfptOptimizeResult",
+    "MfptDistributionResult",
     "ReproduceResult",
     "__version__",
 ]

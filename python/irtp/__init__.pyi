@@ -242,6 +242,28 @@ class MfptOptimizeResult(Result):
     r_min: float
     r_max: float
 
+class MfptDistributionResult(Result):
+    summary: Dict[str, Any]
+    # backward: table distribution
+    t: Array
+    survival: Array
+    density: Array
+    survival_plus: Array
+    density_plus: Array
+    survival_minus: Array
+    density_minus: Array
+    # exact: tables histogram and survival
+    t_lo: Array
+    t_hi: Array
+    density_err: Array
+    count: Array
+    survival_err: Array
+    at_risk: Array
+    tau: float
+    second_moment: float
+    variance: float
+    cv: float
+
 class ReproduceResult(Result):
     summary: Dict[str, Any]
 
@@ -433,6 +455,33 @@ def mfpt_optimize(
     progress: ProgressArg = ...,
     threads: Optional[int] = ...,
 ) -> MfptOptimizeResult: ...
+def mfpt_distribution(
+    *,
+    drag: Union[DragName, str, Drag] = ...,
+    sigma: float = ...,
+    lambda_: float = ...,
+    rate: float = ...,
+    reset_velocity: float = ...,
+    v0: float,
+    cells: int = ...,
+    vt: float,
+    method: Literal["backward", "exact"] = ...,
+    t_max: float = ...,
+    points: int = ...,
+    grid: Literal["linear", "log"] = ...,
+    t_min: float = ...,
+    rtol: float = ...,
+    particles: int = ...,
+    seed: int = ...,
+    out: Optional[PathLike] = ...,
+    force: bool = ...,
+    max_work: float = ...,
+    max_memory: float = ...,
+    params: ParamsArg = ...,
+    reset: Optional[Reset] = ...,
+    progress: ProgressArg = ...,
+    threads: Optional[int] = ...,
+) -> MfptDistributionResult: ...
 def reproduce(
     *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "all"],
     out: PathLike,

@@ -232,6 +232,11 @@ class MfptOptimizeResult(Result):
     """Result of :func:`irtp.mfpt_optimize`: table "rate_grid"."""
 
 
+class MfptDistributionResult(Result):
+    """Result of :func:`irtp.mfpt_distribution`: table "distribution"
+    (backward) or "histogram" and "survival" (exact)."""
+
+
 class ReproduceResult(Result):
     """Result of :func:`irtp.reproduce`: no tables; files in ``files``."""
 
@@ -245,6 +250,7 @@ RESULT_CLASS = {
     "mfpt": MfptResult,
     "mfpt scan": MfptScanResult,
     "mfpt optimize": MfptOptimizeResult,
+    "mfpt distribution": MfptDistributionResult,
     "reproduce": ReproduceResult,
 }
 

@@ -10,7 +10,7 @@ use clap::{Arg, ArgAction, Command, CommandFactory};
 use std::any::TypeId;
 
 /// The commands a Python function can run.
-pub const COMMANDS: [&str; 8] = [
+pub const COMMANDS: [&str; 9] = [
     "simulate",
     "analytic",
     "fp stationary",
@@ -18,6 +18,7 @@ pub const COMMANDS: [&str; 8] = [
     "mfpt",
     "mfpt scan",
     "mfpt optimize",
+    "mfpt distribution",
     "reproduce",
 ];
 

@@ -2,7 +2,9 @@
 //!
 //! - `irtp mfpt --v0 V0 --vt VT [--method ode|euler|exact]`: one problem;
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
-//! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate.
+//! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate;
+//! - `irtp mfpt distribution --vt VT [--method backward|exact]`: the
+//!   first-passage-time distribution ([`super::fpt`]).
 //!
 //! Every method runs through the library's one entry point, `irtp::mfpt::solve`.
 //! Particle methods never present a mean over censored samples: when any
@@ -43,19 +45,22 @@ pub enum MfptCommand {
     Scan(ScanArgs),
     /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]).
     Optimize(OptimizeArgs),
+    /// First-passage-time distribution: survival S(t), density f(t), variance
+    /// (backward equations), or the sampled histogram and Kaplan-Meier curve (exact).
+    Distribution(super::fpt::DistributionArgs),
 }
 
 /// Start and discretisation of the backward equations.
 #[derive(Args, Debug, Clone)]
-struct ProblemArgs {
+pub(super) struct ProblemArgs {
     #[command(flatten)]
-    model: ModelArgs,
+    pub(super) model: ModelArgs,
     /// Initial velocity v_0 (inside (v_l, v_u), on the same side of v_t as v_r).
     #[arg(long, required = true, allow_hyphen_values = true)]
-    v0: Option<f64>,
+    pub(super) v0: Option<f64>,
     /// Cells of the backward-equation mesh on [v_l, v_t].
     #[arg(long, default_value_t = 20_000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
-    cells: usize,
+    pub(super) cells: usize,
 }
 
 /// How tau is computed.
@@ -175,6 +180,7 @@ impl MfptArgs {
             None => self.direct.output.json,
             Some(MfptCommand::Scan(a)) => a.output.json,
             Some(MfptCommand::Optimize(a)) => a.output.json,
+            Some(MfptCommand::Distribution(a)) => a.json(),
         }
     }
 }
@@ -186,6 +192,7 @@ impl MfptArgs {
             None => self.direct.sim.method != Method::Ode,
             Some(MfptCommand::Scan(a)) => a.sim.method != Method::Ode,
             Some(MfptCommand::Optimize(_)) => false,
+            Some(MfptCommand::Distribution(a)) => a.uses_seed(),
         }
     }
 
@@ -195,6 +202,7 @@ impl MfptArgs {
             None => self.direct.config().map(drop),
             Some(MfptCommand::Scan(a)) => a.config().map(drop),
             Some(MfptCommand::Optimize(a)) => a.config().map(drop),
+            Some(MfptCommand::Distribution(a)) => a.validate(),
         }
     }
 }
@@ -205,12 +213,13 @@ pub fn run(args: &MfptArgs, ctx: &Context) -> crate::Result<Outcome> {
         None => run_direct(&args.direct, ctx),
         Some(MfptCommand::Scan(a)) => run_scan(a, ctx),
         Some(MfptCommand::Optimize(a)) => run_optimize(a, ctx),
+        Some(MfptCommand::Distribution(a)) => super::fpt::run(a, ctx),
     }
 }
 
 impl ProblemArgs {
     /// Flags → validated problem (start v_0, target `vt`) and mesh.
-    fn config(&self, vt: f64) -> crate::Result<(Problem, BackwardOptions)> {
+    pub(super) fn config(&self, vt: f64) -> crate::Result<(Problem, BackwardOptions)> {
         let params = self.model.params()?;
         let v0 = self
             .v0
@@ -445,7 +454,7 @@ fn censoring_note(s: &FptSummary) -> String {
 }
 
 /// `survival.csv`: the Kaplan-Meier survival curve of the passage times.
-fn survival_table(c: &SurvivalCurve) -> Table {
+pub(super) fn survival_table(c: &SurvivalCurve) -> Table {
     let rows = (0..c.t.len()).map(|i| {
         [
             c.t[i],
@@ -464,7 +473,7 @@ fn survival_table(c: &SurvivalCurve) -> Table {
 /// `key = value` lines of a JSON object (its `problem` left out): a value
 /// with an `<key>_err` beside it as `value ± error` (2 significant digits
 /// of the error), other numbers to 10 significant digits.
-fn text_lines(v: &serde_json::Value) -> String {
+pub(super) fn text_lines(v: &serde_json::Value) -> String {
     let mut text = String::new();
     let Some(obj) = v.as_object() else {
         return text;

@@ -17,6 +17,7 @@ pub mod common;
 pub mod format;
 pub mod fp;
 pub mod fp_msd;
+pub mod fpt;
 pub mod keywords;
 pub mod mfpt;
 pub mod reproduce;

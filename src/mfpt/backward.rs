@@ -117,13 +117,16 @@ impl Profile {
 
 /// Mesh of [v_l, v_t] (canonical, upward frame) with v_0 and v_r as nodes:
 /// uniform per segment, except the last one when v_t is close to v_u.
-struct Mesh {
-    v: Vec<f64>,
-    start: usize,
-    reset: usize,
+pub(super) struct Mesh {
+    /// Nodes, increasing.
+    pub(super) v: Vec<f64>,
+    /// Index of v_0.
+    pub(super) start: usize,
+    /// Index of v_r.
+    pub(super) reset: usize,
 }
 
-fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
+pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
     let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
@@ -224,7 +227,7 @@ fn drifts<D: Drag>(g: D, sigma: f64, v: f64, sign: DriftSign) -> (f64, f64) {
 /// Banded matrix with partial pivoting (LINPACK-style band LU). Hand-written:
 /// the crate has no banded solver, and with 2 sub- and 2 super-diagonals a
 /// dense or sparse general solver would be far slower.
-struct Band {
+pub(super) struct Band {
     n: usize,
     kl: usize,
     ku: usize,
@@ -234,7 +237,7 @@ struct Band {
 }
 
 impl Band {
-    fn new(n: usize, kl: usize, ku: usize) -> Self {
+    pub(super) fn new(n: usize, kl: usize, ku: usize) -> Self {
         let w = 2 * kl + ku + 1;
         Band {
             n,
@@ -251,11 +254,20 @@ impl Band {
         i * self.w + (j + self.kl - i)
     }
     #[inline]
-    fn set(&mut self, i: usize, j: usize, x: f64) {
+    pub(super) fn set(&mut self, i: usize, j: usize, x: f64) {
         let k = self.idx(i, j);
         self.a[k] = x;
     }
-    fn factor(&mut self) -> Result<()> {
+    /// Entry (i, j) of an unfactored matrix, |i - j| within the band.
+    #[inline]
+    pub(super) fn get(&self, i: usize, j: usize) -> f64 {
+        self.a[self.idx(i, j)]
+    }
+    /// The columns j of row i inside the band (unfactored).
+    pub(super) fn row_range(&self, i: usize) -> std::ops::RangeInclusive<usize> {
+        i.saturating_sub(self.kl)..=(i + self.ku).min(self.n - 1)
+    }
+    pub(super) fn factor(&mut self) -> Result<()> {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
             let last = (k + kl).min(n - 1);
@@ -299,7 +311,7 @@ impl Band {
         Ok(())
     }
     #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
-    fn solve(&self, b: &mut [f64]) {
+    pub(super) fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
             b.swap(k, self.piv[k]);
@@ -319,10 +331,84 @@ impl Band {
 }
 
 /// Source terms s± of the equations "... = -s±": 1 for the MFPT itself,
-/// node values for derivatives.
+/// node values for derivatives and higher moments.
 enum Source<'a> {
     One,
     Nodes(&'a [f64], &'a [f64]),
+}
+
+/// The box-scheme operator on a mesh, before any right-hand side: the band
+/// part (unknowns interleaved tau+_0, tau-_0, tau+_1, ...) and the two
+/// border columns multiplying the reset values x±(v_r). Row 0 is the
+/// regularity relation at v_l (minus the generator of the - state), rows
+/// 1..n-2 are h·(generator) at the cell midpoints, the last row x+(v_t) = 0.
+pub(super) struct Assembly {
+    /// The band part (unfactored).
+    pub(super) band: Band,
+    /// Border column of x+(v_r).
+    pub(super) cp: Vec<f64>,
+    /// Border column of x-(v_r).
+    pub(super) cm: Vec<f64>,
+}
+
+/// Assemble the operator of the simulated (or printed) drifts at `rate`.
+pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Assembly {
+    let par = &p.params();
+    let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
+    let nodes = m.v.len();
+    let n = 2 * nodes;
+    let mut a = Band::new(n, 2, 2);
+    let mut cp = vec![0.0; n];
+    let mut cm = vec![0.0; n];
+    // Row 0: regularity of tau- at v_l.
+    a.set(0, 0, -lam);
+    a.set(0, 1, lam + rate);
+    cm[0] = -rate;
+    for i in 0..nodes - 1 {
+        let h = m.v[i + 1] - m.v[i];
+        let mid = 0.5 * (m.v[i] + m.v[i + 1]);
+        let (ap, am) = drifts(g, sigma, mid, sign);
+        let hl = 0.5 * h * lam;
+        let hd = 0.5 * h * (lam + rate);
+        let (rp, rm) = (2 * i + 1, 2 * i + 2);
+        let (pi, mi, pj, mj) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        a.set(rp, pi, -ap - hd);
+        a.set(rp, pj, ap - hd);
+        a.set(rp, mi, hl);
+        a.set(rp, mj, hl);
+        cp[rp] = h * rate;
+        a.set(rm, mi, -am - hd);
+        a.set(rm, mj, am - hd);
+        a.set(rm, pi, hl);
+        a.set(rm, pj, hl);
+        cm[rm] = h * rate;
+    }
+    // Last row: tau+(v_t) = 0.
+    a.set(n - 1, n - 2, 1.0);
+    Assembly { band: a, cp, cm }
+}
+
+/// The right-hand side of "operator · x = -M s" for sources s±: -h times
+/// the cell averages of s on the cell rows, s-(v_l) on row 0, 0 on the
+/// last (M: the mass matrix of the time-dependent equations,
+/// [`super::distribution`]).
+fn rhs(m: &Mesh, src: &Source) -> Vec<f64> {
+    let nodes = m.v.len();
+    let s_at = |i: usize| -> (f64, f64) {
+        match *src {
+            Source::One => (1.0, 1.0),
+            Source::Nodes(sp, sm) => (sp[i], sm[i]),
+        }
+    };
+    let mut b = vec![0.0; 2 * nodes];
+    b[0] = s_at(0).1;
+    for i in 0..nodes - 1 {
+        let h = m.v[i + 1] - m.v[i];
+        let (s0, s1) = (s_at(i), s_at(i + 1));
+        b[2 * i + 1] = -h * 0.5 * (s0.0 + s1.0);
+        b[2 * i + 2] = -h * 0.5 * (s0.1 + s1.1);
+    }
+    b
 }
 
 /// Solve on the canonical (upward) mesh; returns (tau+, tau-) at the nodes,
@@ -335,50 +421,13 @@ fn solve_mesh(
     sign: DriftSign,
     src: Source,
 ) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
-    let par = &p.params();
-    let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
     let nodes = m.v.len();
-    let n = 2 * nodes;
-    let mut a = Band::new(n, 2, 2);
-    let mut b = vec![0.0; n];
-    let mut cp = vec![0.0; n];
-    let mut cm = vec![0.0; n];
-    let s_at = |i: usize| -> (f64, f64) {
-        match src {
-            Source::One => (1.0, 1.0),
-            Source::Nodes(sp, sm) => (sp[i], sm[i]),
-        }
-    };
-    // Row 0: regularity of tau- at v_l.
-    a.set(0, 0, -lam);
-    a.set(0, 1, lam + rate);
-    cm[0] = -rate;
-    b[0] = s_at(0).1;
-    for i in 0..nodes - 1 {
-        let h = m.v[i + 1] - m.v[i];
-        let mid = 0.5 * (m.v[i] + m.v[i + 1]);
-        let (ap, am) = drifts(g, sigma, mid, sign);
-        let (s0, s1) = (s_at(i), s_at(i + 1));
-        let hl = 0.5 * h * lam;
-        let hd = 0.5 * h * (lam + rate);
-        let (rp, rm) = (2 * i + 1, 2 * i + 2);
-        let (pi, mi, pj, mj) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
-        a.set(rp, pi, -ap - hd);
-        a.set(rp, pj, ap - hd);
-        a.set(rp, mi, hl);
-        a.set(rp, mj, hl);
-        cp[rp] = h * rate;
-        b[rp] = -h * 0.5 * (s0.0 + s1.0);
-        a.set(rm, mi, -am - hd);
-        a.set(rm, mj, am - hd);
-        a.set(rm, pi, hl);
-        a.set(rm, pj, hl);
-        cm[rm] = h * rate;
-        b[rm] = -h * 0.5 * (s0.1 + s1.1);
-    }
-    // Last row: tau+(v_t) = 0.
-    a.set(n - 1, n - 2, 1.0);
-    b[n - 1] = 0.0;
+    let Assembly {
+        band: mut a,
+        cp,
+        cm,
+    } = assemble(p, m, rate, sign);
+    let mut b = rhs(m, &src);
     a.factor()?;
     a.solve(&mut b);
     let mut x = b;
@@ -541,6 +590,112 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
         error_estimate,
         ..fine
     })
+}
+
+/// The first two moments of the first-passage time at v_0: T1± = tau±
+/// from L T1 = -1, T2± = E[T²] from L T2 = -2 T1 (the same operator, mesh
+/// and boundary conditions, a new right-hand side), and what follows for a
+/// uniformly random initial noise state (the mixture, as tau): variance
+/// E[T²] - tau² and coefficient of variation sqrt(variance)/tau.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Moments {
+    /// tau = (tau+ + tau-)/2 (paper Eq. (28)).
+    pub tau: f64,
+    /// Mean starting in +Sigma.
+    pub tau_plus: f64,
+    /// Mean starting in -Sigma.
+    pub tau_minus: f64,
+    /// E[T²] = (T2+ + T2-)/2.
+    pub second: f64,
+    /// E[T²] starting in +Sigma.
+    pub second_plus: f64,
+    /// E[T²] starting in -Sigma.
+    pub second_minus: f64,
+    /// E[T²] - tau².
+    pub variance: f64,
+    /// T2+ - tau+².
+    pub variance_plus: f64,
+    /// T2- - tau-².
+    pub variance_minus: f64,
+    /// sqrt(variance) / tau.
+    pub cv: f64,
+    /// sqrt(variance_plus) / tau_plus.
+    pub cv_plus: f64,
+    /// sqrt(variance_minus) / tau_minus.
+    pub cv_minus: f64,
+    /// Cells used.
+    pub cells: usize,
+}
+
+impl Moments {
+    fn new(t1: (f64, f64), t2: (f64, f64), cells: usize) -> Self {
+        let tau = 0.5 * (t1.0 + t1.1);
+        let second = 0.5 * (t2.0 + t2.1);
+        let var = |m2: f64, m: f64| m2 - m * m;
+        let (variance, variance_plus, variance_minus) =
+            (var(second, tau), var(t2.0, t1.0), var(t2.1, t1.1));
+        Moments {
+            tau,
+            tau_plus: t1.0,
+            tau_minus: t1.1,
+            second,
+            second_plus: t2.0,
+            second_minus: t2.1,
+            variance,
+            variance_plus,
+            variance_minus,
+            cv: variance.sqrt() / tau,
+            cv_plus: variance_plus.sqrt() / t1.0,
+            cv_minus: variance_minus.sqrt() / t1.1,
+            cells,
+        }
+    }
+}
+
+/// T1± and T2± on the canonical mesh `m` (see [`Moments`]).
+pub(super) fn moment_nodes(
+    cp: &Problem,
+    m: &Mesh,
+    sign: DriftSign,
+) -> Result<[(Vec<f64>, Vec<f64>); 2]> {
+    let rate = cp.params().rate();
+    let (tp, tm) = solve_mesh(cp, m, rate, sign, Source::One)?.ok_or_else(overflow)?;
+    let (sp, sm): (Vec<f64>, Vec<f64>) = (
+        tp.iter().map(|t| 2.0 * t).collect(),
+        tm.iter().map(|t| 2.0 * t).collect(),
+    );
+    let second = solve_mesh(cp, m, rate, sign, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
+    Ok([(tp, tm), second])
+}
+
+/// The first two moments of the first-passage time at v_0 (see
+/// [`Moments`]); [`Error::Overflow`] when E[T²] exceeds the f64 range.
+pub fn moments(problem: &Problem, opts: &BackwardOptions) -> Result<Moments> {
+    opts.validate()?;
+    let (cp, swapped) = problem.canonical();
+    let m = mesh(&cp, opts.cells)?;
+    let [(tp, tm), (qp, qm)] = moment_nodes(&cp, &m, opts.drift)?;
+    let i = m.start;
+    let (t1, t2) = if swapped {
+        ((tm[i], tp[i]), (qm[i], qp[i]))
+    } else {
+        ((tp[i], tm[i]), (qp[i], qm[i]))
+    };
+    let out = Moments::new(t1, t2, m.v.len() - 1);
+    verified(problem, out.at_start())?;
+    Ok(out)
+}
+
+impl Moments {
+    fn at_start(&self) -> BackwardSolution {
+        BackwardSolution {
+            tau: self.tau,
+            tau_plus: self.tau_plus,
+            tau_minus: self.tau_minus,
+            cells: self.cells,
+            error_estimate: f64::NAN,
+        }
+    }
 }
 
 /// tau(v_0) at r = 0 and its derivative d tau / d r at r = 0 (the rate in

@@ -29,6 +29,7 @@
 //! - [`optimize`]: scans and the optimal resetting rate.
 
 pub mod backward;
+pub mod distribution;
 pub mod estimator;
 pub mod euler;
 pub mod exact;
@@ -40,7 +41,8 @@ use crate::error::{finite, Error, Result};
 use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
-pub use backward::{BackwardOptions, BackwardSolution, DriftSign};
+pub use backward::{BackwardOptions, BackwardSolution, DriftSign, Moments};
+pub use distribution::{distribution, Distribution, DistributionOptions};
 pub use estimator::{first_passage_stats, FptSample, FptStats, FptSummary};
 pub use euler::EulerFpt;
 pub use exact::FirstPassage;

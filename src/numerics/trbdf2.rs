@@ -1,4 +1,5 @@
-//! Adaptive TR-BDF2 for linear autonomous systems M u' = A u.
+//! Adaptive TR-BDF2 for linear systems M u' = A u (+ F(t), an optional
+//! forcing, [`ShiftedLinear::forcing`]).
 //!
 //! TR-BDF2 (Bank, Coughran, Fichtner, Grosse, Rose & Smith, IEEE Trans.
 //! Electron Devices 32, 1985) written as the three-stage ESDIRK of Hosea &
@@ -47,6 +48,16 @@ pub trait ShiftedLinear {
     fn atol(&self, i: usize, atol: f64) -> f64 {
         let _ = i;
         atol
+    }
+    /// A forcing F(t) (time measured from the start of [`integrate`]):
+    /// fill `out` and return true to integrate M u' = A u + F(t) instead.
+    /// Default: none (false, `out` untouched). F is sampled at t, t + γh and
+    /// t + h of every step, so a jump of F in time must be an output time
+    /// (where the step lands), with F(t) there its limit from the side the
+    /// step comes from.
+    fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
+        let _ = (t, out);
+        false
     }
 }
 
@@ -110,6 +121,8 @@ struct Work {
     mu: Vec<f64>,
     rhs: Vec<f64>,
     err: Vec<f64>,
+    /// Forcing at a stage time.
+    fc: Vec<f64>,
 }
 
 impl Work {
@@ -124,6 +137,7 @@ impl Work {
             mu: z(),
             rhs: z(),
             err: z(),
+            fc: z(),
         }
     }
 }
@@ -153,7 +167,7 @@ pub fn integrate<O: ShiftedLinear>(
             }
             let last = t + 1.1 * h >= t_out;
             let h_step = if last { t_out - t } else { h };
-            let (err, accepted) = step(op, u, h_step, tol, &mut w, &mut stats)?;
+            let (err, accepted) = step(op, u, t, h_step, tol, &mut w, &mut stats)?;
             let factor = (SAFETY * err.powf(-1.0 / 3.0)).clamp(SHRINK_MIN, GROW_MAX);
             if accepted {
                 t = if last { t_out } else { t + h_step };
@@ -233,6 +247,11 @@ fn first_step<O: ShiftedLinear>(
         return h.min(tol.h_max);
     }
     op.apply(u, &mut w.f0);
+    if op.forcing(0.0, &mut w.fc) {
+        for (f, x) in w.f0.iter_mut().zip(&w.fc) {
+            *f += x;
+        }
+    }
     let (mut d0, mut d1) = (0.0f64, 0.0f64);
     for (i, (&x, &f)) in u.iter().zip(&w.f0).enumerate() {
         let sc = op.atol(i, tol.atol) + tol.rtol * x.abs();
@@ -252,11 +271,13 @@ fn first_step<O: ShiftedLinear>(
     h.min(t_out).min(tol.h_max).max(1e-12 * t_out.min(tol.h_max))
 }
 
-/// One attempted step of size h: on acceptance `u` holds u(t + h).
+/// One attempted step of size h from time t: on acceptance `u` holds
+/// u(t + h). With a forcing, F_i = A u_i + F(t_i) at the stage times.
 /// Returns (error norm, accepted).
 fn step<O: ShiftedLinear>(
     op: &mut O,
     u: &mut [f64],
+    t: f64,
     h: f64,
     tol: &Tolerances,
     w: &mut Work,
@@ -265,22 +286,43 @@ fn step<O: ShiftedLinear>(
     let c = D * h;
     let n = u.len();
     op.apply(u, &mut w.f0);
+    if op.forcing(t, &mut w.fc) {
+        for i in 0..n {
+            w.f0[i] += w.fc[i];
+        }
+    }
     op.apply_mass(u, &mut w.mu);
-    // Trapezoidal stage: (M - cA) u_γ = M u + c F0.
+    // Trapezoidal stage: (M - cA) u_γ = M u + c F0 (+ c F(t + γh)).
     for i in 0..n {
         w.rhs[i] = w.mu[i] + c * w.f0[i];
     }
+    if op.forcing(t + GAMMA * h, &mut w.fc) {
+        for i in 0..n {
+            w.rhs[i] += c * w.fc[i];
+        }
+    }
     op.solve_shifted(c, &w.rhs, &mut w.ug)?;
-    // F1 = A u_γ from the stage relation (the stiff part is not re-amplified).
+    // F1 = A u_γ (+ F) from the stage relation (the stiff part is not
+    // re-amplified).
     op.apply_mass(&w.ug, &mut w.f1);
     for i in 0..n {
         w.f1[i] = (w.f1[i] - w.mu[i]) / c - w.f0[i];
     }
-    // BDF2 stage: (M - cA) u_{n+1} = M u + h w (F0 + F1).
+    // BDF2 stage: (M - cA) u_{n+1} = M u + h w (F0 + F1) (+ c F(t + h)).
     for i in 0..n {
         w.rhs[i] = w.mu[i] + h * W * (w.f0[i] + w.f1[i]);
     }
-    op.solve_shifted(c, &w.rhs, &mut w.un)?;
+    let forced = op.forcing(t + h, &mut w.fc);
+    if forced {
+        // w.err holds the right-hand side with the forcing for the solve.
+        for i in 0..n {
+            w.err[i] = w.rhs[i] + c * w.fc[i];
+        }
+        op.solve_shifted(c, &w.err, &mut w.un)?;
+    } else {
+        op.solve_shifted(c, &w.rhs, &mut w.un)?;
+    }
+    // F2 = A u_{n+1} (+ F(t + h)) = (M u_{n+1} - M u - h w (F0 + F1)) / c.
     op.apply_mass(&w.un, &mut w.f2);
     for i in 0..n {
         w.f2[i] = (w.f2[i] - w.rhs[i]) / c;
@@ -416,6 +458,50 @@ mod tests {
             s6.steps,
             s9.steps
         );
+    }
+
+    /// u' = -u + 1 (scalar, forcing 1): u = 1 - e^{-t} from u(0) = 0.
+    struct Forced;
+
+    impl ShiftedLinear for Forced {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn apply(&self, u: &[f64], out: &mut [f64]) {
+            out[0] = -u[0];
+        }
+        fn solve_shifted(
+            &mut self,
+            c: f64,
+            b: &[f64],
+            x: &mut [f64],
+        ) -> std::result::Result<(), Failure> {
+            x[0] = b[0] / (1.0 + c);
+            Ok(())
+        }
+        fn forcing(&self, _t: f64, out: &mut [f64]) -> bool {
+            out[0] = 1.0;
+            true
+        }
+    }
+
+    #[test]
+    fn forcing_enters_at_every_stage() {
+        let times: Vec<f64> = (0..=10).map(|k| 0.5 * k as f64).collect();
+        let mut u = [0.0];
+        let tol = Tolerances {
+            rtol: 1e-9,
+            atol: 1e-9,
+            ..Default::default()
+        };
+        let mut worst = 0.0f64;
+        integrate(&mut Forced, &mut u, &times, &tol, |_, t, u| {
+            worst = worst.max((u[0] - (1.0 - (-t).exp())).abs());
+            Ok(())
+        })
+        .unwrap();
+        // Without the forcing u stays 0: an error of order 1.
+        assert!(worst < 1e-6, "error {worst:e}");
     }
 
     #[test]
