@@ -10,11 +10,12 @@ use clap::{Arg, ArgAction, Command, CommandFactory};
 use std::any::TypeId;
 
 /// The commands a Python function can run.
-pub const COMMANDS: [&str; 9] = [
+pub const COMMANDS: [&str; 10] = [
     "simulate",
     "analytic",
     "fp stationary",
     "fp transient",
+    "fp msd",
     "mfpt",
     "mfpt scan",
     "mfpt optimize",

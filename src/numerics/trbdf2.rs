@@ -268,7 +268,9 @@ fn first_step<O: ShiftedLinear>(
     // A tiny atol makes d1 huge for unknowns that start at 0: keep the
     // first step within 12 decades of the output time (the controller
     // shrinks it further if the error asks for it).
-    h.min(t_out).min(tol.h_max).max(1e-12 * t_out.min(tol.h_max))
+    h.min(t_out)
+        .min(tol.h_max)
+        .max(1e-12 * t_out.min(tol.h_max))
 }
 
 /// One attempted step of size h from time t: on acceptance `u` holds
