@@ -333,9 +333,11 @@ DOCS: Dict[str, Doc] = {
     ),
     "fp_transient": Doc(
         "Time-dependent Fokker-Planck solution from the paper's initial condition.",
-        "Integrates Eqs. (11)-(12) with the explicit upwind scheme of Sec. 3 on a\n"
-        "uniform mesh, from P± = 1/2 in the cell of v = 0; records <v²>(t) and\n"
-        "density snapshots.",
+        "Integrates Eqs. (11)-(12) from P± = 1/2 at v = 0: by default with the\n"
+        "adaptive, L-stable TR-BDF2 on the graded mesh (step set by rtol/atol,\n"
+        "Richardson in the mesh), or with scheme='paper', the explicit upwind\n"
+        "scheme of Sec. 3 on a uniform mesh (step set by cfl); records <v²>(t)\n"
+        "and density snapshots.",
         "FpTransientResult\n"
         "    moments: t, v2, v_mean, mass (``samples`` rows); snapshots: t, v, p,\n"
         "        p_plus, p_minus (``snapshots`` x ``cells`` rows, long format).",
@@ -345,8 +347,8 @@ DOCS: Dict[str, Doc] = {
     ),
     "fp_msd": Doc(
         "<x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling.",
-        "Solves the chain of x-weighted densities M_k = ∫ x^k P dx (k = 0, 1, 2)\n"
-        "of the forward equations with TR-BDF2 on nested graded meshes and\n"
+        "Solves the chain of x-weighted densities M_k = ∫ x^k P dx (k = 0, 1, 2;\n"
+        "docs/equations.md (D1)) of the forward equations Eqs. (11)-(12) with TR-BDF2 on nested graded meshes and\n"
         "Richardson extrapolation, from x = v = 0; output times: t = 0 and a log\n"
         "grid from t_min to t_max.",
         "FpMsdResult\n"
@@ -415,7 +417,9 @@ DOCS: Dict[str, Doc] = {
         "Eqs. (26)-(27) with drift ±sigma - g(v)) on the box-scheme mesh by\n"
         "TR-BDF2; the moments come from L T1 = -1 (tau, Eq. (28)) and\n"
         "L T2 = -2 T1 (variance, cv). The + start has an atom at the flow time\n"
-        "(atom_time, atom_mass); before it pointwise S and f show mesh ripples.\n"
+        "(atom_time, atom_mass); pointwise S and f are unreliable before\n"
+        "1.3 x atom_time (mesh ripples) and those rows are withheld\n"
+        "(summary: pointwise_from, rows_withheld).\n"
         "method='exact': the exact sampler's histogram and Kaplan-Meier curve.",
         "MfptDistributionResult\n"
         "    distribution: t, survival, density, survival_plus, density_plus,\n"
