@@ -34,25 +34,13 @@ fn linear_against_closed_forms(r: f64) {
         rtol: 4e-12,
     };
     let m = msd(&p, &o, &NoProgress).unwrap();
-    for k in 1..times.len() {
+    for (k, &t) in times.iter().enumerate().skip(1) {
         let e2 = m.x2[k] / exact.x2[k] - 1.0;
         let ev = m.v2[k] / exact.v2[k] - 1.0;
-        assert!(
-            e2.abs() <= 1e-8,
-            "r = {r}, t = {}: <x²> rel. error {e2:e}",
-            times[k]
-        );
-        assert!(
-            ev.abs() <= 1e-8,
-            "r = {r}, t = {}: <v²> rel. error {ev:e}",
-            times[k]
-        );
-        let ea = m.alpha[k] - 2.0 * times[k] * exact.xv[k] / exact.x2[k];
-        assert!(
-            ea.abs() <= 1e-7,
-            "r = {r}, t = {}: alpha error {ea:e}",
-            times[k]
-        );
+        assert!(e2.abs() <= 1e-8, "r = {r}, t = {t}: <x²> rel. error {e2:e}");
+        assert!(ev.abs() <= 1e-8, "r = {r}, t = {t}: <v²> rel. error {ev:e}");
+        let ea = m.alpha[k] - 2.0 * t * exact.xv[k] / exact.x2[k];
+        assert!(ea.abs() <= 1e-7, "r = {r}, t = {t}: alpha error {ea:e}");
     }
 }
 
@@ -89,8 +77,7 @@ fn fig5_curves_match_the_exact_sampler() {
         let det = msd(&p, &o, &NoProgress).unwrap();
         let sim_spec = SimSpec::new(10_000, grid.clone(), 50.0, 1, 100 + k as u64).unwrap();
         let sim = compute::moments(&compute::simulate(&p, &sim_spec, &NoProgress).unwrap());
-        for j in 1..=n {
-            let s = &sim[j];
+        for (j, s) in sim.iter().enumerate().take(n + 1).skip(1) {
             assert_eq!(s.t, det.t[j]);
             let z = (det.x2[j] - s.x2) / s.x2_err;
             assert!(
