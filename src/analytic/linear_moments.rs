@@ -9,21 +9,21 @@
 //! L f(x, v, η) = v ∂_x f + (η - v) ∂_v f + λ [f(x, v, -η) - f] + r [f(x, v_r, η) - f],
 //! ```
 //!
-//! and d<f>/dt = <L f>. With η² = Σ² and <η>(t) = 0 (L η = -2λ η, <η>(0) = 0):
+//! and d⟨f⟩/dt = ⟨L f⟩. With η² = Σ² and <η>(t) = 0 (L η = -2λ η, <η>(0) = 0):
 //!
 //! ```text
-//! <v>'   = -(1 + r) <v> + r <v_r>
+//! ⟨v⟩'   = -(1 + r) ⟨v⟩ + r <v_r>
 //! <vη>'  = Σ² - (1 + 2λ + r) <vη>                       (+ r v_r <η> = 0)
-//! <v²>'  = 2 <vη> - (2 + r) <v²> + r <v_r²>
-//! <x>'   = <v>
+//! ⟨v²⟩'  = 2 <vη> - (2 + r) ⟨v²⟩ + r <v_r²>
+//! ⟨x⟩'   = ⟨v⟩
 //! <xη>'  = <vη> - 2λ <xη>                                (a reset keeps x and η)
-//! <xv>'  = <v²> + <xη> - (1 + r) <xv> + r <v_r> <x>
-//! <x²>'  = 2 <xv>
+//! ⟨xv⟩'  = ⟨v²⟩ + <xη> - (1 + r) ⟨xv⟩ + r <v_r> ⟨x⟩
+//! ⟨x²⟩'  = 2 ⟨xv⟩
 //! ```
 //!
 //! Every right side involves only these seven moments: the system closes, also
-//! with the reset terms (a rule that also reset x would add r (x_r v_r - <xv>)
-//! and r (x_r² - <x²>); the one rule, [`NoiseAtReset::Kept`] with x kept, adds
+//! with the reset terms (a rule that also reset x would add r (x_r v_r - ⟨xv⟩)
+//! and r (x_r² - ⟨x²⟩); the one rule, [`NoiseAtReset::Kept`] with x kept, adds
 //! none). It reads u' = A u + b with A lower triangular and constant, u(0) = 0,
 //! so u(t) = ∫_0^t e^{As} b ds exactly.
 //!

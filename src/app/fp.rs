@@ -26,7 +26,7 @@ pub enum FpCommand {
     /// Time-dependent solution from the paper's initial condition (adaptive
     /// TR-BDF2 on the graded mesh, or the paper's explicit scheme, Sec. 3).
     Transient(TransientArgs),
-    /// `<x>(t)`, `<x v>(t)`, `<x²>(t)` and d ln<x²>/d ln t without sampling
+    /// `<x>(t)`, `<x v>(t)`, `<x²>(t)` and d ln⟨x²⟩/d ln t without sampling
     /// (moment chain of the forward equations, TR-BDF2, Richardson in the mesh).
     #[command(
         about = "<x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling (moment chain of the forward equations)."
@@ -64,7 +64,7 @@ pub struct StationaryArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SchemeArg {
     /// Graded mesh, adaptive TR-BDF2 (L-stable, step set by --rtol/--atol),
-    /// <v>, <v²> Richardson-extrapolated over cells and cells/2.
+    /// ⟨v⟩, ⟨v²⟩ Richardson-extrapolated over cells and cells/2.
     Trbdf2,
     /// The paper's explicit upwind scheme on a uniform mesh (step set by --cfl).
     Paper,
@@ -87,7 +87,7 @@ pub struct TransientArgs {
     /// tan, 1000 for tanh).
     #[arg(long, default_value_t = 2000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
-    /// Number of equally spaced recording times of <v²>(t) in [0, t_max].
+    /// Number of equally spaced recording times of ⟨v²⟩(t) in [0, t_max].
     #[arg(long, default_value_t = 101, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     samples: usize,
     /// Number of equally spaced density snapshots in (0, t_max].

@@ -2,8 +2,8 @@
 //!
 //! - `--method backward` (default): S±(t) and f±(t) = -dS±/dt at v_0 from the
 //!   time-dependent backward equations on a `--grid linear|log` of `--points`
-//!   times up to `--t-max` ([`crate::mfpt::distribution`]), and the moments
-//!   tau, E[T²], variance and coefficient of variation from the stationary
+//!   times up to `--t-max` ([`crate::mfpt::distribution()`]), and the moments
+//!   tau, E(T²), variance and coefficient of variation from the stationary
 //!   equations L T1 = -1, L T2 = -2 T1 ([`crate::mfpt::backward::moments`]);
 //!   `distribution.csv`, from 1.3 × the atom's flow time on (earlier rows,
 //!   unreliable pointwise, are withheld; a grid that ends before is refused

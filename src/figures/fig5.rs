@@ -1,7 +1,7 @@
-//! Fig. 5: mean-squared displacement <x²>(t) on log-log axes at lambda = 0.5
+//! Fig. 5: mean-squared displacement ⟨x²⟩(t) on log-log axes at lambda = 0.5
 //! for several r; (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6. Points:
 //! particle simulation on a log time grid (particles start at x = 0, v = 0);
-//! lines: the same <x²>(t) without sampling, from the moment chain of the
+//! lines: the same ⟨x²⟩(t) without sampling, from the moment chain of the
 //! forward equations ([`crate::fp::msd`]); grey guides: t² (dotted,
 //! ballistic) and t (dashed, diffusive).
 
@@ -37,7 +37,7 @@ pub struct Spec {
     pub samples: usize,
     /// Particles per curve.
     pub particles: u64,
-    /// Coarsest mesh of the deterministic <x²>(t) (graded).
+    /// Coarsest mesh of the deterministic ⟨x²⟩(t) (graded).
     pub msd_cells: usize,
     /// Its Richardson levels (meshes msd_cells, 2 msd_cells, ...).
     pub msd_levels: usize,
@@ -78,7 +78,7 @@ pub fn local_slopes(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Shape of one simulated <x²>(t) curve and its late-time diffusion coefficient.
+/// Shape of one simulated ⟨x²⟩(t) curve and its late-time diffusion coefficient.
 #[derive(Clone, Debug, Serialize)]
 pub struct Msd {
     /// Reset rate.
@@ -89,23 +89,23 @@ pub struct Msd {
     pub slope_last: f64,
     /// First time after the steepest point where the slope falls below 1.5.
     pub t_crossover: f64,
-    /// D from <x²> = 2 D t + c (Eq. (36)) on the last decade of times.
+    /// D from ⟨x²⟩ = 2 D t + c (Eq. (36)) on the last decade of times.
     pub d_fit_last_decade: f64,
     /// Exact D_eff of the FP solver.
     pub d_eff_exact: f64,
     /// d_fit_last_decade / d_eff_exact.
     pub d_ratio: f64,
-    /// <x²> at the last time.
+    /// ⟨x²⟩ at the last time.
     pub x2_final: Option<f64>,
-    /// Deterministic <x²> at the last time (moment chain).
+    /// Deterministic ⟨x²⟩ at the last time (moment chain).
     pub x2_final_fp: f64,
     /// Largest |simulation - deterministic| / SE over the times.
     pub z_max_sim_vs_fp: f64,
-    /// Exact effective exponent d ln<x²>/d ln t at the first time (moment chain).
+    /// Exact effective exponent d ln⟨x²⟩/d ln t at the first time (moment chain).
     pub alpha_first: f64,
     /// ... and at the last time.
     pub alpha_last: f64,
-    /// Slope 2 (<xv> - <x><v>) / 2 of the deterministic <x²> at the last time.
+    /// Slope 2 (⟨xv⟩ - ⟨x⟩⟨v⟩) / 2 of the deterministic ⟨x²⟩ at the last time.
     pub d_slope_fp: f64,
     /// Its standard error.
     pub x2_final_err: Option<f64>,
@@ -122,14 +122,14 @@ pub struct Curve {
     pub msd: Msd,
 }
 
-/// The deterministic <x²>(t) and its effective exponent.
+/// The deterministic ⟨x²⟩(t) and its effective exponent.
 #[derive(Clone, Debug)]
 pub struct FpMsd {
     /// Times (t > 0).
     pub t: Vec<f64>,
-    /// <x²>(t).
+    /// ⟨x²⟩(t).
     pub x2: Vec<f64>,
-    /// d ln<x²>/d ln t.
+    /// d ln⟨x²⟩/d ln t.
     pub alpha: Vec<f64>,
 }
 
@@ -223,7 +223,7 @@ fn compute_curve(
     Ok(Curve { sim, fp, msd })
 }
 
-/// Draw Fig. 5: simulated <x²>(t) on log-log axes with t² and t guides.
+/// Draw Fig. 5: simulated ⟨x²⟩(t) on log-log axes with t² and t guides.
 pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     let mut fig = Figure::new(
         "fig5",

@@ -19,11 +19,11 @@
 //! it from the paper's start (x = 0, v = 0, η = ±Σ equally likely), and
 //!
 //! ```text
-//! <x^k v^j>(t) = Σ_cells v^j M_k,   d<x²>/dt = 2 <x v>,
+//! <x^k v^j>(t) = Σ_cells v^j M_k,   d⟨x²⟩/dt = 2 ⟨x v⟩,
 //! ```
 //!
-//! so the effective exponent α(t) = d ln<x²>/d ln t = 2 t <x v> / <x²> is
-//! exact (no finite difference). Long times: 2 (<x v> - <x><v>) → 2 D_eff, the
+//! so the effective exponent α(t) = d ln⟨x²⟩/d ln t = 2 t ⟨x v⟩ / ⟨x²⟩ is
+//! exact (no finite difference). Long times: 2 (⟨x v⟩ - ⟨x⟩⟨v⟩) → 2 D_eff, the
 //! Green-Kubo D_eff of the same discrete chain ([`super::stationary`]).
 //!
 //! The mesh error is removed by Richardson extrapolation over `levels` nested
@@ -91,7 +91,7 @@ pub struct MomentSeries {
     pub xv: Vec<f64>,
     /// `<x²>(t)`.
     pub x2: Vec<f64>,
-    /// Effective exponent d ln<x²>/d ln t = 2 t <x v> / <x²> (4 at t = 0,
+    /// Effective exponent d ln⟨x²⟩/d ln t = 2 t ⟨x v⟩ / ⟨x²⟩ (4 at t = 0,
     /// the limit from v(0) = 0).
     pub alpha: Vec<f64>,
     /// Cells of the finest mesh.
@@ -154,7 +154,7 @@ impl ShiftedLinear for Chain {
     }
 }
 
-/// Moments [mass, <v>, <v²>, <x>, <xv>, <x²>] of a chain state.
+/// Moments [mass, ⟨v⟩, ⟨v²⟩, ⟨x⟩, ⟨xv⟩, ⟨x²⟩] of a chain state.
 fn observe(v: &[f64], u: &[f64]) -> [f64; 6] {
     let n = v.len();
     let mut s = [0.0; 6];
@@ -221,7 +221,7 @@ fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
     Ok(t)
 }
 
-/// Moments on one mesh: rows [mass, <v>, <v²>, <x>, <xv>, <x²>] per time.
+/// Moments on one mesh: rows [mass, ⟨v⟩, ⟨v²⟩, ⟨x⟩, ⟨xv⟩, ⟨x²⟩] per time.
 /// Integrates interval by interval, resetting the absolute tolerance of the
 /// x-weighted blocks to the current length scale of x.
 fn one_mesh(

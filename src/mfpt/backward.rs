@@ -593,10 +593,10 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
 }
 
 /// The first two moments of the first-passage time at v_0: T1± = tau±
-/// from L T1 = -1, T2± = E[T²] from L T2 = -2 T1 (the same operator, mesh
+/// from L T1 = -1, T2± = E(T²) from L T2 = -2 T1 (the same operator, mesh
 /// and boundary conditions, a new right-hand side), and what follows for a
 /// uniformly random initial noise state (the mixture, as tau): variance
-/// E[T²] - tau² and coefficient of variation sqrt(variance)/tau.
+/// E(T²) - tau² and coefficient of variation sqrt(variance)/tau.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
     /// tau = (tau+ + tau-)/2 (paper Eq. (28)).
@@ -605,13 +605,13 @@ pub struct Moments {
     pub tau_plus: f64,
     /// Mean starting in -Sigma.
     pub tau_minus: f64,
-    /// E[T²] = (T2+ + T2-)/2.
+    /// E(T²) = (T2+ + T2-)/2.
     pub second: f64,
-    /// E[T²] starting in +Sigma.
+    /// E(T²) starting in +Sigma.
     pub second_plus: f64,
-    /// E[T²] starting in -Sigma.
+    /// E(T²) starting in -Sigma.
     pub second_minus: f64,
-    /// E[T²] - tau².
+    /// E(T²) - tau².
     pub variance: f64,
     /// T2+ - tau+².
     pub variance_plus: f64,
@@ -669,7 +669,7 @@ pub(super) fn moment_nodes(
 }
 
 /// The first two moments of the first-passage time at v_0 (see
-/// [`Moments`]); [`Error::Overflow`] when E[T²] exceeds the f64 range.
+/// [`Moments`]); [`Error::Overflow`] when E(T²) exceeds the f64 range.
 pub fn moments(problem: &Problem, opts: &BackwardOptions) -> Result<Moments> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();

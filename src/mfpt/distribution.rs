@@ -134,7 +134,7 @@ pub struct Distribution {
     pub mean_plus: f64,
     /// Starting in -Sigma.
     pub mean_minus: f64,
-    /// 2 ∫_0^t_end t S dt: E[T²] from the time integration.
+    /// 2 ∫_0^t_end t S dt: E(T²) from the time integration.
     pub second: f64,
     /// Where the time integration stopped.
     pub t_end: f64,
