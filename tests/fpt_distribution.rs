@@ -1,12 +1,12 @@
 //! The first-passage-time distribution: time-dependent backward equations
-//! against the stationary moments (same mesh) and against the exact
-//! first-passage sampler, on the parameter sets of Fig. 7; the
-//! `irtp mfpt distribution` command's contract.
+//! (upwind scheme, atom split off exactly) against the stationary moments of
+//! the box scheme and against the exact first-passage sampler, on the
+//! parameter sets of Fig. 7; the `irtp mfpt distribution` command's contract.
 
 mod common;
 
 use common::{assert_rejected, assert_success, irtp, json};
-use irtp::mfpt::backward::{moments, profile};
+use irtp::mfpt::backward::moments;
 use irtp::mfpt::exact::first_passage_to;
 use irtp::mfpt::{distribution, BackwardOptions, Distribution, DistributionOptions, Problem};
 use irtp::model::{DragLaw, Params};
@@ -27,7 +27,7 @@ fn fig7_sets() -> Vec<Problem> {
     .collect()
 }
 
-const CELLS: usize = 500;
+const CELLS: usize = 4000;
 
 fn solve(pr: &Problem, times: &[f64]) -> Distribution {
     let opts = DistributionOptions {
@@ -39,12 +39,6 @@ fn solve(pr: &Problem, times: &[f64]) -> Distribution {
 
 fn linear(t_max: f64, n: usize) -> Vec<f64> {
     (0..n).map(|i| t_max * i as f64 / (n - 1) as f64).collect()
-}
-
-/// The window around the atom's flow time where the mesh's ripples make
-/// pointwise S and f unreliable (documented in `mfpt::distribution`).
-fn near_atom(d: &Distribution, t: f64) -> bool {
-    (t - d.atom_time).abs() < 0.3 * d.atom_time
 }
 
 /// Passage times of `n` particles (even i: +Sigma, odd: -Sigma).
@@ -60,29 +54,47 @@ fn sample(pr: &Problem, n: u64, seed: u64) -> Vec<(bool, f64)> {
         .collect()
 }
 
+/// E(T) and E(T²) of the distribution (exact in time for the upwind
+/// equations, two meshes extrapolated; the error falls as cells⁻²: tanh
+/// 3.1e-6, 7.8e-7, 2.0e-7 at 4000, 8000, 16000 cells) against the box
+/// scheme's stationary solve at 20 000 cells, an independent
+/// discretisation: 1e-6 at 16 000 cells. The running
+/// time integral of S agrees to the integrator's global error, about
+/// rtol^(2/3) = 2.2e-3 at the default rtol 1e-4.
 #[test]
-fn mean_of_the_density_is_the_stationary_tau_of_the_same_mesh() {
+fn mean_of_the_density_is_the_stationary_tau() {
     for pr in fig7_sets() {
-        let d = solve(&pr, &linear(5.0, 11));
-        let tau = profile(&pr, &BackwardOptions::with_cells(CELLS))
-            .unwrap()
-            .at_start()
-            .tau;
-        assert_eq!(d.moments.tau, tau);
+        let opts = DistributionOptions {
+            backward: BackwardOptions::with_cells(16_000),
+            ..Default::default()
+        };
+        let d = distribution(&pr, &linear(5.0, 11), &opts).unwrap();
+        let m = moments(&pr, &BackwardOptions::default()).unwrap();
         assert!(d.tail_mass < 1e-10, "{}", d.tail_mass);
-        let rel = (d.mean - tau).abs() / tau;
-        assert!(rel < 1e-6, "{pr:?}: mean {} vs tau {tau}: {rel:e}", d.mean);
-        let rel2 = (d.second - d.moments.second).abs() / d.moments.second;
+        let rel = (d.mean - m.tau).abs() / m.tau;
+        assert!(
+            rel < 1e-6,
+            "{pr:?}: mean {} vs tau {}: {rel:e}",
+            d.mean,
+            m.tau
+        );
+        let rel2 = (d.second - m.second).abs() / m.second;
         assert!(
             rel2 < 1e-6,
-            "{pr:?}: 2∫tS {} vs T2 {}",
+            "{pr:?}: E(T²) {} vs T2 {}: {rel2:e}",
             d.second,
-            d.moments.second
+            m.second
         );
-        // Per starting state too.
-        let rp = (d.mean_plus - d.moments.tau_plus).abs() / d.moments.tau_plus;
-        let rm = (d.mean_minus - d.moments.tau_minus).abs() / d.moments.tau_minus;
+        let rp = (d.mean_plus - m.tau_plus).abs() / m.tau_plus;
+        let rm = (d.mean_minus - m.tau_minus).abs() / m.tau_minus;
         assert!(rp < 1e-6 && rm < 1e-6, "{rp:e} {rm:e}");
+        let rt = (d.mean_time_integral - d.mean).abs() / d.mean;
+        assert!(
+            rt < 1e-4f64.powf(2.0 / 3.0),
+            "{pr:?}: ∫S dt {} vs {}",
+            d.mean_time_integral,
+            d.mean
+        );
     }
 }
 
@@ -117,12 +129,12 @@ fn second_moment_agrees_with_the_exact_sampler() {
 }
 
 /// Bins of probability about 0.05 from the backward survival on a fine
-/// grid, no edge within the atom's window, and a last bin to infinity.
+/// grid (the atom falls inside one), and a last bin to infinity.
 fn bins(d: &Distribution) -> Vec<(f64, f64)> {
     let mut edges = vec![(0.0, 1.0)];
     for (&t, &s) in d.t.iter().zip(&d.survival) {
         let last = edges.last().unwrap().1;
-        if t > 0.0 && !near_atom(d, t) && last - s >= 0.05 {
+        if t > 0.0 && last - s >= 0.05 {
             edges.push((t, s));
         }
     }
@@ -159,37 +171,79 @@ fn sampled_histogram_against_the_backward_density_chi_square() {
     }
 }
 
-/// After the atom has passed (t > 1.3 T_f): before it, the box scheme's
-/// dispersive ripples from the jump of S+ at v_t reach v_0 (grid-scale modes
-/// travel fast) with an amplitude that does not shrink with the mesh
-/// (measured at t = 0.53 T_f, tan r = 2: f reaches -5.9 max f at 1000 cells),
-/// a known limitation documented in `mfpt::distribution`.
+/// At every time, before the atom's flow time T_f too: 0 <= S <= 1, S
+/// non-increasing and f >= 0, within the mesh errors the run reports (the
+/// estimate |X_fine - X_coarse| of the unextrapolated error, which bounds
+/// the extrapolated one), and S+ drops by the atom's mass across T_f.
 #[test]
-fn survival_is_a_probability_and_decreases_after_the_atom() {
+fn survival_is_a_probability_and_decreases() {
     for pr in fig7_sets() {
         let tau = moments(&pr, &BackwardOptions::with_cells(CELLS))
             .unwrap()
             .tau;
         let d = solve(&pr, &linear(8.0 * tau, 201));
         assert!(d.atom_mass > 0.0 && d.atom_mass < 0.5 && d.atom_mass_minus == 0.0);
+        assert!(d.t.iter().filter(|&&t| t > 0.0 && t < d.atom_time).count() >= 2);
         let fmax = d.density.iter().cloned().fold(0.0, f64::max);
-        let after = |t: f64| t > 1.3 * d.atom_time;
-        let ok: Vec<usize> = (0..d.t.len()).filter(|&i| after(d.t[i])).collect();
-        assert!(ok.len() > 150, "{}", ok.len());
-        for w in ok.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            for (s, f) in [
-                (&d.survival, &d.density),
-                (&d.survival_plus, &d.density_plus),
-                (&d.survival_minus, &d.density_minus),
-            ] {
-                assert!(s[b] <= s[a] + 1e-9, "t = {}: {} > {}", d.t[b], s[b], s[a]);
-                assert!(s[b] >= -1e-9 && s[a] <= 1.0 + 1e-9, "{}", s[a]);
-                assert!(f[b] >= -1e-6 * fmax, "t = {}: f = {}", d.t[b], f[b]);
+        for (s, f) in [
+            (&d.survival, &d.density),
+            (&d.survival_plus, &d.density_plus),
+            (&d.survival_minus, &d.density_minus),
+        ] {
+            let (es, ef) = (d.mesh_error, d.mesh_error_density);
+            for i in 0..d.t.len() {
+                let t = d.t[i];
+                assert!(s[i] >= -es && s[i] <= 1.0 + es, "t = {t}: S = {}", s[i]);
+                assert!(f[i] >= -ef, "t = {t}: f = {} ({ef})", f[i]);
+                if i > 0 {
+                    assert!(s[i] <= s[i - 1] + es, "t = {t}: {} > {}", s[i], s[i - 1]);
+                }
             }
         }
-        assert_eq!((d.survival[0], d.density[0]), (1.0, 0.0));
+        assert_eq!(d.survival[0], 1.0);
+        assert!(d.density[0].abs() < 1e-12, "{}", d.density[0]);
+        // Across T_f: S+ loses the atom plus the continuous part's ∫f+ dt.
+        let eps = 1e-6 * d.atom_time;
+        let d2 = solve(&pr, &[d.atom_time - eps, d.atom_time + eps]);
+        let drop = d2.survival_plus[0] - d2.survival_plus[1];
+        assert!(
+            (drop - d.atom_mass_plus).abs() < 1e-5 * d.atom_mass_plus + 2.0 * eps * fmax,
+            "{pr:?}: drop {drop} vs atom {}",
+            d.atom_mass_plus
+        );
     }
+}
+
+/// S(t) converges with the mesh: the extrapolated S at 1000 and 4000 cells
+/// agree to the reported mesh_error of the coarser run, before and after
+/// the atom.
+#[test]
+fn survival_converges_with_the_mesh() {
+    let pr = &fig7_sets()[0];
+    let times = linear(3.0, 31);
+    let run = |cells: usize| {
+        let opts = DistributionOptions {
+            backward: BackwardOptions::with_cells(cells),
+            rtol: 1e-6,
+            atol: 1e-9,
+            ..Default::default()
+        };
+        distribution(pr, &times, &opts).unwrap()
+    };
+    let (a, b) = (run(1000), run(4000));
+    let diff = a
+        .survival
+        .iter()
+        .zip(&b.survival)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(diff <= a.mesh_error, "{diff} vs {}", a.mesh_error);
+    assert!(
+        b.mesh_error < a.mesh_error,
+        "{} {}",
+        b.mesh_error,
+        a.mesh_error
+    );
 }
 
 #[test]
@@ -226,33 +280,21 @@ fn cli_backward_and_exact_write_their_tables() {
     let mut a = PAPER.to_vec();
     let d = dir.to_str().unwrap();
     a.extend([
-        "--vt", "0.5", "--cells", "200", "--points", "21", "--json", "--out", d,
+        "--vt", "0.5", "--cells", "400", "--points", "21", "--json", "--out", d,
     ]);
     let v = json(&irtp(&a));
     let (tau, t2) = (
         v["tau"].as_f64().unwrap(),
         v["second_moment"].as_f64().unwrap(),
     );
-    assert!((v["mean_time_integral"].as_f64().unwrap() - tau).abs() < 1e-6 * tau);
+    assert!((v["distribution_mean"].as_f64().unwrap() - tau).abs() < 1e-4 * tau);
+    assert!((v["mean_time_integral"].as_f64().unwrap() - tau).abs() < 1e-3 * tau);
     assert!((v["variance"].as_f64().unwrap() - (t2 - tau * tau)).abs() < 1e-9 * t2);
     let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
     assert!(csv.starts_with("t,survival,density,"), "{csv}");
-    // Rows before 1.3 atom_time are withheld (unreliable pointwise).
-    let from = v["pointwise_from"].as_f64().unwrap();
-    let withheld = v["rows_withheld"].as_u64().unwrap() as usize;
-    assert!((from - 1.3 * v["atom_time"].as_f64().unwrap()).abs() < 1e-12 * from);
-    assert!(withheld > 0 && withheld < 21, "{withheld}");
-    assert_eq!(csv.lines().count(), 1 + 21 - withheld);
-    let first: f64 = csv
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert!(first >= from, "first row t = {first} < {from}");
+    // Every output time is written, t = 0 and the times before the atom too.
+    assert_eq!(csv.lines().count(), 1 + 21);
+    assert!(v["mesh_error"].as_f64().unwrap() < 1e-2);
     let dir = tmp.path().join("e");
     let mut a = PAPER.to_vec();
     let d = dir.to_str().unwrap();
@@ -273,19 +315,28 @@ fn cli_backward_and_exact_write_their_tables() {
 }
 
 #[test]
-fn cli_refuses_a_grid_entirely_before_the_reliable_times() {
-    // t_max 0.01 is far below 1.3 x the flow time (~0.2 here): exit 4, one
-    // line naming the cause, nothing written.
+fn cli_writes_times_before_the_atom() {
+    // t_max 0.01 is far below the flow time (~0.26 here): S+ is the atom's
+    // e^{-(lambda + r) t} plus what flips or resets can still bring in.
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
     let mut a = PAPER.to_vec();
-    a.extend(["--vt", "0.5", "--cells", "200", "--t-max", "0.01"]);
+    a.extend([
+        "--vt", "0.5", "--cells", "400", "--t-max", "0.01", "--points", "3",
+    ]);
     a.extend(["--out", dir.to_str().unwrap()]);
-    let out = irtp(&a);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(4), "{err}");
-    assert!(err.contains("atom's flow time"), "{err}");
-    assert!(!dir.join("distribution.csv").exists());
+    assert_success(&irtp(&a));
+    let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!(last[0], 0.01);
+    // S = 1 up to the mesh error (S_c's kink, smeared ahead of the atom).
+    assert!(last[1] > 0.99 && last[1] <= 1.0 + 1e-4, "{csv}");
 }
 
 #[test]

@@ -3,67 +3,44 @@
 //!
 //! The survival probabilities S±(v, t) = P(T > t | v(0) = v, eta(0) = ±Sigma)
 //! obey dS/dt = L S with the generator L of [`crate::mfpt`] (the simulated
-//! drifts), S+(v_t, t) = 0 and regularity at v_l, S(v, 0) = 1 below v_t.
-//! The box scheme of [`super::backward`] on the same mesh turns this into
-//! M S' = A S, where A is the stationary operator (band + the two border
-//! columns of the reset values) and M the midpoint-averaging mass matrix:
-//! h (S_i' + S_{i+1}')/2 on the cell rows, -S-'(v_l) on the regularity row,
-//! nothing on the algebraic row S+(v_t) = 0. Integrating M S' = A S from 0 to
-//! ∞ gives A ∫S dt = -M S(0), the stationary equation A T1 = -M·1: with
-//! M S(0) = M·1 the mean of the discrete distribution is the stationary tau
-//! of the same mesh, exactly, and 2∫ t S dt = T2 from A T2 = -2 M T1.
-//!
-//! Time stepping: one backward-Euler step (M - t_1 A) S(t_1) = M·1 over a
-//! tiny t_1 (it starts from M S(0) = M·1, which the algebraic row S+(v_t) = 0
-//! cannot hold pointwise, and damps the resulting grid-scale modes), then
-//! the adaptive L-stable TR-BDF2 of [`crate::numerics::trbdf2`]. Four extra
-//! unknowns at v_0 carry the running integrals I± = ∫_0^t S± ds and
-//! J± = ∫_0^t I± ds, so ∫_0^t S ds = I and ∫_0^t s S ds = t I - J.
-//! The density f = -dS/dt is -M⁻¹ A S evaluated from the operator at the
-//! output state (M inverted by its two bidiagonal recursions: the - state
-//! upwards from the regularity row, the + state downwards from S+(v_t) = 0),
-//! not by differences in time.
+//! drifts), S+(v_t, t) = 0 and regularity at v_l, S(v, 0) = 1 below v_t;
+//! f = -dS/dt is the first-passage-time density.
 //!
 //! The distribution has an atom: a particle started in the state driving
 //! it towards the target arrives, with probability e^{-(lambda + r) T_f}, at
 //! exactly the deterministic flow time T_f from v_0 to v_t (no flip and no
-//! reset before). It is computed exactly ([`Distribution::atom_time`],
-//! [`Distribution::atom_mass`]). KNOWN LIMITATION: the box scheme has no
-//! numerical dissipation, and the jump of S+ at v_t that carries the atom
-//! excites grid-scale modes which travel fast (the scheme's phase speed
-//! diverges at the grid scale): at v_0 they appear as ripples BEFORE the
-//! atom's flow time, with an amplitude that does not shrink with the mesh
-//! (tan, Sigma = 3, lambda = 0.5, r = 2: at t = 0.53 T_f, f+ reaches -5.9
-//! times max f at 1000 cells). Pointwise S±, f± for t < 1.3 T_f are
-//! therefore unreliable (S can exceed 1, f can be negative), and
-//! `irtp mfpt distribution` does not write them
-//! ([`Distribution::pointwise_from`]); after the atom
-//! they are monotone and converge with the mesh, interval probabilities
-//! away from T_f agree with the exact sampler (chi-square,
-//! `tests/fpt_distribution.rs`), and the moments are exact identities of
-//! the mesh. Removing the atom analytically (S = S_atom + S_c, with S_c
-//! continuous; the forcing is [`crate::numerics::trbdf2::ShiftedLinear::forcing`])
-//! was tried: it removes the O(1) ripples at the default tolerance, but the
-//! kinks U keeps still ring at grid scale once the time steps resolve them
-//! (rtol 1e-5, 1000 cells: S - 1 up to 1.7e-4, f down to -0.008 max f), and
-//! the split breaks the exact mean identity of the mesh; not adopted.
+//! reset before). It is split off analytically and reported as a point mass
+//! ([`Distribution::atom_time`], [`Distribution::atom_mass`]); S includes it
+//! (S+ drops by the atom's mass at T_f), f is the density of the rest.
+//! The rest solves the survival equations with a bounded forcing, on the
+//! monotone upwind scheme of [`super::upwind`] (no oscillation: S stays a
+//! probability, f >= 0 up to the integration tolerance) integrated in time
+//! by the adaptive L-stable TR-BDF2 of [`crate::numerics::trbdf2`], landing
+//! on T_f(v_r) where the forcing jumps. Four extra unknowns at v_0 carry the
+//! running integrals I± = ∫_0^t S± ds and J± = ∫_0^t I± ds, so
+//! E(T) = ∫ S dt = I and E(T²) = 2 ∫ t S dt = 2 (t I - J); the atom's share
+//! is added in closed form.
+//!
+//! The scheme is first order in the mesh: it runs on the mesh of
+//! [`super::backward`] with `cells / 2` cells and on its midpoint
+//! refinement, and every output (S, f, the moments) is the Richardson
+//! extrapolation 2 X_fine - X_coarse. The largest |S_fine - S_coarse| is
+//! reported as [`Distribution::mesh_error`] (the error of the finer run,
+//! an upper estimate of the extrapolated one). The stationary moments of
+//! the box scheme on the full mesh ([`Distribution::moments`]) are computed
+//! alongside: the distribution's own mean must agree with them.
 //!
 //! After the output grid the integration continues, in doubling windows,
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
 
-use super::backward::{self, assemble, mesh, Assembly, BackwardOptions, Band, Mesh, Moments};
+use super::backward::{self, mesh, BackwardOptions, DriftSign, Mesh, Moments};
+use super::upwind::{exp_moments, AtomProbe, UpwindOperator};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::Drag;
-use crate::numerics::trbdf2::{self, ShiftedLinear, Tolerances};
-use crate::numerics::Failure;
+use crate::numerics::trbdf2::{self, Stats, Tolerances};
 use serde::{Deserialize, Serialize};
-
-/// Pointwise S±, f± are reliable from this multiple of the atom's flow
-/// time on (see the module doc): `irtp mfpt distribution` withholds the
-/// rows before [`Distribution::pointwise_from`].
-pub const POINTWISE_AFTER_ATOM: f64 = 1.3;
 
 /// Options of [`distribution`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,15 +103,17 @@ pub struct Distribution {
     pub density_plus: Vec<f64>,
     /// f- = -dS-/dt.
     pub density_minus: Vec<f64>,
-    /// The stationary moments of the same mesh (L T1 = -1, L T2 = -2 T1).
+    /// The stationary moments of the box scheme on the full mesh
+    /// (L T1 = -1, L T2 = -2 T1), an independent discretisation.
     pub moments: Moments,
-    /// ∫_0^t_end S dt: the mean from the time integration.
+    /// E(T) = ∫_0^∞ S dt of the distribution (atom included), exact in
+    /// time for the semi-discrete equations, extrapolated in the mesh.
     pub mean: f64,
     /// Starting in +Sigma.
     pub mean_plus: f64,
     /// Starting in -Sigma.
     pub mean_minus: f64,
-    /// 2 ∫_0^t_end t S dt: E(T²) from the time integration.
+    /// E(T²) = 2 ∫_0^∞ t S dt, as [`Distribution::mean`].
     pub second: f64,
     /// Where the time integration stopped.
     pub t_end: f64,
@@ -154,196 +133,17 @@ pub struct Distribution {
     pub steps: usize,
     /// Steps rejected by the error control.
     pub rejected: usize,
-}
-
-impl Distribution {
-    /// The first time where pointwise S, f are reliable:
-    /// [`POINTWISE_AFTER_ATOM`] × `atom_time` (the moments hold regardless).
-    pub fn pointwise_from(&self) -> f64 {
-        POINTWISE_AFTER_ATOM * self.atom_time
-    }
-}
-
-/// The name of the shifted solve in a failure (`at`: the shift c).
-const METHOD: &str = "first-passage distribution: shifted solve (M - cA) x = b";
-
-/// Unknowns: 2 per node (S+, S- interleaved) and four at v_0 (I+, I-, J+, J-).
-const EXTRA: usize = 4;
-
-/// M S' = A S on the mesh (see the module doc), with the integrals at v_0.
-struct TimeOperator {
-    /// Cell widths.
-    h: Vec<f64>,
-    /// Mesh unknowns (2 per node).
-    n: usize,
-    /// Index of v_0 and v_r (nodes).
-    start: usize,
-    reset: usize,
-    /// A (unfactored band and border columns).
-    a: Assembly,
-    /// Whether the border columns are present (r > 0).
-    borders: bool,
-    /// (c, factored M - cA, (M - cA)⁻¹ of both border columns).
-    cache: Option<(f64, Band, Vec<f64>, Vec<f64>)>,
-    /// Scales of the integrals I and J (tau, tau²), for their error weights.
-    scales: (f64, f64),
-}
-
-impl TimeOperator {
-    fn new(cp: &Problem, m: &Mesh, opts: &BackwardOptions) -> Self {
-        TimeOperator {
-            h: m.v.windows(2).map(|w| w[1] - w[0]).collect(),
-            n: 2 * m.v.len(),
-            start: m.start,
-            reset: m.reset,
-            a: assemble(cp, m, cp.params().rate(), opts.drift),
-            borders: cp.params().rate() > 0.0,
-            cache: None,
-            scales: (1.0, 1.0),
-        }
-    }
-
-    /// M - cA factored, and its inverse applied to -c times each border column.
-    fn factor(&self, c: f64) -> std::result::Result<(Band, Vec<f64>, Vec<f64>), Failure> {
-        let n = self.n;
-        let mut b = Band::new(n, 2, 2);
-        for i in 0..n {
-            for j in self.a.band.row_range(i) {
-                b.set(i, j, -c * self.a.band.get(i, j));
-            }
-        }
-        let mut add = |i: usize, j: usize, x: f64| {
-            let y = b.get(i, j);
-            b.set(i, j, y + x);
-        };
-        add(0, 1, -1.0);
-        for (i, &h) in self.h.iter().enumerate() {
-            add(2 * i + 1, 2 * i, 0.5 * h);
-            add(2 * i + 1, 2 * i + 2, 0.5 * h);
-            add(2 * i + 2, 2 * i + 1, 0.5 * h);
-            add(2 * i + 2, 2 * i + 3, 0.5 * h);
-        }
-        b.factor().map_err(|_| Failure::NonFinite {
-            method: METHOD,
-            at: c,
-        })?;
-        let border = |col: &[f64]| {
-            let mut y: Vec<f64> = col.iter().map(|x| -c * x).collect();
-            b.solve(&mut y);
-            y
-        };
-        let (y1, y2) = (border(&self.a.cp), border(&self.a.cm));
-        Ok((b, y1, y2))
-    }
-
-    /// f = -dS/dt at the nodes of v_0: M f = -A S solved by the recursions
-    /// of M (see the module doc); returns (f+, f-) at v_0.
-    fn density_at_start(&self, s: &[f64]) -> (f64, f64) {
-        let mut a_s = vec![0.0; self.n];
-        self.apply_mesh(s, &mut a_s);
-        let mut fm = a_s[0];
-        for i in 0..self.start {
-            fm = -2.0 * a_s[2 * i + 2] / self.h[i] - fm;
-        }
-        let mut fp = 0.0;
-        for i in (self.start..self.h.len()).rev() {
-            fp = -2.0 * a_s[2 * i + 1] / self.h[i] - fp;
-        }
-        (fp, fm)
-    }
-
-    /// out = A s on the mesh unknowns.
-    fn apply_mesh(&self, s: &[f64], out: &mut [f64]) {
-        let (kp, km) = (2 * self.reset, 2 * self.reset + 1);
-        let (rp, rm) = (s[kp], s[km]);
-        for (i, o) in out.iter_mut().enumerate().take(self.n) {
-            let mut x = 0.0;
-            for j in self.a.band.row_range(i) {
-                x += self.a.band.get(i, j) * s[j];
-            }
-            *o = x + self.a.cp[i] * rp + self.a.cm[i] * rm;
-        }
-    }
-}
-
-impl ShiftedLinear for TimeOperator {
-    fn dim(&self) -> usize {
-        self.n + EXTRA
-    }
-
-    fn apply(&self, u: &[f64], out: &mut [f64]) {
-        self.apply_mesh(u, out);
-        let n = self.n;
-        out[n] = u[2 * self.start];
-        out[n + 1] = u[2 * self.start + 1];
-        out[n + 2] = u[n];
-        out[n + 3] = u[n + 1];
-    }
-
-    fn apply_mass(&self, u: &[f64], out: &mut [f64]) {
-        let n = self.n;
-        out[0] = -u[1];
-        for (i, &h) in self.h.iter().enumerate() {
-            out[2 * i + 1] = 0.5 * h * (u[2 * i] + u[2 * i + 2]);
-            out[2 * i + 2] = 0.5 * h * (u[2 * i + 1] + u[2 * i + 3]);
-        }
-        out[n - 1] = 0.0;
-        out[n..].copy_from_slice(&u[n..]);
-    }
-
-    fn solve_shifted(
-        &mut self,
-        c: f64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> std::result::Result<(), Failure> {
-        if self
-            .cache
-            .as_ref()
-            .map_or(true, |k| k.0.to_bits() != c.to_bits())
-        {
-            let (f, y1, y2) = self.factor(c)?;
-            self.cache = Some((c, f, y1, y2));
-        }
-        let (_, f, y1, y2) = self.cache.as_ref().expect("factored above");
-        let n = self.n;
-        x[..n].copy_from_slice(&b[..n]);
-        f.solve(&mut x[..n]);
-        if self.borders {
-            // x = y0 - R+ y1 - R- y2 with R± = x±(v_r): a 2×2 system.
-            let (kp, km) = (2 * self.reset, 2 * self.reset + 1);
-            let (a11, a12, a21, a22) = (1.0 + y1[kp], y2[kp], y1[km], 1.0 + y2[km]);
-            let det = a11 * a22 - a12 * a21;
-            let (rp, rm) = (
-                (x[kp] * a22 - a12 * x[km]) / det,
-                (a11 * x[km] - a21 * x[kp]) / det,
-            );
-            for k in 0..n {
-                x[k] -= rp * y1[k] + rm * y2[k];
-            }
-        }
-        // I - c S(v_0) = b_I, J - c I = b_J.
-        x[n] = b[n] + c * x[2 * self.start];
-        x[n + 1] = b[n + 1] + c * x[2 * self.start + 1];
-        x[n + 2] = b[n + 2] + c * x[n];
-        x[n + 3] = b[n + 3] + c * x[n + 1];
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(Failure::NonFinite {
-                method: METHOD,
-                at: c,
-            });
-        }
-        Ok(())
-    }
-
-    fn atol(&self, i: usize, atol: f64) -> f64 {
-        // The integrals grow to tau and E[T²]/2: errors on their own scale.
-        match i.checked_sub(self.n) {
-            None => atol,
-            Some(k) if k < 2 => atol * self.scales.0,
-            Some(_) => atol * self.scales.1,
-        }
-    }
+    /// max over the output times of |S_fine - S_coarse| (see the module
+    /// doc): the discretisation error of the finer mesh.
+    pub mesh_error: f64,
+    /// max over the output times of |f_fine - f_coarse|: the same for f,
+    /// largest next to the atom's flow time, where S_c has a kink.
+    pub mesh_error_density: f64,
+    /// ∫_0^t_end S dt from the time integration: equals [`Distribution::mean`]
+    /// up to the integration error and the tail (a check of S(t)).
+    pub mean_time_integral: f64,
+    /// 2 ∫_0^t_end t S dt from the time integration.
+    pub second_time_integral: f64,
 }
 
 /// Validate output times: finite, >= 0, increasing.
@@ -363,36 +163,227 @@ fn check_times(times: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// S±(v_0), f±(v_0) at the output times (canonical frame: + state first).
-#[derive(Default)]
-struct Record {
-    t: Vec<f64>,
-    s: Vec<(f64, f64)>,
-    f: Vec<(f64, f64)>,
-}
-
-impl Record {
-    fn push(&mut self, t: f64, s: (f64, f64), f: (f64, f64)) {
-        self.t.push(t);
-        self.s.push(s);
-        self.f.push(f);
+/// The midpoint refinement of a mesh (v_0, v_r stay nodes).
+fn refine(m: &Mesh) -> Mesh {
+    let mut v = Vec::with_capacity(2 * m.v.len() - 1);
+    for w in m.v.windows(2) {
+        v.extend([w[0], 0.5 * (w[0] + w[1])]);
+    }
+    v.push(m.v[m.v.len() - 1]);
+    Mesh {
+        v,
+        start: 2 * m.start,
+        reset: 2 * m.reset,
     }
 }
 
-/// The state at t_1 after one backward-Euler step from M S(0) = M·1.
-fn start_state(op: &mut TimeOperator, t1: f64) -> Result<Vec<f64>> {
-    let dim = op.dim();
-    let mut one = vec![1.0; dim];
-    one[op.n..].fill(0.0);
-    let mut b = vec![0.0; dim];
-    op.apply_mass(&one, &mut b);
-    let mut u = vec![0.0; dim];
-    op.solve_shifted(t1, &b, &mut u)?;
-    Ok(u)
+/// Where a run stops: past the grid until the survival is below `tail`
+/// (or at `t_stop`), or at a given time.
+#[derive(Clone, Copy)]
+enum Stop {
+    Tail { tail: f64, t_stop: f64 },
+    At(f64),
+}
+
+/// One mesh's run, canonical frame (+ state first).
+struct Run {
+    /// S± and f± at v_0 at the output times (the atom included in S+,
+    /// excluded from f+).
+    s: Vec<(f64, f64)>,
+    f: Vec<(f64, f64)>,
+    /// ∫_0^t_end S± dt and 2 ∫_0^t_end t S± dt from the time integration.
+    mean: (f64, f64),
+    second: (f64, f64),
+    /// E(T±) and E(T±²) of the semi-discrete system, exactly in time.
+    exact_mean: (f64, f64),
+    exact_second: (f64, f64),
+    t_end: f64,
+    /// S±(v_0, t_end).
+    tail: (f64, f64),
+    stats: Stats,
+}
+
+/// The atom's part of S+(v_0, t): e^{-k t} for t < T_f.
+fn atom_survival(k: f64, tf: f64, t: f64) -> f64 {
+    if t < tf {
+        (-k * t).exp()
+    } else {
+        0.0
+    }
+}
+
+/// Integrate from `op.t0` through the absolute times `targets`
+/// (increasing, > op.t0), landing on T_f(v_r) where the + forcing
+/// switches off; `observe` sees every target.
+fn advance(
+    op: &mut UpwindOperator,
+    view: &mut UpwindOperator,
+    u: &mut [f64],
+    targets: &[f64],
+    tol: &Tolerances,
+    observe: &mut dyn FnMut(f64, &UpwindOperator, &[f64]),
+) -> Result<Stats> {
+    let mut stats = Stats::default();
+    let mut rest = targets;
+    while !rest.is_empty() {
+        let t0 = op.t0;
+        let tr = op.reset_atom_time();
+        let on = t0 < tr;
+        // This segment: targets up to T_f(v_r) while the forcing is on.
+        let cut = if on {
+            rest.partition_point(|&t| t <= tr)
+        } else {
+            rest.len()
+        };
+        let mut rel: Vec<f64> = rest[..cut].iter().map(|t| t - t0).collect();
+        // Targets remain past T_f(v_r): land on it first.
+        let lands = on && cut < rest.len() && rel.last().map_or(true, |&t| t < tr - t0);
+        if lands {
+            rel.push(tr - t0);
+        }
+        op.set_reset_atom(on);
+        view.set_reset_atom(on);
+        view.t0 = t0;
+        let st = trbdf2::integrate(op, u, &rel, tol, |k, t, x| {
+            if k < cut {
+                observe(t0 + t, view, x);
+            }
+            Ok(())
+        })?;
+        stats.steps += st.steps;
+        stats.rejected += st.rejected;
+        stats.solves += st.solves;
+        op.t0 = t0 + rel.last().copied().unwrap_or(0.0);
+        rest = &rest[cut..];
+    }
+    if let Some(&t) = targets.last() {
+        op.t0 = t;
+    }
+    Ok(stats)
+}
+
+/// The survival equations on one mesh (see the module doc).
+fn run(
+    cp: &Problem,
+    m: &Mesh,
+    times: &[f64],
+    tol: &Tolerances,
+    stop: Stop,
+    scales: (f64, f64),
+) -> Result<Run> {
+    let par = cp.params();
+    let k = par.lambda() + par.rate();
+    let tf = par.drag().flow_time(par.sigma(), cp.v0(), cp.vt());
+    let mut op = UpwindOperator::new(cp, m);
+    op.scales = scales;
+    let mut view = UpwindOperator::new(cp, m);
+    let mut u = op.initial();
+    let (p, q) = (2 * op.start, 2 * op.start + 1);
+    let (mut s, mut f) = (Vec::new(), Vec::new());
+    let positive: Vec<f64> = times.iter().copied().filter(|&t| t > 0.0).collect();
+    for _ in 0..times.len() - positive.len() {
+        s.push((1.0, 1.0));
+        let (dp, dm) = view.rate_at_start(&u, 0.0);
+        f.push((k - dp, -dm));
+    }
+    // Steps land on HIDDEN points across [0, 2 T_f] as well, so the kink of
+    // S_c crossing v_0 at T_f is resolved in time whatever the output grid.
+    let last = positive.last().copied().unwrap_or(0.0);
+    let mut all: Vec<(f64, bool)> = positive.iter().map(|&t| (t, true)).collect();
+    all.extend(
+        (1..=HIDDEN)
+            .map(|j| 2.0 * tf * j as f64 / HIDDEN as f64)
+            .filter(|&t| t < last && positive.binary_search_by(|x| x.total_cmp(&t)).is_err())
+            .map(|t| (t, false)),
+    );
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let targets: Vec<f64> = all.iter().map(|a| a.0).collect();
+    let mut shown = all.iter().map(|a| a.1);
+    let mut observe = |t: f64, v: &UpwindOperator, x: &[f64]| {
+        if shown.next() == Some(true) {
+            let (dp, dm) = v.rate_at_start(x, t);
+            s.push((x[p] + atom_survival(k, tf, t), x[q]));
+            f.push((-dp, -dm));
+        }
+    };
+    let mut stats = advance(&mut op, &mut view, &mut u, &targets, tol, &mut observe)?;
+    // The atom's continuous share of f+, smeared as the scheme smears S_c+.
+    let mut probe = AtomProbe::new(cp, m);
+    let mut q0 = probe.initial();
+    let mut smeared = Vec::with_capacity(positive.len());
+    let st = trbdf2::integrate(&mut probe, &mut q0, &targets, tol, |j, t, x| {
+        if all[j].1 {
+            smeared.push(k * (-k * t).exp() * x[0]);
+        }
+        Ok(())
+    })?;
+    stats.steps += st.steps;
+    stats.rejected += st.rejected;
+    let zeros = f.len() - smeared.len();
+    for (fi, a) in f[zeros..].iter_mut().zip(smeared) {
+        fi.0 += a;
+    }
+    let mut t = op.t0;
+    let survival = |u: &[f64], t: f64| (u[p] + atom_survival(k, tf, t), u[q]);
+    match stop {
+        Stop::Tail { tail, t_stop } => {
+            let t_stop = t_stop.max(t);
+            loop {
+                let (a, b) = survival(&u, t);
+                if !(a.max(b) >= tail && t < t_stop) {
+                    break;
+                }
+                let next = (2.0 * t)
+                    .max(tf.min(t_stop))
+                    .min(t_stop)
+                    .max(t + f64::EPSILON * t);
+                let st = advance(&mut op, &mut view, &mut u, &[next], tol, &mut |_, _, _| {})?;
+                stats.steps += st.steps;
+                stats.rejected += st.rejected;
+                t = next;
+            }
+        }
+        Stop::At(end) if end > t => {
+            let st = advance(&mut op, &mut view, &mut u, &[end], tol, &mut |_, _, _| {})?;
+            stats.steps += st.steps;
+            stats.rejected += st.rejected;
+            t = end;
+        }
+        Stop::At(_) => {}
+    }
+    let n = op.n;
+    // The atom's share of ∫ S+ and ∫ t S+, in closed form.
+    let (ia, ja) = exp_moments(k, tf.min(t));
+    let (xa, ya) = exp_moments(k, tf);
+    let (x1, x2) = op.stationary_integrals()?;
+    let second = |i: f64, j: f64| 2.0 * (t * i - j);
+    Ok(Run {
+        s,
+        f,
+        mean: (u[n] + ia, u[n + 1]),
+        second: (
+            second(u[n], u[n + 2]) + 2.0 * ja,
+            second(u[n + 1], u[n + 3]),
+        ),
+        exact_mean: (x1.0 + xa, x1.1),
+        exact_second: (2.0 * (x2.0 + ya), 2.0 * x2.1),
+        t_end: t,
+        tail: survival(&u, t),
+        stats,
+    })
+}
+
+/// Hidden landing points of the time stepping across [0, 2 T_f].
+const HIDDEN: usize = 64;
+
+/// 2 fine - coarse.
+fn extrapolate(fine: f64, coarse: f64) -> f64 {
+    2.0 * fine - coarse
 }
 
 /// The first-passage-time distribution of `problem` at the output `times`
-/// (see the module doc). Errors: invalid options or times;
+/// (see the module doc). Errors: invalid options or times; the paper's
+/// printed drift (only the simulated process has a distribution);
 /// [`Error::Overflow`] where the moments exceed the f64 range; a numerical
 /// failure of the time integration.
 pub fn distribution(
@@ -402,76 +393,127 @@ pub fn distribution(
 ) -> Result<Distribution> {
     opts.validate()?;
     check_times(times)?;
+    if opts.backward.drift != DriftSign::Simulated {
+        return Err(Error::invalid(
+            "drift",
+            "paper-printed",
+            "the simulated drift",
+        ));
+    }
     let moments = backward::moments(problem, &opts.backward)?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, opts.backward.cells)?;
-    let mut op = TimeOperator::new(&cp, &m, &opts.backward);
-    op.scales = (moments.tau, moments.second);
-    // A second copy of A evaluates f while the integrator holds `op`.
-    let view = TimeOperator::new(&cp, &m, &opts.backward);
-    let start = 2 * m.start;
-    // t_1 <= every positive output time; earlier output times are t = 0.
-    let first = times.iter().copied().find(|&t| t > 0.0);
-    let t1 = first.map_or(1e-9 * moments.tau, |t| t.min(1e-9 * moments.tau));
-    let mut u = start_state(&mut op, t1)?;
-    let mut rec = Record::default();
-    for _ in times.iter().take_while(|&&t| t < t1) {
-        rec.push(0.0, (1.0, 1.0), (0.0, 0.0));
-    }
-    let rest: Vec<f64> = times.iter().filter(|&&t| t >= t1).map(|t| t - t1).collect();
+    let coarse = mesh(&cp, (opts.backward.cells / 2).max(8))?;
+    let fine_mesh = refine(&coarse);
     let tol = Tolerances {
         rtol: opts.rtol,
         atol: opts.atol,
         ..Tolerances::default()
     };
-    let (mut steps, mut rejected) = (0, 0);
-    let mut observe = |_: usize, t: f64, x: &[f64]| -> Result<()> {
-        rec.push(t + t1, (x[start], x[start + 1]), view.density_at_start(x));
-        Ok(())
+    let scales = (moments.tau, moments.second);
+    let stop = Stop::Tail {
+        tail: opts.tail,
+        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
     };
-    if !rest.is_empty() {
-        let st = trbdf2::integrate(&mut op, &mut u, &rest, &tol, &mut observe)?;
-        (steps, rejected) = (st.steps, st.rejected);
-    }
-    // On past the grid, in doubling windows, until the tail is small.
-    let mut t = t1 + rest.last().copied().unwrap_or(0.0);
-    let t_stop = opts.t_stop.unwrap_or(1e3 * moments.tau).max(t);
-    while u[start].max(u[start + 1]) >= opts.tail && t < t_stop {
-        let window = t.min(t_stop - t);
-        let st = trbdf2::integrate(&mut op, &mut u, &[window], &tol, |_, _, _| Ok(()))?;
-        (steps, rejected) = (steps + st.steps, rejected + st.rejected);
-        t += window;
-    }
-    let n = op.n;
+    let fine = run(&cp, &fine_mesh, times, &tol, stop, scales)?;
+    let rough = run(&cp, &coarse, times, &tol, Stop::At(fine.t_end), scales)?;
     let sw = |p: (f64, f64)| if swapped { (p.1, p.0) } else { p };
-    let (i, j) = (sw((u[n], u[n + 1])), sw((u[n + 2], u[n + 3])));
-    let second = |i: f64, j: f64| 2.0 * (t * i - j);
-    let (sp, sm): (Vec<f64>, Vec<f64>) = rec.s.iter().map(|&p| sw(p)).unzip();
-    let (fp, fm): (Vec<f64>, Vec<f64>) = rec.f.iter().map(|&p| sw(p)).unzip();
+    let ex = |a: (f64, f64), b: (f64, f64)| sw((extrapolate(a.0, b.0), extrapolate(a.1, b.1)));
+    // Pointwise S and f from the finer mesh, not extrapolated: the scheme
+    // smears the kinks of S_c over widths that differ between the meshes,
+    // and 2 fine - coarse of two smeared kinks overshoots (f < 0).
+    let (sp, sm): (Vec<f64>, Vec<f64>) = fine.s.iter().map(|&a| sw(a)).unzip();
+    let (fp, fm): (Vec<f64>, Vec<f64>) = fine.f.iter().map(|&a| sw(a)).unzip();
+    let mesh_error = fine
+        .s
+        .iter()
+        .zip(&rough.s)
+        .map(|(a, b)| (a.0 - b.0).abs().max((a.1 - b.1).abs()))
+        .fold(0.0, f64::max);
+    let mesh_error_density = fine
+        .f
+        .iter()
+        .zip(&rough.f)
+        .map(|(a, b)| (a.0 - b.0).abs().max((a.1 - b.1).abs()))
+        .fold(0.0, f64::max);
+    let (mean, second, tail) = (
+        ex(fine.exact_mean, rough.exact_mean),
+        ex(fine.exact_second, rough.exact_second),
+        sw(fine.tail),
+    );
+    let (mean_t, second_t) = (ex(fine.mean, rough.mean), ex(fine.second, rough.second));
     let par = cp.params();
     let atom_time = par.drag().flow_time(par.sigma(), cp.v0(), cp.vt());
     let atom = sw(((-(par.lambda() + par.rate()) * atom_time).exp(), 0.0));
-    let mean = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
-    Ok(Distribution {
-        survival: mean(&sp, &sm),
-        density: mean(&fp, &fm),
-        t: rec.t,
+    let avg = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
+    let d = Distribution {
+        survival: avg(&sp, &sm),
+        density: avg(&fp, &fm),
+        t: times.to_vec(),
         survival_plus: sp,
         survival_minus: sm,
         density_plus: fp,
         density_minus: fm,
         moments,
-        mean: 0.5 * (i.0 + i.1),
-        mean_plus: i.0,
-        mean_minus: i.1,
-        second: 0.5 * (second(i.0, j.0) + second(i.1, j.1)),
-        t_end: t,
-        tail_mass: 0.5 * (u[start] + u[start + 1]),
+        mean: 0.5 * (mean.0 + mean.1),
+        mean_plus: mean.0,
+        mean_minus: mean.1,
+        second: 0.5 * (second.0 + second.1),
+        t_end: fine.t_end,
+        tail_mass: 0.5 * (tail.0 + tail.1),
         atom_time,
         atom_mass: 0.5 * (atom.0 + atom.1),
         atom_mass_plus: atom.0,
         atom_mass_minus: atom.1,
-        steps,
-        rejected,
-    })
+        steps: fine.stats.steps + rough.stats.steps,
+        rejected: fine.stats.rejected + rough.stats.rejected,
+        mesh_error,
+        mesh_error_density,
+        mean_time_integral: 0.5 * (mean_t.0 + mean_t.1),
+        second_time_integral: 0.5 * (second_t.0 + second_t.1),
+    };
+    verify(&d, opts.rtol)?;
+    Ok(d)
+}
+
+/// The invariants of a survival function, to the accuracy the run reports:
+/// 0 <= S <= 1 and S non-increasing (each within 10 rtol + mesh_error),
+/// f >= 0 (within 10 rtol max f + mesh_error_density), and the mean within
+/// 1e-3 of the box scheme's tau (an independent discretisation).
+fn verify(d: &Distribution, rtol: f64) -> Result<()> {
+    let slack = 10.0 * rtol + d.mesh_error;
+    let fmax = d
+        .density
+        .iter()
+        .fold(1.0 / d.moments.tau, |a: f64, &b| a.max(b));
+    let fslack = 10.0 * rtol * fmax + d.mesh_error_density;
+    let fail = |reason: String| {
+        Err(Error::Numerical {
+            method: "first-passage distribution",
+            reason,
+        })
+    };
+    for s in [&d.survival_plus, &d.survival_minus] {
+        if let Some(i) = (0..s.len()).find(|&i| !(s[i] >= -slack && s[i] <= 1.0 + slack)) {
+            return fail(format!(
+                "S = {} at t = {} is not a probability",
+                s[i], d.t[i]
+            ));
+        }
+        if let Some(i) = (1..s.len()).find(|&i| !(s[i] <= s[i - 1] + slack)) {
+            return fail(format!("S increases at t = {}", d.t[i]));
+        }
+    }
+    for f in [&d.density_plus, &d.density_minus] {
+        if let Some(i) = (0..f.len()).find(|&i| !(f[i] >= -fslack)) {
+            return fail(format!("f = {} < 0 at t = {}", f[i], d.t[i]));
+        }
+    }
+    let tau = d.moments.tau;
+    if !((d.mean - tau).abs() <= 1e-3 * tau) {
+        return fail(format!(
+            "E(T) = {} disagrees with the stationary tau = {tau}",
+            d.mean
+        ));
+    }
+    Ok(())
 }

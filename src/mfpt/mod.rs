@@ -36,6 +36,7 @@ pub mod exact;
 pub mod method;
 pub mod optimize;
 pub mod survival;
+mod upwind;
 
 use crate::error::{finite, Error, Result};
 use crate::model::Params;

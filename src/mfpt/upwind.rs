@@ -1,0 +1,475 @@
+//! The time-dependent survival equations on a monotone (upwind) scheme, with
+//! the first-passage atom split off analytically; used by
+//! [`super::distribution`].
+//!
+//! Canonical frame (target above the start, + state driving towards it).
+//! The survival S±(v, t) obeys dS/dt = L S with the generator of
+//! [`crate::mfpt`]. Its atom, the probability of no flip and no reset before
+//! the deterministic flow reaches v_t, is
+//! S_a+(v, t) = e^{-(lambda + r) t} H(T_f(v) - t) with T_f(v) the + flow time
+//! from v to v_t, S_a- = 0. The transport part of L annihilates the jump of
+//! S_a+ along its characteristic, so the remainder S_c = S - S_a solves
+//!
+//! dS_c+/dt = L S_c|+ + r S_a+(v_r, t),   dS_c-/dt = L S_c|- + lambda S_a+(v, t),
+//!
+//! from S_c+(v, 0) = 0, S_c-(v, 0) = 1, S_c+(v_t, t) = 0: consistent data,
+//! bounded forcing, a continuous solution (kinks only). The exact S is
+//! S_a + S_c; the atom itself is reported as a point mass, not smeared.
+//!
+//! Space: first-order upwind differences at the nodes (the + state looks
+//! up the mesh, the - state down), an M-matrix: the semi-discrete flow
+//! keeps 0 <= S_c and creates no oscillation (the box scheme of
+//! [`super::backward`] has no dissipation and rings at grid scale after the
+//! jump). At v_l the - drift vanishes and the - row is the regularity
+//! relation by itself. The - forcing is averaged over each node's dual cell
+//! (T_f taken linear inside it), so it switches off continuously in time.
+//! The + forcing jumps for every row at once at T_f(v_r); the integrator
+//! lands on that time ([`UpwindOperator::set_reset_atom`]).
+//! First order in h: [`super::distribution`] extrapolates two nested meshes.
+
+use super::backward::{Assembly, Band, Mesh};
+use super::Problem;
+use crate::model::Drag;
+use crate::numerics::quad::gk15;
+use crate::numerics::trbdf2::ShiftedLinear;
+use crate::numerics::Failure;
+
+/// The name of the shifted solve in a failure (`at`: the shift c).
+const METHOD: &str = "first-passage distribution: shifted solve (I - cA) x = b";
+
+/// Unknowns: 2 per node (S_c+, S_c- interleaved) and four at v_0: the
+/// running integrals I± = ∫ S_c±(v_0) dt and J± = ∫ I± dt.
+pub(super) const EXTRA: usize = 4;
+
+/// Values of the two start states (+, -).
+pub(super) type Pair = (f64, f64);
+
+/// dS_c/dt = A S_c + F(t) on a mesh (see the module doc).
+pub(super) struct UpwindOperator {
+    /// Mesh unknowns (2 per node).
+    pub(super) n: usize,
+    /// Index of the node v_0.
+    pub(super) start: usize,
+    /// Index of the node v_r.
+    reset: usize,
+    a: Assembly,
+    borders: bool,
+    /// lambda and lambda + r.
+    lam: f64,
+    kill: f64,
+    rate: f64,
+    /// T_f(v_r): the + forcing r e^{-kill t} is on before it.
+    t_reset: f64,
+    /// Whether the + forcing is on (the side of T_f(v_r) being integrated).
+    reset_atom: bool,
+    /// Per node: T_f at the upper and lower ends of its dual cell.
+    ramps: Vec<(f64, f64)>,
+    /// Offset of the integrator's clock (it starts at 0 on every call).
+    pub(super) t0: f64,
+    /// (c, factored I - cA, (I - cA)⁻¹ of -c times both border columns).
+    cache: Option<(f64, Band, Vec<f64>, Vec<f64>)>,
+    /// Scales of the integrals I and J (tau, tau²), for their error weights.
+    pub(super) scales: (f64, f64),
+    /// The reported unknowns: S_c± at v_0 and the four integrals.
+    reported: [usize; 2 + EXTRA],
+}
+
+impl UpwindOperator {
+    /// The operator on mesh `m` of the canonical problem `cp`.
+    pub(super) fn new(cp: &Problem, m: &Mesh) -> Self {
+        let par = cp.params();
+        let (g, sigma) = (par.drag(), par.sigma());
+        let tf = |v: f64| g.flow_time(sigma, v, cp.vt());
+        let nodes = m.v.len();
+        let dual: Vec<f64> = (0..=nodes)
+            .map(|k| match k {
+                0 => m.v[0],
+                k if k == nodes => m.v[nodes - 1],
+                k => 0.5 * (m.v[k - 1] + m.v[k]),
+            })
+            .map(tf)
+            .collect();
+        UpwindOperator {
+            n: 2 * nodes,
+            start: m.start,
+            reset: m.reset,
+            a: assemble(cp, m),
+            borders: par.rate() > 0.0,
+            lam: par.lambda(),
+            kill: par.lambda() + par.rate(),
+            rate: par.rate(),
+            t_reset: tf(m.v[m.reset]),
+            reset_atom: true,
+            ramps: (0..nodes).map(|i| (dual[i + 1], dual[i])).collect(),
+            t0: 0.0,
+            cache: None,
+            scales: (1.0, 1.0),
+            reported: [0, 1, 2, 3, 4, 5].map(|k| match k {
+                0 | 1 => 2 * m.start + k,
+                k => 2 * nodes + k - 2,
+            }),
+        }
+    }
+
+    /// T_f(v_r), where the + forcing switches off.
+    pub(super) fn reset_atom_time(&self) -> f64 {
+        self.t_reset
+    }
+
+    /// Integrate the side of T_f(v_r) before it (`on`) or after it.
+    pub(super) fn set_reset_atom(&mut self, on: bool) {
+        self.reset_atom = on;
+    }
+
+    /// The initial state: S_c+ = 0, S_c- = 1, integrals 0.
+    pub(super) fn initial(&self) -> Vec<f64> {
+        let mut u = vec![0.0; self.n + EXTRA];
+        for k in (1..self.n).step_by(2) {
+            u[k] = 1.0;
+        }
+        u
+    }
+
+    /// dS_c±/dt at v_0 (time `t` on the absolute clock).
+    pub(super) fn rate_at_start(&self, u: &[f64], t: f64) -> (f64, f64) {
+        let mut out = vec![0.0; self.n];
+        self.apply_mesh(u, &mut out);
+        let (p, m) = (2 * self.start, 2 * self.start + 1);
+        let (fp, fm) = self.forcing_rows(t, p);
+        (out[p] + fp, out[m] + fm)
+    }
+
+    /// The forcing of rows (k, k + 1) = (+, -) of one node at absolute time t.
+    fn forcing_rows(&self, t: f64, k: usize) -> (f64, f64) {
+        let decay = (-self.kill * t).exp();
+        let i = k / 2;
+        let plus = if self.reset_atom && 2 * i + 2 < self.n {
+            self.rate * decay
+        } else {
+            0.0
+        };
+        let (up, lo) = self.ramps[i];
+        let frac = if t <= up {
+            1.0
+        } else if t >= lo {
+            0.0
+        } else {
+            (lo - t) / (lo - up)
+        };
+        (plus, self.lam * decay * frac)
+    }
+
+    /// out = A s on the mesh unknowns.
+    fn apply_mesh(&self, s: &[f64], out: &mut [f64]) {
+        let (rp, rm) = (s[2 * self.reset], s[2 * self.reset + 1]);
+        for (i, o) in out.iter_mut().enumerate().take(self.n) {
+            let mut x = 0.0;
+            for j in self.a.band.row_range(i) {
+                x += self.a.band.get(i, j) * s[j];
+            }
+            *o = x + self.a.cp[i] * rp + self.a.cm[i] * rm;
+        }
+    }
+
+    /// The time integrals of S_c± at v_0 over [0, ∞), exact for the
+    /// semi-discrete system: integrating M S_c' = A S_c + F gives
+    /// A X1 = -M S_c(0) - ∫F dt and A X2 = -M X1 - ∫t F dt with X1 = ∫S_c dt,
+    /// X2 = ∫ t S_c dt (F in closed form). Returns ((X1+, X1-), (X2+, X2-)).
+    pub(super) fn stationary_integrals(&self) -> std::result::Result<(Pair, Pair), Failure> {
+        let n = self.n;
+        let (f1, f2) = self.forcing_integrals();
+        let mut mass = vec![0.0; n + EXTRA];
+        self.apply_mass(&self.initial(), &mut mass);
+        // (0·M - 1·A) x = b solves -A x = b.
+        let (band, y1, y2) = self.factor(1.0, false)?;
+        let solve = |mut x: Vec<f64>| {
+            band.solve(&mut x);
+            self.remove_borders(&mut x, &y1, &y2);
+            x
+        };
+        let x1 = solve((0..n).map(|i| mass[i] + f1[i]).collect());
+        self.apply_mass(
+            &x1.iter().copied().chain([0.0; EXTRA]).collect::<Vec<_>>(),
+            &mut mass,
+        );
+        let x2 = solve((0..n).map(|i| mass[i] + f2[i]).collect());
+        let (p, q) = (2 * self.start, 2 * self.start + 1);
+        if !x1.iter().chain(&x2).all(|x| x.is_finite()) {
+            return Err(Failure::NonFinite {
+                method: METHOD,
+                at: f64::INFINITY,
+            });
+        }
+        Ok(((x1[p], x1[q]), (x2[p], x2[q])))
+    }
+
+    /// ∫_0^∞ F dt and ∫_0^∞ t F dt, row by row.
+    fn forcing_integrals(&self) -> (Vec<f64>, Vec<f64>) {
+        let k = self.kill;
+        let (mut f1, mut f2) = (vec![0.0; self.n], vec![0.0; self.n]);
+        let (r0, r1) = exp_moments(k, self.t_reset);
+        for (i, &(up, lo)) in self.ramps.iter().enumerate() {
+            if 2 * i + 2 < self.n {
+                f1[2 * i] = self.rate * r0;
+                f2[2 * i] = self.rate * r1;
+            }
+            let (a0, a1) = exp_moments(k, up);
+            let ramp = |m: usize| {
+                if lo > up {
+                    let f = |t: f64| (-k * t).exp() * (lo - t) / (lo - up) * t.powi(m as i32);
+                    gk15(&f, up, lo).kronrod
+                } else {
+                    0.0
+                }
+            };
+            f1[2 * i + 1] = self.lam * (a0 + ramp(0));
+            f2[2 * i + 1] = self.lam * (a1 + ramp(1));
+        }
+        (f1, f2)
+    }
+
+    /// x -= R+ y1 + R- y2 with R± = x±(v_r) solved from the 2×2 system
+    /// (bordering: the reset columns outside the band).
+    fn remove_borders(&self, x: &mut [f64], y1: &[f64], y2: &[f64]) {
+        if !self.borders {
+            return;
+        }
+        let (kp, km) = (2 * self.reset, 2 * self.reset + 1);
+        let (a11, a12, a21, a22) = (1.0 + y1[kp], y2[kp], y1[km], 1.0 + y2[km]);
+        let det = a11 * a22 - a12 * a21;
+        let (rp, rm) = (
+            (x[kp] * a22 - a12 * x[km]) / det,
+            (a11 * x[km] - a21 * x[kp]) / det,
+        );
+        for k in 0..self.n {
+            x[k] -= rp * y1[k] + rm * y2[k];
+        }
+    }
+
+    /// M - cA factored (M = I except the algebraic row of S_c+(v_t); no M
+    /// when `mass` is false), and its inverse applied to -c times each
+    /// border column.
+    fn factor(
+        &self,
+        c: f64,
+        mass: bool,
+    ) -> std::result::Result<(Band, Vec<f64>, Vec<f64>), Failure> {
+        let n = self.n;
+        let mut b = Band::new(n, 2, 2);
+        for i in 0..n {
+            for j in self.a.band.row_range(i) {
+                b.set(i, j, -c * self.a.band.get(i, j));
+            }
+            if mass && i != n - 2 {
+                b.set(i, i, 1.0 + b.get(i, i));
+            }
+        }
+        b.factor().map_err(|_| Failure::NonFinite {
+            method: METHOD,
+            at: c,
+        })?;
+        let border = |col: &[f64]| {
+            let mut y: Vec<f64> = col.iter().map(|x| -c * x).collect();
+            b.solve(&mut y);
+            y
+        };
+        let (y1, y2) = (border(&self.a.cp), border(&self.a.cm));
+        Ok((b, y1, y2))
+    }
+}
+
+/// Upwind rows at the nodes: + rows look up the mesh, - rows down; the
+/// last + row is the algebraic S_c+(v_t) = 0 (written -S = 0, so that
+/// I - cA keeps a positive diagonal).
+fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
+    let par = cp.params();
+    let (g, sigma, lam, rate) = (par.drag(), par.sigma(), par.lambda(), par.rate());
+    let nodes = m.v.len();
+    let n = 2 * nodes;
+    let mut a = Band::new(n, 2, 2);
+    let (mut bp, mut bm) = (vec![0.0; n], vec![0.0; n]);
+    for i in 0..nodes {
+        let (p, q) = (2 * i, 2 * i + 1);
+        let f = g.force(m.v[i]);
+        if i + 1 < nodes {
+            let w = (sigma - f) / (m.v[i + 1] - m.v[i]);
+            a.set(p, p + 2, w);
+            a.set(p, p, -w - lam - rate);
+            a.set(p, q, lam);
+            bp[p] = rate;
+        } else {
+            a.set(p, p, -1.0);
+        }
+        // The - drift -(Sigma + g) vanishes at v_l = -v_u (i = 0).
+        let w = if i > 0 {
+            (sigma + f).max(0.0) / (m.v[i] - m.v[i - 1])
+        } else {
+            0.0
+        };
+        if i > 0 {
+            a.set(q, q - 2, w);
+        }
+        a.set(q, q, -w - lam - rate);
+        a.set(q, p, lam);
+        bm[q] = rate;
+    }
+    Assembly {
+        band: a,
+        cp: bp,
+        cm: bm,
+    }
+}
+
+impl ShiftedLinear for UpwindOperator {
+    fn dim(&self) -> usize {
+        self.n + EXTRA
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        self.apply_mesh(u, out);
+        let n = self.n;
+        out[n] = u[2 * self.start];
+        out[n + 1] = u[2 * self.start + 1];
+        out[n + 2] = u[n];
+        out[n + 3] = u[n + 1];
+    }
+
+    fn apply_mass(&self, u: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(u);
+        out[self.n - 2] = 0.0;
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        if self
+            .cache
+            .as_ref()
+            .map_or(true, |k| k.0.to_bits() != c.to_bits())
+        {
+            let (f, y1, y2) = self.factor(c, true)?;
+            self.cache = Some((c, f, y1, y2));
+        }
+        let (_, f, y1, y2) = self.cache.as_ref().expect("factored above");
+        let n = self.n;
+        x[..n].copy_from_slice(&b[..n]);
+        f.solve(&mut x[..n]);
+        self.remove_borders(&mut x[..n], y1, y2);
+        // I - c S_c(v_0) = b_I, J - c I = b_J.
+        x[n] = b[n] + c * x[2 * self.start];
+        x[n + 1] = b[n + 1] + c * x[2 * self.start + 1];
+        x[n + 2] = b[n + 2] + c * x[n];
+        x[n + 3] = b[n + 3] + c * x[n + 1];
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::NonFinite {
+                method: METHOD,
+                at: c,
+            });
+        }
+        Ok(())
+    }
+
+    fn atol(&self, i: usize, atol: f64) -> f64 {
+        // The integrals grow to tau and E[T²]/2: errors on their own scale.
+        match i.checked_sub(self.n) {
+            None => atol,
+            Some(k) if k < 2 => atol * self.scales.0,
+            Some(_) => atol * self.scales.1,
+        }
+    }
+
+    fn rms_norm_with_max_over(&self) -> Option<&[usize]> {
+        // A node's forcing switches off within its cell's flow time: under
+        // the max norm every such kink would set the step (steps ~ cells).
+        Some(&self.reported)
+    }
+
+    fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
+        let t = self.t0 + t;
+        for k in (0..self.n).step_by(2) {
+            (out[k], out[k + 1]) = self.forcing_rows(t, k);
+        }
+        out[self.n..].fill(0.0);
+        true
+    }
+}
+
+/// (∫_0^T e^{-k t} dt, ∫_0^T t e^{-k t} dt), without cancellation for small
+/// k T (series) and exact for T = ∞.
+pub(super) fn exp_moments(k: f64, t: f64) -> (f64, f64) {
+    let x = k * t;
+    let first = -(-x).exp_m1() / k;
+    // 1 - e^{-x}(1 + x) = x²/2 - x³/3 + x⁴/8 - x⁵/30 + ...
+    let second = if x < 1e-2 {
+        x * x * (0.5 - x * (1.0 / 3.0 - x * (0.125 - x / 30.0)))
+    } else if x.is_finite() {
+        1.0 - (-x).exp() * (1.0 + x)
+    } else {
+        1.0
+    };
+    (first, second / (k * k))
+}
+
+/// The upwind scheme's own image of the atom's step H(T_f(v_0) - t): the
+/// pure transport dQ_i/dt = w_i (Q_{i+1} - Q_i), w_i = (Sigma - g(v_i))/h_i,
+/// from Q = 1 below v_t and Q(v_t) = 0, read at v_0 (a hypoexponential
+/// survival: mean the discrete flow time, spread ~ sqrt(h T_f)). The kink
+/// of S_c+ at the atom's flow time is smeared by the scheme exactly as this
+/// step is, so the continuous density is assembled as
+/// f+ = (lambda + r) e^{-(lambda + r) t} Q(v_0, t) - dS_c+/dt: with the
+/// exact step H instead, the two would not cancel and f would dip below 0
+/// just after T_f.
+pub(super) struct AtomProbe {
+    /// Transport rates from v_0 up to the last node below v_t.
+    w: Vec<f64>,
+}
+
+impl AtomProbe {
+    /// The probe on mesh `m` of the canonical problem `cp`.
+    pub(super) fn new(cp: &Problem, m: &Mesh) -> Self {
+        let par = cp.params();
+        let (g, sigma) = (par.drag(), par.sigma());
+        let w = (m.start..m.v.len() - 1)
+            .map(|i| (sigma - g.force(m.v[i])) / (m.v[i + 1] - m.v[i]))
+            .collect();
+        AtomProbe { w }
+    }
+
+    /// Q = 1 at every node below v_t.
+    pub(super) fn initial(&self) -> Vec<f64> {
+        vec![1.0; self.w.len()]
+    }
+}
+
+impl ShiftedLinear for AtomProbe {
+    fn dim(&self) -> usize {
+        self.w.len()
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        let m = self.w.len();
+        for j in 0..m {
+            let next = if j + 1 < m { u[j + 1] } else { 0.0 };
+            out[j] = self.w[j] * (next - u[j]);
+        }
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        // Upper bidiagonal: back substitution from the node below v_t.
+        let mut next = 0.0;
+        for j in (0..self.w.len()).rev() {
+            let cw = c * self.w[j];
+            next = (b[j] + cw * next) / (1.0 + cw);
+            x[j] = next;
+        }
+        Ok(())
+    }
+}
