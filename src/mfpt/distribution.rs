@@ -13,7 +13,7 @@
 //! ([`Distribution::atom_time`], [`Distribution::atom_mass`]); S includes it
 //! (S+ drops by the atom's mass at T_f), f is the density of the rest.
 //! The rest solves the survival equations with a bounded forcing, on the
-//! monotone upwind scheme of [`super::upwind`] (no oscillation: S stays a
+//! monotone upwind scheme of `mfpt/upwind.rs` (no oscillation: S stays a
 //! probability, f >= 0 up to the integration tolerance) integrated in time
 //! by the adaptive L-stable TR-BDF2 of [`crate::numerics::trbdf2`], landing
 //! on T_f(v_r) where the forcing jumps. Four extra unknowns at v_0 carry the
