@@ -314,8 +314,10 @@ struct BackwardPart {
     /// max |S_fine - S_coarse| over the output times: the discretisation
     /// error of the finer of the two meshes extrapolated.
     mesh_error: f64,
-    /// max |f_fine - f_coarse|: the same for the density.
+    /// max |f_fine - f_coarse| outside the smeared window: the same for f.
     mesh_error_density: f64,
+    /// Within atom_time ± 6 atom_spread f is smeared by the mesh.
+    atom_spread: f64,
     steps: usize,
     rejected_steps: usize,
 }
@@ -417,6 +419,7 @@ fn backward_report<'a>(c: &'a Config, opts: &DistributionOptions, d: &Distributi
             atom_mass: d.atom_mass,
             mesh_error: d.mesh_error,
             mesh_error_density: d.mesh_error_density,
+            atom_spread: d.atom_spread,
             steps: d.steps,
             rejected_steps: d.rejected,
         }),

@@ -1,4 +1,4 @@
-//! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,all} --out DIR [--quick] [--seed N]`.
+//! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,fpt,all} --out DIR [--quick] [--seed N]`.
 
 use super::common::ForceArgs;
 use super::{Context, Outcome, Results};
@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// same command skips the figures already finished.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
-    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, or all.
+    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7 fpt (first-passage-time densities, beyond the paper), or all.
     #[arg(required = true, value_parser = parse_figure)]
     pub figures: Vec<Selection>,
     /// Output directory.
@@ -46,7 +46,7 @@ fn parse_figure(s: &str) -> Result<Selection, String> {
     }
     s.parse::<Which>()
         .map(Selection::One)
-        .map_err(|_| "expected one of fig1, fig2, fig3, fig5, fig6, fig7, all".to_string())
+        .map_err(|_| "expected one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, all".to_string())
 }
 
 impl ReproduceArgs {

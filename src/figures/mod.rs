@@ -1,4 +1,5 @@
-//! Reproduction of the paper's figures 1, 2, 3, 5, 6 and 7 (`irtp reproduce`).
+//! Reproduction of the paper's figures 1, 2, 3, 5, 6 and 7, and one beyond
+//! the paper (first-passage-time densities, `fpt`) (`irtp reproduce`).
 //!
 //! Each figure module holds its parameter set (a serialisable `Spec`, with a
 //! full and a `quick` size) and works in three steps: `compute` runs the
@@ -19,6 +20,7 @@ pub mod fig2;
 pub mod fig5;
 pub mod fig6;
 pub mod fig7;
+pub mod fpt;
 pub mod plot;
 pub mod store;
 
@@ -43,17 +45,20 @@ pub enum Which {
     Fig6,
     /// MFPT against v_t - v_0 and r.
     Fig7,
+    /// Beyond the paper: first-passage-time densities.
+    Fpt,
 }
 
 impl Which {
     /// Every reproduced figure, in paper order.
-    pub const ALL: [Which; 6] = [
+    pub const ALL: [Which; 7] = [
         Which::Fig1,
         Which::Fig2,
         Which::Fig3,
         Which::Fig5,
         Which::Fig6,
         Which::Fig7,
+        Which::Fpt,
     ];
     /// File stem ("fig1", ...).
     pub fn name(self) -> &'static str {
@@ -64,6 +69,7 @@ impl Which {
             Which::Fig5 => "fig5",
             Which::Fig6 => "fig6",
             Which::Fig7 => "fig7",
+            Which::Fpt => "fpt",
         }
     }
 }
@@ -78,7 +84,7 @@ impl FromStr for Which {
                 Error::invalid(
                     "figure",
                     s,
-                    "one of fig1, fig2, fig3, fig5, fig6, fig7, all",
+                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, all",
                 )
             })
     }
@@ -241,6 +247,7 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
         Which::Fig5 => fig5::run(opts, progress)?,
         Which::Fig6 => fig6::run(opts, progress)?,
         Which::Fig7 => fig7::run(opts, progress)?,
+        Which::Fpt => fpt::run(opts, progress)?,
     };
     out.wall_time_s = t0.elapsed().as_secs_f64();
     progress.update(SCALE, SCALE);

@@ -438,6 +438,13 @@ impl AtomProbe {
         AtomProbe { w }
     }
 
+    /// The spread of the scheme's arrival time from v_0: the standard
+    /// deviation sqrt(Σ w_i⁻²) of the hypoexponential, the width in time
+    /// over which the kink of S_c at T_f is smeared.
+    pub(super) fn spread(&self) -> f64 {
+        self.w.iter().map(|w| w.powi(-2)).sum::<f64>().sqrt()
+    }
+
     /// Q = 1 at every node below v_t.
     pub(super) fn initial(&self) -> Vec<f64> {
         vec![1.0; self.w.len()]
