@@ -4,7 +4,7 @@
 //! large r > r* where the mean is back at its r = 0 value: the same mean
 //! with a different shape, the whole distribution behind the mean the
 //! paper optimises. Lines: bin probabilities of the time-dependent
-//! backward equations ([`crate::mfpt::distribution`], S(lo) - S(hi) per
+//! backward equations ([`crate::mfpt::distribution()`], S(lo) - S(hi) per
 //! bin, divided by the bin width); points: the exact first-passage
 //! sampler's histogram on the same bins, with binomial standard errors.
 //! Both include the atom at the deterministic flow time T_f (no flip and
