@@ -275,8 +275,17 @@ struct Scratch {
 }
 
 /// The segments of noise value s: tables when they fit, else the solve.
+/// A law with an infinite slope at v = 0 (the power law with n < 1) goes
+/// straight to the solve: its kink, where dΦ/du has infinite slope, sits
+/// inside a uniform cell of the potential table, which would be halved
+/// past the table's piece limit (measured: ~0.3 s spent before giving up).
 fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Segments<D::Flow>> {
-    Ok(match PotentialTable::new(drag, s) {
+    let table = if kink_inside(drag, lo, hi) {
+        None
+    } else {
+        PotentialTable::new(drag, s)
+    };
+    Ok(match table {
         Some(t) => Segments::Table(t),
         None => Segments::Solve(
             drag.flow(s).accelerated(),
