@@ -4,7 +4,7 @@
 //! `cargo run --release --example efficiency`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use irtp::model::drag::{Cubic, Linear, PotentialTable, Tan, Tanh};
+use irtp::model::drag::{Cubic, Linear, PotentialTable, Power, Tan, Tanh};
 use irtp::model::{Drag, FlowMap};
 use irtp::parallel::NoProgress;
 use irtp::sim::exact::{self, DeficitTable};
@@ -13,16 +13,17 @@ use irtp::{DragLaw, Params};
 use rand::Rng as _;
 
 fn kernels(c: &mut Criterion) {
-    kernels_for(c, Tan, 3.0);
-    kernels_for(c, Tanh, 0.6);
-    kernels_for(c, Linear, 1.0);
-    kernels_for(c, Cubic, 3.0);
+    kernels_for(c, "tan", Tan, 3.0);
+    kernels_for(c, "tanh", Tanh, 0.6);
+    kernels_for(c, "linear", Linear, 1.0);
+    kernels_for(c, "cubic", Cubic, 3.0);
+    kernels_for(c, "power:n=0.5", Power::new(0.5, 1.0).unwrap(), 3.0);
+    kernels_for(c, "power:n=2", Power::new(2.0, 1.0).unwrap(), 3.0);
 }
 
 /// Flow velocity (plain and accelerated), flow time and deficit lookup of
-/// one law, monomorphised as the sampler runs it.
-fn kernels_for<D: Drag>(c: &mut Criterion, d: D, sigma: f64) {
-    let name = d.name();
+/// one law (`name`, its spec), monomorphised as the sampler runs it.
+fn kernels_for<D: Drag>(c: &mut Criterion, name: &str, d: D, sigma: f64) {
     let f = d.flow(sigma);
     let vu = d.inverse(sigma);
     let bench_velocity = |c: &mut Criterion, label: &str, f: &D::Flow| {
@@ -117,7 +118,8 @@ fn particles(c: &mut Criterion) {
 
 /// Events per second of the exact sampler on the Fig. 2 workload (moments at
 /// two times plus a 100-bin histogram, t = 20 per particle) for the closed-form
-/// laws and for `cubic`, a law given only by g and g' (tabulated flow).
+/// laws and for `cubic` and the power law (n = 0.5: g'(0) = ∞; n = 2), laws
+/// given by g and g' (tabulated flow).
 fn events_per_law(c: &mut Criterion) {
     let mut g = c.benchmark_group("exact_events");
     g.sample_size(10);
@@ -125,6 +127,8 @@ fn events_per_law(c: &mut Criterion) {
         ("tan", 3.0, 0.5, 2.0),
         ("tanh", 0.6, 0.5, 2.0),
         ("cubic", 3.0, 0.5, 2.0),
+        ("power:n=0.5", 3.0, 0.5, 2.0),
+        ("power:n=2", 3.0, 0.5, 2.0),
     ] {
         let drag: DragLaw = law.parse().expect("registered law");
         let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();

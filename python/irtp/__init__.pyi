@@ -23,6 +23,8 @@ __version__: str
 
 Array = npt.NDArray[np.float64]
 PathLike = Union[str, "os.PathLike[str]"]
+# Laws without parameters; a law with parameters is a spec string
+# ("power:n=0.5", "carreau:n=0.5,a=1").
 DragName = Literal["tan", "tanh", "linear", "cubic"]
 ProgressArg = Union[bool, Callable[[str, int, int], None]]
 ParamsArg = Union["Params", Mapping[str, Any], None]
@@ -34,6 +36,8 @@ class Drag:
     def __init__(self, name: Union[str, Drag]) -> None: ...
     @property
     def name(self) -> str: ...
+    @property
+    def law(self) -> str: ...
     @property
     def description(self) -> str: ...
     @property

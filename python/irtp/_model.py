@@ -31,14 +31,21 @@ class Drag:
 
     ``Drag("tan")`` (shear-thickening, Table 1), ``Drag("tanh")``
     (shear-thinning, needs Sigma < 1), ``Drag("linear")`` (Newtonian) and
-    ``Drag("cubic")`` (g = v + v³/3); the list comes from the Rust registry
-    (:func:`drag_laws`). Accepted by every function as ``drag=`` and by
+    ``Drag("cubic")`` (g = v + v³/3), and the parameterised media
+    ``Drag("power:n=0.5")`` (g = k sign(v)|v|^n, k = 1 by default) and
+    ``Drag("carreau:n=0.5,a=1")`` (g = v [1 + (a v)²]^((n-1)/2)); the list
+    comes from the Rust registry (:func:`drag_laws`), which also validates
+    the parameters (a bad one is a ``ValueError`` naming it, from the
+    function that runs). Accepted by every function as ``drag=`` and by
     :class:`Params`; a plain string works too.
 
     Attributes
     ----------
     name : str
-        The registry name (what ``--drag`` takes).
+        What ``--drag`` takes: the registry name, with ``:key=value,...``
+        for a law with parameters.
+    law : str
+        The registry name alone (``power`` for ``power:n=0.5``).
     description : str
         One line, e.g. "shear-thickening, g = tan v".
     force_limit : float
@@ -50,7 +57,7 @@ class Drag:
     def __init__(self, name: "str | Drag") -> None:
         if isinstance(name, Drag):
             name = name.name
-        if not isinstance(name, str) or name not in _laws():
+        if not isinstance(name, str) or name.split(":", 1)[0] not in _laws():
             raise ValueError(
                 f"unknown drag law {name!r} (known: {_known_laws()})"
             )
@@ -61,12 +68,16 @@ class Drag:
         return self._name
 
     @property
+    def law(self) -> str:
+        return self._name.split(":", 1)[0]
+
+    @property
     def description(self) -> str:
-        return str(_laws()[self._name]["description"])
+        return str(_laws()[self.law]["description"])
 
     @property
     def force_limit(self) -> float:
-        return float(_laws()[self._name]["force_limit"])
+        return float(_laws()[self.law]["force_limit"])
 
     def __str__(self) -> str:
         return self._name

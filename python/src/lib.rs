@@ -186,15 +186,27 @@ fn about(command: &str) -> PyResult<String> {
     Ok(text.map(|t| t.to_string()).unwrap_or_default())
 }
 
-/// The registered drag laws: name, description, force limit (inf: unbounded).
+/// The registered drag laws: name, description, force limit (inf:
+/// unbounded), and for a law with parameters its keys in words and an
+/// example spec (`power:n=0.5,k=1`; empty strings for a law without).
 #[pyfunction]
 fn drag_laws<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
     let list = PyList::empty(py);
-    for law in DragLaw::ALL {
+    for law in DragLaw::examples() {
         let d = PyDict::new(py);
-        d.set_item("name", law.to_string())?;
+        let keys = law.keys_help();
+        d.set_item("name", law.name())?;
         d.set_item("description", law.description())?;
         d.set_item("force_limit", law.force_limit())?;
+        d.set_item("parameters", keys.clone())?;
+        d.set_item(
+            "example",
+            if keys.is_empty() {
+                String::new()
+            } else {
+                law.to_string()
+            },
+        )?;
         list.append(d)?;
     }
     Ok(list)

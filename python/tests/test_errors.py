@@ -122,3 +122,14 @@ def test_numerical_error_is_a_runtime_error():
 def test_bad_progress_argument():
     with pytest.raises(TypeError, match="progress"):
         irtp.fp_stationary(cells=100, progress="yes")
+
+
+def test_parameterised_drag_specs_pass_through():
+    res = irtp.analytic(drag="power:n=0.5", sigma=3.0, lambda_=0.9)
+    assert res.summary["drag"] == "power:n=0.5,k=1"
+    d = irtp.Drag("carreau:n=0.5,a=2")
+    assert d.law == "carreau" and d.name == "carreau:n=0.5,a=2" and d.force_limit == math.inf
+    for spec, key in [("power:n=-1", "n > 0"), ("carreau:n=0.5,a=0", "a > 0"),
+                      ("power:n=0.5,q=1", "'q'")]:
+        with pytest.raises(ValueError, match=key):
+            irtp.analytic(drag=spec, sigma=3.0, lambda_=0.9)

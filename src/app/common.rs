@@ -46,14 +46,18 @@ pub struct ModelArgs {
 }
 
 /// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
-/// law with its description.
+/// law with its description (and, for a law with parameters, its spec and
+/// keys).
 fn drag_help() -> String {
-    let laws: Vec<String> = DragLaw::ALL
+    let laws: Vec<String> = DragLaw::examples()
         .iter()
         .map(|d| {
             let limit = d.force_limit();
+            let keys = d.keys_help();
             if limit.is_finite() {
                 format!("{d} ({}, needs sigma < {limit})", d.description())
+            } else if !keys.is_empty() {
+                format!("{d} ({}; {keys})", d.description())
             } else {
                 format!("{d} ({})", d.description())
             }
@@ -91,9 +95,13 @@ pub fn parse_size(s: &str) -> Result<usize, String> {
     usize::try_from(n).map_err(|_| format!("{n} is too large for this machine"))
 }
 
+/// A drag law or its spec with parameters (`power:n=0.5,k=1`); the error
+/// names the parameter and its range.
 fn parse_drag(s: &str) -> Result<DragLaw, String> {
-    s.parse::<DragLaw>()
-        .map_err(|_| format!("expected one of {}", DragLaw::names()))
+    s.parse::<DragLaw>().map_err(|e| match e {
+        crate::Error::InvalidParameter { allowed, .. } => format!("expected {allowed}"),
+        other => other.to_string(),
+    })
 }
 
 impl ModelArgs {

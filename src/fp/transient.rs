@@ -254,16 +254,26 @@ pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
 /// 1e-7 <= rtol <= 1e-4, 1e-14 <= atol <= 1e-8). The integrator is stopped
 /// (numerical failure) at [`TRBDF2_STEP_CAP`] times the estimate.
 pub fn trbdf2_step_bound(params: &Params, opts: &TransientOptions, outputs: usize) -> u64 {
-    let rate = 1.0
-        + params.lambda()
-        + params.rate()
-        + params.drag().derivative(params.reset_velocity()).abs();
+    let rate = 1.0 + params.lambda() + params.rate() + relaxation_rate(params);
     let decades = 1.0 + (opts.t_max * rate).ln_1p() / std::f64::consts::LN_10;
     let tol = (opts.rtol * opts.atol).powf(-1.0 / 6.0);
     let mesh = (opts.cells as f64 / 100.0).sqrt();
     (4.0 * outputs as f64 + 10.0 * tol * mesh * decades)
         .ceil()
         .min(1e15) as u64
+}
+
+/// |g'(v_r)|, the rate at which the flow leaves the reset velocity; where
+/// g' is infinite there (the power law with n < 1 at v_r = 0) the steepest
+/// secant slope to the edge ([`Drag::euler_slope`], finite), the rate of
+/// the flow across the cells around v_r.
+fn relaxation_rate(params: &Params) -> f64 {
+    let g1 = params.drag().derivative(params.reset_velocity()).abs();
+    if g1.is_finite() {
+        g1
+    } else {
+        params.drag().euler_slope(params.sigma())
+    }
 }
 
 /// The TR-BDF2 integrator gives up after this many times the estimated

@@ -194,11 +194,14 @@ impl Params {
     }
 
     /// Largest Euler step that keeps the velocity inside (v_l, v_u):
-    /// dt < 1 / max g' on the interval. Then v ↦ v + dt(Sigma - g(v)) is
-    /// increasing with fixed point v_u, so v < v_u implies v_new < v_u
-    /// (and symmetrically at v_l). Tan: 1/(1+Sigma²); tanh and linear: 1.
+    /// dt < 1 / [`Drag::euler_slope`], the largest secant slope
+    /// (Sigma - g(v)) / (v_u - v) on the interval, so that
+    /// v + dt (Sigma - g(v)) < v_u for every v < v_u (and symmetrically at
+    /// v_l). For the shipped laws without parameters this is 1 / max g'
+    /// (tan: 1/(1+Sigma²); tanh and linear: 1); the power law with n < 1,
+    /// whose g' is unbounded at v = 0, gets its finite secant bound.
     pub fn max_euler_dt(&self) -> f64 {
-        1.0 / self.drag.max_derivative(self.sigma)
+        1.0 / self.drag.euler_slope(self.sigma)
     }
 
     /// Validate an Euler time step against [`Params::max_euler_dt`].
@@ -209,7 +212,7 @@ impl Params {
             return Err(Error::invalid(
                 "dt",
                 dt,
-                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, so an Euler step cannot leave it)"),
+                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded, so an Euler step cannot leave it)"),
             ));
         }
         Ok(dt)

@@ -18,20 +18,26 @@
 //! A new law is one new file implementing [`Drag`] plus one line in the
 //! registry (`docs/extending.md`).
 
+pub mod carreau;
 pub mod closed;
 pub mod cubic;
 pub mod linear;
 pub mod potential_table;
+pub mod power;
 pub mod registry;
+pub mod spec;
 pub mod tabulated;
 pub mod tan;
 pub mod tanh;
 
+pub use carreau::Carreau;
 pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
 pub use cubic::Cubic;
 pub use linear::Linear;
 pub use potential_table::{FlowPoint, PotentialTable};
+pub use power::Power;
 pub use registry::{AnyFlow, DragLaw};
+pub use spec::{Key, ParamLaw};
 pub use tabulated::TabulatedFlow;
 pub use tan::Tan;
 pub use tanh::Tanh;
@@ -120,11 +126,22 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     fn force_limit(&self) -> f64 {
         f64::INFINITY
     }
-    /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]:
-    /// sets the Euler stability limit dt < 1/max g' and the FP CFL number.
+    /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]
+    /// (+∞ where g' is unbounded): the default of [`Drag::euler_slope`],
+    /// which sets the Euler step limit.
     /// Default: the largest of 2049 samples and the edges, plus 1 % margin.
     fn max_derivative(&self, sigma: f64) -> f64 {
         sampled_max_derivative(self, sigma)
+    }
+    /// The largest secant slope (Sigma - g(v)) / (v_u - v) over
+    /// v ∈ [v_l, v_u): an Euler step v + dt (Sigma - g(v)) stays below v_u
+    /// (and, by oddness, the - state's above v_l) for every v in the interval
+    /// exactly when dt < 1 / euler_slope. Finite even where g' is not (the
+    /// power law with n < 1 at v = 0). Default: [`Drag::max_derivative`], an
+    /// upper bound of every secant slope (mean value theorem), equal to it
+    /// for a law whose largest slope is at the edges.
+    fn euler_slope(&self, sigma: f64) -> f64 {
+        self.max_derivative(sigma)
     }
     /// g(v) as the Euler kernel evaluates it (a faster kernel of the same
     /// function where one exists, e.g. Cephes tan).

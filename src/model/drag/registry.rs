@@ -3,27 +3,40 @@
 //! code monomorphised for that law's type. Everything here is generated from
 //! the one list at the bottom of this file: a new law is one line there.
 
+use super::spec::{self, ParamLaw};
 use super::{Drag, FlowMap};
 
-/// The registry: one line per law, `Variant => Type` (Type a unit struct in
-/// [`crate::model::drag`] implementing [`Drag`]). Every other piece of
-/// dispatch is generated from this list by calling back macro `$cb`.
+/// The registry: one line per law, `Variant => Type`, in two lists. `units`:
+/// laws without parameters (Type a unit struct in [`crate::model::drag`]
+/// implementing [`Drag`]; the variant is a unit, `DragLaw::Tan`, its spec
+/// the bare name `tan`). `params`: laws with parameters (Type a `Copy`
+/// struct implementing [`Drag`] and [`ParamLaw`]; the variant carries the
+/// law's value, `DragLaw::Power(Power)`, its spec `power:n=0.5,k=1`). Every
+/// other piece of dispatch is generated from this list by calling back
+/// macro `$cb`.
 #[doc(hidden)]
 #[macro_export]
 macro_rules! drag_laws {
     ($cb:ident ($($args:tt)*)) => {
         $crate::$cb! { ($($args)*)
-            Tan => Tan,
-            Tanh => Tanh,
-            Linear => Linear,
-            Cubic => Cubic,
+            units [
+                Tan => Tan,
+                Tanh => Tanh,
+                Linear => Linear,
+                Cubic => Cubic,
+            ]
+            params [
+                Power => Power,
+                Carreau => Carreau,
+            ]
         }
     };
 }
 
 /// The one dispatch: `with_drag!(law, |d| expr)` evaluates `expr` with `d`
-/// bound to a reference to the law's own type (a unit struct implementing
-/// [`Drag`]), so `expr` is compiled once per law with static dispatch.
+/// bound to a reference to the law's own value (the unit struct of a law
+/// without parameters, the value carried by the variant of a law with
+/// parameters), so `expr` is compiled once per law with static dispatch.
 #[macro_export]
 macro_rules! with_drag {
     ($law:expr, |$x:ident| $body:expr) => {
@@ -34,14 +47,21 @@ macro_rules! with_drag {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __with_drag_arms {
-    (($law:expr, $x:ident, $body:expr) $($variant:ident => $ty:ident,)+) => {
-        match $law {
+    (($law:expr, $x:ident, $body:expr)
+     units [$($u:ident => $uty:ident,)*] params [$($p:ident => $pty:ident,)*]) => {
+        match &$law {
             $(
-                $crate::model::DragLaw::$variant => {
-                    let $x = &$crate::model::drag::$ty;
+                $crate::model::DragLaw::$u => {
+                    let $x = &$crate::model::drag::$uty;
                     $body
                 }
-            )+
+            )*
+            $(
+                $crate::model::DragLaw::$p(law_value) => {
+                    let $x: &$crate::model::drag::$pty = law_value;
+                    $body
+                }
+            )*
         }
     };
 }
@@ -50,21 +70,107 @@ macro_rules! __with_drag_arms {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __drag_registry {
-    (() $($variant:ident => $ty:ident,)+) => {
-        /// A drag law shipped with irtp (see [`crate::model::drag`]).
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    (() units [$($u:ident => $uty:ident,)*] params [$($p:ident => $pty:ident,)*]) => {
+        /// A drag law shipped with irtp (see [`crate::model::drag`]): a unit
+        /// variant for a law without parameters, a variant carrying the
+        /// law's value for a law with parameters.
+        #[derive(Clone, Copy, Debug, PartialEq)]
         pub enum DragLaw {
             $(
-                #[doc = concat!("[`", stringify!($ty), "`](super::", stringify!($ty), ")")]
-                $variant,
-            )+
+                #[doc = concat!("[`", stringify!($uty), "`](super::", stringify!($uty), ")")]
+                $u,
+            )*
+            $(
+                #[doc = concat!("[`", stringify!($pty), "`](super::", stringify!($pty), ")")]
+                $p(super::$pty),
+            )*
         }
 
         impl DragLaw {
-            /// Every law, in registry order.
-            pub const ALL: [DragLaw; [$(stringify!($variant)),+].len()] = [$(DragLaw::$variant),+];
+            /// Every law without parameters, in registry order.
+            pub const ALL: [DragLaw; [$(stringify!($u)),*].len()] = [$(DragLaw::$u),*];
+
+            /// Every registered law in registry order, a law with
+            /// parameters at its [`ParamLaw::example`] value.
+            pub fn examples() -> Vec<DragLaw> {
+                let mut out: Vec<DragLaw> = DragLaw::ALL.to_vec();
+                $(out.push(DragLaw::$p(<super::$pty as ParamLaw>::example()));)*
+                out
+            }
+
+            /// How each law is written, for messages:
+            /// `tan, ..., power:n=N[,k=K], ...`.
+            pub fn names() -> String {
+                let mut names: Vec<String> = vec![$(super::$uty.name().to_string()),*];
+                $(names.push(spec::usage::<super::$pty>());)*
+                names.join(", ")
+            }
+
+            /// The spec of this law: its name, with `:key=value,...` for a
+            /// law with parameters.
+            pub fn spec(&self) -> String {
+                match self {
+                    $(DragLaw::$u => super::$uty.name().to_string(),)*
+                    $(DragLaw::$p(law) => spec::write(law),)*
+                }
+            }
+
+            /// The parameters of this law in words (empty for a law
+            /// without parameters), for help texts.
+            pub fn keys_help(&self) -> String {
+                match self {
+                    $(DragLaw::$u => String::new(),)*
+                    $(DragLaw::$p(_) => spec::keys_help::<super::$pty>(),)*
+                }
+            }
+
+            /// The flow of this law with noise value s.
+            fn any_flow(&self, s: f64) -> AnyFlow {
+                match self {
+                    $(DragLaw::$u => AnyFlow::$u(super::$uty.flow(s)),)*
+                    $(DragLaw::$p(law) => AnyFlow::$p(law.flow(s)),)*
+                }
+            }
         }
 
+        impl std::str::FromStr for DragLaw {
+            type Err = $crate::Error;
+            /// `tan`, or `power:n=0.5,k=1` for a law with parameters.
+            fn from_str(s: &str) -> Result<Self, Self::Err> {
+                let (name, args) = match s.split_once(':') {
+                    Some((name, args)) => (name, Some(args)),
+                    None => (s, None),
+                };
+                $(
+                    if name == super::$uty.name() {
+                        return match args {
+                            None => Ok(DragLaw::$u),
+                            Some(_) => Err($crate::Error::invalid(
+                                "drag",
+                                s,
+                                format!("the bare name '{name}' (this law has no parameters)"),
+                            )),
+                        };
+                    }
+                )*
+                $(
+                    if name == <super::$pty as ParamLaw>::example().name() {
+                        return spec::parse::<super::$pty>(s, args).map(DragLaw::$p);
+                    }
+                )*
+                Err($crate::Error::invalid("drag", s, format!("one of {}", DragLaw::names())))
+            }
+        }
+
+        $crate::__any_flow!($($u => $uty,)* $($p => $pty,)*);
+    };
+}
+
+/// [`AnyFlow`] over every law of the registry.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __any_flow {
+    ($($variant:ident => $ty:ident,)+) => {
         /// The flow of any registered law (for code that holds a
         /// [`DragLaw`]; monomorphised code uses the law's own flow type).
         #[derive(Clone, Debug)]
@@ -96,13 +202,6 @@ macro_rules! __drag_registry {
             }
             fn accelerated(self) -> Self {
                 match self { $(AnyFlow::$variant(f) => AnyFlow::$variant(f.accelerated()),)+ }
-            }
-        }
-
-        impl DragLaw {
-            /// The flow of this law with noise value s.
-            fn any_flow(&self, s: f64) -> AnyFlow {
-                match self { $(DragLaw::$variant => AnyFlow::$variant(super::$ty.flow(s)),)+ }
             }
         }
     };
@@ -145,6 +244,9 @@ impl Drag for DragLaw {
     fn max_derivative(&self, sigma: f64) -> f64 {
         crate::with_drag!(self, |d| d.max_derivative(sigma))
     }
+    fn euler_slope(&self, sigma: f64) -> f64 {
+        crate::with_drag!(self, |d| d.euler_slope(sigma))
+    }
     fn fast_force(&self, v: f64) -> f64 {
         crate::with_drag!(self, |d| d.fast_force(v))
     }
@@ -171,37 +273,16 @@ impl Drag for DragLaw {
     }
 }
 
-impl DragLaw {
-    /// The names accepted by [`str::parse`], comma-separated (for messages).
-    pub fn names() -> String {
-        DragLaw::ALL
-            .iter()
-            .map(|d| d.name())
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-}
-
 impl std::fmt::Display for DragLaw {
+    /// The spec: `tan`, `power:n=0.5,k=1`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for DragLaw {
-    type Err = crate::Error;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        DragLaw::ALL
-            .iter()
-            .copied()
-            .find(|d| d.name() == s)
-            .ok_or_else(|| crate::Error::invalid("drag", s, format!("one of {}", DragLaw::names())))
+        f.write_str(&self.spec())
     }
 }
 
 impl serde::Serialize for DragLaw {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.name())
+        s.serialize_str(&self.spec())
     }
 }
 

@@ -1,0 +1,155 @@
+//! Laws with parameters: [`ParamLaw`] and the compact spec
+//! `name:key=value,...` (`power:n=0.5,k=1`) that names such a law on the
+//! command line, in sweep plans and in every provenance file.
+//!
+//! A spec is written with every key, in the law's key order, each value in
+//! Rust's shortest round-trip form, so the written spec parses back to the
+//! same law bit for bit. Parsing accepts the keys in any order and fills in
+//! defaults; an unknown, repeated or missing key, a value that is not a
+//! number, and a value outside its range are each one error naming the key.
+
+use super::Drag;
+use crate::error::{Error, Result};
+
+/// One parameter of a [`ParamLaw`].
+#[derive(Clone, Copy, Debug)]
+pub struct Key {
+    /// The key in the spec (`n`).
+    pub name: &'static str,
+    /// Its default, or None when the spec must give it.
+    pub default: Option<f64>,
+    /// What it is and its admissible range in words
+    /// (`flow index n > 0, finite`).
+    pub meaning: &'static str,
+}
+
+/// A drag law with parameters, carried by its [`super::DragLaw`] variant
+/// (`DragLaw::Power(Power)`). Its spec is `name:key=value,...`.
+pub trait ParamLaw: Drag + Copy + PartialEq {
+    /// Its parameters in spec order.
+    const KEYS: &'static [Key];
+    /// The law at the given values (in [`ParamLaw::KEYS`] order), validated:
+    /// an error names the first parameter out of range.
+    fn from_values(values: &[f64]) -> Result<Self>;
+    /// Its values in [`ParamLaw::KEYS`] order.
+    fn values(&self) -> Vec<f64>;
+    /// A representative law, for help texts and listings.
+    fn example() -> Self;
+}
+
+/// The spec of a law: `power:n=0.5,k=1` (every key).
+pub fn write<L: ParamLaw>(law: &L) -> String {
+    let pairs: Vec<String> = L::KEYS
+        .iter()
+        .zip(law.values())
+        .map(|(k, v)| format!("{}={}", k.name, number(v)))
+        .collect();
+    format!("{}:{}", law.name(), pairs.join(","))
+}
+
+/// A value in the shortest form that parses back to it: `0.5`, `1`,
+/// `1e-7`, `3.5e200` (the shorter of the plain and the exponent form, the
+/// plain one on a tie).
+fn number(x: f64) -> String {
+    let (plain, exp) = (format!("{x}"), format!("{x:e}"));
+    if exp.len() < plain.len() {
+        exp
+    } else {
+        plain
+    }
+}
+
+/// How to write a law's spec, for messages: `power:n=N[,k=K]`.
+pub fn usage<L: ParamLaw>() -> String {
+    let mut s = format!("{}:", L::example().name());
+    for (i, k) in L::KEYS.iter().enumerate() {
+        let sep = if i == 0 { "" } else { "," };
+        let value = k.name.to_uppercase();
+        match k.default {
+            None => s += &format!("{sep}{}={value}", k.name),
+            Some(_) => s += &format!("[{sep}{}={value}]", k.name),
+        }
+    }
+    s
+}
+
+/// The keys, their meaning and defaults in words (for help texts).
+pub fn keys_help<L: ParamLaw>() -> String {
+    let parts: Vec<String> = L::KEYS
+        .iter()
+        .map(|k| match k.default {
+            None => format!("{}: {}, required", k.name, k.meaning),
+            Some(d) => format!("{}: {}, default {d}", k.name, k.meaning),
+        })
+        .collect();
+    parts.join("; ")
+}
+
+/// Parse the part after `name:` of a spec (`args`; None when the spec has
+/// no `:`). `spec` is the whole spec, for messages.
+pub fn parse<L: ParamLaw>(spec: &str, args: Option<&str>) -> Result<L> {
+    let mut values: Vec<Option<f64>> = vec![None; L::KEYS.len()];
+    for pair in args
+        .unwrap_or("")
+        .split(',')
+        .filter(|p| !p.trim().is_empty())
+    {
+        let (key, value) = pair
+            .split_once('=')
+            .ok_or_else(|| bad::<L>(spec, format!("key=value pairs, not '{}'", pair.trim())))?;
+        let (key, value) = (key.trim(), value.trim());
+        let i = L::KEYS.iter().position(|k| k.name == key).ok_or_else(|| {
+            let known: Vec<&str> = L::KEYS.iter().map(|k| k.name).collect();
+            bad::<L>(
+                spec,
+                format!("the keys {} (unknown key '{key}')", known.join(", ")),
+            )
+        })?;
+        if values[i].is_some() {
+            return Err(bad::<L>(spec, format!("each key once ('{key}' repeated)")));
+        }
+        let x: f64 = value.parse().map_err(|_| {
+            bad::<L>(
+                spec,
+                format!("a number for {key} ({}), not '{value}'", L::KEYS[i].meaning),
+            )
+        })?;
+        values[i] = Some(x);
+    }
+    let mut out = Vec::with_capacity(L::KEYS.len());
+    for (k, v) in L::KEYS.iter().zip(values) {
+        match v.or(k.default) {
+            Some(x) => out.push(x),
+            None => {
+                return Err(bad::<L>(
+                    spec,
+                    format!("a value for {} (required; {})", k.name, k.meaning),
+                ))
+            }
+        }
+    }
+    L::from_values(&out)
+}
+
+/// The error of a malformed spec: names `drag`, the spec and how to write it.
+fn bad<L: ParamLaw>(spec: &str, what: String) -> Error {
+    Error::invalid("drag", spec, format!("{what}, in {}", usage::<L>()))
+}
+
+/// Validate one parameter: finite and > 0, else an error naming it
+/// (`key`), its value and its meaning.
+pub fn positive<L: ParamLaw>(key: &'static str, x: f64) -> Result<f64> {
+    if x > 0.0 && x.is_finite() {
+        return Ok(x);
+    }
+    let meaning = L::KEYS
+        .iter()
+        .find(|k| k.name == key)
+        .map_or("", |k| k.meaning);
+    let name = L::example().name();
+    Err(Error::invalid(
+        "drag",
+        format!("{name} with {key}={x}"),
+        format!("{meaning}, in {}", usage::<L>()),
+    ))
+}
