@@ -487,7 +487,7 @@ def mfpt_distribution(
     threads: Optional[int] = ...,
 ) -> MfptDistributionResult: ...
 def reproduce(
-    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "all"],
+    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "all"],
     out: PathLike,
     force: bool = ...,
     quick: bool = ...,
