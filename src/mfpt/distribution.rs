@@ -268,9 +268,7 @@ fn advance(
             }
             Ok(())
         })?;
-        stats.steps += st.steps;
-        stats.rejected += st.rejected;
-        stats.solves += st.solves;
+        stats += st;
         op.t0 = t0 + rel.last().copied().unwrap_or(0.0);
         rest = &rest[cut..];
     }
@@ -299,9 +297,9 @@ fn run(
     let (p, q) = (2 * op.start, 2 * op.start + 1);
     let (mut s, mut f) = (Vec::new(), Vec::new());
     let positive: Vec<f64> = times.iter().copied().filter(|&t| t > 0.0).collect();
+    let (dp, dm) = view.rate_at_start(&u, 0.0);
     for _ in 0..times.len() - positive.len() {
         s.push((1.0, 1.0));
-        let (dp, dm) = view.rate_at_start(&u, 0.0);
         f.push((k - dp, -dm));
     }
     // Steps land on HIDDEN points across [0, 2 T_f] and, denser, across the
@@ -341,8 +339,7 @@ fn run(
         }
         Ok(())
     })?;
-    stats.steps += st.steps;
-    stats.rejected += st.rejected;
+    stats += st;
     let zeros = f.len() - smeared.len();
     for (fi, a) in f[zeros..].iter_mut().zip(smeared) {
         fi.0 += a;
@@ -362,15 +359,13 @@ fn run(
                     .min(t_stop)
                     .max(t + f64::EPSILON * t);
                 let st = advance(&mut op, &mut view, &mut u, &[next], tol, &mut |_, _, _| {})?;
-                stats.steps += st.steps;
-                stats.rejected += st.rejected;
+                stats += st;
                 t = next;
             }
         }
         Stop::At(end) if end > t => {
             let st = advance(&mut op, &mut view, &mut u, &[end], tol, &mut |_, _, _| {})?;
-            stats.steps += st.steps;
-            stats.rejected += st.rejected;
+            stats += st;
             t = end;
         }
         Stop::At(_) => {}

@@ -104,10 +104,14 @@ impl UpwindOperator {
             t0: 0.0,
             cache: None,
             scales: (1.0, 1.0),
-            reported: [0, 1, 2, 3, 4, 5].map(|k| match k {
-                0 | 1 => 2 * m.start + k,
-                k => 2 * nodes + k - 2,
-            }),
+            reported: [
+                2 * m.start,
+                2 * m.start + 1,
+                2 * nodes,
+                2 * nodes + 1,
+                2 * nodes + 2,
+                2 * nodes + 3,
+            ],
         }
     }
 
@@ -132,17 +136,14 @@ impl UpwindOperator {
 
     /// dS_c±/dt at v_0 (time `t` on the absolute clock).
     pub(super) fn rate_at_start(&self, u: &[f64], t: f64) -> (f64, f64) {
-        let mut out = vec![0.0; self.n];
-        self.apply_mesh(u, &mut out);
         let (p, m) = (2 * self.start, 2 * self.start + 1);
-        let (fp, fm) = self.forcing_rows(t, p);
-        (out[p] + fp, out[m] + fm)
+        let (fp, fm) = self.forcing_rows((-self.kill * t).exp(), t, self.start);
+        (self.row(u, p) + fp, self.row(u, m) + fm)
     }
 
-    /// The forcing of rows (k, k + 1) = (+, -) of one node at absolute time t.
-    fn forcing_rows(&self, t: f64, k: usize) -> (f64, f64) {
-        let decay = (-self.kill * t).exp();
-        let i = k / 2;
+    /// The forcing of rows (2i, 2i + 1) = (+, -) of node i at absolute time
+    /// t, with decay = e^{-(lambda + r) t}.
+    fn forcing_rows(&self, decay: f64, t: f64, i: usize) -> (f64, f64) {
         let plus = if self.reset_atom && 2 * i + 2 < self.n {
             self.rate * decay
         } else {
@@ -159,15 +160,20 @@ impl UpwindOperator {
         (plus, self.lam * decay * frac)
     }
 
+    /// Row i of A s (band and the two reset columns).
+    fn row(&self, s: &[f64], i: usize) -> f64 {
+        let (rp, rm) = (s[2 * self.reset], s[2 * self.reset + 1]);
+        let mut x = 0.0;
+        for j in self.a.band.row_range(i) {
+            x += self.a.band.get(i, j) * s[j];
+        }
+        x + self.a.cp[i] * rp + self.a.cm[i] * rm
+    }
+
     /// out = A s on the mesh unknowns.
     fn apply_mesh(&self, s: &[f64], out: &mut [f64]) {
-        let (rp, rm) = (s[2 * self.reset], s[2 * self.reset + 1]);
         for (i, o) in out.iter_mut().enumerate().take(self.n) {
-            let mut x = 0.0;
-            for j in self.a.band.row_range(i) {
-                x += self.a.band.get(i, j) * s[j];
-            }
-            *o = x + self.a.cp[i] * rp + self.a.cm[i] * rm;
+            *o = self.row(s, i);
         }
     }
 
@@ -389,8 +395,9 @@ impl ShiftedLinear for UpwindOperator {
 
     fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
         let t = self.t0 + t;
-        for k in (0..self.n).step_by(2) {
-            (out[k], out[k + 1]) = self.forcing_rows(t, k);
+        let decay = (-self.kill * t).exp();
+        for i in 0..self.n / 2 {
+            (out[2 * i], out[2 * i + 1]) = self.forcing_rows(decay, t, i);
         }
         out[self.n..].fill(0.0);
         true

@@ -107,6 +107,14 @@ pub struct Stats {
     pub solves: usize,
 }
 
+impl std::ops::AddAssign for Stats {
+    fn add_assign(&mut self, o: Stats) {
+        self.steps += o.steps;
+        self.rejected += o.rejected;
+        self.solves += o.solves;
+    }
+}
+
 const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
 const D: f64 = GAMMA / 2.0;
 const W: f64 = std::f64::consts::SQRT_2 / 4.0;
