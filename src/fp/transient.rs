@@ -9,8 +9,10 @@
 //!   discrete generator [`ForwardOperator`]. The method is L-stable, so the
 //!   step is set by the requested accuracy (`rtol`, `atol` on the cell
 //!   masses), not by the smallest cell; every stage is an exact O(N) solve.
-//!   `<v>` and `<v²>` are Richardson-extrapolated over the meshes of N and N/2
-//!   cells (as the stationary solver does), the density is the fine mesh's.
+//!   `<v>` and `<v²>` are Richardson-extrapolated twice over the nested
+//!   meshes of N, N/2 and N/4 cells (removing the 1/N and 1/N² terms of the
+//!   first-order fluxes), with the change made by the second extrapolation
+//!   reported as the error estimate; the density is the fine mesh's.
 //! - [`Scheme::Paper`]: the paper's way (Sec. 3): explicit upwind on a
 //!   uniform mesh, the step set by the CFL limit.
 
@@ -58,8 +60,9 @@ pub struct TransientOptions {
     /// Time-stepping scheme (and with it the mesh).
     #[serde(default)]
     pub scheme: Scheme,
-    /// Number of cells on (v_l, v_u): graded for [`Scheme::TrBdf2`] (even:
-    /// the coarse mesh of the extrapolation has cells/2), uniform for
+    /// Number of cells on (v_l, v_u): graded for [`Scheme::TrBdf2`] (a
+    /// multiple of 4: the extrapolation uses the nested meshes of cells/2
+    /// and cells/4), uniform for
     /// [`Scheme::Paper`] (paper: 2000 for tan, 1000 for tanh).
     pub cells: usize,
     /// Final time.
@@ -159,12 +162,12 @@ pub struct Transient {
     /// Paper scheme: the time step (steps landing on a requested time are
     /// shortened). TR-BDF2: None (adaptive).
     pub dt: Option<f64>,
-    /// Number of (accepted) steps taken, over both meshes for TR-BDF2.
+    /// Number of (accepted) steps taken, over the three meshes for TR-BDF2.
     pub steps: u64,
-    /// TR-BDF2: rejected steps, over both meshes (0 for the paper scheme).
+    /// TR-BDF2: rejected steps, over the three meshes (0 for the paper scheme).
     pub rejected: u64,
     /// Whether `v_mean` and `v2` are Richardson-extrapolated over the meshes
-    /// of `cells` and `cells/2` cells (TR-BDF2).
+    /// of `cells`, `cells/2` and `cells/4` cells (TR-BDF2).
     pub extrapolated: bool,
     /// Cell centres.
     pub v: Vec<f64>,
@@ -174,10 +177,14 @@ pub struct Transient {
     pub v_mean: Vec<f64>,
     /// `<v²>(t)` (paper Fig. 1).
     pub v2: Vec<f64>,
+    /// TR-BDF2: estimated mesh error of `v2` at each time (the change made by
+    /// the second Richardson extrapolation, see [`Transient::extrapolated`]);
+    /// empty for the paper scheme.
+    pub v2_mesh_error: Vec<f64>,
     /// Σ P Δv at the recording times (fine mesh).
     pub mass: Vec<f64>,
     /// |Σ P Δv - 1|, maximum over every step (paper scheme) or over every
-    /// recording and snapshot time of both meshes (TR-BDF2).
+    /// recording and snapshot time of the three meshes (TR-BDF2).
     pub mass_error_max: f64,
     /// Density snapshots (fine mesh).
     pub snapshots: Vec<Snapshot>,
@@ -211,7 +218,7 @@ pub struct Plan {
     /// mesh, see [`trbdf2_step_bound`].
     pub steps: u64,
     /// Cell updates: cells × steps for the paper scheme;
-    /// [`TRBDF2_UPDATES_PER_STEP`] × cells × steps × 1.5 (both meshes) for
+    /// [`TRBDF2_UPDATES_PER_STEP`] × cells × steps × 1.75 (the three meshes) for
     /// TR-BDF2.
     pub work: f64,
 }
@@ -232,7 +239,7 @@ pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
             Ok(Plan {
                 dt: None,
                 steps,
-                work: TRBDF2_UPDATES_PER_STEP * 1.5 * opts.cells as f64 * steps as f64,
+                work: TRBDF2_UPDATES_PER_STEP * 1.75 * opts.cells as f64 * steps as f64,
             })
         }
     }
@@ -361,6 +368,7 @@ fn paper(
         times: Vec::with_capacity(times.len()),
         v_mean: Vec::with_capacity(times.len()),
         v2: Vec::with_capacity(times.len()),
+        v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
@@ -404,9 +412,9 @@ fn paper(
     Ok(out)
 }
 
-/// TR-BDF2 on the graded meshes of `cells` and `cells/2` cells; moments
-/// Richardson-extrapolated (first-order scheme: X = 2 X_N - X_{N/2}) at
-/// t > 0.
+/// TR-BDF2 on the nested graded meshes of `cells/4`, `cells/2` and `cells`
+/// cells; moments Richardson-extrapolated twice at t > 0 (see
+/// [`extrapolate`]).
 fn run_trbdf2(
     params: &Params,
     opts: &TransientOptions,
@@ -423,49 +431,76 @@ fn run_trbdf2(
         h_max: f64::INFINITY,
         max_steps: usize::try_from(bound.saturating_mul(TRBDF2_STEP_CAP)).unwrap_or(usize::MAX),
     };
-    let half = opts.cells / 2;
-    // Progress: outputs done on the coarse mesh, then on the fine one.
-    let total = 2 * all.len() as u64;
-    let coarse = ForwardOperator::refined(params, Mesh::Graded, half, 0)?;
-    let c = integrate_mesh(params, coarse, &tol, times, snaps, &all, |k| {
-        report(progress, k as u64, total)
-    })?;
-    let fine = ForwardOperator::refined(params, Mesh::Graded, half, 1)?;
-    let f = integrate_mesh(params, fine, &tol, times, snaps, &all, |k| {
-        report(progress, (all.len() + k) as u64, total)
-    })?;
+    let base = opts.cells / 4;
+    // Progress: outputs done on the coarsest mesh, then on the finer ones.
+    let total = (MESH_LEVELS * all.len()) as u64;
+    let mut runs = Vec::with_capacity(MESH_LEVELS);
+    for level in 0..MESH_LEVELS {
+        let op = ForwardOperator::refined(params, Mesh::Graded, base, level)?;
+        let done = level * all.len();
+        runs.push(integrate_mesh(params, op, &tol, times, snaps, &all, |k| {
+            report(progress, (done + k) as u64, total)
+        })?);
+    }
     progress.update(total, total);
-    // At t = 0 the moments are those of the initial delta placed in a cell
-    // (O(Δv²), not a first-order mesh error): reported from the fine mesh,
-    // not extrapolated (2 X_N - X_{N/2} would give <v²> = -Δv²/2 < 0 there).
-    // The same holds while the front of the delta has crossed few cells;
-    // an extrapolated <v²> outside its range there is refused below.
-    let ex = |a: &[f64], b: &[f64]| -> Vec<f64> {
-        a.iter()
-            .zip(b)
-            .zip(times)
-            .map(|((x, y), &t)| if t > 0.0 { 2.0 * x - y } else { *x })
-            .collect()
-    };
-    let v2 = ex(&f.t.v2, &c.t.v2);
+    let fine = runs.pop().expect("three meshes").t;
+    let (half, quarter) = (&runs[1].t, &runs[0].t);
+    let (v2, v2_mesh_error) = extrapolate(times, &fine.v2, &half.v2, &quarter.v2);
     check_resolved(params, times, &v2)?;
     Ok(Transient {
         params: *params,
         scheme: Scheme::TrBdf2,
         mesh: Mesh::Graded,
-        cells: 2 * half,
+        cells: opts.cells,
         dt: None,
-        steps: f.t.steps + c.t.steps,
-        rejected: f.t.rejected + c.t.rejected,
+        steps: fine.steps + half.steps + quarter.steps,
+        rejected: fine.rejected + half.rejected + quarter.rejected,
         extrapolated: true,
-        v: f.t.v,
+        v: fine.v,
         times: times.to_vec(),
-        v_mean: ex(&f.t.v_mean, &c.t.v_mean),
+        v_mean: extrapolate(times, &fine.v_mean, &half.v_mean, &quarter.v_mean).0,
         v2,
-        mass: f.t.mass,
-        mass_error_max: f.t.mass_error_max.max(c.t.mass_error_max),
-        snapshots: f.t.snapshots,
+        v2_mesh_error,
+        mass: fine.mass,
+        mass_error_max: fine
+            .mass_error_max
+            .max(half.mass_error_max)
+            .max(quarter.mass_error_max),
+        snapshots: fine.snapshots,
     })
+}
+
+/// Nested meshes of the TR-BDF2 scheme: cells/4, cells/2 and cells.
+pub const MESH_LEVELS: usize = 3;
+
+/// Moments on the nested meshes of N, N/2 and N/4 cells, extrapolated twice:
+/// the upwind fluxes are first order, X_N = X + a/N + b/N² + ..., so
+/// X₂ = 2 X_N - X_{N/2} removes the 1/N term and
+/// X₃ = (4 X₂(N) - X₂(N/2)) / 3 = (8 X_N - 6 X_{N/2} + X_{N/4}) / 3 the 1/N²
+/// term. Returns X₃ and the estimate of its error |X₃ - X₂(N)| (the change
+/// made by the second extrapolation, an upper estimate where the expansion
+/// holds).
+///
+/// At t = 0 the moments are those of the initial delta placed in a cell
+/// (O(Δv²), not a first-order mesh error): reported from the fine mesh, not
+/// extrapolated (2 X_N - X_{N/2} would give <v²> = -Δv²/2 < 0 there). The
+/// same holds while the front of the delta has crossed few cells; an
+/// extrapolated <v²> outside its range there is refused by
+/// [`check_resolved`].
+fn extrapolate(times: &[f64], n: &[f64], half: &[f64], quarter: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            if t > 0.0 {
+                let x2 = 2.0 * n[k] - half[k];
+                let x3 = (8.0 * n[k] - 6.0 * half[k] + quarter[k]) / 3.0;
+                (x3, (x3 - x2).abs())
+            } else {
+                (n[k], 0.0)
+            }
+        })
+        .unzip()
 }
 
 /// 0 <= <v²>(t) <= max(v_l², v_u²) for the extrapolated values, or the
@@ -522,6 +557,7 @@ fn integrate_mesh(
         times: Vec::with_capacity(times.len()),
         v_mean: Vec::with_capacity(times.len()),
         v2: Vec::with_capacity(times.len()),
+        v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
@@ -578,11 +614,15 @@ fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
             }
         }
         Scheme::TrBdf2 => {
-            if n % 2 != 0 {
+            if !(n % 4 == 0 && n / 4 >= MIN_CELLS) {
                 return Err(Error::invalid(
                     "cells",
                     n,
-                    "an even number (TR-BDF2 extrapolates from the mesh of cells/2)",
+                    format!(
+                        "a multiple of 4, at least {} (TR-BDF2 extrapolates from the meshes of \
+                         cells/2 and cells/4)",
+                        4 * MIN_CELLS
+                    ),
                 ));
             }
             let rtol = finite("rtol", opts.rtol)?;

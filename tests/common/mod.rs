@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 pub mod models;
+pub mod spectral;
 
 use std::path::Path;
 use std::process::{Command, Output};
