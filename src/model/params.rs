@@ -226,7 +226,7 @@ impl Params {
             return Err(Error::invalid(
                 "dt",
                 dt,
-                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded, so an Euler step cannot leave it)"),
+                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded or g jumps, so an Euler step cannot leave it)"),
             ));
         }
         Ok(dt)
