@@ -18,9 +18,10 @@
 //!   v* = (Sigma - mu)/gamma. The flow potential is ln(v* - v) for v >= 0 and
 //!   ln(w* - v) + ln(v*/w*) for v < 0 (continuous, falling at rate gamma),
 //!   the deficit integrals are elementary on each side.
-//! - The exact sampler's tables in the potential are not used (the potential
-//!   has a kink at v = 0); it runs the closed-form velocity solve with the
-//!   deficit table in v, which has a piece boundary at v = 0.
+//! - The exact sampler's tables in the potential
+//!   ([`super::PotentialTable`]) make the potential's kink at v = 0 a cell
+//!   boundary, so each piece is smooth (the fallback, the closed-form
+//!   velocity with the deficit table in v, has a piece boundary at v = 0).
 //! - The Fokker-Planck mesh evaluates the upwind drift at a node v = 0 on
 //!   the upwind side, Sigma + mu for both states; the stationary flux is
 //!   continuous there and the density jumps (by (Sigma + mu)/(Sigma - mu)
