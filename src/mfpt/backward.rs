@@ -1,8 +1,8 @@
 //! Direct solve of the MFPT backward equations (see [`crate::mfpt`]).
 //!
 //! Discretisation: box (midpoint) scheme on a piecewise-smooth mesh of
-//! [v_l, v_t] with v_0 and v_r as nodes (and v = 0 where g jumps there) (graded towards v_t when v_t is
-//! close to v_u). On each cell [v_i, v_{i+1}] both
+//! [v_l, v_t] with v_0 and v_r as nodes, and v = 0 where g jumps there
+//! (graded towards v_t when v_t is close to v_u). On each cell [v_i, v_{i+1}] both
 //! first-order equations are imposed at the midpoint with tau± averaged
 //! over the two nodes: second order on any mesh, and no coefficient is ever
 //! evaluated at v_l, where the - drift vanishes. There the ODE has a regular

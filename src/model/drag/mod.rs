@@ -83,8 +83,8 @@ pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
 
 /// A velocity-dependent drag force g(v): odd, strictly increasing, and
 /// continuous except for a jump at v = 0 of size 2 [`Drag::static_friction`]
-/// (0 for every law but Coulomb friction). A law must give [`Drag::name`], [`Drag::force`],
-/// [`Drag::derivative`] and its flow type; every other method has a robust
+/// (0 for every law but Coulomb friction). A law must give [`Drag::name`],
+/// [`Drag::force`], [`Drag::derivative`] and its flow type; every other method has a robust
 /// default (numerical inverse, sampled slope bound, quadrature flows) that
 /// laws with closed forms override.
 pub trait Drag: Clone + Send + Sync + fmt::Debug {
