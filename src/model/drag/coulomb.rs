@@ -100,7 +100,7 @@ impl ParamLaw for Coulomb {
         Key {
             name: "gamma",
             default: Some(1.0),
-            meaning: "viscosity gamma > 0, finite",
+            meaning: "viscosity gamma > 0, finite (at gamma = 0 the velocity is unbounded)",
         },
     ];
     fn from_values(values: &[f64]) -> Result<Self> {
