@@ -118,7 +118,8 @@ fn particles(c: &mut Criterion) {
 
 /// Events per second of the exact sampler on the Fig. 2 workload (moments at
 /// two times plus a 100-bin histogram, t = 20 per particle) for the closed-form
-/// laws and for `cubic` and the power law (n = 0.5: g'(0) = ∞; n = 2), laws
+/// laws (Coulomb friction: closed-form velocity, deficit table in v) and for
+/// `cubic` and the power law (n = 0.5: g'(0) = ∞; n = 2), laws
 /// given by g and g' (tabulated flow).
 fn events_per_law(c: &mut Criterion) {
     let mut g = c.benchmark_group("exact_events");
@@ -126,6 +127,8 @@ fn events_per_law(c: &mut Criterion) {
     for (law, sigma, lambda, r) in [
         ("tan", 3.0, 0.5, 2.0),
         ("tanh", 0.6, 0.5, 2.0),
+        ("linear", 3.0, 0.5, 2.0),
+        ("coulomb:mu=0.5", 3.0, 0.5, 2.0),
         ("cubic", 3.0, 0.5, 2.0),
         ("power:n=0.5", 3.0, 0.5, 2.0),
         ("power:n=2", 3.0, 0.5, 2.0),

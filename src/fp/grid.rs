@@ -166,15 +166,24 @@ impl Grid {
             })
             .collect();
         // Drift of + at node j: Σ - g(v_j) > 0; of - : -(Σ + g(v_j)) < 0.
+        // Where g jumps at a node v = 0 (Coulomb friction), the flux leaves
+        // the upwind cell, so the drift is its limit from the upwind side:
+        // Σ - g(0-) = Σ + g(0+) for + (from v < 0), the same for -.
+        let jump = drag.static_friction();
+        let at_jump = |j: usize| jump > 0.0 && edges[j] == 0.0;
         let plus = |j: usize| {
-            if xu[j] <= xl[j] {
+            if at_jump(j) {
+                sigma + jump
+            } else if xu[j] <= xl[j] {
                 edge_drift(drag, sigma, xu[j])
             } else {
                 sigma - drag.force(edges[j])
             }
         };
         let minus = |j: usize| {
-            if xl[j] <= xu[j] {
+            if at_jump(j) {
+                sigma + jump
+            } else if xl[j] <= xu[j] {
                 edge_drift(drag, sigma, xl[j])
             } else {
                 sigma + drag.force(edges[j])

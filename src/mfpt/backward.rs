@@ -1,8 +1,8 @@
 //! Direct solve of the MFPT backward equations (see [`crate::mfpt`]).
 //!
 //! Discretisation: box (midpoint) scheme on a piecewise-smooth mesh of
-//! [v_l, v_t] with v_0 and v_r as nodes (graded towards v_t when v_t is
-//! close to v_u). On each cell [v_i, v_{i+1}] both
+//! [v_l, v_t] with v_0 and v_r as nodes, and v = 0 where g jumps there
+//! (graded towards v_t when v_t is close to v_u). On each cell [v_i, v_{i+1}] both
 //! first-order equations are imposed at the midpoint with tau± averaged
 //! over the two nodes: second order on any mesh, and no coefficient is ever
 //! evaluated at v_l, where the - drift vanishes. There the ODE has a regular
@@ -130,6 +130,11 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
     let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
+    // A jump of g at v = 0 (Coulomb friction) sits on a node, so that every
+    // cell's midpoint drift is smooth on the cell (second order kept).
+    if p.params().drag().static_friction() > 0.0 && vl < 0.0 && 0.0 < p.vt() {
+        cuts.push(0.0);
+    }
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
     let total = p.vt() - vl;

@@ -284,6 +284,20 @@ impl UpwindOperator {
     }
 }
 
+/// g at node v as the + state (moving up) and the - state (moving down)
+/// see it: g(v) itself, except at a jump of g at v = 0, where they see
+/// g(0+) = mu and g(0-) = -mu.
+#[inline]
+fn node_forces<D: Drag>(g: D, v: f64) -> (f64, f64) {
+    let jump = g.static_friction();
+    if jump > 0.0 && v == 0.0 {
+        (jump, -jump)
+    } else {
+        let f = g.force(v);
+        (f, f)
+    }
+}
+
 /// Upwind rows at the nodes: + rows look up the mesh, - rows down; the
 /// last + row is the algebraic S_c+(v_t) = 0 (written -S = 0, so that
 /// I - cA keeps a positive diagonal).
@@ -296,7 +310,9 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
     let (mut bp, mut bm) = (vec![0.0; n], vec![0.0; n]);
     for i in 0..nodes {
         let (p, q) = (2 * i, 2 * i + 1);
-        let f = g.force(m.v[i]);
+        // Where g jumps at a node v = 0 (Coulomb friction), each state's
+        // drift is its limit on the side it moves to: g(0+) for +, g(0-) for -.
+        let (f, f_minus) = node_forces(g, m.v[i]);
         if i + 1 < nodes {
             let w = (sigma - f) / (m.v[i + 1] - m.v[i]);
             a.set(p, p + 2, w);
@@ -308,7 +324,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         }
         // The - drift -(Sigma + g) vanishes at v_l = -v_u (i = 0).
         let w = if i > 0 {
-            (sigma + f).max(0.0) / (m.v[i] - m.v[i - 1])
+            (sigma + f_minus).max(0.0) / (m.v[i] - m.v[i - 1])
         } else {
             0.0
         };
@@ -440,7 +456,7 @@ impl AtomProbe {
         let par = cp.params();
         let (g, sigma) = (par.drag(), par.sigma());
         let w = (m.start..m.v.len() - 1)
-            .map(|i| (sigma - g.force(m.v[i])) / (m.v[i + 1] - m.v[i]))
+            .map(|i| (sigma - node_forces(g, m.v[i]).0) / (m.v[i + 1] - m.v[i]))
             .collect();
         AtomProbe { w }
     }

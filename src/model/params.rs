@@ -56,8 +56,10 @@ impl From<Params> for RawParams {
 }
 
 impl Params {
-    /// Validate and build. Rules: Sigma > 0 and finite, and Sigma < 1 for tanh
-    /// (the velocity bound atanh(Sigma) must exist); lambda ≥ 0 and r ≥ 0, finite;
+    /// Validate and build. Rules: Sigma > 0 and finite, Sigma < 1 for tanh
+    /// (the velocity bound atanh(Sigma) must exist) and Sigma > mu for
+    /// Coulomb friction ([`Drag::static_friction`]: below it the particle
+    /// sticks at v = 0); lambda ≥ 0 and r ≥ 0, finite;
     /// v_r strictly inside (v_l, v_u).
     pub fn new(
         drag: DragLaw,
@@ -75,6 +77,18 @@ impl Params {
                 format!("sigma > 0 for {drag} drag")
             };
             return Err(Error::invalid("sigma", sigma, allowed));
+        }
+        let friction = drag.static_friction();
+        if !(sigma > friction) {
+            return Err(Error::invalid(
+                "sigma",
+                sigma,
+                format!(
+                    "sigma > mu = {friction} of drag {drag}: at sigma <= mu the particle sticks \
+                     at v = 0 (the noise never overcomes the static friction; the stationary \
+                     state is a point mass at v = 0, D_eff = 0)"
+                ),
+            ));
         }
         let lambda = finite("lambda", lambda)?;
         if !(lambda >= 0.0) {
@@ -212,7 +226,7 @@ impl Params {
             return Err(Error::invalid(
                 "dt",
                 dt,
-                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded, so an Euler step cannot leave it)"),
+                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded or g jumps, so an Euler step cannot leave it)"),
             ));
         }
         Ok(dt)

@@ -78,9 +78,12 @@ impl DeficitTable {
         let mut stack = vec![(lo, hi)];
         let min_width = (hi - lo) * 1e-9;
         let kink_width = (hi - lo) * 1e-15;
-        // Initial uniform split, then refine by coefficient decay.
+        // Initial uniform split, then refine by coefficient decay. Where g
+        // jumps at v = 0 (Coulomb friction) so does the integrand: v = 0 is
+        // made a piece boundary.
         stack.clear();
         let init = 8;
+        let jump = drag.static_friction() > 0.0;
         for i in (0..init).rev() {
             let a = lo + (hi - lo) * i as f64 / init as f64;
             let b = if i + 1 == init {
@@ -88,7 +91,12 @@ impl DeficitTable {
             } else {
                 lo + (hi - lo) * (i + 1) as f64 / init as f64
             };
-            stack.push((a, b));
+            if jump && a < 0.0 && 0.0 < b {
+                stack.push((0.0, b));
+                stack.push((a, 0.0));
+            } else {
+                stack.push((a, b));
+            }
         }
         while let Some((a, b)) = stack.pop() {
             let fit = chebyshev::fit(&f, a, b);
@@ -177,9 +185,10 @@ impl DeficitTable {
     }
 }
 
-/// Does [a, b] contain v = 0 where g' is infinite (a law with a kink at 0)?
+/// Does [a, b] contain v = 0 where g' is infinite or g jumps (a law with a
+/// kink at 0: the power law with n < 1, Coulomb friction)?
 fn kink_inside<D: Drag>(drag: &D, a: f64, b: f64) -> bool {
-    a <= 0.0 && 0.0 <= b && !drag.derivative(0.0).is_finite()
+    a <= 0.0 && 0.0 <= b && (!drag.derivative(0.0).is_finite() || drag.static_friction() > 0.0)
 }
 
 /// Smallest relaxation rate g'(v*) at the fixed point v* = v_u the tables
@@ -319,8 +328,10 @@ struct Scratch {
 /// straight to the solve: its kink, where dΦ/du has infinite slope, sits
 /// inside a uniform cell of the potential table, which would be halved
 /// past the table's piece limit (measured: ~0.3 s spent before giving up).
+/// (A jump of g at v = 0 is a kink of Φ at a known potential, which the
+/// table makes a cell boundary.)
 fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Segments<D::Flow>> {
-    let table = if kink_inside(drag, lo, hi) {
+    let table = if lo <= 0.0 && 0.0 <= hi && !drag.derivative(0.0).is_finite() {
         None
     } else {
         PotentialTable::new(drag, s)

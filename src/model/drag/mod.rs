@@ -7,6 +7,9 @@
 //! - [`tan`], [`tanh`], [`linear`]: the paper's laws (Table 1), each a unit
 //!   struct implementing [`Drag`] with its closed forms as overrides.
 //! - [`cubic`]: g = v + v³/3, a law given only by g and g' (the default path).
+//! - [`power`], [`carreau`], [`coulomb`]: laws with parameters
+//!   (`power:n=0.5,k=1`); Coulomb friction jumps at v = 0
+//!   ([`Drag::static_friction`]).
 //! - [`closed`]: the closed-form flow [`ClosedFlow`] shared by those laws.
 //! - [`tabulated`]: [`TabulatedFlow`], the fast exact-to-rounding flow of a law
 //!   that gives only g and g' (the default path of a new law).
@@ -20,6 +23,7 @@
 
 pub mod carreau;
 pub mod closed;
+pub mod coulomb;
 pub mod cubic;
 pub mod linear;
 pub mod potential_table;
@@ -32,6 +36,7 @@ pub mod tanh;
 
 pub use carreau::Carreau;
 pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
+pub use coulomb::Coulomb;
 pub use cubic::Cubic;
 pub use linear::Linear;
 pub use potential_table::{FlowPoint, PotentialTable};
@@ -76,9 +81,10 @@ pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
     }
 }
 
-/// A velocity-dependent drag force g(v): odd, continuous, strictly
-/// increasing. A law must give [`Drag::name`], [`Drag::force`],
-/// [`Drag::derivative`] and its flow type; every other method has a robust
+/// A velocity-dependent drag force g(v): odd, strictly increasing, and
+/// continuous except for a jump at v = 0 of size 2 [`Drag::static_friction`]
+/// (0 for every law but Coulomb friction). A law must give [`Drag::name`],
+/// [`Drag::force`], [`Drag::derivative`] and its flow type; every other method has a robust
 /// default (numerical inverse, sampled slope bound, quadrature flows) that
 /// laws with closed forms override.
 pub trait Drag: Clone + Send + Sync + fmt::Debug {
@@ -125,6 +131,14 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// sup_v g(v): the noise amplitude Sigma must stay strictly below it.
     fn force_limit(&self) -> f64 {
         f64::INFINITY
+    }
+    /// g(0+) = lim g(v) as v ↓ 0: the static friction of a law whose force
+    /// jumps at v = 0 (Coulomb friction; g(0) = 0 itself, by oddness). Noise
+    /// of amplitude Sigma <= g(0+) cannot overcome it (a particle reaching
+    /// v = 0 sticks there), so Sigma must exceed it. Everywhere else g is
+    /// continuous. Default: 0 (a continuous law).
+    fn static_friction(&self) -> f64 {
+        0.0
     }
     /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]
     /// (+∞ where g' is unbounded): the default of [`Drag::euler_slope`],

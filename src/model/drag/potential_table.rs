@@ -92,11 +92,7 @@ impl<F: FlowMap> PotentialTable<F> {
         let u_lo = 0.25 * f64::EPSILON * vs;
         let phi_lo = flow.potential_at_distance(u_lo);
         let phi_top = flow.potential_at_distance(2.0 * vs);
-        let range = phi_top - phi_lo;
-        if !(range > 0.0 && range.is_finite()) {
-            return None;
-        }
-        let n = (range.ceil() as usize).max(8);
+        let (n, range, phi_top, u_top) = layout(drag, &flow, vs, phi_lo, phi_top)?;
         if n > MAX_PIECES {
             return None;
         }
@@ -104,7 +100,7 @@ impl<F: FlowMap> PotentialTable<F> {
             drag,
             flow: &flow,
             s: a,
-            bracket: (u_lo.ln() - 2.0, (2.0 * vs).ln()),
+            bracket: (u_lo.ln() - 2.0, u_top.ln()),
             guess: u_lo.ln(),
             acc: [u_lo / k, 0.5 * u_lo * u_lo / k],
             coef: Vec::new(),
@@ -194,6 +190,45 @@ impl<F: FlowMap> PotentialTable<F> {
             q: [self.refl * q[0], q[1]],
         }
     }
+}
+
+/// The uniform cells of the table: (number n, range in Φ, Φ and u at the
+/// top). Normally n = ⌈range⌉ (at least 8) cells up to u = 2 v*. Where the
+/// force jumps at v = 0 ([`Drag::static_friction`], Coulomb friction) the
+/// potential has a kink at u = v*: it is made a cell boundary (at least 8 cells
+/// of equal width h <= 1 below it), and the table extends upwards to a
+/// whole number of cells (past u = 2 v*, where the flow continues), so
+/// every piece is smooth. None if the range is empty or not finite.
+fn layout<D: Drag, F: FlowMap>(
+    drag: &D,
+    flow: &F,
+    vs: f64,
+    phi_lo: f64,
+    phi_top: f64,
+) -> Option<(usize, f64, f64, f64)> {
+    let range = phi_top - phi_lo;
+    if !(range > 0.0 && range.is_finite()) {
+        return None;
+    }
+    if !(drag.static_friction() > 0.0) {
+        return Some(((range.ceil() as usize).max(8), range, phi_top, 2.0 * vs));
+    }
+    let below = flow.potential_at_distance(vs) - phi_lo;
+    if !(below > 0.0 && below < range) {
+        return None;
+    }
+    let kc = below.ceil().max(8.0);
+    let h = below / kc;
+    let n = ((range / h).ceil() as usize).max(kc as usize + 1);
+    let top = phi_lo + h * n as f64;
+    let mut u = 2.0 * vs;
+    while !(flow.potential_at_distance(u) >= top) {
+        u *= 2.0;
+        if !u.is_finite() {
+            return None;
+        }
+    }
+    Some((n, top - phi_lo, top, u))
 }
 
 impl<F> Inner<F> {
@@ -338,6 +373,7 @@ mod tests {
     /// Lookups against the iterative flow and the deficit quadrature.
     #[test]
     fn table_matches_iterative_flow() {
+        let coulomb = crate::model::drag::Coulomb::new(0.5, 1.3).unwrap();
         // Tolerance on v in units of 1 + |v*|: a potential rounds at ε |Φ|,
         // a time error of ε |Φ| / g'(v*) (tanh at 0.99: g'(v*) = 0.02 and
         // Φ = ln sinh u - s u cancels from |Φ| ~ 5 near -v*: measured time
@@ -349,6 +385,8 @@ mod tests {
             (DragLaw::Tanh, 0.99, 1e-12),
             (DragLaw::Linear, 1.0, 1e-14),
             (DragLaw::Cubic, 3.0, 1e-14),
+            (DragLaw::Coulomb(coulomb), 2.0, 3e-14),
+            (DragLaw::Coulomb(coulomb), 30.0, 3e-14),
         ] {
             for s in [sg, -sg] {
                 let tab =

@@ -28,6 +28,7 @@ macro_rules! drag_laws {
             params [
                 Power => Power,
                 Carreau => Carreau,
+                Coulomb => Coulomb,
             ]
         }
     };
@@ -240,6 +241,9 @@ impl Drag for DragLaw {
     }
     fn force_limit(&self) -> f64 {
         crate::with_drag!(self, |d| d.force_limit())
+    }
+    fn static_friction(&self) -> f64 {
+        crate::with_drag!(self, |d| d.static_friction())
     }
     fn max_derivative(&self, sigma: f64) -> f64 {
         crate::with_drag!(self, |d| d.max_derivative(sigma))

@@ -142,14 +142,29 @@ pub fn positive<L: ParamLaw>(key: &'static str, x: f64) -> Result<f64> {
     if x > 0.0 && x.is_finite() {
         return Ok(x);
     }
+    Err(out_of_range::<L>(key, x))
+}
+
+/// Validate one parameter: finite and >= 0, else an error naming it
+/// (`key`), its value and its meaning.
+pub fn non_negative<L: ParamLaw>(key: &'static str, x: f64) -> Result<f64> {
+    if x >= 0.0 && x.is_finite() {
+        return Ok(x);
+    }
+    Err(out_of_range::<L>(key, x))
+}
+
+/// The error of a parameter out of range: names `drag`, the law with the
+/// value (`power with n=0`), the key's meaning and how to write the spec.
+fn out_of_range<L: ParamLaw>(key: &'static str, x: f64) -> Error {
     let meaning = L::KEYS
         .iter()
         .find(|k| k.name == key)
         .map_or("", |k| k.meaning);
     let name = L::example().name();
-    Err(Error::invalid(
+    Error::invalid(
         "drag",
         format!("{name} with {key}={x}"),
         format!("{meaning}, in {}", usage::<L>()),
-    ))
+    )
 }
