@@ -76,6 +76,7 @@ impl Params {
             };
             return Err(Error::invalid("sigma", sigma, allowed));
         }
+        drag.admissible(sigma)?;
         let lambda = finite("lambda", lambda)?;
         if !(lambda >= 0.0) {
             return Err(Error::invalid("lambda", lambda, "lambda >= 0"));

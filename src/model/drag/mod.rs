@@ -7,6 +7,8 @@
 //! - [`tan`], [`tanh`], [`linear`]: the paper's laws (Table 1), each a unit
 //!   struct implementing [`Drag`] with its closed forms as overrides.
 //! - [`cubic`]: g = v + v³/3, a law given only by g and g' (the default path).
+//! - [`power`], [`carreau`]: laws with parameters (`power:n=0.5,k=1`).
+//! - [`expr`]: any law written as an expression in v (`expr:v + 0.3*v^3`).
 //! - [`closed`]: the closed-form flow [`ClosedFlow`] shared by those laws.
 //! - [`tabulated`]: [`TabulatedFlow`], the fast exact-to-rounding flow of a law
 //!   that gives only g and g' (the default path of a new law).
@@ -21,6 +23,7 @@
 pub mod carreau;
 pub mod closed;
 pub mod cubic;
+pub mod expr;
 pub mod linear;
 pub mod potential_table;
 pub mod power;
@@ -33,11 +36,12 @@ pub mod tanh;
 pub use carreau::Carreau;
 pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
 pub use cubic::Cubic;
+pub use expr::Expr;
 pub use linear::Linear;
 pub use potential_table::{FlowPoint, PotentialTable};
 pub use power::Power;
 pub use registry::{AnyFlow, DragLaw};
-pub use spec::{Key, ParamLaw};
+pub use spec::{Key, ParamLaw, SpecLaw};
 pub use tabulated::TabulatedFlow;
 pub use tan::Tan;
 pub use tanh::Tanh;
@@ -125,6 +129,15 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// sup_v g(v): the noise amplitude Sigma must stay strictly below it.
     fn force_limit(&self) -> f64 {
         f64::INFINITY
+    }
+    /// Check that the law is a valid drag law at noise amplitude Sigma
+    /// (0 < Sigma < [`Drag::force_limit`] already holds): g⁻¹(Sigma) exists
+    /// and g is finite and strictly increasing on [-g⁻¹(Sigma), g⁻¹(Sigma)].
+    /// Called by [`crate::Params::new`]; an error names `drag` or `sigma`.
+    /// Default: Ok (a shipped law is valid by construction).
+    fn admissible(&self, sigma: f64) -> crate::error::Result<()> {
+        let _ = sigma;
+        Ok(())
     }
     /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]
     /// (+∞ where g' is unbounded): the default of [`Drag::euler_slope`],

@@ -3,7 +3,7 @@
 //! code monomorphised for that law's type. Everything here is generated from
 //! the one list at the bottom of this file: a new law is one line there.
 
-use super::spec::{self, ParamLaw};
+use super::spec::SpecLaw;
 use super::{Drag, FlowMap};
 
 /// The registry: one line per law, `Variant => Type`, in two lists. `units`:
@@ -28,6 +28,7 @@ macro_rules! drag_laws {
             params [
                 Power => Power,
                 Carreau => Carreau,
+                Expr => Expr,
             ]
         }
     };
@@ -94,7 +95,7 @@ macro_rules! __drag_registry {
             /// parameters at its [`ParamLaw::example`] value.
             pub fn examples() -> Vec<DragLaw> {
                 let mut out: Vec<DragLaw> = DragLaw::ALL.to_vec();
-                $(out.push(DragLaw::$p(<super::$pty as ParamLaw>::example()));)*
+                $(out.push(DragLaw::$p(<super::$pty as SpecLaw>::example()));)*
                 out
             }
 
@@ -102,7 +103,7 @@ macro_rules! __drag_registry {
             /// `tan, ..., power:n=N[,k=K], ...`.
             pub fn names() -> String {
                 let mut names: Vec<String> = vec![$(super::$uty.name().to_string()),*];
-                $(names.push(spec::usage::<super::$pty>());)*
+                $(names.push(<super::$pty as SpecLaw>::usage());)*
                 names.join(", ")
             }
 
@@ -111,7 +112,7 @@ macro_rules! __drag_registry {
             pub fn spec(&self) -> String {
                 match self {
                     $(DragLaw::$u => super::$uty.name().to_string(),)*
-                    $(DragLaw::$p(law) => spec::write(law),)*
+                    $(DragLaw::$p(law) => SpecLaw::write(law),)*
                 }
             }
 
@@ -120,7 +121,7 @@ macro_rules! __drag_registry {
             pub fn keys_help(&self) -> String {
                 match self {
                     $(DragLaw::$u => String::new(),)*
-                    $(DragLaw::$p(_) => spec::keys_help::<super::$pty>(),)*
+                    $(DragLaw::$p(_) => <super::$pty as SpecLaw>::keys_help(),)*
                 }
             }
 
@@ -154,8 +155,8 @@ macro_rules! __drag_registry {
                     }
                 )*
                 $(
-                    if name == <super::$pty as ParamLaw>::example().name() {
-                        return spec::parse::<super::$pty>(s, args).map(DragLaw::$p);
+                    if name == <super::$pty as SpecLaw>::example().name() {
+                        return <super::$pty as SpecLaw>::parse(s, args).map(DragLaw::$p);
                     }
                 )*
                 Err($crate::Error::invalid("drag", s, format!("one of {}", DragLaw::names())))
@@ -240,6 +241,9 @@ impl Drag for DragLaw {
     }
     fn force_limit(&self) -> f64 {
         crate::with_drag!(self, |d| d.force_limit())
+    }
+    fn admissible(&self, sigma: f64) -> crate::error::Result<()> {
+        crate::with_drag!(self, |d| d.admissible(sigma))
     }
     fn max_derivative(&self, sigma: f64) -> f64 {
         crate::with_drag!(self, |d| d.max_derivative(sigma))
