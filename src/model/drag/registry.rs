@@ -9,9 +9,11 @@ use super::{Drag, FlowMap};
 /// The registry: one line per law, `Variant => Type`, in two lists. `units`:
 /// laws without parameters (Type a unit struct in [`crate::model::drag`]
 /// implementing [`Drag`]; the variant is a unit, `DragLaw::Tan`, its spec
-/// the bare name `tan`). `params`: laws with parameters (Type a `Copy`
-/// struct implementing [`Drag`] and [`ParamLaw`]; the variant carries the
-/// law's value, `DragLaw::Power(Power)`, its spec `power:n=0.5,k=1`). Every
+/// the bare name `tan`). `params`: laws with a value (Type a `Copy`
+/// struct implementing [`Drag`] and [`SpecLaw`], as every
+/// [`ParamLaw`](super::ParamLaw) does; the variant carries the law's value,
+/// `DragLaw::Power(Power)`, its spec `power:n=0.5,k=1`; the expression law
+/// `DragLaw::Expr(Expr)`, `expr:v + 0.3*v^3`). Every
 /// other piece of dispatch is generated from this list by calling back
 /// macro `$cb`.
 #[doc(hidden)]
@@ -92,7 +94,7 @@ macro_rules! __drag_registry {
             pub const ALL: [DragLaw; [$(stringify!($u)),*].len()] = [$(DragLaw::$u),*];
 
             /// Every registered law in registry order, a law with
-            /// parameters at its [`ParamLaw::example`] value.
+            /// a value at its [`SpecLaw::example`].
             pub fn examples() -> Vec<DragLaw> {
                 let mut out: Vec<DragLaw> = DragLaw::ALL.to_vec();
                 $(out.push(DragLaw::$p(<super::$pty as SpecLaw>::example()));)*
