@@ -137,7 +137,7 @@ def test_parameterised_drag_specs_pass_through():
 
 def test_expression_drag_passes_through():
     res = irtp.fp_stationary(drag="expr:v  +  v^3/3", sigma=3.0, rate=2.0, cells=500)
-    assert res.summary["drag"] == "expr:v + v^3/3"
+    assert res.params["model"]["drag"] == "expr:v + v^3/3"
     ref = irtp.fp_stationary(drag="cubic", sigma=3.0, rate=2.0, cells=500)
     assert abs(res.summary["v2"] - ref.summary["v2"]) <= 1e-9 * ref.summary["v2"]
     assert irtp.Drag("expr:sinh(v)").law == "expr"

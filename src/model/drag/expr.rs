@@ -270,8 +270,9 @@ impl Drag for Expr {
     fn description(&self) -> &'static str {
         "any odd, strictly increasing g written as an expression in v"
     }
-    /// The first root of g(v) = |f| from 0 (see [`increasing_root`]),
-    /// exactly odd.
+    /// The first root of g(v) = |f| from 0 (bracketed by doubling,
+    /// narrowed where g stops increasing, then safeguarded Newton), exactly
+    /// odd.
     fn inverse(&self, f: f64) -> f64 {
         let a = f.abs();
         if a == self.pin.0 {
