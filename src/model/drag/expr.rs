@@ -218,7 +218,7 @@ fn compile(text: &str) -> Result<Compiled> {
     Ok(law)
 }
 
-/// g(-v) = -g(v) to 1e-10 relative at 0 and 80 points from 1e-4 to 1e4
+/// g(-v) = -g(v) to 1e-10 relative at 0 and 81 points from 1e-4 to 1e4
 /// (where both are finite; finite on one side only is not odd).
 fn check_odd(law: &Compiled) -> Result<()> {
     let g = |v: f64| Expr::eval(&law.g, v);
@@ -226,7 +226,7 @@ fn check_odd(law: &Compiled) -> Result<()> {
     if g0 != 0.0 {
         return Err(bad(&law.text, format!("not odd: g(0) = {g0}, not 0")));
     }
-    for i in 0..80 {
+    for i in 0..=80 {
         let v = 1e-4 * 10f64.powf(i as f64 / 10.0);
         let (gp, gm) = (g(v), g(-v));
         if !gp.is_finite() && !gm.is_finite() {
@@ -303,14 +303,14 @@ impl Drag for Expr {
 /// below a (and increasing) up to the largest double. A bracket that ends
 /// where g stops increasing or is not finite is narrowed to the first of
 /// 64 sub-intervals that does (repeatedly), so the root found is the first
-/// crossing, not one past a non-monotone stretch.
-fn bracket(d: &Expr, a: f64) -> Option<(f64, f64)> {
+/// crossing, not one past a non-monotone stretch. Returns (lo, hi, g(lo)).
+fn bracket(d: &Expr, a: f64) -> Option<(f64, f64, f64)> {
     let (mut lo, mut g_lo) = (0.0f64, 0.0f64);
     let mut hi = 1.0 / 65536.0;
     loop {
         let g = d.force(hi);
         if g >= a {
-            return Some((lo, hi));
+            return Some((lo, hi, g_lo));
         }
         if !(g.is_finite() && g >= g_lo) {
             return Some(narrow(d, a, lo, g_lo, hi));
@@ -325,11 +325,11 @@ fn bracket(d: &Expr, a: f64) -> Option<(f64, f64)> {
 
 /// The first of 64 sub-intervals of [lo, hi] whose right end has g ≥ a or
 /// g not finite or decreasing (g(lo) = g_lo < a), narrowed 4 times.
-fn narrow(d: &Expr, a: f64, mut lo: f64, mut g_lo: f64, mut hi: f64) -> (f64, f64) {
+fn narrow(d: &Expr, a: f64, mut lo: f64, mut g_lo: f64, mut hi: f64) -> (f64, f64, f64) {
     for _ in 0..4 {
-        let h = (hi - lo) / 64.0;
+        let (base, h) = (lo, (hi - lo) / 64.0);
         for i in 1..=64 {
-            let x = if i == 64 { hi } else { lo + h * i as f64 };
+            let x = if i == 64 { hi } else { base + h * i as f64 };
             let g = d.force(x);
             if g >= a || !(g.is_finite() && g >= g_lo) {
                 hi = x;
@@ -337,11 +337,8 @@ fn narrow(d: &Expr, a: f64, mut lo: f64, mut g_lo: f64, mut hi: f64) -> (f64, f6
             }
             (lo, g_lo) = (x, g);
         }
-        if g_lo >= a {
-            break;
-        }
     }
-    (lo, hi)
+    (lo, hi, g_lo)
 }
 
 /// The first root of g(v) = a ≥ 0 on v ≥ 0 ([`bracket`], then the
@@ -351,17 +348,21 @@ fn increasing_root(d: &Expr, a: f64) -> f64 {
     if !(a > 0.0) {
         return if a == 0.0 { 0.0 } else { f64::NAN };
     }
-    let Some((lo, hi)) = bracket(d, a) else {
+    let Some((lo, hi, g_lo)) = bracket(d, a) else {
         return f64::INFINITY;
     };
-    // H = g - a, +1 where g is not finite; a slope that is not finite and
-    // positive (g' = ∞ at v = 0 of a power-like law) makes a bisection step.
+    // H = g - a, and +1 past the end of the increasing branch (g not finite
+    // or below g(lo): tan(v) past its pole). There, and where g' is not
+    // finite and positive (g' = ∞ at v = 0 of a power-like law), the slope
+    // is NaN, which makes the solver bisect instead of stepping.
     let h = |x: f64| {
         let g = d.force(x);
         let g1 = d.derivative(x);
-        let r = if g.is_finite() { g - a } else { 1.0 };
+        if !(g.is_finite() && g >= g_lo) {
+            return (1.0, f64::NAN, 0.0);
+        }
         (
-            r,
+            g - a,
             if g1 > 0.0 && g1.is_finite() {
                 g1
             } else {
@@ -371,18 +372,19 @@ fn increasing_root(d: &Expr, a: f64) -> f64 {
         )
     };
     root::solve_increasing(&h, lo, hi, 0.5 * (lo + hi), 1e-15, 0.0)
-        .unwrap_or_else(|_| bisect(d, a, lo, hi))
+        .unwrap_or_else(|_| bisect(d, a, (lo, hi), g_lo))
 }
 
-/// g(v) = a on [lo, hi] by bisection to adjacent doubles.
-fn bisect(d: &Expr, a: f64, mut lo: f64, mut hi: f64) -> f64 {
+/// g(v) = a on [lo, hi] by bisection to adjacent doubles (past the end of
+/// the branch, g < g_lo or not finite, counts as above).
+fn bisect(d: &Expr, a: f64, (mut lo, mut hi): (f64, f64), g_lo: f64) -> f64 {
     loop {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {
             return lo;
         }
         let g = d.force(mid);
-        if g >= a || !g.is_finite() {
+        if g >= a || !(g.is_finite() && g >= g_lo) {
             hi = mid;
         } else {
             lo = mid;
@@ -470,5 +472,52 @@ impl SpecLaw for Expr {
             "EXPRESSION: odd and increasing in v, with + - * / ^ and the functions {}",
             known_names()
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn law(text: &str) -> Expr {
+        Expr::parse(text).unwrap()
+    }
+
+    /// The inverse of `tan(v)` is atan (the bracket from doubling ends past
+    /// the pole, where tan turns negative, and is narrowed to the branch
+    /// through 0), exactly odd.
+    #[test]
+    fn inverse_finds_the_branch_through_zero() {
+        let d = law("tan(v)");
+        for f in [1e-9, 1e-3, 0.5, 3.0, 1e3, 1e8] {
+            let v = d.inverse(f);
+            assert!((v - f.atan()).abs() <= 4e-16 * f.atan(), "f={f}: {v}");
+            assert_eq!(d.inverse(-f), -v);
+        }
+        // v - v^3 rises to 2/(3√3) = 0.3849 at 1/√3 and falls after: the
+        // root of g = 0.38 is the first crossing, below 1/√3.
+        let d = law("v - v^3");
+        let v = d.inverse(0.38);
+        assert!(
+            v < 3f64.sqrt().recip() && (d.force(v) - 0.38).abs() < 1e-15,
+            "{v}"
+        );
+        assert!(d.inverse(0.5).is_finite() && d.admissible(0.5).is_err());
+        assert!(d.admissible(0.38).is_ok());
+    }
+
+    /// One interned law per canonical text; the flow's pinned fixed point is
+    /// the plain inverse.
+    #[test]
+    fn interned_by_canonical_text() {
+        let (a, b) = (law("v +  v^3"), law(" v + v^3 "));
+        assert!(std::ptr::eq(a.law, b.law) && a == b);
+        assert_ne!(law("v+v^3"), a);
+        let pinned = Expr {
+            law: a.law,
+            pin: (2.0, increasing_root(&a, 2.0)),
+        };
+        assert_eq!(pinned.inverse(-2.0), a.inverse(-2.0));
+        assert_eq!(pinned, a);
     }
 }
