@@ -33,9 +33,11 @@ class Drag:
     (shear-thinning, needs Sigma < 1), ``Drag("linear")`` (Newtonian) and
     ``Drag("cubic")`` (g = v + v³/3), and the parameterised media
     ``Drag("power:n=0.5")`` (g = k sign(v)|v|^n, k = 1 by default) and
-    ``Drag("carreau:n=0.5,a=1")`` (g = v [1 + (a v)²]^((n-1)/2)) and
+    ``Drag("carreau:n=0.5,a=1")`` (g = v [1 + (a v)²]^((n-1)/2)),
     ``Drag("coulomb:mu=0.5,gamma=1")`` (g = mu sign(v) + gamma v, needs
-    Sigma > mu: below it the particle sticks at v = 0); the list
+    Sigma > mu: below it the particle sticks at v = 0), and any odd,
+    increasing law as an expression in v, ``Drag("expr:v + 0.3*v^3")``;
+    the list
     comes from the Rust registry (:func:`drag_laws`), which also validates
     the parameters (a bad one is a ``ValueError`` naming it, from the
     function that runs). Accepted by every function as ``drag=`` and by

@@ -133,3 +133,16 @@ def test_parameterised_drag_specs_pass_through():
                       ("power:n=0.5,q=1", "'q'")]:
         with pytest.raises(ValueError, match=key):
             irtp.analytic(drag=spec, sigma=3.0, lambda_=0.9)
+
+
+def test_expression_drag_passes_through():
+    res = irtp.fp_stationary(drag="expr:v  +  v^3/3", sigma=3.0, rate=2.0, cells=500)
+    assert res.params["model"]["drag"] == "expr:v + v^3/3"
+    ref = irtp.fp_stationary(drag="cubic", sigma=3.0, rate=2.0, cells=500)
+    assert abs(res.summary["v2"] - ref.summary["v2"]) <= 1e-9 * ref.summary["v2"]
+    assert irtp.Drag("expr:sinh(v)").law == "expr"
+    for spec, needle in [("expr:v^2", "not odd"), ("expr:foo(v)", "unknown name 'foo'")]:
+        with pytest.raises(ValueError, match=needle):
+            irtp.fp_stationary(drag=spec, sigma=3.0, cells=500)
+    with pytest.raises(ValueError, match="sigma"):
+        irtp.fp_stationary(drag="expr:tanh(v)", sigma=3.0, cells=500)

@@ -90,6 +90,7 @@ impl Params {
                 ),
             ));
         }
+        drag.admissible(sigma)?;
         let lambda = finite("lambda", lambda)?;
         if !(lambda >= 0.0) {
             return Err(Error::invalid("lambda", lambda, "lambda >= 0"));

@@ -10,6 +10,7 @@
 //! - [`power`], [`carreau`], [`coulomb`]: laws with parameters
 //!   (`power:n=0.5,k=1`); Coulomb friction jumps at v = 0
 //!   ([`Drag::static_friction`]).
+//! - [`expr`]: any law written as an expression in v (`expr:v + 0.3*v^3`).
 //! - [`closed`]: the closed-form flow [`ClosedFlow`] shared by those laws.
 //! - [`tabulated`]: [`TabulatedFlow`], the fast exact-to-rounding flow of a law
 //!   that gives only g and g' (the default path of a new law).
@@ -25,6 +26,7 @@ pub mod carreau;
 pub mod closed;
 pub mod coulomb;
 pub mod cubic;
+pub mod expr;
 pub mod linear;
 pub mod potential_table;
 pub mod power;
@@ -38,11 +40,12 @@ pub use carreau::Carreau;
 pub use closed::{ClosedFlow, ClosedForm, InverseGuide};
 pub use coulomb::Coulomb;
 pub use cubic::Cubic;
+pub use expr::Expr;
 pub use linear::Linear;
 pub use potential_table::{FlowPoint, PotentialTable};
 pub use power::Power;
 pub use registry::{AnyFlow, DragLaw};
-pub use spec::{Key, ParamLaw};
+pub use spec::{Key, ParamLaw, SpecLaw};
 pub use tabulated::TabulatedFlow;
 pub use tan::Tan;
 pub use tanh::Tanh;
@@ -139,6 +142,16 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug {
     /// continuous. Default: 0 (a continuous law).
     fn static_friction(&self) -> f64 {
         0.0
+    }
+
+    /// Check that the law is a valid drag law at noise amplitude Sigma
+    /// (0 < Sigma < [`Drag::force_limit`] already holds): g⁻¹(Sigma) exists
+    /// and g is finite and strictly increasing on [-g⁻¹(Sigma), g⁻¹(Sigma)].
+    /// Called by [`crate::Params::new`]; an error names `drag` or `sigma`.
+    /// Default: Ok (a shipped law is valid by construction).
+    fn admissible(&self, sigma: f64) -> crate::error::Result<()> {
+        let _ = sigma;
+        Ok(())
     }
     /// max of g'(v) over the admissible interval [-g⁻¹(Sigma), g⁻¹(Sigma)]
     /// (+∞ where g' is unbounded): the default of [`Drag::euler_slope`],

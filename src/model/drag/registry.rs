@@ -3,15 +3,17 @@
 //! code monomorphised for that law's type. Everything here is generated from
 //! the one list at the bottom of this file: a new law is one line there.
 
-use super::spec::{self, ParamLaw};
+use super::spec::SpecLaw;
 use super::{Drag, FlowMap};
 
 /// The registry: one line per law, `Variant => Type`, in two lists. `units`:
 /// laws without parameters (Type a unit struct in [`crate::model::drag`]
 /// implementing [`Drag`]; the variant is a unit, `DragLaw::Tan`, its spec
-/// the bare name `tan`). `params`: laws with parameters (Type a `Copy`
-/// struct implementing [`Drag`] and [`ParamLaw`]; the variant carries the
-/// law's value, `DragLaw::Power(Power)`, its spec `power:n=0.5,k=1`). Every
+/// the bare name `tan`). `params`: laws with a value (Type a `Copy`
+/// struct implementing [`Drag`] and [`SpecLaw`], as every
+/// [`ParamLaw`](super::ParamLaw) does; the variant carries the law's value,
+/// `DragLaw::Power(Power)`, its spec `power:n=0.5,k=1`; the expression law
+/// `DragLaw::Expr(Expr)`, `expr:v + 0.3*v^3`). Every
 /// other piece of dispatch is generated from this list by calling back
 /// macro `$cb`.
 #[doc(hidden)]
@@ -29,6 +31,7 @@ macro_rules! drag_laws {
                 Power => Power,
                 Carreau => Carreau,
                 Coulomb => Coulomb,
+                Expr => Expr,
             ]
         }
     };
@@ -92,10 +95,10 @@ macro_rules! __drag_registry {
             pub const ALL: [DragLaw; [$(stringify!($u)),*].len()] = [$(DragLaw::$u),*];
 
             /// Every registered law in registry order, a law with
-            /// parameters at its [`ParamLaw::example`] value.
+            /// a value at its [`SpecLaw::example`].
             pub fn examples() -> Vec<DragLaw> {
                 let mut out: Vec<DragLaw> = DragLaw::ALL.to_vec();
-                $(out.push(DragLaw::$p(<super::$pty as ParamLaw>::example()));)*
+                $(out.push(DragLaw::$p(<super::$pty as SpecLaw>::example()));)*
                 out
             }
 
@@ -103,7 +106,7 @@ macro_rules! __drag_registry {
             /// `tan, ..., power:n=N[,k=K], ...`.
             pub fn names() -> String {
                 let mut names: Vec<String> = vec![$(super::$uty.name().to_string()),*];
-                $(names.push(spec::usage::<super::$pty>());)*
+                $(names.push(<super::$pty as SpecLaw>::usage());)*
                 names.join(", ")
             }
 
@@ -112,7 +115,7 @@ macro_rules! __drag_registry {
             pub fn spec(&self) -> String {
                 match self {
                     $(DragLaw::$u => super::$uty.name().to_string(),)*
-                    $(DragLaw::$p(law) => spec::write(law),)*
+                    $(DragLaw::$p(law) => SpecLaw::write(law),)*
                 }
             }
 
@@ -121,7 +124,7 @@ macro_rules! __drag_registry {
             pub fn keys_help(&self) -> String {
                 match self {
                     $(DragLaw::$u => String::new(),)*
-                    $(DragLaw::$p(_) => spec::keys_help::<super::$pty>(),)*
+                    $(DragLaw::$p(_) => <super::$pty as SpecLaw>::keys_help(),)*
                 }
             }
 
@@ -155,8 +158,8 @@ macro_rules! __drag_registry {
                     }
                 )*
                 $(
-                    if name == <super::$pty as ParamLaw>::example().name() {
-                        return spec::parse::<super::$pty>(s, args).map(DragLaw::$p);
+                    if name == <super::$pty as SpecLaw>::example().name() {
+                        return <super::$pty as SpecLaw>::parse(s, args).map(DragLaw::$p);
                     }
                 )*
                 Err($crate::Error::invalid("drag", s, format!("one of {}", DragLaw::names())))
@@ -244,6 +247,9 @@ impl Drag for DragLaw {
     }
     fn static_friction(&self) -> f64 {
         crate::with_drag!(self, |d| d.static_friction())
+    }
+    fn admissible(&self, sigma: f64) -> crate::error::Result<()> {
+        crate::with_drag!(self, |d| d.admissible(sigma))
     }
     fn max_derivative(&self, sigma: f64) -> f64 {
         crate::with_drag!(self, |d| d.max_derivative(sigma))

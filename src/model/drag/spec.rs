@@ -37,6 +37,41 @@ pub trait ParamLaw: Drag + Copy + PartialEq {
     fn example() -> Self;
 }
 
+/// A law named by a spec `name:...` whose [`super::DragLaw`] variant
+/// carries its value: every [`ParamLaw`] (`power:n=0.5,k=1`, through the
+/// functions of this module) and the expression law (`expr:v + v^3/3`).
+pub trait SpecLaw: Drag + Copy + PartialEq {
+    /// A representative law, for help texts and listings.
+    fn example() -> Self;
+    /// The law of a spec: `args` is the part after `name:` (None when the
+    /// spec has no `:`), `spec` the whole spec, for messages.
+    fn parse(spec: &str, args: Option<&str>) -> Result<Self>;
+    /// Its canonical spec, which parses back to the same law.
+    fn write(&self) -> String;
+    /// How to write the spec, for messages (`power:n=N[,k=K]`).
+    fn usage() -> String;
+    /// Its parameters in words, for help texts.
+    fn keys_help() -> String;
+}
+
+impl<L: ParamLaw> SpecLaw for L {
+    fn example() -> Self {
+        <L as ParamLaw>::example()
+    }
+    fn parse(spec: &str, args: Option<&str>) -> Result<Self> {
+        parse::<L>(spec, args)
+    }
+    fn write(&self) -> String {
+        write(self)
+    }
+    fn usage() -> String {
+        usage::<L>()
+    }
+    fn keys_help() -> String {
+        keys_help::<L>()
+    }
+}
+
 /// The spec of a law: `power:n=0.5,k=1` (every key).
 pub fn write<L: ParamLaw>(law: &L) -> String {
     let pairs: Vec<String> = L::KEYS
