@@ -7,6 +7,7 @@
 //! (see [`edge_drift`]).
 
 use crate::error::{Error, Result};
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::{Drag, DragLaw, Params};
 use serde::{Deserialize, Serialize};
 
@@ -71,11 +72,21 @@ pub(crate) struct Grid {
     pub reset_minus: usize,
     /// Grading exponent q (1 for a uniform mesh).
     pub grading: f64,
+    /// What a reset does to the noise state: the reset outflux of the two
+    /// states re-enters the target cells through [`Grid::reinject`].
+    pub noise: NoiseAtReset,
 }
 
 impl Grid {
     pub fn cells(&self) -> usize {
         self.widths.len()
+    }
+
+    /// Reset influx into the (+, -) target cells from the reset outflux
+    /// (a, b) of the (+, -) states ([`NoiseAtReset::mix`]).
+    #[inline]
+    pub fn reinject(&self, a: f64, b: f64) -> (f64, f64) {
+        self.noise.mix(a, b)
     }
 
     /// Uniform mesh of `n` cells. Reset target: the cell containing v_r; if v_r
@@ -201,6 +212,7 @@ impl Grid {
             reset_plus,
             reset_minus,
             grading,
+            noise: p.reset().noise(),
         }
     }
 }

@@ -21,6 +21,7 @@
 
 use super::Problem;
 use crate::error::{Error, Result};
+use crate::model::reset::Reset;
 use crate::model::Drag;
 use serde::{Deserialize, Serialize};
 
@@ -355,6 +356,9 @@ pub(super) struct Assembly {
 pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Assembly {
     let par = &p.params();
     let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
+    // The reset term of state s weighs x±(v_r) by the noise rule's shares
+    // (kept: x_s(v_r) alone; re-drawn: ½ each).
+    let noise = par.reset().noise();
     let nodes = m.v.len();
     let n = 2 * nodes;
     let mut a = Band::new(n, 2, 2);
@@ -363,7 +367,7 @@ pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Ass
     // Row 0: regularity of tau- at v_l.
     a.set(0, 0, -lam);
     a.set(0, 1, lam + rate);
-    cm[0] = -rate;
+    (cp[0], cm[0]) = noise.mix(0.0, -rate);
     for i in 0..nodes - 1 {
         let h = m.v[i + 1] - m.v[i];
         let mid = 0.5 * (m.v[i] + m.v[i + 1]);
@@ -376,12 +380,12 @@ pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Ass
         a.set(rp, pj, ap - hd);
         a.set(rp, mi, hl);
         a.set(rp, mj, hl);
-        cp[rp] = h * rate;
+        (cp[rp], cm[rp]) = noise.mix(h * rate, 0.0);
         a.set(rm, mi, -am - hd);
         a.set(rm, mj, am - hd);
         a.set(rm, pi, hl);
         a.set(rm, pj, hl);
-        cm[rm] = h * rate;
+        (cp[rm], cm[rm]) = noise.mix(0.0, h * rate);
     }
     // Last row: tau+(v_t) = 0.
     a.set(n - 1, n - 2, 1.0);
@@ -708,8 +712,10 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
     let (cp, _) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
-    let sp: Vec<f64> = tp.iter().map(|t| tp[m.reset] - t).collect();
-    let sm: Vec<f64> = tm.iter().map(|t| tm[m.reset] - t).collect();
+    // The reset values each state returns to (kept: its own, re-drawn: the mean).
+    let (rp, rm) = cp.params().reset().noise().mix(tp[m.reset], tm[m.reset]);
+    let sp: Vec<f64> = tp.iter().map(|t| rp - t).collect();
+    let sm: Vec<f64> = tm.iter().map(|t| rm - t).collect();
     let (dp, dm) =
         solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
     let i = m.start;
@@ -742,14 +748,15 @@ pub fn fixed_point_upwind(
     let mut change = f64::INFINITY;
     for sweep in 1..=max_sweeps {
         change = 0.0;
-        let rp = tp[m.reset];
+        let noise = par.reset().noise();
+        let rp = noise.mix(tp[m.reset], tm[m.reset]).0;
         for i in (0..n - 1).rev() {
             let c = a[i].0 / (m.v[i + 1] - m.v[i]);
             let new = (c * tp[i + 1] + lam * tm[i] + r * rp + 1.0) / (c + lam + r);
             change = change.max((new - tp[i]).abs());
             tp[i] = new;
         }
-        let rm = tm[m.reset];
+        let rm = noise.mix(tp[m.reset], tm[m.reset]).1;
         for i in 0..n {
             let c = if i == 0 {
                 0.0

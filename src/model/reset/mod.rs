@@ -11,13 +11,18 @@
 //!
 //! - [`poisson`]: Poissonian resetting to a fixed v_r, noise state kept
 //!   (the paper's Eq. (3)).
+//! - [`redrawn`]: Poissonian resetting to a fixed v_r, noise state re-drawn
+//!   (±Sigma with probability ½ each).
 //! - [`registry`]: [`ResetRule`] and the dispatch
 //!   [`with_reset!`](crate::with_reset).
 
 pub mod poisson;
+pub mod redrawn;
 pub mod registry;
+pub mod spec;
 
 pub use poisson::PoissonReset;
+pub use redrawn::RedrawnReset;
 pub use registry::ResetRule;
 
 use rand::Rng;
@@ -51,6 +56,50 @@ impl Target {
 pub enum NoiseAtReset {
     /// Kept (the paper's state-preserving resetting).
     Kept,
+    /// Re-drawn: ±Sigma with probability ½ each, independently of the state
+    /// before the reset.
+    Redrawn,
+}
+
+impl NoiseAtReset {
+    /// Name as written in a reset spec (`kept`, `redrawn`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            NoiseAtReset::Kept => "kept",
+            NoiseAtReset::Redrawn => "redrawn",
+        }
+    }
+
+    /// The reset influx into the (+, -) states of the reset outflux (a, b)
+    /// of the (+, -) states: (a, b) when the state is kept, both halves of
+    /// a + b when it is re-drawn. Forward equations re-inject through it;
+    /// backward equations weigh the two states' values at the target with
+    /// the same shares (the matrix is symmetric).
+    #[inline]
+    pub fn mix(&self, a: f64, b: f64) -> (f64, f64) {
+        match self {
+            NoiseAtReset::Kept => (a, b),
+            NoiseAtReset::Redrawn => {
+                let h = 0.5 * (a + b);
+                (h, h)
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for NoiseAtReset {
+    type Err = crate::error::Error;
+    fn from_str(s: &str) -> crate::error::Result<Self> {
+        match s {
+            "kept" => Ok(NoiseAtReset::Kept),
+            "redrawn" => Ok(NoiseAtReset::Redrawn),
+            _ => Err(crate::error::Error::invalid(
+                "reset_noise",
+                s,
+                "kept or redrawn",
+            )),
+        }
+    }
 }
 
 /// A resetting protocol: at the events of a Poisson clock of rate
@@ -80,9 +129,10 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
 
     /// The noise state after a reset (`plus`: eta = +Sigma before it).
     #[inline]
-    fn draw_noise<R: Rng + ?Sized>(&self, plus: bool, _rng: &mut R) -> bool {
+    fn draw_noise<R: Rng + ?Sized>(&self, plus: bool, rng: &mut R) -> bool {
         match self.noise() {
             NoiseAtReset::Kept => plus,
+            NoiseAtReset::Redrawn => rng.gen::<bool>(),
         }
     }
 

@@ -1,0 +1,351 @@
+//! Resetting protocols beyond the paper's (point target, noise kept) in every
+//! method: the noise state re-drawn at a reset (±Sigma with probability ½).
+//!
+//! - linear drag: the closed forms (`<v>`, `<v²>`, D_eff, `<x²>(t)`) against
+//!   the Fokker-Planck solvers (stationary, moment chain) to 1e-8 and
+//!   against the exact sampler (4 SE, Bonferroni over the comparisons);
+//! - tan drag: the FP stationary density against the sampler's histogram
+//!   (z per bin, Bonferroni);
+//! - first passage: backward equations (box scheme) and the time-dependent
+//!   upwind survival equations against the exact first-passage sampler
+//!   (4 SE, Bonferroni);
+//! - the CLI: flags, provenance spec, one-line errors naming the flag.
+
+mod common;
+
+use irtp::analytic::{linear, linear_moments};
+use irtp::fp::{msd as fp_moments, stationary, Mesh, MsdOptions, StationaryOptions};
+use irtp::mfpt::{self, BackwardOptions, DistributionOptions, Method, ParticleOptions, Problem};
+use irtp::model::reset::{NoiseAtReset, Reset, Target};
+use irtp::parallel::NoProgress;
+use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
+use irtp::{DragLaw, Params};
+
+/// z bound for m simultaneous two-sided comparisons at the family rate of
+/// one 4-sigma comparison (6.3e-5, Bonferroni), by bisection on erfc.
+fn bonferroni_z(m: usize) -> f64 {
+    let tail = |z: f64| m as f64 * erfc(z / std::f64::consts::SQRT_2);
+    let family = erfc(4.0 / std::f64::consts::SQRT_2);
+    let (mut lo, mut hi) = (3.0, 9.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if tail(mid) > family {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// erfc(x) for x >= 0 (Numerical Recipes' erfcc, relative error < 1.2e-7).
+fn erfc(x: f64) -> f64 {
+    let t = 1.0 / (1.0 + 0.5 * x);
+    let p = -x * x - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    t * p.exp()
+}
+
+fn redrawn(drag: DragLaw, sigma: f64, lambda: f64, r: f64, vr: f64) -> Params {
+    Params::new(drag, sigma, lambda, r, vr)
+        .unwrap()
+        .with_reset(Target::Point(vr), NoiseAtReset::Redrawn)
+        .unwrap()
+}
+
+/// Relative difference, on the scale 0.1 for quantities near 0 (`<v>`).
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(0.1)
+}
+
+#[test]
+fn redrawn_rule_is_recorded_and_mirrors() {
+    let p = redrawn(DragLaw::Linear, 1.0, 0.5, 2.0, 0.2);
+    assert_eq!(p.reset().noise(), NoiseAtReset::Redrawn);
+    assert_eq!(p.reset_spec().as_deref(), Some("point:v=0.2,noise=redrawn"));
+    let json = serde_json::to_string(&p).unwrap();
+    assert!(
+        json.contains("\"reset\":\"point:v=0.2,noise=redrawn\""),
+        "{json}"
+    );
+    let back: Params = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, p);
+    let m = p.mirrored_reset();
+    assert_eq!(m.reset_velocity(), -0.2);
+    assert_eq!(m.reset().noise(), NoiseAtReset::Redrawn);
+    let q = p.with_rate(0.7).unwrap();
+    assert_eq!((q.rate(), q.reset().noise()), (0.7, NoiseAtReset::Redrawn));
+    // The paper's protocol writes no spec: provenance stays as it was.
+    let k = Params::new(DragLaw::Linear, 1.0, 0.5, 2.0, 0.2).unwrap();
+    assert!(k.reset_spec().is_none());
+    assert!(!serde_json::to_string(&k).unwrap().contains("reset\""));
+}
+
+/// Closed forms vs FP (stationary + moment chain), linear drag.
+#[test]
+fn redrawn_linear_closed_forms_match_fokker_planck() {
+    for (s, l, r, vr) in [(1.0, 0.5, 2.0, 0.2), (1.5, 0.3, 0.7, 0.0)] {
+        let p = redrawn(DragLaw::Linear, s, l, r, vr);
+        let fp = stationary(&p, &StationaryOptions::default()).unwrap();
+        let (m, v2, d) = (
+            linear::v_mean(&p).unwrap(),
+            linear::v2(&p).unwrap(),
+            linear::d_eff(&p).unwrap(),
+        );
+        eprintln!(
+            "linear s={s} l={l} r={r} vr={vr}: <v> {m} vs {}, <v2> {v2} vs {}, D {d} vs {}",
+            fp.v_mean, fp.v2, fp.d_eff
+        );
+        assert!(rel(fp.v_mean, m) < 1e-8);
+        assert!(rel(fp.v2, v2) < 1e-8);
+        assert!(rel(fp.d_eff, d) < 1e-8);
+        // D_eff differs from the kept rule's: the check discriminates.
+        let kept = Params::new(DragLaw::Linear, s, l, r, vr).unwrap();
+        assert!(rel(linear::d_eff(&kept).unwrap(), d) > 0.05);
+
+        let times = vec![0.0, 0.5, 2.0, 8.0];
+        let exact = linear_moments::moments(&p, &times).unwrap();
+        // Graded mesh: v_r is a node on every level.
+        let o = MsdOptions {
+            cells: 100,
+            mesh: Mesh::Graded,
+            levels: 3,
+            times: times.clone(),
+            rtol: 1e-9,
+        };
+        let chain = fp_moments(&p, &o, &NoProgress).unwrap();
+        for (k, t) in times.iter().enumerate().skip(1) {
+            eprintln!("  t={t}: <x2> {} vs {}", exact.x2[k], chain.x2[k]);
+            assert!(rel(chain.x2[k], exact.x2[k]) < 1e-6, "t = {t}");
+            assert!(rel(chain.xv[k], exact.xv[k]) < 1e-6, "t = {t}");
+        }
+    }
+}
+
+/// Closed forms vs the exact and the Euler samplers: `<x²>(t)` (where the
+/// re-drawn noise acts), `<v>`, `<v²>` time averages.
+#[test]
+fn redrawn_linear_closed_forms_match_samplers() {
+    let p = redrawn(DragLaw::Linear, 1.0, 0.5, 2.0, 0.2);
+    let grid = TimeGrid::linear(6.0, 4).unwrap();
+    let exact = linear_moments::moments(&p, grid.times()).unwrap();
+    let kept = linear_moments::moments(
+        &Params::new(DragLaw::Linear, 1.0, 0.5, 2.0, 0.2).unwrap(),
+        grid.times(),
+    )
+    .unwrap();
+    let spec = SimSpec::new(40_000, grid.clone(), 2.0, 10, 4242).unwrap();
+    let methods = [SimMethod::Exact, SimMethod::Euler { dt: 1e-3 }];
+    let z = bonferroni_z(2 * (grid.times().len() - 1 + 2));
+    for method in methods {
+        let obs = simulate(&p, &spec, method, &NoProgress).unwrap();
+        // Euler's O(dt) bias, relative: a few dt.
+        let bias = if matches!(method, SimMethod::Exact) {
+            0.0
+        } else {
+            5e-3
+        };
+        for k in 1..obs.times.len() {
+            let (mean, se) = (obs.x2[k].mean(), obs.x2[k].sem());
+            let dev = (mean - exact.x2[k]).abs() - bias * exact.x2[k];
+            eprintln!(
+                "{method:?} t={}: <x2> sim {mean} ± {se}, redrawn {}, kept {}",
+                obs.times[k], exact.x2[k], kept.x2[k]
+            );
+            assert!(
+                dev < z * se,
+                "t = {}: {mean} ± {se} vs {}",
+                obs.times[k],
+                exact.x2[k]
+            );
+        }
+        let s = obs.summary();
+        let (m, v2) = (linear::v_mean(&p).unwrap(), linear::v2(&p).unwrap());
+        assert!((s.v_mean - m).abs() - bias * m.abs() < z * s.v_mean_err);
+        assert!((s.v2 - v2).abs() - bias * v2 < z * s.v2_err);
+    }
+    // The kept rule's <x²> is far outside the error bars at the last time.
+    let last = grid.times().len() - 1;
+    assert!(rel(kept.x2[last], exact.x2[last]) > 0.05);
+}
+
+/// tan drag: FP stationary density vs the exact sampler's histogram.
+#[test]
+fn redrawn_tan_density_matches_sampler_histogram() {
+    const BINS: usize = 20;
+    let p = redrawn(DragLaw::Tan, 3.0, 0.9, 1.0, 0.3);
+    let fine = stationary(
+        &p,
+        &StationaryOptions {
+            cells: BINS * 200,
+            mesh: Mesh::Uniform,
+            extrapolate: false,
+        },
+    )
+    .unwrap();
+    let spec = SimSpec::new(20_000, TimeGrid::linear(10.0, 2).unwrap(), 3.0, BINS, 777).unwrap();
+    let obs = simulate(&p, &spec, SimMethod::Exact, &NoProgress).unwrap();
+    let m = fine.cell_masses();
+    let bw = obs.bin_width();
+    let rows = obs.density_rows();
+    let compared: Vec<(f64, f64, f64)> = rows
+        .iter()
+        .enumerate()
+        .map(|(b, row)| {
+            (
+                m[b * 200..(b + 1) * 200].iter().sum(),
+                row[1] * bw,
+                row[2] * bw,
+            )
+        })
+        .filter(|&(fp, _, _)| fp >= 1e-3)
+        .collect();
+    let z = bonferroni_z(compared.len());
+    for (fp, sim, se) in compared {
+        assert!(
+            ((sim - fp) / se).abs() < z,
+            "bin: FP {fp} vs sim {sim} ± {se}"
+        );
+    }
+}
+
+/// Backward equations and the time-dependent survival equations vs the
+/// exact first-passage sampler, noise re-drawn.
+#[test]
+fn redrawn_first_passage_matches_exact_sampler() {
+    let cases = [
+        (DragLaw::Tan, 3.0, 0.9, 2.0, 0.0, -0.249, 0.5),
+        (DragLaw::Tanh, 0.6, 1.2, 2.0, 0.1, -0.249, 0.3),
+        (DragLaw::Tan, 3.0, 0.9, 1.0, 0.2, 0.4, -0.3), // downward (mirror frame)
+    ];
+    let z = bonferroni_z(3 * cases.len());
+    for (i, (d, s, l, r, vr, v0, vt)) in cases.into_iter().enumerate() {
+        let p = redrawn(d, s, l, r, vr);
+        let prob = Problem::new(p, v0, vt).unwrap();
+        let ode = mfpt::backward::solve(&prob, &Default::default()).unwrap();
+        let run = ParticleOptions {
+            particles: 16_000,
+            t_max: f64::INFINITY,
+            seed: 900 + i as u64,
+        };
+        let sim = mfpt::solve(&prob, &Method::Exact(run), &NoProgress)
+            .unwrap()
+            .summary()
+            .unwrap();
+        let dist = mfpt::distribution(
+            &prob,
+            &[0.5, 1.0],
+            &DistributionOptions {
+                backward: BackwardOptions::with_cells(4000),
+                ..DistributionOptions::default()
+            },
+        )
+        .unwrap();
+        eprintln!(
+            "{d} r={r} vr={vr} {v0}->{vt}: backward {} (+ {}, - {}), distribution {}, exact {} ± {} (+ {} ± {}, - {} ± {})",
+            ode.tau, ode.tau_plus, ode.tau_minus, dist.mean, sim.tau, sim.tau_err,
+            sim.tau_plus, sim.tau_plus_err, sim.tau_minus, sim.tau_minus_err
+        );
+        assert!(((sim.tau_plus - ode.tau_plus) / sim.tau_plus_err).abs() < z);
+        assert!(((sim.tau_minus - ode.tau_minus) / sim.tau_minus_err).abs() < z);
+        assert!(((sim.tau - dist.mean) / sim.tau_err).abs() < z);
+        if i == 0 {
+            // The kept rule gives another tau, far outside these error bars.
+            let kept = Problem::new(Params::new(d, s, l, r, vr).unwrap(), v0, vt).unwrap();
+            let k = mfpt::backward::solve(&kept, &Default::default()).unwrap();
+            assert!(
+                ((sim.tau - k.tau) / sim.tau_err).abs() > 8.0,
+                "kept {}",
+                k.tau
+            );
+        }
+    }
+}
+
+// ---- CLI -------------------------------------------------------------
+
+#[test]
+fn cli_records_the_protocol_and_refuses_bad_specs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fp");
+    let o = common::irtp(&[
+        "fp",
+        "stationary",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--reset-noise",
+        "redrawn",
+        "--reset-velocity",
+        "0.2",
+        "--cells",
+        "2000",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    common::assert_success(&o);
+    let run = common::read_json(&out.join("run.json"));
+    let text = run.to_string();
+    assert!(
+        text.contains("\"reset\":\"point:v=0.2,noise=redrawn\""),
+        "{text}"
+    );
+    // The same protocol through the spec.
+    let o2 = common::irtp(&[
+        "fp",
+        "stationary",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--reset-to",
+        "point:v=0.2,noise=redrawn",
+        "--cells",
+        "2000",
+        "--json",
+    ]);
+    common::assert_success(&o2);
+    let (a, b) = (common::summary(&o), common::summary(&o2));
+    assert_eq!(a["results"]["d_eff"], b["results"]["d_eff"]);
+    // Default protocol: no reset spec anywhere.
+    let o3 = common::irtp(&["fp", "stationary", "--cells", "2000", "--json"]);
+    assert!(!String::from_utf8_lossy(&o3.stdout).contains("\"reset\""));
+
+    for (args, flag) in [
+        (vec!["--reset-noise", "maybe"], "--reset-noise"),
+        (vec!["--reset-to", "point:v=9"], "--reset-to"),
+        (vec!["--reset-to", "point:v=nan"], "--reset-to"),
+        (vec!["--reset-to", "dirac:v=0"], "--reset-to"),
+        (
+            vec![
+                "--reset-to",
+                "point:v=0,noise=kept",
+                "--reset-noise",
+                "redrawn",
+            ],
+            "--reset-noise",
+        ),
+    ] {
+        for cmd in [
+            vec!["simulate"],
+            vec!["fp", "stationary"],
+            vec!["mfpt", "--v0", "-0.249", "--vt", "0.5"],
+        ] {
+            let empty = tempfile::tempdir().unwrap();
+            let bad = empty.path().join("out");
+            let mut all: Vec<&str> = cmd.clone();
+            all.extend(&args);
+            all.extend(["--out", bad.to_str().unwrap()]);
+            let o = common::irtp(&all);
+            common::assert_rejected(&o, flag, &bad);
+        }
+    }
+}
