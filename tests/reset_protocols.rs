@@ -1,5 +1,7 @@
 //! Resetting protocols beyond the paper's (point target, noise kept) in every
-//! method: the noise state re-drawn at a reset (±Sigma with probability ½).
+//! method: the noise state re-drawn at a reset (±Sigma with probability ½),
+//! and resets to a random velocity (Gaussian truncated to the velocity
+//! interval, uniform on [a, b]).
 //!
 //! - linear drag: the closed forms (`<v>`, `<v²>`, D_eff, `<x²>(t)`) against
 //!   the Fokker-Planck solvers (stationary, moment chain) to 1e-8 and
@@ -9,6 +11,9 @@
 //! - first passage: backward equations (box scheme) and the time-dependent
 //!   upwind survival equations against the exact first-passage sampler
 //!   (4 SE, Bonferroni);
+//! - random targets: closed forms vs FP and vs the exact sampler, the FP
+//!   density vs the sampler's histogram (tan), and the backward equations'
+//!   refusal naming the protocol and the method;
 //! - the CLI: flags, provenance spec, one-line errors naming the flag.
 
 mod common;
@@ -347,5 +352,263 @@ fn cli_records_the_protocol_and_refuses_bad_specs() {
             let o = common::irtp(&all);
             common::assert_rejected(&o, flag, &bad);
         }
+    }
+}
+
+// ---- random targets ----------------------------------------------------
+
+fn with_target(
+    drag: DragLaw,
+    sigma: f64,
+    lambda: f64,
+    r: f64,
+    t: Target,
+    n: NoiseAtReset,
+) -> Params {
+    Params::new(drag, sigma, lambda, r, 0.0)
+        .unwrap()
+        .with_reset(t, n)
+        .unwrap()
+}
+
+fn gauss(mean: f64, std: f64) -> Target {
+    Target::Gaussian {
+        mean,
+        std,
+        lo: f64::NEG_INFINITY,
+        hi: f64::INFINITY,
+    }
+}
+
+/// Truncated Gaussian moments: the untruncated limit, and a strongly
+/// truncated case against composite Simpson on 2e5 panels.
+#[test]
+fn truncated_gaussian_moments_are_exact() {
+    let p = with_target(
+        DragLaw::Linear,
+        1.0,
+        0.5,
+        1.0,
+        gauss(0.2, 0.01),
+        NoiseAtReset::Kept,
+    );
+    let (m1, m2) = p.reset().target().moments();
+    assert!(
+        (m1 - 0.2).abs() < 1e-15 && (m2 - 0.0401).abs() < 1e-15,
+        "{m1} {m2}"
+    );
+    let p = with_target(
+        DragLaw::Linear,
+        1.0,
+        0.5,
+        1.0,
+        gauss(0.7, 0.6),
+        NoiseAtReset::Kept,
+    );
+    let (m1, m2) = p.reset().target().moments();
+    let n = 200_000;
+    let h = 2.0 / n as f64;
+    let (mut z, mut s1, mut s2) = (0.0, 0.0, 0.0);
+    for k in 0..=n {
+        let v = -1.0 + k as f64 * h;
+        let w = if k == 0 || k == n {
+            1.0
+        } else if k % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        let f = w * (-0.5 * ((v - 0.7) / 0.6f64).powi(2)).exp();
+        (z, s1, s2) = (z + f, s1 + f * v, s2 + f * v * v);
+    }
+    eprintln!("truncated: {m1} vs {}, {m2} vs {}", s1 / z, s2 / z);
+    assert!(rel(m1, s1 / z) < 1e-12 && rel(m2, s2 / z) < 1e-12);
+}
+
+fn random_cases() -> Vec<(Target, NoiseAtReset)> {
+    vec![
+        (gauss(0.1, 0.3), NoiseAtReset::Kept),
+        (gauss(0.1, 0.3), NoiseAtReset::Redrawn),
+        (gauss(-0.6, 0.8), NoiseAtReset::Kept),
+        (Target::Uniform { a: -0.5, b: 0.2 }, NoiseAtReset::Kept),
+        (Target::Uniform { a: -0.5, b: 0.2 }, NoiseAtReset::Redrawn),
+    ]
+}
+
+/// Linear drag: closed forms from the target's moments vs the FP solver.
+#[test]
+fn random_targets_linear_closed_forms_match_fokker_planck() {
+    for (t, n) in random_cases() {
+        let p = with_target(DragLaw::Linear, 1.0, 0.5, 2.0, t, n);
+        let fp = stationary(&p, &StationaryOptions::default()).unwrap();
+        let (m, v2, d) = (
+            linear::v_mean(&p).unwrap(),
+            linear::v2(&p).unwrap(),
+            linear::d_eff(&p).unwrap(),
+        );
+        eprintln!(
+            "{}: <v> {m} vs {}, <v2> {v2} vs {}, D {d} vs {}",
+            p.reset_spec().unwrap(),
+            fp.v_mean,
+            fp.v2,
+            fp.d_eff
+        );
+        assert!(rel(fp.v_mean, m) < 1e-8);
+        // <v²> by cell-centre quadrature on the default mesh: 1.3e-8 for
+        // the uniform target (9e-9 for a point target).
+        assert!(rel(fp.v2, v2) < 3e-8);
+        assert!(rel(fp.d_eff, d) < 1e-8);
+    }
+}
+
+/// Linear drag: closed forms vs the exact sampler (<x²>(t), <v>, <v²>).
+#[test]
+fn random_targets_linear_closed_forms_match_exact_sampler() {
+    let grid = TimeGrid::linear(6.0, 4).unwrap();
+    let cases = random_cases();
+    let z = bonferroni_z(cases.len() * (grid.len() - 1 + 2));
+    for (i, (t, n)) in cases.into_iter().enumerate() {
+        let p = with_target(DragLaw::Linear, 1.0, 0.5, 2.0, t, n);
+        let exact = linear_moments::moments(&p, grid.times()).unwrap();
+        let spec = SimSpec::new(20_000, grid.clone(), 2.0, 10, 5150 + i as u64).unwrap();
+        let obs = simulate(&p, &spec, SimMethod::Exact, &NoProgress).unwrap();
+        for k in 1..obs.times.len() {
+            let (mean, se) = (obs.x2[k].mean(), obs.x2[k].sem());
+            assert!(
+                ((mean - exact.x2[k]) / se).abs() < z,
+                "{:?} t = {}: {mean} ± {se} vs {}",
+                p.reset_spec(),
+                obs.times[k],
+                exact.x2[k]
+            );
+        }
+        let s = obs.summary();
+        let (m, v2) = (linear::v_mean(&p).unwrap(), linear::v2(&p).unwrap());
+        eprintln!(
+            "{}: <v> {} ± {} vs {m}, <v2> {} ± {} vs {v2}",
+            p.reset_spec().unwrap(),
+            s.v_mean,
+            s.v_mean_err,
+            s.v2,
+            s.v2_err
+        );
+        assert!(((s.v_mean - m) / s.v_mean_err).abs() < z);
+        assert!(((s.v2 - v2) / s.v2_err).abs() < z);
+    }
+}
+
+/// tan drag, Gaussian target: FP density vs the exact sampler's histogram.
+#[test]
+fn random_target_tan_density_matches_sampler_histogram() {
+    const BINS: usize = 20;
+    let p = with_target(
+        DragLaw::Tan,
+        3.0,
+        0.9,
+        2.0,
+        gauss(0.3, 0.25),
+        NoiseAtReset::Kept,
+    );
+    let fine = stationary(
+        &p,
+        &StationaryOptions {
+            cells: BINS * 200,
+            mesh: Mesh::Uniform,
+            extrapolate: false,
+        },
+    )
+    .unwrap();
+    let spec = SimSpec::new(20_000, TimeGrid::linear(10.0, 2).unwrap(), 3.0, BINS, 4711).unwrap();
+    let obs = simulate(&p, &spec, SimMethod::Exact, &NoProgress).unwrap();
+    let m = fine.cell_masses();
+    let bw = obs.bin_width();
+    let compared: Vec<(f64, f64, f64)> = obs
+        .density_rows()
+        .iter()
+        .enumerate()
+        .map(|(b, row)| {
+            (
+                m[b * 200..(b + 1) * 200].iter().sum(),
+                row[1] * bw,
+                row[2] * bw,
+            )
+        })
+        .filter(|&(fp, _, _)| fp >= 1e-3)
+        .collect();
+    let z = bonferroni_z(compared.len() + 1);
+    for (fp, sim, se) in compared {
+        assert!(
+            ((sim - fp) / se).abs() < z,
+            "bin: FP {fp} vs sim {sim} ± {se}"
+        );
+    }
+    let s = obs.summary();
+    let fp = stationary(&p, &StationaryOptions::default()).unwrap();
+    eprintln!(
+        "tan gauss: <v2> FP {} vs sim {} ± {}",
+        fp.v2, s.v2, s.v2_err
+    );
+    assert!(((s.v2 - fp.v2) / s.v2_err).abs() < z);
+}
+
+/// The backward equations need a point target: a random one is refused,
+/// naming the protocol and the method; the exact sampler runs it.
+#[test]
+fn backward_equations_refuse_random_targets_by_name() {
+    let p = with_target(
+        DragLaw::Tan,
+        3.0,
+        0.9,
+        2.0,
+        gauss(0.0, 0.2),
+        NoiseAtReset::Kept,
+    );
+    let prob = Problem::new(p, -0.249, 0.5).unwrap();
+    let e = mfpt::backward::solve(&prob, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("invalid reset_to = gauss:mean=0,std=0.2"),
+        "{e}"
+    );
+    assert!(
+        e.contains("backward equations") && e.contains("gauss rule"),
+        "{e}"
+    );
+    let run = ParticleOptions {
+        particles: 2000,
+        t_max: f64::INFINITY,
+        seed: 3,
+    };
+    let s = mfpt::solve(&prob, &Method::Exact(run), &NoProgress)
+        .unwrap()
+        .summary()
+        .unwrap();
+    assert!(s.tau.is_finite() && s.censored == 0);
+    let dir = tempfile::tempdir().unwrap();
+    for cmd in [
+        vec!["mfpt"],
+        vec!["mfpt", "distribution"],
+        vec!["mfpt", "optimize"],
+    ] {
+        let bad = dir.path().join("out");
+        let mut all = cmd.clone();
+        let b = bad.to_str().unwrap();
+        all.extend([
+            "--v0",
+            "-0.249",
+            "--vt",
+            "0.5",
+            "--reset-to",
+            "uniform:a=-0.5,b=0.2",
+            "--out",
+            b,
+        ]);
+        let o = common::irtp(&all);
+        let err = common::assert_rejected(&o, "--reset-to", &bad);
+        assert!(
+            err.contains("backward equations") && err.contains("uniform rule"),
+            "{err}"
+        );
     }
 }

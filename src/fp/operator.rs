@@ -13,7 +13,8 @@
 //! Shifted solves (I - cA) x = b are done without subtractions where the
 //! signs allow it: I - cA = -c (B' + R) with B' = B - I/c, which is B with the
 //! loss rate r + 1/c, solved by the block-Thomas factorisation of
-//! [`super::solve`]; R = E Fᵀ has rank ≤ 2 (E: the two target unit vectors,
+//! [`super::solve`]; R = E Fᵀ has rank ≤ 2 (E: unit mass in the target
+//! cell of each state, or spread by a random target's cell masses,
 //! Fᵀ = r W (1+, 1-)ᵀ: the state sums mixed by the noise rule, W = I when the
 //! state is kept, all entries ½ when it is re-drawn; W's columns sum to 1)
 //! and is added by the
@@ -181,8 +182,7 @@ impl ForwardOperator {
             out[2 * i + 1] = l * p - (be[i] + l + r) * m + right;
         }
         let (ip, im) = g.reinject(r * up, r * um);
-        out[2 * g.reset_plus] += ip;
-        out[2 * g.reset_minus + 1] += im;
+        g.add_reset_flat(out, ip, im);
     }
 
     /// Solve (I - cA) x = b for c > 0, caching the factorisation of the last
@@ -232,14 +232,15 @@ impl ForwardOperator {
         let g = &self.grid;
         let loss = self.rate + 1.0 / c;
         let factor = ResetFactor::new(g, self.lambda, loss);
-        let unit = |k: usize| {
+        // E's columns: unit mass re-entering in the + and in the - state.
+        let unit = |ip: f64, im: f64| {
             let mut e = vec![0.0; self.dim()];
-            e[k] = 1.0;
+            g.add_reset_flat(&mut e, ip, im);
             let mut z = vec![0.0; self.dim()];
             factor.solve(g, &e, &mut z);
             z
         };
-        let z = [unit(2 * g.reset_plus), unit(2 * g.reset_minus + 1)];
+        let z = [unit(1.0, 0.0), unit(0.0, 1.0)];
         // Column k of S: s on the sum; the off-diagonal is the re-injection
         // into the other state of r Σ Z_k (≤ 0), the diagonal
         // s + |off-diagonal|.

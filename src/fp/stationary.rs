@@ -140,8 +140,7 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
         // state, the noise state kept or re-drawn.
         let mut b = vec![[0.0; 2]; n];
         let (ip, im) = g.reinject(0.5 * r, 0.5 * r);
-        b[g.reset_plus][0] -= ip;
-        b[g.reset_minus][1] -= im;
+        g.add_reset(&mut b, -ip, -im);
         solve_reset(g, lambda, r, &b)
     } else {
         solve_free(g, lambda, &vec![[0.0; 2]; n], 1.0)
@@ -199,8 +198,7 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
             };
             let yp = fp / kappa;
             let (ip, im) = g.reinject(r * yp, -(r * yp));
-            b[g.reset_plus][0] -= ip;
-            b[g.reset_minus][1] -= im;
+            g.add_reset(&mut b, -ip, -im);
             solve_reset(g, lambda, r, &b)
         } else {
             solve_free(g, lambda, &b, 0.0)

@@ -659,8 +659,7 @@ fn step(g: &Grid, lambda: f64, r: f64, h: f64, m: &[[f64; 2]], next: &mut [[f64;
         in_p = op;
     }
     let (ip, im) = g.reinject(reset_p, reset_m);
-    next[g.reset_plus][0] += ip;
-    next[g.reset_minus][1] += im;
+    g.add_reset(next, ip, im);
     let total: f64 = next.iter().map(|c| c[0] + c[1]).sum();
     (total - 1.0).abs()
 }

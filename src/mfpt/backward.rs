@@ -130,7 +130,10 @@ pub(super) struct Mesh {
 pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
-    let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
+    let vr = p.params().point_target(
+        "the backward equations (mfpt --method ode, mfpt scan, mfpt optimize, mfpt distribution)",
+    )?;
+    let mut cuts = vec![vl, p.v0(), vr, p.vt()];
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
     let total = p.vt() - vl;
@@ -181,7 +184,7 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
     Ok(Mesh {
         start: find(p.v0()),
-        reset: find(p.params().reset_velocity()),
+        reset: find(vr),
         v,
     })
 }

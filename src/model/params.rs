@@ -1,7 +1,10 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
-use super::reset::{spec, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule, Target};
+use super::reset::{
+    spec, GaussianReset, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule, Target,
+    UniformReset,
+};
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -150,6 +153,7 @@ impl Params {
     /// Same parameters with another reset velocity (validated), the noise
     /// rule kept.
     pub fn with_reset_velocity(&self, reset_velocity: f64) -> Result<Self> {
+        self.point_target("another reset velocity")?;
         Params::new(
             self.drag,
             self.sigma,
@@ -165,6 +169,8 @@ impl Params {
     /// the noise state. The pair picks the rule of [`crate::model::reset`].
     pub fn with_reset(&self, target: Target, noise: NoiseAtReset) -> Result<Self> {
         let rate = self.rate();
+        let vu = self.v_upper();
+        let written = || spec::write(&target, noise);
         let reset = match target {
             Target::Point(v) => {
                 let base = Params::new(self.drag, self.sigma, self.lambda, rate, v)?;
@@ -176,8 +182,55 @@ impl Params {
                     }),
                 }
             }
+            Target::Gaussian { mean, std, .. } => {
+                if !(mean > -vu && mean < vu) {
+                    return Err(Error::invalid(
+                        "reset_to",
+                        written(),
+                        format!("-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the Gaussian is truncated)"),
+                    ));
+                }
+                if !(std > 0.0 && std.is_finite()) {
+                    return Err(Error::invalid("reset_to", written(), "std > 0, finite"));
+                }
+                ResetRule::Gauss(GaussianReset {
+                    rate,
+                    mean,
+                    std,
+                    bound: vu,
+                    noise,
+                })
+            }
+            Target::Uniform { a, b } => {
+                if !(a > -vu && a < b && b < vu) {
+                    return Err(Error::invalid(
+                        "reset_to",
+                        written(),
+                        format!("-{vu:.6} < a < b < {vu:.6} (inside the open velocity interval)"),
+                    ));
+                }
+                ResetRule::Uniform(UniformReset { rate, a, b, noise })
+            }
         };
         Ok(Params { reset, ..*self })
+    }
+
+    /// The point target v_r, or an error naming `method` and the rule for a
+    /// random target (a method that needs a point target refuses the
+    /// others through it, never treating them as a point).
+    pub fn point_target(&self, method: &str) -> Result<f64> {
+        match self.reset.target() {
+            Target::Point(v) => Ok(v),
+            Target::Gaussian { .. } | Target::Uniform { .. } => Err(Error::invalid(
+                "reset_to",
+                spec::write(&self.reset.target(), self.reset.noise()),
+                format!(
+                    "a point target (point:v=V) for {method}: the {} rule's random target is \
+                     run by the particle methods, the Fokker-Planck solvers and the linear closed forms",
+                    self.reset.name()
+                ),
+            )),
+        }
     }
 
     /// The canonical reset spec (`point:v=0.2,noise=redrawn`), None for the
@@ -214,9 +267,14 @@ impl Params {
     /// [`NoiseAtReset::mix`]: a rule with another kind of target extends
     /// this exhaustive match, and each such method must then handle it or
     /// refuse it.
+    ///
+    /// For a random target: its centre ([`Target::centre`]), where meshes
+    /// put a node; the methods that need a point target take it from
+    /// [`Params::point_target`] instead, which refuses random targets.
     pub fn reset_velocity(&self) -> f64 {
         match self.reset.target() {
             Target::Point(v) => v,
+            t @ (Target::Gaussian { .. } | Target::Uniform { .. }) => t.centre(),
         }
     }
 

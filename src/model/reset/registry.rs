@@ -13,6 +13,8 @@ macro_rules! reset_rules {
         $crate::$cb! { ($($args)*)
             Poisson => PoissonReset,
             Redrawn => RedrawnReset,
+            Gauss => GaussianReset,
+            Uniform => UniformReset,
         }
     };
 }

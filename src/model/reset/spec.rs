@@ -12,19 +12,24 @@ use crate::error::{Error, Result};
 use crate::model::drag::spec::number;
 
 /// The target kinds and their keys, for messages.
-pub const USAGE: &str = "point:v=V";
+pub const USAGE: &str = "point:v=V, gauss:mean=M,std=S or uniform:a=A,b=B";
 
 /// `point:v=0.2,noise=redrawn`: the canonical spec of a target and noise rule.
 pub fn write(target: &Target, noise: NoiseAtReset) -> String {
     let t = match *target {
         Target::Point(v) => format!("point:v={}", number(v)),
+        Target::Gaussian { mean, std, .. } => {
+            format!("gauss:mean={},std={}", number(mean), number(std))
+        }
+        Target::Uniform { a, b } => format!("uniform:a={},b={}", number(a), number(b)),
     };
     format!("{t},noise={}", noise.name())
 }
 
 /// Parse a spec: the target (its keys) and the noise rule, if the spec
 /// names one. Range checks against the velocity interval are the
-/// caller's ([`crate::Params::with_reset`]).
+/// caller's ([`crate::Params::with_reset`]), which also sets the
+/// truncation of a Gaussian (left at ±∞ here).
 pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
     let bad = |what: String| {
         Error::invalid(
@@ -36,7 +41,13 @@ pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
     let (kind, args) = spec.trim().split_once(':').unwrap_or((spec.trim(), ""));
     let keys: &[&str] = match kind {
         "point" => &["v"],
-        _ => return Err(bad(format!("a target kind point (not '{kind}')"))),
+        "gauss" => &["mean", "std"],
+        "uniform" => &["a", "b"],
+        _ => {
+            return Err(bad(format!(
+                "a target kind point, gauss or uniform (not '{kind}')"
+            )))
+        }
     };
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
     let mut noise = None;
@@ -76,7 +87,16 @@ pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
     }
     let target = match kind {
         "point" => Target::Point(out[0]),
-        _ => unreachable!("kind checked above"),
+        "gauss" => Target::Gaussian {
+            mean: out[0],
+            std: out[1],
+            lo: f64::NEG_INFINITY,
+            hi: f64::INFINITY,
+        },
+        _ => Target::Uniform {
+            a: out[0],
+            b: out[1],
+        },
     };
     Ok((target, noise))
 }
