@@ -21,7 +21,7 @@
 
 use super::Problem;
 use crate::error::{Error, Result};
-use crate::model::reset::Reset;
+use crate::model::reset::{Reset, Target};
 use crate::model::Drag;
 use serde::{Deserialize, Serialize};
 
@@ -123,16 +123,33 @@ pub(super) struct Mesh {
     pub(super) v: Vec<f64>,
     /// Index of v_0.
     pub(super) start: usize,
-    /// Index of v_r.
+    /// Index of v_r (of v_0 for a random target, unused then).
     pub(super) reset: usize,
+    /// A random target's node weights w_j: the reset value of state s is
+    /// Σ_j w_j x_s(v_j) (half of the target's mass in each cell adjacent
+    /// to the node; the mass beyond v_t, where a reset is the passage,
+    /// weighs x = 0); None for a point target (the node `reset`).
+    pub(super) weights: Option<Vec<f64>>,
 }
 
+/// The mesh of a point-target problem; a random target is refused, naming
+/// the methods (the time-dependent, moment and rate-derivative solvers
+/// take the reset value at one node).
 pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
+    p.params().point_target(
+        "mfpt distribution, mfpt optimize and the backward moments (mfpt --method ode and mfpt scan take it)",
+    )?;
+    mesh_any(p, cells)
+}
+
+/// The mesh of [`profile`]: a point target is a node, a random one gets
+/// node weights ([`Mesh::weights`]).
+fn mesh_any(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
-    let vr = p.params().point_target(
-        "the backward equations (mfpt --method ode, mfpt scan, mfpt optimize, mfpt distribution)",
-    )?;
+    let target = p.params().reset().target();
+    let point = p.params().reset().point();
+    let vr = point.unwrap_or(p.v0());
     let mut cuts = vec![vl, p.v0(), vr, p.vt()];
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
@@ -182,10 +199,21 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
         }
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
+    let weights = point.is_none().then(|| {
+        let total = target.mass(-vu, vu);
+        let mut w = vec![0.0; v.len()];
+        for (i, c) in v.windows(2).enumerate() {
+            let half = 0.5 * target.mass(c[0], c[1]) / total;
+            w[i] += half;
+            w[i + 1] += half;
+        }
+        w
+    });
     Ok(Mesh {
         start: find(p.v0()),
         reset: find(vr),
         v,
+        weights,
     })
 }
 
@@ -438,8 +466,14 @@ fn solve_mesh(
     a.factor()?;
     a.solve(&mut b);
     let mut x = b;
-    if rate > 0.0 && !reset_correction(&a, &mut x, cp, cm, m.reset) {
-        return Ok(None);
+    if rate > 0.0 {
+        let corrected = match &m.weights {
+            None => reset_correction(&a, &mut x, cp, cm, m.reset),
+            Some(w) => spread_correction(&a, &mut x, cp, cm, w),
+        };
+        if !corrected {
+            return Ok(None);
+        }
     }
     let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
     let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
@@ -488,11 +522,43 @@ fn reset_correction(
     true
 }
 
-/// tau±(v) on the whole mesh, in the user's frame.
+/// The reset terms for a random target: as [`reset_correction`], with the
+/// reset values R± = Σ_j w_j x±(v_j) (the dense rank-one term
+/// r (∫ x± q - x±) in bordered form), R from the 2×2 system
+/// R = ℓ(y0) - R+ ℓ(y1) - R- ℓ(y2) solved directly.
+fn spread_correction(
+    a: &Band,
+    x: &mut [f64],
+    mut cp: Vec<f64>,
+    mut cm: Vec<f64>,
+    w: &[f64],
+) -> bool {
+    a.solve(&mut cp);
+    a.solve(&mut cm);
+    let ell = |y: &[f64], s: usize| -> f64 {
+        w.iter().enumerate().map(|(j, wj)| wj * y[2 * j + s]).sum()
+    };
+    let (m11, m12) = (1.0 + ell(&cp, 0), ell(&cm, 0));
+    let (m21, m22) = (ell(&cp, 1), 1.0 + ell(&cm, 1));
+    let (bp, bm) = (ell(x, 0), ell(x, 1));
+    let det = m11 * m22 - m12 * m21;
+    if !(det.abs() > 0.0) || !det.is_finite() {
+        return false;
+    }
+    let rp = (bp * m22 - m12 * bm) / det;
+    let rm = (m11 * bm - m21 * bp) / det;
+    for k in 0..x.len() {
+        x[k] -= rp * cp[k] + rm * cm[k];
+    }
+    true
+}
+
+/// tau±(v) on the whole mesh, in the user's frame (a point or a random
+/// reset target).
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, opts.cells)?;
+    let m = mesh_any(&cp, opts.cells)?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
@@ -530,8 +596,15 @@ pub fn lower_bound(problem: &Problem) -> f64 {
     let p = cp.params();
     let flow = |from: f64| p.drag().flow_time(p.sigma(), from, cp.vt());
     let r = p.rate();
+    // The highest velocity a reset can land on (a random target's top; at
+    // or beyond v_t the reset is the passage: flow time 0).
+    let top = match p.reset().target() {
+        Target::Point(v) => v,
+        Target::Uniform { b, .. } => b,
+        Target::Gaussian { hi, .. } => hi,
+    };
     if r > 0.0 {
-        let t = flow(cp.v0()).min(flow(p.reset_velocity()));
+        let t = flow(cp.v0()).min(flow(top.min(cp.vt())));
         (r * t).exp_m1() / r
     } else {
         flow(cp.v0())

@@ -226,7 +226,8 @@ impl Params {
                 spec::write(&self.reset.target(), self.reset.noise()),
                 format!(
                     "a point target (point:v=V) for {method}: the {} rule's random target is \
-                     run by the particle methods, the Fokker-Planck solvers and the linear closed forms",
+                     run by the particle methods, the Fokker-Planck solvers, mfpt --method ode, \
+                     mfpt scan and the linear closed forms",
                     self.reset.name()
                 ),
             )),
