@@ -68,6 +68,7 @@ class Params:
         *,
         rate: Optional[float] = None,
         reset_velocity: Optional[float] = None,
+        reset_to: Optional[str] = None,
         **kwargs: Any,
     ) -> None: ...
     @classmethod
@@ -82,6 +83,8 @@ class Params:
     def rate(self) -> Optional[float]: ...
     @property
     def reset_velocity(self) -> Optional[float]: ...
+    @property
+    def reset_to(self) -> Optional[str]: ...
     @property
     def reset(self) -> Optional[PoissonReset]: ...
     def options(self) -> Dict[str, Any]: ...
@@ -278,6 +281,8 @@ def simulate(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -321,6 +326,8 @@ def fp_stationary(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -341,6 +348,8 @@ def fp_transient(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -366,6 +375,8 @@ def fp_msd(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -390,6 +401,8 @@ def mfpt(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,
@@ -414,6 +427,8 @@ def mfpt_scan(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     v0: float,
     cells: int = ...,
     vt: Optional[float] = ...,
@@ -443,6 +458,8 @@ def mfpt_optimize(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,
@@ -466,6 +483,8 @@ def mfpt_distribution(
     lambda_: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
+    reset_noise: Literal["kept", "redrawn"] = ...,
+    reset_to: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,

@@ -165,6 +165,7 @@ _FIELDS: Tuple[Tuple[str, str], ...] = (
     ("lambda_", "lambda"),
     ("rate", "rate"),
     ("reset_velocity", "reset_velocity"),
+    ("reset_to", "reset_to"),
 )
 
 
@@ -193,6 +194,7 @@ class Params:
         *,
         rate: Optional[float] = None,
         reset_velocity: Optional[float] = None,
+        reset_to: Optional[str] = None,
         **kwargs: Any,
     ) -> None:
         if "lambda" in kwargs:
@@ -203,7 +205,7 @@ class Params:
             bad = ", ".join(sorted(kwargs))
             raise ValueError(
                 f"unknown keyword {bad} for irtp.Params "
-                "(known: drag, sigma, lambda_, reset, rate, reset_velocity)"
+                "(known: drag, sigma, lambda_, reset, rate, reset_velocity, reset_to)"
             )
         if reset is not None:
             if not isinstance(reset, Reset):
@@ -221,14 +223,23 @@ class Params:
         for attr, given in fields:
             if given is not None:
                 values[attr] = _number(attr, given)
+        if reset_to is not None:
+            values["reset_to"] = str(reset_to)
         self._values = values
 
     @classmethod
     def from_mapping(cls, m: Mapping[str, Any]) -> "Params":
         """From a mapping with the keys of run.json's model (``drag``, ``sigma``,
         ``lambda``, ``rate``, ``reset_velocity``), e.g. ``result.summary["params"]``
-        of :func:`fp_stationary` or ``result.params["model"]``."""
-        return cls(**dict(m))
+        of :func:`fp_stationary` or ``result.params["model"]``. A protocol
+        other than the paper's is recorded as the spec ``reset``
+        (``point:v=0.2,noise=redrawn``), which becomes ``reset_to`` (and
+        carries the reset velocity)."""
+        d = dict(m)
+        if isinstance(d.get("reset"), str):
+            d["reset_to"] = d.pop("reset")
+            d.pop("reset_velocity", None)
+        return cls(**d)
 
     drag = property(lambda self: self._values.get("drag"), doc="Drag law (or None: default).")
     sigma = property(lambda self: self._values.get("sigma"), doc="Noise amplitude Sigma.")
@@ -236,6 +247,10 @@ class Params:
     rate = property(lambda self: self._values.get("rate"), doc="Reset rate r.")
     reset_velocity = property(
         lambda self: self._values.get("reset_velocity"), doc="Reset velocity v_r."
+    )
+    reset_to = property(
+        lambda self: self._values.get("reset_to"),
+        doc="The resetting protocol as a spec (``gauss:mean=0,std=0.3``), or None.",
     )
 
     @property

@@ -19,8 +19,23 @@
 //! which integrates to D_eff = (Var v + `<vη>`/(2λ)) / (1 + r).
 //! Checks: r = 0 gives `<v²>` = Σ²/(1+2λ) and D_eff = Σ²/(2λ) (free telegraph
 //! noise integrated once); r → ∞ gives D_eff ≈ Σ²/(2λ r²), the paper's r⁻².
+//!
+//! With the noise state re-drawn at a reset (L gets r [½ f(v_r, Σ) +
+//! ½ f(v_r, -Σ) - f(v, η)] instead), f = v and f = v² are unchanged
+//! (their reset values do not depend on η), and so is f = vη: its reset
+//! value averages to 0, and the kept rule's r v_r <η> vanished anyway. So
+//! `<v>`, `<vη>` and `<v²>` are those above, and the stationary density
+//! itself is the same (the reset influx of each state is r/2 either way).
+//! What changes is the memory of η: L η = -(2λ + r) η, so
+//! E[η(t) | η_0] = η_0 e^{-κt} with κ = 2λ + r (κ = 2λ when kept), and
+//!
+//! ```text
+//! E[v(t) | v_0, η_0] = <v> + (v_0 - <v>) e^{-(1+r)t} + η_0 (e^{-κt} - e^{-(1+r)t}) / (1 + r - κ),
+//! D_eff = (Var v + <vη>/κ) / (1 + r).
+//! ```
 
 use crate::error::{Error, Result};
+use crate::model::reset::NoiseAtReset;
 use crate::model::Reset;
 use crate::model::{DragLaw, Params};
 
@@ -33,6 +48,15 @@ fn require_linear(p: &Params) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// κ, the decay rate of the noise memory E[η(t) | η_0] = η_0 e^{-κt}: 2λ
+/// when a reset keeps η, 2λ + r when it re-draws it.
+pub fn eta_decay(p: &Params) -> f64 {
+    match p.reset().noise() {
+        NoiseAtReset::Kept => 2.0 * p.lambda(),
+        NoiseAtReset::Redrawn => 2.0 * p.lambda() + p.rate(),
+    }
 }
 
 /// Stationary `<v η>`.
@@ -66,7 +90,7 @@ pub fn d_eff(p: &Params) -> Result<f64> {
     }
     let m = v_mean(p)?;
     let var = v2(p)? - m * m;
-    Ok((var + v_eta(p)? / (2.0 * p.lambda())) / (1.0 + p.rate()))
+    Ok((var + v_eta(p)? / eta_decay(p)) / (1.0 + p.rate()))
 }
 
 #[cfg(test)]

@@ -16,15 +16,18 @@
 //! <vη>'  = Σ² - (1 + 2λ + r) <vη>                       (+ r v_r <η> = 0)
 //! ⟨v²⟩'  = 2 <vη> - (2 + r) ⟨v²⟩ + r <v_r²>
 //! ⟨x⟩'   = ⟨v⟩
-//! <xη>'  = <vη> - 2λ <xη>                                (a reset keeps x and η)
+//! <xη>'  = <vη> - κ <xη>        (κ = 2λ: a reset keeps x and η; κ = 2λ + r: it re-draws η)
 //! ⟨xv⟩'  = ⟨v²⟩ + <xη> - (1 + r) ⟨xv⟩ + r <v_r> ⟨x⟩
 //! ⟨x²⟩'  = 2 ⟨xv⟩
 //! ```
 //!
 //! Every right side involves only these seven moments: the system closes, also
 //! with the reset terms (a rule that also reset x would add r (x_r v_r - ⟨xv⟩)
-//! and r (x_r² - ⟨x²⟩); the one rule, [`NoiseAtReset::Kept`] with x kept, adds
-//! none). It reads u' = A u + b with A lower triangular and constant, u(0) = 0,
+//! and r (x_r² - ⟨x²⟩); the rules here keep x and add none). A rule that
+//! re-draws η ([`crate::model::reset::NoiseAtReset::Redrawn`]) changes only the equations of the
+//! η-weighted moments: f(x, v_r, ±Σ) averages to 0 for f = xη and vη, so the
+//! reset term of <xη> is -r <xη> (that of <vη> is -r <vη> either way, as
+//! <η> = 0). It reads u' = A u + b with A lower triangular and constant, u(0) = 0,
 //! so u(t) = ∫_0^t e^{As} b ds exactly.
 //!
 //! Evaluation (our choice): the diagonal of A holds rates that coincide at
@@ -39,9 +42,9 @@
 //! accurate to a few ulp per substep (measured: 1e-14 relative against the
 //! small-t expansion and the explicit `<v²>`, see the tests).
 
-use super::linear::v_eta;
+use super::linear::{eta_decay, v_eta};
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::reset::Reset;
 use crate::model::Params;
 
 const N: usize = 7;
@@ -78,10 +81,8 @@ type Mat = [[f64; N]; N];
 /// A and b of u' = A u + b (rows: the moment equations above).
 fn system(p: &Params) -> Result<(Mat, [f64; N])> {
     v_eta(p)?; // refuses other drag laws
-    match p.reset().noise() {
-        NoiseAtReset::Kept => {}
-    }
     let (l, r, s2) = (p.lambda(), p.rate(), p.sigma() * p.sigma());
+    let eta_decay = eta_decay(p);
     let (m1, m2) = p.reset().target().moments();
     let mut a = [[0.0; N]; N];
     a[V][V] = -(1.0 + r);
@@ -90,7 +91,7 @@ fn system(p: &Params) -> Result<(Mat, [f64; N])> {
     a[V2][V2] = -(2.0 + r);
     a[X][V] = 1.0;
     a[XE][VE] = 1.0;
-    a[XE][XE] = -2.0 * l;
+    a[XE][XE] = -eta_decay;
     a[XV][V2] = 1.0;
     a[XV][XE] = 1.0;
     a[XV][XV] = -(1.0 + r);

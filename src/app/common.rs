@@ -1,5 +1,6 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
+use crate::model::reset::{spec as reset_spec, NoiseAtReset, Target};
 use crate::model::Drag;
 use crate::{DragLaw, Params};
 use clap::Args;
@@ -43,6 +44,18 @@ pub struct ModelArgs {
     /// Reset velocity v_r.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub reset_velocity: f64,
+    /// The noise state at a reset: kept (the paper's protocol) or redrawn
+    /// (±Sigma with probability 1/2 each) [default: kept].
+    #[arg(long, value_name = "kept|redrawn")]
+    pub reset_noise: Option<String>,
+    /// Where a reset sends the velocity, as a spec (instead of
+    /// --reset-velocity): point:v=V, gauss:mean=M,std=S (a Gaussian
+    /// truncated to the velocity interval, M inside it, S > 0) or
+    /// uniform:a=A,b=B (inside the interval, A < B); optionally
+    /// ,noise=kept|redrawn. A random target runs everywhere except
+    /// mfpt distribution and mfpt optimize, which refuse it.
+    #[arg(long, value_name = "SPEC", conflicts_with = "reset_velocity")]
+    pub reset_to: Option<String>,
 }
 
 /// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
@@ -105,10 +118,48 @@ fn parse_drag(s: &str) -> Result<DragLaw, String> {
 }
 
 impl ModelArgs {
-    /// Validate into [`Params`].
+    /// Validate into [`Params`]: the paper's protocol (point target
+    /// `--reset-velocity`, noise kept) unless `--reset-to` or
+    /// `--reset-noise` names another.
     pub fn params(&self) -> crate::Result<Params> {
-        self.noise
-            .params(self.rate.unwrap_or(DEFAULT_RATE), self.reset_velocity)
+        let base = self
+            .noise
+            .params(self.rate.unwrap_or(DEFAULT_RATE), self.reset_velocity)?;
+        let flag = match &self.reset_noise {
+            Some(s) => Some(s.parse::<NoiseAtReset>()?),
+            None => None,
+        };
+        let (target, in_spec) = match &self.reset_to {
+            Some(s) => reset_spec::parse(s)?,
+            None if flag.is_none() => return Ok(base),
+            None => (Target::Point(self.reset_velocity), None),
+        };
+        let noise = match (flag, in_spec) {
+            (Some(a), Some(b)) if a != b => {
+                return Err(crate::Error::invalid(
+                    "reset_noise",
+                    a.name(),
+                    format!(
+                        "the noise rule of --reset-to ({}), or no --reset-noise",
+                        b.name()
+                    ),
+                ))
+            }
+            (a, b) => a.or(b).unwrap_or(NoiseAtReset::Kept),
+        };
+        base.with_reset(target, noise).map_err(|e| match e {
+            // A target out of range that --reset-to typed is blamed on it.
+            crate::Error::InvalidParameter {
+                name: "reset_velocity",
+                value,
+                allowed,
+            } if self.reset_to.is_some() => crate::Error::InvalidParameter {
+                name: "reset_to",
+                value,
+                allowed,
+            },
+            e => e,
+        })
     }
 }
 

@@ -157,9 +157,16 @@ impl DistributionArgs {
             256.0,
             vec!["cells"],
         ))?;
-        let tau = backward::solve(&problem, &BackwardOptions::with_cells(1000))
-            .map(|s| s.tau)
-            .unwrap_or(f64::INFINITY);
+        // tau sets the default t-max; a protocol the backward equations
+        // refuse is an error of the backward method, and leaves the exact
+        // one without a default.
+        let tau = match backward::solve(&problem, &BackwardOptions::with_cells(1000)) {
+            Ok(s) => s.tau,
+            Err(e @ Error::InvalidParameter { .. }) if self.method == DistMethod::Backward => {
+                return Err(e)
+            }
+            Err(_) => f64::INFINITY,
+        };
         let factor = match self.method {
             DistMethod::Backward => 10.0,
             DistMethod::Exact => 100.0,
@@ -171,7 +178,7 @@ impl DistributionArgs {
                 return Err(Error::invalid(
                     "--t-max",
                     "missing",
-                    "a time > 0 (tau overflows)",
+                    "a time > 0 (no backward estimate of tau to scale it: tau overflows, or the reset target is random)",
                 ))
             }
         };

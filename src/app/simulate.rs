@@ -444,7 +444,9 @@ fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> Strin
         fmt_sig(p.lambda()),
         fmt_sig(p.rate()),
         fmt_sig(p.reset_velocity())
-    );
+    ) + &p
+        .reset_spec()
+        .map_or(String::new(), |s| format!(", reset {s}"));
     let (burn_in, t_max) = (fmt_sig(a.burn_in), fmt_sig(s.t_max));
     let mut text = match &c.euler {
         Some(e) => format!(

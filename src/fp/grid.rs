@@ -7,6 +7,7 @@
 //! (see [`edge_drift`]).
 
 use crate::error::{Error, Result};
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::{Drag, DragLaw, Params};
 use serde::{Deserialize, Serialize};
 
@@ -71,11 +72,59 @@ pub(crate) struct Grid {
     pub reset_minus: usize,
     /// Grading exponent q (1 for a uniform mesh).
     pub grading: f64,
+    /// What a reset does to the noise state: the reset outflux of the two
+    /// states re-enters the target cells through [`Grid::reinject`].
+    pub noise: NoiseAtReset,
+    /// A random target's cell masses (sum 1), where reset mass re-enters
+    /// spread over the mesh; None for a point target (the cells
+    /// `reset_plus`, `reset_minus`).
+    pub spread: Option<Vec<f64>>,
 }
 
 impl Grid {
     pub fn cells(&self) -> usize {
         self.widths.len()
+    }
+
+    /// Reset influx into the (+, -) target cells from the reset outflux
+    /// (a, b) of the (+, -) states ([`NoiseAtReset::mix`]).
+    #[inline]
+    pub fn reinject(&self, a: f64, b: f64) -> (f64, f64) {
+        self.noise.mix(a, b)
+    }
+
+    /// Add the reset influx (ip, im) of the (+, -) states to `b`: into the
+    /// target cells of a point target, spread by the target's cell masses
+    /// for a random one.
+    pub fn add_reset(&self, b: &mut [[f64; 2]], ip: f64, im: f64) {
+        match &self.spread {
+            None => {
+                b[self.reset_plus][0] += ip;
+                b[self.reset_minus][1] += im;
+            }
+            Some(q) => {
+                for (c, &w) in b.iter_mut().zip(q) {
+                    c[0] += ip * w;
+                    c[1] += im * w;
+                }
+            }
+        }
+    }
+
+    /// [`Grid::add_reset`] on flat interleaved cell values (m+_0, m-_0, ...).
+    pub fn add_reset_flat(&self, b: &mut [f64], ip: f64, im: f64) {
+        match &self.spread {
+            None => {
+                b[2 * self.reset_plus] += ip;
+                b[2 * self.reset_minus + 1] += im;
+            }
+            Some(q) => {
+                for (c, &w) in b.chunks_exact_mut(2).zip(q) {
+                    c[0] += ip * w;
+                    c[1] += im * w;
+                }
+            }
+        }
     }
 
     /// Uniform mesh of `n` cells. Reset target: the cell containing v_r; if v_r
@@ -201,6 +250,7 @@ impl Grid {
         let out_minus = (0..n)
             .map(|i| if i == 0 { 0.0 } else { minus(i) / widths[i] })
             .collect();
+        let spread = spread(p, &edges);
         Grid {
             edges,
             widths,
@@ -210,8 +260,23 @@ impl Grid {
             reset_plus,
             reset_minus,
             grading,
+            noise: p.reset().noise(),
+            spread,
         }
     }
+}
+
+/// The cell masses of a random reset target on the mesh with `edges`
+/// (normalised to sum 1); None for a point target.
+fn spread(p: &Params, edges: &[f64]) -> Option<Vec<f64>> {
+    let t = p.reset().target();
+    if p.reset().point().is_some() {
+        return None;
+    }
+    let mut q: Vec<f64> = edges.windows(2).map(|e| t.mass(e[0], e[1])).collect();
+    let total: f64 = q.iter().sum();
+    q.iter_mut().for_each(|x| *x /= total);
+    Some(q)
 }
 
 /// Cells of a uniform mesh that receive + and - mass placed at velocity w:
@@ -237,7 +302,13 @@ fn half_maps(p: &Params) -> (HalfMap, HalfMap) {
     let q = grading_exponent(p);
     let (s, gr) = (p.sigma(), p.drag().force(vr));
     let rate = p.lambda() + p.rate();
-    let r_on = if p.rate() > 0.0 { rate } else { 0.0 };
+    // Cells cluster at a point target (the density's cusp); a random
+    // target's smooth injection needs no clustering.
+    let r_on = if p.rate() > 0.0 && p.reset().point().is_some() {
+        rate
+    } else {
+        0.0
+    };
     (
         HalfMap::new(vr - vl, q, s + gr, r_on),
         HalfMap::new(vu - vr, q, s - gr, r_on),

@@ -171,8 +171,9 @@ fn observe(v: &[f64], u: &[f64]) -> [f64; 6] {
 }
 
 fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
+    // Either noise rule: A re-injects the M_k like the density, x kept.
     match params.reset().noise() {
-        NoiseAtReset::Kept => {}
+        NoiseAtReset::Kept | NoiseAtReset::Redrawn => {}
     }
     if !(1..=MAX_LEVELS).contains(&o.levels) {
         return Err(Error::invalid(

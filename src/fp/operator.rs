@@ -13,8 +13,11 @@
 //! Shifted solves (I - cA) x = b are done without subtractions where the
 //! signs allow it: I - cA = -c (B' + R) with B' = B - I/c, which is B with the
 //! loss rate r + 1/c, solved by the block-Thomas factorisation of
-//! [`super::solve`]; R = E Fᵀ has rank 2 (E: the two target unit vectors,
-//! F = r (1+, 1-): the state sums) and is added by the
+//! [`super::solve`]; R = E Fᵀ has rank ≤ 2 (E: unit mass in the target
+//! cell of each state, or spread by a random target's cell masses,
+//! Fᵀ = r W (1+, 1-)ᵀ: the state sums mixed by the noise rule, W = I when the
+//! state is kept, all entries ½ when it is re-drawn; W's columns sum to 1)
+//! and is added by the
 //! Sherman-Morrison-Woodbury formula
 //!   (B' + E Fᵀ)^{-1} y = w - Z S^{-1} Fᵀ w,  w = B'^{-1} y, Z = B'^{-1} E,
 //!   S = I + Fᵀ Z (2×2).
@@ -178,8 +181,8 @@ impl ForwardOperator {
             out[2 * i] = left - (al[i] + l + r) * p + l * m;
             out[2 * i + 1] = l * p - (be[i] + l + r) * m + right;
         }
-        out[2 * g.reset_plus] += r * up;
-        out[2 * g.reset_minus + 1] += r * um;
+        let (ip, im) = g.reinject(r * up, r * um);
+        g.add_reset_flat(out, ip, im);
     }
 
     /// Solve (I - cA) x = b for c > 0, caching the factorisation of the last
@@ -208,7 +211,8 @@ impl ForwardOperator {
         let y: Vec<f64> = b.iter().map(|&bi| -bi / c).collect();
         s.factor.solve(g, &y, x);
         let (fp, fm) = state_sums(x);
-        let f = [self.rate * fp, self.rate * fm];
+        let (f0, f1) = g.reinject(self.rate * fp, self.rate * fm);
+        let f = [f0, f1];
         let a = [
             s.s_inv[0][0] * f[0] + s.s_inv[0][1] * f[1],
             s.s_inv[1][0] * f[0] + s.s_inv[1][1] * f[1],
@@ -228,21 +232,24 @@ impl ForwardOperator {
         let g = &self.grid;
         let loss = self.rate + 1.0 / c;
         let factor = ResetFactor::new(g, self.lambda, loss);
-        let unit = |k: usize| {
+        // E's columns: unit mass re-entering in the + and in the - state.
+        let unit = |ip: f64, im: f64| {
             let mut e = vec![0.0; self.dim()];
-            e[k] = 1.0;
+            g.add_reset_flat(&mut e, ip, im);
             let mut z = vec![0.0; self.dim()];
             factor.solve(g, &e, &mut z);
             z
         };
-        let z = [unit(2 * g.reset_plus), unit(2 * g.reset_minus + 1)];
-        // Column k of S: s on the sum; the off-diagonal is r Σ Z_k over the
-        // other state (≤ 0), the diagonal s + |off-diagonal|.
+        let z = [unit(1.0, 0.0), unit(0.0, 1.0)];
+        // Column k of S: s on the sum; the off-diagonal is the re-injection
+        // into the other state of r Σ Z_k (≤ 0), the diagonal
+        // s + |off-diagonal|.
         let s = 1.0 / (1.0 + self.rate * c);
-        let off = [
-            self.rate * state_sums(&z[0]).1,
-            self.rate * state_sums(&z[1]).0,
-        ];
+        let inject = |z: &[f64]| {
+            let (a, b) = state_sums(z);
+            g.reinject(self.rate * a, self.rate * b)
+        };
+        let off = [inject(&z[0]).1, inject(&z[1]).0];
         let (s00, s11) = (s - off[0], s - off[1]);
         let det = s * s - s * (off[0] + off[1]);
         let s_inv = [[s11 / det, -off[1] / det], [-off[0] / det, s00 / det]];

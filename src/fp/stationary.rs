@@ -3,6 +3,7 @@
 use super::grid::{Grid, Mesh};
 use super::solve::{solve_free, solve_reset};
 use crate::error::{Error, Result};
+use crate::model::reset::NoiseAtReset;
 use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
@@ -135,10 +136,11 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
     let n = g.cells();
     let mut m = if r > 0.0 {
         // Flips conserve the state masses' sum and equalise them: M± = 1/2
-        // (for λ = 0 the symmetric choice), so the reset influx is r/2 per state.
+        // (for λ = 0 the symmetric choice), so the reset influx is r/2 per
+        // state, the noise state kept or re-drawn.
         let mut b = vec![[0.0; 2]; n];
-        b[g.reset_plus][0] -= 0.5 * r;
-        b[g.reset_minus][1] -= 0.5 * r;
+        let (ip, im) = g.reinject(0.5 * r, 0.5 * r);
+        g.add_reset(&mut b, -ip, -im);
         solve_reset(g, lambda, r, &b)
     } else {
         solve_free(g, lambda, &vec![[0.0; 2]; n], 1.0)
@@ -163,9 +165,12 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
 /// generator, Q = Bᵀ + reset re-injection), the exact Green-Kubo integral of
 /// the discrete process. Computed through the dual problem Qᵀ y = -(π∘f),
 /// D = Σ f y, which uses the forward solvers. Summing the + rows of
-/// Qᵀ y = -(π∘f) gives λ (Y+ - Y-) = F+ := Σ π+ f; we pick Y± = ±F+/(2λ)
-/// (the free null-space component cπ does not change Σ f y since Σ π f = 0),
-/// so By = -(π∘f) - r Y+ e_{k+} - r Y- e_{k-}.
+/// Qᵀ y = -(π∘f) with Y- = -Y+ gives κ Y+ = F+ := Σ π+ f, κ = 2λ when a
+/// reset keeps the noise state (the re-injection r Y+ returns to the +
+/// rows), κ = 2λ + r when it re-draws it (the re-injection r (Y+ + Y-)/2
+/// vanishes); so Y± = ±F+/κ (the free null-space component cπ does not
+/// change Σ f y since Σ π f = 0), and By = -(π∘f) - (re-injection of
+/// r Y+, r Y- into e_{k+}, e_{k-}).
 pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
     let (lambda, r) = (p.lambda(), p.rate());
     let n = g.cells();
@@ -187,9 +192,13 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
             .collect();
         let y = if r > 0.0 {
             let fp: f64 = m.iter().zip(&f).map(|(c, &fi)| c[0] * fi).sum();
-            let yp = fp / (2.0 * lambda);
-            b[g.reset_plus][0] -= r * yp;
-            b[g.reset_minus][1] += r * yp;
+            let kappa = match g.noise {
+                NoiseAtReset::Kept => 2.0 * lambda,
+                NoiseAtReset::Redrawn => 2.0 * lambda + r,
+            };
+            let yp = fp / kappa;
+            let (ip, im) = g.reinject(r * yp, -(r * yp));
+            g.add_reset(&mut b, -ip, -im);
             solve_reset(g, lambda, r, &b)
         } else {
             solve_free(g, lambda, &b, 0.0)

@@ -698,8 +698,8 @@ fn step(g: &Grid, lambda: f64, r: f64, h: f64, m: &[[f64; 2]], next: &mut [[f64;
         next[i] = [mp - op - rp + fl + in_p, mm - om - rm - fl + in_m];
         in_p = op;
     }
-    next[g.reset_plus][0] += reset_p;
-    next[g.reset_minus][1] += reset_m;
+    let (ip, im) = g.reinject(reset_p, reset_m);
+    g.add_reset(next, ip, im);
     let total: f64 = next.iter().map(|c| c[0] + c[1]).sum();
     (total - 1.0).abs()
 }

@@ -21,6 +21,7 @@
 
 use super::Problem;
 use crate::error::{Error, Result};
+use crate::model::reset::{Reset, Target};
 use crate::model::Drag;
 use serde::{Deserialize, Serialize};
 
@@ -122,14 +123,34 @@ pub(super) struct Mesh {
     pub(super) v: Vec<f64>,
     /// Index of v_0.
     pub(super) start: usize,
-    /// Index of v_r.
+    /// Index of v_r (of v_0 for a random target, unused then).
     pub(super) reset: usize,
+    /// A random target's node weights w_j: the reset value of state s is
+    /// Σ_j w_j x_s(v_j) (half of the target's mass in each cell adjacent
+    /// to the node; the mass beyond v_t, where a reset is the passage,
+    /// weighs x = 0); None for a point target (the node `reset`).
+    pub(super) weights: Option<Vec<f64>>,
 }
 
+/// The mesh of a point-target problem; a random target is refused, naming
+/// the methods (the time-dependent, moment and rate-derivative solvers
+/// take the reset value at one node).
 pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
+    p.params().point_target(
+        "mfpt distribution, mfpt optimize and the backward moments (mfpt --method ode and mfpt scan take it)",
+    )?;
+    mesh_any(p, cells)
+}
+
+/// The mesh of [`profile`]: a point target is a node, a random one gets
+/// node weights ([`Mesh::weights`]).
+fn mesh_any(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
-    let mut cuts = vec![vl, p.v0(), p.params().reset_velocity(), p.vt()];
+    let target = p.params().reset().target();
+    let point = p.params().reset().point();
+    let vr = point.unwrap_or(p.v0());
+    let mut cuts = vec![vl, p.v0(), vr, p.vt()];
     // A jump of g at v = 0 (Coulomb friction) sits on a node, so that every
     // cell's midpoint drift is smooth on the cell (second order kept).
     if p.params().drag().static_friction() > 0.0 && vl < 0.0 && 0.0 < p.vt() {
@@ -183,10 +204,21 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
         }
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
+    let weights = point.is_none().then(|| {
+        let total = target.mass(-vu, vu);
+        let mut w = vec![0.0; v.len()];
+        for (i, c) in v.windows(2).enumerate() {
+            let half = 0.5 * target.mass(c[0], c[1]) / total;
+            w[i] += half;
+            w[i + 1] += half;
+        }
+        w
+    });
     Ok(Mesh {
         start: find(p.v0()),
-        reset: find(p.params().reset_velocity()),
+        reset: find(vr),
         v,
+        weights,
     })
 }
 
@@ -360,6 +392,9 @@ pub(super) struct Assembly {
 pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Assembly {
     let par = &p.params();
     let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
+    // The reset term of state s weighs x±(v_r) by the noise rule's shares
+    // (kept: x_s(v_r) alone; re-drawn: ½ each).
+    let noise = par.reset().noise();
     let nodes = m.v.len();
     let n = 2 * nodes;
     let mut a = Band::new(n, 2, 2);
@@ -368,7 +403,7 @@ pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Ass
     // Row 0: regularity of tau- at v_l.
     a.set(0, 0, -lam);
     a.set(0, 1, lam + rate);
-    cm[0] = -rate;
+    (cp[0], cm[0]) = noise.mix(0.0, -rate);
     for i in 0..nodes - 1 {
         let h = m.v[i + 1] - m.v[i];
         let mid = 0.5 * (m.v[i] + m.v[i + 1]);
@@ -381,12 +416,12 @@ pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Ass
         a.set(rp, pj, ap - hd);
         a.set(rp, mi, hl);
         a.set(rp, mj, hl);
-        cp[rp] = h * rate;
+        (cp[rp], cm[rp]) = noise.mix(h * rate, 0.0);
         a.set(rm, mi, -am - hd);
         a.set(rm, mj, am - hd);
         a.set(rm, pi, hl);
         a.set(rm, pj, hl);
-        cm[rm] = h * rate;
+        (cp[rm], cm[rm]) = noise.mix(0.0, h * rate);
     }
     // Last row: tau+(v_t) = 0.
     a.set(n - 1, n - 2, 1.0);
@@ -436,8 +471,14 @@ fn solve_mesh(
     a.factor()?;
     a.solve(&mut b);
     let mut x = b;
-    if rate > 0.0 && !reset_correction(&a, &mut x, cp, cm, m.reset) {
-        return Ok(None);
+    if rate > 0.0 {
+        let corrected = match &m.weights {
+            None => reset_correction(&a, &mut x, cp, cm, m.reset),
+            Some(w) => spread_correction(&a, &mut x, cp, cm, w),
+        };
+        if !corrected {
+            return Ok(None);
+        }
     }
     let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
     let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
@@ -486,11 +527,43 @@ fn reset_correction(
     true
 }
 
-/// tau±(v) on the whole mesh, in the user's frame.
+/// The reset terms for a random target: as [`reset_correction`], with the
+/// reset values R± = Σ_j w_j x±(v_j) (the dense rank-one term
+/// r (∫ x± q - x±) in bordered form), R from the 2×2 system
+/// R = ℓ(y0) - R+ ℓ(y1) - R- ℓ(y2) solved directly.
+fn spread_correction(
+    a: &Band,
+    x: &mut [f64],
+    mut cp: Vec<f64>,
+    mut cm: Vec<f64>,
+    w: &[f64],
+) -> bool {
+    a.solve(&mut cp);
+    a.solve(&mut cm);
+    let ell = |y: &[f64], s: usize| -> f64 {
+        w.iter().enumerate().map(|(j, wj)| wj * y[2 * j + s]).sum()
+    };
+    let (m11, m12) = (1.0 + ell(&cp, 0), ell(&cm, 0));
+    let (m21, m22) = (ell(&cp, 1), 1.0 + ell(&cm, 1));
+    let (bp, bm) = (ell(x, 0), ell(x, 1));
+    let det = m11 * m22 - m12 * m21;
+    if !(det.abs() > 0.0) || !det.is_finite() {
+        return false;
+    }
+    let rp = (bp * m22 - m12 * bm) / det;
+    let rm = (m11 * bm - m21 * bp) / det;
+    for k in 0..x.len() {
+        x[k] -= rp * cp[k] + rm * cm[k];
+    }
+    true
+}
+
+/// tau±(v) on the whole mesh, in the user's frame (a point or a random
+/// reset target).
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, opts.cells)?;
+    let m = mesh_any(&cp, opts.cells)?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
@@ -528,8 +601,15 @@ pub fn lower_bound(problem: &Problem) -> f64 {
     let p = cp.params();
     let flow = |from: f64| p.drag().flow_time(p.sigma(), from, cp.vt());
     let r = p.rate();
+    // The highest velocity a reset can land on (a random target's top; at
+    // or beyond v_t the reset is the passage: flow time 0).
+    let top = match p.reset().target() {
+        Target::Point(v) => v,
+        Target::Uniform { b, .. } => b,
+        Target::Gaussian { hi, .. } => hi,
+    };
     if r > 0.0 {
-        let t = flow(cp.v0()).min(flow(p.reset_velocity()));
+        let t = flow(cp.v0()).min(flow(top.min(cp.vt())));
         (r * t).exp_m1() / r
     } else {
         flow(cp.v0())
@@ -713,8 +793,10 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
     let (cp, _) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
-    let sp: Vec<f64> = tp.iter().map(|t| tp[m.reset] - t).collect();
-    let sm: Vec<f64> = tm.iter().map(|t| tm[m.reset] - t).collect();
+    // The reset values each state returns to (kept: its own, re-drawn: the mean).
+    let (rp, rm) = cp.params().reset().noise().mix(tp[m.reset], tm[m.reset]);
+    let sp: Vec<f64> = tp.iter().map(|t| rp - t).collect();
+    let sm: Vec<f64> = tm.iter().map(|t| rm - t).collect();
     let (dp, dm) =
         solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
     let i = m.start;
@@ -747,14 +829,15 @@ pub fn fixed_point_upwind(
     let mut change = f64::INFINITY;
     for sweep in 1..=max_sweeps {
         change = 0.0;
-        let rp = tp[m.reset];
+        let noise = par.reset().noise();
+        let rp = noise.mix(tp[m.reset], tm[m.reset]).0;
         for i in (0..n - 1).rev() {
             let c = a[i].0 / (m.v[i + 1] - m.v[i]);
             let new = (c * tp[i + 1] + lam * tm[i] + r * rp + 1.0) / (c + lam + r);
             change = change.max((new - tp[i]).abs());
             tp[i] = new;
         }
-        let rm = tm[m.reset];
+        let rm = noise.mix(tp[m.reset], tm[m.reset]).1;
         for i in 0..n {
             let c = if i == 0 {
                 0.0

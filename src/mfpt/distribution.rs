@@ -186,10 +186,14 @@ fn refine(m: &Mesh) -> Mesh {
         v.extend([w[0], 0.5 * (w[0] + w[1])]);
     }
     v.push(m.v[m.v.len() - 1]);
+    // Point targets only: the coarse mesh comes from `mesh`, which refuses
+    // a random one.
+    debug_assert!(m.weights.is_none());
     Mesh {
         v,
         start: 2 * m.start,
         reset: 2 * m.reset,
+        weights: None,
     }
 }
 

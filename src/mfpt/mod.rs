@@ -39,6 +39,7 @@ pub mod survival;
 mod upwind;
 
 use crate::error::{finite, Error, Result};
+use crate::model::reset::Reset;
 use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
@@ -151,7 +152,10 @@ impl Problem {
                 format!("{vl:.6} < v0 < {vu:.6} and v0 != vt"),
             ));
         }
-        if (up && !(vr < vt)) || (!up && !(vr > vt)) {
+        // A random target may land beyond v_t: that reset is the passage
+        // (the particle methods count it at the reset instant).
+        let point = params.reset().point().is_some();
+        if point && ((up && !(vr < vt)) || (!up && !(vr > vt))) {
             return Err(wrong_side(v0, vt, vr));
         }
         Ok(Problem { params, v0, vt })

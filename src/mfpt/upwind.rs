@@ -12,6 +12,9 @@
 //!
 //! dS_c+/dt = L S_c|+ + r S_a+(v_r, t),   dS_c-/dt = L S_c|- + lambda S_a+(v, t),
 //!
+//! when a reset keeps the noise state; when it re-draws it, the reset of the
+//! atom returns r S_a+(v_r, t)/2 to each state's rows instead,
+//!
 //! from S_c+(v, 0) = 0, S_c-(v, 0) = 1, S_c+(v_t, t) = 0: consistent data,
 //! bounded forcing, a continuous solution (kinks only). The exact S is
 //! S_a + S_c; the atom itself is reported as a point mass, not smeared.
@@ -29,6 +32,7 @@
 
 use super::backward::{Assembly, Band, Mesh};
 use super::Problem;
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Drag;
 use crate::numerics::quad::gk15;
 use crate::numerics::trbdf2::ShiftedLinear;
@@ -58,7 +62,10 @@ pub(super) struct UpwindOperator {
     lam: f64,
     kill: f64,
     rate: f64,
-    /// T_f(v_r): the + forcing r e^{-kill t} is on before it.
+    /// What a reset does to the noise state (shares of the atom's reset
+    /// forcing between the + and - rows).
+    noise: NoiseAtReset,
+    /// T_f(v_r): the reset forcing r e^{-kill t} is on before it.
     t_reset: f64,
     /// Whether the + forcing is on (the side of T_f(v_r) being integrated).
     reset_atom: bool,
@@ -98,6 +105,7 @@ impl UpwindOperator {
             lam: par.lambda(),
             kill: par.lambda() + par.rate(),
             rate: par.rate(),
+            noise: par.reset().noise(),
             t_reset: tf(m.v[m.reset]),
             reset_atom: true,
             ramps: (0..nodes).map(|i| (dual[i + 1], dual[i])).collect(),
@@ -144,11 +152,12 @@ impl UpwindOperator {
     /// The forcing of rows (2i, 2i + 1) = (+, -) of node i at absolute time
     /// t, with decay = e^{-(lambda + r) t}.
     fn forcing_rows(&self, decay: f64, t: f64, i: usize) -> (f64, f64) {
-        let plus = if self.reset_atom && 2 * i + 2 < self.n {
-            self.rate * decay
+        let (plus, minus) = if self.reset_atom {
+            self.noise.mix(self.rate * decay, 0.0)
         } else {
-            0.0
+            (0.0, 0.0)
         };
+        let plus = if 2 * i + 2 < self.n { plus } else { 0.0 };
         let (up, lo) = self.ramps[i];
         let frac = if t <= up {
             1.0
@@ -157,7 +166,7 @@ impl UpwindOperator {
         } else {
             (lo - t) / (lo - up)
         };
-        (plus, self.lam * decay * frac)
+        (plus, self.lam * decay * frac + minus)
     }
 
     /// Row i of A s (band and the two reset columns).
@@ -215,9 +224,11 @@ impl UpwindOperator {
         let (mut f1, mut f2) = (vec![0.0; self.n], vec![0.0; self.n]);
         let (r0, r1) = exp_moments(k, self.t_reset);
         for (i, &(up, lo)) in self.ramps.iter().enumerate() {
+            let (p0, m0) = self.noise.mix(self.rate * r0, 0.0);
+            let (p1, m1) = self.noise.mix(self.rate * r1, 0.0);
             if 2 * i + 2 < self.n {
-                f1[2 * i] = self.rate * r0;
-                f2[2 * i] = self.rate * r1;
+                f1[2 * i] = p0;
+                f2[2 * i] = p1;
             }
             let (a0, a1) = exp_moments(k, up);
             let ramp = |m: usize| {
@@ -228,8 +239,8 @@ impl UpwindOperator {
                     0.0
                 }
             };
-            f1[2 * i + 1] = self.lam * (a0 + ramp(0));
-            f2[2 * i + 1] = self.lam * (a1 + ramp(1));
+            f1[2 * i + 1] = self.lam * (a0 + ramp(0)) + m0;
+            f2[2 * i + 1] = self.lam * (a1 + ramp(1)) + m1;
         }
         (f1, f2)
     }
@@ -304,6 +315,7 @@ fn node_forces<D: Drag>(g: D, v: f64) -> (f64, f64) {
 fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
     let par = cp.params();
     let (g, sigma, lam, rate) = (par.drag(), par.sigma(), par.lambda(), par.rate());
+    let noise = par.reset().noise();
     let nodes = m.v.len();
     let n = 2 * nodes;
     let mut a = Band::new(n, 2, 2);
@@ -318,7 +330,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
             a.set(p, p + 2, w);
             a.set(p, p, -w - lam - rate);
             a.set(p, q, lam);
-            bp[p] = rate;
+            (bp[p], bm[p]) = noise.mix(rate, 0.0);
         } else {
             a.set(p, p, -1.0);
         }
@@ -333,7 +345,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         }
         a.set(q, q, -w - lam - rate);
         a.set(q, p, lam);
-        bm[q] = rate;
+        (bp[q], bm[q]) = noise.mix(0.0, rate);
     }
     Assembly {
         band: a,

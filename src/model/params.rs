@@ -1,7 +1,10 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
-use super::reset::{NoiseAtReset, PoissonReset, Reset, ResetRule, Target};
+use super::reset::{
+    spec, GaussianReset, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule, Target,
+    UniformReset,
+};
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -21,7 +24,7 @@ pub struct Params {
 }
 
 /// Unvalidated mirror of [`Params`] used for (de)serialisation.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RawParams {
     /// Drag law.
     pub drag: DragLaw,
@@ -34,12 +37,23 @@ pub struct RawParams {
     /// Reset velocity v_r.
     #[serde(default)]
     pub reset_velocity: f64,
+    /// The resetting protocol as a reset spec (`point:v=0.2,noise=redrawn`),
+    /// absent for the paper's (point target v_r, noise kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset: Option<String>,
 }
 
 impl TryFrom<RawParams> for Params {
     type Error = Error;
     fn try_from(r: RawParams) -> Result<Self> {
-        Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)
+        let p = Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)?;
+        match r.reset {
+            None => Ok(p),
+            Some(s) => {
+                let (target, noise) = spec::parse(&s)?;
+                p.with_reset(target, noise.unwrap_or(NoiseAtReset::Kept))
+            }
+        }
     }
 }
 
@@ -51,6 +65,7 @@ impl From<Params> for RawParams {
             lambda: p.lambda,
             rate: p.rate(),
             reset_velocity: p.reset_velocity(),
+            reset: p.reset_spec(),
         }
     }
 }
@@ -119,37 +134,129 @@ impl Params {
         })
     }
 
-    /// Same parameters with another reset rate (validated).
+    /// Same parameters with another reset rate (validated), the rest of the
+    /// resetting rule kept.
     pub fn with_rate(&self, rate: f64) -> Result<Self> {
-        Params::new(
+        let base = Params::new(
             self.drag,
             self.sigma,
             self.lambda,
             rate,
             self.reset_velocity(),
-        )
+        )?;
+        Ok(Params {
+            reset: self.reset.with_rate(base.rate()),
+            ..base
+        })
     }
 
     /// Same parameters with another flip rate (validated).
     pub fn with_lambda(&self, lambda: f64) -> Result<Self> {
-        Params::new(
+        let base = Params::new(
             self.drag,
             self.sigma,
             lambda,
             self.rate(),
             self.reset_velocity(),
-        )
+        )?;
+        Ok(Params {
+            reset: self.reset,
+            ..base
+        })
     }
 
-    /// Same parameters with another reset velocity (validated).
+    /// Same parameters with another reset velocity (validated), the noise
+    /// rule kept.
     pub fn with_reset_velocity(&self, reset_velocity: f64) -> Result<Self> {
+        self.point_target("another reset velocity")?;
         Params::new(
             self.drag,
             self.sigma,
             self.lambda,
             self.rate(),
             reset_velocity,
-        )
+        )?
+        .with_reset(Target::Point(reset_velocity), self.reset.noise())
+    }
+
+    /// Same parameters and rate with another resetting protocol: the target
+    /// (validated against the velocity interval) and what a reset does to
+    /// the noise state. The pair picks the rule of [`crate::model::reset`].
+    pub fn with_reset(&self, target: Target, noise: NoiseAtReset) -> Result<Self> {
+        let rate = self.rate();
+        let vu = self.v_upper();
+        let written = || spec::write(&target, noise);
+        let reset = match target {
+            Target::Point(v) => {
+                let base = Params::new(self.drag, self.sigma, self.lambda, rate, v)?;
+                match noise {
+                    NoiseAtReset::Kept => return Ok(base),
+                    NoiseAtReset::Redrawn => ResetRule::Redrawn(RedrawnReset {
+                        rate,
+                        velocity: base.reset_velocity(),
+                    }),
+                }
+            }
+            Target::Gaussian { mean, std, .. } => {
+                if !(mean > -vu && mean < vu) {
+                    return Err(Error::invalid(
+                        "reset_to",
+                        written(),
+                        format!("-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the Gaussian is truncated)"),
+                    ));
+                }
+                if !(std > 0.0 && std.is_finite()) {
+                    return Err(Error::invalid("reset_to", written(), "std > 0, finite"));
+                }
+                ResetRule::Gauss(GaussianReset {
+                    rate,
+                    mean,
+                    std,
+                    bound: vu,
+                    noise,
+                })
+            }
+            Target::Uniform { a, b } => {
+                if !(a > -vu && a < b && b < vu) {
+                    return Err(Error::invalid(
+                        "reset_to",
+                        written(),
+                        format!("-{vu:.6} < a < b < {vu:.6} (inside the open velocity interval)"),
+                    ));
+                }
+                ResetRule::Uniform(UniformReset { rate, a, b, noise })
+            }
+        };
+        Ok(Params { reset, ..*self })
+    }
+
+    /// The point target v_r, or an error naming `method` and the rule for a
+    /// random target (a method that needs a point target refuses the
+    /// others through it, never treating them as a point).
+    pub fn point_target(&self, method: &str) -> Result<f64> {
+        match self.reset.target() {
+            Target::Point(v) => Ok(v),
+            Target::Gaussian { .. } | Target::Uniform { .. } => Err(Error::invalid(
+                "reset_to",
+                spec::write(&self.reset.target(), self.reset.noise()),
+                format!(
+                    "a point target (point:v=V) for {method}: the {} rule's random target is \
+                     run by the particle methods, the Fokker-Planck solvers, mfpt --method ode, \
+                     mfpt scan and the linear closed forms",
+                    self.reset.name()
+                ),
+            )),
+        }
+    }
+
+    /// The canonical reset spec (`point:v=0.2,noise=redrawn`), None for the
+    /// paper's protocol (point target, noise kept), which provenance files
+    /// record by `rate` and `reset_velocity` alone.
+    pub fn reset_spec(&self) -> Option<String> {
+        match self.reset {
+            ResetRule::Poisson(_) => None,
+            _ => Some(spec::write(&self.reset.target(), self.reset.noise())),
+        }
     }
 
     /// Drag law.
@@ -170,14 +277,20 @@ impl Params {
     }
     /// Reset velocity v_r.
     ///
-    /// The point target of a resetting rule that keeps the noise state. The
-    /// methods that assume both (the FP mesh's reset cell, the backward
-    /// equations' reset term) read it here: a rule with another kind of
-    /// target or noise handling extends this exhaustive match, and each such
-    /// method must then handle it or refuse it.
+    /// The point target of the resetting rule. The methods that assume a
+    /// point target (the FP mesh's reset cell, the backward equations' reset
+    /// term) read it here and the noise rule through the exhaustive
+    /// [`NoiseAtReset::mix`]: a rule with another kind of target extends
+    /// this exhaustive match, and each such method must then handle it or
+    /// refuse it.
+    ///
+    /// For a random target: its centre ([`Target::centre`]), where meshes
+    /// put a node; the methods that need a point target take it from
+    /// [`Params::point_target`] instead, which refuses random targets.
     pub fn reset_velocity(&self) -> f64 {
-        match (self.reset.target(), self.reset.noise()) {
-            (Target::Point(v), NoiseAtReset::Kept) => v,
+        match self.reset.target() {
+            Target::Point(v) => v,
+            t @ (Target::Gaussian { .. } | Target::Uniform { .. }) => t.centre(),
         }
     }
 

@@ -85,7 +85,7 @@ pub fn write<L: ParamLaw>(law: &L) -> String {
 /// A value in the shortest form that parses back to it: `0.5`, `1`,
 /// `1e-7`, `3.5e200` (the shorter of the plain and the exponent form, the
 /// plain one on a tie).
-fn number(x: f64) -> String {
+pub(crate) fn number(x: f64) -> String {
     let (plain, exp) = (format!("{x}"), format!("{x:e}"));
     if exp.len() < plain.len() {
         exp

@@ -12,6 +12,9 @@ macro_rules! reset_rules {
     ($cb:ident ($($args:tt)*)) => {
         $crate::$cb! { ($($args)*)
             Poisson => PoissonReset,
+            Redrawn => RedrawnReset,
+            Gauss => GaussianReset,
+            Uniform => UniformReset,
         }
     };
 }
