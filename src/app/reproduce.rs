@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// same command skips the figures already finished.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
-    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7 fpt (first-passage-time densities, beyond the paper), or all.
+    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, fpt (first-passage-time densities, beyond the paper), media (every drag law: Figs. 2 and 7 questions, beyond the paper), or all.
     #[arg(required = true, value_parser = parse_figure)]
     pub figures: Vec<Selection>,
     /// Output directory.
@@ -44,9 +44,9 @@ fn parse_figure(s: &str) -> Result<Selection, String> {
     if s == "all" {
         return Ok(Selection::All);
     }
-    s.parse::<Which>()
-        .map(Selection::One)
-        .map_err(|_| "expected one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, all".to_string())
+    s.parse::<Which>().map(Selection::One).map_err(|_| {
+        "expected one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, all".to_string()
+    })
 }
 
 impl ReproduceArgs {

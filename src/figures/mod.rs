@@ -21,6 +21,7 @@ pub mod fig5;
 pub mod fig6;
 pub mod fig7;
 pub mod fpt;
+pub mod media;
 pub mod plot;
 pub mod store;
 
@@ -47,11 +48,13 @@ pub enum Which {
     Fig7,
     /// Beyond the paper: first-passage-time densities.
     Fpt,
+    /// Beyond the paper: the questions of Figs. 2 and 7 in every medium.
+    Media,
 }
 
 impl Which {
     /// Every reproduced figure, in paper order.
-    pub const ALL: [Which; 7] = [
+    pub const ALL: [Which; 8] = [
         Which::Fig1,
         Which::Fig2,
         Which::Fig3,
@@ -59,6 +62,7 @@ impl Which {
         Which::Fig6,
         Which::Fig7,
         Which::Fpt,
+        Which::Media,
     ];
     /// File stem ("fig1", ...).
     pub fn name(self) -> &'static str {
@@ -70,6 +74,7 @@ impl Which {
             Which::Fig6 => "fig6",
             Which::Fig7 => "fig7",
             Which::Fpt => "fpt",
+            Which::Media => "media",
         }
     }
 }
@@ -84,7 +89,7 @@ impl FromStr for Which {
                 Error::invalid(
                     "figure",
                     s,
-                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, all",
+                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, all",
                 )
             })
     }
@@ -248,6 +253,7 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
         Which::Fig6 => fig6::run(opts, progress)?,
         Which::Fig7 => fig7::run(opts, progress)?,
         Which::Fpt => fpt::run(opts, progress)?,
+        Which::Media => media::run(opts, progress)?,
     };
     out.wall_time_s = t0.elapsed().as_secs_f64();
     progress.update(SCALE, SCALE);
