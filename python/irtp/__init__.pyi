@@ -506,7 +506,7 @@ def mfpt_distribution(
     threads: Optional[int] = ...,
 ) -> MfptDistributionResult: ...
 def reproduce(
-    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "all"],
+    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media", "all"],
     out: PathLike,
     force: bool = ...,
     quick: bool = ...,
