@@ -77,7 +77,9 @@ fn reproduce_all_quick() {
     );
     eprintln!("reproduce all --quick: {:.1} s", t0.elapsed().as_secs_f64());
 
-    for f in ["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media"] {
+    for f in [
+        "fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media",
+    ] {
         let csv = std::fs::read_to_string(out.join(format!("{f}.csv"))).unwrap();
         assert!(
             csv.starts_with("panel,series,source,style,x,y,y_err\n"),
