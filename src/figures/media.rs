@@ -223,7 +223,10 @@ fn rate_curve(
 }
 
 /// Densities at `density_rates` and the r = 0 check.
-fn densities(spec: &Spec, m: &Medium) -> Result<(Vec<(Vec<f64>, Vec<f64>)>, f64)> {
+/// A density curve: (v / v_u, v_u P_s).
+type Curve = (Vec<f64>, Vec<f64>);
+
+fn densities(spec: &Spec, m: &Medium) -> Result<(Vec<Curve>, f64)> {
     let mut out = Vec::new();
     let mut r0_error = 0.0f64;
     for &r in &spec.density_rates {
