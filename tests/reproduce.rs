@@ -54,7 +54,7 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
         "media" => &[
             "exact sampler, ",
             "backward equations / Fokker-Planck",
-            "dτ/dr(0) < 0",
+            "dτ/dr(0) negative",
         ],
         _ => &[],
     }

@@ -315,7 +315,7 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
     let mut fig = Figure::new(
         "media",
         format!(
-            "Every medium: v₀ = {} vᵤ → vₜ = {} vᵤ, v_r = 0",
+            "Every medium: v₀ = {} vᵤ → vₜ = {} vᵤ, v_{{r}} = 0",
             spec.v0_fraction, spec.vt_fraction
         ),
         3,
@@ -338,7 +338,7 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
             label(0),
             title(spec, mi),
             Axis::log("r"),
-            Axis::log("τ_r / τ_0"),
+            Axis::log("τ_{r} / τ_{0}"),
         );
         tau.legend_title = Some("λ =".into());
         for (li, c) in res.curves.iter().enumerate() {
@@ -369,7 +369,7 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
             label(1),
             format!("λ = {}", fmt_num(spec.density_lambda)),
             Axis::linear("v / vᵤ"),
-            Axis::log("vᵤ P_s"),
+            Axis::log("vᵤ P_{s}"),
         );
         dens.legend_title = Some("r =".into());
         for (ri, (x, y)) in res.densities.iter().enumerate() {
@@ -388,7 +388,8 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
             Axis::log("λ"),
             Axis::linear("vₜ / vᵤ"),
         );
-        for (helps, color, text) in [(true, 0, "dτ/dr(0) < 0"), (false, 1, "dτ/dr(0) ≥ 0")] {
+        for (helps, color, text) in [(true, 0, "dτ/dr(0) negative"), (false, 1, "dτ/dr(0) ≥ 0")]
+        {
             let pts: Vec<&(f64, f64, f64)> =
                 res.map.iter().filter(|p| (p.2 < 0.0) == helps).collect();
             let x: Vec<f64> = pts.iter().map(|p| p.0).collect();
