@@ -36,10 +36,12 @@
 
 use crate::error::{Error, Result};
 use crate::model::reset::NoiseAtReset;
+use crate::model::reset::Solver;
 use crate::model::Reset;
 use crate::model::{DragLaw, Params};
 
 fn require_linear(p: &Params) -> Result<()> {
+    p.require(Solver::ClosedForm)?;
     if p.drag() != DragLaw::Linear {
         return Err(Error::invalid(
             "drag",

@@ -45,6 +45,7 @@
 use super::linear::{eta_decay, v_eta};
 use crate::error::{finite, Error, Result};
 use crate::model::reset::Reset;
+use crate::model::reset::Solver;
 use crate::model::Params;
 
 const N: usize = 7;
@@ -151,6 +152,7 @@ fn propagator(a: &Mat, b: &[f64; N], h: f64) -> ([[f64; N]; N], [f64; N]) {
 /// Exact moments of the Newtonian IRTP at `times` (sorted, >= 0) from
 /// x = v = 0, η = ±Σ with probability ½.
 pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
+    p.require(Solver::ClosedForm)?;
     let (a, b) = system(p)?;
     let rho = (0..N).map(|i| a[i][i].abs()).fold(1.0, f64::max);
     let mut out = LinearMoments {

@@ -49,6 +49,7 @@
 
 use super::r0_exponent::EdgeIntegral;
 use crate::error::{Error, Result};
+use crate::model::reset::Solver;
 use crate::model::{Drag, DragLaw, Params};
 use crate::numerics::quad::{self, Panels};
 use serde::{Deserialize, Serialize};
@@ -627,6 +628,7 @@ impl R0Density {
 
     /// From validated parameters; requires rate = 0.
     pub fn from_params(p: &Params) -> Result<Self> {
+        p.require(Solver::ClosedForm)?;
         if p.rate() != 0.0 {
             return Err(Error::invalid(
                 "rate",

@@ -1,6 +1,6 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
-use crate::model::reset::{spec as reset_spec, NoiseAtReset, Target};
+use crate::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use crate::model::Drag;
 use crate::{DragLaw, Params};
 use clap::Args;
@@ -56,6 +56,21 @@ pub struct ModelArgs {
     /// mfpt distribution and mfpt optimize, which refuse it.
     #[arg(long, value_name = "SPEC", conflicts_with = "reset_velocity")]
     pub reset_to: Option<String>,
+    /// Periodic (sharp) resetting: a reset at every multiple of T > 0 of
+    /// the time since the start, instead of a Poisson clock (then no
+    /// --rate, or --rate 0).
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub reset_period: Option<f64>,
+    /// Position resetting: at every reset the position jumps to X with the
+    /// velocity (full resetting); the position then has a stationary
+    /// distribution.
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub reset_position: Option<f64>,
+    /// A refractory period after every reset (velocity held at the reset
+    /// velocity, resets ignored, noise flipping on): exp:mean=M
+    /// (exponential duration of mean M) or fixed:t=T.
+    #[arg(long, value_name = "SPEC")]
+    pub refractory: Option<String>,
 }
 
 /// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
@@ -122,9 +137,25 @@ impl ModelArgs {
     /// `--reset-velocity`, noise kept) unless `--reset-to` or
     /// `--reset-noise` names another.
     pub fn params(&self) -> crate::Result<Params> {
+        let schedule = Schedule::parse(
+            self.reset_period,
+            self.reset_position,
+            self.refractory.as_deref(),
+        )?;
+        self.rule_params()?.with_schedule(schedule)
+    }
+
+    /// [`Self::params`] without the schedule's modifiers (the rate
+    /// defaults to 0 with a periodic clock).
+    fn rule_params(&self) -> crate::Result<Params> {
+        let default = if self.reset_period.is_some() {
+            0.0
+        } else {
+            DEFAULT_RATE
+        };
         let base = self
             .noise
-            .params(self.rate.unwrap_or(DEFAULT_RATE), self.reset_velocity)?;
+            .params(self.rate.unwrap_or(default), self.reset_velocity)?;
         let flag = match &self.reset_noise {
             Some(s) => Some(s.parse::<NoiseAtReset>()?),
             None => None,

@@ -34,6 +34,7 @@ use super::grid::Mesh;
 use super::operator::ForwardOperator;
 use super::stationary::MIN_CELLS;
 use crate::error::{finite, Error, Result};
+use crate::model::reset::Solver;
 use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Params;
 use crate::numerics::trbdf2::{integrate, ShiftedLinear, Tolerances};
@@ -311,6 +312,7 @@ pub fn moments(
     opts: &MsdOptions,
     progress: &dyn Progress,
 ) -> Result<MomentSeries> {
+    params.require(Solver::FpMsd)?;
     let times = check(params, opts)?;
     let total = (opts.levels * times.len()) as u64;
     let mut done = 0;

@@ -4,6 +4,7 @@ use super::grid::{Grid, Mesh};
 use super::solve::{solve_free, solve_reset};
 use crate::error::{Error, Result};
 use crate::model::reset::NoiseAtReset;
+use crate::model::reset::Solver;
 use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
@@ -240,6 +241,7 @@ fn check_invariants(params: &Params, v2: f64, d_eff: f64) -> Result<()> {
 
 /// Solve the stationary forward equations directly (no time stepping), in O(N).
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
+    params.require(Solver::FpStationary)?;
     check_options(params, opts)?;
     let g = if opts.extrapolate {
         make_grid(params, opts.mesh, opts.cells / 2, 1)?

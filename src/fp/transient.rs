@@ -20,6 +20,7 @@ use super::grid::{uniform_target, Grid, Mesh};
 use super::operator::ForwardOperator;
 use super::stationary::{MAX_CELLS, MIN_CELLS};
 use crate::error::{finite, Error, Result};
+use crate::model::reset::Solver;
 use crate::model::{Drag, Params};
 use crate::numerics::trbdf2::{self, Tolerances};
 use crate::parallel::{NoProgress, Progress};
@@ -231,6 +232,7 @@ pub const TRBDF2_UPDATES_PER_STEP: f64 = 12.0;
 /// The step and step count [`transient`] will use (O(cells), no
 /// integration): for estimating the cost before a run.
 pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
+    params.require(Solver::FpTransient)?;
     let (times, snaps) = validate(opts)?;
     match opts.scheme {
         Scheme::Paper => plan_on(params, opts, &Grid::uniform(params, opts.cells)),
@@ -328,6 +330,7 @@ pub fn transient_with_progress(
     progress: &dyn Progress,
 ) -> Result<Transient> {
     let (times, snaps) = validate(opts)?;
+    params.require(Solver::FpTransient)?;
     match opts.scheme {
         Scheme::Paper => paper(params, opts, &times, &snaps, progress),
         Scheme::TrBdf2 => run_trbdf2(params, opts, &times, &snaps, progress),

@@ -39,6 +39,7 @@ use super::backward::{self, mesh, BackwardOptions, DriftSign, Mesh, Moments};
 use super::upwind::{exp_moments, AtomProbe, UpwindOperator};
 use super::Problem;
 use crate::error::{Error, Result};
+use crate::model::reset::Solver;
 use crate::model::Drag;
 use crate::numerics::trbdf2::{self, Stats, Tolerances};
 use serde::{Deserialize, Serialize};
@@ -419,6 +420,7 @@ pub fn distribution(
     times: &[f64],
     opts: &DistributionOptions,
 ) -> Result<Distribution> {
+    problem.params().require(Solver::FptDistribution)?;
     opts.validate()?;
     check_times(times)?;
     if opts.backward.drift != DriftSign::Simulated {

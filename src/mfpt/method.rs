@@ -8,6 +8,7 @@ use super::estimator::{FptStats, FptSummary};
 use super::euler::EulerFpt;
 use super::{exact, Problem};
 use crate::error::{Error, Result};
+use crate::model::reset::Solver;
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
 
@@ -140,6 +141,11 @@ impl MfptResult {
 /// count; `progress` counts particles (the backward solve reports none).
 /// Errors with [`Error::Overflow`] where the backward tau overflows f64.
 pub fn solve(problem: &Problem, method: &Method, progress: &dyn Progress) -> Result<MfptResult> {
+    problem.params().require(match method {
+        Method::Backward(_) => Solver::Backward,
+        Method::Exact(_) => Solver::MfptExact,
+        Method::Euler { .. } => Solver::MfptEuler,
+    })?;
     method.check(problem)?;
     let stats = match *method {
         Method::Backward(opts) => {

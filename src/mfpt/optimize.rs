@@ -5,6 +5,7 @@ use super::backward::{
 };
 use super::Problem;
 use crate::error::{finite, Error, Result};
+use crate::model::reset::Solver;
 use crate::numerics::grid;
 use crate::parallel::{self, Progress};
 use serde::{Deserialize, Serialize};
@@ -188,6 +189,7 @@ pub fn optimize_rate(
     opts: &OptimizeOptions,
     progress: &dyn Progress,
 ) -> Result<Optimum> {
+    base.params().require(Solver::MfptOptimize)?;
     opts.validate()?;
     let (r_min, r_max) = (opts.r_min, opts.r_max);
     base.with_rate(r_max)?;

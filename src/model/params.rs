@@ -2,8 +2,8 @@
 
 use super::drag::{Drag, DragLaw};
 use super::reset::{
-    spec, GaussianReset, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule, Target,
-    UniformReset,
+    spec, support, GaussianReset, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule,
+    Schedule, Solver, Target, UniformReset,
 };
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
@@ -21,6 +21,7 @@ pub struct Params {
     sigma: f64,
     lambda: f64,
     reset: ResetRule,
+    schedule: Schedule,
 }
 
 /// Unvalidated mirror of [`Params`] used for (de)serialisation.
@@ -41,19 +42,34 @@ pub struct RawParams {
     /// absent for the paper's (point target v_r, noise kept).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reset: Option<String>,
+    /// Periodic resetting: the period T (absent for a Poisson clock).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset_period: Option<f64>,
+    /// Position resetting: x_r (absent when the position is kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset_position: Option<f64>,
+    /// The refractory period as a spec (`exp:mean=0.5`, `fixed:t=0.5`),
+    /// absent for none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refractory: Option<String>,
 }
 
 impl TryFrom<RawParams> for Params {
     type Error = Error;
     fn try_from(r: RawParams) -> Result<Self> {
         let p = Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)?;
-        match r.reset {
-            None => Ok(p),
+        let p = match r.reset {
+            None => p,
             Some(s) => {
                 let (target, noise) = spec::parse(&s)?;
-                p.with_reset(target, noise.unwrap_or(NoiseAtReset::Kept))
+                p.with_reset(target, noise.unwrap_or(NoiseAtReset::Kept))?
             }
-        }
+        };
+        p.with_schedule(Schedule::parse(
+            r.reset_period,
+            r.reset_position,
+            r.refractory.as_deref(),
+        )?)
     }
 }
 
@@ -66,6 +82,9 @@ impl From<Params> for RawParams {
             rate: p.rate(),
             reset_velocity: p.reset_velocity(),
             reset: p.reset_spec(),
+            reset_period: p.schedule.periodic.map(|t| t.period),
+            reset_position: p.schedule.position.map(|x| x.x),
+            refractory: p.schedule.refractory.map(|r| r.spec()),
         }
     }
 }
@@ -131,6 +150,7 @@ impl Params {
                 rate,
                 velocity: reset_velocity,
             }),
+            schedule: Schedule::default(),
         })
     }
 
@@ -144,10 +164,11 @@ impl Params {
             rate,
             self.reset_velocity(),
         )?;
-        Ok(Params {
+        let p = Params {
             reset: self.reset.with_rate(base.rate()),
             ..base
-        })
+        };
+        p.with_schedule(self.schedule)
     }
 
     /// Same parameters with another flip rate (validated).
@@ -161,6 +182,7 @@ impl Params {
         )?;
         Ok(Params {
             reset: self.reset,
+            schedule: self.schedule,
             ..base
         })
     }
@@ -176,7 +198,8 @@ impl Params {
             self.rate(),
             reset_velocity,
         )?
-        .with_reset(Target::Point(reset_velocity), self.reset.noise())
+        .with_reset(Target::Point(reset_velocity), self.reset.noise())?
+        .with_schedule(self.schedule)
     }
 
     /// Same parameters and rate with another resetting protocol: the target
@@ -190,7 +213,12 @@ impl Params {
             Target::Point(v) => {
                 let base = Params::new(self.drag, self.sigma, self.lambda, rate, v)?;
                 match noise {
-                    NoiseAtReset::Kept => return Ok(base),
+                    NoiseAtReset::Kept => {
+                        return Ok(Params {
+                            schedule: self.schedule,
+                            ..base
+                        })
+                    }
                     NoiseAtReset::Redrawn => ResetRule::Redrawn(RedrawnReset {
                         rate,
                         velocity: base.reset_velocity(),
@@ -228,6 +256,50 @@ impl Params {
             }
         };
         Ok(Params { reset, ..*self })
+    }
+
+    /// Same parameters with the modifiers of the resetting rule (periodic
+    /// clock, position reset, refractory period), validated: a periodic
+    /// clock replaces the Poisson clock, so the rate must then be 0.
+    pub fn with_schedule(&self, schedule: Schedule) -> Result<Self> {
+        if let Some(t) = schedule.periodic {
+            if self.rate() != 0.0 {
+                return Err(Error::invalid(
+                    "rate",
+                    self.rate(),
+                    format!(
+                        "0 (or no --rate) with --reset-period {} (periodic resetting replaces the Poisson clock)",
+                        t.period
+                    ),
+                ));
+            }
+        }
+        Ok(Params { schedule, ..*self })
+    }
+
+    /// The modifiers of the resetting rule.
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// Refuse what `solver` does not run: every feature of the schedule
+    /// is looked up in [`support::supports`]; the first one missing is an
+    /// error naming its flag, the solver and the methods that run it.
+    pub fn require(&self, solver: Solver) -> Result<()> {
+        for f in self.schedule.features() {
+            if !support::supports(solver, f) {
+                return Err(Error::invalid(
+                    f.flag(),
+                    self.schedule.spec_of(f),
+                    format!(
+                        "no {} with {solver} (it is run by: {})",
+                        f.describe(),
+                        support::runners(f)
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The point target v_r, or an error naming `method` and the rule for a
@@ -413,6 +485,48 @@ mod tests {
         assert_eq!(p, q);
         let bad = s.replace("3.0", "-3.0");
         assert!(serde_json::from_str::<Params>(&bad).is_err());
+    }
+
+    #[test]
+    fn schedule_round_trip_and_refusal() {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.9, 0.0, 0.1).unwrap();
+        let sched = Schedule::parse(Some(2.0), Some(-0.5), Some("exp:mean=0.25")).unwrap();
+        let q = p.with_schedule(sched).unwrap();
+        let s = serde_json::to_string(&q).unwrap();
+        assert!(s.contains("\"refractory\":\"exp:mean=0.25\""), "{s}");
+        let back: Params = serde_json::from_str(&s).unwrap();
+        assert_eq!(back, q);
+        // The paper's protocol writes none of the new keys.
+        assert!(!serde_json::to_string(&p).unwrap().contains("reset_period"));
+        // A periodic clock with a Poisson rate is refused, naming rate.
+        let r = Params::new(DragLaw::Tan, 3.0, 0.9, 1.0, 0.1).unwrap();
+        let e = r.with_schedule(sched).unwrap_err().to_string();
+        assert!(e.starts_with("invalid rate = 1"), "{e}");
+        // Every solver that lacks a feature refuses it, naming the flag.
+        for solver in Solver::ALL {
+            for f in q.schedule().features() {
+                let one = match f {
+                    support::Feature::Periodic => Schedule::parse(Some(2.0), None, None),
+                    support::Feature::Position => Schedule::parse(None, Some(1.0), None),
+                    _ => Schedule::parse(None, None, Some("exp:mean=0.25")),
+                }
+                .unwrap();
+                let res = p.with_schedule(one).unwrap().require(solver);
+                match res {
+                    Ok(()) => assert!(support::supports(solver, f)),
+                    Err(e) => {
+                        let msg = e.to_string();
+                        assert!(!support::supports(solver, f));
+                        assert!(msg.starts_with(&format!("invalid {}", f.flag())), "{msg}");
+                        assert!(msg.contains(solver.command()), "{msg}");
+                    }
+                }
+            }
+        }
+        // Bad values are refused at the door.
+        assert!(Schedule::parse(Some(0.0), None, None).is_err());
+        assert!(Schedule::parse(None, Some(f64::NAN), None).is_err());
+        assert!(Schedule::parse(None, None, Some("exp:mean=-1")).is_err());
     }
 
     #[test]

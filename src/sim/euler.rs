@@ -36,6 +36,7 @@
 
 use super::{Observables, Part, SimSpec};
 use crate::error::{Error, Result};
+use crate::model::reset::Solver;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, DragLaw, Params};
 use crate::parallel::Progress;
@@ -87,6 +88,7 @@ impl EulerPlan {
     /// Validate dt against the parameters (dt < 1/max g', r·dt < 1) and map
     /// the grid and burn-in onto steps.
     pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
+        params.require(Solver::Euler)?;
         let dt = params.check_dt(dt)?;
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
@@ -639,6 +641,7 @@ pub struct LinearChain {
 impl LinearChain {
     /// Start at step 0 (all moments zero). Requires linear drag and a valid dt.
     pub fn new(params: &Params, dt: f64) -> Result<Self> {
+        params.require(Solver::ClosedForm)?;
         if params.drag() != DragLaw::Linear {
             return Err(Error::invalid(
                 "drag",

@@ -34,6 +34,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
+use crate::model::reset::Solver;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
@@ -371,6 +372,7 @@ fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> 
 
 impl<F: FlowMap> Sampler<F> {
     fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
+        params.require(Solver::Exact)?;
         let sigma = params.sigma();
         let (lo, hi) = params.bounds();
         check_relaxation(drag, sigma, hi)?;

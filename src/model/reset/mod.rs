@@ -19,21 +19,35 @@
 //!   [a, b].
 //! - [`registry`]: [`ResetRule`] and the dispatch
 //!   [`with_reset!`](crate::with_reset).
+//!
+//! Three modifiers combine with any rule ([`Schedule`]): [`periodic`]
+//! (resets every T instead of at Poisson times), [`position`] (x → x_r
+//! with the velocity) and [`refractory`] (velocity held at v_r for a while
+//! after a reset). [`support`] is the table of which method runs which.
 
 pub mod gaussian;
+pub mod periodic;
 pub mod poisson;
+pub mod position;
 pub mod redrawn;
+pub mod refractory;
 pub mod registry;
 pub mod spec;
+pub mod support;
 pub mod uniform;
 
 pub use gaussian::GaussianReset;
+pub use periodic::Periodic;
 pub use poisson::PoissonReset;
+pub use position::PositionReset;
 pub use redrawn::RedrawnReset;
+pub use refractory::Refractory;
 pub use registry::ResetRule;
+pub use support::{Feature, Solver};
 pub use uniform::UniformReset;
 
 use rand::Rng;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// Where a reset sends the velocity.
@@ -161,6 +175,71 @@ impl Target {
 /// erfc accurate to the last digits).
 fn normal_mass(al: f64, be: f64) -> f64 {
     crate::numerics::quad::integrate(&phi, al, be, 1e-14).unwrap_or(f64::NAN)
+}
+
+/// The modifiers of a resetting rule: when resets happen, whether the
+/// position resets too, and a refractory period after each reset. The
+/// default is the paper's: Poisson clock, position kept, no refractory
+/// period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Schedule {
+    /// Resets every T (the rule's Poisson rate is then 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<Periodic>,
+    /// Position reset to x_r at every reset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<PositionReset>,
+    /// Refractory period after every reset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refractory: Option<Refractory>,
+}
+
+impl Schedule {
+    /// The features in use (beyond the paper's protocol).
+    pub fn features(&self) -> Vec<Feature> {
+        let mut f = Vec::new();
+        if self.periodic.is_some() {
+            f.push(Feature::Periodic);
+        }
+        if self.position.is_some() {
+            f.push(Feature::Position);
+        }
+        match self.refractory {
+            Some(Refractory::Exp { .. }) => f.push(Feature::RefractoryExp),
+            Some(Refractory::Fixed { .. }) => f.push(Feature::RefractoryFixed),
+            None => {}
+        }
+        f
+    }
+
+    /// Validate the modifiers from their flags (`--reset-period`,
+    /// `--reset-position`, `--refractory`).
+    pub fn parse(
+        period: Option<f64>,
+        position: Option<f64>,
+        refractory: Option<&str>,
+    ) -> crate::error::Result<Self> {
+        Ok(Schedule {
+            periodic: period.map(Periodic::new).transpose()?,
+            position: position.map(PositionReset::new).transpose()?,
+            refractory: refractory.map(str::parse).transpose()?,
+        })
+    }
+
+    /// The value of the flag behind `feature`, for messages.
+    pub fn spec_of(&self, feature: Feature) -> String {
+        match feature {
+            Feature::Periodic => self.periodic.map(|p| p.period.to_string()),
+            Feature::Position => self.position.map(|p| p.x.to_string()),
+            Feature::RefractoryExp | Feature::RefractoryFixed => self.refractory.map(|r| r.spec()),
+        }
+        .unwrap_or_default()
+    }
+
+    /// Whether it is the paper's (no modifier).
+    pub fn is_plain(&self) -> bool {
+        *self == Schedule::default()
+    }
 }
 
 /// What a reset does to the noise state eta = ±Sigma.
