@@ -19,6 +19,7 @@
 
 mod common;
 
+use common::stats::bonferroni_z;
 use common::{assert_rejected, irtp};
 use irtp::analytic::r0::R0Density;
 use irtp::fp::{stationary, Stationary, StationaryOptions};
@@ -30,37 +31,6 @@ use irtp::Params;
 
 fn law(spec: &str) -> DragLaw {
     spec.parse().unwrap()
-}
-
-/// z bound for m simultaneous two-sided comparisons at the family rate of
-/// one 4-sigma comparison (Bonferroni), by bisection on erfc.
-fn bonferroni_z(m: usize) -> f64 {
-    let tail = |z: f64| m as f64 * erfc(z / std::f64::consts::SQRT_2);
-    let family = erfc(4.0 / std::f64::consts::SQRT_2);
-    let (mut lo, mut hi) = (3.0, 8.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if tail(mid) > family {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
-/// erfc(x) for x >= 0 (Numerical Recipes' erfcc, relative error < 1.2e-7).
-fn erfc(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.5 * x);
-    let p = -x * x - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    t * p.exp()
 }
 
 /// Probability of each bin [edges[i], edges[i+1]] under the FP cell

@@ -12,6 +12,9 @@
 //!     equations.
 //! (d) Bad specs: exit 2, one line naming the parameter, nothing written.
 
+mod common;
+
+use common::stats::bonferroni_z;
 use irtp::analytic::r0::R0Density;
 use irtp::fp::{stationary, Stationary, StationaryOptions};
 use irtp::mfpt::{backward, solve, BackwardOptions, Method, ParticleOptions, Problem};
@@ -27,39 +30,6 @@ fn law(spec: &str) -> DragLaw {
 
 /// The three media of the cross-method checks.
 const MEDIA: [&str; 3] = ["power:n=0.5", "power:n=2", "carreau:n=0.5,a=1"];
-
-/// z bound for m simultaneous two-sided comparisons at the family rate of
-/// one 4-sigma comparison (6.3e-5, Bonferroni): 4.0, 4.25, 4.89 for m = 1,
-/// 3, 63 (inverse of the normal tail, by bisection on erfc below).
-fn bonferroni_z(m: usize) -> f64 {
-    let tail = |z: f64| m as f64 * erfc(z / std::f64::consts::SQRT_2);
-    let family = erfc(4.0 / std::f64::consts::SQRT_2);
-    let (mut lo, mut hi) = (3.0, 8.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if tail(mid) > family {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
-/// erfc(x) for x >= 0 (Numerical Recipes' erfcc, relative error < 1.2e-7:
-/// plenty for a test threshold).
-fn erfc(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.5 * x);
-    let p = -x * x - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    t * p.exp()
-}
 
 /// The r = 0 density P(v) ∝ (Sigma² - g²)⁻¹ exp(-2 lambda Φ(v)),
 /// Φ(v) = ∫_0^|v| g / (Sigma² - g²), by composite Simpson on graded panels

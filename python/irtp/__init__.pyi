@@ -69,6 +69,9 @@ class Params:
         rate: Optional[float] = None,
         reset_velocity: Optional[float] = None,
         reset_to: Optional[str] = None,
+        reset_period: Optional[float] = None,
+        reset_position: Optional[float] = None,
+        refractory: Optional[str] = None,
         **kwargs: Any,
     ) -> None: ...
     @classmethod
@@ -85,6 +88,12 @@ class Params:
     def reset_velocity(self) -> Optional[float]: ...
     @property
     def reset_to(self) -> Optional[str]: ...
+    @property
+    def reset_period(self) -> Optional[float]: ...
+    @property
+    def reset_position(self) -> Optional[float]: ...
+    @property
+    def refractory(self) -> Optional[str]: ...
     @property
     def reset(self) -> Optional[PoissonReset]: ...
     def options(self) -> Dict[str, Any]: ...
@@ -283,6 +292,9 @@ def simulate(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -328,6 +340,9 @@ def fp_stationary(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -350,6 +365,9 @@ def fp_transient(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -377,6 +395,9 @@ def fp_msd(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -403,6 +424,9 @@ def mfpt(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,
@@ -429,6 +453,9 @@ def mfpt_scan(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     v0: float,
     cells: int = ...,
     vt: Optional[float] = ...,
@@ -460,6 +487,9 @@ def mfpt_optimize(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,
@@ -485,6 +515,9 @@ def mfpt_distribution(
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
+    reset_period: float = ...,
+    reset_position: float = ...,
+    refractory: str = ...,
     v0: float,
     cells: int = ...,
     vt: float,

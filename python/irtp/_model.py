@@ -166,6 +166,9 @@ _FIELDS: Tuple[Tuple[str, str], ...] = (
     ("rate", "rate"),
     ("reset_velocity", "reset_velocity"),
     ("reset_to", "reset_to"),
+    ("reset_period", "reset_period"),
+    ("reset_position", "reset_position"),
+    ("refractory", "refractory"),
 )
 
 
@@ -195,6 +198,9 @@ class Params:
         rate: Optional[float] = None,
         reset_velocity: Optional[float] = None,
         reset_to: Optional[str] = None,
+        reset_period: Optional[float] = None,
+        reset_position: Optional[float] = None,
+        refractory: Optional[str] = None,
         **kwargs: Any,
     ) -> None:
         if "lambda" in kwargs:
@@ -205,7 +211,8 @@ class Params:
             bad = ", ".join(sorted(kwargs))
             raise ValueError(
                 f"unknown keyword {bad} for irtp.Params "
-                "(known: drag, sigma, lambda_, reset, rate, reset_velocity, reset_to)"
+                "(known: drag, sigma, lambda_, reset, rate, reset_velocity, reset_to, "
+                "reset_period, reset_position, refractory)"
             )
         if reset is not None:
             if not isinstance(reset, Reset):
@@ -219,12 +226,15 @@ class Params:
             values["drag"] = Drag(drag)
         fields: Tuple[Tuple[str, Any], ...] = (
             ("sigma", sigma), ("lambda_", lambda_), ("rate", rate),
-            ("reset_velocity", reset_velocity))
+            ("reset_velocity", reset_velocity), ("reset_period", reset_period),
+            ("reset_position", reset_position))
         for attr, given in fields:
             if given is not None:
                 values[attr] = _number(attr, given)
         if reset_to is not None:
             values["reset_to"] = str(reset_to)
+        if refractory is not None:
+            values["refractory"] = str(refractory)
         self._values = values
 
     @classmethod
@@ -251,6 +261,18 @@ class Params:
     reset_to = property(
         lambda self: self._values.get("reset_to"),
         doc="The resetting protocol as a spec (``gauss:mean=0,std=0.3``), or None.",
+    )
+    reset_period = property(
+        lambda self: self._values.get("reset_period"),
+        doc="Periodic resetting: the period T (then no rate), or None.",
+    )
+    reset_position = property(
+        lambda self: self._values.get("reset_position"),
+        doc="Position resetting: x_r, or None (position kept).",
+    )
+    refractory = property(
+        lambda self: self._values.get("refractory"),
+        doc="Refractory period after a reset (``exp:mean=0.5``, ``fixed:t=0.5``), or None.",
     )
 
     @property
