@@ -219,7 +219,7 @@ pub struct Plan {
     /// mesh, see [`trbdf2_step_bound`].
     pub steps: u64,
     /// Cell updates: cells × steps for the paper scheme;
-    /// [`TRBDF2_UPDATES_PER_STEP`] × cells × steps × 1.75 (the three meshes) for
+    /// [`TRBDF2_UPDATES_PER_STEP`] × cells × steps × 1.75 (`mesh_work_factor`, the three meshes) for
     /// TR-BDF2.
     pub work: f64,
 }
@@ -241,7 +241,7 @@ pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
             Ok(Plan {
                 dt: None,
                 steps,
-                work: TRBDF2_UPDATES_PER_STEP * 1.75 * opts.cells as f64 * steps as f64,
+                work: TRBDF2_UPDATES_PER_STEP * mesh_work_factor() * opts.cells as f64 * steps as f64,
             })
         }
     }
@@ -475,6 +475,12 @@ fn run_trbdf2(
 
 /// Nested meshes of the TR-BDF2 scheme: cells/4, cells/2 and cells.
 pub const MESH_LEVELS: usize = 3;
+
+/// Cells of the [`MESH_LEVELS`] nested meshes N, N/2, N/4, ... in units of
+/// N: 1 + 1/2 + 1/4 = 1.75.
+fn mesh_work_factor() -> f64 {
+    (0..MESH_LEVELS).map(|l| 0.5f64.powi(l as i32)).sum()
+}
 
 /// Moments on the nested meshes of N, N/2 and N/4 cells, extrapolated twice:
 /// the upwind fluxes are first order, X_N = X + a/N + b/N² + ..., so
