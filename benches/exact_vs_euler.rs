@@ -119,8 +119,9 @@ fn particles(c: &mut Criterion) {
 /// Events per second of the exact sampler on the Fig. 2 workload (moments at
 /// two times plus a 100-bin histogram, t = 20 per particle) for the closed-form
 /// laws (Coulomb friction: closed-form velocity, deficit table in v) and for
-/// `cubic` and the power law (n = 0.5: g'(0) = ∞; n = 2), laws
-/// given by g and g' (tabulated flow).
+/// `cubic`, the power law (n = 0.5: g'(0) = ∞; n = 2) and two expression
+/// laws (`expr:tan(v)`, `expr:v + 0.3*v^3`), laws given by g and g'
+/// (tabulated flow).
 fn events_per_law(c: &mut Criterion) {
     let mut g = c.benchmark_group("exact_events");
     g.sample_size(10);
@@ -132,6 +133,8 @@ fn events_per_law(c: &mut Criterion) {
         ("cubic", 3.0, 0.5, 2.0),
         ("power:n=0.5", 3.0, 0.5, 2.0),
         ("power:n=2", 3.0, 0.5, 2.0),
+        ("expr:tan(v)", 3.0, 0.5, 2.0),
+        ("expr:v + 0.3*v^3", 3.0, 0.5, 2.0),
     ] {
         let drag: DragLaw = law.parse().expect("registered law");
         let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();
