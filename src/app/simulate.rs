@@ -5,7 +5,7 @@ use super::format::{fmt_pm, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use crate::sim::euler::{self, EulerPlan, EventSampling};
 use crate::sim::exact;
-use crate::sim::{Observables, SimSpec, SimSummary, TimeGrid};
+use crate::sim::{Observables, PositionHistogram, SimSpec, SimSummary, TimeGrid};
 use crate::Params;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
@@ -320,15 +320,23 @@ fn report(
         events_per_s: exact.then_some(rate),
         out: out.as_ref().map(|o| o.target().display().to_string()),
     };
+    let mut tables = vec![
+        Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
+        Table::from_rows("density", &Observables::DENSITY_HEADER, obs.density_rows()),
+    ];
+    if let Some(h) = &obs.position {
+        tables.push(Table::from_rows(
+            "position",
+            &PositionHistogram::HEADER,
+            h.rows(),
+        ));
+    }
     let results = Results {
         method: c.method().to_string(),
         seed: Some(c.spec.seed),
         json: json.to_value(),
         parameters: to_value(&run_parameters(a, c)),
-        tables: vec![
-            Table::from_rows("moments", &Observables::MOMENT_HEADER, obs.moment_rows()),
-            Table::from_rows("density", &Observables::DENSITY_HEADER, obs.density_rows()),
-        ],
+        tables,
         json_files: Vec::new(),
         text: text_report(a, c, &summary, wall),
         wall_time_s: wall,
@@ -446,7 +454,12 @@ fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> Strin
         fmt_sig(p.reset_velocity())
     ) + &p
         .reset_spec()
-        .map_or(String::new(), |s| format!(", reset {s}"));
+        .map_or(String::new(), |s| format!(", reset {s}"))
+        + &p.schedule()
+            .features()
+            .iter()
+            .map(|f| format!(", {} {}", f.flag(), p.schedule().spec_of(*f)))
+            .collect::<String>();
     let (burn_in, t_max) = (fmt_sig(a.burn_in), fmt_sig(s.t_max));
     let mut text = match &c.euler {
         Some(e) => format!(
@@ -471,6 +484,15 @@ fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> Strin
         fmt_pm(s.v2_final, s.v2_final_err),
         fmt_pm(s.x2_final, s.x2_final_err)
     );
+    if let (Some([lo, hi]), Some(out), Some(err)) = (s.x_range, s.x_outside, s.x_outside_err) {
+        text += &format!(
+            "position resetting: P_s(x) at t = {t_max} on [{}, {}] (position.csv), mass outside {}; <x> = {}\n",
+            fmt_sig(lo),
+            fmt_sig(hi),
+            fmt_pm(out, err),
+            fmt_pm(s.x_final, s.x_final_err)
+        );
+    }
     if let (Some(d), Some(e)) = (s.d_eff_msd, s.d_eff_msd_err) {
         text += &format!(
             "Eq. (36) fit <x^2> = 2 D t + c over [{burn_in}, {t_max}]: D = {}\n",

@@ -4,11 +4,19 @@
 //! step and the gaps are those of the particle simulation ([`euler_step`]
 //! with the law's fast g, [`geometric_gap`]). The entry point is
 //! [`super::solve`] with [`super::Method::Euler`].
+//!
+//! The modifiers of the resetting rule run as in [`crate::sim::euler`]
+//! (one kernel per run, chosen outside the step): the periodic reset at kT
+//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing),
+//! a refractory
+//! period as round(D/dt) held steps (no drift, Poisson resets discarded,
+//! flips on, periodic times up to its end skipped). A reset at or above
+//! v_t is the passage at that step.
 
 use super::estimator::{FptSample, FptStats};
 use super::Problem;
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
 use crate::model::Drag;
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -69,11 +77,18 @@ impl EulerFpt {
     /// at a time, for any thread count.
     pub fn stats(&self, n: u64, seed: u64, progress: &dyn Progress) -> FptStats {
         let c = Chain::new(self, seed);
+        let scheduled = c.periodic.is_some() || c.refractory.is_some();
         crate::with_drag!(self.problem.params().drag(), |d| {
             parallel::reduce_chunks(
                 n,
                 || FptStats::new(self.t_max),
-                |lo, hi, acc| c.chunk(d, lo, hi, acc),
+                |lo, hi, acc| {
+                    if scheduled {
+                        c.chunk::<_, true>(d, lo, hi, acc)
+                    } else {
+                        c.chunk::<_, false>(d, lo, hi, acc)
+                    }
+                },
                 |a, b| a.merge(&b),
                 progress,
             )
@@ -98,6 +113,8 @@ struct Chain {
     max_steps: u64,
     reset: ResetRule,
     seed: u64,
+    periodic: Option<Periodic>,
+    refractory: Option<Refractory>,
 }
 
 /// One particle in flight.
@@ -111,6 +128,19 @@ struct Lane {
     next_flip: u64,
     next_reset: u64,
     step: u64,
+    /// Held steps left of a refractory period.
+    hold: u64,
+    /// The next periodic reset time (∞ without a periodic clock).
+    next_periodic: f64,
+}
+
+impl Lane {
+    /// Whether the step just counted (from (step-1)·dt to step·dt) holds
+    /// the next periodic reset: step - 1 = round(kT/dt).
+    #[inline]
+    fn periodic_now(&self, dt: f64) -> bool {
+        (self.step - 1) as f64 >= (self.next_periodic / dt).round()
+    }
 }
 
 impl Chain {
@@ -129,6 +159,8 @@ impl Chain {
             max_steps: (e.t_max / dt).floor() as u64,
             reset: *par.reset(),
             seed,
+            periodic: par.schedule().periodic,
+            refractory: par.schedule().refractory,
         }
     }
 
@@ -146,13 +178,16 @@ impl Chain {
             next_flip,
             next_reset,
             step: 0,
+            hold: 0,
+            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
         }
     }
 
     /// One Euler step of a lane (reset or drift, arrival check, then flip);
-    /// the sample once the particle has arrived or reached t_max.
+    /// the sample once the particle has arrived or reached t_max. `S`: with
+    /// the schedule's modifiers (module docs).
     #[inline(always)]
-    fn advance<D: Drag>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
+    fn advance<D: Drag, const S: bool>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
         if l.step >= self.max_steps {
             return Some(FptSample {
                 time: None,
@@ -160,6 +195,9 @@ impl Chain {
             });
         }
         l.step += 1;
+        if S {
+            return self.advance_scheduled(drag, l);
+        }
         if l.step == l.next_reset {
             l.v = self.reset.draw_velocity(&mut l.rng);
             let plus = self.reset.draw_noise(l.s > 0.0, &mut l.rng);
@@ -176,17 +214,65 @@ impl Chain {
                 });
             }
         }
+        self.flip(l);
+        None
+    }
+
+    /// Step 4: the flip of the noise state, at the lane's next flip step.
+    #[inline(always)]
+    fn flip(&self, l: &mut Lane) {
         if l.step == l.next_flip {
             l.s = -l.s;
             l.next_flip = l
                 .step
                 .saturating_add(geometric_gap(&mut l.rng, self.ln_flip));
         }
+    }
+
+    /// [`Chain::advance`]'s step with the schedule's modifiers (module
+    /// docs), after the step count: a held step of a refractory period (a
+    /// Poisson reset discarded), a reset (Poisson or periodic; passage if
+    /// the reset velocity is at or above v_t, else a refractory period if
+    /// any), or the drift and its arrival check; then the flip.
+    fn advance_scheduled<D: Drag>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
+        let t = l.step as f64 * self.dt;
+        let poisson = l.step == l.next_reset;
+        if poisson {
+            l.next_reset = l
+                .step
+                .saturating_add(geometric_gap(&mut l.rng, self.ln_reset));
+        }
+        let arrived = Some(FptSample {
+            time: Some(t),
+            work: l.step,
+        });
+        if l.hold > 0 {
+            l.hold -= 1;
+        } else if poisson || l.periodic_now(self.dt) {
+            l.v = self.reset.draw_velocity(&mut l.rng);
+            let plus = self.reset.draw_noise(l.s > 0.0, &mut l.rng);
+            l.s = if plus { self.sigma } else { -self.sigma };
+            if l.v >= self.vt {
+                return arrived;
+            }
+            if let Some(r) = self.refractory {
+                l.hold = (r.draw(&mut l.rng) / self.dt).round() as u64;
+            }
+            if let Some(p) = self.periodic {
+                l.next_periodic = p.next_after(l.next_periodic + l.hold as f64 * self.dt);
+            }
+        } else {
+            l.v = euler_step(drag, l.v, l.s, self.dt);
+            if l.v >= self.vt {
+                return arrived;
+            }
+        }
+        self.flip(l);
         None
     }
 
     /// Particles lo..hi, `LANES` in flight, added to `acc` in index order.
-    fn chunk<D: Drag>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
+    fn chunk<D: Drag, const S: bool>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
         let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
         let mut next = lo;
         let mut lanes: Vec<Lane> = Vec::with_capacity(LANES);
@@ -197,7 +283,7 @@ impl Chain {
         while !lanes.is_empty() {
             let mut k = 0;
             while k < lanes.len() {
-                if let Some(sample) = self.advance(drag, &mut lanes[k]) {
+                if let Some(sample) = self.advance::<D, S>(drag, &mut lanes[k]) {
                     out[(lanes[k].i - lo) as usize] = Some(sample);
                     if next < hi {
                         lanes[k] = self.start(next);
@@ -266,7 +352,8 @@ mod tests {
                 for i in lo..(lo + parallel::CHUNK).min(n) {
                     let mut lane = c.start(i);
                     let sample = loop {
-                        if let Some(s) = c.advance(&crate::model::drag::Tan, &mut lane) {
+                        if let Some(s) = c.advance::<_, false>(&crate::model::drag::Tan, &mut lane)
+                        {
                             break s;
                         }
                     };

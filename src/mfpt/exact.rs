@@ -5,12 +5,21 @@
 //! exact flow time to v_t: no time step, no overshoot. Estimates are gathered
 //! by [`first_passage_stats`]; the entry point is [`super::solve`] with
 //! [`super::Method::Exact`].
+//!
+//! With a periodic reset clock (resets at T, 2T, ... from t = 0) a flow
+//! segment also ends at the next periodic time; after a reset with a
+//! refractory period of duration D the velocity is held at the reset
+//! velocity (below v_t, or the reset itself is the passage), so the period
+//! cannot cross v_t: it advances the time by D and flips the noise state
+//! with the probability of an odd number of flips, ½(1 - e^{-2 lambda D});
+//! Poisson resets are off during it and the periodic times inside it or at
+//! its end are skipped.
 
 use super::estimator::{first_passage_stats, FptSample, FptStats};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -43,6 +52,10 @@ pub struct FirstPassage<F = AnyFlow> {
     total_rate: f64,
     /// The resetting rule (target and noise state at a reset).
     reset: ResetRule,
+    /// Periodic reset clock.
+    periodic: Option<Periodic>,
+    /// Refractory period after each reset.
+    refractory: Option<Refractory>,
 }
 
 impl FirstPassage {
@@ -70,6 +83,8 @@ impl<F: FlowMap> FirstPassage<F> {
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
+            periodic: params.schedule().periodic,
+            refractory: params.schedule().refractory,
         }
     }
 
@@ -84,6 +99,9 @@ impl<F: FlowMap> FirstPassage<F> {
     ) -> (Option<f64>, u64) {
         if v0 >= vt {
             return (Some(0.0), 0);
+        }
+        if self.periodic.is_some() || self.refractory.is_some() {
+            return self.run_scheduled(v0, vt, start_plus, t_max, rng);
         }
         let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
         let mut events = 0u64;
@@ -112,6 +130,65 @@ impl<F: FlowMap> FirstPassage<F> {
                 if v >= vt {
                     return (Some(t), events);
                 }
+            }
+        }
+    }
+}
+
+impl<F: FlowMap> FirstPassage<F> {
+    /// [`FirstPassage::run`] with a periodic clock and/or a refractory
+    /// period (module docs).
+    fn run_scheduled(
+        &self,
+        v0: f64,
+        vt: f64,
+        start_plus: bool,
+        t_max: f64,
+        rng: &mut Rng,
+    ) -> (Option<f64>, u64) {
+        let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
+        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut events = 0u64;
+        loop {
+            let gap = exp_gap(rng, self.total_rate);
+            let periodic = next_periodic - t <= gap;
+            let step = if periodic { next_periodic - t } else { gap };
+            let flow = &self.flows[usize::from(!plus)];
+            if plus {
+                let tau = flow.time(v, vt);
+                if tau <= step {
+                    let hit = t + tau;
+                    return (if hit <= t_max { Some(hit) } else { None }, events);
+                }
+            }
+            if t + step >= t_max {
+                return (None, events);
+            }
+            v = flow.velocity(v, step);
+            t = if periodic { next_periodic } else { t + step };
+            events += 1;
+            if !periodic && rng.gen::<f64>() * self.total_rate < self.lambda {
+                plus = !plus;
+                continue;
+            }
+            v = self.reset.draw_velocity(rng);
+            plus = self.reset.draw_noise(plus, rng);
+            if v >= vt {
+                return (Some(t), events);
+            }
+            if let Some(r) = self.refractory {
+                let d = r.draw(rng);
+                if t + d >= t_max {
+                    return (None, events);
+                }
+                if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
+                    plus = !plus;
+                }
+                t += d;
+                events += 1;
+            }
+            if let Some(p) = self.periodic {
+                next_periodic = p.next_after(t);
             }
         }
     }

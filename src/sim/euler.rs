@@ -27,6 +27,20 @@
 //! and tanh the kernels of [`crate::numerics::fastmath`], within 3 ulp of
 //! libm and platform-independent).
 //!
+//! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
+//! run in a one-particle-at-a-time kernel chosen once per run (the paper's
+//! protocol keeps the kernel above, bit for bit), same step order:
+//! - periodic resetting: the reset at t = kT is the reset of step 3 in step
+//!   n = round(kT/dt) (from n·dt to (n+1)·dt), so the state recorded at kT
+//!   is the one before the reset, as in the exact sampler (a reset at t
+//!   acts just after t); it acts within dt of kT, an O(dt) timing error;
+//! - a refractory period of duration D (drawn at the reset) holds v at the
+//!   reset velocity for round(D/dt) steps (duration error ≤ dt/2): step 3
+//!   neither drifts nor resets there (the Poisson decisions are drawn and
+//!   discarded, the periodic times up to its end skipped); the flips of
+//!   step 4 go on;
+//! - position resetting: x ← x_r at the reset of step 3.
+//!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
 //! round to the same step (closer than dt, e.g. the short end of a log grid)
@@ -36,8 +50,7 @@
 
 use super::{Observables, Part, SimSpec};
 use crate::error::{Error, Result};
-use crate::model::reset::Solver;
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Reset, ResetRule, Schedule, Solver};
 use crate::model::{Drag, DragLaw, Params};
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
@@ -89,6 +102,7 @@ impl EulerPlan {
     /// the grid and burn-in onto steps.
     pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
         params.require(Solver::Euler)?;
+        super::check_period_window(params, spec)?;
         let dt = params.check_dt(dt)?;
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
@@ -358,6 +372,7 @@ fn run<D: Drag, E: Events>(
         bins: spec.bins,
         seed: spec.seed,
         plan,
+        schedule: *params.schedule(),
     };
     // Chunks of parallel::CHUNK consecutive particles, reduced exactly like
     // parallel::reduce (each chunk from an empty accumulator in particle
@@ -371,6 +386,12 @@ fn run<D: Drag, E: Events>(
         |lo, hi, obs| {
             let mut occ = vec![0.0; LANES * spec.bins];
             let mut i = lo;
+            if !kernel.schedule.is_plain() {
+                for i in lo..hi {
+                    kernel.scheduled::<E>(first + i, obs, &mut occ[..spec.bins]);
+                }
+                return;
+            }
             if lanes == LANES {
                 let wide = wide_vectors();
                 while i + LANES as u64 <= hi {
@@ -405,6 +426,8 @@ struct Kernel<'a, D> {
     bins: usize,
     seed: u64,
     plan: &'a EulerPlan,
+    /// The modifiers of the resetting rule (see the module docs).
+    schedule: Schedule,
 }
 
 /// Number of Bernoulli(p) trials up to and including the first success,
@@ -591,6 +614,72 @@ impl<D: Drag> Kernel<'_, D> {
             obs.finish_particle(sv[l] / w, sv2[l] / w, o, w, v[l], msd[l]);
         }
         obs.steps += L as u64 * plan.steps;
+    }
+
+    /// Particle `i` with the schedule's modifiers (module docs), one step
+    /// at a time in the step order of [`Kernel::group`]; the random stream
+    /// is consumed as there, plus the refractory duration after a reset's
+    /// draws.
+    fn scheduled<E: Events>(&self, i: u64, obs: &mut Observables, occ: &mut [f64]) {
+        let plan = self.plan;
+        let dt = plan.dt;
+        let mut rng = rng::stream(self.seed, i);
+        let mut eta = if rng.gen::<f64>() < 0.5 {
+            self.sigma
+        } else {
+            -self.sigma
+        };
+        let mut ev = E::new(&mut rng, plan);
+        let periodic = self.schedule.periodic;
+        let mut next_periodic = periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        // The step of the next periodic reset (∞ without a periodic clock).
+        let mut periodic_step = (next_periodic / dt).round();
+        let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
+        let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        for n in 0..plan.steps {
+            if plan.record_steps.get(k) == Some(&n) {
+                obs.record(k, v, x);
+                msd += obs.msd_term(k, x);
+                k += 1;
+            }
+            if n >= plan.burn_in_step {
+                sv += v;
+                sv2 += v * v;
+                occ[self.bin(v)] += 1.0;
+            }
+            x += v * dt;
+            let poisson = ev.reset(n, &mut rng);
+            if hold > 0 {
+                hold -= 1;
+            } else if poisson || n as f64 >= periodic_step {
+                v = self.reset.draw_velocity(&mut rng);
+                let plus = self.reset.draw_noise(eta > 0.0, &mut rng);
+                eta = if plus { self.sigma } else { -self.sigma };
+                if let Some(p) = self.schedule.position {
+                    x = p.x;
+                }
+                if let Some(r) = self.schedule.refractory {
+                    hold = (r.draw(&mut rng) / dt).round() as u64;
+                }
+                if let Some(p) = periodic {
+                    next_periodic = p.next_after(next_periodic + hold as f64 * dt);
+                    periodic_step = (next_periodic / dt).round();
+                }
+            } else {
+                v = euler_step(self.f, v, eta, dt);
+            }
+            if ev.flip(n, &mut rng) {
+                eta = -eta;
+            }
+        }
+        if k < plan.record_steps.len() {
+            obs.record(k, v, x);
+            msd += obs.msd_term(k, x);
+        }
+        let w = (plan.steps - plan.burn_in_step) as f64;
+        obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
+        obs.record_final_position(x);
+        obs.steps += plan.steps;
     }
 }
 

@@ -31,11 +31,24 @@
 //! (flow evaluated inside the segment), time averages of v and v² and the
 //! occupation time of every histogram bin over [burn_in, t_max] (bin edges
 //! crossed in full contribute the precomputed flow time across the bin).
+//!
+//! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
+//! run in a second event loop, chosen once per run (the paper's protocol
+//! keeps its own loop, bit for bit): the next event is the earliest of the
+//! exponential clock (flips at rate lambda, plus Poisson resets at rate r
+//! outside a refractory period), the next periodic reset time (resets at
+//! T, 2T, ... from t = 0) and the end of a refractory period. A reset sends
+//! x to x_r with position resetting; a refractory period is a held segment:
+//! v constant at the reset velocity, x linear in t, the occupation of the
+//! held velocity's bin and the time averages exact; the noise flips during
+//! it, reset-clock events are ignored (the periodic times inside it or at
+//! its end skipped), and the flow resumes from the held velocity with the
+//! noise state of that moment. An event at t acts just after t: a
+//! recording time equal to a periodic reset time sees the state before it.
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
-use crate::model::reset::Solver;
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Periodic, Refractory, Reset, ResetRule, Solver};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
 use crate::parallel::Progress;
@@ -315,6 +328,27 @@ struct Sampler<F> {
     burn_in: f64,
     t_max: f64,
     seed: u64,
+    /// The paper's protocol (no modifier): the plain event loop runs.
+    plain: bool,
+    /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
+    inv_lambda: f64,
+    /// Periodic reset clock.
+    periodic: Option<Periodic>,
+    /// Position resetting: x_r.
+    x_reset: Option<f64>,
+    /// Refractory period after each reset.
+    refractory: Option<Refractory>,
+}
+
+/// What ends a segment of the scheduled event loop.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Edge {
+    /// The exponential clock: a flip, or a Poisson reset.
+    Clock,
+    /// A periodic reset time.
+    Periodic,
+    /// The end of a refractory period.
+    Release,
 }
 
 /// Per-chunk scratch: occupation times and full-crossing counts
@@ -373,6 +407,7 @@ fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> 
 impl<F: FlowMap> Sampler<F> {
     fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
         params.require(Solver::Exact)?;
+        super::check_period_window(params, spec)?;
         let sigma = params.sigma();
         let (lo, hi) = params.bounds();
         check_relaxation(drag, sigma, hi)?;
@@ -399,7 +434,14 @@ impl<F: FlowMap> Sampler<F> {
         ];
         let reset = *params.reset();
         let at_vr = reset.point().map(|vr| [segs[0].at(vr), segs[1].at(vr)]);
+        let schedule = params.schedule();
+        let lambda = params.lambda();
         Ok(Sampler {
+            plain: schedule.is_plain(),
+            inv_lambda: if lambda > 0.0 { 1.0 / lambda } else { 0.0 },
+            periodic: schedule.periodic,
+            x_reset: schedule.position.map(|p| p.x),
+            refractory: schedule.refractory,
             vs: [flows[0].fixed_point(), flows[1].fixed_point()],
             inv_rate: [1.0 / flows[0].rate(), 1.0 / flows[1].rate()],
             segs,
@@ -469,6 +511,9 @@ impl<F: FlowMap> Sampler<F> {
             msd: 0.0,
             events: 0,
             done: false,
+            held: false,
+            hold_until: f64::INFINITY,
+            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
         }
     }
 
@@ -483,8 +528,37 @@ impl<F: FlowMap> Sampler<F> {
         } else {
             f64::INFINITY
         };
+        let t_end = (p.t + gap).min(self.t_max);
+        let b = self.flow_to(p, obs, sc, t_end);
+        if t_end >= self.t_max {
+            p.done = true;
+            return;
+        }
+        p.events += 1;
+        if p.rng.gen::<f64>() * self.total_rate < self.lambda {
+            p.si = 1 - p.si;
+            p.a = self.segs[p.si].at(b.v);
+        } else {
+            let v = self.draw_reset(p);
+            p.a = match &self.at_vr {
+                Some(at) => at[p.si],
+                None => self.segs[p.si].at(v),
+            };
+        }
+    }
+
+    /// The flow segment of a particle from p.t to `t_end`: moments at the
+    /// grid times inside (p.t, t_end], the window integrals and occupation
+    /// times, the position; returns (and stores) the end point.
+    #[inline(always)]
+    fn flow_to(
+        &self,
+        p: &mut Lane,
+        obs: &mut Observables,
+        sc: &mut Scratch,
+        t_end: f64,
+    ) -> FlowPoint {
         let (t, si, a) = (p.t, p.si, p.a);
-        let t_end = (t + gap).min(self.t_max);
         let seg = &self.segs[si];
         let vs = self.vs[si];
         // Moments at grid times inside (t, t_end].
@@ -513,23 +587,114 @@ impl<F: FlowMap> Sampler<F> {
         p.x += vs * dt - (a.q[0] - b.q[0]);
         p.t = t_end;
         p.a = b;
+        b
+    }
+
+    /// The velocity after a reset (drawn for a random target) and the noise
+    /// state (kept or re-drawn), stored in the lane.
+    #[inline(always)]
+    fn draw_reset(&self, p: &mut Lane) -> f64 {
+        let plus = p.si == 0;
+        let v = self.reset.draw_velocity(&mut p.rng);
+        p.si = usize::from(!self.reset.draw_noise(plus, &mut p.rng));
+        v
+    }
+
+    /// [`Sampler::step`] with the schedule's modifiers (see the module
+    /// docs): the segment ends at the exponential clock, the next periodic
+    /// reset time or the end of the refractory period, whichever is first.
+    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
+        // Inside a refractory period only the flips run (rate lambda).
+        let (rate, inv) = if p.held {
+            (self.lambda, self.inv_lambda)
+        } else {
+            (self.total_rate, self.inv_total_rate)
+        };
+        let gap = if rate > 0.0 {
+            p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
+        } else {
+            f64::INFINITY
+        };
+        let (mut t_end, mut edge) = (p.t + gap, Edge::Clock);
+        let (at, kind) = if p.held {
+            (p.hold_until, Edge::Release)
+        } else {
+            (p.next_periodic, Edge::Periodic)
+        };
+        if at <= t_end {
+            (t_end, edge) = (at, kind);
+        }
+        let t_end = t_end.min(self.t_max);
+        if p.held {
+            self.hold_to(p, obs, sc, t_end);
+        } else {
+            self.flow_to(p, obs, sc, t_end);
+        }
         if t_end >= self.t_max {
             p.done = true;
             return;
         }
         p.events += 1;
-        let plus = si == 0;
-        if p.rng.gen::<f64>() * self.total_rate < self.lambda {
-            p.si = 1 - si;
-            p.a = self.segs[p.si].at(b.v);
-        } else {
-            let v = self.reset.draw_velocity(&mut p.rng);
-            p.si = usize::from(!self.reset.draw_noise(plus, &mut p.rng));
-            p.a = match &self.at_vr {
-                Some(at) => at[p.si],
-                None => self.segs[p.si].at(v),
-            };
+        match edge {
+            Edge::Release => {
+                p.held = false;
+                p.a = self.segs[p.si].at(p.a.v);
+            }
+            Edge::Periodic => self.reset_scheduled(p),
+            Edge::Clock if p.held => p.si = 1 - p.si,
+            Edge::Clock => {
+                if p.rng.gen::<f64>() * self.total_rate < self.lambda {
+                    p.si = 1 - p.si;
+                    p.a = self.segs[p.si].at(p.a.v);
+                } else {
+                    self.reset_scheduled(p);
+                }
+            }
         }
+    }
+
+    /// A reset with the schedule's modifiers at p.t: velocity and noise by
+    /// the rule, x → x_r with position resetting, then a refractory period
+    /// (held at the reset velocity) if any; the next periodic time is the
+    /// first one after the reset, or after the refractory period.
+    fn reset_scheduled(&self, p: &mut Lane) {
+        let v = self.draw_reset(p);
+        p.a = match &self.at_vr {
+            Some(at) => at[p.si],
+            None => self.segs[p.si].at(v),
+        };
+        if let Some(x) = self.x_reset {
+            p.x = x;
+        }
+        let mut free = p.t;
+        if let Some(r) = self.refractory {
+            p.held = true;
+            p.hold_until = p.t + r.draw(&mut p.rng);
+            free = p.hold_until;
+        }
+        if let Some(per) = self.periodic {
+            p.next_periodic = per.next_after(free);
+        }
+    }
+
+    /// A held segment (refractory period) from p.t to `t_end`: v constant
+    /// at p.a.v, x linear in t, the held velocity's bin occupied.
+    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch, t_end: f64) {
+        let (t, v) = (p.t, p.a.v);
+        while p.k < self.times.len() && self.times[p.k] <= t_end {
+            let xk = p.x + v * (self.times[p.k] - t);
+            obs.record(p.k, v, xk);
+            p.msd += obs.msd_term(p.k, xk);
+            p.k += 1;
+        }
+        if t_end > self.burn_in {
+            let dw = t_end - t.max(self.burn_in);
+            p.int_v += v * dw;
+            p.int_v2 += v * v * dw;
+            sc.occ[obs.bin_of(v)] += dw;
+        }
+        p.x += v * (t_end - t);
+        p.t = t_end;
     }
 
     /// Close a particle: full bin crossings (occupation += crossings × tau)
@@ -553,6 +718,7 @@ impl<F: FlowMap> Sampler<F> {
             p.a.v,
             p.msd,
         );
+        obs.record_final_position(p.x);
         obs.steps += p.events;
     }
 
@@ -562,8 +728,14 @@ impl<F: FlowMap> Sampler<F> {
     fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
         for i in ids {
             let mut p = self.start(i);
-            while !p.done {
-                self.step(&mut p, obs, sc);
+            if self.plain {
+                while !p.done {
+                    self.step(&mut p, obs, sc);
+                }
+            } else {
+                while !p.done {
+                    self.step_scheduled(&mut p, obs, sc);
+                }
             }
             self.finish(&p, obs, sc);
         }
@@ -586,6 +758,11 @@ struct Lane {
     msd: f64,
     events: u64,
     done: bool,
+    /// Inside a refractory period (v held at p.a.v until `hold_until`).
+    held: bool,
+    hold_until: f64,
+    /// The next periodic reset time (∞ without a periodic clock).
+    next_periodic: f64,
 }
 
 /// Exp(rate) waiting time (∞ for rate 0), by the ziggurat sampler of

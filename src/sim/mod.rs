@@ -117,6 +117,10 @@ pub fn combine_units(
             && (o.v_lo, o.v_hi) == (total.v_lo, total.v_hi)
             && o.density_time.len() == total.density_time.len()
             && o.density_final.len() == total.density_final.len()
+            && match (&o.position, &total.position) {
+                (Some(a), Some(b)) => a.same(b),
+                (a, b) => a.is_none() && b.is_none(),
+            }
             && [&o.v, &o.v2, &o.x, &o.x2]
                 .iter()
                 .all(|a| a.len() == total.times.len());
@@ -251,14 +255,42 @@ impl SimSpec {
     }
 }
 
+/// With a periodic reset clock the long-time state is periodic in time
+/// (cycle [`crate::model::reset::Periodic::cycle`]), so the window time
+/// averages over [burn_in, t_max] are period averages only when the window
+/// holds a whole number of cycles (to a relative 1e-9): refused otherwise,
+/// naming `burn_in`.
+pub(crate) fn check_period_window(params: &Params, spec: &SimSpec) -> Result<()> {
+    let schedule = params.schedule();
+    let Some(periodic) = schedule.periodic else {
+        return Ok(());
+    };
+    let cycle = periodic.cycle(schedule.refractory);
+    let n = (spec.grid.t_max() - spec.burn_in) / cycle;
+    if !(n.round() >= 1.0 && (n - n.round()).abs() <= 1e-9 * n) {
+        return Err(Error::invalid(
+            "burn_in",
+            spec.burn_in,
+            format!(
+                "t_max - burn_in a whole number of periods {cycle} with --reset-period \
+                 (the window time averages are period averages; here {n} periods)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Least-squares weights w_k with Σ w_k y_k = (slope of y against t over the
 /// times in [burn_in, t_max]) / 2; all zero if fewer than two such times, or
 /// if v_r ≠ 0: then `<x>` ≠ 0 and `<x²>` carries the drift, so no Eq. (36) fit
 /// (with v_r = 0 the process is symmetric under (x, v, η) → -(x, v, η) and `<x>` = 0 exactly).
+/// All zero with position resetting too: x is then stationary, `<x²>` does
+/// not grow, and there is no diffusion coefficient to fit.
 pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> Vec<f64> {
     let inside = |t: f64| t >= burn_in;
     let n = times.iter().filter(|&&t| inside(t)).count();
-    if n < 2 || params.reset().target().moments().0 != 0.0 {
+    let stationary_x = params.schedule().position.is_some();
+    if n < 2 || params.reset().target().moments().0 != 0.0 || stationary_x {
         return vec![0.0; times.len()];
     }
     let mean = times.iter().filter(|&&t| inside(t)).sum::<f64>() / n as f64;
@@ -321,6 +353,83 @@ pub struct Observables {
     /// Weights of that fit per grid time (zero outside the window).
     #[serde(default)]
     pub msd_weights: Vec<f64>,
+    /// With position resetting: the histogram of x(t_max), P_s(x) (absent
+    /// otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<PositionHistogram>,
+}
+
+/// Histogram of the position at t_max on [lo, hi] (position resetting:
+/// the stationary P_s(x); range from
+/// [`crate::model::reset::PositionReset::range`]), with the mass outside.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PositionHistogram {
+    /// Lower end of the range.
+    pub lo: f64,
+    /// Upper end of the range.
+    pub hi: f64,
+    /// Per-particle indicator of x(t_max) in each bin, divided by the bin width.
+    pub density: Vec<MeanAcc>,
+    /// Per-particle indicator of x(t_max) outside [lo, hi].
+    pub outside: MeanAcc,
+}
+
+impl PositionHistogram {
+    fn new(params: &Params, spec: &SimSpec) -> Option<Self> {
+        let reset = params.schedule().position?;
+        let (v_lo, v_hi) = params.bounds();
+        let v_max = v_lo.abs().max(v_hi.abs());
+        let (lo, hi) = reset.range(v_max, params.rate(), params.schedule(), spec.grid.t_max());
+        Some(PositionHistogram {
+            lo,
+            hi,
+            density: vec![MeanAcc::new(); spec.bins],
+            outside: MeanAcc::new(),
+        })
+    }
+
+    /// Bin width.
+    pub fn bin_width(&self) -> f64 {
+        (self.hi - self.lo) / self.density.len() as f64
+    }
+
+    /// Add one particle's x(t_max).
+    fn push(&mut self, x: f64) {
+        let w = self.bin_width();
+        let inside = x >= self.lo && x < self.hi;
+        let bin = ((x - self.lo) / w).floor();
+        for (b, d) in self.density.iter_mut().enumerate() {
+            d.push(if inside && bin == b as f64 {
+                1.0 / w
+            } else {
+                0.0
+            });
+        }
+        self.outside.push(if inside { 0.0 } else { 1.0 });
+    }
+
+    fn merge(&mut self, o: &PositionHistogram) {
+        merge_all(&mut self.density, &o.density);
+        self.outside.merge(&o.outside);
+    }
+
+    /// Same geometry.
+    fn same(&self, o: &PositionHistogram) -> bool {
+        (self.lo, self.hi, self.density.len()) == (o.lo, o.hi, o.density.len())
+    }
+
+    /// Rows (x, p, p_err): bin centre, density and its standard error.
+    pub fn rows(&self) -> Vec<[f64; 3]> {
+        let w = self.bin_width();
+        self.density
+            .iter()
+            .enumerate()
+            .map(|(b, d)| [self.lo + (b as f64 + 0.5) * w, d.mean(), d.sem()])
+            .collect()
+    }
+
+    /// Header for [`PositionHistogram::rows`].
+    pub const HEADER: [&'static str; 3] = ["x", "p", "p_err"];
 }
 
 impl Observables {
@@ -343,6 +452,16 @@ impl Observables {
             steps: 0,
             msd_fit_d: MeanAcc::new(),
             msd_weights: msd_fit_weights(spec.grid.times(), spec.burn_in, params),
+            position: PositionHistogram::new(params, spec),
+        }
+    }
+
+    /// Add one particle's position at t_max to the histogram of P_s(x)
+    /// (position resetting; nothing otherwise).
+    #[inline]
+    pub fn record_final_position(&mut self, x: f64) {
+        if let Some(h) = &mut self.position {
+            h.push(x);
         }
     }
 
@@ -414,6 +533,9 @@ impl Observables {
         merge_all(&mut self.density_final, &o.density_final);
         self.steps += o.steps;
         self.msd_fit_d.merge(&o.msd_fit_d);
+        if let (Some(a), Some(b)) = (&mut self.position, &o.position) {
+            a.merge(b);
+        }
     }
 
     /// Number of particles accumulated.
@@ -489,6 +611,11 @@ impl Observables {
             v2_final_err: self.v2[last].sem(),
             x2_final: self.x2[last].mean(),
             x2_final_err: self.x2[last].sem(),
+            x_final: self.x[last].mean(),
+            x_final_err: self.x[last].sem(),
+            x_range: self.position.as_ref().map(|h| [h.lo, h.hi]),
+            x_outside: self.position.as_ref().map(|h| h.outside.mean()),
+            x_outside_err: self.position.as_ref().map(|h| h.outside.sem()),
             t_max: self.times[last],
             particles: self.particles(),
             steps: self.steps,
@@ -517,6 +644,18 @@ pub struct SimSummary {
     pub x2_final: f64,
     /// Its standard error.
     pub x2_final_err: f64,
+    /// Ensemble `<x>` at t_max.
+    pub x_final: f64,
+    /// Its standard error.
+    pub x_final_err: f64,
+    /// With position resetting: the range of the histogram of P_s(x)
+    /// (`position.csv`), else None.
+    pub x_range: Option<[f64; 2]>,
+    /// With position resetting: the fraction of particles with x(t_max)
+    /// outside that range, else None.
+    pub x_outside: Option<f64>,
+    /// Its standard error.
+    pub x_outside_err: Option<f64>,
     /// Final time.
     pub t_max: f64,
     /// Number of particles.

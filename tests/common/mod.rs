@@ -1,9 +1,12 @@
 //! Shared helpers of the integration tests: run the `irtp` binary, parse
 //! its JSON, and check the bad-input contract (one line, exit 2, nothing
-//! written); [`models`] holds the shared parameter sets. Each test crate uses
+//! written); [`models`] holds the shared parameter sets,
+//! [`linear_protocols`] the linear-drag closed forms of the reset-protocol
+//! modifiers. Each test crate uses
 //! a subset.
 #![allow(dead_code)]
 
+pub mod linear_protocols;
 pub mod models;
 pub mod spectral;
 pub mod stats;

@@ -37,6 +37,22 @@ impl Periodic {
     }
 }
 
+impl Periodic {
+    /// The period of the long-time (cyclostationary) state: T, or m T with
+    /// a fixed refractory period D, whose resets fall every
+    /// m = floor(D/T) + 1 periods (the reset times inside a refractory
+    /// period or at its end are skipped). Window time averages are period
+    /// averages only over a whole number of these.
+    pub fn cycle(&self, refractory: Option<super::Refractory>) -> f64 {
+        match refractory {
+            Some(super::Refractory::Fixed { duration }) => {
+                ((duration / self.period).floor() + 1.0) * self.period
+            }
+            _ => self.period,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

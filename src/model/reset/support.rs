@@ -119,14 +119,20 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
         // answers are those without position resetting.
         F::Position => matches!(
             solver,
-            S::FpTransient
+            S::Exact
+                | S::Euler
+                | S::FpTransient
                 | S::Backward
                 | S::MfptExact
                 | S::MfptEuler
                 | S::FptDistribution
                 | S::MfptOptimize
         ),
-        F::RefractoryExp | F::RefractoryFixed | F::Periodic => false,
+        // The particle samplers run every modifier: the exact sampler
+        // exactly, the Euler schemes with their O(dt) timing.
+        F::Periodic | F::RefractoryExp | F::RefractoryFixed => {
+            matches!(solver, S::Exact | S::Euler | S::MfptExact | S::MfptEuler)
+        }
     }
 }
 
