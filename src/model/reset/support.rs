@@ -119,14 +119,20 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
         // answers are those without position resetting.
         F::Position => matches!(
             solver,
-            S::FpTransient
+            S::FpStationary
+                | S::ClosedForm
+                | S::FpTransient
                 | S::Backward
                 | S::MfptExact
                 | S::MfptEuler
                 | S::FptDistribution
                 | S::MfptOptimize
         ),
-        F::RefractoryExp | F::RefractoryFixed | F::Periodic => false,
+        // Markovian: extra states of the chain, extra unknowns of the
+        // backward equations, extra moments of the generator.
+        F::RefractoryExp => matches!(solver, S::FpStationary | S::Backward | S::ClosedForm),
+        F::RefractoryFixed => false,
+        F::Periodic => matches!(solver, S::ClosedForm),
     }
 }
 
