@@ -60,7 +60,12 @@ fn fp_refractory_matches_linear_closed_forms() {
         close(s.mass, 1.0, 1e-12, &format!("mass {what}"));
         let mr = 1.5 * 0.4 / (1.0 + 1.5 * 0.4);
         close(s.refractory_mass, mr, 1e-10, &format!("m_R {what}"));
-        close(s.v_mean, lin::v_mean(&p).unwrap(), 2e-5, &format!("<v> {what}"));
+        close(
+            s.v_mean,
+            lin::v_mean(&p).unwrap(),
+            2e-5,
+            &format!("<v> {what}"),
+        );
         close(s.v2, lin::v2(&p).unwrap(), 2e-5, &format!("<v2> {what}"));
         close(s.d_eff, lin::d_eff(&p).unwrap(), 2e-5, &format!("D {what}"));
     }
@@ -80,7 +85,12 @@ fn refractory_mean_to_zero_is_the_plain_protocol() {
     }
     let plain = linear(1.0, 0.6, 1.5, 0.2);
     let held = with_schedule(plain, None, None, Some("exp:mean=1e-9"));
-    close(lin::d_eff(&held).unwrap(), lin::d_eff(&plain).unwrap(), 1e-8, "D");
+    close(
+        lin::d_eff(&held).unwrap(),
+        lin::d_eff(&plain).unwrap(),
+        1e-8,
+        "D",
+    );
 }
 
 /// Position resetting: the stationary `<x>`, `<x²>` of the x-weighted chain
@@ -140,7 +150,10 @@ fn periodic_linear_moments_jump_and_relax() {
 #[test]
 fn backward_refractory_identities() {
     let opts = BackwardOptions::with_cells(2000);
-    for (base, v0, vt) in [(tan(0.9, 1.0), -0.249, 0.5), (linear(1.0, 0.6, 0.7, 0.1), 0.0, 0.4)] {
+    for (base, v0, vt) in [
+        (tan(0.9, 1.0), -0.249, 0.5),
+        (linear(1.0, 0.6, 0.7, 0.1), 0.0, 0.4),
+    ] {
         let plain = base
             .with_reset(base.reset().target(), NoiseAtReset::Redrawn)
             .unwrap();

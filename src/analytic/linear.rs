@@ -35,8 +35,8 @@
 //! ```
 
 use crate::error::{Error, Result};
-use crate::model::reset::{NoiseAtReset, Refractory};
 use crate::model::reset::Solver;
+use crate::model::reset::{NoiseAtReset, Refractory};
 use crate::model::Reset;
 use crate::model::{DragLaw, Params};
 
@@ -146,8 +146,10 @@ pub fn d_eff(p: &Params) -> Result<f64> {
         NoiseAtReset::Redrawn => 0.0,
     };
     let beta = alpha / (2.0 * l + r - r * kept / (1.0 + 2.0 * l * m));
-    Ok(alpha * (b - vm * a) + beta * c + (alpha + m) * mr * (m2 - vm * m1)
-        - vm * m * mr * (m1 - vm))
+    Ok(
+        alpha * (b - vm * a) + beta * c + (alpha + m) * mr * (m2 - vm * m1)
+            - vm * m * mr * (m1 - vm),
+    )
 }
 
 /// Stationary (`<x>`, `<x²>`) under position resetting to x_r (needs

@@ -44,8 +44,8 @@
 
 use super::linear::{eta_decay, require_linear};
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::reset::Solver;
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Params;
 
 const N: usize = 7;

@@ -203,7 +203,9 @@ impl Held {
         let (z, a) = self.responses(g);
         let t = self.cycle(&a);
         let y0s = state_sums(&y0);
-        let c = self.k_inv(self.influx(y0s[0], y0s[1])).map(|x| self.kappa * x);
+        let c = self
+            .k_inv(self.influx(y0s[0], y0s[1]))
+            .map(|x| self.kappa * x);
         // 1 - T00 = T10 (columns sum to 1), without the cancellation.
         let (al, be) = (t[1][0], t[0][1]);
         let j = if al >= be {
@@ -217,7 +219,8 @@ impl Held {
         ];
         let cont: f64 = (0..g.cells())
             .map(|i| {
-                let y = y0[i][0] + y0[i][1]
+                let y = y0[i][0]
+                    + y0[i][1]
                     + j[0] * (z[0][i][0] + z[0][i][1])
                     + j[1] * (z[1][i][0] + z[1][i][1]);
                 f[i] * y
@@ -239,6 +242,5 @@ impl Held {
 
 /// (Σ u+, Σ u-).
 pub(crate) fn state_sums(u: &[[f64; 2]]) -> [f64; 2] {
-    u.iter()
-        .fold([0.0, 0.0], |s, c| [s[0] + c[0], s[1] + c[1]])
+    u.iter().fold([0.0, 0.0], |s, c| [s[0] + c[0], s[1] + c[1]])
 }
