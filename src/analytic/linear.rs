@@ -35,12 +35,12 @@
 //! ```
 
 use crate::error::{Error, Result};
-use crate::model::reset::NoiseAtReset;
 use crate::model::reset::Solver;
+use crate::model::reset::{NoiseAtReset, Refractory};
 use crate::model::Reset;
 use crate::model::{DragLaw, Params};
 
-fn require_linear(p: &Params) -> Result<()> {
+pub(super) fn require_linear(p: &Params) -> Result<()> {
     p.require(Solver::ClosedForm)?;
     if p.drag() != DragLaw::Linear {
         return Err(Error::invalid(
@@ -61,27 +61,63 @@ pub fn eta_decay(p: &Params) -> f64 {
     }
 }
 
-/// Stationary `<v η>`.
+/// The refractory factors: (M, m_C, m_R) with M the mean refractory time
+/// (0 without a refractory period), m_C = 1/(1 + rM) and m_R = rM/(1 + rM)
+/// the stationary probabilities of the flowing and the held phase
+/// (docs/equations.md, entry (R3)).
+fn phases(p: &Params) -> Result<(f64, f64, f64)> {
+    if let Some(t) = p.schedule().periodic {
+        return Err(Error::invalid(
+            "reset_period",
+            t.period,
+            "none for the stationary closed forms (periodic resetting has no stationary state; the time-dependent linear moments run it)",
+        ));
+    }
+    let m = match p.schedule().refractory {
+        None => 0.0,
+        Some(Refractory::Exp { mean }) => mean,
+        Some(r @ Refractory::Fixed { .. }) => {
+            return Err(Error::invalid(
+                "refractory",
+                r.spec(),
+                "exp:mean=M for the linear closed forms",
+            ))
+        }
+    };
+    let rm = p.rate() * m;
+    Ok((m, 1.0 / (1.0 + rm), rm / (1.0 + rm)))
+}
+
+/// Stationary `<v η>`: Σ² m_C / (1 + 2λ + r) (the held phase contributes
+/// `<u>` `<η>`_R = 0).
 pub fn v_eta(p: &Params) -> Result<f64> {
     require_linear(p)?;
-    Ok(p.sigma() * p.sigma() / (1.0 + 2.0 * p.lambda() + p.rate()))
+    let (_, mc, _) = phases(p)?;
+    Ok(p.sigma() * p.sigma() * mc / (1.0 + 2.0 * p.lambda() + p.rate()))
 }
 
-/// Stationary `<v>`.
+/// Stationary `<v>`: the flowing part a = r m_C `<v_r>` / (1 + r) plus the
+/// held part m_R `<v_r>`, Eq. (R3).
 pub fn v_mean(p: &Params) -> Result<f64> {
     require_linear(p)?;
+    let (_, mc, mr) = phases(p)?;
     let (m1, _) = p.reset().target().moments();
-    Ok(p.rate() * m1 / (1.0 + p.rate()))
+    Ok(p.rate() * mc * m1 / (1.0 + p.rate()) + mr * m1)
 }
 
-/// Stationary `<v²>`.
+/// Stationary `<v²>`: (2 `<vη>` + r m_C `<v_r²>`) / (2 + r) + m_R `<v_r²>`,
+/// Eq. (R3).
 pub fn v2(p: &Params) -> Result<f64> {
     let c = v_eta(p)?;
+    let (_, mc, mr) = phases(p)?;
     let (_, m2) = p.reset().target().moments();
-    Ok((2.0 * c + p.rate() * m2) / (2.0 + p.rate()))
+    Ok((2.0 * c + p.rate() * mc * m2) / (2.0 + p.rate()) + mr * m2)
 }
 
-/// Effective diffusion coefficient D_eff = lim `<(x - <x>)²>/(2t)` (needs λ > 0).
+/// Effective diffusion coefficient D_eff = lim `<(x - <x>)²>/(2t)` (needs
+/// λ > 0), from the linear solution of the Poisson equation of the
+/// generator, Eq. (R3); without a refractory period
+/// (Var v + `<vη>`/κ) / (1 + r).
 pub fn d_eff(p: &Params) -> Result<f64> {
     if !(p.lambda() > 0.0) {
         return Err(Error::invalid(
@@ -90,9 +126,68 @@ pub fn d_eff(p: &Params) -> Result<f64> {
             "lambda > 0 (with lambda = 0 the motion is ballistic)",
         ));
     }
-    let m = v_mean(p)?;
-    let var = v2(p)? - m * m;
-    Ok((var + v_eta(p)? / eta_decay(p)) / (1.0 + p.rate()))
+    if let Some(x) = p.schedule().position {
+        return Err(Error::invalid(
+            "reset_position",
+            x.x,
+            "none for D_eff (with position resetting the position does not diffuse: see the stationary <x>, <x^2>)",
+        ));
+    }
+    let (l, r) = (p.lambda(), p.rate());
+    let (m, mc, mr) = phases(p)?;
+    let (m1, m2) = p.reset().target().moments();
+    let vm = v_mean(p)?;
+    let c = v_eta(p)?;
+    let a = r * mc * m1 / (1.0 + r);
+    let b = (2.0 * c + r * mc * m2) / (2.0 + r);
+    let alpha = 1.0 / (1.0 + r);
+    let kept = match p.reset().noise() {
+        NoiseAtReset::Kept => 1.0,
+        NoiseAtReset::Redrawn => 0.0,
+    };
+    let beta = alpha / (2.0 * l + r - r * kept / (1.0 + 2.0 * l * m));
+    Ok(
+        alpha * (b - vm * a) + beta * c + (alpha + m) * mr * (m2 - vm * m1)
+            - vm * m * mr * (m1 - vm),
+    )
+}
+
+/// Stationary (`<x>`, `<x²>`) under position resetting to x_r (needs
+/// r > 0), with or without an exponential refractory period, Eq. (R4).
+pub fn position_moments(p: &Params) -> Result<(f64, f64)> {
+    require_linear(p)?;
+    let xr = match p.schedule().position {
+        Some(x) => x.x,
+        None => {
+            return Err(Error::invalid(
+                "reset_position",
+                "none",
+                "a reset position (without it the position has no stationary law)",
+            ))
+        }
+    };
+    let (l, r) = (p.lambda(), p.rate());
+    if !(r > 0.0) {
+        return Err(Error::invalid(
+            "rate",
+            r,
+            "rate > 0 (without resets the position has no stationary law)",
+        ));
+    }
+    let (m, mc, mr) = phases(p)?;
+    let (m1, m2) = p.reset().target().moments();
+    let c = v_eta(p)?;
+    let a = r * mc * m1 / (1.0 + r);
+    let b = (2.0 * c + r * mc * m2) / (2.0 + r);
+    // Held phase (x moves at u): κ x_R = m_R <u> + r x_r m_C, etc.
+    let kx_r = mr * m1 + r * xr * mc;
+    let kxu_r = mr * m2 + r * xr * m1 * mc;
+    let x_c = (a + kx_r) / r;
+    let xe_c = c / (2.0 * l + r);
+    let xv_c = (b + xe_c + kxu_r) / (1.0 + r);
+    let kx2_r = 2.0 * m * kxu_r + r * xr * xr * mc;
+    let x2_c = (2.0 * xv_c + kx2_r) / r;
+    Ok((x_c + m * kx_r, x2_c + m * kx2_r))
 }
 
 #[cfg(test)]

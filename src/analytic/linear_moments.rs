@@ -42,10 +42,10 @@
 //! accurate to a few ulp per substep (measured: 1e-14 relative against the
 //! small-t expansion and the explicit `<v²>`, see the tests).
 
-use super::linear::{eta_decay, v_eta};
+use super::linear::{eta_decay, require_linear};
 use crate::error::{finite, Error, Result};
-use crate::model::reset::Reset;
 use crate::model::reset::Solver;
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Params;
 
 const N: usize = 7;
@@ -81,7 +81,7 @@ type Mat = [[f64; N]; N];
 
 /// A and b of u' = A u + b (rows: the moment equations above).
 fn system(p: &Params) -> Result<(Mat, [f64; N])> {
-    v_eta(p)?; // refuses other drag laws
+    require_linear(p)?; // refuses other drag laws
     let (l, r, s2) = (p.lambda(), p.rate(), p.sigma() * p.sigma());
     let eta_decay = eta_decay(p);
     let (m1, m2) = p.reset().target().moments();
@@ -102,6 +102,18 @@ fn system(p: &Params) -> Result<(Mat, [f64; N])> {
     b[V] = r * m1;
     b[VE] = s2;
     b[V2] = r * m2;
+    if let Some(x) = p.schedule().position {
+        // A reset also sends x to x_r, Eq. (R4): f(x_r, v_r, η') for
+        // f = x, xη, xv, x² averages to x_r, 0, x_r <v_r>, x_r².
+        let xr = x.x;
+        a[X][X] = -r;
+        b[X] = r * xr;
+        a[XE][XE] = -(2.0 * l + r);
+        a[XV][X] = 0.0;
+        b[XV] = r * xr * m1;
+        a[X2][X2] = -r;
+        b[X2] = r * xr * xr;
+    }
     Ok((a, b))
 }
 
@@ -149,10 +161,66 @@ fn propagator(a: &Mat, b: &[f64; N], h: f64) -> ([[f64; N]; N], [f64; N]) {
     (e, w)
 }
 
+/// Advance u by `span` with the exact propagator (substeps h ρ ≤ ¼).
+fn advance(a: &Mat, b: &[f64; N], rho: f64, u: &mut [f64; N], span: f64, at: f64) -> Result<()> {
+    if !(span > 0.0) {
+        return Ok(());
+    }
+    let steps = (span * rho * 4.0).ceil().max(1.0);
+    if !(steps <= 1e8) {
+        return Err(Error::invalid(
+            "times",
+            at,
+            "t * (2 + r + 2 lambda) <= 2.5e7",
+        ));
+    }
+    let (e, w) = propagator(a, b, span / steps);
+    for _ in 0..steps as u64 {
+        let eu = mat_vec(&e, u);
+        for i in 0..N {
+            u[i] = eu[i] + w[i];
+        }
+    }
+    Ok(())
+}
+
+/// The jump map of a periodic reset, Eq. (R5): v → u drawn from the
+/// target (independent of everything else), η kept or re-drawn (<η> = 0
+/// either way), x kept or sent to x_r.
+fn jump(p: &Params, u: &mut [f64; N]) {
+    let (m1, m2) = p.reset().target().moments();
+    u[V] = m1;
+    u[VE] = 0.0;
+    u[V2] = m2;
+    match p.schedule().position {
+        Some(x) => {
+            u[X] = x.x;
+            u[XE] = 0.0;
+            u[XV] = x.x * m1;
+            u[X2] = x.x * x.x;
+        }
+        None => {
+            if p.reset().noise() == NoiseAtReset::Redrawn {
+                u[XE] = 0.0;
+            }
+            u[XV] = m1 * u[X];
+        }
+    }
+}
+
 /// Exact moments of the Newtonian IRTP at `times` (sorted, >= 0) from
-/// x = v = 0, η = ±Σ with probability ½.
+/// x = v = 0, η = ±Σ with probability ½. With periodic resetting the
+/// moments at t = kT are those just after the reset (paths are
+/// right-continuous); no refractory period.
 pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
     p.require(Solver::ClosedForm)?;
+    if let Some(r) = p.schedule().refractory {
+        return Err(Error::invalid(
+            "refractory",
+            r.spec(),
+            "none for the time-dependent linear moments (the stationary closed forms run exp:mean=M)",
+        ));
+    }
     let (a, b) = system(p)?;
     let rho = (0..N).map(|i| a[i][i].abs()).fold(1.0, f64::max);
     let mut out = LinearMoments {
@@ -164,6 +232,8 @@ pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
         xv: Vec::new(),
         x2: Vec::new(),
     };
+    let period = p.schedule().periodic.map(|t| t.period);
+    let mut resets = 0.0;
     let mut u = [0.0; N];
     let mut t = 0.0;
     for &tk in times {
@@ -171,22 +241,16 @@ pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
         if !(tk >= t) {
             return Err(Error::invalid("times", tk, "sorted times >= 0"));
         }
-        let span = tk - t;
-        let steps = (span * rho * 4.0).ceil().max(1.0);
-        if !(steps <= 1e8) {
-            return Err(Error::invalid(
-                "times",
-                tk,
-                "t * (2 + r + 2 lambda) <= 2.5e7",
-            ));
-        }
-        let (e, w) = propagator(&a, &b, span / steps);
-        for _ in 0..steps as u64 {
-            let eu = mat_vec(&e, &u);
-            for i in 0..N {
-                u[i] = eu[i] + w[i];
+        if let Some(tp) = period {
+            // Every reset time in (t, tk], counted so as not to drift.
+            while (resets + 1.0) * tp <= tk {
+                resets += 1.0;
+                advance(&a, &b, rho, &mut u, resets * tp - t, tk)?;
+                t = resets * tp;
+                jump(p, &mut u);
             }
         }
+        advance(&a, &b, rho, &mut u, tk - t, tk)?;
         t = tk;
         out.t.push(tk);
         out.v_mean.push(u[V]);

@@ -629,6 +629,13 @@ impl R0Density {
     /// From validated parameters; requires rate = 0.
     pub fn from_params(p: &Params) -> Result<Self> {
         p.require(Solver::ClosedForm)?;
+        if let Some(t) = p.schedule().periodic {
+            return Err(Error::invalid(
+                "reset_period",
+                t.period,
+                "none (the closed-form density exists only without resetting)",
+            ));
+        }
         if p.rate() != 0.0 {
             return Err(Error::invalid(
                 "rate",

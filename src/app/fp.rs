@@ -251,10 +251,11 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
         });
     }
     let wall = start.elapsed().as_secs_f64();
-    let summary = json!({
+    let mut summary = json!({
         "v2": s.v2,
         "v_mean": s.v_mean,
         "d_eff": s.d_eff,
+        "refractory_mass": s.refractory_mass,
         "cells": s.cells,
         "mass": s.mass,
         "mesh": s.mesh,
@@ -266,16 +267,48 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> crate::Result<Outcome> {
         "params": params,
         "wall_time_s": wall,
     });
+    // With position resetting the position has a stationary law: <x>, <x²>
+    // replace D_eff, which would be meaningless.
+    let diffusion = match (s.x_mean, s.x2) {
+        (Some(x1), Some(x2)) => {
+            let obj = summary.as_object_mut().expect("a JSON object");
+            obj.remove("d_eff");
+            obj.insert("x_mean".into(), json!(x1));
+            obj.insert("x2".into(), json!(x2));
+            format!(
+                "<x> = {}  <x^2> = {}  (position resetting: no D_eff)",
+                fmt_digits(x1, 12),
+                fmt_digits(x2, 12)
+            )
+        }
+        _ => format!("D_eff = {}", fmt_digits(s.d_eff, 12)),
+    };
+    // The refractory point mass as a last row of zero width.
+    let point = (s.refractory_mass > 0.0).then(|| {
+        [
+            params.reset_velocity(),
+            s.refractory_mass,
+            s.refractory[0],
+            s.refractory[1],
+            0.0,
+        ]
+    });
     let density = Table::from_rows(
         "density",
         &["v", "p", "p_plus", "p_minus", "dv"],
-        (0..s.cells).map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]]),
+        (0..s.cells)
+            .map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]])
+            .chain(point),
     );
+    let held = if s.refractory_mass > 0.0 {
+        format!("  point mass = {}", fmt_digits(s.refractory_mass, 12))
+    } else {
+        String::new()
+    };
     let text = format!(
-        "<v^2> = {}  <v> = {}  D_eff = {}  ({} cells, {} mesh{})\n",
+        "<v^2> = {}  <v> = {}  {diffusion}{held}  ({} cells, {} mesh{})\n",
         fmt_digits(s.v2, 12),
         fmt_digits(s.v_mean, 12),
-        fmt_digits(s.d_eff, 12),
         s.cells,
         s.mesh.name(),
         if s.extrapolated { ", extrapolated" } else { "" }

@@ -27,6 +27,8 @@
 mod grid;
 mod moments;
 mod operator;
+mod position;
+mod refractory;
 mod solve;
 mod stationary;
 mod transient;

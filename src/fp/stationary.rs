@@ -1,6 +1,8 @@
 //! Direct stationary solve, `<v>`, `<v²>` (paper Eq. (33)) and the exact D_eff.
 
 use super::grid::{Grid, Mesh};
+use super::position::stationary_x;
+use super::refractory::Held;
 use super::solve::{solve_free, solve_reset};
 use crate::error::{Error, Result};
 use crate::model::reset::NoiseAtReset;
@@ -49,6 +51,11 @@ pub struct Moments {
     pub v2: f64,
     /// D_eff = ∫_0^∞ <δv(0) δv(t)>_ss dt (∞ for λ = 0: ballistic).
     pub d_eff: f64,
+    /// Refractory mass q+ + q- (the point mass at the held velocity; 0
+    /// without a refractory period). Included in `mass`, `v_mean`, `v2`.
+    pub refractory_mass: f64,
+    /// Stationary (`<x>`, `<x²>`) under position resetting, else None.
+    pub x_moments: Option<[f64; 2]>,
 }
 
 /// Stationary state of the discrete forward equations (paper Eqs. (11)-(12) with
@@ -83,8 +90,21 @@ pub struct Stationary {
     pub v_mean: f64,
     /// `<v²>_ss` (extrapolated if `extrapolated`).
     pub v2: f64,
-    /// D_eff (extrapolated if `extrapolated`).
+    /// D_eff (extrapolated if `extrapolated`). With position resetting
+    /// the position does not diffuse: this is then only the integral of the
+    /// velocity autocorrelation, and the CLI does not report it.
     pub d_eff: f64,
+    /// The refractory point mass q+ + q- at the held velocity (v_r, or
+    /// spread as the random target), fine mesh; 0 without a refractory
+    /// period. `p` is the continuous part only: Σ p Δv + this = 1.
+    pub refractory_mass: f64,
+    /// Its + and - parts.
+    pub refractory: [f64; 2],
+    /// Stationary `<x>` under position resetting (extrapolated if
+    /// `extrapolated`), else None.
+    pub x_mean: Option<f64>,
+    /// Stationary `<x²>` under position resetting, else None.
+    pub x2: Option<f64>,
     /// Whether v_mean, v2, d_eff are Richardson-extrapolated.
     pub extrapolated: bool,
     /// Observables on the fine mesh.
@@ -115,6 +135,13 @@ fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
             "lambda > 0 when rate = 0 (otherwise each state sits at its edge forever)",
         ));
     }
+    if let (Some(x), false) = (p.schedule().position, p.rate() > 0.0) {
+        return Err(Error::invalid(
+            "reset_position",
+            x.x,
+            "a reset rate > 0 (without resets the position has no stationary law)",
+        ));
+    }
     Ok(())
 }
 
@@ -131,9 +158,17 @@ pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Resu
     }
 }
 
-/// Stationary cell masses [m+, m-] (sum 1) of the discrete forward equations.
-pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
+/// Stationary continuous cell masses [m+, m-] and refractory masses
+/// (q+, q-) (total 1) of the discrete forward equations.
+pub(crate) fn stationary_masses(
+    g: &Grid,
+    p: &Params,
+    held: Option<&Held>,
+) -> Result<(Vec<[f64; 2]>, [f64; 2])> {
     let (lambda, r) = (p.lambda(), p.rate());
+    if let (Some(h), true) = (held, r > 0.0) {
+        return h.stationary(g);
+    }
     let n = g.cells();
     let mut m = if r > 0.0 {
         // Flips conserve the state masses' sum and equalise them: M± = 1/2
@@ -157,7 +192,7 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
         c[0] /= total;
         c[1] /= total;
     }
-    Ok(m)
+    Ok((m, [0.0; 2]))
 }
 
 /// `<v>`, `<v²>` and D_eff of the discrete chain with stationary masses `m`.
@@ -172,7 +207,18 @@ pub(crate) fn stationary_masses(g: &Grid, p: &Params) -> Result<Vec<[f64; 2]>> {
 /// vanishes); so Y± = ±F+/κ (the free null-space component cπ does not
 /// change Σ f y since Σ π f = 0), and By = -(π∘f) - (re-injection of
 /// r Y+, r Y- into e_{k+}, e_{k-}).
-pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
+///
+/// With a refractory block `held` the masses `q` sit at its held
+/// velocities and D_eff comes from [`Held::d_eff`]; with position
+/// resetting the stationary `<x>`, `<x²>` come from
+/// [`stationary_x`].
+pub(crate) fn moments(
+    g: &Grid,
+    p: &Params,
+    held: Option<&Held>,
+    m: &[[f64; 2]],
+    q: [f64; 2],
+) -> Moments {
     let (lambda, r) = (p.lambda(), p.rate());
     let n = g.cells();
     let mut mass = 0.0;
@@ -184,7 +230,20 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
         v1 += w * v;
         v2 += w * v * v;
     }
-    let d_eff = if lambda > 0.0 {
+    let qt = q[0] + q[1];
+    if let Some(h) = held {
+        let (u1, u2) = h.velocity_moments();
+        mass += qt;
+        v1 += qt * u1;
+        v2 += qt * u2;
+    }
+    let x_moments = p
+        .schedule()
+        .position
+        .map(|x| stationary_x(g, p, held, m, q, x.x));
+    let d_eff = if let (true, Some(h)) = (lambda > 0.0 && r > 0.0, held) {
+        h.d_eff(g, m, q, v1)
+    } else if lambda > 0.0 {
         let f: Vec<f64> = g.centres.iter().map(|&v| v - v1).collect();
         let mut b: Vec<[f64; 2]> = m
             .iter()
@@ -214,6 +273,8 @@ pub(crate) fn moments(g: &Grid, p: &Params, m: &[[f64; 2]]) -> Moments {
         v_mean: v1,
         v2,
         d_eff,
+        refractory_mass: qt,
+        x_moments,
     }
 }
 
@@ -248,12 +309,14 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
     } else {
         make_grid(params, opts.mesh, opts.cells, 0)?
     };
-    let m = stationary_masses(&g, params)?;
-    let fine = moments(&g, params, &m);
+    let held = Held::new(&g, params);
+    let (m, q) = stationary_masses(&g, params, held.as_ref())?;
+    let fine = moments(&g, params, held.as_ref(), &m, q);
     let coarse = if opts.extrapolate {
         let gc = make_grid(params, opts.mesh, opts.cells / 2, 0)?;
-        let mc = stationary_masses(&gc, params)?;
-        Some(moments(&gc, params, &mc))
+        let hc = Held::new(&gc, params);
+        let (mc, qc) = stationary_masses(&gc, params, hc.as_ref())?;
+        Some(moments(&gc, params, hc.as_ref(), &mc, qc))
     } else {
         None
     };
@@ -267,7 +330,17 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         ),
         None => (fine.v_mean, fine.v2, fine.d_eff),
     };
-    for (name, x) in [("<v>", v_mean), ("<v^2>", v2)] {
+    let xm = |i: usize| match &coarse {
+        Some(c) => fine.x_moments.zip(c.x_moments).map(|(f, c)| ex(f[i], c[i])),
+        None => fine.x_moments.map(|f| f[i]),
+    };
+    let (x_mean, x2) = (xm(0), xm(1));
+    for (name, x) in [
+        ("<v>", v_mean),
+        ("<v^2>", v2),
+        ("<x>", x_mean.unwrap_or(0.0)),
+        ("<x^2>", x2.unwrap_or(0.0)),
+    ] {
         if !x.is_finite() {
             return Err(Error::Numerical {
                 method: "fp stationary",
@@ -295,6 +368,10 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         v_mean,
         v2,
         d_eff,
+        refractory_mass: q[0] + q[1],
+        refractory: q,
+        x_mean,
+        x2,
         extrapolated: coarse.is_some(),
         fine,
         coarse,

@@ -21,7 +21,7 @@
 
 use super::Problem;
 use crate::error::{Error, Result};
-use crate::model::reset::{Reset, Target};
+use crate::model::reset::{Refractory, Reset, Target};
 use crate::model::Drag;
 use serde::{Deserialize, Serialize};
 
@@ -464,10 +464,13 @@ fn solve_mesh(
     let nodes = m.v.len();
     let Assembly {
         band: mut a,
-        cp,
-        cm,
+        mut cp,
+        mut cm,
     } = assemble(p, m, rate, sign);
     let mut b = rhs(m, &src);
+    if rate > 0.0 {
+        refractory(p, m, &src, &mut cp, &mut cm, &mut b)?;
+    }
     a.factor()?;
     a.solve(&mut b);
     let mut x = b;
@@ -486,6 +489,57 @@ fn solve_mesh(
         return Ok(None);
     }
     Ok(Some((tp, tm)))
+}
+
+/// An exponential refractory period (docs/equations.md, entry (R6)): the
+/// held phase's values T_R(s) solve
+/// λ (T_R(-s) - T_R(s)) + κ (T(u, s) - T_R(s)) = -1 (u < v_t: no passage
+/// while held), i.e. T_R = P T(u) + 1/κ with P = κ K⁻¹,
+/// K = [[κ + λ, -λ], [-λ, κ + λ]], and the reset term of the flowing
+/// equations takes T_R where it took T(v_r). The reset values R± enter
+/// the rows through the border columns c±, so they become
+/// (c+, c-) P, and the constant moves to the right-hand side:
+/// b -= (c+ + c-) W/κ, W = Σ w_j (1 for a point target; a random
+/// target's mass beyond v_t is a passage at the reset itself). P's rows sum
+/// to 1, so c+ + c- is unchanged (the identity [`reset_correction`] relies
+/// on). Only the mean (source 1): the moments and distributions refuse it.
+fn refractory(
+    p: &Problem,
+    m: &Mesh,
+    src: &Source,
+    cp: &mut [f64],
+    cm: &mut [f64],
+    b: &mut [f64],
+) -> Result<()> {
+    let mean = match p.params().schedule().refractory {
+        None => return Ok(()),
+        Some(Refractory::Exp { mean }) => mean,
+        Some(r @ Refractory::Fixed { .. }) => {
+            return Err(Error::invalid(
+                "refractory",
+                r.spec(),
+                "exp:mean=M for the backward equations",
+            ))
+        }
+    };
+    if !matches!(src, Source::One) {
+        return Err(Error::invalid(
+            "refractory",
+            format!("exp:mean={mean}"),
+            "none for the first-passage moments and distributions (the mean, mfpt --method backward and mfpt scan, runs it)",
+        ));
+    }
+    let (k, l) = (1.0 / mean, p.params().lambda());
+    let det = k + 2.0 * l;
+    let (d, o) = ((k + l) / det, l / det);
+    let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
+    for i in 0..b.len() {
+        let (a, c) = (cp[i], cm[i]);
+        b[i] -= (a + c) * wsum * mean;
+        cp[i] = d * a + o * c;
+        cm[i] = o * a + d * c;
+    }
+    Ok(())
 }
 
 /// The reset terms of the backward equations by two extra solves with the

@@ -199,3 +199,15 @@ pub fn linear_cases() -> Vec<(Params, LinearAnswer)> {
         })
         .collect()
 }
+
+/// `p` with the protocol modifiers of the flags `--reset-period`,
+/// `--reset-position`, `--refractory` (validated).
+pub fn with_schedule(
+    p: Params,
+    period: Option<f64>,
+    position: Option<f64>,
+    refractory: Option<&str>,
+) -> Params {
+    let s = irtp::model::reset::Schedule::parse(period, position, refractory).unwrap();
+    p.with_schedule(s).unwrap()
+}

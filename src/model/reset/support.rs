@@ -121,6 +121,8 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
             solver,
             S::Exact
                 | S::Euler
+                | S::FpStationary
+                | S::ClosedForm
                 | S::FpTransient
                 | S::Backward
                 | S::MfptExact
@@ -129,10 +131,25 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptOptimize
         ),
         // The particle samplers run every modifier: the exact sampler
-        // exactly, the Euler schemes with their O(dt) timing.
-        F::Periodic | F::RefractoryExp | F::RefractoryFixed => {
-            matches!(solver, S::Exact | S::Euler | S::MfptExact | S::MfptEuler)
-        }
+        // exactly, the Euler schemes with their O(dt) timing. The
+        // exponential refractory period is Markovian: extra states of the
+        // chain, extra unknowns of the backward equations, extra moments of
+        // the generator.
+        F::RefractoryExp => matches!(
+            solver,
+            S::Exact
+                | S::Euler
+                | S::MfptExact
+                | S::MfptEuler
+                | S::FpStationary
+                | S::Backward
+                | S::ClosedForm
+        ),
+        F::RefractoryFixed => matches!(solver, S::Exact | S::Euler | S::MfptExact | S::MfptEuler),
+        F::Periodic => matches!(
+            solver,
+            S::Exact | S::Euler | S::MfptExact | S::MfptEuler | S::ClosedForm
+        ),
     }
 }
 
