@@ -12,11 +12,14 @@
 //!   upwind survival equations against the exact first-passage sampler
 //!   (4 SE, Bonferroni);
 //! - random targets: closed forms vs FP and vs the exact sampler, the FP
-//!   density vs the sampler's histogram (tan), and the backward equations'
-//!   refusal naming the protocol and the method;
+//!   density vs the sampler's histogram (tan), the backward MFPT vs the
+//!   exact sampler (the distribution, moments and optimize with random
+//!   targets: `random_target_fpt.rs`);
 //! - the CLI: flags, provenance spec, one-line errors naming the flag.
 
 mod common;
+
+use common::stats::bonferroni_z;
 
 use irtp::analytic::{linear, linear_moments};
 use irtp::fp::{msd as fp_moments, stationary, Mesh, MsdOptions, StationaryOptions};
@@ -25,37 +28,6 @@ use irtp::model::reset::{NoiseAtReset, Reset, Target};
 use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
-
-/// z bound for m simultaneous two-sided comparisons at the family rate of
-/// one 4-sigma comparison (6.3e-5, Bonferroni), by bisection on erfc.
-fn bonferroni_z(m: usize) -> f64 {
-    let tail = |z: f64| m as f64 * erfc(z / std::f64::consts::SQRT_2);
-    let family = erfc(4.0 / std::f64::consts::SQRT_2);
-    let (mut lo, mut hi) = (3.0, 9.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if tail(mid) > family {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
-/// erfc(x) for x >= 0 (Numerical Recipes' erfcc, relative error < 1.2e-7).
-fn erfc(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.5 * x);
-    let p = -x * x - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    t * p.exp()
-}
 
 fn redrawn(drag: DragLaw, sigma: f64, lambda: f64, r: f64, vr: f64) -> Params {
     Params::new(drag, sigma, lambda, r, vr)
@@ -587,54 +559,5 @@ fn random_target_backward_mfpt_matches_exact_sampler() {
         assert!(((sim.tau - ode.tau) / sim.tau_err).abs() < z);
         assert!(((sim.tau_plus - ode.tau_plus) / sim.tau_plus_err).abs() < z);
         assert!(((sim.tau_minus - ode.tau_minus) / sim.tau_minus_err).abs() < z);
-    }
-}
-
-/// The methods that take the reset value at one node (the time-dependent
-/// survival equations, the r-derivative of mfpt optimize) refuse a random
-/// target, naming the protocol and the method; nothing is written.
-#[test]
-fn methods_without_random_targets_refuse_them_by_name() {
-    let p = with_target(
-        DragLaw::Tan,
-        3.0,
-        0.9,
-        2.0,
-        gauss(0.0, 0.2),
-        NoiseAtReset::Kept,
-    );
-    let prob = Problem::new(p, -0.249, 0.5).unwrap();
-    let e = mfpt::backward::moments(&prob, &Default::default())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.starts_with("invalid reset_to = gauss:mean=0,std=0.2"),
-        "{e}"
-    );
-    assert!(
-        e.contains("mfpt distribution") && e.contains("gauss rule"),
-        "{e}"
-    );
-    let dir = tempfile::tempdir().unwrap();
-    for cmd in [vec!["mfpt", "distribution"], vec!["mfpt", "optimize"]] {
-        let bad = dir.path().join("out");
-        let mut all = cmd.clone();
-        let b = bad.to_str().unwrap();
-        all.extend([
-            "--v0",
-            "-0.249",
-            "--vt",
-            "0.5",
-            "--reset-to",
-            "uniform:a=-0.5,b=0.2",
-            "--out",
-            b,
-        ]);
-        let o = common::irtp(&all);
-        let err = common::assert_rejected(&o, "--reset-to", &bad);
-        assert!(
-            err.contains(cmd[1]) && err.contains("uniform rule"),
-            "{err}"
-        );
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod models;
 pub mod spectral;
+pub mod stats;
 
 use std::path::Path;
 use std::process::{Command, Output};
