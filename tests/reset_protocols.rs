@@ -12,8 +12,9 @@
 //!   upwind survival equations against the exact first-passage sampler
 //!   (4 SE, Bonferroni);
 //! - random targets: closed forms vs FP and vs the exact sampler, the FP
-//!   density vs the sampler's histogram (tan), and the backward equations'
-//!   refusal naming the protocol and the method;
+//!   density vs the sampler's histogram (tan), the backward MFPT vs the
+//!   exact sampler (the distribution, moments and optimize with random
+//!   targets: `random_target_fpt.rs`);
 //! - the CLI: flags, provenance spec, one-line errors naming the flag.
 
 mod common;
@@ -557,54 +558,5 @@ fn random_target_backward_mfpt_matches_exact_sampler() {
         assert!(((sim.tau - ode.tau) / sim.tau_err).abs() < z);
         assert!(((sim.tau_plus - ode.tau_plus) / sim.tau_plus_err).abs() < z);
         assert!(((sim.tau_minus - ode.tau_minus) / sim.tau_minus_err).abs() < z);
-    }
-}
-
-/// The methods that take the reset value at one node (the time-dependent
-/// survival equations, the r-derivative of mfpt optimize) refuse a random
-/// target, naming the protocol and the method; nothing is written.
-#[test]
-fn methods_without_random_targets_refuse_them_by_name() {
-    let p = with_target(
-        DragLaw::Tan,
-        3.0,
-        0.9,
-        2.0,
-        gauss(0.0, 0.2),
-        NoiseAtReset::Kept,
-    );
-    let prob = Problem::new(p, -0.249, 0.5).unwrap();
-    let e = mfpt::backward::moments(&prob, &Default::default())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.starts_with("invalid reset_to = gauss:mean=0,std=0.2"),
-        "{e}"
-    );
-    assert!(
-        e.contains("mfpt distribution") && e.contains("gauss rule"),
-        "{e}"
-    );
-    let dir = tempfile::tempdir().unwrap();
-    for cmd in [vec!["mfpt", "distribution"], vec!["mfpt", "optimize"]] {
-        let bad = dir.path().join("out");
-        let mut all = cmd.clone();
-        let b = bad.to_str().unwrap();
-        all.extend([
-            "--v0",
-            "-0.249",
-            "--vt",
-            "0.5",
-            "--reset-to",
-            "uniform:a=-0.5,b=0.2",
-            "--out",
-            b,
-        ]);
-        let o = common::irtp(&all);
-        let err = common::assert_rejected(&o, "--reset-to", &bad);
-        assert!(
-            err.contains(cmd[1]) && err.contains("uniform rule"),
-            "{err}"
-        );
     }
 }

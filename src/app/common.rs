@@ -52,8 +52,7 @@ pub struct ModelArgs {
     /// --reset-velocity): point:v=V, gauss:mean=M,std=S (a Gaussian
     /// truncated to the velocity interval, M inside it, S > 0) or
     /// uniform:a=A,b=B (inside the interval, A < B); optionally
-    /// ,noise=kept|redrawn. A random target runs everywhere except
-    /// mfpt distribution and mfpt optimize, which refuse it.
+    /// ,noise=kept|redrawn. A random target runs in every method.
     #[arg(long, value_name = "SPEC", conflicts_with = "reset_velocity")]
     pub reset_to: Option<String>,
     /// Periodic (sharp) resetting: a reset at every multiple of T > 0 of

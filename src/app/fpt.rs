@@ -178,7 +178,7 @@ impl DistributionArgs {
                 return Err(Error::invalid(
                     "--t-max",
                     "missing",
-                    "a time > 0 (no backward estimate of tau to scale it: tau overflows, or the reset target is random)",
+                    "a time > 0 (no backward estimate of tau to scale it: tau overflows)",
                 ))
             }
         };

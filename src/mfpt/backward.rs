@@ -123,33 +123,31 @@ pub(super) struct Mesh {
     pub(super) v: Vec<f64>,
     /// Index of v_0.
     pub(super) start: usize,
-    /// Index of v_r (of v_0 for a random target, unused then).
+    /// Index of v_r (for a random target: of its centre when inside
+    /// (v_l, v_t), else of v_0; unused then).
     pub(super) reset: usize,
     /// A random target's node weights w_j: the reset value of state s is
-    /// Σ_j w_j x_s(v_j) (half of the target's mass in each cell adjacent
-    /// to the node; the mass beyond v_t, where a reset is the passage,
-    /// weighs x = 0); None for a point target (the node `reset`).
+    /// Σ_j w_j x_s(v_j) = ∫ x_s dQ for x_s linear on each cell (w_j: the
+    /// target's integral of the hat function of node j; the mass beyond
+    /// v_t, where a reset is the passage, weighs x = 0); None for a point
+    /// target (the node `reset`).
     pub(super) weights: Option<Vec<f64>>,
 }
 
-/// The mesh of a point-target problem; a random target is refused, naming
-/// the methods (the time-dependent, moment and rate-derivative solvers
-/// take the reset value at one node).
+/// Mesh of [v_l, v_t] for `p` (canonical frame): a point target is a node,
+/// a random one gets node weights ([`Mesh::weights`]).
 pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
-    p.params().point_target(
-        "mfpt distribution, mfpt optimize and the backward moments (mfpt --method ode and mfpt scan take it)",
-    )?;
-    mesh_any(p, cells)
-}
-
-/// The mesh of [`profile`]: a point target is a node, a random one gets
-/// node weights ([`Mesh::weights`]).
-fn mesh_any(p: &Problem, cells: usize) -> Result<Mesh> {
     let vl = p.params().v_lower();
     let vu = p.params().v_upper();
-    let target = p.params().reset().target();
     let point = p.params().reset().point();
-    let vr = point.unwrap_or(p.v0());
+    // A random target's centre is a node too (a narrow target then weighs
+    // that node alone, as the point target would).
+    let centre = p.params().reset().target().centre();
+    let vr = point.unwrap_or(if centre > vl && centre < p.vt() {
+        centre
+    } else {
+        p.v0()
+    });
     let mut cuts = vec![vl, p.v0(), vr, p.vt()];
     // A jump of g at v = 0 (Coulomb friction) sits on a node, so that every
     // cell's midpoint drift is smooth on the cell (second order kept).
@@ -204,22 +202,44 @@ fn mesh_any(p: &Problem, cells: usize) -> Result<Mesh> {
         }
     }
     let find = |x: f64| v.iter().position(|&y| y == x).expect("cut is a node");
-    let weights = point.is_none().then(|| {
-        let total = target.mass(-vu, vu);
-        let mut w = vec![0.0; v.len()];
-        for (i, c) in v.windows(2).enumerate() {
-            let half = 0.5 * target.mass(c[0], c[1]) / total;
-            w[i] += half;
-            w[i + 1] += half;
-        }
-        w
-    });
+    let weights = target_weights(p, &v);
     Ok(Mesh {
         start: find(p.v0()),
         reset: find(vr),
         v,
         weights,
     })
+}
+
+/// A random target's node weights on the nodes `v` of `p`'s mesh (see
+/// [`Mesh::weights`]); None for a point target.
+pub(super) fn target_weights(p: &Problem, v: &[f64]) -> Option<Vec<f64>> {
+    let reset = p.params().reset();
+    reset.point().is_none().then(|| {
+        let target = reset.target();
+        let vu = p.params().v_upper();
+        let total = target.mass(-vu, vu);
+        let mut w = vec![0.0; v.len()];
+        for (i, c) in v.windows(2).enumerate() {
+            // The cell's mass split by the hat functions of its two nodes.
+            let mass = target.mass(c[0], c[1]);
+            let upper = (target.moment_from(c[0], c[1]) / (c[1] - c[0])).clamp(0.0, mass);
+            w[i] += (mass - upper) / total;
+            w[i + 1] += upper / total;
+        }
+        w
+    })
+}
+
+impl Mesh {
+    /// The reset value of a nodal function x (node j ↦ x(j)): x(v_r) at
+    /// the reset node for a point target, Σ_j w_j x(j) for a random one.
+    pub(super) fn reset_value(&self, x: impl Fn(usize) -> f64) -> f64 {
+        match &self.weights {
+            None => x(self.reset),
+            Some(w) => w.iter().enumerate().map(|(j, wj)| wj * x(j)).sum(),
+        }
+    }
 }
 
 /// The node y ∈ [lo, hi] with count(y) = target, by Newton from lo (count
@@ -477,7 +497,7 @@ fn solve_mesh(
     if rate > 0.0 {
         let corrected = match &m.weights {
             None => reset_correction(&a, &mut x, cp, cm, m.reset),
-            Some(w) => spread_correction(&a, &mut x, cp, cm, w),
+            Some(w) => spread_correction(&a, &mut x, cp, cm, w, beyond(p)),
         };
         if !corrected {
             return Ok(None);
@@ -581,32 +601,52 @@ fn reset_correction(
     true
 }
 
+/// The probability that a reset of `p` (canonical frame) lands at or
+/// beyond v_t, where it is the passage: 1 - Σ_j w_j in exact arithmetic.
+fn beyond(p: &Problem) -> f64 {
+    let target = p.params().reset().target();
+    let vu = p.params().v_upper();
+    target.mass(p.vt(), vu) / target.mass(-vu, vu)
+}
+
 /// The reset terms for a random target: as [`reset_correction`], with the
-/// reset values R± = Σ_j w_j x±(v_j) (the dense rank-one term
+/// reset values R± = ℓ±(x) = Σ_j w_j x±(v_j) (the dense rank-one term
 /// r (∫ x± q - x±) in bordered form), R from the 2×2 system
-/// R = ℓ(y0) - R+ ℓ(y1) - R- ℓ(y2) solved directly.
+/// R = ℓ(y0) - R+ ℓ(y1) - R- ℓ(y2). As there, 1 + y1 + y2 = q gives
+/// 1 + ℓ+(y1) = b + ℓ+(q) - ℓ+(y2) with b = 1 - Σ_j w_j (`beyond`, the mass
+/// past v_t) and y1, y2 <= 0, so the system is solved in sums of
+/// non-negative terms (no cancellation when tau is astronomically large).
+/// Returns false when it is singular or overflows.
 fn spread_correction(
     a: &Band,
     x: &mut [f64],
     mut cp: Vec<f64>,
     mut cm: Vec<f64>,
     w: &[f64],
+    beyond: f64,
 ) -> bool {
+    let n = x.len();
+    let mut q = vec![0.0; n];
+    q[n - 1] = 1.0;
+    a.solve(&mut q);
     a.solve(&mut cp);
     a.solve(&mut cm);
     let ell = |y: &[f64], s: usize| -> f64 {
         w.iter().enumerate().map(|(j, wj)| wj * y[2 * j + s]).sum()
     };
-    let (m11, m12) = (1.0 + ell(&cp, 0), ell(&cm, 0));
-    let (m21, m22) = (ell(&cp, 1), 1.0 + ell(&cm, 1));
-    let (bp, bm) = (ell(x, 0), ell(x, 1));
-    let det = m11 * m22 - m12 * m21;
-    if !(det.abs() > 0.0) || !det.is_finite() {
+    // -ℓ+(y2), -ℓ-(y1) >= 0; m11 = 1 + ℓ+(y1), m22 = 1 + ℓ-(y2).
+    let (y2p, y1m) = (-ell(&cm, 0), -ell(&cp, 1));
+    let (m11, m22) = (beyond + ell(&q, 0) + y2p, beyond + ell(&q, 1) + y1m);
+    let det = (beyond + ell(&q, 0)) * (beyond + ell(&q, 1))
+        + (beyond + ell(&q, 0)) * y1m
+        + (beyond + ell(&q, 1)) * y2p;
+    if !(det > 0.0) || !det.is_finite() {
         return false;
     }
-    let rp = (bp * m22 - m12 * bm) / det;
-    let rm = (m11 * bm - m21 * bp) / det;
-    for k in 0..x.len() {
+    let (bp, bm) = (ell(x, 0), ell(x, 1));
+    let rp = (bp * m22 + y2p * bm) / det;
+    let rm = (m11 * bm + y1m * bp) / det;
+    for k in 0..n {
         x[k] -= rp * cp[k] + rm * cm[k];
     }
     true
@@ -617,7 +657,7 @@ fn spread_correction(
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
-    let m = mesh_any(&cp, opts.cells)?;
+    let m = mesh(&cp, opts.cells)?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     Ok(to_user_frame(m, tp, tm, swapped))
@@ -848,7 +888,11 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
     // The reset values each state returns to (kept: its own, re-drawn: the mean).
-    let (rp, rm) = cp.params().reset().noise().mix(tp[m.reset], tm[m.reset]);
+    let (rp, rm) = cp
+        .params()
+        .reset()
+        .noise()
+        .mix(m.reset_value(|j| tp[j]), m.reset_value(|j| tm[j]));
     let sp: Vec<f64> = tp.iter().map(|t| rp - t).collect();
     let sm: Vec<f64> = tm.iter().map(|t| rm - t).collect();
     let (dp, dm) =
@@ -884,14 +928,18 @@ pub fn fixed_point_upwind(
     for sweep in 1..=max_sweeps {
         change = 0.0;
         let noise = par.reset().noise();
-        let rp = noise.mix(tp[m.reset], tm[m.reset]).0;
+        let rp = noise
+            .mix(m.reset_value(|j| tp[j]), m.reset_value(|j| tm[j]))
+            .0;
         for i in (0..n - 1).rev() {
             let c = a[i].0 / (m.v[i + 1] - m.v[i]);
             let new = (c * tp[i + 1] + lam * tm[i] + r * rp + 1.0) / (c + lam + r);
             change = change.max((new - tp[i]).abs());
             tp[i] = new;
         }
-        let rm = noise.mix(tp[m.reset], tm[m.reset]).1;
+        let rm = noise
+            .mix(m.reset_value(|j| tp[j]), m.reset_value(|j| tm[j]))
+            .1;
         for i in 0..n {
             let c = if i == 0 {
                 0.0

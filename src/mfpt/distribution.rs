@@ -16,7 +16,9 @@
 //! monotone upwind scheme of `mfpt/upwind.rs` (no oscillation: S stays a
 //! probability, f >= 0 up to the integration tolerance) integrated in time
 //! by the adaptive L-stable TR-BDF2 of [`crate::numerics::trbdf2`], landing
-//! on T_f(v_r) where the forcing jumps. Four extra unknowns at v_0 carry the
+//! on T_f(v_r) where the forcing jumps (a random reset target: the reset
+//! terms weigh the target's node weights, and the forcing is continuous; see
+//! `mfpt/upwind.rs`). Four extra unknowns at v_0 carry the
 //! running integrals I± = ∫_0^t S± ds and J± = ∫_0^t I± ds, so
 //! E(T) = ∫ S dt = I and E(T²) = 2 ∫ t S dt = 2 (t I - J); the atom's share
 //! is added in closed form.
@@ -35,7 +37,7 @@
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
 
-use super::backward::{self, mesh, BackwardOptions, DriftSign, Mesh, Moments};
+use super::backward::{self, mesh, target_weights, BackwardOptions, DriftSign, Mesh, Moments};
 use super::upwind::{exp_moments, AtomProbe, UpwindOperator};
 use super::Problem;
 use crate::error::{Error, Result};
@@ -180,21 +182,19 @@ fn check_times(times: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// The midpoint refinement of a mesh (v_0, v_r stay nodes).
-fn refine(m: &Mesh) -> Mesh {
+/// The midpoint refinement of a mesh of `cp` (v_0, v_r stay nodes; a
+/// random target's weights are recomputed on it).
+fn refine(cp: &Problem, m: &Mesh) -> Mesh {
     let mut v = Vec::with_capacity(2 * m.v.len() - 1);
     for w in m.v.windows(2) {
         v.extend([w[0], 0.5 * (w[0] + w[1])]);
     }
     v.push(m.v[m.v.len() - 1]);
-    // Point targets only: the coarse mesh comes from `mesh`, which refuses
-    // a random one.
-    debug_assert!(m.weights.is_none());
     Mesh {
+        weights: target_weights(cp, &v),
         v,
         start: 2 * m.start,
         reset: 2 * m.reset,
-        weights: None,
     }
 }
 
@@ -433,7 +433,7 @@ pub fn distribution(
     let moments = backward::moments(problem, &opts.backward)?;
     let (cp, swapped) = problem.canonical();
     let coarse = mesh(&cp, (opts.backward.cells / 2).max(8))?;
-    let fine_mesh = refine(&coarse);
+    let fine_mesh = refine(&cp, &coarse);
     let tol = Tolerances {
         rtol: opts.rtol,
         atol: opts.atol,

@@ -13,7 +13,12 @@
 //! dS_c+/dt = L S_c|+ + r S_a+(v_r, t),   dS_c-/dt = L S_c|- + lambda S_a+(v, t),
 //!
 //! when a reset keeps the noise state; when it re-draws it, the reset of the
-//! atom returns r S_a+(v_r, t)/2 to each state's rows instead,
+//! atom returns r S_a+(v_r, t)/2 to each state's rows instead. For a random
+//! target the reset value of S is its average over the target, Σ_j w_j S(v_j)
+//! with the mesh's node weights, and so is the atom's: r S_a+(v_r, t) becomes
+//! r e^{-(lambda + r) t} Σ_j w_j H(T_f(v_j) - t), the probability that the
+//! flow from the landing velocity has not yet reached v_t (H averaged over
+//! each node's dual cell, as below; a forcing continuous in time),
 //!
 //! from S_c+(v, 0) = 0, S_c-(v, 0) = 1, S_c+(v_t, t) = 0: consistent data,
 //! bounded forcing, a continuous solution (kinks only). The exact S is
@@ -26,8 +31,9 @@
 //! jump). At v_l the - drift vanishes and the - row is the regularity
 //! relation by itself. The - forcing is averaged over each node's dual cell
 //! (T_f taken linear inside it), so it switches off continuously in time.
-//! The + forcing jumps for every row at once at T_f(v_r); the integrator
-//! lands on that time ([`UpwindOperator::set_reset_atom`]).
+//! For a point target the + forcing jumps for every row at once at
+//! T_f(v_r); the integrator lands on that time
+//! ([`UpwindOperator::set_reset_atom`]).
 //! First order in h: [`super::distribution`] extrapolates two nested meshes.
 
 use super::backward::{Assembly, Band, Mesh};
@@ -56,6 +62,8 @@ pub(super) struct UpwindOperator {
     pub(super) start: usize,
     /// Index of the node v_r.
     reset: usize,
+    /// A random target's node weights ([`Mesh::weights`]).
+    weights: Option<Vec<f64>>,
     a: Assembly,
     borders: bool,
     /// lambda and lambda + r.
@@ -65,7 +73,8 @@ pub(super) struct UpwindOperator {
     /// What a reset does to the noise state (shares of the atom's reset
     /// forcing between the + and - rows).
     noise: NoiseAtReset,
-    /// T_f(v_r): the reset forcing r e^{-kill t} is on before it.
+    /// T_f(v_r): the reset forcing r e^{-kill t} is on before it (+∞ for
+    /// a random target, whose forcing is continuous in time).
     t_reset: f64,
     /// Whether the + forcing is on (the side of T_f(v_r) being integrated).
     reset_atom: bool,
@@ -100,13 +109,18 @@ impl UpwindOperator {
             n: 2 * nodes,
             start: m.start,
             reset: m.reset,
+            weights: m.weights.clone(),
             a: assemble(cp, m),
             borders: par.rate() > 0.0,
             lam: par.lambda(),
             kill: par.lambda() + par.rate(),
             rate: par.rate(),
             noise: par.reset().noise(),
-            t_reset: tf(m.v[m.reset]),
+            t_reset: if m.weights.is_some() {
+                f64::INFINITY
+            } else {
+                tf(m.v[m.reset])
+            },
             reset_atom: true,
             ramps: (0..nodes).map(|i| (dual[i + 1], dual[i])).collect(),
             t0: 0.0,
@@ -145,33 +159,67 @@ impl UpwindOperator {
     /// dS_c±/dt at v_0 (time `t` on the absolute clock).
     pub(super) fn rate_at_start(&self, u: &[f64], t: f64) -> (f64, f64) {
         let (p, m) = (2 * self.start, 2 * self.start + 1);
-        let (fp, fm) = self.forcing_rows((-self.kill * t).exp(), t, self.start);
-        (self.row(u, p) + fp, self.row(u, m) + fm)
+        let share = self.reset_atom_share(t);
+        let (fp, fm) = self.forcing_rows((-self.kill * t).exp(), t, self.start, share);
+        let at = self.reset_values(u);
+        (self.row(u, p, at) + fp, self.row(u, m, at) + fm)
     }
 
-    /// The forcing of rows (2i, 2i + 1) = (+, -) of node i at absolute time
-    /// t, with decay = e^{-(lambda + r) t}.
-    fn forcing_rows(&self, decay: f64, t: f64, i: usize) -> (f64, f64) {
-        let (plus, minus) = if self.reset_atom {
-            self.noise.mix(self.rate * decay, 0.0)
-        } else {
-            (0.0, 0.0)
-        };
-        let plus = if 2 * i + 2 < self.n { plus } else { 0.0 };
+    /// The atom's survival averaged over the reset target at absolute time
+    /// t: S_a+(v_r, t) e^{(lambda + r) t}, H(T_f(v_r) - t) for a point
+    /// target (1 on the side of T_f(v_r) being integrated), Σ_j w_j H_j(t)
+    /// for a random one (H_j: the step averaged over node j's dual cell).
+    fn reset_atom_share(&self, t: f64) -> f64 {
+        match &self.weights {
+            None => f64::from(u8::from(self.reset_atom)),
+            Some(w) => w
+                .iter()
+                .enumerate()
+                .map(|(j, wj)| wj * self.ramp(j, t))
+                .sum(),
+        }
+    }
+
+    /// H(T_f(v) - t) averaged over node i's dual cell (T_f linear in it).
+    fn ramp(&self, i: usize, t: f64) -> f64 {
         let (up, lo) = self.ramps[i];
-        let frac = if t <= up {
+        if t <= up {
             1.0
         } else if t >= lo {
             0.0
         } else {
             (lo - t) / (lo - up)
-        };
-        (plus, self.lam * decay * frac + minus)
+        }
     }
 
-    /// Row i of A s (band and the two reset columns).
-    fn row(&self, s: &[f64], i: usize) -> f64 {
-        let (rp, rm) = (s[2 * self.reset], s[2 * self.reset + 1]);
+    /// The reset values (x+, x-) of the mesh unknowns s: at the node v_r,
+    /// or weighted over a random target's nodes.
+    fn reset_values(&self, s: &[f64]) -> (f64, f64) {
+        match &self.weights {
+            None => (s[2 * self.reset], s[2 * self.reset + 1]),
+            Some(w) => w.iter().enumerate().fold((0.0, 0.0), |(a, b), (j, wj)| {
+                (a + wj * s[2 * j], b + wj * s[2 * j + 1])
+            }),
+        }
+    }
+
+    /// The forcing of rows (2i, 2i + 1) = (+, -) of node i at absolute time
+    /// t, with decay = e^{-(lambda + r) t} and the target's atom `share`
+    /// ([`UpwindOperator::reset_atom_share`]).
+    fn forcing_rows(&self, decay: f64, t: f64, i: usize, share: f64) -> (f64, f64) {
+        let (plus, minus) = if share > 0.0 {
+            self.noise.mix(self.rate * decay * share, 0.0)
+        } else {
+            (0.0, 0.0)
+        };
+        let plus = if 2 * i + 2 < self.n { plus } else { 0.0 };
+        (plus, self.lam * decay * self.ramp(i, t) + minus)
+    }
+
+    /// Row i of A s (band and the two reset columns), with the reset
+    /// values `at` = [`UpwindOperator::reset_values`] of s.
+    fn row(&self, s: &[f64], i: usize, at: (f64, f64)) -> f64 {
+        let (rp, rm) = at;
         let mut x = 0.0;
         for j in self.a.band.row_range(i) {
             x += self.a.band.get(i, j) * s[j];
@@ -181,8 +229,9 @@ impl UpwindOperator {
 
     /// out = A s on the mesh unknowns.
     fn apply_mesh(&self, s: &[f64], out: &mut [f64]) {
+        let at = self.reset_values(s);
         for (i, o) in out.iter_mut().enumerate().take(self.n) {
-            *o = self.row(s, i);
+            *o = self.row(s, i, at);
         }
     }
 
@@ -222,42 +271,56 @@ impl UpwindOperator {
     fn forcing_integrals(&self) -> (Vec<f64>, Vec<f64>) {
         let k = self.kill;
         let (mut f1, mut f2) = (vec![0.0; self.n], vec![0.0; self.n]);
-        let (r0, r1) = exp_moments(k, self.t_reset);
-        for (i, &(up, lo)) in self.ramps.iter().enumerate() {
-            let (p0, m0) = self.noise.mix(self.rate * r0, 0.0);
-            let (p1, m1) = self.noise.mix(self.rate * r1, 0.0);
+        // Per node: ∫ e^{-k t} H_i(t) t^m dt, m = 0, 1 (H_i: the atom's step
+        // averaged over the dual cell, [`UpwindOperator::ramp`]).
+        let atom: Vec<(f64, f64)> = self
+            .ramps
+            .iter()
+            .map(|&(up, lo)| {
+                let (a0, a1) = exp_moments(k, up);
+                let ramp = |m: usize| {
+                    if lo > up {
+                        let f = |t: f64| (-k * t).exp() * (lo - t) / (lo - up) * t.powi(m as i32);
+                        gk15(&f, up, lo).kronrod
+                    } else {
+                        0.0
+                    }
+                };
+                (a0 + ramp(0), a1 + ramp(1))
+            })
+            .collect();
+        let (r0, r1) = match &self.weights {
+            None => exp_moments(k, self.t_reset),
+            Some(w) => w
+                .iter()
+                .zip(&atom)
+                .fold((0.0, 0.0), |(x, y), (wj, h)| (x + wj * h.0, y + wj * h.1)),
+        };
+        let (p0, m0) = self.noise.mix(self.rate * r0, 0.0);
+        let (p1, m1) = self.noise.mix(self.rate * r1, 0.0);
+        for (i, h) in atom.iter().enumerate() {
             if 2 * i + 2 < self.n {
                 f1[2 * i] = p0;
                 f2[2 * i] = p1;
             }
-            let (a0, a1) = exp_moments(k, up);
-            let ramp = |m: usize| {
-                if lo > up {
-                    let f = |t: f64| (-k * t).exp() * (lo - t) / (lo - up) * t.powi(m as i32);
-                    gk15(&f, up, lo).kronrod
-                } else {
-                    0.0
-                }
-            };
-            f1[2 * i + 1] = self.lam * (a0 + ramp(0)) + m0;
-            f2[2 * i + 1] = self.lam * (a1 + ramp(1)) + m1;
+            f1[2 * i + 1] = self.lam * h.0 + m0;
+            f2[2 * i + 1] = self.lam * h.1 + m1;
         }
         (f1, f2)
     }
 
-    /// x -= R+ y1 + R- y2 with R± = x±(v_r) solved from the 2×2 system
+    /// x -= R+ y1 + R- y2 with R± the reset values of the solution
+    /// ([`UpwindOperator::reset_values`]) solved from the 2×2 system
     /// (bordering: the reset columns outside the band).
     fn remove_borders(&self, x: &mut [f64], y1: &[f64], y2: &[f64]) {
         if !self.borders {
             return;
         }
-        let (kp, km) = (2 * self.reset, 2 * self.reset + 1);
-        let (a11, a12, a21, a22) = (1.0 + y1[kp], y2[kp], y1[km], 1.0 + y2[km]);
+        let ((y1p, y1m), (y2p, y2m)) = (self.reset_values(y1), self.reset_values(y2));
+        let (xp, xm) = self.reset_values(x);
+        let (a11, a12, a21, a22) = (1.0 + y1p, y2p, y1m, 1.0 + y2m);
         let det = a11 * a22 - a12 * a21;
-        let (rp, rm) = (
-            (x[kp] * a22 - a12 * x[km]) / det,
-            (a11 * x[km] - a21 * x[kp]) / det,
-        );
+        let (rp, rm) = ((xp * a22 - a12 * xm) / det, (a11 * xm - a21 * xp) / det);
         for k in 0..self.n {
             x[k] -= rp * y1[k] + rm * y2[k];
         }
@@ -424,8 +487,9 @@ impl ShiftedLinear for UpwindOperator {
     fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
         let t = self.t0 + t;
         let decay = (-self.kill * t).exp();
+        let share = self.reset_atom_share(t);
         for i in 0..self.n / 2 {
-            (out[2 * i], out[2 * i + 1]) = self.forcing_rows(decay, t, i);
+            (out[2 * i], out[2 * i + 1]) = self.forcing_rows(decay, t, i, share);
         }
         out[self.n..].fill(0.0);
         true

@@ -312,9 +312,8 @@ impl Params {
                 "reset_to",
                 spec::write(&self.reset.target(), self.reset.noise()),
                 format!(
-                    "a point target (point:v=V) for {method}: the {} rule's random target is \
-                     run by the particle methods, the Fokker-Planck solvers, mfpt --method ode, \
-                     mfpt scan and the linear closed forms",
+                    "a point target (point:v=V) for {method}: the {} rule's random target has \
+                     no single reset velocity",
                     self.reset.name()
                 ),
             )),

@@ -143,6 +143,30 @@ impl Target {
         }
     }
 
+    /// ∫_{x0}^{x1} (v - x0) dQ(v), unnormalised like [`Target::mass`]: with
+    /// it, meshes weigh a random target by hat functions (exact for a
+    /// piecewise-linear integrand). Closed forms: for the truncated
+    /// Gaussian (m - x0) Z + s (φ(α0) - φ(α1)) on the clipped interval.
+    pub fn moment_from(&self, x0: f64, x1: f64) -> f64 {
+        match *self {
+            Target::Point(v) => (v - x0) * self.mass(x0, x1),
+            Target::Uniform { a, b } => {
+                let (u0, u1) = (x0.max(a), x1.min(b));
+                let d = (u1 - u0).max(0.0);
+                d * (0.5 * (u0 + u1) - x0) / (b - a)
+            }
+            Target::Gaussian { mean, std, lo, hi } => {
+                let (u0, u1) = (x0.max(lo), x1.min(hi));
+                if u1 > u0 {
+                    let (a0, a1) = ((u0 - mean) / std, (u1 - mean) / std);
+                    (mean - x0) * normal_mass(a0, a1) + std * (phi(a0) - phi(a1))
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
     /// A velocity drawn from the target: the truncated Gaussian by
     /// rejection (from the Gaussian itself when std ≤ half the interval,
     /// acceptance ≥ 0.34 since the mean is inside; else from the uniform
