@@ -79,7 +79,10 @@ fn r0_density_converges_at_first_order() {
             let ratio = w[0].0 / w[1].0;
             assert!((1.8..=2.2).contains(&ratio), "{spec}: ratio {ratio}");
             let ratio0 = w[0].1 / w[1].1;
-            assert!((1.8..=2.2).contains(&ratio0), "{spec}: near 0 ratio {ratio0}");
+            assert!(
+                (1.8..=2.2).contains(&ratio0),
+                "{spec}: near 0 ratio {ratio0}"
+            );
             assert!(w[0].2 > 3.0 * w[1].2, "{spec}: <v²> not second order");
         }
         assert!(runs[2].0 < c / 4000.0, "{spec}: {}", runs[2].0);
@@ -108,6 +111,10 @@ fn exact_sampler_matches_fokker_planck() {
         let (m, se) = (o.v2_time_avg.mean(), o.v2_time_avg.sem());
         let se = se.hypot(fp.v2 - fp.fine.v2);
         eprintln!("{s} r=2: exact <v²> {m} ± {se}, FP {}", fp.v2);
-        assert!(((m - fp.v2) / se).abs() < 4.25, "{s}: {m} ± {se} vs {}", fp.v2);
+        assert!(
+            ((m - fp.v2) / se).abs() < 4.25,
+            "{s}: {m} ± {se} vs {}",
+            fp.v2
+        );
     }
 }

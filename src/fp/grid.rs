@@ -238,7 +238,15 @@ impl Grid {
                 });
             }
         }
-        Ok(Grid::build(p, xl, xu, widths, reset, reset.saturating_sub(1), q))
+        Ok(Grid::build(
+            p,
+            xl,
+            xu,
+            widths,
+            reset,
+            reset.saturating_sub(1),
+            q,
+        ))
     }
 
     fn build(
@@ -750,12 +758,19 @@ mod tests {
     /// meshes nest; a law with finite g'(0) keeps the two-part mesh.
     #[test]
     fn kinked_mesh_has_node_at_zero_graded_towards_it() {
-        for (spec, vr) in [("power:n=0.5", 0.0), ("power:n=0.3", 2.0), ("power:n=0.5", -1.0)] {
+        for (spec, vr) in [
+            ("power:n=0.5", 0.0),
+            ("power:n=0.3", 2.0),
+            ("power:n=0.5", -1.0),
+        ] {
             let d: DragLaw = spec.parse().unwrap();
             let p = Params::new(d, 3.0, 0.5, 1.0, vr).unwrap();
             let q0 = kink_grading(&p).unwrap().unwrap();
             let n = 1.0 / q0;
-            let (a, b) = (graded_mesh(&p, 500, 0).unwrap(), graded_mesh(&p, 500, 1).unwrap());
+            let (a, b) = (
+                graded_mesh(&p, 500, 0).unwrap(),
+                graded_mesh(&p, 500, 1).unwrap(),
+            );
             for g in [&a, &b] {
                 let z = g.edges.iter().position(|&e| e == 0.0).expect("node at 0");
                 assert!(g.edges.iter().any(|&e| e == vr), "{spec}: v_r node");
@@ -768,7 +783,10 @@ mod tests {
             }
             // nested: every other node of the refined mesh is a coarse node
             for (k, &e) in a.edges.iter().enumerate() {
-                assert!((b.edges[2 * k] - e).abs() <= 1e-13 * (1.0 + e.abs()), "{spec} node {k}");
+                assert!(
+                    (b.edges[2 * k] - e).abs() <= 1e-13 * (1.0 + e.abs()),
+                    "{spec} node {k}"
+                );
             }
             // Cells uniform in g next to 0 (on the side away from v_r, the
             // longer piece): g at the second node from 0 is twice g at the
@@ -786,14 +804,25 @@ mod tests {
                 let (h1, h2) = next(g);
                 (d.force(h1 + h2) / d.force(h1) - 2.0).abs()
             };
-            assert!(dev(&a) < 0.1 && dev(&b) < 0.6 * dev(&a), "{spec}: {} {}", dev(&a), dev(&b));
+            assert!(
+                dev(&a) < 0.1 && dev(&b) < 0.6 * dev(&a),
+                "{spec}: {} {}",
+                dev(&a),
+                dev(&b)
+            );
             let shrink = next(&a).0 / next(&b).0;
-            assert!((shrink / 2f64.powf(1.0 / n) - 1.0).abs() < 0.1, "{spec}: {shrink}");
+            assert!(
+                (shrink / 2f64.powf(1.0 / n) - 1.0).abs() < 0.1,
+                "{spec}: {shrink}"
+            );
         }
         let p = Params::new(DragLaw::Tan, 3.0, 0.5, 1.0, 0.3).unwrap();
         assert!(kink_grading(&p).unwrap().is_none());
         let (nl, nu) = graded_split(&p, 800);
-        let (g, h) = (graded_mesh(&p, 800, 1).unwrap(), Grid::graded(&p, 2 * nl, 2 * nu).unwrap());
+        let (g, h) = (
+            graded_mesh(&p, 800, 1).unwrap(),
+            Grid::graded(&p, 2 * nl, 2 * nu).unwrap(),
+        );
         assert_eq!(g.edges, h.edges);
         assert_eq!(g.widths, h.widths);
     }

@@ -15,7 +15,9 @@
 //!   time of order dt; the bias stays O(dt) in practice and is measured
 //!   against the exact sampler (`tests/media_laws.rs`).
 //! - The exact flow is tabulated ([`TabulatedFlow`]), whose table has a
-//!   break at v = 0 and refines adaptively into the |v|^n kink there.
+//!   break at v = 0 and refines adaptively into the |v|^n kink there; the
+//!   exact sampler's potential table ([`super::PotentialTable`]) makes the
+//!   kink a cell boundary and resolves it in a stretched variable.
 //! - The Fokker-Planck mesh is graded at the edges ±v_u, where
 //!   g'(v_u) = k n v_u^(n-1) is finite (the edge exponent
 //!   (lambda + r) / g'(v_u) - 1 is finite likewise), and, for n < 1, towards
