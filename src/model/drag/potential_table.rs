@@ -234,7 +234,7 @@ fn layout<D: Drag, F: FlowMap>(
         return None;
     }
     let jump = drag.static_friction() > 0.0;
-    if !(jump || !drag.derivative(0.0).is_finite()) {
+    if !jump && drag.derivative(0.0).is_finite() {
         let n = (range.ceil() as usize).max(8);
         return Some((n, range, phi_top, 2.0 * vs, usize::MAX));
     }
