@@ -147,14 +147,12 @@ fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
 
 /// Mesh with `n` cells, `halves` times refined (each refinement splits every
 /// cell in two in the mesh parameter): the graded mesh splits its cells at v_r
-/// in proportion to length, so nested meshes share the same split.
+/// (and at v = 0 where g'(0) = ∞) in proportion to length, so nested meshes
+/// share the same split.
 pub(crate) fn make_grid(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Result<Grid> {
     match mesh {
         Mesh::Uniform => Ok(Grid::uniform(p, n << refine)),
-        Mesh::Graded => {
-            let (nl, nu) = super::grid::graded_split(p, n);
-            Grid::graded(p, nl << refine, nu << refine)
-        }
+        Mesh::Graded => super::grid::graded_mesh(p, n, refine),
     }
 }
 

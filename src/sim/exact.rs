@@ -359,18 +359,12 @@ struct Scratch {
 }
 
 /// The segments of noise value s: tables when they fit, else the solve.
-/// A law with an infinite slope at v = 0 (the power law with n < 1) goes
-/// straight to the solve: its kink, where dΦ/du has infinite slope, sits
-/// inside a uniform cell of the potential table, which would be halved
-/// past the table's piece limit (measured: ~0.3 s spent before giving up).
-/// (A jump of g at v = 0 is a kink of Φ at a known potential, which the
-/// table makes a cell boundary.)
+/// (A jump of g at v = 0, or an infinite slope there as for the power law
+/// with n < 1, is a kink of Φ at a known potential, which the table makes
+/// a cell boundary, tabulating the cells next to an infinite slope in a
+/// variable that resolves it.)
 fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Segments<D::Flow>> {
-    let table = if lo <= 0.0 && 0.0 <= hi && !drag.derivative(0.0).is_finite() {
-        None
-    } else {
-        PotentialTable::new(drag, s)
-    };
+    let table = PotentialTable::new(drag, s);
     Ok(match table {
         Some(t) => Segments::Table(t),
         None => Segments::Solve(
@@ -843,13 +837,20 @@ mod tests {
     use crate::model::DragLaw;
 
     /// The two segment kinds (tables in Φ, iterative solve) agree to
-    /// rounding: velocity, potential and deficit integrals.
+    /// rounding: velocity, potential and deficit integrals (also for the
+    /// power law with n < 1, g'(0) = ∞).
     #[test]
     fn table_and_solve_segments_agree() {
-        for (d, sg) in [
-            (DragLaw::Tan, 3.0),
-            (DragLaw::Tanh, 0.6),
-            (DragLaw::Cubic, 3.0),
+        let power = |n: f64| DragLaw::Power(crate::model::drag::Power::new(n, 1.0).unwrap());
+        // Velocity tolerance in units of 1 + v_u: the power law's table
+        // is resolved to the noise of its values, ε |Φ| |dv/dΦ| with
+        // |dv/dΦ| up to 260 (see the potential table's own test).
+        for (d, sg, tol) in [
+            (DragLaw::Tan, 3.0, 1e-14),
+            (DragLaw::Tanh, 0.6, 1e-14),
+            (DragLaw::Cubic, 3.0, 1e-14),
+            (power(0.5), 3.0, 1e-13),
+            (power(0.3), 3.0, 1e-13),
         ] {
             let p = Params::new(d, sg, 1.0, 0.0, 0.0).unwrap();
             let (lo, hi) = p.bounds();
@@ -868,7 +869,7 @@ mod tests {
                             [a.q[0] - ta.q[0], a.q[1] - ta.q[1]],
                             [b.q[0] - sa.q[0], b.q[1] - sa.q[1]],
                         );
-                        assert!((ta.v - sa.v).abs() < 1e-14 * (1.0 + hi), "{d} {s} {v} {dt}");
+                        assert!((ta.v - sa.v).abs() < tol * (1.0 + hi), "{d} {s} {v} {dt}");
                         assert!(
                             ta.phi == sa.phi
                                 || (ta.phi - sa.phi).abs() < 1e-14 * (1.0 + a.phi.abs()),
@@ -876,10 +877,16 @@ mod tests {
                             ta.phi,
                             sa.phi
                         );
+                        // Each path's deficit is a difference of its own
+                        // antiderivatives, which round at ε of their size
+                        // (the solve's Ψ reach 5e4 for the power law n = 0.3).
                         for k in 0..2 {
+                            let scale = 1.0 + a.q[k].abs() + b.q[k].abs();
                             assert!(
-                                (ja[k] - jb[k]).abs() < 1e-13 * (1.0 + a.q[k].abs()),
-                                "{d} {s} {v} {dt} {k}"
+                                (ja[k] - jb[k]).abs() < 1e-13 * scale,
+                                "{d} {s} {v} {dt} {k}: {} {}",
+                                ja[k],
+                                jb[k]
                             );
                         }
                     }

@@ -15,10 +15,15 @@
 //!   time of order dt; the bias stays O(dt) in practice and is measured
 //!   against the exact sampler (`tests/media_laws.rs`).
 //! - The exact flow is tabulated ([`TabulatedFlow`]), whose table has a
-//!   break at v = 0 and refines adaptively into the |v|^n kink there.
+//!   break at v = 0 and refines adaptively into the |v|^n kink there; the
+//!   exact sampler's potential table ([`super::PotentialTable`]) makes the
+//!   kink a cell boundary and resolves it in a stretched variable.
 //! - The Fokker-Planck mesh is graded at the edges ±v_u, where
-//!   g'(v_u) = k n v_u^(n-1) is finite; inside, it uses the (bounded) drift
-//!   only. The edge exponent (lambda + r) / g'(v_u) - 1 is finite likewise.
+//!   g'(v_u) = k n v_u^(n-1) is finite (the edge exponent
+//!   (lambda + r) / g'(v_u) - 1 is finite likewise), and, for n < 1, towards
+//!   a node at v = 0 with |v| ~ s^(1/n): the state densities have a |v|^n
+//!   kink there, smooth in g, which that grading resolves at first order
+//!   ([`crate::fp::Mesh::Graded`]).
 
 use super::spec::{self, Key, ParamLaw};
 use super::{Drag, TabulatedFlow};
