@@ -387,3 +387,24 @@ fn cli_position_outputs() {
     let run = read_json(&dir.join("run.json"));
     assert_eq!(run["parameters"]["model"]["reset_position"], 0.5, "{run}");
 }
+
+/// Unit totals with the modifiers (position histogram included) combine
+/// into the whole run bit for bit, for both samplers.
+#[test]
+fn units_combine_bit_for_bit() {
+    use irtp::sim::{combine_units, simulate, simulate_units, unit_count, Method};
+    let sched = Schedule::parse(None, Some(0.2), Some("exp:mean=0.3")).unwrap();
+    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.1)
+        .unwrap()
+        .with_schedule(sched)
+        .unwrap();
+    let s = spec(5_000, TimeGrid::linear(3.0, 4).unwrap(), 1.0, 70);
+    for m in [Method::Exact, Method::Euler { dt: 2e-3 }] {
+        let whole = simulate(&p, &s, m, &NoProgress).unwrap();
+        let n = unit_count(s.particles);
+        let mut units = simulate_units(&p, &s, m, 0..1, &NoProgress).unwrap();
+        units.extend(simulate_units(&p, &s, m, 1..n, &NoProgress).unwrap());
+        assert_eq!(combine_units(&p, &s, m, &units).unwrap(), whole, "{m:?}");
+        assert!(whole.position.is_some(), "{m:?}");
+    }
+}
