@@ -3,7 +3,7 @@
 //! forms for linear drag (tests/common/linear_protocols.rs), against each
 //! other for a nonlinear law, and the CLI's refusals.
 //!
-//! Statistical checks: fixed seeds, 4 standard errors. About 150
+//! Statistical checks: fixed seeds, 4 standard errors. About 135
 //! comparisons in all; at 4 SE the two-sided false-alarm rate is 6.3e-5
 //! each, so by Bonferroni the whole file has a false alarm below 1 % for
 //! these (fixed) seeds. The Euler scheme's O(dt) bias at dt = 1e-3 is
@@ -182,7 +182,7 @@ fn periodic_linear_closed_form() {
         let p = linear(sigma, lambda, 0.0, target, noise, sched);
         let t_max = 6.0;
         let grid = TimeGrid::linear(t_max, 13).unwrap();
-        let s = spec(20_000, grid, t_max - 2.0 * period, 30 + i as u64);
+        let s = spec(12_000, grid, t_max - 2.0 * period, 30 + i as u64);
         for (m, o) in both(&p, &s) {
             for (k, &t) in o.times.iter().enumerate().skip(1) {
                 let (v, v2) = lp::periodic(sigma, lambda, period, target.moments(), t);
@@ -291,7 +291,7 @@ fn mfpt_exact_vs_euler() {
     ];
     for (i, pr) in cases.iter().enumerate() {
         let run = ParticleOptions {
-            particles: 20_000,
+            particles: 12_000,
             t_max: 1e4,
             seed: 60 + i as u64,
         };
