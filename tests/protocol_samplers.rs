@@ -3,7 +3,7 @@
 //! forms for linear drag (tests/common/linear_protocols.rs), against each
 //! other for a nonlinear law, and the CLI's refusals.
 //!
-//! Statistical checks: fixed seeds, 4 standard errors. About 150
+//! Statistical checks: fixed seeds, 4 standard errors. About 135
 //! comparisons in all; at 4 SE the two-sided false-alarm rate is 6.3e-5
 //! each, so by Bonferroni the whole file has a false alarm below 1 % for
 //! these (fixed) seeds. The Euler scheme's O(dt) bias at dt = 1e-3 is
@@ -182,7 +182,7 @@ fn periodic_linear_closed_form() {
         let p = linear(sigma, lambda, 0.0, target, noise, sched);
         let t_max = 6.0;
         let grid = TimeGrid::linear(t_max, 13).unwrap();
-        let s = spec(20_000, grid, t_max - 2.0 * period, 30 + i as u64);
+        let s = spec(12_000, grid, t_max - 2.0 * period, 30 + i as u64);
         for (m, o) in both(&p, &s) {
             for (k, &t) in o.times.iter().enumerate().skip(1) {
                 let (v, v2) = lp::periodic(sigma, lambda, period, target.moments(), t);
@@ -291,7 +291,7 @@ fn mfpt_exact_vs_euler() {
     ];
     for (i, pr) in cases.iter().enumerate() {
         let run = ParticleOptions {
-            particles: 20_000,
+            particles: 12_000,
             t_max: 1e4,
             seed: 60 + i as u64,
         };
@@ -386,4 +386,25 @@ fn cli_position_outputs() {
     assert_eq!(csv.lines().count(), 21, "{csv}");
     let run = read_json(&dir.join("run.json"));
     assert_eq!(run["parameters"]["model"]["reset_position"], 0.5, "{run}");
+}
+
+/// Unit totals with the modifiers (position histogram included) combine
+/// into the whole run bit for bit, for both samplers.
+#[test]
+fn units_combine_bit_for_bit() {
+    use irtp::sim::{combine_units, simulate, simulate_units, unit_count, Method};
+    let sched = Schedule::parse(None, Some(0.2), Some("exp:mean=0.3")).unwrap();
+    let p = Params::new(DragLaw::Tan, 3.0, 0.9, 2.0, 0.1)
+        .unwrap()
+        .with_schedule(sched)
+        .unwrap();
+    let s = spec(5_000, TimeGrid::linear(3.0, 4).unwrap(), 1.0, 70);
+    for m in [Method::Exact, Method::Euler { dt: 2e-3 }] {
+        let whole = simulate(&p, &s, m, &NoProgress).unwrap();
+        let n = unit_count(s.particles);
+        let mut units = simulate_units(&p, &s, m, 0..1, &NoProgress).unwrap();
+        units.extend(simulate_units(&p, &s, m, 1..n, &NoProgress).unwrap());
+        assert_eq!(combine_units(&p, &s, m, &units).unwrap(), whole, "{m:?}");
+        assert!(whole.position.is_some(), "{m:?}");
+    }
 }
