@@ -6,6 +6,8 @@
 //!   Euler (Richardson over dt and dt/2, which removes the O(rate·dt) bias
 //!   and leaves O(dt²)) and the Fokker-Planck solver; reference FP where it
 //!   runs the cell, else the exact sampler.
+//! - With position resetting, the stationary <x²> (FP's x-weighted chain,
+//!   the samplers' ensemble at t_max) as well.
 //! - Mean first-passage time of the velocity from v_0 = -0.2 v_u to
 //!   v_t = 0.4 v_u: exact first-passage sampler, Euler (Richardson), the
 //!   backward equations; reference backward where it runs the cell, else
@@ -22,7 +24,7 @@ mod common;
 use common::stats::bonferroni_z;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
-use irtp::model::reset::{NoiseAtReset, Schedule, Solver, Target};
+use irtp::model::reset::{NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target};
 use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
@@ -93,6 +95,43 @@ fn protocols() -> Vec<Protocol> {
             noise: NoiseAtReset::Redrawn,
             schedule: plain,
         },
+        Protocol {
+            name: "position",
+            target: point,
+            noise: NoiseAtReset::Kept,
+            schedule: || Schedule {
+                position: Some(PositionReset::new(0.5).unwrap()),
+                ..Schedule::default()
+            },
+        },
+        Protocol {
+            name: "refractory exp",
+            target: point,
+            noise: NoiseAtReset::Kept,
+            schedule: || Schedule {
+                refractory: Some(Refractory::Exp { mean: 0.3 }),
+                ..Schedule::default()
+            },
+        },
+        Protocol {
+            name: "refractory fixed",
+            target: point,
+            noise: NoiseAtReset::Redrawn,
+            schedule: || Schedule {
+                refractory: Some(Refractory::Fixed { duration: 0.3 }),
+                ..Schedule::default()
+            },
+        },
+        Protocol {
+            name: "periodic",
+            target: point,
+            noise: NoiseAtReset::Kept,
+            // The window [4, 16] holds 8 whole periods.
+            schedule: || Schedule {
+                periodic: Some(Periodic::new(1.5).unwrap()),
+                ..Schedule::default()
+            },
+        },
     ]
 }
 
@@ -144,45 +183,77 @@ fn euler_dt(p: &Params) -> f64 {
     (0.2 * p.max_euler_dt()).min(2e-3)
 }
 
-fn v2_sim(p: &Params, method: SimMethod, particles: u64, seed: u64) -> Est {
+/// The stationary <v²> (window average) and, with position resetting,
+/// <x²> at t_max = 16 (stationary to e^{-16 r}).
+fn sim(p: &Params, method: SimMethod, particles: u64, seed: u64) -> (Est, Est) {
     let spec = SimSpec::new(particles, TimeGrid::linear(16.0, 2).unwrap(), 4.0, 10, seed).unwrap();
     let s = simulate(p, &spec, method, &NoProgress).unwrap().summary();
-    Est {
+    let v2 = Est {
         value: s.v2,
         se: s.v2_err,
-    }
+    };
+    let x2 = Est {
+        value: s.x2_final,
+        se: s.x2_final_err,
+    };
+    (v2, x2)
 }
 
-/// Stationary <v²> by every listed method: (method, estimate).
-fn v2_all(p: &Params, seed: u64) -> Vec<(&'static str, Est)> {
-    let mut out = Vec::new();
+fn richardson2(coarse: (Est, Est), fine: (Est, Est)) -> (Est, Est) {
+    (richardson(coarse.0, fine.0), richardson(coarse.1, fine.1))
+}
+
+/// Estimates of one quantity: (method, estimate), the reference first.
+type Ests = Vec<(&'static str, Est)>;
+
+/// Stationary <v²> and (with position resetting) <x²> by every listed
+/// method.
+fn stationary_all(p: &Params, seed: u64) -> (Ests, Ests) {
+    let (mut v2, mut x2) = (Vec::new(), Vec::new());
     if let Some(s) = listed(p, Solver::FpStationary, || {
         stationary(p, &StationaryOptions::default()).unwrap()
     }) {
         let err = s.coarse.as_ref().map_or(0.0, |c| (c.v2 - s.v2).abs());
-        out.push((
+        v2.push((
             "fp",
             Est {
                 value: s.v2,
                 se: err,
             },
         ));
+        if let Some(x) = s.x2 {
+            // The mesh error of <x²>: relative as that of <v²>, times 10.
+            x2.push((
+                "fp",
+                Est {
+                    value: x,
+                    se: 10.0 * x * err / s.v2,
+                },
+            ));
+        }
     }
+    let position = p.schedule().position.is_some();
+    let mut push = |name, (a, b): (Est, Est)| {
+        v2.push((name, a));
+        if position {
+            x2.push((name, b));
+        }
+    };
     if let Some(e) = listed(p, Solver::Exact, || {
-        v2_sim(p, SimMethod::Exact, 20_000, seed)
+        sim(p, SimMethod::Exact, 20_000, seed)
     }) {
-        out.push(("exact", e));
+        push("exact", e);
     }
     if let Some(e) = listed(p, Solver::Euler, || {
         let dt = euler_dt(p);
-        richardson(
-            v2_sim(p, SimMethod::Euler { dt }, 1_000, seed + 1),
-            v2_sim(p, SimMethod::Euler { dt: 0.5 * dt }, 1_000, seed + 2),
+        richardson2(
+            sim(p, SimMethod::Euler { dt }, 1_000, seed + 1),
+            sim(p, SimMethod::Euler { dt: 0.5 * dt }, 1_000, seed + 2),
         )
     }) {
-        out.push(("euler", e));
+        push("euler", e);
     }
-    out
+    (v2, x2)
 }
 
 fn tau_particles(prob: &Problem, method: Method) -> Est {
@@ -269,10 +340,11 @@ fn z_scores(what: &str, ests: &[(&'static str, Est)]) -> Vec<(String, f64)> {
 
 /// Every protocol for the law `LAWS[i]`. The Bonferroni bound counts the
 /// most comparisons the whole matrix can make (two per quantity and cell:
-/// three methods, one reference), which is conservative.
+/// three methods, one reference; three quantities with position
+/// resetting), which is conservative.
 fn law_agrees_across_methods(i: usize) {
     let (law, sigma) = LAWS[i];
-    let most = LAWS.len() * protocols().len() * 4;
+    let most = LAWS.len() * protocols().len() * 6;
     let bound = bonferroni_z(most);
     let mut zs = Vec::new();
     let mut cells_with_two = 0;
@@ -280,10 +352,11 @@ fn law_agrees_across_methods(i: usize) {
         let p = cell(law, sigma, proto);
         let seed = 10_000 + 100 * (i * 16 + j) as u64;
         let what = format!("{law} {}", proto.name);
-        let v2 = v2_all(&p, seed);
+        let (v2, x2) = stationary_all(&p, seed);
         let tau = tau_all(&p, seed + 50);
         cells_with_two += usize::from(v2.len() > 1 || tau.len() > 1);
         zs.extend(z_scores(&format!("{what} <v²>"), &v2));
+        zs.extend(z_scores(&format!("{what} <x²>"), &x2));
         zs.extend(z_scores(&format!("{what} tau"), &tau));
     }
     assert!(zs.len() <= most);
