@@ -163,6 +163,13 @@ fn backward_refractory_identities() {
         let factor = 1.0 + plain.rate() * 0.3;
         close(t1.tau_plus, factor * t0.tau_plus, 1e-11, "tau+");
         close(t1.tau_minus, factor * t0.tau_minus, 1e-11, "tau-");
+        // The same for a random target below v_t (node weights summing to 1).
+        let uni = Target::Uniform { a: -0.3, b: 0.3 };
+        let plain = plain.with_reset(uni, NoiseAtReset::Redrawn).unwrap();
+        let held = with_schedule(plain, None, None, Some("exp:mean=0.3"));
+        let t0 = backward::solve(&Problem::new(plain, v0, vt).unwrap(), &opts).unwrap();
+        let t1 = backward::solve(&Problem::new(held, v0, vt).unwrap(), &opts).unwrap();
+        close(t1.tau, factor * t0.tau, 1e-10, "tau, uniform target");
         // Kept noise: mean -> 0 is the plain protocol.
         let tiny = with_schedule(base, None, None, Some("exp:mean=1e-10"));
         let a = backward::solve(&Problem::new(base, v0, vt).unwrap(), &opts).unwrap();
@@ -187,4 +194,58 @@ fn unsupported_modifiers_are_refused() {
     let per = with_schedule(linear(1.0, 0.6, 0.0, 0.2), Some(1.0), None, None);
     let e = fp::stationary(&per, &fp_opts(100)).unwrap_err().to_string();
     assert!(e.starts_with("invalid reset_period"), "{e}");
+}
+
+/// `irtp fp stationary` reports the refractory point mass in the summary
+/// and as the last row (zero width) of density.csv, and with position
+/// resetting `<x>`, `<x²>` instead of D_eff.
+#[test]
+fn cli_reports_point_mass_and_position_moments() {
+    let model = [
+        "fp",
+        "stationary",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--lambda",
+        "0.6",
+        "--rate",
+        "1.5",
+        "--reset-velocity",
+        "0.2",
+        "--cells",
+        "400",
+        "--json",
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("held");
+    let mut args = model.to_vec();
+    args.extend([
+        "--refractory",
+        "exp:mean=0.4",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let v = common::json(&common::irtp(&args));
+    let mr = v["refractory_mass"].as_f64().unwrap();
+    assert!((mr - 0.375).abs() < 1e-10, "{mr}");
+    assert!((v["mass"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    let csv = std::fs::read_to_string(dir.join("density.csv")).unwrap();
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!((last[0], last[4]), (0.2, 0.0));
+    assert!((last[1] - mr).abs() < 1e-15);
+    let mut args = model.to_vec();
+    args.extend(["--reset-position", "-0.3"]);
+    let v = common::json(&common::irtp(&args));
+    assert!(v.get("d_eff").is_none(), "{v}");
+    let p = with_schedule(linear(1.0, 0.6, 1.5, 0.2), None, Some(-0.3), None);
+    let (x1, _) = lin::position_moments(&p).unwrap();
+    assert!((v["x_mean"].as_f64().unwrap() - x1).abs() < 1e-4, "{v}");
 }
