@@ -730,7 +730,15 @@ pub struct LinearChain {
 impl LinearChain {
     /// Start at step 0 (all moments zero). Requires linear drag and a valid dt.
     pub fn new(params: &Params, dt: f64) -> Result<Self> {
-        params.require(Solver::ClosedForm)?;
+        // The chain is the paper's protocol only: no modifier of the
+        // resetting rule (the closed forms' support does not carry over).
+        if let Some(&f) = params.schedule().features().first() {
+            return Err(Error::invalid(
+                f.flag(),
+                params.schedule().spec_of(f),
+                format!("no {} in the exactly solvable Euler chain", f.describe()),
+            ));
+        }
         if params.drag() != DragLaw::Linear {
             return Err(Error::invalid(
                 "drag",
