@@ -89,6 +89,69 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
+/// `Target::moment_from`, behind the mesh's hat-function weights: against
+/// composite Simpson (2000 panels) of (v - x0) q(v) on cells inside, across
+/// and outside the support, for a truncated Gaussian and a uniform target
+/// (q unnormalised as `Target::mass`: φ((v - m)/s)/s and 1/(b - a)).
+#[test]
+fn target_first_moments_match_quadrature() {
+    let p = params(DragLaw::Tan, 3.0, 2.0, gauss(0.3, 0.25), NoiseAtReset::Kept);
+    let g = p.reset().target();
+    let u = Target::Uniform { a: -0.4, b: 0.3 };
+    let (lo, hi) = match g {
+        Target::Gaussian { lo, hi, .. } => (lo, hi),
+        _ => unreachable!(),
+    };
+    let qg = |v: f64| {
+        let z = (v - 0.3) / 0.25;
+        (-0.5 * z * z).exp() / (0.25 * (2.0 * std::f64::consts::PI).sqrt())
+    };
+    let qu = |_: f64| 1.0 / 0.7;
+    let simpson = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| {
+        let n = 2000;
+        let h = (b - a) / n as f64;
+        let s: f64 = (0..=n)
+            .map(|k| {
+                let w = if k == 0 || k == n {
+                    1.0
+                } else {
+                    2.0 + 2.0 * (k % 2) as f64
+                };
+                w * f(a + h * k as f64)
+            })
+            .sum();
+        s * h / 3.0
+    };
+    // q on its support (lo, hi) only: the quadrature runs over the cell's
+    // part inside it, where q is smooth.
+    let supports = [
+        (g, &qg as &dyn Fn(f64) -> f64, (lo, hi)),
+        (u, &qu, (-0.4, 0.3)),
+    ];
+    for (t, q, (a, b)) in supports {
+        for (x0, x1) in [
+            (-0.1, 0.2),
+            (-0.6, -0.3),
+            (0.2, 1.2),
+            (-1.2, -1.0),
+            (hi - 0.2, hi),
+        ] {
+            let exact = t.moment_from(x0, x1);
+            let (u0, u1) = (x0.max(a), x1.min(b));
+            let quad = if u1 > u0 {
+                simpson(&|v| (v - x0) * q(v), u0, u1)
+            } else {
+                0.0
+            };
+            eprintln!("{t:?} [{x0}, {x1}]: {exact} vs {quad}");
+            assert!(
+                (exact - quad).abs() < 1e-10 * (1.0 + quad.abs()),
+                "{exact} vs {quad}"
+            );
+        }
+    }
+}
+
 /// E(T) and E(T²) of the distribution (4000 cells, two meshes
 /// extrapolated) against the stationary box scheme at 20 000 cells (the
 /// `mfpt --method ode` solve and its second moment), an independent

@@ -30,6 +30,10 @@ def test_random_target_spec_and_bad_input():
     assert r.params["model"]["reset"] == "gauss:mean=0,std=0.3,noise=kept"
     with pytest.raises(ValueError, match="reset_to"):
         irtp.fp_stationary(reset_to="gauss:mean=5,std=0.3")
-    # mfpt optimize needs a point target: refused, naming the protocol.
-    with pytest.raises(ValueError, match="uniform rule"):
-        irtp.mfpt_optimize(v0=-0.249, vt=0.5, reset_to="uniform:a=-0.5,b=0.2")
+    # mfpt optimize runs a random target too (the backward equations'
+    # target weights); a refractory period it does not run is refused,
+    # naming the flag.
+    opt = irtp.mfpt_optimize(v0=-0.249, vt=0.5, reset_to="uniform:a=-0.5,b=0.2")
+    assert opt.params["model"]["reset"] == "uniform:a=-0.5,b=0.2,noise=kept"
+    with pytest.raises(ValueError, match="refractory"):
+        irtp.mfpt_optimize(v0=-0.249, vt=0.5, refractory="exp:mean=0.2")
