@@ -24,7 +24,9 @@ mod common;
 use common::stats::bonferroni_z;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
-use irtp::model::reset::{NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target};
+use irtp::model::reset::{
+    NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target,
+};
 use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
@@ -239,9 +241,7 @@ fn stationary_all(p: &Params, seed: u64) -> (Ests, Ests) {
             x2.push((name, b));
         }
     };
-    if let Some(e) = listed(p, Solver::Exact, || {
-        sim(p, SimMethod::Exact, 20_000, seed)
-    }) {
+    if let Some(e) = listed(p, Solver::Exact, || sim(p, SimMethod::Exact, 20_000, seed)) {
         push("exact", e);
     }
     if let Some(e) = listed(p, Solver::Euler, || {

@@ -241,7 +241,10 @@ pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
             Ok(Plan {
                 dt: None,
                 steps,
-                work: TRBDF2_UPDATES_PER_STEP * mesh_work_factor() * opts.cells as f64 * steps as f64,
+                work: TRBDF2_UPDATES_PER_STEP
+                    * mesh_work_factor()
+                    * opts.cells as f64
+                    * steps as f64,
             })
         }
     }
@@ -262,12 +265,20 @@ pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
 /// tanh Σ = 0.6 at λ = 0.5, r = 0 and 2, 200 to 1600 cells,
 /// 1e-7 <= rtol <= 1e-4, 1e-14 <= atol <= 1e-8). The integrator is stopped
 /// (numerical failure) at [`TRBDF2_STEP_CAP`] times the estimate.
+///
+/// With periodic resetting every reset time up to t_max is a further stop,
+/// and each reset puts the mass back on a front at the target, started
+/// afresh: each reset counts as one more output and one more front.
 pub fn trbdf2_step_bound(params: &Params, opts: &TransientOptions, outputs: usize) -> u64 {
     let rate = 1.0 + params.lambda() + params.rate() + relaxation_rate(params);
     let decades = 1.0 + (opts.t_max * rate).ln_1p() / std::f64::consts::LN_10;
     let tol = (opts.rtol * opts.atol).powf(-1.0 / 6.0);
     let mesh = (opts.cells as f64 / 100.0).sqrt();
-    (4.0 * outputs as f64 + 10.0 * tol * mesh * decades)
+    let resets = params
+        .schedule()
+        .periodic
+        .map_or(0.0, |p| (opts.t_max / p.period).floor().min(1e12));
+    (4.0 * (outputs as f64 + resets) + 10.0 * tol * mesh * decades * (1.0 + resets))
         .ceil()
         .min(1e15) as u64
 }
@@ -316,6 +327,38 @@ fn merged(times: &[f64], snaps: &[f64]) -> Vec<f64> {
     all.sort_by(|a, b| a.total_cmp(b));
     all.dedup();
     all
+}
+
+/// Periodic resetting: the reset times kT (k = 1, 2, ..., counted as k T so
+/// as not to drift, as in [`crate::analytic::linear_moments::moments`]) up
+/// to the last recording or snapshot time; empty without
+/// `--reset-period`. Steps land on them and the state is reset there,
+/// before recording: a recording time at kT shows the state just after
+/// the reset.
+fn reset_times(params: &Params, times: &[f64], snaps: &[f64]) -> Vec<f64> {
+    let last = times.iter().chain(snaps).copied().fold(0.0, f64::max);
+    let Some(p) = params.schedule().periodic else {
+        return Vec::new();
+    };
+    (1..)
+        .map(|k| k as f64 * p.period)
+        .take_while(|&t| t <= last)
+        .collect()
+}
+
+/// A periodic reset of the flat interleaved cell masses (m+_0, m-_0, ...):
+/// all the mass of each noise state moves to the target (the reset cells of
+/// a point target, spread by the target's cell masses for a random one),
+/// the noise state kept or re-drawn by [`Grid::reinject`].
+fn periodic_reset(g: &Grid, u: &mut [f64]) {
+    let (mut a, mut b) = (0.0, 0.0);
+    for c in u.chunks_exact_mut(2) {
+        a += c[0];
+        b += c[1];
+        c.fill(0.0);
+    }
+    let (ip, im) = g.reinject(a, b);
+    g.add_reset_flat(u, ip, im);
 }
 
 /// Integrate the forward equations from the paper's initial condition.
@@ -376,24 +419,11 @@ fn paper(
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
     };
+    let resets = reset_times(params, times, snaps);
     let (mut ti, mut si) = (0usize, 0usize);
     let mut t = 0.0f64;
     let report_every = (total_steps / 200).max(1);
-    loop {
-        while ti < times.len() && times[ti] <= t {
-            out.record_moments(times[ti], &m, &g);
-            ti += 1;
-        }
-        while si < snaps.len() && snaps[si] <= t {
-            out.record_snapshot(snaps[si], &m, &g);
-            si += 1;
-        }
-        let target = match (times.get(ti), snaps.get(si)) {
-            (Some(&a), Some(&b)) => a.min(b),
-            (Some(&a), None) => a,
-            (None, Some(&b)) => b,
-            (None, None) => break,
-        };
+    for target in merged(&merged(times, snaps), &resets) {
         // Step to `target`, the last step shortened to land on it exactly.
         while t < target {
             let h = if t + dt >= target - 1e-9 * dt {
@@ -409,6 +439,17 @@ fn paper(
             if out.steps % report_every == 0 {
                 report(progress, out.steps, total_steps)?;
             }
+        }
+        if resets.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
+            periodic_reset(&g, m.as_flattened_mut());
+        }
+        while ti < times.len() && times[ti] <= t {
+            out.record_moments(times[ti], &m, &g);
+            ti += 1;
+        }
+        while si < snaps.len() && snaps[si] <= t {
+            out.record_snapshot(snaps[si], &m, &g);
+            si += 1;
         }
     }
     progress.update(total_steps, total_steps);
@@ -542,7 +583,10 @@ struct MeshRun {
 }
 
 /// One mesh's TR-BDF2 run from the paper's initial condition: moments at
-/// `times`, densities at `snaps` (`all`: their sorted union).
+/// `times`, densities at `snaps` (`all`: their sorted union). With periodic
+/// resetting the run is split at the reset times (hidden stops, see
+/// [`reset_times`]): each piece is integrated from its start to the next
+/// reset, where the state is reset and then recorded if asked.
 fn integrate_mesh(
     params: &Params,
     mut op: ForwardOperator,
@@ -572,21 +616,60 @@ fn integrate_mesh(
         snapshots: Vec::with_capacity(snaps.len()),
     };
     let g = op.grid().clone();
-    let stats = trbdf2::integrate(&mut op, &mut u, all, tol, |k, t, u| {
+    let resets = reset_times(params, times, snaps);
+    let mut done = 0usize;
+    let mut observe = |t: f64, u: &[f64], out: &mut Transient| -> Result<()> {
+        if all.binary_search_by(|x| x.total_cmp(&t)).is_err() {
+            return Ok(());
+        }
         let m: Vec<[f64; 2]> = u.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-        let m = &m[..];
         let mass: f64 = u.iter().sum();
         out.mass_error_max = out.mass_error_max.max((mass - 1.0).abs());
         if times.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
-            out.record_moments(t, m, &g);
+            out.record_moments(t, &m, &g);
         }
         if snaps.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
-            out.record_snapshot(t, m, &g);
+            out.record_snapshot(t, &m, &g);
         }
-        report(k + 1)
-    })?;
-    out.steps = stats.steps as u64;
-    out.rejected = stats.rejected as u64;
+        done += 1;
+        report(done)
+    };
+    // Pieces [t0, end): from 0 or a reset time to the next reset time (the
+    // last piece to the last output); outputs at t0 are recorded at its
+    // start, after the reset.
+    let mut t0 = 0.0;
+    let ends = resets.iter().map(|&e| Some(e)).chain([None]);
+    for end in ends {
+        observe(t0, &u, &mut out)?;
+        let mut stops: Vec<f64> = all
+            .iter()
+            .copied()
+            .filter(|&s| s > t0 && end.map_or(true, |e| s < e))
+            .collect();
+        stops.extend(end);
+        if !stops.is_empty() {
+            let rel: Vec<f64> = stops.iter().map(|&s| s - t0).collect();
+            let piece = Tolerances {
+                max_steps: tol
+                    .max_steps
+                    .saturating_sub((out.steps + out.rejected) as usize),
+                ..*tol
+            };
+            let stats = trbdf2::integrate(&mut op, &mut u, &rel, &piece, |k, _, u| {
+                // The piece's end (a reset time) is recorded after the reset.
+                match end {
+                    Some(_) if k + 1 == stops.len() => Ok(()),
+                    _ => observe(stops[k], u, &mut out),
+                }
+            })?;
+            out.steps += stats.steps as u64;
+            out.rejected += stats.rejected as u64;
+        }
+        if let Some(e) = end {
+            periodic_reset(&g, &mut u);
+            t0 = e;
+        }
+    }
     Ok(MeshRun { t: out })
 }
 

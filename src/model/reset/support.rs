@@ -148,7 +148,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
         F::RefractoryFixed => matches!(solver, S::Exact | S::Euler | S::MfptExact | S::MfptEuler),
         F::Periodic => matches!(
             solver,
-            S::Exact | S::Euler | S::MfptExact | S::MfptEuler | S::ClosedForm
+            S::Exact | S::Euler | S::MfptExact | S::MfptEuler | S::ClosedForm | S::FpTransient
         ),
     }
 }
