@@ -410,7 +410,16 @@ fn simulate(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
             &["events", "events_per_s"],
         )
     };
-    let mut nullable = vec!["out", "d_eff_msd", "d_eff_msd_err"];
+    // Documented: null without --reset-position (the P_s(x) histogram's
+    // range and the mass outside it).
+    let mut nullable = vec![
+        "out",
+        "d_eff_msd",
+        "d_eff_msd_err",
+        "x_range",
+        "x_outside",
+        "x_outside_err",
+    ];
     nullable.extend_from_slice(other);
     no_nulls(json, &nullable)?;
     for key in own {
@@ -443,13 +452,14 @@ fn fp_stationary(case: &Case, json: &Value, o: &Outcome, vu: f64) -> Result<(), 
     in_v2_range("v2", num(json, "v2")?, vu)?;
     if case.lambda == 0.0 {
         // Documented: D_eff = ∞ at lambda = 0 (ballistic), JSON null.
-        no_nulls(json, &["fine", "coarse", "grading", "d_eff"])?;
+        no_nulls(json, &["fine", "coarse", "grading", "d_eff", "x_moments"])?;
         ensure(json["d_eff"].is_null(), || {
             "finite d_eff at lambda = 0".into()
         })?;
     } else {
-        // fine, coarse: null without Richardson extrapolation.
-        no_nulls(json, &["fine", "coarse", "grading"])?;
+        // fine, coarse: null without Richardson extrapolation; their
+        // x_moments null without --reset-position.
+        no_nulls(json, &["fine", "coarse", "grading", "x_moments"])?;
         let d = num(json, "d_eff")?;
         ensure(d >= 0.0, || format!("d_eff = {d} < 0"))?;
     }
