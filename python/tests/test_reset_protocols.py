@@ -34,6 +34,7 @@ def test_random_target_spec_and_bad_input():
     # target weights); a refractory period it does not run is refused,
     # naming the flag.
     opt = irtp.mfpt_optimize(v0=-0.249, vt=0.5, reset_to="uniform:a=-0.5,b=0.2")
-    assert opt.params["model"]["reset"] == "uniform:a=-0.5,b=0.2,noise=kept"
+    assert opt.params["problem"]["params"]["reset"] == "uniform:a=-0.5,b=0.2,noise=kept"
+    assert opt.params["tau_opt"] <= opt.params["tau_r0"]
     with pytest.raises(ValueError, match="refractory"):
         irtp.mfpt_optimize(v0=-0.249, vt=0.5, refractory="exp:mean=0.2")

@@ -292,7 +292,7 @@ impl Params {
                     f.flag(),
                     self.schedule.spec_of(f),
                     format!(
-                        "no {} with {solver} (it is run by: {})",
+                        "a protocol that {solver} runs ({} is run by: {})",
                         f.describe(),
                         support::runners(f)
                     ),
