@@ -46,6 +46,7 @@ pub mod error;
 pub mod figures;
 pub mod fp;
 pub mod io;
+pub mod memo;
 pub mod mfpt;
 pub mod model;
 pub mod numerics;

@@ -4,7 +4,7 @@
 //! `python/`) → `sweep` → `app` → `figures` → {`mfpt`, `fp`, `sim`,
 //! `analytic`} → `model` → `numerics`. A module may import from its own
 //! layer's allowed siblings ([`SIBLINGS`]) and from any layer below it.
-//! `error`, `rng`, `parallel`, `stats`, `io` are utilities: importable from
+//! `error`, `rng`, `parallel`, `stats`, `io`, `memo` are utilities: importable from
 //! `model` and above, and importing only each other; `numerics` may import
 //! only `error`. In particular `sim` (the samplers) never imports `mfpt`
 //! (first passage, which uses the samplers).
@@ -30,7 +30,7 @@ const LAYERS: &[&[&str]] = &[
 ];
 
 /// Utilities: importable from `model` and above (and from each other).
-const UTILITIES: &[&str] = &["error", "rng", "parallel", "stats", "io"];
+const UTILITIES: &[&str] = &["error", "rng", "parallel", "stats", "io", "memo"];
 
 /// The allowed imports within one layer, (from, to).
 const SIBLINGS: &[(&str, &str)] = &[("mfpt", "sim")];

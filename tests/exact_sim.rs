@@ -264,3 +264,32 @@ fn method_dispatch() {
         r#"{"method":"exact"}"#
     );
 }
+
+/// The flow tables are shared between runs of one (law, Sigma, bins)
+/// (`irtp::memo`): a run on shared tables, one on tables rebuilt after
+/// eviction and the first run give the same numbers bit for bit.
+#[test]
+fn shared_tables_give_the_numbers_of_a_fresh_build() {
+    let spec = SimSpec::new(
+        64,
+        TimeGrid::from_times(vec![0.0, 5.0]).unwrap(),
+        1.0,
+        20,
+        9,
+    )
+    .unwrap();
+    let run = |law: &str, sigma: f64| {
+        let p = Params::new(law.parse::<DragLaw>().unwrap(), sigma, 0.5, 2.0, 0.0).unwrap();
+        exact::simulate(&p, &spec, &NoProgress).unwrap()
+    };
+    let law = "expr:v + 0.2*v^3";
+    let first = run(law, 2.0);
+    let shared = run(law, 2.0);
+    // More distinct set-ups than the store keeps evict the first.
+    for k in 0..=irtp::memo::CAPACITY {
+        run("tanh", 0.3 + 0.01 * k as f64);
+    }
+    let rebuilt = run(law, 2.0);
+    assert_eq!(format!("{first:?}"), format!("{shared:?}"));
+    assert_eq!(format!("{first:?}"), format!("{rebuilt:?}"));
+}

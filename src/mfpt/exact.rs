@@ -78,8 +78,19 @@ impl<F: FlowMap> FirstPassage<F> {
                 f
             }
         };
+        // The flows depend on the law and Sigma alone: shared between the
+        // points of a scan (crate::memo), built once.
+        let sigma = params.sigma();
+        let key = format!("first passage {drag:?} {:x} {accelerated}", sigma.to_bits());
+        let flows = crate::memo::shared(key, || {
+            Ok::<_, std::convert::Infallible>([flow(sigma), flow(-sigma)])
+        });
+        let flows = match flows {
+            Ok(f) => (*f).clone(),
+            Err(never) => match never {},
+        };
         FirstPassage {
-            flows: [flow(params.sigma()), flow(-params.sigma())],
+            flows,
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
@@ -107,19 +118,10 @@ impl<F: FlowMap> FirstPassage<F> {
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
-            let si = usize::from(!plus);
-            let flow = &self.flows[si];
-            if plus {
-                let tau = flow.time(v, vt);
-                if tau <= gap {
-                    let hit = t + tau;
-                    return (if hit <= t_max { Some(hit) } else { None }, events);
-                }
-            }
-            if t + gap >= t_max {
-                return (None, events);
-            }
-            v = flow.velocity(v, gap);
+            v = match self.segment(plus, v, vt, t, gap, t_max) {
+                Segment::Done(hit) => return (hit, events),
+                Segment::Moved(v) => v,
+            };
             t += gap;
             events += 1;
             if rng.gen::<f64>() * self.total_rate < self.lambda {
@@ -135,7 +137,34 @@ impl<F: FlowMap> FirstPassage<F> {
     }
 }
 
+/// The end of one flow segment of [`FirstPassage`].
+enum Segment {
+    /// The walk is over: the passage time, or None past t_max.
+    Done(Option<f64>),
+    /// The velocity at the segment's end (no passage, t_max not reached).
+    Moved(f64),
+}
+
 impl<F: FlowMap> FirstPassage<F> {
+    /// Flow for `step` from (t, v) in state `plus`: the passage if the +
+    /// flow reaches v_t within the step (None when that is past t_max), a
+    /// stop when the step reaches t_max, else the velocity at its end.
+    #[inline(always)]
+    fn segment(&self, plus: bool, v: f64, vt: f64, t: f64, step: f64, t_max: f64) -> Segment {
+        let flow = &self.flows[usize::from(!plus)];
+        if plus {
+            let tau = flow.time(v, vt);
+            if tau <= step {
+                let hit = t + tau;
+                return Segment::Done(if hit <= t_max { Some(hit) } else { None });
+            }
+        }
+        if t + step >= t_max {
+            return Segment::Done(None);
+        }
+        Segment::Moved(flow.velocity(v, step))
+    }
+
     /// [`FirstPassage::run`] with a periodic clock and/or a refractory
     /// period (module docs).
     fn run_scheduled(
@@ -153,18 +182,10 @@ impl<F: FlowMap> FirstPassage<F> {
             let gap = exp_gap(rng, self.total_rate);
             let periodic = next_periodic - t <= gap;
             let step = if periodic { next_periodic - t } else { gap };
-            let flow = &self.flows[usize::from(!plus)];
-            if plus {
-                let tau = flow.time(v, vt);
-                if tau <= step {
-                    let hit = t + tau;
-                    return (if hit <= t_max { Some(hit) } else { None }, events);
-                }
-            }
-            if t + step >= t_max {
-                return (None, events);
-            }
-            v = flow.velocity(v, step);
+            v = match self.segment(plus, v, vt, t, step, t_max) {
+                Segment::Done(hit) => return (hit, events),
+                Segment::Moved(v) => v,
+            };
             t = if periodic { next_periodic } else { t + step };
             events += 1;
             if !periodic && rng.gen::<f64>() * self.total_rate < self.lambda {

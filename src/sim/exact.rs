@@ -263,6 +263,7 @@ fn check_cancellation(params: &Params) -> Result<()> {
 /// potential ([`PotentialTable`]) where the flow fits in its tables, else the
 /// iterative velocity solve with the deficit table in v (the same answers
 /// to rounding).
+#[derive(Clone)]
 enum Segments<F> {
     Table(PotentialTable<F>),
     Solve(F, DeficitTable),
@@ -303,6 +304,51 @@ impl<F: FlowMap> Segments<F> {
                 }
             }
         }
+    }
+}
+
+/// The part of a [`Sampler`] that the law, Sigma and the number of bins
+/// fix (no rate enters): the flow segments, the bins' crossing times and
+/// edge potentials. Built once per process for each (law, Sigma, bins) and
+/// shared through [`crate::memo`], so the points of a sweep over the rates
+/// do not rebuild the tables (for a law on the generic path, tens of
+/// milliseconds).
+#[derive(Clone)]
+struct LawSetup<F> {
+    segs: [Segments<F>; 2],
+    tau: [Vec<f64>; 2],
+    phi_edges: [Vec<f64>; 2],
+    vs: [f64; 2],
+    inv_rate: [f64; 2],
+}
+
+impl<F: FlowMap> LawSetup<F> {
+    fn new<D: Drag<Flow = F>>(drag: &D, sigma: f64, lo: f64, hi: f64, b: usize) -> Result<Self> {
+        let plus = segments(drag, sigma, lo, hi)?;
+        let minus = match &plus {
+            Segments::Table(t) => Segments::Table(t.mirrored()),
+            Segments::Solve(..) => segments(drag, -sigma, lo, hi)?,
+        };
+        let mut edges: Vec<f64> = (0..=b)
+            .map(|k| lo + (hi - lo) * k as f64 / b as f64)
+            .collect();
+        edges[b] = hi;
+        let tau = [
+            crossing_times(drag, sigma, &edges)?,
+            crossing_times(drag, -sigma, &edges)?,
+        ];
+        let flows = [drag.flow(sigma), drag.flow(-sigma)];
+        let phi_edges = [
+            edges.iter().map(|&e| flows[0].potential(e)).collect(),
+            edges.iter().map(|&e| flows[1].potential(e)).collect(),
+        ];
+        Ok(LawSetup {
+            segs: [plus, minus],
+            tau,
+            phi_edges,
+            vs: [flows[0].fixed_point(), flows[1].fixed_point()],
+            inv_rate: [1.0 / flows[0].rate(), 1.0 / flows[1].rate()],
+        })
     }
 }
 
@@ -406,26 +452,15 @@ impl<F: FlowMap> Sampler<F> {
         let (lo, hi) = params.bounds();
         check_relaxation(drag, sigma, hi)?;
         check_cancellation(params)?;
-        let plus = segments(drag, sigma, lo, hi)?;
-        let minus = match &plus {
-            Segments::Table(t) => Segments::Table(t.mirrored()),
-            Segments::Solve(..) => segments(drag, -sigma, lo, hi)?,
-        };
-        let segs = [plus, minus];
-        let b = spec.bins;
-        let mut edges: Vec<f64> = (0..=b)
-            .map(|k| lo + (hi - lo) * k as f64 / b as f64)
-            .collect();
-        edges[b] = hi;
-        let tau = [
-            crossing_times(drag, sigma, &edges)?,
-            crossing_times(drag, -sigma, &edges)?,
-        ];
-        let flows = [drag.flow(sigma), drag.flow(-sigma)];
-        let phi_edges = [
-            edges.iter().map(|&e| flows[0].potential(e)).collect(),
-            edges.iter().map(|&e| flows[1].potential(e)).collect(),
-        ];
+        let key = format!("exact sampler {drag:?} {:x} {}", sigma.to_bits(), spec.bins);
+        let law = crate::memo::shared(key, || LawSetup::new(drag, sigma, lo, hi, spec.bins))?;
+        let LawSetup {
+            segs,
+            tau,
+            phi_edges,
+            vs,
+            inv_rate,
+        } = (*law).clone();
         let reset = *params.reset();
         let at_vr = reset.point().map(|vr| [segs[0].at(vr), segs[1].at(vr)]);
         let schedule = params.schedule();
@@ -436,8 +471,8 @@ impl<F: FlowMap> Sampler<F> {
             periodic: schedule.periodic,
             x_reset: schedule.position.map(|p| p.x),
             refractory: schedule.refractory,
-            vs: [flows[0].fixed_point(), flows[1].fixed_point()],
-            inv_rate: [1.0 / flows[0].rate(), 1.0 / flows[1].rate()],
+            vs,
+            inv_rate,
             segs,
             phi_edges,
             at_vr,

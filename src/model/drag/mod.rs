@@ -55,7 +55,7 @@ use std::fmt;
 
 /// The exact deterministic flow dv/dt = s - g(v) for one noise value s, with
 /// everything a sampler needs precomputed. All maps are monotone in time.
-pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
+pub trait FlowMap: Clone + Send + Sync + fmt::Debug + 'static {
     /// The fixed point v* = g⁻¹(s).
     fn fixed_point(&self) -> f64;
     /// g'(v*), the rate of the exponential approach to v*.
@@ -90,7 +90,7 @@ pub trait FlowMap: Clone + Send + Sync + fmt::Debug {
 /// [`Drag::force`], [`Drag::derivative`] and its flow type; every other method has a robust
 /// default (numerical inverse, sampled slope bound, quadrature flows) that
 /// laws with closed forms override.
-pub trait Drag: Clone + Send + Sync + fmt::Debug {
+pub trait Drag: Clone + Send + Sync + fmt::Debug + 'static {
     /// The exact flow of this law ([`TabulatedFlow<Self>`] for a law with no
     /// closed forms).
     type Flow: FlowMap;
