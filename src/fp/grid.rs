@@ -516,25 +516,10 @@ impl HalfMap {
 /// uniform in the force g) makes the densities and the drift smooth in the
 /// mesh parameter s, and the upwind scheme first order with a clean error
 /// expansion again (on a mesh not graded at 0 the cell next to 0 errs by
-/// O(h^n)). n is the law's local exponent ln(g(2δ)/g(δ)) / ln 2 at
-/// δ = 1e-12 v_u (exact for the power law); q₀ is capped at [`MAX_GRADING`].
-/// Fails (typed) if that exponent is not in (0, 1).
+/// O(h^n)). n is [`Params::kink_exponent`]; q₀ is capped at
+/// [`MAX_GRADING`]. Fails (typed) if that exponent is not in (0, 1).
 pub(crate) fn kink_grading(p: &Params) -> Result<Option<f64>> {
-    let drag = p.drag();
-    if drag.derivative(0.0).is_finite() || drag.static_friction() > 0.0 {
-        return Ok(None);
-    }
-    let delta = 1e-12 * p.v_upper();
-    let n = (drag.force(2.0 * delta) / drag.force(delta)).log2();
-    if !(n > 0.0 && n < 1.0) {
-        return Err(Error::Numerical {
-            method: "fp graded mesh",
-            reason: format!(
-                "g'(0) = ∞ but the local exponent n of g ~ |v|^n at 0 is {n}, not in (0, 1)"
-            ),
-        });
-    }
-    Ok(Some((1.0 / n).min(MAX_GRADING)))
+    Ok(p.kink_exponent()?.map(|n| (1.0 / n).min(MAX_GRADING)))
 }
 
 /// The graded mesh of `n << refine` cells ([`Mesh::Graded`]): the mesh of

@@ -1,8 +1,9 @@
 //! Direct solve of the MFPT backward equations (see [`crate::mfpt`]).
 //!
 //! Discretisation: box (midpoint) scheme on a piecewise-smooth mesh of
-//! [v_l, v_t] with v_0 and v_r as nodes, and v = 0 where g jumps there
-//! (graded towards v_t when v_t is close to v_u). On each cell [v_i, v_{i+1}] both
+//! [v_l, v_t] with v_0 and v_r as nodes, and v = 0 where g jumps there or
+//! where g'(0) = ∞ (then graded towards 0, see `kink_node`; and graded
+//! towards v_t when v_t is close to v_u). On each cell [v_i, v_{i+1}] both
 //! first-order equations are imposed at the midpoint with tau± averaged
 //! over the two nodes: second order on any mesh, and no coefficient is ever
 //! evaluated at v_l, where the - drift vanishes. There the ODE has a regular
@@ -154,6 +155,20 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
     if p.params().drag().static_friction() > 0.0 && vl < 0.0 && 0.0 < p.vt() {
         cuts.push(0.0);
     }
+    // Where g'(0) = ∞ (g ~ |v|^n, n < 1) tau has |v|^(1+n) terms at 0:
+    // 0 is a node and the cells next to it are graded (kink_nodes).
+    let kink = match p.params().kink_exponent()? {
+        Some(n) if vl < 0.0 && 0.0 < p.vt() => {
+            cuts.push(0.0);
+            // The last segment may need the log grading towards v_u: it
+            // then starts halfway to v_t, not at the kink.
+            if p.vt() > 0.0 && !cuts.iter().any(|&c| c > 0.0 && c < p.vt()) {
+                cuts.push(0.5 * p.vt());
+            }
+            Some(3.0 / (1.0 + n))
+        }
+        _ => None,
+    };
     cuts.sort_by(|a, b| a.total_cmp(b));
     cuts.dedup();
     let total = p.vt() - vl;
@@ -193,6 +208,8 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
             // Last node of each segment exactly at the cut.
             x = if k == n {
                 b
+            } else if let Some(y) = kink_node(kink, a, b, k as f64 / n as f64) {
+                y
             } else if weight == 0.0 {
                 a + (b - a) * k as f64 / n as f64
             } else {
@@ -209,6 +226,24 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
         v,
         weights,
     })
+}
+
+/// Node at mesh parameter s ∈ (0, 1) of a segment [a, b] that ends at a
+/// kink of g at 0 (g ~ |v|^n, n < 1, grading exponent q = 3/(1+n)):
+/// |v| = |b - a| s^q from the kink. The |v|^(1+n) terms of tau, and the
+/// higher |v|^(1+jn), become powers s^(q(1+jn)) ≥ s³ of the mesh
+/// parameter, smooth enough for the box scheme's second order (and its
+/// Richardson error estimate). None where the segment does not touch a
+/// kink.
+fn kink_node(q: Option<f64>, a: f64, b: f64, s: f64) -> Option<f64> {
+    let q = q?;
+    if a == 0.0 {
+        Some(b * s.powf(q))
+    } else if b == 0.0 {
+        Some(a * (1.0 - s).powf(q))
+    } else {
+        None
+    }
 }
 
 /// A random target's node weights on the nodes `v` of `p`'s mesh (see

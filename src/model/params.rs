@@ -387,6 +387,30 @@ impl Params {
     pub fn v_lower(&self) -> f64 {
         -self.v_upper()
     }
+
+    /// Where g'(0) = ∞ (g ≈ c sign(v) |v|^n near 0 with 0 < n < 1, as for
+    /// the power law with n < 1): Some(n), the law's local exponent
+    /// ln(g(2δ)/g(δ)) / ln 2 at δ = 1e-12 v_u (exact for the power law).
+    /// None where g'(0) is finite or g jumps at 0 (Coulomb friction). The
+    /// meshes of the forward and backward solvers are graded towards such a
+    /// kink. Fails (typed) if g'(0) = ∞ but the exponent is not in (0, 1).
+    pub fn kink_exponent(&self) -> Result<Option<f64>> {
+        let drag = self.drag();
+        if drag.derivative(0.0).is_finite() || drag.static_friction() > 0.0 {
+            return Ok(None);
+        }
+        let delta = 1e-12 * self.v_upper();
+        let n = (drag.force(2.0 * delta) / drag.force(delta)).log2();
+        if !(n > 0.0 && n < 1.0) {
+            return Err(Error::Numerical {
+                method: "kink exponent of g at v = 0",
+                reason: format!(
+                    "g'(0) = ∞ but the local exponent n of g ~ |v|^n at 0 is {n}, not in (0, 1)"
+                ),
+            });
+        }
+        Ok(Some(n))
+    }
     /// (v_l, v_u).
     pub fn bounds(&self) -> (f64, f64) {
         (self.v_lower(), self.v_upper())
