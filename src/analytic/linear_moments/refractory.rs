@@ -79,8 +79,8 @@ fn system(p: &Params, mean: f64) -> [[f64; N]; N] {
     // Held phase: v fixed, x moving at v, flips; loss κ, reset gain from C.
     let (mr, vr, ver, v2r, xr, xer, xvr, x2r) =
         (R, R + 1, R + 2, R + 3, R + 4, R + 5, R + 6, R + 7);
-    for i in R..N {
-        a[i][i] = -k;
+    for (i, row) in a.iter_mut().enumerate().skip(R) {
+        row[i] = -k;
     }
     a[ver][ver] = -(2.0 * l + k);
     a[xer][xer] = -(2.0 * l + k);
