@@ -225,7 +225,7 @@ fn jump(p: &Params, u: &mut [f64; N]) {
 /// x = v = 0, η = ±Σ with probability ½. With periodic resetting the
 /// moments at t = kT are those just after the reset (paths are
 /// right-continuous). With an exponential refractory period the
-/// phase-resolved system of Eq. (R9) ([`refractory`]; not with periodic
+/// phase-resolved system of Eq. (R9) (module `refractory`; not with periodic
 /// resetting); a fixed one is refused.
 pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
     p.require(Solver::ClosedForm)?;

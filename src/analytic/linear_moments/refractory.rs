@@ -15,7 +15,7 @@
 //! moments E[f; C], E[f; R], d E[f; C]/dt = E[L_C-part f; C] - r E[f; C] +
 //! κ E[f; R] and d E[f; R]/dt = E[v ∂_x f + flips; R] - κ E[f; R] +
 //! r E[f(x', u, η'); C]. E[η; C] = E[η; R] = 0 from the symmetric start (a
-//! closed pair with zero data), so with m_1 = <u>, m_2 = <u²>, ν = 1 (η
+//! closed pair with zero data), so with m_1 = `<u>`, m_2 = `<u²>`, ν = 1 (η
 //! kept) or 0 (re-drawn):
 //!
 //! ```text
