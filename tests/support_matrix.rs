@@ -370,6 +370,60 @@ fn law_agrees_across_methods(i: usize) {
     }
 }
 
+/// The time-dependent Fokker-Planck methods run every protocol the table
+/// lists for them and refuse the others (tan and linear laws): `fp
+/// transient` (TR-BDF2, 200 cells, t = 0.5) and `fp msd` (50 cells, one
+/// level, t = 0.5) each with mass 1 at t (1e-9) and, where `fp
+/// stationary` runs the cell, `fp transient` at t = 12 within 1e-3
+/// relative of its `<v²>` (the relaxation rates are >= min(r, 2 lambda) = 1).
+#[test]
+fn time_dependent_fp_methods_run_what_the_table_lists() {
+    use irtp::fp::{msd, transient, MsdOptions, TransientOptions};
+    for (law, sigma) in [LAWS[0], LAWS[2]] {
+        for proto in protocols() {
+            let p = cell(law, sigma, &proto);
+            let what = format!("{law} {}", proto.name);
+            let tr = listed(&p, Solver::FpTransient, || {
+                let o = |t: f64| TransientOptions {
+                    cells: 200,
+                    t_max: t,
+                    times: vec![t],
+                    ..TransientOptions::default()
+                };
+                let tr = transient(&p, &o(0.5)).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert!((tr.mass[0] - 1.0).abs() < 1e-9, "{what}: {}", tr.mass[0]);
+                transient(&p, &o(12.0)).unwrap_or_else(|e| panic!("{what}: {e}"))
+            });
+            let st = listed(&p, Solver::FpStationary, || {
+                let o = StationaryOptions {
+                    cells: 800,
+                    mesh: irtp::fp::Mesh::Graded,
+                    extrapolate: true,
+                };
+                stationary(&p, &o).unwrap().v2
+            });
+            if let (Some(tr), Some(v2)) = (&tr, st) {
+                let rel = (tr.v2[0] / v2 - 1.0).abs();
+                assert!(
+                    rel < 1e-3,
+                    "{what}: transient {} vs stationary {v2}",
+                    tr.v2[0]
+                );
+            }
+            listed(&p, Solver::FpMsd, || {
+                let o = MsdOptions {
+                    cells: 50,
+                    levels: 1,
+                    times: vec![0.5],
+                    ..MsdOptions::default()
+                };
+                let m = msd(&p, &o, &NoProgress).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert!((m.mass[0] - 1.0).abs() < 1e-9, "{what}: {}", m.mass[0]);
+            });
+        }
+    }
+}
+
 macro_rules! per_law {
     ($($name:ident => $i:expr,)+) => {
         $(

@@ -45,8 +45,10 @@
 use super::linear::{eta_decay, require_linear};
 use crate::error::{finite, Error, Result};
 use crate::model::reset::Solver;
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::Params;
+
+mod refractory;
 
 const N: usize = 7;
 /// Indices of the moments in the state vector.
@@ -117,8 +119,8 @@ fn system(p: &Params) -> Result<(Mat, [f64; N])> {
     Ok((a, b))
 }
 
-fn mat_vec(a: &Mat, u: &[f64; N]) -> [f64; N] {
-    let mut out = [0.0; N];
+fn mat_vec<const K: usize>(a: &[[f64; K]; K], u: &[f64; K]) -> [f64; K] {
+    let mut out = [0.0; K];
     for (o, row) in out.iter_mut().zip(a) {
         *o = row.iter().zip(u).map(|(x, y)| x * y).sum();
     }
@@ -127,8 +129,12 @@ fn mat_vec(a: &Mat, u: &[f64; N]) -> [f64; N] {
 
 /// (E, w) = (e^{Ah}, ∫_0^h e^{As} b ds) by Taylor series, column by column:
 /// E e_j = Σ_k (hA)^k e_j / k!, w = Σ_k h^{k+1} A^k b / (k+1)!.
-fn propagator(a: &Mat, b: &[f64; N], h: f64) -> ([[f64; N]; N], [f64; N]) {
-    let series = |start: [f64; N], shift: usize| {
+fn propagator<const K: usize>(
+    a: &[[f64; K]; K],
+    b: &[f64; K],
+    h: f64,
+) -> ([[f64; K]; K], [f64; K]) {
+    let series = |start: [f64; K], shift: usize| {
         let mut term = start;
         let mut sum = start;
         for k in 1..200 {
@@ -148,12 +154,12 @@ fn propagator(a: &Mat, b: &[f64; N], h: f64) -> ([[f64; N]; N], [f64; N]) {
         }
         sum
     };
-    let mut e = [[0.0; N]; N];
-    for j in 0..N {
-        let mut unit = [0.0; N];
+    let mut e = [[0.0; K]; K];
+    for j in 0..K {
+        let mut unit = [0.0; K];
         unit[j] = 1.0;
         let col = series(unit, 0);
-        for i in 0..N {
+        for i in 0..K {
             e[i][j] = col[i];
         }
     }
@@ -162,7 +168,14 @@ fn propagator(a: &Mat, b: &[f64; N], h: f64) -> ([[f64; N]; N], [f64; N]) {
 }
 
 /// Advance u by `span` with the exact propagator (substeps h ρ ≤ ¼).
-fn advance(a: &Mat, b: &[f64; N], rho: f64, u: &mut [f64; N], span: f64, at: f64) -> Result<()> {
+fn advance<const K: usize>(
+    a: &[[f64; K]; K],
+    b: &[f64; K],
+    rho: f64,
+    u: &mut [f64; K],
+    span: f64,
+    at: f64,
+) -> Result<()> {
     if !(span > 0.0) {
         return Ok(());
     }
@@ -177,7 +190,7 @@ fn advance(a: &Mat, b: &[f64; N], rho: f64, u: &mut [f64; N], span: f64, at: f64
     let (e, w) = propagator(a, b, span / steps);
     for _ in 0..steps as u64 {
         let eu = mat_vec(&e, u);
-        for i in 0..N {
+        for i in 0..K {
             u[i] = eu[i] + w[i];
         }
     }
@@ -211,15 +224,23 @@ fn jump(p: &Params, u: &mut [f64; N]) {
 /// Exact moments of the Newtonian IRTP at `times` (sorted, >= 0) from
 /// x = v = 0, η = ±Σ with probability ½. With periodic resetting the
 /// moments at t = kT are those just after the reset (paths are
-/// right-continuous); no refractory period.
+/// right-continuous). With an exponential refractory period the
+/// phase-resolved system of Eq. (R9) (module `refractory`; not with periodic
+/// resetting); a fixed one is refused.
 pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
     p.require(Solver::ClosedForm)?;
-    if let Some(r) = p.schedule().refractory {
-        return Err(Error::invalid(
-            "refractory",
-            r.spec(),
-            "none for the time-dependent linear moments (the stationary closed forms run exp:mean=M)",
-        ));
+    match p.schedule().refractory {
+        None => {}
+        Some(Refractory::Exp { mean }) if p.schedule().periodic.is_none() => {
+            return refractory::moments(p, mean, times);
+        }
+        Some(r) => {
+            return Err(Error::invalid(
+                "refractory",
+                r.spec(),
+                "exp:mean=M without --reset-period for the time-dependent linear moments",
+            ));
+        }
     }
     let (a, b) = system(p)?;
     let rho = (0..N).map(|i| a[i][i].abs()).fold(1.0, f64::max);

@@ -348,6 +348,7 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
         "v2_final": tr.v2[k],
         "v_mean_final": tr.v_mean[k],
         "mass": tr.mass[k],
+        "refractory_mass": tr.refractory_mass[k],
         "mass_error_max": tr.mass_error_max,
         "dt": tr.dt,
         "steps": tr.steps,
@@ -364,7 +365,7 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
     if let Some(e) = mesh_error {
         summary["v2_mesh_error_max"] = json!(e);
     }
-    let moments = Table {
+    let mut moments = Table {
         name: "moments",
         header: ["t", "v_mean", "v2", "mass"].map(String::from).to_vec(),
         columns: vec![
@@ -374,6 +375,11 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> crate::Result<Outcome> {
             tr.mass.clone(),
         ],
     };
+    // With a refractory period: the held point mass per recording time.
+    if params.schedule().refractory.is_some() {
+        moments.header.push("refractory_mass".into());
+        moments.columns.push(tr.refractory_mass.clone());
+    }
     let snapshots = Table::from_rows(
         "snapshots",
         &["t", "v", "p", "p_plus", "p_minus"],

@@ -129,9 +129,11 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
     };
     let wall = start.elapsed().as_secs_f64();
     let k = m.t.len() - 1;
-    // d Var(x)/dt = 2 (<xv> - <x><v>) → 2 D_eff.
+    // d Var(x)/dt = 2 (<xv> - <x><v>) → 2 D_eff; with position resetting
+    // the position has a stationary law instead and there is no D_eff.
     let d_slope = m.xv[k] - m.x_mean[k] * m.v_mean[k];
-    let summary = json!({
+    let position = params.schedule().position.is_some();
+    let mut summary = json!({
         "x2_final": m.x2[k],
         "xv_final": m.xv[k],
         "x_mean_final": m.x_mean[k],
@@ -145,6 +147,10 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
         "params": params,
         "wall_time_s": wall,
     });
+    if position {
+        let obj = summary.as_object_mut().expect("a JSON object");
+        obj.remove("d_eff_slope");
+    }
     let moments = Table {
         name: "moments",
         header: ["t", "mass", "v_mean", "v2", "x_mean", "xv", "x2", "alpha"]
@@ -161,12 +167,19 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
             m.alpha.clone(),
         ],
     };
+    let diffusion = if position {
+        format!(
+            "<x> = {}  (position resetting: no D_eff)",
+            fmt_digits(m.x_mean[k], 10)
+        )
+    } else {
+        format!("(<xv> - <x><v>) = {} -> D_eff", fmt_digits(d_slope, 10))
+    };
     let text = format!(
-        "<x^2>(t = {}) = {}  alpha = {}  (<xv> - <x><v>) = {} -> D_eff  ({} levels up to {} cells, {} TR-BDF2 steps)\n",
+        "<x^2>(t = {}) = {}  alpha = {}  {diffusion}  ({} levels up to {} cells, {} TR-BDF2 steps)\n",
         fmt_sig(m.t[k]),
         fmt_digits(m.x2[k], 12),
         fmt_digits(m.alpha[k], 6),
-        fmt_digits(d_slope, 10),
         opts.levels,
         m.cells_finest,
         m.steps

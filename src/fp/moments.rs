@@ -9,10 +9,13 @@
 //! ```
 //!
 //! (∂_t ∫ x^k p = ∫ x^k (-v ∂_x p + A p) = k v M_{k-1} + A M_k after one
-//! integration by parts in x). A rule that also reset x to 0 would replace
-//! the re-injection of M_k (k ≥ 1) by nothing, its own reset source; the one
-//! rule keeps x, so the reset term of A is the whole story
-//! (docs/equations.md, entry (D1)). On the mesh this is the chain operator
+//! integration by parts in x). When a reset keeps x the reset term of A is
+//! the whole story (docs/equations.md, entry (D1)). With position
+//! resetting (`--reset-position x_r`) the reset influx of M_k (k ≥ 1) is
+//! x_r^k times that of M_0 instead of its own, and with an exponential
+//! refractory period the held pairs of [`ForwardOperator`] are unknowns of
+//! every block, x moving at the held velocity there (entry (R8)). On the
+//! mesh this is the chain operator
 //! C = [[A, 0, 0], [V, A, 0], [0, 2V, A]] with V = diag(cell-centre v): block
 //! lower triangular, so (I - cC) x = b is three shifted solves of A by
 //! forward substitution. TR-BDF2 ([`crate::numerics::trbdf2`]) integrates
@@ -24,7 +27,9 @@
 //!
 //! so the effective exponent α(t) = d ln⟨x²⟩/d ln t = 2 t ⟨x v⟩ / ⟨x²⟩ is
 //! exact (no finite difference). Long times: 2 (⟨x v⟩ - ⟨x⟩⟨v⟩) → 2 D_eff, the
-//! Green-Kubo D_eff of the same discrete chain ([`super::stationary`]).
+//! Green-Kubo D_eff of the same discrete chain ([`super::stationary`]);
+//! with position resetting ⟨x⟩ and ⟨x²⟩ tend to the stationary ones of the
+//! same chain instead (no D_eff).
 //!
 //! The mesh error is removed by Richardson extrapolation over `levels` nested
 //! meshes (cells, 2 cells, ...), assuming an expansion in powers of 1/N (the
@@ -104,7 +109,11 @@ pub struct MomentSeries {
 /// The moment chain k = 0, 1, 2 on one mesh.
 struct Chain {
     op: ForwardOperator,
+    /// The velocity of every unknown (the held ones at their held velocity).
     v: Vec<f64>,
+    /// Position resetting to x_r: the reset influx of block k ≥ 1 is x_r^k
+    /// times that of M_0 (docs/equations.md, (R8)).
+    x_r: Option<f64>,
     /// Absolute tolerance of each block.
     atol: [f64; 3],
     tmp: Vec<f64>,
@@ -118,12 +127,18 @@ impl ShiftedLinear for Chain {
     fn apply(&self, u: &[f64], out: &mut [f64]) {
         let n = self.v.len();
         for k in 0..3 {
-            self.op
-                .apply(&u[k * n..(k + 1) * n], &mut out[k * n..(k + 1) * n]);
+            let block = &mut out[k * n..(k + 1) * n];
+            match self.x_r {
+                Some(x) if k > 0 => {
+                    self.op.apply_with(&u[k * n..(k + 1) * n], block, false);
+                    self.op.add_injection(&u[..n], block, x.powi(k as i32));
+                }
+                _ => self.op.apply(&u[k * n..(k + 1) * n], block),
+            }
             if k > 0 {
                 let kf = k as f64;
                 for i in 0..n {
-                    out[k * n + i] += kf * self.v[i] * u[(k - 1) * n + i];
+                    block[i] += kf * self.v[i] * u[(k - 1) * n + i];
                 }
             }
         }
@@ -144,8 +159,16 @@ impl ShiftedLinear for Chain {
                     self.tmp[i] += ck * self.v[i] * x[(k - 1) * n + i];
                 }
             }
-            self.op
-                .solve_shifted_into(c, &self.tmp, &mut x[k * n..(k + 1) * n])?;
+            let (lower, rest) = x.split_at_mut(k * n);
+            let block = &mut rest[..n];
+            match self.x_r {
+                Some(xr) if k > 0 => {
+                    self.op
+                        .add_injection(&lower[..n], &mut self.tmp, c * xr.powi(k as i32));
+                    self.op.solve_shifted_with(c, &self.tmp, block, false)?;
+                }
+                _ => self.op.solve_shifted_into(c, &self.tmp, block)?,
+            }
         }
         Ok(())
     }
@@ -172,7 +195,8 @@ fn observe(v: &[f64], u: &[f64]) -> [f64; 6] {
 }
 
 fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
-    // Either noise rule: A re-injects the M_k like the density, x kept.
+    // Either noise rule: A re-injects the M_k like the density (x kept), or
+    // x_r^k times M_0's influx (position resetting).
     match params.reset().noise() {
         NoiseAtReset::Kept | NoiseAtReset::Redrawn => {}
     }
@@ -248,6 +272,7 @@ fn one_mesh(
     let mut chain = Chain {
         op,
         v,
+        x_r: params.schedule().position.map(|x| x.x),
         atol: [0.0; 3],
         tmp: vec![0.0; n],
     };

@@ -26,8 +26,20 @@
 //! as s plus the magnitude of its off-diagonal entry: det S = s² + s(|S01| +
 //! |S10|) and S^{-1} ≥ 0. For b ≥ 0 the solution is then a sum of
 //! non-negative terms.
+//!
+//! With an exponential refractory period (docs/equations.md, entries (R1),
+//! (R7)) the unknowns go on, after the cell masses, with one held pair
+//! y_a = (q+, q-) per held velocity u_a (the [`Atom`]s): the reset outflux
+//! enters the held pairs, y_a' = w_a W r (Σx+, Σx-) - K y_a, and the pairs
+//! re-enter the cells at rate κ, x' = B x + κ Σ_a E_a y_a (E_a: the cells of
+//! atom a). The shifted solve eliminates the 2×2 held blocks:
+//! y_a = L (d_a + c w_a W r Σx), L = (I + cK)^{-1} ≥ 0, which leaves
+//!   (B' + E G W r Σ) x = -(b + c κ Σ_a E_a L d_a)/c,  G = c κ L,
+//! the same rank-2 structure with Fᵀ = G W r Σ, solved by the same
+//! Sherman-Morrison-Woodbury formula with a general 2×2 S^{-1}.
 
 use super::grid::{Grid, Mesh};
+use super::refractory::{Atom, Held};
 use super::solve::ResetFactor;
 use super::stationary::{make_grid, MAX_CELLS, MIN_CELLS};
 use crate::error::{Error, Result};
@@ -44,6 +56,8 @@ struct Shifted {
     z: [Vec<f64>; 2],
     /// S^{-1} (row-major).
     s_inv: [[f64; 2]; 2],
+    /// With a refractory period: L = (I + cK)^{-1} (row-major).
+    l: [[f64; 2]; 2],
 }
 
 /// The discrete forward generator A (transport, flips, reset removal and
@@ -56,6 +70,9 @@ pub struct ForwardOperator {
     rate: f64,
     /// Cell-centre velocity of every unknown (each centre twice).
     velocities: Vec<f64>,
+    /// The exponential refractory period, if any: one held pair per atom
+    /// after the cell masses.
+    held: Option<Held>,
     shifted: Option<Shifted>,
 }
 
@@ -91,12 +108,20 @@ impl ForwardOperator {
     }
 
     pub(crate) fn on_grid(params: &Params, grid: Grid) -> Self {
-        let velocities = grid.centres.iter().flat_map(|&v| [v, v]).collect();
+        let held = Held::new(&grid, params);
+        let atoms = held.as_ref().map_or(&[][..], |h| &h.atoms[..]);
+        let velocities = grid
+            .centres
+            .iter()
+            .chain(atoms.iter().map(|a| &a.v))
+            .flat_map(|&v| [v, v])
+            .collect();
         ForwardOperator {
             grid,
             lambda: params.lambda(),
             rate: params.rate(),
             velocities,
+            held,
             shifted: None,
         }
     }
@@ -110,9 +135,22 @@ impl ForwardOperator {
         self.grid.cells()
     }
 
-    /// Number of unknowns, 2 × cells.
+    /// Number of unknowns: 2 × cells, and with an exponential refractory
+    /// period 2 more per held velocity (the held pairs (q+, q-), after the
+    /// cell masses).
     pub fn dim(&self) -> usize {
-        2 * self.grid.cells()
+        2 * (self.grid.cells() + self.atoms().len())
+    }
+
+    /// The held velocities of a refractory period (empty without one).
+    pub(crate) fn atoms(&self) -> &[Atom] {
+        self.held.as_ref().map_or(&[], |h| &h.atoms)
+    }
+
+    /// The held (refractory) mass Σ_a (q+_a + q-_a) of `u` (0 without a
+    /// refractory period).
+    pub fn refractory_mass(&self, u: &[f64]) -> f64 {
+        u[2 * self.grid.cells()..].iter().sum()
     }
 
     /// Cell centres (one per cell).
@@ -131,9 +169,10 @@ impl ForwardOperator {
     }
 
     /// Cell-centre velocity of every unknown, in the interleaved order
-    /// (length [`dim`](Self::dim): v_0, v_0, v_1, v_1, ...). This is the v of
-    /// the source of the position-moment chain dM_k/dt = A M_k + k v M_{k-1}
-    /// (elementwise product).
+    /// (length [`dim`](Self::dim): v_0, v_0, v_1, v_1, ..., then the held
+    /// velocity u_a twice per held pair). This is the v of the source of the
+    /// position-moment chain dM_k/dt = A M_k + k v M_{k-1} (elementwise
+    /// product).
     pub fn velocities(&self) -> &[f64] {
         &self.velocities
     }
@@ -180,10 +219,11 @@ impl ForwardOperator {
         u
     }
 
-    /// Mass, `<v>` and `<v²>` of the cell masses `u` (cell-centre quadrature).
+    /// Mass, `<v>` and `<v²>` of the cell masses `u` (cell-centre quadrature;
+    /// the held pairs at their held velocities).
     pub fn moments(&self, u: &[f64]) -> [f64; 3] {
         let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-        for (c, &v) in u.chunks_exact(2).zip(&self.grid.centres) {
+        for (c, &v) in u.chunks_exact(2).zip(self.velocities.iter().step_by(2)) {
             let w = c[0] + c[1];
             s0 += w;
             s1 += w * v;
@@ -194,6 +234,14 @@ impl ForwardOperator {
 
     /// out = A u.
     pub fn apply(&self, u: &[f64], out: &mut [f64]) {
+        self.apply_with(u, out, true)
+    }
+
+    /// out = A u, without the reset influx (the re-injection into the target
+    /// cells, or the entry into the held pairs) unless `inject`: the operator
+    /// of an x-weighted block with position resetting, whose influx is
+    /// [`add_injection`](Self::add_injection) of M_0 instead.
+    pub fn apply_with(&self, u: &[f64], out: &mut [f64], inject: bool) {
         let g = &self.grid;
         let n = g.cells();
         let (al, be, l, r) = (&g.out_plus, &g.out_minus, self.lambda, self.rate);
@@ -211,8 +259,52 @@ impl ForwardOperator {
             out[2 * i] = left - (al[i] + l + r) * p + l * m;
             out[2 * i + 1] = l * p - (be[i] + l + r) * m + right;
         }
-        let (ip, im) = g.reinject(r * up, r * um);
-        g.add_reset_flat(out, ip, im);
+        match &self.held {
+            None if inject => {
+                let (ip, im) = g.reinject(r * up, r * um);
+                g.add_reset_flat(out, ip, im);
+            }
+            None => {}
+            Some(h) => self.apply_held(h, u, out, if inject { [up, um] } else { [0.0; 2] }),
+        }
+    }
+
+    /// The held pairs' rows of A u and their re-entry into the cells, with
+    /// the reset outflux of the state sums `sums`.
+    fn apply_held(&self, h: &Held, u: &[f64], out: &mut [f64], sums: [f64; 2]) {
+        let base = 2 * self.grid.cells();
+        let inf = h.influx(sums[0], sums[1]);
+        let (k, l) = (h.kappa, self.lambda);
+        for (i, a) in h.atoms.iter().enumerate() {
+            let (p, m) = (u[base + 2 * i], u[base + 2 * i + 1]);
+            out[base + 2 * i] = a.w * inf[0] - (k + l) * p + l * m;
+            out[base + 2 * i + 1] = a.w * inf[1] + l * p - (k + l) * m;
+            out[2 * a.plus] += k * p;
+            out[2 * a.minus + 1] += k * m;
+        }
+    }
+
+    /// out += `scale` × the reset influx of the state sums of `u0`'s cell
+    /// masses: into the target cells, or into the held pairs with a
+    /// refractory period. With position resetting the x-weighted block k
+    /// receives this with scale x_r^k from M_0 (docs/equations.md, (R8)).
+    pub fn add_injection(&self, u0: &[f64], out: &mut [f64], scale: f64) {
+        let g = &self.grid;
+        let n = g.cells();
+        let (up, um) = state_sums(&u0[..2 * n]);
+        match &self.held {
+            None => {
+                let (ip, im) = g.reinject(scale * self.rate * up, scale * self.rate * um);
+                g.add_reset_flat(&mut out[..2 * n], ip, im);
+            }
+            Some(h) => {
+                let inf = h.influx(scale * up, scale * um);
+                for (i, a) in h.atoms.iter().enumerate() {
+                    out[2 * n + 2 * i] += a.w * inf[0];
+                    out[2 * n + 2 * i + 1] += a.w * inf[1];
+                }
+            }
+        }
     }
 
     /// Solve (I - cA) x = b for c > 0, caching the factorisation of the last
@@ -224,6 +316,19 @@ impl ForwardOperator {
         c: f64,
         b: &[f64],
         x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        self.solve_shifted_with(c, b, x, true)
+    }
+
+    /// [`solve_shifted_into`](Self::solve_shifted_into) for the operator of
+    /// [`apply_with`](Self::apply_with): without the reset influx unless
+    /// `inject`.
+    pub fn solve_shifted_with(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+        inject: bool,
     ) -> std::result::Result<(), Failure> {
         let fail = Failure::NonFinite {
             method: "fp shifted solve (I - cA) x = b",
@@ -237,18 +342,18 @@ impl ForwardOperator {
         }
         let s = self.shifted.as_ref().expect("factorised above");
         let g = &self.grid;
-        // (B' + E Fᵀ) x = -b/c.
-        let y: Vec<f64> = b.iter().map(|&bi| -bi / c).collect();
-        s.factor.solve(g, &y, x);
-        let (fp, fm) = state_sums(x);
-        let (f0, f1) = g.reinject(self.rate * fp, self.rate * fm);
-        let f = [f0, f1];
-        let a = [
-            s.s_inv[0][0] * f[0] + s.s_inv[0][1] * f[1],
-            s.s_inv[1][0] * f[0] + s.s_inv[1][1] * f[1],
-        ];
-        for (i, xi) in x.iter_mut().enumerate() {
-            *xi -= s.z[0][i] * a[0] + s.z[1][i] * a[1];
+        match &self.held {
+            None => {
+                // (B' + E Fᵀ) x = -b/c.
+                let y: Vec<f64> = b.iter().map(|&bi| -bi / c).collect();
+                s.factor.solve(g, &y, x);
+                if inject {
+                    let (fp, fm) = state_sums(x);
+                    let (f0, f1) = g.reinject(self.rate * fp, self.rate * fm);
+                    smw(s, [f0, f1], x);
+                }
+            }
+            Some(h) => solve_held(g, h, s, b, x, inject),
         }
         if x.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -264,13 +369,23 @@ impl ForwardOperator {
         let factor = ResetFactor::new(g, self.lambda, loss);
         // E's columns: unit mass re-entering in the + and in the - state.
         let unit = |ip: f64, im: f64| {
-            let mut e = vec![0.0; self.dim()];
+            let mut e = vec![0.0; 2 * g.cells()];
             g.add_reset_flat(&mut e, ip, im);
-            let mut z = vec![0.0; self.dim()];
+            let mut z = vec![0.0; 2 * g.cells()];
             factor.solve(g, &e, &mut z);
             z
         };
         let z = [unit(1.0, 0.0), unit(0.0, 1.0)];
+        if let Some(h) = &self.held {
+            let (l, s_inv) = held_s_inv(h, self.rate, c, &z);
+            return Shifted {
+                c,
+                factor,
+                z,
+                s_inv,
+                l,
+            };
+        }
         // Column k of S: s on the sum; the off-diagonal is the re-injection
         // into the other state of r Σ Z_k (≤ 0), the diagonal
         // s + |off-diagonal|.
@@ -288,7 +403,78 @@ impl ForwardOperator {
             factor,
             z,
             s_inv,
+            l: [[0.0; 2]; 2],
         }
+    }
+}
+
+/// x -= Z S^{-1} f: the Sherman-Morrison-Woodbury correction.
+fn smw(s: &Shifted, f: [f64; 2], x: &mut [f64]) {
+    let a = mat2(&s.s_inv, f);
+    for (i, xi) in x.iter_mut().enumerate() {
+        *xi -= s.z[0][i] * a[0] + s.z[1][i] * a[1];
+    }
+}
+
+/// M y for a row-major 2×2 M.
+fn mat2(m: &[[f64; 2]; 2], y: [f64; 2]) -> [f64; 2] {
+    [
+        m[0][0] * y[0] + m[0][1] * y[1],
+        m[1][0] * y[0] + m[1][1] * y[1],
+    ]
+}
+
+/// L = (I + cK)^{-1} (entries ≥ 0) and S^{-1}, S = I + G W r Σ Z with
+/// G = c κ L (module docs). Free of cancellation as for the plain S: the
+/// columns of L sum to 1/(1 + cκ), those of W to 1, and Σ Z_j sums to
+/// -c/(1 + rc), so each column of S sums to
+/// s = (1 + cκ + rc) / ((1 + cκ)(1 + rc)); the off-diagonal entries are ≤ 0
+/// and the diagonal is s plus their magnitude.
+fn held_s_inv(h: &Held, r: f64, c: f64, z: &[Vec<f64>; 2]) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
+    let (k, l) = (c * h.kappa, c * h.lambda());
+    let det = (1.0 + k) * (1.0 + k + 2.0 * l);
+    let (d, o) = ((1.0 + k + l) / det, l / det);
+    let lm = [[d, o], [o, d]];
+    let col = |z: &[f64]| {
+        let (a, b) = state_sums(z);
+        mat2(&lm, h.influx(a, b)).map(|x| k * x)
+    };
+    let off = [col(&z[0])[1], col(&z[1])[0]];
+    let s = (1.0 + k + r * c) / ((1.0 + k) * (1.0 + r * c));
+    let (s00, s11) = (s - off[0], s - off[1]);
+    let det = s * s - s * (off[0] + off[1]);
+    let s_inv = [[s11 / det, -off[1] / det], [-off[0] / det, s00 / det]];
+    (lm, s_inv)
+}
+
+/// The shifted solve with the held pairs (module docs): x's cells from the
+/// rank-2 corrected solve, then y_a = L (d_a + c w_a W r Σx).
+fn solve_held(g: &Grid, h: &Held, s: &Shifted, b: &[f64], x: &mut [f64], inject: bool) {
+    let n2 = 2 * g.cells();
+    let c = s.c;
+    let (bc, d) = b.split_at(n2);
+    let ld: Vec<[f64; 2]> = d
+        .chunks_exact(2)
+        .map(|da| mat2(&s.l, [da[0], da[1]]))
+        .collect();
+    let mut y: Vec<f64> = bc.iter().map(|&bi| -bi / c).collect();
+    for (a, l) in h.atoms.iter().zip(&ld) {
+        y[2 * a.plus] -= h.kappa * l[0];
+        y[2 * a.minus + 1] -= h.kappa * l[1];
+    }
+    let (xc, xh) = x.split_at_mut(n2);
+    s.factor.solve(g, &y, xc);
+    let mut inf = [0.0; 2];
+    if inject {
+        let (fp, fm) = state_sums(xc);
+        let f = mat2(&s.l, h.influx(fp, fm)).map(|v| c * h.kappa * v);
+        smw(s, f, xc);
+        let (xp, xm) = state_sums(xc);
+        inf = mat2(&s.l, h.influx(xp, xm));
+    }
+    for ((a, l), out) in h.atoms.iter().zip(&ld).zip(xh.chunks_exact_mut(2)) {
+        out[0] = l[0] + c * a.w * inf[0];
+        out[1] = l[1] + c * a.w * inf[1];
     }
 }
 
@@ -414,6 +600,64 @@ mod tests {
                     let (sx, sb) = (x.iter().sum::<f64>(), b.iter().sum::<f64>());
                     let sa: f64 = b.iter().map(|v| v.abs()).sum();
                     assert!((sx - sb).abs() <= 1e-12 * sa, "{sx} vs {sb}");
+                }
+            }
+        }
+    }
+
+    /// Operators with an exponential refractory period: point and uniform
+    /// targets, noise kept and re-drawn.
+    fn held_ops() -> Vec<ForwardOperator> {
+        use crate::model::reset::{NoiseAtReset, Schedule, Target};
+        let mut out = Vec::new();
+        for (d, s, vr) in [(DragLaw::Tan, 3.0, 0.0), (DragLaw::Linear, 1.0, -0.2)] {
+            let p = Params::new(d, s, 0.5, 2.0, vr).unwrap();
+            let sched = Schedule::parse(None, None, Some("exp:mean=0.3")).unwrap();
+            for noise in [NoiseAtReset::Kept, NoiseAtReset::Redrawn] {
+                for t in [Target::Point(vr), Target::Uniform { a: -0.3, b: 0.2 }] {
+                    let q = p
+                        .with_reset(t, noise)
+                        .unwrap()
+                        .with_schedule(sched)
+                        .unwrap();
+                    out.push(ForwardOperator::new(&q, Mesh::Graded, 120).unwrap());
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn held_shifted_solve_satisfies_the_equations_and_conserves_mass() {
+        for mut op in held_ops() {
+            let n = op.dim();
+            assert!(n > 2 * op.cells());
+            // Columns of A sum to zero with the held pairs.
+            let mut col = vec![0.0; n];
+            for j in [0, n / 3, n - 2, n - 1] {
+                let mut e = vec![0.0; n];
+                e[j] = 1.0;
+                op.apply(&e, &mut col);
+                let scale: f64 = col.iter().map(|x| x.abs()).sum();
+                assert!(col.iter().sum::<f64>().abs() <= 1e-14 * scale, "column {j}");
+            }
+            for c in [1e-6, 0.03, 1.0, 1e4] {
+                for inject in [true, false] {
+                    let b: Vec<f64> = (0..n).map(|i| ((i * 3) % 5) as f64).collect();
+                    let mut x = vec![0.0; n];
+                    op.solve_shifted_with(c, &b, &mut x, inject).unwrap();
+                    let mut ax = vec![0.0; n];
+                    op.apply_with(&x, &mut ax, inject);
+                    let norm = b.iter().chain(&x).fold(0.0f64, |m, v| m.max(v.abs()));
+                    let scale = norm * (1.0 + c * 1e4);
+                    for i in 0..n {
+                        let res = x[i] - c * ax[i] - b[i];
+                        assert!(res.abs() <= 1e-11 * scale, "c = {c}, i = {i}: {res}");
+                    }
+                    if inject {
+                        let (sx, sb) = (x.iter().sum::<f64>(), b.iter().sum::<f64>());
+                        assert!((sx - sb).abs() <= 1e-12 * sb, "c = {c}: {sx} vs {sb}");
+                    }
                 }
             }
         }

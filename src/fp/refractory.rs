@@ -86,6 +86,11 @@ impl Held {
         })
     }
 
+    /// The flip rate λ.
+    pub fn lambda(&self) -> f64 {
+        self.lambda
+    }
+
     /// K⁻¹ x, K = [[κ + λ, -λ], [-λ, κ + λ]] (positive entries).
     pub fn k_inv(&self, x: [f64; 2]) -> [f64; 2] {
         let (k, l) = (self.kappa, self.lambda);

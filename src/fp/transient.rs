@@ -15,6 +15,11 @@
 //!   reported as the error estimate; the density is the fine mesh's.
 //! - [`Scheme::Paper`]: the paper's way (Sec. 3): explicit upwind on a
 //!   uniform mesh, the step set by the CFL limit.
+//!
+//! An exponential refractory period (docs/equations.md, (R7)) runs in
+//! [`Scheme::TrBdf2`]: the held pairs of [`ForwardOperator`] are unknowns
+//! next to the cell masses, and [`Transient::refractory_mass`] reports
+//! their mass; the paper scheme refuses it.
 
 use super::grid::{uniform_target, Grid, Mesh};
 use super::operator::ForwardOperator;
@@ -182,8 +187,13 @@ pub struct Transient {
     /// the second Richardson extrapolation, see [`Transient::extrapolated`]);
     /// empty for the paper scheme.
     pub v2_mesh_error: Vec<f64>,
-    /// Σ P Δv at the recording times (fine mesh).
+    /// Σ P Δv at the recording times (fine mesh), with the refractory mass.
     pub mass: Vec<f64>,
+    /// The refractory (held) point mass q+ + q- at the recording times
+    /// (fine mesh; docs/equations.md, (R1), (R7)), 0 without an exponential
+    /// refractory period. `mass`, `v_mean` and `v2` include it, at the held
+    /// velocities; the snapshots are the continuous part.
+    pub refractory_mass: Vec<f64>,
     /// |Σ P Δv - 1|, maximum over every step (paper scheme) or over every
     /// recording and snapshot time of the three meshes (TR-BDF2).
     pub mass_error_max: f64,
@@ -233,6 +243,7 @@ pub const TRBDF2_UPDATES_PER_STEP: f64 = 12.0;
 /// integration): for estimating the cost before a run.
 pub fn plan(params: &Params, opts: &TransientOptions) -> Result<Plan> {
     params.require(Solver::FpTransient)?;
+    require_held(params, opts.scheme)?;
     let (times, snaps) = validate(opts)?;
     match opts.scheme {
         Scheme::Paper => plan_on(params, opts, &Grid::uniform(params, opts.cells)),
@@ -361,6 +372,30 @@ fn periodic_reset(g: &Grid, u: &mut [f64]) {
     g.add_reset_flat(u, ip, im);
 }
 
+/// The exponential refractory period runs in [`Scheme::TrBdf2`] only (the
+/// held pairs of [`ForwardOperator`]), and not together with periodic
+/// resetting.
+fn require_held(params: &Params, scheme: Scheme) -> Result<()> {
+    let Some(r) = params.schedule().refractory else {
+        return Ok(());
+    };
+    if scheme == Scheme::Paper {
+        return Err(Error::invalid(
+            "refractory",
+            r.spec(),
+            "none with --scheme paper (the refractory period runs in --scheme trbdf2)",
+        ));
+    }
+    if params.schedule().periodic.is_some() {
+        return Err(Error::invalid(
+            "refractory",
+            r.spec(),
+            "none together with --reset-period in fp transient",
+        ));
+    }
+    Ok(())
+}
+
 /// Integrate the forward equations from the paper's initial condition.
 pub fn transient(params: &Params, opts: &TransientOptions) -> Result<Transient> {
     transient_with_progress(params, opts, &NoProgress)
@@ -374,6 +409,7 @@ pub fn transient_with_progress(
 ) -> Result<Transient> {
     let (times, snaps) = validate(opts)?;
     params.require(Solver::FpTransient)?;
+    require_held(params, opts.scheme)?;
     match opts.scheme {
         Scheme::Paper => paper(params, opts, &times, &snaps, progress),
         Scheme::TrBdf2 => run_trbdf2(params, opts, &times, &snaps, progress),
@@ -416,6 +452,7 @@ fn paper(
         v2: Vec::with_capacity(times.len()),
         v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
+        refractory_mass: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
     };
@@ -444,7 +481,7 @@ fn paper(
             periodic_reset(&g, m.as_flattened_mut());
         }
         while ti < times.len() && times[ti] <= t {
-            out.record_moments(times[ti], &m, &g);
+            out.record_moments(times[ti], &m, &g.centres, n);
             ti += 1;
         }
         while si < snaps.len() && snaps[si] <= t {
@@ -506,6 +543,7 @@ fn run_trbdf2(
         v2,
         v2_mesh_error,
         mass: fine.mass,
+        refractory_mass: fine.refractory_mass,
         mass_error_max: fine
             .mass_error_max
             .max(half.mass_error_max)
@@ -612,10 +650,13 @@ fn integrate_mesh(
         v2: Vec::with_capacity(times.len()),
         v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
+        refractory_mass: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
     };
     let g = op.grid().clone();
+    // The velocity of each (cell or held) pair of unknowns.
+    let pair_v: Vec<f64> = op.velocities().iter().step_by(2).copied().collect();
     let resets = reset_times(params, times, snaps);
     let mut done = 0usize;
     let mut observe = |t: f64, u: &[f64], out: &mut Transient| -> Result<()> {
@@ -626,7 +667,7 @@ fn integrate_mesh(
         let mass: f64 = u.iter().sum();
         out.mass_error_max = out.mass_error_max.max((mass - 1.0).abs());
         if times.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
-            out.record_moments(t, &m, &g);
+            out.record_moments(t, &m, &pair_v, g.cells());
         }
         if snaps.binary_search_by(|x| x.total_cmp(&t)).is_ok() {
             out.record_snapshot(t, &m, &g);
@@ -736,10 +777,12 @@ fn validate(opts: &TransientOptions) -> Result<(Vec<f64>, Vec<f64>)> {
 }
 
 impl Transient {
-    /// Record mass, `<v>` and `<v²>` of the cell masses `m` at time t.
-    fn record_moments(&mut self, t: f64, m: &[[f64; 2]], g: &Grid) {
+    /// Record mass, `<v>` and `<v²>` of the pairs `m` (the cell masses,
+    /// then from index `cells` on the held pairs) at velocities `v` at time
+    /// t, and the held mass.
+    fn record_moments(&mut self, t: f64, m: &[[f64; 2]], v: &[f64], cells: usize) {
         let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-        for (c, &v) in m.iter().zip(&g.centres) {
+        for (c, &v) in m.iter().zip(v) {
             let w = c[0] + c[1];
             s0 += w;
             s1 += w * v;
@@ -747,6 +790,8 @@ impl Transient {
         }
         self.times.push(t);
         self.mass.push(s0);
+        self.refractory_mass
+            .push(m[cells..].iter().map(|c| c[0] + c[1]).sum());
         self.v_mean.push(s1);
         self.v2.push(s2);
     }

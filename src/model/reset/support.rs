@@ -124,6 +124,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::FpStationary
                 | S::ClosedForm
                 | S::FpTransient
+                | S::FpMsd
                 | S::Backward
                 | S::MfptExact
                 | S::MfptEuler
@@ -142,6 +143,8 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptExact
                 | S::MfptEuler
                 | S::FpStationary
+                | S::FpTransient
+                | S::FpMsd
                 | S::Backward
                 | S::ClosedForm
         ),
