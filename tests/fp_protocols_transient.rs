@@ -335,13 +335,7 @@ fn cli_reports_held_mass_and_omits_d_eff_with_position_resetting() {
     close(v["mass"].as_f64().unwrap(), 1.0, 1e-12, "mass");
     let csv = std::fs::read_to_string(dir.join("moments.csv")).unwrap();
     assert_eq!(csv.lines().next(), Some("t,v_mean,v2,mass,refractory_mass"));
-    let last: Vec<f64> = csv
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = common::last_csv_row(&dir.join("moments.csv"));
     assert_eq!(last[4], mr);
     for (position, has_d) in [(true, false), (false, true)] {
         let mut args = vec!["fp", "msd", "--t-max", "2", "--samples", "3"];

@@ -327,13 +327,7 @@ fn cli_writes_times_before_the_atom() {
     a.extend(["--out", dir.to_str().unwrap()]);
     assert_success(&irtp(&a));
     let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
-    let last: Vec<f64> = csv
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = common::last_csv_row(&dir.join("distribution.csv"));
     assert_eq!(last[0], 0.01);
     // S = 1 up to the mesh error (S_c's kink, smeared ahead of the atom).
     assert!(last[1] > 0.99 && last[1] <= 1.0 + 1e-4, "{csv}");

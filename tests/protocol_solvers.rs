@@ -231,14 +231,7 @@ fn cli_reports_point_mass_and_position_moments() {
     let mr = v["refractory_mass"].as_f64().unwrap();
     assert!((mr - 0.375).abs() < 1e-10, "{mr}");
     assert!((v["mass"].as_f64().unwrap() - 1.0).abs() < 1e-12);
-    let csv = std::fs::read_to_string(dir.join("density.csv")).unwrap();
-    let last: Vec<f64> = csv
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = common::last_csv_row(&dir.join("density.csv"));
     assert_eq!((last[0], last[4]), (0.2, 0.0));
     assert!((last[1] - mr).abs() < 1e-15);
     let mut args = model.to_vec();

@@ -79,6 +79,21 @@ pub struct LinearMoments {
     pub x2: Vec<f64>,
 }
 
+impl LinearMoments {
+    /// No times yet, room for `n`.
+    pub(crate) fn empty(n: usize) -> Self {
+        LinearMoments {
+            t: Vec::with_capacity(n),
+            v_mean: Vec::with_capacity(n),
+            v2: Vec::with_capacity(n),
+            v_eta: Vec::with_capacity(n),
+            x_mean: Vec::with_capacity(n),
+            xv: Vec::with_capacity(n),
+            x2: Vec::with_capacity(n),
+        }
+    }
+}
+
 type Mat = [[f64; N]; N];
 
 /// A and b of u' = A u + b (rows: the moment equations above).
@@ -244,15 +259,7 @@ pub fn moments(p: &Params, times: &[f64]) -> Result<LinearMoments> {
     }
     let (a, b) = system(p)?;
     let rho = (0..N).map(|i| a[i][i].abs()).fold(1.0, f64::max);
-    let mut out = LinearMoments {
-        t: Vec::with_capacity(times.len()),
-        v_mean: Vec::new(),
-        v2: Vec::new(),
-        v_eta: Vec::new(),
-        x_mean: Vec::new(),
-        xv: Vec::new(),
-        x2: Vec::new(),
-    };
+    let mut out = LinearMoments::empty(times.len());
     let period = p.schedule().periodic.map(|t| t.period);
     let mut resets = 0.0;
     let mut u = [0.0; N];

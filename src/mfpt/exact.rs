@@ -84,13 +84,10 @@ impl<F: FlowMap> FirstPassage<F> {
         let key = format!("first passage {drag:?} {:x} {accelerated}", sigma.to_bits());
         let flows = crate::memo::shared(key, || {
             Ok::<_, std::convert::Infallible>([flow(sigma), flow(-sigma)])
-        });
-        let flows = match flows {
-            Ok(f) => (*f).clone(),
-            Err(never) => match never {},
-        };
+        })
+        .unwrap_or_else(|never| match never {});
         FirstPassage {
-            flows,
+            flows: (*flows).clone(),
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),

@@ -60,6 +60,16 @@ pub fn json(out: &Output) -> serde_json::Value {
     summary(out)["results"].clone()
 }
 
+/// The last row of a CSV file, as numbers.
+pub fn last_csv_row(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    let last = text
+        .lines()
+        .last()
+        .unwrap_or_else(|| panic!("{path:?}: empty"));
+    last.split(',').map(|x| x.parse().unwrap()).collect()
+}
+
 /// Parse a JSON file (e.g. an output directory's run.json).
 pub fn read_json(path: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));

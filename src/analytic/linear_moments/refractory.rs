@@ -115,15 +115,7 @@ pub(super) fn moments(p: &Params, mean: f64, times: &[f64]) -> Result<LinearMome
     let rho = (0..N).map(|i| a[i][i].abs()).fold(1.0, f64::max);
     let mut u = [0.0; N];
     u[MC] = 1.0;
-    let mut out = LinearMoments {
-        t: Vec::with_capacity(times.len()),
-        v_mean: Vec::new(),
-        v2: Vec::new(),
-        v_eta: Vec::new(),
-        x_mean: Vec::new(),
-        xv: Vec::new(),
-        x2: Vec::new(),
-    };
+    let mut out = LinearMoments::empty(times.len());
     let mut t = 0.0;
     for &tk in times {
         let tk = finite("times", tk)?;
