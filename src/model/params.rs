@@ -383,6 +383,19 @@ impl Params {
     pub fn v_upper(&self) -> f64 {
         self.drag.inverse(self.sigma)
     }
+    /// The Newtonian medium on the same velocity interval: g(v) = v with
+    /// Sigma' = v_u, the flip rate, resetting rule and schedule unchanged.
+    /// Driven by the same random stream, the exact sampler gives it the
+    /// same events as this model, and its moments are known exactly
+    /// ([`crate::analytic::linear_moments`]): the control variate of
+    /// [`crate::sim::control`].
+    pub fn linear_proxy(&self) -> Params {
+        Params {
+            drag: DragLaw::Linear,
+            sigma: self.v_upper(),
+            ..*self
+        }
+    }
     /// Lower velocity bound v_l = -v_u.
     pub fn v_lower(&self) -> f64 {
         -self.v_upper()

@@ -53,6 +53,7 @@ use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
+use crate::sim::control::Coupled;
 use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
 use std::ops::Range;
@@ -864,6 +865,71 @@ fn simulate_drag<D: Drag>(
         progress,
     );
     Ok(totals.into_iter().map(|(obs, _)| obs).collect())
+}
+
+/// [`crate::sim::control::coupled`]: every particle of the run twice, with
+/// `params` and with the linear proxy `proxy` ([`Params::linear_proxy`]),
+/// from the same stream (seed, i), so both see the same events; the pairs
+/// (x(t_k)², x_proxy(t_k)²) and the pair of Eq. (36) slopes are summed.
+pub(crate) fn simulate_coupled(
+    params: &Params,
+    proxy: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<Coupled> {
+    crate::with_drag!(params.drag(), |d| coupled_drag(
+        d, params, proxy, spec, progress
+    ))
+}
+
+/// Per-chunk state of a coupled run: the totals, a one-particle accumulator
+/// per sampler and the scratch.
+struct CoupledChunk {
+    totals: Coupled,
+    one: [Observables; 2],
+    sc: Scratch,
+}
+
+fn coupled_drag<D: Drag>(
+    drag: &D,
+    params: &Params,
+    proxy: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<Coupled> {
+    let target = Sampler::new(drag, params, spec)?;
+    let linear = Sampler::new(&crate::model::drag::Linear, proxy, spec)?;
+    let empty = [
+        Observables::new(spec, params),
+        Observables::new(spec, proxy),
+    ];
+    let b = spec.bins;
+    let first = spec.first_particle;
+    let init = || CoupledChunk {
+        totals: Coupled::empty(empty[0].clone()),
+        one: empty.clone(),
+        sc: Scratch {
+            occ: vec![0.0; b],
+            cross: [vec![0; b], vec![0; b]],
+        },
+    };
+    let chunk = |lo: u64, hi: u64, c: &mut CoupledChunk| {
+        for i in first + lo..first + hi {
+            target.particles(i..i + 1, &mut c.one[0], &mut c.sc);
+            linear.particles(i..i + 1, &mut c.one[1], &mut c.sc);
+            c.totals.push(&c.one[0], &c.one[1]);
+            c.one[0].clone_from(&empty[0]);
+            c.one[1].clone_from(&empty[1]);
+        }
+    };
+    let mut totals = Part::Whole.reduce(
+        spec.particles,
+        init,
+        chunk,
+        |a, b| a.totals.merge(&b.totals),
+        progress,
+    );
+    Ok(totals.remove(0).totals)
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@
 //! [`combine_units`]) merges into the same bits. Each method implements "simulate one particle and add it to an
 //! [`Observables`] accumulator"; everything downstream is shared.
 
+pub mod control;
 pub mod euler;
 pub mod exact;
 
