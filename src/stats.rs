@@ -117,7 +117,7 @@ pub struct PairAcc {
     pub sxy: f64,
 }
 
-/// A control-variate estimate of E[x] (see [`PairAcc::controlled`]).
+/// A control-variate estimate of the mean of x (see [`PairAcc::controlled`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Controlled {
     /// x̄ - β (ȳ - μ_y).
@@ -168,7 +168,7 @@ impl PairAcc {
         self.sxy += o.sxy;
     }
 
-    /// The control-variate estimate of E[x] given the exact mean `mu_y` of
+    /// The control-variate estimate of the mean of x given the exact mean `mu_y` of
     /// y: x̄ - β (ȳ - μ_y) with the least-squares β = S_xy / S_yy (centred
     /// sums). Its variance is σ²_res / n · (1 + 1/(n - 3)), σ²_res = (S_xx -
     /// S_xy²/S_yy)/(n - 2) the residual variance of x about its regression
