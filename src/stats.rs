@@ -135,6 +135,18 @@ pub struct Controlled {
     pub equivalent_samples: f64,
 }
 
+impl Controlled {
+    /// No estimate: every value NaN, no equivalent samples.
+    pub const NAN: Controlled = Controlled {
+        mean: f64::NAN,
+        se: f64::NAN,
+        plain: f64::NAN,
+        plain_se: f64::NAN,
+        rho: f64::NAN,
+        equivalent_samples: 0.0,
+    };
+}
+
 impl PairAcc {
     /// Empty accumulator.
     pub const fn new() -> Self {

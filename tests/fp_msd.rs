@@ -160,7 +160,7 @@ fn cli_writes_moments_and_refuses_bad_input() {
     assert_eq!(res["cells_finest"], 64);
     let csv = std::fs::read_to_string(out.join("moments.csv")).unwrap();
     let header = csv.lines().find(|l| l.starts_with("t,")).unwrap();
-    assert_eq!(header, "t,mass,v_mean,v2,x_mean,xv,x2,alpha");
+    assert_eq!(header, "t,mass,v_mean,v2,x_mean,xv,x2,alpha,x2_err");
     assert_eq!(csv.lines().filter(|l| !l.starts_with('#')).count(), 7);
     for (flag, value) in [
         ("--levels", "0"),

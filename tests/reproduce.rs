@@ -33,13 +33,13 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
             "r = 0, FP",
         ],
         "fig5" => &[
-            "exact sampler, 2",
+            "exact sampler with linear-proxy control variate, ",
             "guide (ballistic)",
             "guide (diffusive)",
             "r = 10",
         ],
         "fig6" => &[
-            "exact sampler (",
+            "exact sampler with linear-proxy control variate (",
             "fit of Eq. (36)",
             "(FP generator)",
             "guide",

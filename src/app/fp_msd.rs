@@ -139,6 +139,7 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
         "x_mean_final": m.x_mean[k],
         "v2_final": m.v2[k],
         "alpha_final": m.alpha[k],
+        "x2_err_final": m.x2_err[k],
         "d_eff_slope": d_slope,
         "t_max": m.t[k],
         "cells_finest": m.cells_finest,
@@ -151,11 +152,13 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
         let obj = summary.as_object_mut().expect("a JSON object");
         obj.remove("d_eff_slope");
     }
-    let moments = Table {
+    let mut moments = Table {
         name: "moments",
-        header: ["t", "mass", "v_mean", "v2", "x_mean", "xv", "x2", "alpha"]
-            .map(String::from)
-            .to_vec(),
+        header: [
+            "t", "mass", "v_mean", "v2", "x_mean", "xv", "x2", "alpha", "x2_err",
+        ]
+        .map(String::from)
+        .to_vec(),
         columns: vec![
             m.t.clone(),
             m.mass.clone(),
@@ -165,8 +168,18 @@ pub fn msd(a: &MsdArgs, ctx: &Context) -> crate::Result<Outcome> {
             m.xv.clone(),
             m.x2.clone(),
             m.alpha.clone(),
+            m.x2_err.clone(),
         ],
     };
+    if opts.levels < 2 {
+        // One mesh: no error estimate to write.
+        moments.header.pop();
+        moments.columns.pop();
+        summary
+            .as_object_mut()
+            .expect("a JSON object")
+            .remove("x2_err_final");
+    }
     let diffusion = if position {
         format!(
             "<x> = {}  (position resetting: no D_eff)",

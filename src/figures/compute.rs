@@ -7,6 +7,7 @@ use crate::fp::{self, Mesh, StationaryOptions};
 use crate::mfpt::{self, BackwardOptions, OptimizeOptions, ParticleOptions, Problem};
 use crate::model::Params;
 use crate::parallel::{NoProgress, Progress};
+use crate::sim::control::{self, ControlledRun};
 use crate::sim::{exact, Observables, SimSpec};
 use serde::Serialize;
 
@@ -14,6 +15,52 @@ use serde::Serialize;
 /// no discretisation bias; `crate::sim::exact`).
 pub fn simulate(params: &Params, spec: &SimSpec, progress: &dyn Progress) -> Result<Observables> {
     exact::simulate(params, spec, progress)
+}
+
+/// Exact-sampler run with each particle paired with its linear proxy as
+/// control variate ([`crate::sim::control`]); the proxy's exact moments come
+/// from the closed-form moment equations (docs/equations.md, (D1)).
+pub fn controlled(
+    params: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<ControlledRun> {
+    let proxy =
+        crate::analytic::linear_moments::moments(&params.linear_proxy(), spec.grid.times())?;
+    control::run(params, spec, &proxy.x2, progress)
+}
+
+/// How a sizing pilot turns into a run size: a pilot of `pilot` particles
+/// (own seed, discarded) measures the equivalent independent samples one
+/// particle is worth; the run then gets enough for `margin` × `target`
+/// (the margin covers the pilot's own sampling error), between `min` and `max`.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Sizing {
+    /// Particles of the pilot.
+    pub pilot: u64,
+    /// Equivalent independent samples aimed at.
+    pub target: f64,
+    /// Factor on the target (>= 1).
+    pub margin: f64,
+    /// Fewest particles.
+    pub min: u64,
+    /// Most particles.
+    pub max: u64,
+}
+
+impl Sizing {
+    /// Particles for a run whose pilot measured `equivalent` samples in all.
+    pub fn particles(&self, equivalent: f64) -> u64 {
+        let per = equivalent / self.pilot as f64;
+        let want = self.margin * self.target / per;
+        // NaN or a zero gain: the pilot says nothing, take the most.
+        let n = if want.is_finite() {
+            want.ceil() as u64
+        } else {
+            self.max
+        };
+        n.clamp(self.min, self.max.max(self.min))
+    }
 }
 
 /// The moments the figures use at one recording time (named columns of
@@ -122,6 +169,36 @@ pub const D_EFF_CELLS: usize = 20_000;
 /// Exact effective diffusion coefficient from the stationary FP solver.
 pub fn d_eff(params: &Params) -> Result<f64> {
     Ok(fp_stationary(params, D_EFF_CELLS)?.d_eff)
+}
+
+/// Exact D_eff with an error estimate, for comparisons at standard errors
+/// far below the mesh error of [`d_eff`]: the meshes `D_EFF_CELLS` / 2,
+/// `D_EFF_CELLS` and 2 `D_EFF_CELLS` in a two-stage Richardson table (the
+/// solver's own extrapolation removes the O(1/N) error of each pair; the
+/// second stage the O(1/N²) of the two extrapolants). The error estimate is
+/// the second stage's correction, the error of the better extrapolant:
+/// conservative for the combined value where the expansion holds.
+pub fn d_eff_with_error(params: &Params) -> Result<(f64, f64)> {
+    let a = fp_stationary(params, D_EFF_CELLS)?.d_eff;
+    let b = fp_stationary(params, 2 * D_EFF_CELLS)?.d_eff;
+    let correction = (b - a) / 3.0;
+    Ok((b + correction, correction.abs()))
+}
+
+/// Relative bias of the Eq. (36) fit window for the linear proxy of a
+/// controlled run, exact: (its window fit of the exact <x_lin²>(t_k)) /
+/// (its exact D_eff) - 1. The proxy shares the target's flip rate, reset
+/// rule and velocity interval, so the transients the window leaves in the
+/// fit decay at the same rates; `None` without a fit window.
+pub fn proxy_window_bias(run: &ControlledRun) -> Result<Option<f64>> {
+    let w = &run.sums.target.msd_weights;
+    if w.iter().all(|&x| x == 0.0) {
+        return Ok(None);
+    }
+    let window: f64 = w.iter().zip(&run.proxy_x2).map(|(w, m)| w * m).sum();
+    Ok(Some(
+        window / crate::analytic::linear::d_eff(&run.proxy)? - 1.0,
+    ))
 }
 
 /// Cells of the backward MFPT solves.

@@ -566,10 +566,14 @@ fn simulate_sized(
         &spec_for(spec.pilot_particles, PILOT_SEED_OFFSET + k as u64)?,
         &NoProgress,
     )?;
-    let n_per_particle = equivalent_samples(var_v2, &pilot) / spec.pilot_particles as f64;
-    // 20 % margin for the pilot's own sampling error.
-    let particles = ((1.2 * spec.target_equivalent / n_per_particle).ceil() as u64)
-        .clamp(spec.particles, spec.max_particles);
+    let particles = compute::Sizing {
+        pilot: spec.pilot_particles,
+        target: spec.target_equivalent,
+        margin: 1.2,
+        min: spec.particles,
+        max: spec.max_particles,
+    }
+    .particles(equivalent_samples(var_v2, &pilot));
     let obs = compute::simulate(params, &spec_for(particles, k as u64)?, progress)?;
     Ok((obs, particles))
 }

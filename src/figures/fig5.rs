@@ -1,21 +1,25 @@
 //! Fig. 5: mean-squared displacement ⟨x²⟩(t) on log-log axes at lambda = 0.5
 //! for several r; (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6. Points:
-//! particle simulation on a log time grid (particles start at x = 0, v = 0);
-//! lines: the same ⟨x²⟩(t) without sampling, from the moment chain of the
+//! particle simulation on a log time grid (particles start at x = 0, v = 0),
+//! each particle paired with its linear proxy as control variate
+//! ([`crate::sim::control`]) and the number of pairs sized by a pilot to
+//! 10⁶ equivalent independent samples of x²(t) at every time; lines: the same ⟨x²⟩(t) without sampling, from the moment chain of the
 //! forward equations ([`crate::fp::msd`]); grey guides: t² (dotted,
 //! ballistic) and t (dashed, diffusive).
 
-use super::compute::{self, Moments};
+use super::compute::{self, Moments, Sizing};
 use super::fig1::{medium_title, Medium, MEDIA};
-use super::plot::{fmt_count, Axis, Color, Dash, Figure, Key, Note, Panel, Series};
+use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Note, Panel, Series};
 use super::{
     curve_seed, fmt_num, grid_of_curves, to_json, Claim, FigureOutput, Options, Parameters,
     Verdict, Which,
 };
 use crate::error::Result;
 use crate::model::Params;
-use crate::parallel::Progress;
+use crate::parallel::{NoProgress, Progress};
+use crate::sim::control::ControlledRun;
 use crate::sim::{SimSpec, TimeGrid};
+use crate::stats::Controlled;
 use serde::Serialize;
 
 /// Parameters of Fig. 5.
@@ -35,8 +39,9 @@ pub struct Spec {
     pub t_max: f64,
     /// Recording times (log grid, plus t = 0).
     pub samples: usize,
-    /// Particles per curve.
-    pub particles: u64,
+    /// Pairs (particle and linear proxy) per curve: a pilot measures what a
+    /// pair is worth at the least favourable time.
+    pub sizing: Sizing,
     /// Coarsest mesh of the deterministic ⟨x²⟩(t) (graded).
     pub msd_cells: usize,
     /// Its Richardson levels (meshes msd_cells, 2 msd_cells, ...).
@@ -56,7 +61,17 @@ impl Spec {
             t_min: 0.01,
             t_max: if quick { 30.0 } else { 100.0 },
             samples: if quick { 16 } else { 36 },
-            particles: if quick { 2_000 } else { 100_000 },
+            sizing: Sizing {
+                pilot: if quick { 200 } else { 2_000 },
+                target: if quick { 2e4 } else { 1e6 },
+                // The per-pair residual has a heavy tail at tan, r = 10: a
+                // 2000-pair pilot overestimates a pair's worth there 1.5x
+                // (the run then reaches 1.0e6, not 1.5e6); 2.0 would double
+                // the figure's cost (tan, r = 1) for that one curve.
+                margin: 1.5,
+                min: if quick { 500 } else { 4_000 },
+                max: if quick { 4_000 } else { 300_000 },
+            },
             msd_cells: if quick { 100 } else { 200 },
             msd_levels: 3,
             msd_rtol: if quick { 1e-6 } else { 1e-7 },
@@ -91,6 +106,8 @@ pub struct Msd {
     pub t_crossover: f64,
     /// D from ⟨x²⟩ = 2 D t + c (Eq. (36)) on the last decade of times.
     pub d_fit_last_decade: f64,
+    /// Its standard error.
+    pub d_fit_err: f64,
     /// Exact D_eff of the FP solver.
     pub d_eff_exact: f64,
     /// d_fit_last_decade / d_eff_exact.
@@ -99,8 +116,15 @@ pub struct Msd {
     pub x2_final: Option<f64>,
     /// Deterministic ⟨x²⟩ at the last time (moment chain).
     pub x2_final_fp: f64,
-    /// Largest |simulation - deterministic| / SE over the times.
+    /// Its error estimate (Richardson table without the finest mesh).
+    pub x2_final_fp_err: f64,
+    /// Largest |simulation - deterministic| / sqrt(SE² + chain error²) over
+    /// the times.
     pub z_max_sim_vs_fp: f64,
+    /// Pairs simulated.
+    pub pairs: u64,
+    /// Fewest equivalent independent samples Var(x²)/SE² over the times t > 0.
+    pub equivalent_samples_min: f64,
     /// Exact effective exponent d ln⟨x²⟩/d ln t at the first time (moment chain).
     pub alpha_first: f64,
     /// ... and at the last time.
@@ -153,74 +177,139 @@ fn compute_curve(
     let (m, r) = (spec.media[mi], spec.rates[ri]);
     let k = mi * spec.rates.len() + ri;
     let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
-    let sim_spec = SimSpec::new(
-        spec.particles,
-        TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?,
-        spec.t_max / 2.0,
-        1,
-        curve_seed(opts.seed, Which::Fig5, k as u64),
-    )?;
-    let obs = compute::simulate(&params, &sim_spec, progress)?;
-    let det = crate::fp::msd(
-        &params,
-        &crate::fp::MsdOptions {
-            cells: spec.msd_cells,
-            mesh: crate::fp::Mesh::Graded,
-            levels: spec.msd_levels,
-            times: sim_spec.grid.times().to_vec(),
-            rtol: spec.msd_rtol,
+    let times = TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?
+        .times()
+        .to_vec();
+    // The serial moment chain alongside the parallel sampler.
+    let (run, det) = rayon::join(
+        || simulate_sized(spec, &params, k, opts.seed, progress),
+        || {
+            crate::fp::msd(
+                &params,
+                &crate::fp::MsdOptions {
+                    cells: spec.msd_cells,
+                    mesh: crate::fp::Mesh::Graded,
+                    levels: spec.msd_levels,
+                    times: times.clone(),
+                    rtol: spec.msd_rtol,
+                },
+                &NoProgress,
+            )
         },
-        &crate::parallel::NoProgress,
-    )?;
+    );
+    let (run, det) = (run?, det?);
     let keep: Vec<usize> = (0..det.t.len()).filter(|&k| det.t[k] > 0.0).collect();
     let fp = FpMsd {
         t: keep.iter().map(|&k| det.t[k]).collect(),
         x2: keep.iter().map(|&k| det.x2[k]).collect(),
         alpha: keep.iter().map(|&k| det.alpha[k]).collect(),
     };
+    let fp_err: Vec<f64> = keep.iter().map(|&k| det.x2_err[k]).collect();
     let last = det.t.len() - 1;
-    let sim: Vec<Moments> = compute::moments(&obs)
+    // The plain moments, with <x²> and its error from the control variate.
+    let sim: Vec<Moments> = compute::moments(&run.sums.target)
         .into_iter()
-        .filter(|s| s.t > 0.0)
+        .zip(&run.x2)
+        .filter(|(s, _)| s.t > 0.0)
+        .map(|(s, c)| Moments {
+            x2: c.mean,
+            x2_err: c.se,
+            ..s
+        })
         .collect();
-    let t: Vec<f64> = sim.iter().map(|s| s.t).collect();
-    let y: Vec<f64> = sim.iter().map(|s| s.x2).collect();
-    let sl = local_slopes(&t, &y);
-    let peak = sl.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
-    // Crossover: first time after the steepest point where the slope falls below 1.5.
-    let imax = sl.iter().position(|s| s.1 == peak).unwrap_or(0);
-    let cross = sl[imax..]
+    let equivalent_min = run
+        .x2
         .iter()
-        .find(|s| s.1 < 1.5)
-        .map_or(f64::NAN, |s| s.0);
+        .zip(&times)
+        .filter(|(_, &t)| t > 0.0)
+        .map(|(c, _)| c.equivalent_samples)
+        .fold(f64::INFINITY, f64::min);
+    let (cross, sl) = crossover(&sim);
     // Late regime, paper Eq. (36): <x²> = 2 D t + c fitted on the last
-    // decade of times, against the exact D_eff of the FP solver.
-    let late: Vec<&Moments> = sim.iter().filter(|s| s.t >= spec.t_max / 10.0).collect();
-    let lt: Vec<f64> = late.iter().map(|s| s.t).collect();
-    let ly: Vec<f64> = late.iter().map(|s| s.x2).collect();
-    let d_fit = super::fig6::ols_slope(&lt, &ly) / 2.0;
+    // decade of times (per particle, under the control variate), against
+    // the exact D_eff of the FP solver.
+    let d_fit = run.msd_d.unwrap_or(Controlled::NAN);
     let d_exact = compute::d_eff(&params)?;
     let msd = Msd {
         r,
         slope_first: sl.first().map_or(f64::NAN, |s| s.1),
         slope_last: sl.last().map_or(f64::NAN, |s| s.1),
         t_crossover: cross,
-        d_fit_last_decade: d_fit,
+        d_fit_last_decade: d_fit.mean,
+        d_fit_err: d_fit.se,
         d_eff_exact: d_exact,
-        d_ratio: d_fit / d_exact,
+        d_ratio: d_fit.mean / d_exact,
         x2_final: sim.last().map(|s| s.x2),
         x2_final_err: sim.last().map(|s| s.x2_err),
         x2_final_fp: det.x2[last],
+        x2_final_fp_err: det.x2_err[last],
         z_max_sim_vs_fp: sim
             .iter()
-            .zip(&fp.x2)
-            .map(|(s, d)| ((s.x2 - d) / s.x2_err).abs())
+            .zip(fp.x2.iter().zip(&fp_err))
+            .map(|(s, (d, e))| ((s.x2 - d) / s.x2_err.hypot(*e)).abs())
             .fold(0.0, f64::max),
+        pairs: run.sums.target.particles(),
+        equivalent_samples_min: equivalent_min,
         alpha_first: fp.alpha.first().copied().unwrap_or(f64::NAN),
         alpha_last: det.alpha[last],
         d_slope_fp: det.xv[last] - det.x_mean[last] * det.v_mean[last],
     };
     Ok(Curve { sim, fp, msd })
+}
+
+/// Seed index offset of the sizing pilots (disjoint from the curves' indices).
+const PILOT_SEED_OFFSET: u64 = 1 << 32;
+
+/// A pilot sizes the pairs to `spec.sizing.target` equivalent samples at
+/// the least favourable time; then the run itself.
+fn simulate_sized(
+    spec: &Spec,
+    params: &Params,
+    k: usize,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<ControlledRun> {
+    let spec_for = |n: u64, index: u64| {
+        // The Eq. (36) fit window: the last decade (the factor keeps a grid
+        // time that rounds just below t_max/10 inside).
+        SimSpec::new(
+            n,
+            TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?,
+            spec.t_max / 10.0 * (1.0 - 1e-9),
+            1,
+            curve_seed(seed, Which::Fig5, index),
+        )
+    };
+    let pilot = compute::controlled(
+        params,
+        &spec_for(spec.sizing.pilot, PILOT_SEED_OFFSET + k as u64)?,
+        &NoProgress,
+    )?;
+    let times = pilot.sums.target.times.clone();
+    let least = pilot
+        .x2
+        .iter()
+        .zip(&times)
+        .filter(|(_, &t)| t > 0.0)
+        .map(|(c, _)| c.equivalent_samples)
+        .fold(f64::INFINITY, f64::min);
+    let pairs = spec.sizing.particles(least);
+    compute::controlled(params, &spec_for(pairs, k as u64)?, progress)
+}
+
+/// Crossover time (first time after the steepest point where the log-log
+/// slope falls below 1.5) and the local slopes.
+fn crossover(sim: &[Moments]) -> (f64, Vec<(f64, f64)>) {
+    let t: Vec<f64> = sim.iter().map(|s| s.t).collect();
+    let y: Vec<f64> = sim.iter().map(|s| s.x2).collect();
+    let sl = local_slopes(&t, &y);
+    let peak = sl.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
+    let imax = sl.iter().position(|s| s.1 == peak).unwrap_or(0);
+    let cross = sl[imax..]
+        .iter()
+        .find(|s| s.1 < 1.5)
+        .map_or(f64::NAN, |s| s.0);
+    (cross, sl)
 }
 
 /// Draw Fig. 5: simulated ⟨x²⟩(t) on log-log axes with t² and t guides.
@@ -232,8 +321,8 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     );
     fig.key = vec![
         Key::points(format!(
-            "exact sampler, {} particles",
-            fmt_count(spec.particles)
+            "exact sampler with linear-proxy control variate, {} pairs",
+            count_range(curves.iter().flatten().map(|c| c.msd.pairs))
         )),
         Key::line(
             "moment chain of the FP equations (no sampling)",
@@ -337,7 +426,7 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
                 figure: "fig5",
                 paper: "ballistic <x²> ~ t² at early times, diffusive ~ t at late times; crossover time and <x²> decrease with r".into(),
                 ours: format!(
-                    "{}, r = [{}]: log-log slope at t ≈ {} = [{}] (exact d ln<x²>/d ln t from the moment chain at t = {}: [{}]): ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; simulation vs moment chain: max |z| = [{}]; last decade: log slope [{}], Eq. (36) fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
+                    "{}, r = [{}]: log-log slope at t ≈ {} = [{}] (exact d ln<x²>/d ln t from the moment chain at t = {}: [{}]): ≈ 4, not 2, since particles start at v = 0 (x ≈ ηt²/2); t²-like only at intermediate times; simulation vs moment chain: max |z| = [{}] (SE and the chain's own error combined); fewest equivalent samples of x²(t) over the times: [{}] ([{}] pairs); last decade: log slope [{}], Eq. (36) fit D / exact D_eff = [{}] ({}); crossover (slope < 1.5) at t = [{}] ({}); final <x²> {}",
                     m.drag,
                     spec.rates.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", "),
                     fmt_num(spec.t_min),
@@ -345,6 +434,8 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
                     fmt_num(spec.t_min),
                     list(&|r| format!("{:.3}", r.alpha_first)),
                     list(&|r| format!("{:.1}", r.z_max_sim_vs_fp)),
+                    list(&|r| format!("{:.3e}", r.equivalent_samples_min)),
+                    list(&|r| r.pairs.to_string()),
                     list(&|r| format!("{:.3}", r.slope_last)),
                     list(&|r| format!("{:.3}", r.d_ratio)),
                     if late_ok { "diffusive" } else { "NOT yet diffusive" },

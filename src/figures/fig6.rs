@@ -1,21 +1,27 @@
 //! Fig. 6: effective diffusion coefficient D_eff against r (log-log) for
 //! several lambda; (a) tan, Sigma = 3; (b) tanh, Sigma = 0.6.
 //! Points: simulation, D_eff from a least-squares fit of <x²> = 2 D t + c
-//! (paper Eq. (36)) on late times [T/4, T], with its standard error from 32
-//! independent batches of particles; lines: exact D_eff from the
+//! (paper Eq. (36)) on late times [T/4, T]: the mean of the per-particle
+//! fits, each particle paired with its linear proxy as control variate
+//! ([`crate::sim::control`], the proxy's window fit exact), the pairs sized
+//! by a pilot to 10⁶ equivalent independent samples; lines: exact D_eff from the
 //! Fokker-Planck (Poisson-equation) solver; grey dotted guide: r⁻².
 
-use super::compute;
+use super::compute::{self, Sizing};
 use super::fig1::{medium_title, Medium, MEDIA};
 use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Note, Panel, Series};
 use super::{
-    curve_seed, fmt_num, to_json, Claim, FigureOutput, Options, Parameters, Stage, Verdict, Which,
+    curve_seed, fmt_num, grid_of_curves, to_json, Claim, FigureOutput, Options, Parameters, Stage,
+    Verdict, Which,
 };
+use crate::error::Error;
 use crate::error::Result;
 use crate::model::{DragLaw, Params};
+use crate::parallel::NoProgress;
 use crate::parallel::Progress;
+use crate::sim::control::ControlledRun;
 use crate::sim::{SimSpec, TimeGrid};
-use crate::stats::MeanAcc;
+use crate::stats::Controlled;
 use serde::Serialize;
 
 /// Parameters of Fig. 6.
@@ -36,12 +42,16 @@ pub struct Spec {
     pub t_factor: f64,
     /// Recording times on [0, T] (linear).
     pub samples: usize,
-    /// Independent batches for the standard error of the fit.
-    pub batches: u64,
-    /// At most this many particles per point...
-    pub max_particles: u64,
-    /// ...and at most this many sampler events (flips + resets) per point:
-    /// particles = min(max_particles, events / ((lambda + r) T)).
+    /// Pairs per point: a pilot measures the equivalent independent samples
+    /// 2 (D/SE)² a pair is worth (`sizing.max` is the most pairs)...
+    pub sizing: Sizing,
+    /// The pilot's pairs: this many events, but between `sizing.pilot` / 5
+    /// and 10 `sizing.pilot` pairs. The per-particle fit has a heavy tail
+    /// where the proxy helps most (tan, lambda = 5, r = 10): a fixed
+    /// 1000-pair pilot overestimated a pair's worth 2.4x there, in two seeds.
+    pub pilot_events: f64,
+    /// ...and at most this many sampler events (flips + resets, both
+    /// particles of a pair) per point: pairs <= events / (2 (lambda + r) T).
     pub events_per_point: f64,
     /// Rates at or above which ln D is fitted against ln r.
     pub fit_r_min: f64,
@@ -65,34 +75,38 @@ impl Spec {
             },
             t_factor: 40.0,
             samples: 9,
-            batches: 32,
-            max_particles: if quick { 3_200 } else { 256_000 },
-            events_per_point: if quick { 2e6 } else { 1e7 },
+            sizing: Sizing {
+                pilot: if quick { 100 } else { 1_000 },
+                target: if quick { 1e4 } else { 1e6 },
+                margin: 1.5,
+                min: if quick { 200 } else { 500 },
+                max: if quick { 4_000 } else { 400_000 },
+            },
+            events_per_point: if quick { 4e6 } else { 8e7 },
+            pilot_events: if quick { 1e5 } else { 1e6 },
             fit_r_min: 10.0,
         }
     }
 }
 
-/// D_eff from an MSD fit with its standard error across batches.
+/// D_eff from an MSD fit with its standard error.
 #[derive(Clone, Debug, Serialize)]
 pub struct MsdFit {
-    /// Mean of the batch estimates.
+    /// Mean of the per-particle fits under the control variate.
     pub d: f64,
-    /// Standard error of the mean over batches.
+    /// Its standard error.
     pub se: f64,
-    /// Particles in all.
-    pub particles: u64,
+    /// Pairs (particle and linear proxy).
+    pub pairs: u64,
     /// Trajectory length.
     pub t_max: f64,
-}
-
-/// Least-squares slope of y against t.
-pub fn ols_slope(t: &[f64], y: &[f64]) -> f64 {
-    let n = t.len() as f64;
-    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let sxy: f64 = t.iter().zip(y).map(|(a, b)| (a - mt) * (b - my)).sum();
-    let sxx: f64 = t.iter().map(|a| (a - mt) * (a - mt)).sum();
-    sxy / sxx
+    /// Equivalent independent Gaussian displacement samples 2 (D/SE)².
+    pub equivalent_samples: f64,
+    /// Plain particles a pair is worth: Var(per-particle fit) / (n SE²).
+    pub gain: f64,
+    /// The fit window's relative bias for the linear proxy (exact; see
+    /// [`compute::proxy_window_bias`]).
+    pub window_bias: f64,
 }
 
 /// Weighted least-squares fit of y = a + b x with standard errors sy:
@@ -111,31 +125,71 @@ pub fn wls_slope(x: &[f64], y: &[f64], sy: &[f64]) -> (f64, f64) {
     ((s * sxy - sx * syy) / det, (s / det).sqrt())
 }
 
-/// Simulated D_eff by the MSD fit (Eq. (36)) for one parameter set.
-pub fn msd_fit(params: &Params, spec: &Spec, seed: u64, progress: &dyn Progress) -> Result<MsdFit> {
+/// Equivalent independent Gaussian displacement samples of a D estimate:
+/// one displacement over time t gives x²/(2t) with variance 2 D², so
+/// n = 2 (D/SE)².
+pub fn equivalent_samples(d: &Controlled) -> f64 {
+    2.0 * (d.mean / d.se).powi(2)
+}
+
+/// Seed index offset of the sizing pilots (disjoint from the points' indices).
+const PILOT_SEED_OFFSET: u64 = 1 << 32;
+
+/// Simulated D_eff by the MSD fit (Eq. (36)) for one parameter set: a pilot
+/// of `spec.sizing.pilot` pairs (seed index `PILOT_SEED_OFFSET + index`,
+/// discarded) sizes the run (seed index `index`).
+pub fn msd_fit(
+    params: &Params,
+    spec: &Spec,
+    seed: u64,
+    index: u64,
+    progress: &dyn Progress,
+) -> Result<MsdFit> {
     let (l, r) = (params.lambda(), params.rate());
     let t_max = spec.t_factor * (1.0 / (2.0 * l) + 1.0 / (1.0 + r));
-    let per = (spec.events_per_point / ((l + r) * t_max)).floor() as u64;
-    let per_batch = (per.min(spec.max_particles) / spec.batches).max(8);
-    let grid = TimeGrid::linear(t_max, spec.samples)?;
-    let mut acc = MeanAcc::new();
-    for b in 0..spec.batches {
-        let s = SimSpec::new(per_batch, grid.clone(), 0.0, 1, seed.wrapping_add(b))?;
-        let stage = Stage::new(progress, b as usize, spec.batches as usize);
-        let obs = compute::simulate(params, &s, &stage)?;
-        let late: Vec<compute::Moments> = compute::moments(&obs)
-            .into_iter()
-            .filter(|s| s.t >= t_max / 4.0 - 1e-12)
-            .collect();
-        let t: Vec<f64> = late.iter().map(|s| s.t).collect();
-        let y: Vec<f64> = late.iter().map(|s| s.x2 - s.x_mean * s.x_mean).collect();
-        acc.push(ols_slope(&t, &y) / 2.0);
-    }
+    let spec_for = |n: u64, index: u64| {
+        // The fit window [T/4, T] (the factor keeps the grid time that
+        // rounds just below T/4 inside).
+        SimSpec::new(
+            n,
+            TimeGrid::linear(t_max, spec.samples)?,
+            t_max / 4.0 * (1.0 - 1e-9),
+            1,
+            curve_seed(seed, Which::Fig6, index),
+        )
+    };
+    let fit = |run: &ControlledRun| {
+        run.msd_d
+            .ok_or_else(|| Error::invalid("reset_velocity", 0, "v_r = 0 for an Eq. (36) fit"))
+    };
+    let per_pair = 2.0 * (l + r) * t_max;
+    let pilot_pairs = ((spec.pilot_events / per_pair).ceil() as u64)
+        .clamp(spec.sizing.pilot / 5, 10 * spec.sizing.pilot);
+    let sizing = Sizing {
+        pilot: pilot_pairs,
+        max: spec
+            .sizing
+            .max
+            .min((spec.events_per_point / per_pair).floor() as u64),
+        ..spec.sizing
+    };
+    let pilot = compute::controlled(
+        params,
+        &spec_for(pilot_pairs, PILOT_SEED_OFFSET + index)?,
+        &NoProgress,
+    )?;
+    let pairs = sizing.particles(equivalent_samples(&fit(&pilot)?));
+    let run = compute::controlled(params, &spec_for(pairs, index)?, progress)?;
+    let d = fit(&run)?;
+    let window_bias = compute::proxy_window_bias(&run)?.unwrap_or(f64::NAN);
     Ok(MsdFit {
-        d: acc.mean(),
-        se: acc.sem(),
-        particles: per_batch * spec.batches,
+        window_bias,
+        d: d.mean,
+        se: d.se,
+        pairs,
         t_max,
+        equivalent_samples: equivalent_samples(&d),
+        gain: d.equivalent_samples / pairs as f64,
     })
 }
 
@@ -150,16 +204,37 @@ pub struct Point {
     pub r: f64,
     /// MSD-fit D_eff (Eq. (36)).
     pub d_sim: f64,
-    /// Its standard error over batches.
+    /// Its standard error.
     pub d_sim_err: f64,
-    /// Exact D_eff (FP).
+    /// Exact D_eff (FP, [`compute::d_eff_with_error`]).
     pub d_exact: f64,
-    /// (d_sim - d_exact) / d_sim_err.
+    /// Its error estimate.
+    pub d_exact_err: f64,
+    /// Relative bias of the fit window for the linear proxy (exact).
+    pub window_bias: f64,
+    /// (d_sim - d_exact) / sqrt(d_sim_err² + d_exact_err² + (window_bias d_exact)²):
+    /// the standard error, the reference's error and the size of the
+    /// window's transients, as the proxy has them.
     pub z: f64,
-    /// Particles in all.
-    pub particles: u64,
+    /// Pairs (particle and linear proxy).
+    pub pairs: u64,
+    /// Equivalent independent samples 2 (D/SE)².
+    pub equivalent_samples: f64,
+    /// Plain particles a pair is worth.
+    pub gain: f64,
     /// Trajectory length.
     pub t_max: f64,
+}
+
+impl Point {
+    /// The error of d_sim - d_exact: the standard error, the FP value's
+    /// error estimate and the window's bias as the linear proxy has it,
+    /// combined in quadrature.
+    pub fn error(&self) -> f64 {
+        self.d_sim_err
+            .hypot(self.d_exact_err)
+            .hypot(self.window_bias * self.d_exact)
+    }
 }
 
 /// Exponent of D_eff ∝ r^b at large r for one flip rate.
@@ -171,7 +246,7 @@ pub struct Exponent {
     pub r_range: [f64; 2],
     /// Weighted fit of ln D_sim against ln r.
     pub exponent_sim: f64,
-    /// Its standard error.
+    /// Its error, from the points' errors (see [`Point::error`]).
     pub exponent_sim_err: f64,
     /// The same fit of the exact values at the same rates.
     pub exponent_exact_same_rates: f64,
@@ -194,34 +269,36 @@ pub struct Curve {
     pub exponent: Option<Exponent>,
 }
 
-/// Compute every curve: `[medium][lambda]`.
+/// Compute every curve: `[medium][lambda]`, the curves side by side.
 pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
-    let mut out = Vec::new();
-    for (mi, m) in spec.media.iter().enumerate() {
-        let mut row = Vec::new();
-        for (li, &lambda) in spec.lambdas.iter().enumerate() {
+    use rayon::prelude::*;
+    grid_of_curves(
+        spec.media.len(),
+        spec.lambdas.len(),
+        progress,
+        |mi, li, stage| {
+            let (m, lambda) = (spec.media[mi], spec.lambdas[li]);
             let base = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
             let exact: Vec<f64> = spec
                 .line_rates
-                .iter()
+                .par_iter()
                 .map(|&r| compute::d_eff(&base.with_rate(r)?))
                 .collect::<Result<_>>()?;
             let first_k = (mi * spec.lambdas.len() + li) * spec.sim_rates.len();
-            let points = sim_points(spec, &base, first_k, opts, progress)?;
+            let points = sim_points(spec, &base, first_k, opts, stage)?;
             let exponent = exponent(spec, &base, &points)?;
-            row.push(Curve {
+            Ok(Curve {
                 lambda,
                 exact,
                 points,
                 exponent,
-            });
-        }
-        out.push(row);
-    }
-    Ok(out)
+            })
+        },
+    )
 }
 
-/// MSD-fit points at `Spec::sim_rates`; stage and seed index of the first is `first_k`.
+/// MSD-fit points at `Spec::sim_rates`; the seed index of the first is
+/// `1000 first_k`.
 fn sim_points(
     spec: &Spec,
     base: &Params,
@@ -229,7 +306,7 @@ fn sim_points(
     opts: &Options,
     progress: &dyn Progress,
 ) -> Result<Vec<Point>> {
-    let n_stages = spec.media.len() * spec.lambdas.len() * spec.sim_rates.len();
+    let n = spec.sim_rates.len();
     let mut points = Vec::new();
     for (ri, &r) in spec.sim_rates.iter().enumerate() {
         let k = first_k + ri;
@@ -237,21 +314,28 @@ fn sim_points(
         let fit = msd_fit(
             &p,
             spec,
-            curve_seed(opts.seed, Which::Fig6, 1000 * k as u64),
-            &Stage::new(progress, k, n_stages),
+            opts.seed,
+            1000 * k as u64,
+            &Stage::new(progress, ri, n),
         )?;
-        let e = compute::d_eff(&p)?;
-        points.push(Point {
+        let (e, e_err) = compute::d_eff_with_error(&p)?;
+        let mut point = Point {
             drag: base.drag(),
             lambda: base.lambda(),
             r,
             d_sim: fit.d,
             d_sim_err: fit.se,
             d_exact: e,
-            z: (fit.d - e) / fit.se,
-            particles: fit.particles,
+            d_exact_err: e_err,
+            window_bias: fit.window_bias,
+            z: f64::NAN,
+            pairs: fit.pairs,
+            equivalent_samples: fit.equivalent_samples,
+            gain: fit.gain,
             t_max: fit.t_max,
-        });
+        };
+        point.z = (point.d_sim - point.d_exact) / point.error();
+        points.push(point);
     }
     Ok(points)
 }
@@ -268,10 +352,13 @@ fn exponent(spec: &Spec, base: &Params, points: &[Point]) -> Result<Option<Expon
     }
     let lx: Vec<f64> = sel.iter().map(|p| p.r.ln()).collect();
     let ly: Vec<f64> = sel.iter().map(|p| p.d_sim.ln()).collect();
-    let sy: Vec<f64> = sel.iter().map(|p| p.d_sim_err / p.d_sim).collect();
+    // Each point's error as its z has it (standard error, the reference's
+    // error, the window's transients); the exact values are fitted with the
+    // same weights, so both fits estimate the same weighted exponent.
+    let sy: Vec<f64> = sel.iter().map(|p| p.error() / p.d_sim).collect();
     let (b, sb) = wls_slope(&lx, &ly, &sy);
     let le: Vec<f64> = sel.iter().map(|p| p.d_exact.ln()).collect();
-    let (be, _) = wls_slope(&lx, &le, &vec![1.0; sel.len()]);
+    let (be, _) = wls_slope(&lx, &le, &sy);
     // Asymptote: local exponent at r = 10³..10⁴ and D r² against Sigma²/(2 lambda).
     let (r1, r2) = (1e3, 1e4);
     let (d1, d2) = (
@@ -301,10 +388,12 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
         curves
             .iter()
             .flatten()
-            .flat_map(|c| c.points.iter().map(|p| p.particles)),
+            .flat_map(|c| c.points.iter().map(|p| p.pairs)),
     );
     fig.key = vec![
-        Key::points(format!("exact sampler ({n} particles), fit of Eq. (36)")),
+        Key::points(format!(
+            "exact sampler with linear-proxy control variate ({n} pairs), fit of Eq. (36)"
+        )),
         Key::line("exact D_{eff} (FP generator)", Color::Gray, Dash::Solid),
         Key::line("r⁻² guide", Color::Gray, Dash::Dotted),
     ];
@@ -375,10 +464,12 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
         figure: "fig6",
         paper: "D_eff from fitting the simulated <x²> (Eq. (36))".into(),
         ours: format!(
-            "MSD-fit D_eff against the exact FP value at every simulated point: max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
+            "MSD-fit D_eff against the exact FP value at every simulated point: max |z| = {:.2} over {} points (standard error, the FP value's Richardson error and the fit window's bias as the linear proxy has it, exact, combined) (limit max(4, 1 % Bonferroni) = {:.2}); equivalent independent samples 2 (D/SE)² per point: {:.3e} to {:.3e}",
             worst_z,
             all.len(),
-            z_crit
+            z_crit,
+            all.iter().map(|a| a.equivalent_samples).fold(f64::INFINITY, f64::min),
+            all.iter().map(|a| a.equivalent_samples).fold(0.0, f64::max),
         ),
         verdict: if worst_z < z_crit { Verdict::Agrees } else { Verdict::Differs },
         values: to_json(&all),
@@ -402,7 +493,7 @@ fn exponent_claim(spec: &Spec, drag: DragLaw, row: &[Curve]) -> Claim {
         figure: "fig6",
         paper: "D_eff ∝ r⁻² for r > 1, whatever g(v)".into(),
         ours: format!(
-            "ln D vs ln r fit for r ≥ {}: simulation exponents {} (exact at the same rates: {}; max |sim - exact|/SE = {:.2}); exact local exponent at r = 10³-10⁴: {}; D r² → Σ²/(2λ) (ratio {}). The r⁻² law is asymptotic: at r = 1-10 the local exponent is still well above -2",
+            "ln D vs ln r fit for r ≥ {}: simulation exponents {} (exact at the same rates: {}; max |sim - exact|/error = {:.2}, the points' errors as in their z); exact local exponent at r = 10³-10⁴: {}; D r² → Σ²/(2λ) (ratio {}). The r⁻² law is asymptotic: at r = 1-10 the local exponent is still well above -2",
             fmt_num(spec.fit_r_min),
             list(&|f| format!("{:.3} ± {:.3}", f.exponent_sim, f.exponent_sim_err)),
             list(&|f| format!("{:.3}", f.exponent_exact_same_rates)),

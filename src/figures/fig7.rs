@@ -12,12 +12,13 @@ use super::compute;
 use super::fig1::medium_title;
 use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
-    curve_seed, fmt_num, json_num, to_json, Claim, FigureOutput, Options, Parameters, Stage,
-    Verdict, Which,
+    curve_seed, fmt_num, json_num, rows_of_curves, to_json, Claim, FigureOutput, Options,
+    Parameters, Stage, Verdict, Which,
 };
 use crate::error::Result;
 use crate::model::{DragLaw, Params};
 use crate::parallel::Progress;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// One medium's half of Fig. 7.
@@ -189,9 +190,11 @@ pub struct Curve {
     pub optimum: Optimum,
 }
 
-/// Running stage counter: stage index and seed index of the simulated points.
+/// Running stage counter of one curve: stage index and seed index of the
+/// simulated points (the curve's first seed index is `first`).
 struct Stages<'a> {
     progress: &'a dyn Progress,
+    first: usize,
     done: usize,
     total: usize,
 }
@@ -201,31 +204,35 @@ impl<'a> Stages<'a> {
     fn next(&mut self) -> (Stage<'a>, usize) {
         let st = Stage::new(self.progress, self.done, self.total);
         self.done += 1;
-        (st, self.done)
+        (st, self.first + self.done)
     }
 }
 
-/// Compute every curve: `[medium][lambda]`.
+/// Compute every curve: `[medium][lambda]`, the curves side by side. The
+/// seed indices of the simulated points run over the curves in order.
 pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<Vec<Vec<Curve>>> {
-    let total: usize = spec
-        .media
-        .iter()
-        .map(|m| m.lambdas.len() * (m.sim_targets.len() + m.sim_rates.len()))
-        .sum();
-    let mut stages = Stages {
-        progress,
-        done: 0,
-        total,
-    };
-    spec.media
-        .iter()
-        .map(|m| {
-            m.lambdas
-                .iter()
-                .map(|&lambda| compute_curve(spec, m, lambda, opts, &mut stages))
-                .collect()
-        })
-        .collect()
+    let per_curve = |m: &MediumSpec| m.sim_targets.len() + m.sim_rates.len();
+    let mut first = Vec::new();
+    let mut k = 0;
+    for m in &spec.media {
+        first.push(
+            (0..m.lambdas.len())
+                .map(|li| k + li * per_curve(m))
+                .collect::<Vec<_>>(),
+        );
+        k += m.lambdas.len() * per_curve(m);
+    }
+    let lens: Vec<usize> = spec.media.iter().map(|m| m.lambdas.len()).collect();
+    rows_of_curves(&lens, progress, |mi, li, stage| {
+        let m = &spec.media[mi];
+        let mut stages = Stages {
+            progress: stage,
+            first: first[mi][li],
+            done: 0,
+            total: per_curve(m),
+        };
+        compute_curve(spec, m, m.lambdas[li], opts, &mut stages)
+    })
 }
 
 fn compute_curve(
@@ -238,11 +245,15 @@ fn compute_curve(
     let v0 = spec.v0;
     // (a)/(c): tau against v_t - v_0 at rate m.rate.
     let pr = Params::new(m.drag, m.sigma, lambda, m.rate, spec.reset_velocity)?;
-    let mut vs_target = Line::default();
-    for &vt in &m.targets {
-        vs_target.x.push(vt - v0);
-        vs_target.tau.push(compute::mfpt(&pr, v0, vt)?);
-    }
+    let mut vs_target = Line {
+        x: m.targets.iter().map(|&vt| vt - v0).collect(),
+        tau: m
+            .targets
+            .par_iter()
+            .map(|&vt| compute::mfpt(&pr, v0, vt))
+            .collect::<Result<_>>()?,
+        ..Line::default()
+    };
     for &vt in &m.sim_targets {
         if let Some(p) = sim_point(spec, &pr, vt, opts, stages)? {
             vs_target.points.push((vt - v0, p));
@@ -250,13 +261,15 @@ fn compute_curve(
     }
     // (b)/(d): tau against r at target m.target.
     let p0 = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
-    let mut vs_rate = Line::default();
-    for &r in &m.rates {
-        vs_rate.x.push(r);
-        vs_rate
-            .tau
-            .push(compute::mfpt(&p0.with_rate(r)?, v0, m.target)?);
-    }
+    let mut vs_rate = Line {
+        x: m.rates.clone(),
+        tau: m
+            .rates
+            .par_iter()
+            .map(|&r| compute::mfpt(&p0.with_rate(r)?, v0, m.target))
+            .collect::<Result<_>>()?,
+        ..Line::default()
+    };
     for &r in &m.sim_rates {
         if let Some(p) = sim_point(spec, &p0.with_rate(r)?, m.target, opts, stages)? {
             vs_rate.points.push((r, p));

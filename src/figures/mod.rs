@@ -29,6 +29,7 @@ use crate::error::{Error, Result};
 use crate::parallel::Progress;
 use serde::Serialize;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Which figure to reproduce.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -191,22 +192,83 @@ pub struct Stage<'a> {
 /// Units of a figure-wide progress bar.
 pub const SCALE: u64 = 1000;
 
-/// `f(i, j, stage)` over a rows × cols grid of curves (medium × rate), each
-/// curve one equally weighted stage of the figure's progress bar, collected
+/// `f(i, j, stage)` over a rows × cols grid of curves (medium × rate), all
+/// curves at the same time (each is deterministic on its own, so the result
+/// does not depend on the order; a curve whose work is too small to fill
+/// the cores, or is serial like a moment chain, leaves them to the others),
+/// each one equally weighted share of the figure's progress bar, collected
 /// as `[row][col]`; the first error stops the work.
-pub fn grid_of_curves<T>(
+pub fn grid_of_curves<T: Send>(
     rows: usize,
     cols: usize,
     progress: &dyn Progress,
-    f: impl Fn(usize, usize, &dyn Progress) -> Result<T>,
+    f: impl Fn(usize, usize, &dyn Progress) -> Result<T> + Sync,
 ) -> Result<Vec<Vec<T>>> {
-    (0..rows)
-        .map(|i| {
-            (0..cols)
-                .map(|j| f(i, j, &Stage::new(progress, i * cols + j, rows * cols)))
-                .collect()
-        })
-        .collect()
+    rows_of_curves(&vec![cols; rows], progress, f)
+}
+
+/// [`grid_of_curves`] with rows of different lengths `cols[i]`.
+pub fn rows_of_curves<T: Send>(
+    cols: &[usize],
+    progress: &dyn Progress,
+    f: impl Fn(usize, usize, &dyn Progress) -> Result<T> + Sync,
+) -> Result<Vec<Vec<T>>> {
+    use rayon::prelude::*;
+    let cells: Vec<(usize, usize)> = cols
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &n)| (0..n).map(move |j| (i, j)))
+        .collect();
+    let shares = Shares {
+        inner: progress,
+        done: cells.iter().map(|_| AtomicU64::new(0)).collect(),
+    };
+    let flat: Vec<T> = cells
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(i, j))| f(i, j, &Share { all: &shares, k }))
+        .collect::<Result<_>>()?;
+    let mut it = flat.into_iter();
+    Ok(cols
+        .iter()
+        .map(|&n| it.by_ref().take(n).collect())
+        .collect())
+}
+
+/// Stages that run at the same time: each keeps its own fraction done (in
+/// units of [`SCALE`]), and the figure-wide bar shows their mean.
+struct Shares<'a> {
+    inner: &'a dyn Progress,
+    done: Vec<AtomicU64>,
+}
+
+/// Stage `k` of [`Shares`].
+struct Share<'a> {
+    all: &'a Shares<'a>,
+    k: usize,
+}
+
+impl Progress for Share<'_> {
+    fn update(&self, done: u64, total: u64) {
+        let units = if total == 0 {
+            SCALE
+        } else {
+            (SCALE as f64 * done as f64 / total as f64).round() as u64
+        };
+        self.all.done[self.k].fetch_max(units.min(SCALE), Ordering::Relaxed);
+        let sum: u64 = self
+            .all
+            .done
+            .iter()
+            .map(|d| d.load(Ordering::Relaxed))
+            .sum();
+        self.all
+            .inner
+            .update(sum / self.all.done.len().max(1) as u64, SCALE);
+    }
+    fn cancelled(&self) -> bool {
+        self.all.inner.cancelled()
+    }
 }
 
 impl<'a> Stage<'a> {

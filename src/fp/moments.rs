@@ -97,6 +97,10 @@ pub struct MomentSeries {
     pub xv: Vec<f64>,
     /// `<x²>(t)`.
     pub x2: Vec<f64>,
+    /// Error estimate of `x2`: its change when the finest mesh is left out of
+    /// the Richardson table (conservative for the full table; +∞ with one
+    /// level, 0 at t = 0).
+    pub x2_err: Vec<f64>,
     /// Effective exponent d ln⟨x²⟩/d ln t = 2 t ⟨x v⟩ / ⟨x²⟩ (4 at t = 0,
     /// the limit from v(0) = 0).
     pub alpha: Vec<f64>,
@@ -359,6 +363,7 @@ pub fn moments(
         x_mean: Vec::new(),
         xv: Vec::new(),
         x2: Vec::new(),
+        x2_err: Vec::new(),
         alpha: Vec::new(),
         cells_finest: opts.cells << (opts.levels - 1),
         steps,
@@ -374,7 +379,7 @@ pub fn moments(
             ] {
                 c.push(x);
             }
-            for c in [&mut out.x_mean, &mut out.xv, &mut out.x2] {
+            for c in [&mut out.x_mean, &mut out.xv, &mut out.x2, &mut out.x2_err] {
                 c.push(0.0);
             }
             out.alpha.push(4.0);
@@ -386,6 +391,13 @@ pub fn moments(
         out.x_mean.push(col(k, 3));
         out.xv.push(col(k, 4));
         out.x2.push(col(k, 5));
+        out.x2_err.push(match levels.len() {
+            1 => f64::INFINITY,
+            n => {
+                let coarser: Vec<f64> = levels[..n - 1].iter().map(|rows| rows[k][5]).collect();
+                (col(k, 5) - richardson(&coarser)).abs()
+            }
+        });
         out.alpha.push(if t == 0.0 {
             4.0
         } else {
