@@ -49,6 +49,8 @@ pub fn first_passage(
 pub struct FirstPassage<F = AnyFlow> {
     flows: [F; 2],
     lambda: f64,
+    /// Poisson reset rate r.
+    rate: f64,
     total_rate: f64,
     /// The resetting rule (target and noise state at a reset).
     reset: ResetRule,
@@ -89,11 +91,24 @@ impl<F: FlowMap> FirstPassage<F> {
         FirstPassage {
             flows: (*flows).clone(),
             lambda: params.lambda(),
+            rate: params.rate(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
             periodic: params.schedule().periodic,
             refractory: params.schedule().refractory,
         }
+    }
+
+    /// The flows of the +Sigma and -Sigma states.
+    pub(super) fn flows(&self) -> &[F; 2] {
+        &self.flows
+    }
+
+    /// (lambda, r, the resetting rule, whether a periodic or refractory
+    /// schedule runs).
+    pub(super) fn rates(&self) -> (f64, f64, &ResetRule, bool) {
+        let scheduled = self.periodic.is_some() || self.refractory.is_some();
+        (self.lambda, self.rate, &self.reset, scheduled)
     }
 
     /// One upward first passage, as [`first_passage`].
@@ -105,6 +120,22 @@ impl<F: FlowMap> FirstPassage<F> {
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
+        self.walk(v0, vt, start_plus, t_max, rng, &mut ())
+    }
+
+    /// [`FirstPassage::run`] reporting every flow segment and jump of the
+    /// walk to `tally` (the random stream is consumed exactly as by `run`,
+    /// so the passage time is the same bits). Periodic and refractory
+    /// schedules report nothing: their clock is not a Poisson one.
+    pub fn walk<T: Tally>(
+        &self,
+        v0: f64,
+        vt: f64,
+        start_plus: bool,
+        t_max: f64,
+        rng: &mut Rng,
+        tally: &mut T,
+    ) -> (Option<f64>, u64) {
         if v0 >= vt {
             return (Some(0.0), 0);
         }
@@ -115,23 +146,55 @@ impl<F: FlowMap> FirstPassage<F> {
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
-            v = match self.segment(plus, v, vt, t, gap, t_max) {
-                Segment::Done(hit) => return (hit, events),
-                Segment::Moved(v) => v,
+            let end = self.segment(plus, v, vt, t, gap, t_max);
+            v = match end {
+                Segment::Done(hit) => {
+                    if let Some(hit) = hit {
+                        tally.flow(plus, v, vt, hit - t);
+                    }
+                    return (hit, events);
+                }
+                Segment::Moved(w) => {
+                    tally.flow(plus, v, w, gap);
+                    w
+                }
             };
             t += gap;
             events += 1;
             if rng.gen::<f64>() * self.total_rate < self.lambda {
+                tally.jump(v, plus, Some((v, !plus)));
                 plus = !plus;
             } else {
-                v = self.reset.draw_velocity(rng);
-                plus = self.reset.draw_noise(plus, rng);
-                if v >= vt {
+                let w = self.reset.draw_velocity(rng);
+                let after = self.reset.draw_noise(plus, rng);
+                if w >= vt {
+                    tally.jump(v, plus, None);
                     return (Some(t), events);
                 }
+                tally.jump(v, plus, Some((w, after)));
+                (v, plus) = (w, after);
             }
         }
     }
+}
+
+/// An observer of a first-passage walk ([`FirstPassage::walk`]): the
+/// passage-time control variate of [`super::control`] integrates along it.
+/// `()` observes nothing and compiles away.
+pub trait Tally {
+    /// A flow segment in noise state `plus` from `va` to `vb` lasting `dt`
+    /// (the last one ends at v_t).
+    fn flow(&mut self, plus: bool, va: f64, vb: f64, dt: f64);
+    /// A flip or reset from (v, plus) to `after`; `None` when the jump is
+    /// the passage (a reset at or beyond v_t).
+    fn jump(&mut self, v: f64, plus: bool, after: Option<(f64, bool)>);
+}
+
+impl Tally for () {
+    #[inline(always)]
+    fn flow(&mut self, _: bool, _: f64, _: f64, _: f64) {}
+    #[inline(always)]
+    fn jump(&mut self, _: f64, _: bool, _: Option<(f64, bool)>) {}
 }
 
 /// The end of one flow segment of [`FirstPassage`].

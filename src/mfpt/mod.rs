@@ -22,6 +22,8 @@
 //!
 //! - [`backward`]: direct O(N) second-order solve of the backward equations.
 //! - [`exact`]: exact event-driven particles (the sampler of [`crate::sim::exact`]).
+//! - [`control`]: the martingale control variate of exact passages, from an
+//!   approximate backward solution.
 //! - [`euler`]: Euler particles (the step of [`crate::sim::euler`]).
 //! - [`estimator`]: first-passage statistics of any particle method.
 //! - [`survival`]: the Kaplan-Meier survival curve of censored passage times.
@@ -29,6 +31,7 @@
 //! - [`optimize`]: scans and the optimal resetting rate.
 
 pub mod backward;
+pub mod control;
 pub mod distribution;
 pub mod estimator;
 pub mod euler;
