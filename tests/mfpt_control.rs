@@ -6,6 +6,9 @@
 //! the backward equations it agrees with them and is worth many plain
 //! passages; bit-identical for any thread count.
 
+mod common;
+
+use common::models::fig7;
 use irtp::mfpt::control::{self, controlled_walk, run_with, PassageControl};
 use irtp::mfpt::exact::FirstPassage;
 use irtp::mfpt::{backward, BackwardOptions, Problem};
@@ -15,16 +18,6 @@ use irtp::rng;
 use irtp::stats::MeanAcc;
 use irtp::{DragLaw, Params};
 
-/// Fig. 7's problem: v_0 = -0.249 -> v_t = 0.5, v_r = 0.
-fn fig7(drag: DragLaw, sigma: f64, lambda: f64, r: f64) -> Problem {
-    Problem::new(
-        Params::new(drag, sigma, lambda, r, 0.0).unwrap(),
-        -0.249,
-        0.5,
-    )
-    .unwrap()
-}
-
 /// tau by the backward equations with their discretisation error estimate.
 fn tau(p: &Problem) -> backward::BackwardSolution {
     backward::solve(p, &BackwardOptions::default()).unwrap()
@@ -32,7 +25,7 @@ fn tau(p: &Problem) -> backward::BackwardSolution {
 
 #[test]
 fn passage_times_are_the_plain_samplers_bits() {
-    let p = fig7(DragLaw::Tanh, 0.6, 1.0, 0.3);
+    let p = fig7(DragLaw::Tanh, 1.0, 0.3, 0.5);
     let fpt = FirstPassage::new(p.params());
     let (vl, _) = p.params().bounds();
     let ctl = PassageControl::new(&fpt, vl, p.vt(), 64, |v, s| v + f64::from(u8::from(s))).unwrap();
@@ -47,7 +40,7 @@ fn passage_times_are_the_plain_samplers_bits() {
 
 #[test]
 fn a_zero_control_is_the_plain_mean() {
-    let p = fig7(DragLaw::Tan, 3.0, 0.5, 2.0);
+    let p = fig7(DragLaw::Tan, 0.5, 2.0, 0.5);
     let fpt = FirstPassage::new(p.params());
     let (vl, _) = p.params().bounds();
     let ctl = PassageControl::new(&fpt, vl, p.vt(), 16, |_, _| 0.0).unwrap();
@@ -123,10 +116,10 @@ fn the_martingale_has_mean_zero_for_any_control() {
 #[test]
 fn backward_control_agrees_and_is_worth_many_passages() {
     let cases = [
-        fig7(DragLaw::Tan, 3.0, 0.5, 2.0),
-        fig7(DragLaw::Tan, 3.0, 50.0, 1.0),
-        fig7(DragLaw::Tanh, 0.6, 1.0, 0.2),
-        fig7(DragLaw::Tanh, 0.6, 5.0, 1.0),
+        fig7(DragLaw::Tan, 0.5, 2.0, 0.5),
+        fig7(DragLaw::Tan, 50.0, 1.0, 0.5),
+        fig7(DragLaw::Tanh, 1.0, 0.2, 0.5),
+        fig7(DragLaw::Tanh, 5.0, 1.0, 0.5),
         Problem::new(
             Params::new(DragLaw::Tanh, 0.6, 1.0, 0.4, 0.1).unwrap(),
             0.3,
@@ -158,7 +151,7 @@ fn backward_control_agrees_and_is_worth_many_passages() {
 
 #[test]
 fn controlled_runs_are_bit_identical_for_any_thread_count() {
-    let p = fig7(DragLaw::Tan, 3.0, 1.0, 2.0);
+    let p = fig7(DragLaw::Tan, 1.0, 2.0, 0.5);
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -45,7 +45,11 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
             "guide",
             "λ = 5",
         ],
-        "fig7" => &["exact sampler, ", "backward eqs. (26)-(27)", "tanh λ = 5"],
+        "fig7" => &[
+            "exact sampler with martingale control variate, ",
+            "backward eqs. (26)-(27)",
+            "tanh λ = 5",
+        ],
         "fpt" => &[
             "exact sampler, ",
             "backward equations (bin averages)",

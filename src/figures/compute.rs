@@ -236,6 +236,30 @@ pub fn mfpt_sim(
     Ok((s.tau, s.tau_err, s.particles, s.censored))
 }
 
+/// MFPT from the backward equations and its discretisation error estimate
+/// (Richardson, [`MFPT_CELLS`] vs half as many cells).
+pub fn mfpt_with_error(params: &Params, v0: f64, vt: f64) -> Result<(f64, f64)> {
+    let pr = Problem::new(*params, v0, vt)?;
+    let s = mfpt::backward::solve(&pr, &BackwardOptions::with_cells(MFPT_CELLS))?;
+    Ok((s.tau, s.error_estimate))
+}
+
+/// Exact first passages from v0 to vt under the martingale control variate
+/// ([`crate::mfpt::control`], u from the backward equations on
+/// [`MFPT_CELLS`] cells, piecewise constant on `cells`): `particles`
+/// walks, half started in each noise state; an error if any is censored
+/// at `t_cap`.
+pub fn mfpt_sim_controlled(
+    params: &Params,
+    (v0, vt): (f64, f64),
+    (particles, seed, t_cap): (u64, u64, f64),
+    cells: usize,
+    progress: &dyn Progress,
+) -> Result<mfpt::control::ControlledPassage> {
+    let pr = Problem::new(*params, v0, vt)?;
+    mfpt::control::run(&pr, (particles, seed, t_cap), cells, MFPT_CELLS, progress)?.summary()
+}
+
 /// Result of the optimal-rate search.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct RateOptimum {

@@ -5,10 +5,13 @@
 //! (e), not in the paper: tau_r / tau_0 on a linear axis, where the optimum
 //! (a few per cent deep) is visible.
 //! Lines: backward equations of the simulated process (crate::mfpt);
-//! points: exact event-driven first-passage sampler, run only where the
-//! expected cost tau·(lambda + r)·samples fits the event budget.
+//! points: exact event-driven first-passage sampler under the martingale
+//! control variate of [`crate::mfpt::control`] (u from the backward
+//! equations; unbiased for any u), sized by a pilot to 10⁶ equivalent
+//! passages, run only where the expected cost of the fewest passages worth
+//! a point, tau·(lambda + r)·min, fits the event budget.
 
-use super::compute;
+use super::compute::{self, Sizing};
 use super::fig1::medium_title;
 use super::plot::{count_range, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
@@ -17,7 +20,7 @@ use super::{
 };
 use crate::error::Result;
 use crate::model::{DragLaw, Params};
-use crate::parallel::Progress;
+use crate::parallel::{NoProgress, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -53,12 +56,16 @@ pub struct Spec {
     pub reset_velocity: f64,
     /// Both media.
     pub media: Vec<MediumSpec>,
-    /// First-passage samples per simulated point (at most).
-    pub samples: u64,
-    /// Simulation skipped where the expected events tau·(lambda + r)·samples exceed this.
+    /// Passages per simulated point: a pilot measures the equivalent
+    /// passages one controlled passage is worth, the run gets enough for
+    /// the target (at least `min`, at most `max` or the event budget).
+    pub sizing: Sizing,
+    /// Event budget of a point: simulation is skipped where `sizing.min`
+    /// passages are expected to cost more (tau·(lambda + r) + 2 events
+    /// each), and the run is capped by it.
     pub events_per_point: f64,
-    /// Fewest samples worth a point (else the point is skipped).
-    pub min_samples: u64,
+    /// Cells of the piecewise-constant control function.
+    pub control_cells: usize,
 }
 
 fn lin(a: f64, b: f64, n: usize) -> Vec<f64> {
@@ -106,9 +113,15 @@ impl Spec {
                     sim_rates: logs(0.01, 10.0, ns),
                 },
             ],
-            samples: if quick { 2_000 } else { 100_000 },
+            sizing: Sizing {
+                pilot: if quick { 100 } else { 500 },
+                target: 1e6,
+                margin: 1.5,
+                min: if quick { 200 } else { 2_000 },
+                max: if quick { 2_000 } else { 100_000 },
+            },
             events_per_point: if quick { 2e5 } else { 1e7 },
-            min_samples: if quick { 200 } else { 2_000 },
+            control_cells: crate::mfpt::control::CONTROL_CELLS,
         }
     }
 }
@@ -127,15 +140,23 @@ pub struct Point {
     pub r: f64,
     /// Target velocity.
     pub vt: f64,
-    /// Simulated MFPT.
+    /// Simulated MFPT (controlled estimate).
     pub tau_sim: f64,
     /// Its standard error.
     pub tau_sim_err: f64,
-    /// First-passage samples.
+    /// The plain mean of the same passages.
+    pub tau_plain: f64,
+    /// Its standard error.
+    pub tau_plain_err: f64,
+    /// First passages simulated.
     pub samples: u64,
+    /// Plain passages with the standard error of `tau_sim`.
+    pub equivalent_samples: f64,
     /// MFPT of the backward equations.
     pub tau_backward: f64,
-    /// (tau_sim - tau_backward) / tau_sim_err.
+    /// Its discretisation error estimate (Richardson, N vs N/2 cells).
+    pub tau_backward_err: f64,
+    /// (tau_sim - tau_backward) / sqrt(tau_sim_err² + tau_backward_err²).
     pub z: f64,
 }
 
@@ -384,7 +405,7 @@ fn key<'a>(lines: impl Iterator<Item = &'a Line>) -> Vec<Key> {
     let points = if n.is_empty() {
         "exact sampler".to_string()
     } else {
-        format!("exact sampler, {n} passages")
+        format!("exact sampler with martingale control variate, {n} passages")
     };
     vec![
         Key::points(points),
@@ -419,6 +440,10 @@ pub fn claims(curves: &[Vec<Curve>]) -> Vec<Claim> {
         .map(|(_, p)| p)
         .collect();
     let worst = points.iter().map(|p| p.z.abs()).fold(0.0, f64::max);
+    let fewest = points
+        .iter()
+        .map(|p| p.equivalent_samples)
+        .fold(f64::INFINITY, f64::min);
     let z_crit = super::z_crit(points.len());
     vec![
         optimum_claim(&all().map(|c| &c.optimum).collect::<Vec<_>>()),
@@ -427,7 +452,8 @@ pub fn claims(curves: &[Vec<Curve>]) -> Vec<Claim> {
             figure: "fig7",
             paper: "particle simulations agree with the solution of Eqs. (26)-(27)".into(),
             ours: format!(
-                "exact first-passage sampler vs backward equations of the simulated process (drift ±Σ - g, not the printed g ± Σ): max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
+                "exact first-passage sampler (martingale control variate, ≥ {:.2e} equivalent passages per point) vs backward equations of the simulated process (drift ±Σ - g, not the printed g ± Σ): max |z| = {:.2} over {} points (limit max(4, 1 % Bonferroni) = {:.2})",
+                fewest,
                 worst,
                 points.len(),
                 z_crit
@@ -513,8 +539,13 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
     })
 }
 
+/// Seed index offset of the sizing pilots (disjoint from the points' indices).
+const PILOT_SEED_OFFSET: u64 = 1 << 32;
+
 /// One simulated point (its progress stage taken from `stages` either way),
-/// or `None` when the expected cost exceeds the budget.
+/// or `None` when the fewest passages worth a point exceed the event
+/// budget: a pilot (seed index `PILOT_SEED_OFFSET + index`, discarded)
+/// sizes the controlled run (seed index `index`).
 fn sim_point(
     spec: &Spec,
     p: &Params,
@@ -522,42 +553,55 @@ fn sim_point(
     opts: &Options,
     stages: &mut Stages,
 ) -> Result<Option<Point>> {
-    let tau = compute::mfpt(p, spec.v0, vt)?;
+    let (tau, tau_err) = compute::mfpt_with_error(p, spec.v0, vt)?;
     let (stage, index) = stages.next();
     let progress = &stage;
     let per_sample = tau * (p.lambda() + p.rate()) + 2.0;
-    let n = ((spec.events_per_point / per_sample).floor() as u64).min(spec.samples);
-    if n < spec.min_samples {
+    let affordable = (spec.events_per_point / per_sample).floor() as u64;
+    if affordable < spec.sizing.min {
         progress.update(1, 1);
         return Ok(None);
     }
     // Censoring cap far beyond the mean: a censored particle would bias the
     // mean low, so any censoring is reported as an error rather than plotted.
     let t_cap = 1e3 * tau + 1e3;
-    let (m, e, n, censored) = compute::mfpt_sim(
-        p,
-        spec.v0,
-        vt,
-        n,
-        curve_seed(opts.seed, Which::Fig7, index as u64),
-        t_cap,
+    let run = |n: u64, index: u64, progress: &dyn Progress| {
+        let seed = curve_seed(opts.seed, Which::Fig7, index);
+        compute::mfpt_sim_controlled(
+            p,
+            (spec.v0, vt),
+            (n, seed, t_cap),
+            spec.control_cells,
+            progress,
+        )
+    };
+    let pilot = run(
+        spec.sizing.pilot,
+        PILOT_SEED_OFFSET + index as u64,
+        &NoProgress,
+    )?;
+    let sizing = Sizing {
+        max: spec.sizing.max.min(affordable),
+        ..spec.sizing
+    };
+    let s = run(
+        sizing.particles(pilot.equivalent_samples),
+        index as u64,
         progress,
     )?;
-    if censored > 0 {
-        return Err(crate::error::Error::Numerical {
-            method: "exact first passage",
-            reason: format!("{censored} of {n} particles not arrived by t = {t_cap:.3e}"),
-        });
-    }
     Ok(Some(Point {
         drag: p.drag(),
         lambda: p.lambda(),
         r: p.rate(),
         vt,
-        tau_sim: m,
-        tau_sim_err: e,
-        samples: n,
+        tau_sim: s.tau,
+        tau_sim_err: s.tau_err,
+        tau_plain: s.plain,
+        tau_plain_err: s.plain_err,
+        samples: s.particles,
+        equivalent_samples: s.equivalent_samples,
         tau_backward: tau,
-        z: (m - tau) / e,
+        tau_backward_err: tau_err,
+        z: (s.tau - tau) / s.tau_err.hypot(tau_err),
     }))
 }

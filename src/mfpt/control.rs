@@ -10,8 +10,9 @@
 //! is a martingale with M_0 = 0 (no smoothness of u is needed: only the jump
 //! rates enter), so E[M_T] = 0 at the passage time T, and the pairs (T, M_T)
 //! give the control-variate estimate of tau = E[T] ([`PairAcc::controlled`]
-//! with the exact mean 0). When u is the solution tau±(v) of the backward
-//! equations (docs/equations.md, (M1)), T - M_T = tau(v_0) for every path
+//! with the exact mean 0; docs/equations.md, (D4)). When u is the solution
+//! tau±(v) of the backward equations (Eqs. (26)-(27) with the drifts of the
+//! simulated process), T - M_T = tau(v_0) for every path
 //! (Dynkin's formula with L tau = -1, tau = 0 at the target): the closer u is
 //! to it, the smaller the residual variance. The estimate stays unbiased for
 //! *any* u; a poor u only costs variance, and the fitted coefficient makes it
