@@ -8,8 +8,8 @@
 //! J u(v, s) = lambda [u(v, -s) - u(v, s)] + r [E u(v_r', s') - u(v, s)],
 //!
 //! is a martingale with M_0 = 0 (no smoothness of u is needed: only the jump
-//! rates enter), so E[M_T] = 0 at the passage time T, and the pairs (T, M_T)
-//! give the control-variate estimate of tau = E[T] ([`PairAcc::controlled`]
+//! rates enter), so E\[M_T\] = 0 at the passage time T, and the pairs (T, M_T)
+//! give the control-variate estimate of tau = E\[T\] ([`PairAcc::controlled`]
 //! with the exact mean 0; docs/equations.md, (D4)). When u is the solution
 //! tau±(v) of the backward equations (Eqs. (26)-(27) with the drifts of the
 //! simulated process), T - M_T = tau(v_0) for every path
