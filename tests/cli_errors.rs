@@ -169,3 +169,35 @@ fn runs_over_budget_are_refused_before_starting() {
     let err = one_line_error(&["simulate", "--samples", "1e9", "--max-memory", "1e20"]);
     assert!(err.contains("--max-work"), "{err}");
 }
+
+/// The exact sampler's cost estimate counts the resets of a periodic clock
+/// and the ends of refractory periods (10 particles, resets every 10⁻⁶ to
+/// t = 1: ≥ 10⁷ events against a budget of 10⁶), refused before any work.
+#[test]
+fn periodic_and_refractory_events_count_against_max_work() {
+    for extra in [
+        &["--reset-period", "1e-6"][..],
+        &[
+            "--reset-period",
+            "1e-6",
+            "--refractory",
+            "fixed:t=1e-9",
+        ],
+    ] {
+        let mut args = vec![
+            "simulate",
+            "--particles",
+            "10",
+            "--t-max",
+            "1",
+            "--max-work",
+            "1e6",
+        ];
+        args.extend_from_slice(extra);
+        let err = one_line_error(&args);
+        assert!(
+            err.contains("too costly") && err.contains("--max-work"),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -307,7 +307,9 @@ impl SimArgs {
 /// and 200 bytes per cell (measured: 2e6 cells, 6.6 s, 396 MB). Particles:
 /// each runs until its first passage, on average tau (from the backward
 /// equations on a coarse mesh, or t_max where they fail), at most t_max;
-/// exact events come at rate lambda + r, Euler steps every dt.
+/// exact events come at rate lambda + r (with a periodic clock or a
+/// refractory period, their bound `Schedule::event_rate_bound`), Euler
+/// steps every dt.
 fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budget::Cost {
     let backward = super::budget::mesh(cells, 100.0, 256.0, vec!["cells"]);
     let Some(run) = method.particles() else {
@@ -323,7 +325,11 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
             vec!["particles", "t_max", "dt"],
         ),
         _ => (
-            (params.lambda() + params.rate()) * t + 2.0,
+            params
+                .schedule()
+                .event_rate_bound(params.lambda(), params.rate())
+                * t
+                + 2.0,
             "particle events",
             vec!["particles", "lambda", "rate", "t_max"],
         ),

@@ -188,7 +188,8 @@ impl SimulateArgs {
     }
 
     /// Work and memory, from the flags before anything is allocated: Euler
-    /// steps, or exact-sampler events (flips and resets at rate lambda + r,
+    /// steps, or exact-sampler events (flips, resets and the ends of
+    /// refractory periods, [`crate::model::reset::Schedule::event_rate_bound`],
     /// plus one flow evaluation per recording time).
     fn cost(&self, p: &Params) -> crate::Result<super::budget::Cost> {
         let t_max = crate::error::finite("t_max", self.t_max)?;
@@ -202,7 +203,7 @@ impl SimulateArgs {
                 vec!["particles", "t_max", "dt", "bins"],
             ),
             MethodArg::Exact => (
-                (p.lambda() + p.rate()) * t_max + samples + bins + 1.0,
+                p.schedule().event_rate_bound(p.lambda(), p.rate()) * t_max + samples + bins + 1.0,
                 "particle events",
                 vec!["particles", "lambda", "rate", "t_max", "samples", "bins"],
             ),

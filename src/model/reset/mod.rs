@@ -260,6 +260,16 @@ impl Schedule {
         .unwrap_or_default()
     }
 
+    /// An upper bound on the exact samplers' events per unit time: flips
+    /// (`lambda`), resets (the Poisson `rate`, or 1/T for a periodic
+    /// clock) and, with a refractory period, the end of each one (one more
+    /// event per reset). For cost estimates before a run.
+    pub fn event_rate_bound(&self, lambda: f64, rate: f64) -> f64 {
+        let resets = rate + self.periodic.map_or(0.0, |p| 1.0 / p.period);
+        let per_reset = if self.refractory.is_some() { 2.0 } else { 1.0 };
+        lambda + resets * per_reset
+    }
+
     /// Whether it is the paper's (no modifier).
     pub fn is_plain(&self) -> bool {
         *self == Schedule::default()
