@@ -177,12 +177,7 @@ fn runs_over_budget_are_refused_before_starting() {
 fn periodic_and_refractory_events_count_against_max_work() {
     for extra in [
         &["--reset-period", "1e-6"][..],
-        &[
-            "--reset-period",
-            "1e-6",
-            "--refractory",
-            "fixed:t=1e-9",
-        ],
+        &["--reset-period", "1e-6", "--refractory", "fixed:t=1e-9"],
     ] {
         let mut args = vec![
             "simulate",

@@ -56,7 +56,7 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
             "(r*)",
         ],
         "media" => &[
-            "exact sampler, ",
+            "exact sampler with martingale control variate, ",
             "backward equations / Fokker-Planck",
             "dτ/dr(0) negative",
         ],

@@ -127,6 +127,7 @@ impl<F: FlowMap> FirstPassage<F> {
     /// walk to `tally` (the random stream is consumed exactly as by `run`,
     /// so the passage time is the same bits). Periodic and refractory
     /// schedules report nothing: their clock is not a Poisson one.
+    #[inline(always)]
     pub fn walk<T: Tally>(
         &self,
         v0: f64,
