@@ -4,7 +4,7 @@
 use crate::analytic::r0::R0Density;
 use crate::error::{Error, Result};
 use crate::fp::{self, Mesh, StationaryOptions};
-use crate::mfpt::{self, BackwardOptions, OptimizeOptions, ParticleOptions, Problem};
+use crate::mfpt::{self, BackwardOptions, OptimizeOptions, Problem};
 use crate::model::Params;
 use crate::parallel::{NoProgress, Progress};
 use crate::sim::control::{self, ControlledRun};
@@ -29,6 +29,11 @@ pub fn controlled(
         crate::analytic::linear_moments::moments(&params.linear_proxy(), spec.grid.times())?;
     control::run(params, spec, &proxy.x2, progress)
 }
+
+/// Seed index offset of the sizing pilots: a figure's pilot for the curve
+/// or point of seed index k draws from index `PILOT_SEED_OFFSET + k`,
+/// disjoint from the indices of the runs themselves.
+pub const PILOT_SEED_OFFSET: u64 = 1 << 32;
 
 /// How a sizing pilot turns into a run size: a pilot of `pilot` particles
 /// (own seed, discarded) measures the equivalent independent samples one
@@ -210,30 +215,6 @@ pub fn mfpt(params: &Params, v0: f64, vt: f64) -> Result<f64> {
     let pr = Problem::new(*params, v0, vt)?;
     let s = mfpt::backward::at_start_or_overflow(&pr, &BackwardOptions::with_cells(MFPT_CELLS))?;
     Ok(s.map_or(f64::INFINITY, |s| s.tau))
-}
-
-/// Simulated first passage with the exact sampler (half the particles start
-/// in +Sigma, half in -Sigma): (tau, standard error, particles, censored).
-/// Particles not arrived by `t_cap` are censored (reported, excluded).
-pub fn mfpt_sim(
-    params: &Params,
-    v0: f64,
-    vt: f64,
-    samples: u64,
-    seed: u64,
-    t_cap: f64,
-    progress: &dyn Progress,
-) -> Result<(f64, f64, u64, u64)> {
-    let pr = Problem::new(*params, v0, vt)?;
-    let method = mfpt::Method::Exact(ParticleOptions {
-        particles: samples,
-        t_max: t_cap,
-        seed,
-    });
-    let s = mfpt::solve(&pr, &method, progress)?
-        .summary()
-        .expect("a particle method");
-    Ok((s.tau, s.tau_err, s.particles, s.censored))
 }
 
 /// MFPT from the backward equations and its discretisation error estimate

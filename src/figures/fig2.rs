@@ -228,9 +228,6 @@ pub fn local_maxima(v: &[f64], p: &[f64], vu: f64) -> Vec<f64> {
     out
 }
 
-/// Seed index offset of the sizing pilots (disjoint from the curves' indices).
-const PILOT_SEED_OFFSET: u64 = 1 << 32;
-
 /// Stationary variance of v², <v⁴> - <v²>², from an FP density (cell masses).
 pub fn stationary_var_v2(fp: &Density) -> f64 {
     let (mut m2, mut m4) = (0.0, 0.0);
@@ -563,7 +560,7 @@ fn simulate_sized(
     // Sizing pilot (its own seed stream; results discarded).
     let pilot = compute::simulate(
         params,
-        &spec_for(spec.pilot_particles, PILOT_SEED_OFFSET + k as u64)?,
+        &spec_for(spec.pilot_particles, compute::PILOT_SEED_OFFSET + k as u64)?,
         &NoProgress,
     )?;
     let particles = compute::Sizing {

@@ -255,9 +255,6 @@ fn compute_curve(
     Ok(Curve { sim, fp, msd })
 }
 
-/// Seed index offset of the sizing pilots (disjoint from the curves' indices).
-const PILOT_SEED_OFFSET: u64 = 1 << 32;
-
 /// A pilot sizes the pairs to `spec.sizing.target` equivalent samples at
 /// the least favourable time; then the run itself.
 fn simulate_sized(
@@ -280,7 +277,7 @@ fn simulate_sized(
     };
     let pilot = compute::controlled(
         params,
-        &spec_for(spec.sizing.pilot, PILOT_SEED_OFFSET + k as u64)?,
+        &spec_for(spec.sizing.pilot, compute::PILOT_SEED_OFFSET + k as u64)?,
         &NoProgress,
     )?;
     let pairs = spec.sizing.particles(least_equivalent(&pilot));

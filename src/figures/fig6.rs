@@ -132,9 +132,6 @@ pub fn equivalent_samples(d: &Controlled) -> f64 {
     2.0 * (d.mean / d.se).powi(2)
 }
 
-/// Seed index offset of the sizing pilots (disjoint from the points' indices).
-const PILOT_SEED_OFFSET: u64 = 1 << 32;
-
 /// Simulated D_eff by the MSD fit (Eq. (36)) for one parameter set: a pilot
 /// of `spec.sizing.pilot` pairs (seed index `PILOT_SEED_OFFSET + index`,
 /// discarded) sizes the run (seed index `index`).
@@ -175,7 +172,7 @@ pub fn msd_fit(
     };
     let pilot = compute::controlled(
         params,
-        &spec_for(pilot_pairs, PILOT_SEED_OFFSET + index)?,
+        &spec_for(pilot_pairs, compute::PILOT_SEED_OFFSET + index)?,
         &NoProgress,
     )?;
     let pairs = sizing.particles(equivalent_samples(&fit(&pilot)?));

@@ -539,9 +539,6 @@ pub fn run(opts: &Options, progress: &dyn Progress) -> Result<FigureOutput> {
     })
 }
 
-/// Seed index offset of the sizing pilots (disjoint from the points' indices).
-const PILOT_SEED_OFFSET: u64 = 1 << 32;
-
 /// One simulated point (its progress stage taken from `stages` either way),
 /// or `None` when the fewest passages worth a point exceed the event
 /// budget: a pilot (seed index `PILOT_SEED_OFFSET + index`, discarded)
@@ -577,7 +574,7 @@ fn sim_point(
     };
     let pilot = run(
         spec.sizing.pilot,
-        PILOT_SEED_OFFSET + index as u64,
+        compute::PILOT_SEED_OFFSET + index as u64,
         &NoProgress,
     )?;
     let sizing = Sizing {
