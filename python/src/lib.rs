@@ -1,15 +1,16 @@
 //! `irtp._irtp`: the Rust side of the Python package `irtp`, a thin layer
-//! over [`irtp::app`]. Python keywords become the equivalent `irtp` command
-//! line ([`irtp::app::keywords`]), which the CLI's own definitions parse; the command runs
-//! off the Python thread ([`runner`]); the [`irtp::app::Outcome`] comes back
+//! over [`irtp_app`] and [`irtp_paper`]. Python keywords become the equivalent `irtp` command
+//! line ([`irtp_app::keywords`]), which the CLI's own definitions parse; the command runs
+//! off the Python thread ([`runner`]); the [`irtp_app::Outcome`] comes back
 //! as a dict whose tables are numpy arrays (each column's buffer is moved
 //! into its array, not copied). The pure-Python layer (`python/irtp/`)
 //! builds the public functions, result objects and progress bars on it.
 
 mod runner;
 
-use irtp::app::keywords::{self as argv, Value};
-use irtp::app::Outcome;
+use irtp_app::keywords::{self as argv, Value, Vocabulary};
+use irtp_paper::Cli;
+use irtp_app::Outcome;
 use irtp::model::Drag;
 use irtp::DragLaw;
 use numpy::PyArray1;
@@ -35,7 +36,7 @@ fn to_pyerr(command: &str, e: irtp::Error) -> PyErr {
     match &e {
         irtp::Error::InvalidParameter { .. } | irtp::Error::TooCostly { .. } => {
             let msg = e.message_with(keyword);
-            PyValueError::new_err(argv::flags_to_keywords(command, &msg))
+            PyValueError::new_err(argv::flags_to_keywords::<Cli>(command, &msg))
         }
         irtp::Error::Interrupted => PyKeyboardInterrupt::new_err(e.to_string()),
         irtp::Error::Io { .. } => PyOSError::new_err(e.to_string()),
@@ -128,8 +129,8 @@ fn run<'py>(
         let name: String = k.extract()?;
         opts.push((name.clone(), value(&v, &name)?));
     }
-    let argv = argv::build(command, opts).map_err(PyValueError::new_err)?;
-    let cli = argv::parse(command, &argv).map_err(PyValueError::new_err)?;
+    let argv = argv::build::<Cli>(command, opts).map_err(PyValueError::new_err)?;
+    let cli = argv::parse::<Cli>(command, &argv).map_err(PyValueError::new_err)?;
     let progress = progress.filter(|p| !p.is_none());
     let outcome =
         runner::run(py, cli.command, argv, progress, threads)?.map_err(|e| to_pyerr(command, e))?;
@@ -139,14 +140,14 @@ fn run<'py>(
 /// The commands `run` accepts.
 #[pyfunction]
 fn commands() -> Vec<&'static str> {
-    argv::COMMANDS.to_vec()
+    Cli::commands()
 }
 
 /// One dict per keyword of a command: name, flag, help, default, kind,
 /// choices, required (from the CLI's definitions).
 #[pyfunction]
 fn describe<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>> {
-    let cmd = argv::command(command).map_err(PyValueError::new_err)?;
+    let cmd = argv::command::<Cli>(command).map_err(PyValueError::new_err)?;
     let list = PyList::empty(py);
     for a in argv::keywords(&cmd) {
         let d = PyDict::new(py);
@@ -181,7 +182,7 @@ fn describe<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>>
 /// The CLI's description of a command.
 #[pyfunction]
 fn about(command: &str) -> PyResult<String> {
-    let cmd = argv::command(command).map_err(PyValueError::new_err)?;
+    let cmd = argv::command::<Cli>(command).map_err(PyValueError::new_err)?;
     let text = cmd.get_long_about().or(cmd.get_about());
     Ok(text.map(|t| t.to_string()).unwrap_or_default())
 }

@@ -1,10 +1,11 @@
 //! Running a command off the Python thread: the GIL is released while the
 //! library computes on a worker thread; the calling thread wakes every
 //! 50 ms to run Python's signal handlers (Ctrl-C → `KeyboardInterrupt`,
-//! which cancels the run through [`irtp::app::Reporter::cancelled`]) and to
+//! which cancels the run through [`irtp_app::Reporter::cancelled`]) and to
 //! report progress.
 
-use irtp::app::{self, Command, Context, Outcome, Reporter};
+use irtp_app::{Context, Outcome, Reporter};
+use irtp_paper::Command;
 use irtp::parallel::Progress;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -99,7 +100,7 @@ pub fn run(
                 reporter: &reporter,
                 argv,
             };
-            let work = || app::run(&command, &ctx);
+            let work = || command.run(&ctx);
             let result = match &pool {
                 Some(p) => p.install(work),
                 None => work(),

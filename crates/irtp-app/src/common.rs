@@ -1,0 +1,245 @@
+//! Flags shared by every subcommand (the CLI contract: add, never rename).
+
+use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
+use irtp::model::Drag;
+use irtp::{DragLaw, Params};
+use clap::Args;
+use std::path::PathBuf;
+
+/// Medium and noise flags: `--drag --sigma --lambda` (every subcommand,
+/// including `analytic`, which has no resetting flags of its own).
+#[derive(Args, Clone, Debug)]
+pub struct NoiseArgs {
+    /// Drag law g(v) (help text generated from the registry by `drag_help`).
+    #[arg(long, default_value = "tan", value_parser = parse_drag, help = drag_help())]
+    pub drag: DragLaw,
+    /// Noise amplitude Sigma (eta = ±Sigma).
+    #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
+    pub sigma: f64,
+    /// Flip rate lambda of the telegraph noise.
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    pub lambda: f64,
+}
+
+impl NoiseArgs {
+    /// Validate into [`Params`] with the given reset rate and velocity.
+    pub fn params(&self, rate: f64, reset_velocity: f64) -> irtp::Result<Params> {
+        Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity)
+    }
+}
+
+/// The reset rate when `--rate` is not given.
+pub const DEFAULT_RATE: f64 = 2.0;
+
+/// Model flags: `--drag --sigma --lambda --rate --reset-velocity`.
+#[derive(Args, Clone, Debug)]
+pub struct ModelArgs {
+    /// `--drag --sigma --lambda`.
+    #[command(flatten)]
+    pub noise: NoiseArgs,
+    /// Velocity reset rate r [default: 2; not accepted by `mfpt optimize`,
+    /// which searches r].
+    #[arg(long, short = 'r', allow_hyphen_values = true)]
+    pub rate: Option<f64>,
+    /// Reset velocity v_r.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub reset_velocity: f64,
+    /// The noise state at a reset: kept (the paper's protocol) or redrawn
+    /// (±Sigma with probability 1/2 each) [default: kept].
+    #[arg(long, value_name = "kept|redrawn")]
+    pub reset_noise: Option<String>,
+    /// Where a reset sends the velocity, as a spec (instead of
+    /// --reset-velocity): point:v=V, gauss:mean=M,std=S (a Gaussian
+    /// truncated to the velocity interval, M inside it, S > 0) or
+    /// uniform:a=A,b=B (inside the interval, A < B); optionally
+    /// ,noise=kept|redrawn. A random target runs in every method.
+    #[arg(long, value_name = "SPEC", conflicts_with = "reset_velocity")]
+    pub reset_to: Option<String>,
+    /// Periodic (sharp) resetting: a reset at every multiple of T > 0 of
+    /// the time since the start, instead of a Poisson clock (then no
+    /// --rate, or --rate 0).
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub reset_period: Option<f64>,
+    /// Position resetting: at every reset the position jumps to X with the
+    /// velocity (full resetting); the position then has a stationary
+    /// distribution.
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub reset_position: Option<f64>,
+    /// A refractory period after every reset (velocity held at the reset
+    /// velocity, resets ignored, noise flipping on): exp:mean=M
+    /// (exponential duration of mean M) or fixed:t=T.
+    #[arg(long, value_name = "SPEC")]
+    pub refractory: Option<String>,
+}
+
+/// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
+/// law with its description (and, for a law with parameters, its spec and
+/// keys).
+fn drag_help() -> String {
+    let laws: Vec<String> = DragLaw::examples()
+        .iter()
+        .map(|d| {
+            let limit = d.force_limit();
+            let keys = d.keys_help();
+            if limit.is_finite() {
+                format!("{d} ({}, needs sigma < {limit})", d.description())
+            } else if !keys.is_empty() {
+                format!("{d} ({}; {keys})", d.description())
+            } else {
+                format!("{d} ({})", d.description())
+            }
+        })
+        .collect();
+    format!("Drag law g(v): {}", laws.join("; "))
+}
+
+/// Largest count accepted in scientific notation (every integer up to it is
+/// an exact f64).
+const MAX_FLOAT_COUNT: f64 = 9_007_199_254_740_992.0; // 2^53
+
+/// A count flag (`--particles`, `--cells`, ...): an integer, also in
+/// scientific notation when it is a whole number (`1e6`, `2.5e3`).
+pub fn parse_count(s: &str) -> Result<u64, String> {
+    if let Ok(n) = s.parse::<u64>() {
+        return Ok(n);
+    }
+    let whole = "a whole number >= 0, such as 20000 or 2e4";
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a count: expected {whole}"))?;
+    if !(x >= 0.0 && x.fract() == 0.0 && x <= MAX_FLOAT_COUNT) {
+        return Err(format!(
+            "not a count: expected {whole} (at most 2^53 in scientific notation)"
+        ));
+    }
+    Ok(x as u64)
+}
+
+/// [`parse_count`] for sizes (`--cells`, `--bins`, ...).
+pub fn parse_size(s: &str) -> Result<usize, String> {
+    let n = parse_count(s)?;
+    usize::try_from(n).map_err(|_| format!("{n} is too large for this machine"))
+}
+
+/// A drag law or its spec with parameters (`power:n=0.5,k=1`); the error
+/// names the parameter and its range.
+fn parse_drag(s: &str) -> Result<DragLaw, String> {
+    s.parse::<DragLaw>().map_err(|e| match e {
+        irtp::Error::InvalidParameter { allowed, .. } => format!("expected {allowed}"),
+        other => other.to_string(),
+    })
+}
+
+impl ModelArgs {
+    /// Validate into [`Params`]: the paper's protocol (point target
+    /// `--reset-velocity`, noise kept) unless `--reset-to` or
+    /// `--reset-noise` names another.
+    pub fn params(&self) -> irtp::Result<Params> {
+        let schedule = Schedule::parse(
+            self.reset_period,
+            self.reset_position,
+            self.refractory.as_deref(),
+        )?;
+        self.rule_params()?.with_schedule(schedule)
+    }
+
+    /// [`Self::params`] without the schedule's modifiers (the rate
+    /// defaults to 0 with a periodic clock).
+    fn rule_params(&self) -> irtp::Result<Params> {
+        let default = if self.reset_period.is_some() {
+            0.0
+        } else {
+            DEFAULT_RATE
+        };
+        let base = self
+            .noise
+            .params(self.rate.unwrap_or(default), self.reset_velocity)?;
+        let flag = match &self.reset_noise {
+            Some(s) => Some(s.parse::<NoiseAtReset>()?),
+            None => None,
+        };
+        let (target, in_spec) = match &self.reset_to {
+            Some(s) => reset_spec::parse(s)?,
+            None if flag.is_none() => return Ok(base),
+            None => (Target::Point(self.reset_velocity), None),
+        };
+        let noise = match (flag, in_spec) {
+            (Some(a), Some(b)) if a != b => {
+                return Err(irtp::Error::invalid(
+                    "reset_noise",
+                    a.name(),
+                    format!(
+                        "the noise rule of --reset-to ({}), or no --reset-noise",
+                        b.name()
+                    ),
+                ))
+            }
+            (a, b) => a.or(b).unwrap_or(NoiseAtReset::Kept),
+        };
+        base.with_reset(target, noise).map_err(|e| match e {
+            // A target out of range that --reset-to typed is blamed on it.
+            irtp::Error::InvalidParameter {
+                name: "reset_velocity",
+                value,
+                allowed,
+            } if self.reset_to.is_some() => irtp::Error::InvalidParameter {
+                name: "reset_to",
+                value,
+                allowed,
+            },
+            e => e,
+        })
+    }
+}
+
+/// Output flags: `--seed --out --json`.
+#[derive(Args, Clone, Debug)]
+pub struct OutputArgs {
+    /// Master seed; particle i uses a stream derived from (seed, i)
+    /// [default: 1; only for particle methods: a deterministic solver
+    /// refuses it].
+    #[arg(long, allow_hyphen_values = true)]
+    pub seed: Option<u64>,
+    /// Directory to write CSV files and run.json into.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// `--force`.
+    #[command(flatten)]
+    pub force: ForceArgs,
+    /// Print one JSON object with the results on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// `--max-work --max-memory`.
+    #[command(flatten)]
+    pub budget: super::budget::BudgetArgs,
+}
+
+impl OutputArgs {
+    /// The master seed of a particle method (1 when `--seed` is not given).
+    pub fn seed(&self) -> u64 {
+        self.seed.unwrap_or(1)
+    }
+
+    /// Refuse `--seed` where nothing is random (`what`: the computation).
+    pub fn no_seed(&self, what: &str) -> irtp::Result<()> {
+        match self.seed {
+            Some(s) => Err(irtp::Error::invalid(
+                "--seed",
+                s,
+                format!("only with a particle method ({what} is deterministic)"),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `--force`, of every command with `--out`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ForceArgs {
+    /// Write into an --out that holds another run or files irtp did not write:
+    /// the previous run's outputs (as its run.json lists them) are replaced,
+    /// other files are left alone (and named in a warning).
+    #[arg(long)]
+    pub force: bool,
+}

@@ -1,0 +1,492 @@
+//! Writing results: all files of a run appear together or not at all, and
+//! every output directory carries `run.json` with its provenance.
+
+use irtp::error::{Error, Result};
+use serde::Serialize;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// The [`Error::Io`] of an operation on `path`.
+pub fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Io {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    }
+}
+
+/// An output directory whose files are first written to a hidden staging
+/// directory and moved into place by [`OutputDir::commit`]. Dropping it
+/// uncommitted (error, panic, cancellation) removes the staging directory, so
+/// a failed run leaves nothing half-written behind. A process killed outright
+/// (SIGKILL) cannot clean up: its staging directory `.NAME.partial-PID`
+/// records the host, and the next `OutputDir` of the same target removes it
+/// once that process is gone (a live process, or one on another host of a
+/// shared file system, keeps its staging directory).
+#[derive(Debug)]
+pub struct OutputDir {
+    target: PathBuf,
+    staging: PathBuf,
+    files: Vec<String>,
+    /// Files of a previous irtp run in `target` to remove at commit.
+    replaced: Vec<String>,
+    /// `run.json` of a previous run this one must match (same parameters).
+    previous: Option<serde_json::Value>,
+    /// Warnings for the user (files left alone under `--force`).
+    warnings: Vec<String>,
+    committed: bool,
+}
+
+/// The file in a staging directory naming the host of the process that owns it.
+const HOST_FILE: &str = ".irtp-host";
+
+/// This machine's host name.
+fn host_name() -> String {
+    gethostname::gethostname().to_string_lossy().into_owned()
+}
+
+/// Whether process `pid` exists on this host (`kill(pid, 0)`; a process of
+/// another user counts as alive). Without Unix signals, always true.
+#[cfg(unix)]
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return true;
+    };
+    // SAFETY: signal 0 sends nothing; the call only checks that `pid` exists.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+#[cfg(not(unix))]
+fn process_alive(_pid: u32) -> bool {
+    true
+}
+
+/// Remove the staging directories `.NAME.partial-PID` in `parent` left by
+/// processes of this host that no longer run (killed with SIGKILL, power
+/// loss). Best effort: what cannot be read or removed is left alone.
+fn remove_stale_staging(parent: &Path, name: &str) {
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = fs::read_dir(parent) else {
+        return;
+    };
+    let host = host_name();
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(pid) = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&prefix))
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid == 0 || pid == std::process::id() {
+            continue;
+        }
+        let owner = fs::read_to_string(e.path().join(HOST_FILE));
+        if owner.is_ok_and(|h| h.trim() == host) && !process_alive(pid) {
+            let _ = fs::remove_dir_all(e.path());
+        }
+    }
+}
+
+impl OutputDir {
+    /// Prepare writing into `target` (created if missing).
+    pub fn new(target: impl AsRef<Path>) -> Result<Self> {
+        let target = target.as_ref().to_path_buf();
+        if target.exists() && !target.is_dir() {
+            return Err(Error::invalid(
+                "out",
+                target.display(),
+                "a directory path (it exists and is a file)",
+            ));
+        }
+        let name = target
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
+        remove_stale_staging(&parent, &name);
+        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        if staging.exists() {
+            fs::remove_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+        }
+        fs::create_dir_all(&staging).map_err(|e| io_err(&staging, e))?;
+        let owner = staging.join(HOST_FILE);
+        fs::write(&owner, host_name()).map_err(|e| io_err(&owner, e))?;
+        Ok(OutputDir {
+            target,
+            staging,
+            files: Vec::new(),
+            replaced: Vec::new(),
+            previous: None,
+            warnings: Vec::new(),
+            committed: false,
+        })
+    }
+
+    /// Remove these files of a previous irtp run (names relative to the
+    /// target) when committing: what this run writes replaces them, the rest
+    /// goes.
+    pub fn replacing(mut self, files: Vec<String>) -> Self {
+        self.replaced = files;
+        self
+    }
+
+    /// Record the `run.json` of a previous run the new one must match
+    /// (checked by the caller before committing).
+    pub fn expecting(mut self, run: serde_json::Value) -> Self {
+        self.previous = Some(run);
+        self
+    }
+
+    /// The previous run's `run.json` given to [`OutputDir::expecting`].
+    pub fn previous(&self) -> Option<&serde_json::Value> {
+        self.previous.as_ref()
+    }
+
+    /// Add a warning for the user.
+    pub fn warn(&mut self, w: String) {
+        self.warnings.push(w);
+    }
+
+    /// The warnings added so far.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Files staged so far (relative to the target, in staging order).
+    pub fn files(&self) -> &[String] {
+        &self.files
+    }
+
+    /// Final directory.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Path inside the staging directory for a new file (sub-directories allowed).
+    pub fn path(&mut self, name: &str) -> Result<PathBuf> {
+        let p = self.staging.join(name);
+        if let Some(parent) = p.parent() {
+            fs::create_dir_all(parent).map_err(|e| io_err(parent, e))?;
+        }
+        if !self.files.iter().any(|f| f == name) {
+            self.files.push(name.to_string());
+        }
+        Ok(p)
+    }
+
+    /// Write a CSV file from a header and rows of numbers (full precision).
+    pub fn write_csv<R: AsRef<[f64]>>(
+        &mut self,
+        name: &str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = R>,
+    ) -> Result<()> {
+        let p = self.path(name)?;
+        let mut w = csv::Writer::from_path(&p).map_err(|e| io_err(&p, e))?;
+        w.write_record(header).map_err(|e| io_err(&p, e))?;
+        for row in rows {
+            let row = row.as_ref();
+            debug_assert_eq!(row.len(), header.len());
+            w.write_record(row.iter().map(|x| format_float(*x)))
+                .map_err(|e| io_err(&p, e))?;
+        }
+        w.flush().map_err(|e| io_err(&p, e))
+    }
+
+    /// Write a JSON file.
+    pub fn write_json<T: Serialize>(&mut self, name: &str, value: &T) -> Result<()> {
+        let p = self.path(name)?;
+        let s = serde_json::to_string_pretty(value).map_err(|e| io_err(&p, e))?;
+        fs::write(&p, s + "\n").map_err(|e| io_err(&p, e))
+    }
+
+    /// Write raw bytes or text.
+    pub fn write_bytes(&mut self, name: &str, bytes: impl AsRef<[u8]>) -> Result<()> {
+        let p = self.path(name)?;
+        fs::write(&p, bytes).map_err(|e| io_err(&p, e))
+    }
+
+    /// Remove the replaced files of a previous run that this run does not
+    /// write, then move every staged file into the target directory (each
+    /// move atomic, in staging order: a provenance file staged last marks the
+    /// set complete) and remove the staging directory. Returns the final paths.
+    pub fn commit(mut self) -> Result<Vec<PathBuf>> {
+        fs::create_dir_all(&self.target).map_err(|e| io_err(&self.target, e))?;
+        for f in self.replaced.iter().filter(|f| !self.files.contains(f)) {
+            let p = self.target.join(f);
+            let gone = if p.is_dir() {
+                fs::remove_dir_all(&p)
+            } else {
+                fs::remove_file(&p)
+            };
+            match gone {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&p, e)),
+                _ => {}
+            }
+        }
+        let mut out = Vec::with_capacity(self.files.len());
+        for f in &self.files {
+            let from = self.staging.join(f);
+            let to = self.target.join(f);
+            if let Some(parent) = to.parent() {
+                fs::create_dir_all(parent).map_err(|e| io_err(parent, e))?;
+            }
+            fs::rename(&from, &to).map_err(|e| io_err(&to, e))?;
+            out.push(to);
+        }
+        let _ = fs::remove_dir_all(&self.staging);
+        self.committed = true;
+        Ok(out)
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+/// What an output directory holds before a run writes into it: the
+/// `run.json` of a previous irtp run, the entries that run wrote, and
+/// everything else (entries irtp did not write).
+#[derive(Debug, Default)]
+pub struct Previous {
+    /// `run.json` of the previous irtp run, when there is one.
+    pub run: Option<serde_json::Value>,
+    /// Top-level entries irtp wrote (its provenance lists them), present now.
+    pub ours: Vec<String>,
+    /// Top-level entries irtp did not write.
+    pub foreign: Vec<String>,
+}
+
+impl Previous {
+    /// Survey `dir` (missing: empty). Entries listed by its `run.json`, the
+    /// `run.json` itself and the names in `also` (listed by further
+    /// provenance files of the caller) count as irtp's.
+    pub fn read(dir: &Path, also: &[String]) -> Result<Self> {
+        let mut prev = Previous::default();
+        let entries = match fs::read_dir(dir) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(prev),
+            Err(e) => return Err(io_err(dir, e)),
+        };
+        prev.run = read_provenance(&dir.join("run.json"));
+        let mut listed: Vec<String> = also.to_vec();
+        if let Some(files) = prev.run.as_ref().and_then(|r| r["files"].as_array()) {
+            listed.extend(
+                files
+                    .iter()
+                    .filter_map(|f| f.as_str())
+                    .map(|f| f.split('/').next().unwrap_or(f).to_string()),
+            );
+            listed.push("run.json".into());
+        }
+        let mut names: Vec<String> = entries
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<std::io::Result<_>>()
+            .map_err(|e| io_err(dir, e))?;
+        names.sort();
+        for n in names {
+            if listed.contains(&n) {
+                prev.ours.push(n);
+            } else {
+                prev.foreign.push(n);
+            }
+        }
+        Ok(prev)
+    }
+
+    /// The previous run's `command` (`simulate`, `fp stationary`, ...).
+    pub fn command(&self) -> Option<&str> {
+        self.run.as_ref().and_then(|r| r["command"].as_str())
+    }
+
+    /// `a, b, c and 4 more`: the first entries irtp did not write.
+    pub fn foreign_list(&self) -> String {
+        let shown: Vec<&str> = self.foreign.iter().take(3).map(String::as_str).collect();
+        match self.foreign.len() - shown.len() {
+            0 => shown.join(", "),
+            n => format!("{} and {n} more", shown.join(", ")),
+        }
+    }
+}
+
+impl Previous {
+    /// The `--force` warning naming the files irtp did not write in `dir`.
+    pub fn left_alone(&self, dir: &Path) -> String {
+        format!(
+            "--out {}: left alone {}, which irtp did not write",
+            dir.display(),
+            self.foreign_list()
+        )
+    }
+}
+
+/// The refusal of an `--out` directory that holds `what` (bad input).
+pub fn out_in_use(dir: &Path, what: String) -> Error {
+    Error::invalid(
+        "out",
+        dir.display(),
+        format!(
+            "an empty directory or one holding this same run; it holds {what} \
+             (choose another directory, or --force to replace irtp's outputs there)"
+        ),
+    )
+}
+
+/// An irtp provenance file (`"software": "irtp"`), if `path` holds one.
+pub fn read_provenance(path: &Path) -> Option<serde_json::Value> {
+    let text = fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    (v["software"] == "irtp").then_some(v)
+}
+
+/// Shortest representation that round-trips exactly.
+pub fn format_float(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// Provenance written as `run.json` next to every result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Provenance<P: Serialize> {
+    /// Always "irtp".
+    pub software: &'static str,
+    /// Crate version.
+    pub version: &'static str,
+    /// Git revision of the build, when built from a checkout.
+    pub git_revision: Option<&'static str>,
+    /// What was run (e.g. "simulate", "fp stationary").
+    pub command: String,
+    /// Full command line as typed.
+    pub argv: Vec<String>,
+    /// Numerical method (e.g. "euler", "exact", "fv-upwind").
+    pub method: String,
+    /// Master seed, for stochastic methods.
+    pub seed: Option<u64>,
+    /// All parameters of the run.
+    pub parameters: P,
+    /// Wall-clock time of the computation in seconds.
+    pub wall_time_s: f64,
+    /// rayon threads used (results do not depend on it).
+    pub threads: usize,
+    /// Seconds since the Unix epoch when the run finished.
+    pub finished_unix: u64,
+    /// Files written alongside.
+    pub files: Vec<String>,
+}
+
+impl<P: Serialize> Provenance<P> {
+    /// Fill in software, version, thread count and time stamp.
+    pub fn new(
+        command: impl Into<String>,
+        method: impl Into<String>,
+        seed: Option<u64>,
+        parameters: P,
+        wall_time_s: f64,
+    ) -> Self {
+        Provenance {
+            software: "irtp",
+            version: crate::VERSION,
+            git_revision: crate::GIT_REVISION,
+            command: command.into(),
+            argv: std::env::args().collect(),
+            method: method.into(),
+            seed,
+            parameters,
+            wall_time_s,
+            threads: rayon::current_num_threads(),
+            finished_unix: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_secs())
+                .unwrap_or(0),
+            files: Vec::new(),
+        }
+    }
+}
+
+impl<P: Serialize> Provenance<P> {
+    /// Record this command line instead of the process's own.
+    pub fn with_argv(mut self, argv: Vec<String>) -> Self {
+        self.argv = argv;
+        self
+    }
+}
+
+impl OutputDir {
+    /// [`OutputDir::commit_with_provenance`], also returning `run.json`'s
+    /// content as written.
+    pub fn commit_with_provenance_value<P: Serialize>(
+        mut self,
+        mut prov: Provenance<P>,
+    ) -> Result<(serde_json::Value, Vec<PathBuf>)> {
+        prov.files = self.files.clone();
+        prov.files.push("run.json".into());
+        let value = serde_json::to_value(&prov).map_err(|e| io_err(&self.target, e))?;
+        self.write_json("run.json", &value)?;
+        Ok((value, self.commit()?))
+    }
+
+    /// Write `run.json` listing every file staged so far, then commit.
+    pub fn commit_with_provenance<P: Serialize>(
+        mut self,
+        mut prov: Provenance<P>,
+    ) -> Result<Vec<PathBuf>> {
+        prov.files = self.files.clone();
+        prov.files.push("run.json".into());
+        self.write_json("run.json", &prov)?;
+        self.commit()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uncommitted_leaves_nothing() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("res");
+        {
+            let mut o = OutputDir::new(&target).unwrap();
+            o.write_csv("a.csv", &["x"], [[1.0]]).unwrap();
+        }
+        assert!(!target.exists());
+        assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn commit_moves_files_with_provenance() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("res");
+        let mut o = OutputDir::new(&target).unwrap();
+        o.write_csv("a.csv", &["x", "y"], [[1.0, 0.1], [2.0, 1e-300]])
+            .unwrap();
+        o.commit_with_provenance(Provenance::new(
+            "test",
+            "none",
+            Some(1),
+            serde_json::json!({"a": 1}),
+            0.0,
+        ))
+        .unwrap();
+        let csv = fs::read_to_string(target.join("a.csv")).unwrap();
+        assert_eq!(csv, "x,y\n1.0,0.1\n2.0,1e-300\n");
+        let run: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(target.join("run.json")).unwrap()).unwrap();
+        assert_eq!(run["software"], "irtp");
+        assert_eq!(run["files"][0], "a.csv");
+        assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 1);
+    }
+}

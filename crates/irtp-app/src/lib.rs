@@ -1,0 +1,438 @@
+//! The commands of the `irtp` program as library calls, shared by every
+//! front end (the `irtp` binary, the Python module).
+//!
+//! Each command has one home here: its flags (clap `Args`, which are also the
+//! Python keyword arguments and their defaults), their validation into a
+//! config, the computation, and the files it writes. A front end parses its
+//! input into the `Args`, calls the command's `run` with a [`Context`], and
+//! presents the returned [`Outcome`]: the binary prints its text or JSON; the
+//! Python module hands out its tables as numpy arrays. The same `Args` give
+//! the same numbers, bit for bit, through either.
+//!
+//! Layering: `app` sits above [`crate::figures`] and below the front ends.
+
+pub mod analytic;
+pub mod budget;
+pub mod common;
+pub mod format;
+pub mod fp;
+pub mod fp_msd;
+pub mod fpt;
+pub mod io;
+pub mod keywords;
+pub mod mfpt;
+pub mod simulate;
+pub mod sweep;
+
+/// The version every provenance file records (the workspace's).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+/// The git revision of the build, where it was built from a checkout.
+pub const GIT_REVISION: Option<&str> = option_env!("IRTP_GIT_REVISION");
+
+use irtp::error::{Error, Result};
+use crate::io::{out_in_use, OutputDir, Previous, Provenance};
+use irtp::parallel::Progress;
+use clap::{Parser, Subcommand};
+use serde::Serialize;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+#[derive(Parser, Debug)]
+#[command(name = "irtp", version, about, long_about = None)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands of `irtp`.
+// Parsed once per run: the size of the largest flag set costs nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    Analytic(analytic::AnalyticArgs),
+    /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
+    Simulate(simulate::SimulateArgs),
+    /// Mean first-passage time to a target velocity (backward equations or particles).
+    Mfpt(mfpt::MfptArgs),
+    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    Fp(fp::FpArgs),
+}
+
+impl Command {
+    /// Whether `--json` was given.
+    pub fn json(&self) -> bool {
+        match self {
+            Command::Analytic(a) => a.json,
+            Command::Simulate(a) => a.output.json,
+            Command::Mfpt(a) => a.json(),
+            Command::Fp(a) => a.json(),
+        }
+    }
+}
+
+/// Validate a command's flags as its run would (ranges, combinations),
+/// without computing anything.
+pub fn validate(command: &Command) -> Result<()> {
+    match command {
+        Command::Analytic(a) => a.config().map(drop),
+        Command::Simulate(a) => a.config().map(drop),
+        Command::Mfpt(a) => a.validate(),
+        Command::Fp(a) => a.validate(),
+    }
+}
+
+/// Whether a command draws random numbers (so takes `--seed`): simulations
+/// and particle first-passage methods; the deterministic solvers refuse a
+/// seed.
+pub fn uses_seed(command: &Command) -> bool {
+    match command {
+        Command::Simulate(_) => true,
+        Command::Analytic(_) | Command::Fp(_) => false,
+        Command::Mfpt(a) => a.uses_seed(),
+    }
+}
+
+/// Run a command.
+pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
+    match command {
+        Command::Analytic(a) => analytic::run(a, ctx),
+        Command::Simulate(a) => simulate::run(a, ctx),
+        Command::Mfpt(a) => mfpt::run(a, ctx),
+        Command::Fp(a) => fp::run(a, ctx),
+    }
+}
+
+/// How a front end shows progress and asks a run to stop.
+pub trait Reporter: Sync {
+    /// A progress observer for one stage of work (`label`, `total` units);
+    /// dropping it ends the stage (a terminal bar is cleared).
+    fn stage(&self, label: &str, total: u64) -> Box<dyn Progress + '_>;
+    /// Whether the caller wants the run stopped (then the run returns
+    /// [`Error::Interrupted`] and writes nothing).
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// A reporter that shows nothing and never cancels.
+pub struct Quiet;
+
+impl Reporter for Quiet {
+    fn stage(&self, _label: &str, _total: u64) -> Box<dyn Progress + '_> {
+        Box::new(irtp::parallel::NoProgress)
+    }
+}
+
+/// What a run needs from its front end.
+pub struct Context<'a> {
+    /// Progress and cancellation.
+    pub reporter: &'a dyn Reporter,
+    /// The command line recorded in `run.json` (the binary's own argv; the
+    /// Python module records the equivalent `irtp ...` command line).
+    pub argv: Vec<String>,
+}
+
+impl<'a> Context<'a> {
+    /// A context recording this process's command line.
+    pub fn new(reporter: &'a dyn Reporter) -> Self {
+        Context {
+            reporter,
+            argv: std::env::args().collect(),
+        }
+    }
+
+    /// [`Error::Interrupted`] when the reporter asked to stop: a cancelled
+    /// computation's partial result is never returned nor written.
+    pub fn check(&self) -> Result<()> {
+        if self.reporter.cancelled() {
+            Err(Error::Interrupted)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// One result table: the columns of a CSV file the command writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// File stem (`moments` for `moments.csv`).
+    pub name: &'static str,
+    /// Column names, in file order.
+    pub header: Vec<String>,
+    /// Columns (each as long as the table).
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl Table {
+    /// A table from its header and rows.
+    pub fn from_rows<R: AsRef<[f64]>>(
+        name: &'static str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = R>,
+    ) -> Self {
+        let mut columns = vec![Vec::new(); header.len()];
+        for row in rows {
+            for (c, x) in columns.iter_mut().zip(row.as_ref()) {
+                c.push(*x);
+            }
+        }
+        Table {
+            name,
+            header: header.iter().map(|h| h.to_string()).collect(),
+            columns,
+        }
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.columns.first().map_or(0, Vec::len)
+    }
+
+    /// Whether the table has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn write(&self, out: &mut OutputDir) -> Result<()> {
+        let header: Vec<&str> = self.header.iter().map(String::as_str).collect();
+        let rows = (0..self.len()).map(|i| self.columns.iter().map(|c| c[i]).collect::<Vec<_>>());
+        out.write_csv(&format!("{}.csv", self.name), &header, rows)
+    }
+}
+
+/// The result of one command: what it computed, its provenance and the
+/// files it wrote.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The command (`simulate`, `fp stationary`, ...).
+    pub command: &'static str,
+    /// What the command computed.
+    pub results: Results,
+    /// `run.json` as written (or as it would be written without `--out`).
+    pub provenance: Value,
+    /// `summary.json` as written (and as `--json` prints it): see [`summary`].
+    pub summary: Value,
+    /// The output directory and the files written there, when one was given.
+    pub written: Option<(PathBuf, Vec<PathBuf>)>,
+    /// Warnings for the user (files in `--out` that `--force` left alone).
+    pub warnings: Vec<String>,
+}
+
+/// What a command computed: what `--json` prints, the tables and the text
+/// report; [`Outcome`] adds the provenance and the files written.
+#[derive(Clone, Debug)]
+pub struct Results {
+    /// The numerical method, as recorded in `run.json`.
+    pub method: String,
+    /// The master seed of a stochastic method.
+    pub seed: Option<u64>,
+    /// What `--json` prints (one object, or one object per row for a scan).
+    pub json: Value,
+    /// The `parameters` object of `run.json`.
+    pub parameters: Value,
+    /// The tables (`<name>.csv` in the output directory).
+    pub tables: Vec<Table>,
+    /// Further JSON files of the output directory (`mfpt.json`, ...);
+    /// `summary.json` is written by `finish` for every command.
+    pub json_files: Vec<(&'static str, Value)>,
+    /// The text-mode report (without the list of written files).
+    pub text: String,
+    /// Wall-clock seconds of the computation.
+    pub wall_time_s: f64,
+}
+
+impl Results {
+    /// The table with this name.
+    pub fn table(&self, name: &str) -> Option<&Table> {
+        self.tables.iter().find(|t| t.name == name)
+    }
+}
+
+/// JSON value of a serialisable result (these never fail: plain structs of
+/// numbers and strings).
+pub(crate) fn to_value<T: Serialize>(v: &T) -> Value {
+    serde_json::to_value(v).expect("result structs serialise to JSON")
+}
+
+/// Open the output directory, if any, before computing (a bad path fails at
+/// once). A directory holding files irtp did not write, or the outputs of
+/// another command, is refused unless `force`; a previous run of the same
+/// command is replaced at commit (without `force`, only by a run with the
+/// same parameters: checked by [`finish`]).
+pub(crate) fn open_out(
+    command: &str,
+    dir: Option<&Path>,
+    force: bool,
+) -> Result<Option<OutputDir>> {
+    let Some(dir) = dir else {
+        return Ok(None);
+    };
+    let out = OutputDir::new(dir)?;
+    let prev = Previous::read(dir, &[])?;
+    let other = prev.command().filter(|c| *c != command);
+    if !force {
+        if !prev.foreign.is_empty() {
+            return Err(out_in_use(
+                dir,
+                format!("{}, which irtp did not write", prev.foreign_list()),
+            ));
+        }
+        if let Some(c) = other {
+            return Err(out_in_use(dir, format!("the outputs of `irtp {c}`")));
+        }
+    }
+    let mut out = out.replacing(prev.ours.clone());
+    if force && !prev.foreign.is_empty() {
+        out.warn(prev.left_alone(dir));
+    }
+    match prev.run {
+        Some(run) if !force => Ok(Some(out.expecting(run))),
+        _ => Ok(Some(out)),
+    }
+}
+
+/// Refuse to replace a previous run of the same command with other
+/// parameters, method or seed.
+fn same_run(out: &OutputDir, prov: &Value) -> Result<()> {
+    let Some(prev) = out.previous() else {
+        return Ok(());
+    };
+    let mut differ: Vec<String> = ["method", "seed"]
+        .into_iter()
+        .filter(|k| prev[k] != prov[k])
+        .map(String::from)
+        .collect();
+    match (
+        prev["parameters"].as_object(),
+        prov["parameters"].as_object(),
+    ) {
+        (Some(a), Some(b)) => differ.extend(
+            a.keys()
+                .chain(b.keys().filter(|k| !a.contains_key(*k)))
+                .filter(|k| a.get(*k) != b.get(*k))
+                .cloned(),
+        ),
+        _ if prev["parameters"] != prov["parameters"] => differ.push("parameters".into()),
+        _ => {}
+    }
+    if differ.is_empty() {
+        return Ok(());
+    }
+    Err(out_in_use(
+        out.target(),
+        format!(
+            "a run of `irtp {}` with other {}",
+            prov["command"].as_str().unwrap_or("?"),
+            differ.join(", ")
+        ),
+    ))
+}
+
+/// The schema name of `summary.json` and of the `--json` object.
+pub const SUMMARY_SCHEMA: &str = "irtp.summary/1";
+
+/// The keys of `run.json` repeated under `provenance` in `summary.json`.
+const PROVENANCE_KEYS: [&str; 8] = [
+    "software",
+    "version",
+    "git_revision",
+    "argv",
+    "seed",
+    "threads",
+    "wall_time_s",
+    "finished_unix",
+];
+
+/// The one output object of every command, written as `summary.json` and
+/// printed by `--json`: `schema`, `command`, `method`, `params` (the run
+/// parameters, as in `run.json`), `results` (what the command computed,
+/// each value with its error where it has one) and `provenance` (the
+/// version, revision, seed, command line and time of `run.json`).
+pub fn summary(command: &str, r: &Results, run: &Value) -> Value {
+    let provenance: serde_json::Map<String, Value> = PROVENANCE_KEYS
+        .iter()
+        .map(|k| (k.to_string(), run[*k].clone()))
+        .collect();
+    serde_json::json!({
+        "schema": SUMMARY_SCHEMA,
+        "command": command,
+        "method": r.method,
+        "params": r.parameters,
+        "results": r.json,
+        "provenance": provenance,
+    })
+}
+
+/// A non-finite number in a result table is never returned nor written.
+fn refuse_non_finite(command: &'static str, tables: &[Table]) -> Result<()> {
+    for t in tables {
+        for (h, c) in t.header.iter().zip(&t.columns) {
+            if let Some((i, x)) = c.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(Error::Numerical {
+                    method: command,
+                    reason: format!(
+                        "{h} = {x} in row {i} of {}.csv: the computation overflowed for these parameters; refused",
+                        t.name
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Check for cancellation, then write the tables, the JSON files and
+/// `run.json` (all or nothing) and assemble the [`Outcome`].
+pub(crate) fn finish(
+    command: &'static str,
+    results: Results,
+    out: Option<OutputDir>,
+    ctx: &Context,
+) -> Result<Outcome> {
+    ctx.check()?;
+    let r = &results;
+    // First-passage tables mark a tau beyond the f64 range (the target is
+    // practically never reached) as inf, point by point; every other table
+    // holds only finite numbers.
+    if !command.starts_with("mfpt") {
+        refuse_non_finite(command, &r.tables)?;
+    }
+    let prov = Provenance::new(
+        command,
+        r.method.clone(),
+        r.seed,
+        &r.parameters,
+        r.wall_time_s,
+    )
+    .with_argv(ctx.argv.clone());
+    let mut warnings = Vec::new();
+    let summary = summary(command, r, &to_value(&prov));
+    let (provenance, written) = match out {
+        None => (to_value(&prov), None),
+        Some(mut o) => {
+            same_run(&o, &to_value(&prov))?;
+            warnings = o.warnings().to_vec();
+            for t in &r.tables {
+                t.write(&mut o)?;
+            }
+            for (name, v) in &r.json_files {
+                o.write_json(name, v)?;
+            }
+            o.write_json("summary.json", &summary)?;
+            let target = o.target().to_path_buf();
+            let (prov, files) = o.commit_with_provenance_value(prov)?;
+            (prov, Some((target, files)))
+        }
+    };
+    Ok(Outcome {
+        command,
+        results,
+        provenance,
+        summary,
+        written,
+        warnings,
+    })
+}

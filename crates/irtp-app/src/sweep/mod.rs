@@ -1,0 +1,431 @@
+//! Parameter sweeps: one command over a grid of parameters ([`plan`]),
+//! every point in its own directory ([`store`]), run in parallel on this
+//! machine or split into shards (`--shard K/N`, one per SLURM array task,
+//! [`slurm`]), merged into one table that does not depend on the split.
+//!
+//! Each point runs through [`crate::app`] exactly as `irtp <command>` with
+//! the point's flags would (its `run.json` records that command line), with
+//! a seed derived from the plan seed and the point's parameters. A point
+//! that fails records its error and the sweep goes on; a killed sweep,
+//! run again, redoes only the points without a `result.json`.
+//!
+//! Layering: `sweep` sits above [`crate::app`], below the binary.
+
+pub mod parts;
+pub mod plan;
+pub mod slurm;
+pub mod store;
+mod table;
+
+pub use plan::{Plan, Point};
+pub use store::{PointResult, Store};
+pub use table::{write_table, Counts};
+
+use crate::{keywords, Context, Quiet};
+use irtp::error::{Error, Result};
+use rayon::prelude::*;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Which points a run takes: those whose plan index is `k - 1` modulo `n`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 1-based.
+    pub k: u64,
+    /// Number of shards.
+    pub n: u64,
+}
+
+impl Shard {
+    /// The whole plan.
+    pub const ALL: Shard = Shard { k: 1, n: 1 };
+
+    /// Whether point `index` belongs to this shard.
+    pub fn has(&self, index: usize) -> bool {
+        index as u64 % self.n == self.k - 1
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Shard, String> {
+        let parsed = s
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.trim().parse().ok()?, n.trim().parse().ok()?)));
+        match parsed {
+            Some((k, n)) if k >= 1 && k <= n => Ok(Shard { k, n }),
+            _ => Err(format!("'{s}' is not K/N with 1 <= K <= N")),
+        }
+    }
+}
+
+/// Progress of a sweep: points finished (failed among them) of those this
+/// run takes.
+pub trait Tally: Sync {
+    /// `done` of `total` points finished, `failed` of them failed.
+    fn update(&self, done: u64, failed: u64, total: u64);
+}
+
+impl Tally for () {
+    fn update(&self, _: u64, _: u64, _: u64) {}
+}
+
+/// What a run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunReport {
+    /// Points of the plan.
+    pub points: usize,
+    /// Work items of the plan (points, or their parts with `particle_parts`).
+    pub items: usize,
+    /// Work items of this shard.
+    pub shard_items: usize,
+    /// Items this run computed.
+    pub ran: usize,
+    /// Of those, failed.
+    pub failed: usize,
+    /// Items of this shard already finished before the run.
+    pub skipped: usize,
+    /// The table, when every point of the plan is finished.
+    pub table: Option<PathBuf>,
+}
+
+/// Options of a run.
+#[derive(Clone, Copy, Debug)]
+pub struct RunOptions {
+    /// This run's share of the work items.
+    pub shard: Shard,
+    /// Run failed points again (else a failure is a finished point).
+    pub retry_failed: bool,
+}
+
+/// Whether an item still needs work.
+fn pending(plan: &Plan, store: &Store, it: &parts::Item, retry: bool) -> bool {
+    let open = store.unfinished(it.point, retry);
+    match it.part {
+        None => open,
+        Some(k) => open && !(parts::path(store, it.point, k).exists() && plan.particle_parts > 1),
+    }
+}
+
+/// Run the work items of `plan` this shard takes and has not finished, in
+/// parallel, into `root`; assemble split points whose parts are all there;
+/// write `results.csv` when the whole plan is done.
+pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Result<RunReport> {
+    let store = Store::open(root, plan)?;
+    write_provenance(&store, plan, opts.shard)?;
+    let points: Vec<Point> = plan.points().collect();
+    let all = parts::items(plan, &points);
+    let mine: Vec<parts::Item> = all
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| opts.shard.has(*i))
+        .map(|(_, it)| *it)
+        .collect();
+    let todo: Vec<&parts::Item> = mine
+        .iter()
+        .filter(|it| pending(plan, &store, it, opts.retry_failed))
+        .collect();
+    let (done, failed) = (AtomicU64::new(0), AtomicU64::new(0));
+    let total = todo.len() as u64;
+    tally.update(0, 0, total);
+    todo.par_iter().try_for_each(|it| -> Result<()> {
+        let ok = match it.part {
+            None => run_point(plan, &store, it.point)?.status == "ok",
+            Some(k) => parts::run_part(plan, &store, it.point, k)?,
+        };
+        failed.fetch_add(u64::from(!ok), Ordering::Relaxed);
+        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+        tally.update(d, failed.load(Ordering::Relaxed), total);
+        Ok(())
+    })?;
+    assemble_ready(plan, &store, &points, opts.retry_failed)?;
+    let counts = table::counts(plan, &store);
+    let table = if counts.missing == 0 {
+        Some(write_table(plan, &store)?.0)
+    } else {
+        None
+    };
+    Ok(RunReport {
+        points: plan.len(),
+        items: all.len(),
+        shard_items: mine.len(),
+        ran: todo.len(),
+        failed: failed.into_inner() as usize,
+        skipped: mine.len() - todo.len(),
+        table,
+    })
+}
+
+/// Assemble every split point whose parts are all stored and which has no
+/// result yet (or a failed one, with `retry`).
+fn assemble_ready(plan: &Plan, store: &Store, points: &[Point], retry: bool) -> Result<()> {
+    if plan.particle_parts <= 1 {
+        return Ok(());
+    }
+    points.par_iter().try_for_each(|p| -> Result<()> {
+        if store.unfinished(p, retry) && parts::complete(plan, store, p) {
+            parts::assemble(plan, store, p)?;
+        }
+        Ok(())
+    })
+}
+
+/// Run one point through [`crate::run`] into its directory and record its
+/// result; a failure of the computation is a failed point, an i/o failure
+/// of the sweep directory stops the sweep.
+fn run_point(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
+    store.begin(plan, p)?;
+    let t0 = std::time::Instant::now();
+    let argv = plan
+        .argv(p, Some(&store.dir(p)))
+        .map_err(|e| bad_point(p, e))?;
+    let cli = keywords::parse::<crate::Cli>(&plan.command, &argv).map_err(|e| bad_point(p, e))?;
+    let ctx = Context {
+        reporter: &Quiet,
+        argv,
+    };
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        crate::run(&cli.command, &ctx)
+    }))
+    .unwrap_or_else(|_| {
+        Err(Error::Numerical {
+            method: "irtp",
+            reason: "internal error (a panic); please report it".into(),
+        })
+    });
+    let r = point_result(p, outcome, t0.elapsed().as_secs_f64());
+    store.finish(p, &r)?;
+    Ok(r)
+}
+
+/// A point's record from its command's outcome.
+fn point_result(p: &Point, outcome: Result<crate::Outcome>, wall_time_s: f64) -> PointResult {
+    match outcome {
+        Ok(o) => PointResult {
+            status: "ok".into(),
+            error: None,
+            method: Some(o.results.method.clone()),
+            seed: p.seed,
+            wall_time_s,
+            summary: stable_summary(o.results.json),
+        },
+        Err(e) => failed(p, e.message_with(|n| n.to_string()), wall_time_s),
+    }
+}
+
+fn failed(p: &Point, error: String, wall_time_s: f64) -> PointResult {
+    PointResult {
+        status: "failed".into(),
+        error: Some(error),
+        method: None,
+        seed: p.seed,
+        wall_time_s,
+        summary: serde_json::Value::Null,
+    }
+}
+
+fn bad_point(p: &Point, e: String) -> Error {
+    Error::InvalidParameter {
+        name: "plan",
+        value: format!("point {} ({})", p.index, plan::describe(&p.params)),
+        allowed: e,
+    }
+}
+
+/// The summary without what changes from run to run (timings, the output path).
+fn stable_summary(mut v: serde_json::Value) -> serde_json::Value {
+    if let Some(o) = v.as_object_mut() {
+        for k in ["wall_time_s", "particle_steps_per_s", "events_per_s", "out"] {
+            o.shift_remove(k);
+        }
+    }
+    v
+}
+
+/// `sweep.json` (written once: the plan, the software, its revision) and
+/// one record per run under `runs/` (host, shard, command line, time).
+fn write_provenance(store: &Store, plan: &Plan, shard: Shard) -> Result<()> {
+    let sweep = store.root.join("sweep.json");
+    if !sweep.exists() {
+        let v = json!({
+            "software": "irtp",
+            "version": crate::VERSION,
+            "git_revision": crate::GIT_REVISION,
+            "command": plan.command,
+            "plan_seed": plan.seed,
+            "points": plan.len(),
+            "point_seed": "first 8 bytes (little-endian) of SHA-256 of \"irtp sweep seed <plan seed> <parameters as sorted JSON>\"",
+            "plan": plan.text,
+        });
+        store::write_atomic(
+            &sweep,
+            (serde_json::to_string_pretty(&v).expect("JSON") + "\n").as_bytes(),
+        )?;
+    }
+    let host = gethostname::gethostname().to_string_lossy().into_owned();
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let run = json!({
+        "host": host,
+        "pid": std::process::id(),
+        "shard": format!("{}/{}", shard.k, shard.n),
+        "argv": std::env::args().collect::<Vec<_>>(),
+        "threads": rayon::current_num_threads(),
+        "started_unix": now,
+        "version": crate::VERSION,
+        "git_revision": crate::GIT_REVISION,
+    });
+    let dir = store.root.join("runs");
+    std::fs::create_dir_all(&dir).map_err(|e| crate::io::io_err(&dir, e))?;
+    let name = format!(
+        "{host}-{}-{now}-shard{}of{}.json",
+        std::process::id(),
+        shard.k,
+        shard.n
+    );
+    store::write_atomic(
+        &dir.join(name),
+        (serde_json::to_string_pretty(&run).expect("JSON") + "\n").as_bytes(),
+    )
+}
+
+/// Read the plan a sweep directory holds.
+pub fn plan_of(root: &Path) -> Result<Plan> {
+    let path = root.join("plan.toml");
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| crate::io::io_err(&path, format!("{e} (not a sweep directory?)")))?;
+    Plan::parse(&text)
+}
+
+/// Merge shard directories into `target` (which may be one of them): copy
+/// their finished points that `target` lacks, check that points present in
+/// both agree, and write `results.csv`. Every directory must hold the same
+/// plan.
+pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<Counts> {
+    let first = sources.first().map(PathBuf::as_path).unwrap_or(target);
+    let plan = if target.join("plan.toml").exists() {
+        plan_of(target)?
+    } else {
+        plan_of(first)?
+    };
+    let store = Store::open(target, &plan)?;
+    for src in sources {
+        if same_dir(src, target) {
+            continue;
+        }
+        let other = plan_of(src)?;
+        if other.text != plan.text {
+            return Err(Error::invalid(
+                "sweep_dir",
+                src.display(),
+                format!("a sweep directory of the same plan as {}", target.display()),
+            ));
+        }
+        let src_store = Store::open(src, &plan)?;
+        for p in plan.points() {
+            table::take_point(&src_store, &store, &p)?;
+        }
+    }
+    let points: Vec<Point> = plan.points().collect();
+    assemble_ready(&plan, &store, &points, false)?;
+    Ok(write_table(&plan, &store)?.1)
+}
+
+fn same_dir(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// A sweep directory's state.
+#[derive(Clone, Debug)]
+pub struct Status {
+    /// The directory.
+    pub dir: PathBuf,
+    /// Points of the plan.
+    pub points: usize,
+    /// Finished points.
+    pub done: usize,
+    /// Failed points: (index, id, error).
+    pub failed: Vec<(usize, String, String)>,
+    /// Missing points: (index, id, parameters).
+    pub missing: Vec<(usize, String, String)>,
+    /// Leftovers of killed runs (staging directories, temporary files).
+    pub leftovers: Vec<String>,
+}
+
+/// The state of the sweep directory `root` holding `plan`.
+pub fn status(plan: &Plan, root: &Path) -> Result<Status> {
+    let store = Store {
+        root: root.to_path_buf(),
+    };
+    let mut s = Status {
+        dir: root.to_path_buf(),
+        points: plan.len(),
+        done: 0,
+        failed: Vec::new(),
+        missing: Vec::new(),
+        leftovers: Vec::new(),
+    };
+    for p in plan.points() {
+        match store.result(&p) {
+            Some(r) if r.status == "ok" => s.done += 1,
+            Some(r) => {
+                s.done += 1;
+                s.failed
+                    .push((p.index, p.id.clone(), r.error.unwrap_or_default()));
+            }
+            None => s
+                .missing
+                .push((p.index, p.id.clone(), plan::describe(&p.params))),
+        }
+    }
+    if let Ok(entries) = std::fs::read_dir(store.workspace()) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                s.leftovers.push(name);
+            }
+        }
+    }
+    s.leftovers.sort();
+    Ok(s)
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let d = self.dir.display();
+        writeln!(
+            f,
+            "{d}: {} points: {} finished ({} failed), {} missing",
+            self.points,
+            self.done,
+            self.failed.len(),
+            self.missing.len()
+        )?;
+        for (i, id, e) in &self.failed {
+            writeln!(f, "failed  point {i} ({id}): {e}")?;
+        }
+        for (i, id, params) in self.missing.iter().take(20) {
+            writeln!(f, "missing point {i} ({id}): {params}")?;
+        }
+        if self.missing.len() > 20 {
+            writeln!(f, "missing ... and {} more", self.missing.len() - 20)?;
+        }
+        if !self.leftovers.is_empty() {
+            writeln!(f, "{} leftovers of interrupted runs in {d}/workspace (ignored; safe to delete when no run is active)", self.leftovers.len())?;
+        }
+        match (self.missing.is_empty(), self.failed.is_empty()) {
+            (true, true) => writeln!(f, "complete: {d}/results.csv"),
+            (false, _) => writeln!(f, "to finish: irtp sweep run {d}/plan.toml --out {d}"),
+            (true, false) => writeln!(
+                f,
+                "to retry the failed points: irtp sweep run {d}/plan.toml --out {d} --retry-failed"
+            ),
+        }
+    }
+}

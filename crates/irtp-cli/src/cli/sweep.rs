@@ -1,0 +1,204 @@
+//! `irtp sweep {run, merge, status, slurm}`: parameter sweeps (library:
+//! [`irtp_app::sweep`]).
+
+use super::progress::Bar;
+use clap::{Args, Subcommand};
+use irtp_app::sweep::{self, slurm, Plan, RunOptions, Shard, Tally};
+use std::path::{Path, PathBuf};
+
+/// Run one command over a grid of parameters (a TOML plan), here or on a SLURM cluster.
+#[derive(Args, Debug)]
+pub struct SweepArgs {
+    #[command(subcommand)]
+    command: SweepCommand,
+}
+
+#[derive(Subcommand, Debug)]
+enum SweepCommand {
+    /// Run the plan's points (those of --shard), skipping finished ones; results.csv when all are done.
+    Run(RunArgs),
+    /// Merge shard directories into the first one and write results.csv (exit 3 if points are missing).
+    Merge(MergeArgs),
+    /// Points done, failed and missing, and the command that finishes them.
+    Status(StatusArgs),
+    /// Write (and with --submit, submit) a SLURM job array and its merge job.
+    Slurm(SlurmArgs),
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// The plan (TOML; see docs/sweeps.md).
+    plan: PathBuf,
+    /// Sweep directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Run only shard K of N (points whose index is K-1 modulo N).
+    #[arg(long, default_value = "1/1", value_parser = parse_shard)]
+    shard: Shard,
+    /// Run failed points again.
+    #[arg(long)]
+    retry_failed: bool,
+}
+
+#[derive(Args, Debug)]
+struct MergeArgs {
+    /// The sweep directory to merge into, then shard directories to take points from.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct StatusArgs {
+    /// Sweep directory.
+    dir: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct SlurmArgs {
+    /// The plan (TOML).
+    plan: PathBuf,
+    /// Sweep directory (on a file system the compute nodes share).
+    #[arg(long)]
+    out: PathBuf,
+    /// SLURM partition.
+    #[arg(long)]
+    partition: Option<String>,
+    /// Time limit of one array task (SLURM format, e.g. 01:00:00).
+    #[arg(long)]
+    time: Option<String>,
+    /// CPUs (threads) per array task.
+    #[arg(long, default_value_t = 1)]
+    cpus_per_task: u32,
+    /// The cluster's MaxArraySize: the array has at most this many tasks.
+    #[arg(long, default_value_t = 1000)]
+    max_array: u64,
+    /// Points per array task [default: the fewest that fit --max-array].
+    #[arg(long)]
+    points_per_task: Option<u64>,
+    /// Array tasks running at once (the % of --array).
+    #[arg(long, default_value_t = 100)]
+    throttle: u64,
+    /// Submit both jobs (sbatch) and print their ids.
+    #[arg(long)]
+    submit: bool,
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse()
+}
+
+/// A bar of points: done of total, failed, time left.
+struct PointsBar(Bar);
+
+impl Tally for PointsBar {
+    fn update(&self, done: u64, failed: u64, total: u64) {
+        self.0.message(&format!("{failed} failed"));
+        irtp::parallel::Progress::update(&self.0, done, total);
+    }
+}
+
+fn read_plan(path: &Path) -> anyhow::Result<Plan> {
+    let text = std::fs::read_to_string(path).map_err(|e| irtp::Error::Io {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    Ok(Plan::parse(&text)?)
+}
+
+/// Run `irtp sweep ...`; the process exit code (0, or 3 when points are missing).
+pub fn run(args: SweepArgs) -> anyhow::Result<u8> {
+    match args.command {
+        SweepCommand::Run(a) => run_points(a),
+        SweepCommand::Merge(a) => merge(a),
+        SweepCommand::Status(a) => status(a),
+        SweepCommand::Slurm(a) => slurm_scripts(a),
+    }
+}
+
+fn run_points(a: RunArgs) -> anyhow::Result<u8> {
+    let plan = read_plan(&a.plan)?;
+    let bar = PointsBar(Bar::new("points", 0));
+    let opts = RunOptions {
+        shard: a.shard,
+        retry_failed: a.retry_failed,
+    };
+    let r = sweep::run(&plan, &a.out, opts, &bar)?;
+    drop(bar);
+    println!(
+        "{}: {} points, {} work items; shard {}/{} has {}: ran {} ({} failed), {} already finished",
+        a.out.display(),
+        r.points,
+        r.items,
+        a.shard.k,
+        a.shard.n,
+        r.shard_items,
+        r.ran,
+        r.failed,
+        r.skipped
+    );
+    match r.table {
+        Some(t) => println!("all points finished: {}", t.display()),
+        None => println!(
+            "points of other shards are missing: `irtp sweep status {}`",
+            a.out.display()
+        ),
+    }
+    Ok(0)
+}
+
+fn merge(a: MergeArgs) -> anyhow::Result<u8> {
+    let (target, sources) = a.dirs.split_first().expect("clap requires one dir");
+    let c = sweep::merge(target, sources)?;
+    println!(
+        "{}: {} points finished ({} failed), {} missing; wrote results.csv",
+        target.display(),
+        c.done,
+        c.failed,
+        c.missing
+    );
+    Ok(if c.missing > 0 { 3 } else { 0 })
+}
+
+fn status(a: StatusArgs) -> anyhow::Result<u8> {
+    let plan = sweep::plan_of(&a.dir)?;
+    let report = sweep::status(&plan, &a.dir)?;
+    print!("{report}");
+    Ok(if report.missing.is_empty() { 0 } else { 3 })
+}
+
+fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
+    let plan = read_plan(&a.plan)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| irtp::Error::Io {
+        path: a.out.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    let root = a.out.canonicalize()?;
+    // The directory holds the plan before any task starts.
+    sweep::Store::open(&root, &plan)?;
+    let o = slurm::SlurmOptions {
+        partition: a.partition,
+        time: a.time,
+        cpus_per_task: a.cpus_per_task,
+        max_array: a.max_array,
+        points_per_task: a.points_per_task,
+        throttle: a.throttle,
+        exe: std::env::current_exe()?,
+    };
+    let s = slurm::write_scripts(&plan, &root, &o)?;
+    println!(
+        "{} work items ({} points) in {} array tasks of at most {} items: {}, {}",
+        plan.len() as u64 * plan.particle_parts,
+        plan.len(),
+        s.tasks,
+        s.points_per_task,
+        s.run.display(),
+        s.merge.display()
+    );
+    if a.submit {
+        let (array, merge) = slurm::submit(&s)?;
+        println!("submitted: array job {array}, merge job {merge} (afterany:{array})");
+    } else {
+        println!("submit with: bash {}", s.submit.display());
+    }
+    Ok(0)
+}

@@ -1,0 +1,109 @@
+//! `irtp`: thin binary over the irtp library.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+use irtp_paper::Command;
+use std::process::ExitCode;
+
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+#[derive(Parser, Debug)]
+#[command(name = "irtp", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: TopCommand,
+}
+
+/// The library's commands ([`irtp_paper::Command`]) and the sweeps.
+// Parsed once per run: the size of the largest flag set costs nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Subcommand, Debug)]
+enum TopCommand {
+    #[command(flatten)]
+    App(Command),
+    /// Parameter sweeps from a TOML plan: run (sharded, resumable), merge, status, SLURM arrays.
+    Sweep(cli::sweep::SweepArgs),
+}
+
+/// Run the command; the exit code on success (0; `sweep` may report 3;
+/// 130 or 143 after SIGINT or SIGTERM).
+fn run(cli: Cli) -> anyhow::Result<u8> {
+    match cli.command {
+        TopCommand::App(command) => {
+            cli::signals::install()?;
+            let reporter = cli::progress::Bars;
+            let ctx = irtp_app::Context::new(&reporter);
+            let outcome = match (command.run(&ctx), cli::signals::received()) {
+                (Err(_), Some((code, name))) => {
+                    eprintln!(
+                        "irtp: interrupted by {name}: stopped; unfinished results were not written \
+                         (figures `reproduce` finished are kept)"
+                    );
+                    return Ok(code);
+                }
+                (outcome, _) => outcome?,
+            };
+            cli::present(&outcome, command.json())?;
+            Ok(0)
+        }
+        TopCommand::Sweep(a) => cli::sweep::run(a),
+    }
+}
+
+/// A command line clap refused. Help and version go to stdout (exit 0). A
+/// missing subcommand (bare `irtp`, `irtp fp`) prints the usage to stderr;
+/// every other usage error is one line on stderr naming what is wrong,
+/// including the names of missing required flags (exit 2).
+fn usage_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if !e.use_stderr() {
+        let _ = e.print();
+        return ExitCode::SUCCESS;
+    }
+    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        let _ = e.print();
+        return ExitCode::from(2);
+    }
+    eprintln!(
+        "irtp: error: {} (see --help)",
+        one_line(&e.render().to_string())
+    );
+    ExitCode::from(2)
+}
+
+/// clap's message in one line: its first line, continued by the indented
+/// lines that follow a trailing colon (the list of missing flags).
+fn one_line(rendered: &str) -> String {
+    let mut lines = rendered.lines().filter(|l| !l.trim().is_empty());
+    let first = lines.next().unwrap_or("");
+    let mut msg = first.strip_prefix("error: ").unwrap_or(first).to_string();
+    if msg.ends_with(':') {
+        let items: Vec<&str> = lines
+            .take_while(|l| l.starts_with(' '))
+            .map(str::trim)
+            .collect();
+        msg = format!("{} {}", msg, items.join(", "));
+    }
+    msg
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => return usage_error(e),
+    };
+    match run(cli) {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            // Library errors name parameters (`t_max`); the user typed flags (`--t-max`).
+            let lib = e.downcast_ref::<irtp::Error>();
+            let msg = lib.map_or_else(|| e.to_string(), |l| l.message_with(cli::flag_for));
+            eprintln!("irtp: error: {msg}");
+            ExitCode::from(match lib {
+                Some(l) if l.is_input_error() => 2,
+                Some(l) if l.is_numerical() => 4,
+                _ => 1,
+            })
+        }
+    }
+}

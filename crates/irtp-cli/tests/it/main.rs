@@ -1,0 +1,29 @@
+//! The one integration-test binary of the `irtp` program, run as a user runs it (flags, outputs, exit codes), and the cross-method checks that go through it.
+//! Each module is one former test file; shared helpers live in `common`.
+
+mod censoring;
+mod cli_analytic;
+mod cli_errors;
+mod cli_simulate;
+#[allow(dead_code)]
+mod common;
+mod coulomb;
+mod counts;
+mod exact_cli;
+mod expr_law;
+mod fp_cli;
+mod fp_msd;
+mod fp_protocols_transient;
+mod fpt_distribution;
+#[cfg(unix)]
+mod interrupt;
+mod media_laws;
+mod mfpt_cli;
+mod protocol_samplers;
+mod protocol_solvers;
+mod random_target_fpt;
+mod reproduce;
+mod reset_protocols;
+mod sweep;
+mod value_stability;
+mod verified;

@@ -1,0 +1,711 @@
+//! Rendering of a [`Figure`] with `plotters` (cargo feature `plot`): PNG
+//! through the bitmap backend and SVG, both with the embedded DejaVu Sans
+//! font (no system font library needed).
+//!
+//! plotters does the mapping (linear, or its `log_scale` coordinates), the
+//! error bars (`ErrorBar`) and the dashed and dotted strokes, in the plot and
+//! in the legend; the layout it lacks (ranges, ticks, legend placement,
+//! clipping, cusp splitting) comes from the parent module. Titles, axis
+//! labels and legend text are drawn here piece by piece so that `_{...}`
+//! subscripts come out lowered and smaller.
+
+use super::{
+    choose_place, clip_polyline, fit_range, label_at, legend_entries, occupancy, rich_segments,
+    split_sharp, tick_labels, ticks, Axis, Color, Dash, Entry, Figure, Panel, Place, Scale, Style,
+};
+use irtp::error::{Error, Result};
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::Color as _;
+use std::ops::Range;
+use std::path::Path;
+use std::sync::Once;
+
+/// The embedded sans-serif font (DejaVu Sans, free license, see assets/fonts).
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+const FAMILY: &str = "sans-serif";
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bytes are a valid TrueType font shipped with the crate.
+        plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
+            .map_err(|_| ())
+            .expect("embedded DejaVu Sans is a valid font");
+    });
+}
+
+const TITLE_PX: u32 = 34;
+/// Height of one row of the figure key under the title.
+const KEY_ROW_PX: u32 = 22;
+const FONT_PX: f64 = 17.0;
+const TICK_FONT_PX: f64 = 15.0;
+const LEGEND_FONT_PX: f64 = 15.0;
+/// Subscripts: size relative to the text and drop of their top edge.
+const SUB_SIZE: f64 = 0.72;
+const SUB_DROP: f64 = 0.42;
+/// Height reserved above a panel's plotting area for its caption.
+const CAPTION_PX: u32 = 28;
+/// Label areas: below the plotting area (ticks and x label) and left of it.
+const X_LABEL_AREA: u32 = 52;
+const Y_LABEL_AREA: u32 = 72;
+/// Legend: width of the line/marker sample and height of a row.
+const SAMPLE_PX: i32 = 34;
+const ROW_PX: i32 = 20;
+/// Dash and gap lengths in pixels of dashed and dotted strokes.
+const DASHED: (i32, i32) = (9, 6);
+const DOTTED: (i32, i32) = (2, 4);
+
+type DynErr = Box<dyn std::error::Error + 'static>;
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<AxisCoord, AxisCoord>>;
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Io {
+        path: path.display().to_string(),
+        reason: format!("plotting: {e}"),
+    }
+}
+
+fn rgb(c: Color) -> RGBColor {
+    let (r, g, b) = c.rgb();
+    RGBColor(r, g, b)
+}
+
+/// Pixel size of the whole figure.
+fn size(fig: &Figure) -> (u32, u32) {
+    let (rows, cols) = fig.grid();
+    let w = cols as u32 * fig.panel_px.0;
+    (w, rows as u32 * fig.panel_px.1 + header_px(fig, w))
+}
+
+/// Height of the title and the key rows under it.
+fn header_px(fig: &Figure, width: u32) -> u32 {
+    TITLE_PX + KEY_ROW_PX * fig.key_rows(width, LEGEND_FONT_PX, SAMPLE_PX as u32).len() as u32
+}
+
+/// Render to a PNG file.
+pub(super) fn png(fig: &Figure, path: &Path) -> Result<()> {
+    register_font();
+    let root = BitMapBackend::new(path, size(fig)).into_drawing_area();
+    draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))
+}
+
+/// Render to an SVG file.
+pub(super) fn svg(fig: &Figure, path: &Path) -> Result<()> {
+    register_font();
+    let root = SVGBackend::new(path, size(fig)).into_drawing_area();
+    draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))
+}
+
+fn draw_figure<DB: DrawingBackend>(
+    fig: &Figure,
+    root: &DrawingArea<DB, Shift>,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (w, h) = root.dim_in_pixel();
+    let (title_area, body) = root.split_vertically(header_px(fig, w).min(h));
+    draw_rich(&title_area, &fig.title, (12, 8), FONT_PX + 2.0, false)?;
+    for (i, row) in fig
+        .key_rows(w, LEGEND_FONT_PX, SAMPLE_PX as u32)
+        .iter()
+        .enumerate()
+    {
+        let mut x = 12;
+        let cy = (TITLE_PX + KEY_ROW_PX * i as u32) as i32 + ROW_PX / 2 - 2;
+        for &k in row {
+            let key = &fig.key[k];
+            let e = Entry {
+                label: key.label.clone(),
+                color: key.color,
+                dash: key.dash,
+                marker: key.marker,
+            };
+            draw_entry(&title_area, &e, (x, cy))?;
+            x += SAMPLE_PX + 8 + rich_width(&title_area, &key.label, LEGEND_FONT_PX) + 28;
+        }
+    }
+    let areas = body.split_evenly(fig.grid());
+    for (panel, area) in fig.panels.iter().zip(areas.iter()) {
+        draw_panel(panel, area)?;
+    }
+    Ok(())
+}
+
+/// plotters' linear or logarithmic (`log_scale`) coordinate.
+enum Mapping {
+    Linear(RangedCoordf64),
+    Log(LogCoord<f64>),
+}
+
+/// One axis: plotters' mapping with our own tick (bold) and grid (light)
+/// positions in data units (plotters' `WithKeyPoints` cannot take a label
+/// formatter, and its log key points have no 2-5 subdivisions).
+struct AxisCoord {
+    mapping: Mapping,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl AxisCoord {
+    /// Range and ticks in the axis' layout units (see `Axis::tr`).
+    fn new(axis: &Axis, (lo, hi): (f64, f64), bold: &[f64], light: &[f64]) -> Self {
+        let mapping = match axis.scale {
+            Scale::Linear => Mapping::Linear((lo..hi).into()),
+            Scale::Log => Mapping::Log((axis.inv(lo)..axis.inv(hi)).log_scale().into()),
+        };
+        let data = |u: &[f64]| u.iter().map(|&u| axis.inv(u)).collect();
+        AxisCoord {
+            mapping,
+            bold: data(bold),
+            light: data(light),
+        }
+    }
+}
+
+impl Ranged for AxisCoord {
+    type ValueType = f64;
+    type FormatOption = DefaultFormatting;
+    fn range(&self) -> Range<f64> {
+        match &self.mapping {
+            Mapping::Linear(c) => c.range(),
+            Mapping::Log(c) => c.range(),
+        }
+    }
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        match &self.mapping {
+            Mapping::Linear(c) => c.map(value, limit),
+            Mapping::Log(c) => c.map(value, limit),
+        }
+    }
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
+    }
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> Range<i32> {
+        match &self.mapping {
+            Mapping::Linear(c) => c.axis_pixel_range(limit),
+            Mapping::Log(c) => c.axis_pixel_range(limit),
+        }
+    }
+}
+
+/// Where things go in one panel, in layout units (log10 on log axes).
+struct Layout {
+    xr: (f64, f64),
+    yr: (f64, f64),
+    entries: Vec<Entry>,
+    legend_px: (i32, i32),
+    place: Place,
+}
+
+fn layout<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Layout {
+    let xr = fit_range(&p.x, p.series.iter().flat_map(|s| s.x.iter().copied()));
+    let yvals = p.series.iter().flat_map(|s| {
+        let e = s.y_err.clone();
+        s.y.iter().enumerate().flat_map(move |(i, &y)| {
+            let d = e
+                .as_ref()
+                .map_or(0.0, |e| if e[i].is_finite() { e[i] } else { 0.0 });
+            [y - d, y + d]
+        })
+    });
+    let yr = fit_range(&p.y, yvals.collect::<Vec<_>>().into_iter());
+    let entries = legend_entries(p);
+    let (lw, lh) = legend_size(area, &entries, p.legend_title.as_deref());
+    let (aw, ah) = area.dim_in_pixel();
+    // Approximate plotting-area size (margins and label areas subtracted).
+    let pw = aw as f64 - f64::from(8 + 16 + Y_LABEL_AREA);
+    let ph = ah as f64 - f64::from(6 + CAPTION_PX + 6 + X_LABEL_AREA);
+    let place = if entries.is_empty() {
+        Place::Inside(0.0, 0.0)
+    } else {
+        choose_place(&occupancy(p, xr, yr), lw as f64 / pw, lh as f64 / ph)
+    };
+    Layout {
+        xr,
+        yr,
+        entries,
+        legend_px: (lw, lh),
+        place,
+    }
+}
+
+/// Caption, margins, axes, ticks, tick labels and grid of a panel.
+fn chart<'a, DB: DrawingBackend>(
+    p: &Panel,
+    area: &'a DrawingArea<DB, Shift>,
+    l: &Layout,
+) -> std::result::Result<Chart<'a, DB>, DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let (xt, xminor, xstep) = ticks(&p.x, l.xr.0, l.xr.1);
+    let (yt, yminor, ystep) = ticks(&p.y, l.yr.0, l.yr.1);
+    let right_margin = if l.place == Place::Outside && !l.entries.is_empty() {
+        l.legend_px.0 + 16
+    } else {
+        16
+    };
+    let caption = if p.title.is_empty() {
+        p.label.clone()
+    } else {
+        format!("{}  {}", p.label, p.title)
+    };
+    let cw = rich_width(area, &caption, FONT_PX);
+    let aw = area.dim_in_pixel().0 as i32;
+    draw_rich(area, &caption, ((aw - cw) / 2, 6), FONT_PX, false)?;
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(6 + CAPTION_PX)
+        .margin_left(8)
+        .margin_bottom(6)
+        .margin_right(right_margin)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
+        .build_cartesian_2d(
+            AxisCoord::new(&p.x, l.xr, &xt, &xminor),
+            AxisCoord::new(&p.y, l.yr, &yt, &yminor),
+        )?;
+    // One format for all tick labels of an axis (plotters asks per value).
+    let label = |axis: &Axis, t: Vec<f64>, step: f64| {
+        let labels = tick_labels(axis, &t, step);
+        let scale = axis.scale;
+        move |v: &f64| {
+            let u = match scale {
+                Scale::Linear => *v,
+                Scale::Log => v.log10(),
+            };
+            label_at(&t, &labels, u)
+        }
+    };
+    let (fx, fy) = (label(&p.x, xt, xstep), label(&p.y, yt, ystep));
+    chart
+        .configure_mesh()
+        .label_style((FAMILY, TICK_FONT_PX))
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .bold_line_style(RGBColor(225, 225, 225))
+        .light_line_style(RGBColor(243, 243, 243))
+        .draw()?;
+    axis_labels(p, area, &chart)?;
+    Ok(chart)
+}
+
+/// The axis labels, centred below and left of the plotting area (the y
+/// label reading upwards).
+fn axis_labels<DB: DrawingBackend>(
+    p: &Panel,
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart<'_, DB>,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let plot = chart.plotting_area();
+    let (xrange, yrange) = (plot.get_x_range(), plot.get_y_range());
+    let (ax, ay) = area.get_base_pixel();
+    let tl = chart.backend_coord(&(xrange.start, yrange.end));
+    let br = chart.backend_coord(&(xrange.end, yrange.start));
+    let (l, t, r, b) = (tl.0 - ax, tl.1 - ay, br.0 - ax, br.1 - ay);
+    let w = rich_width(area, &p.x.label, FONT_PX);
+    let y = b + X_LABEL_AREA as i32 - FONT_PX as i32 - 4;
+    draw_rich(area, &p.x.label, ((l + r - w) / 2, y), FONT_PX, false)?;
+    let h = rich_width(area, &p.y.label, FONT_PX);
+    let x = l - Y_LABEL_AREA as i32 + 2;
+    draw_rich(area, &p.y.label, (x, (t + b + h) / 2), FONT_PX, true)
+}
+
+/// Width in pixels of `text` (with `_{...}` subscripts) at `px` font size.
+fn rich_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px: f64) -> i32 {
+    rich_segments(text)
+        .iter()
+        .map(|(t, sub)| text_width(area, t, if *sub { SUB_SIZE * px } else { px }))
+        .sum()
+}
+
+fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, t: &str, px: f64) -> i32 {
+    let font = (FAMILY, px).into_font();
+    area.estimate_text_size(t, &TextStyle::from(font))
+        .map(|(w, _)| w as i32)
+        .unwrap_or((0.6 * px) as i32 * t.chars().count() as i32)
+}
+
+/// Draw `text` with its `_{...}` subscripts lowered and smaller, from
+/// (x, y) (area pixels): the top left of the text, or with `upwards` the
+/// bottom left of text reading upwards.
+fn draw_rich<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    (x, y): (i32, i32),
+    px: f64,
+    upwards: bool,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let mut along = 0;
+    for (t, sub) in rich_segments(text) {
+        let (size, drop) = if sub {
+            (SUB_SIZE * px, (SUB_DROP * px) as i32)
+        } else {
+            (px, 0)
+        };
+        let w = text_width(area, &t, size);
+        let font = (FAMILY, size).into_font();
+        if upwards {
+            let font = font.transform(FontTransform::Rotate270);
+            area.draw(&Text::new(t, (x + drop, y - along), font))?;
+        } else {
+            area.draw(&Text::new(t, (x + along, y + drop), font))?;
+        }
+        along += w;
+    }
+    Ok(())
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    p: &Panel,
+    area: &DrawingArea<DB, Shift>,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let l = layout(p, area);
+    let mut chart = chart(p, area, &l)?;
+    // Lines first, points on top.
+    draw_lines(&mut chart, p, &l)?;
+    draw_points(&mut chart, p, &l)?;
+    draw_notes(&mut chart, p, &l)?;
+    if l.entries.is_empty() {
+        return Ok(());
+    }
+    let plot = chart.plotting_area();
+    let (xrange, yrange) = (plot.get_x_range(), plot.get_y_range());
+    // Pixel corners of the plotting area: top left and bottom right.
+    let (ox, oy) = chart.backend_coord(&(xrange.start, yrange.end));
+    let br = chart.backend_coord(&(xrange.end, yrange.start));
+    let (w, h) = (br.0 - ox, br.1 - oy);
+    let corner = match l.place {
+        Place::Inside(fx, fy) => (ox + (fx * w as f64) as i32, oy + (fy * h as f64) as i32),
+        Place::Outside => (br.0 + 10, oy),
+    };
+    draw_legend(
+        area,
+        &l.entries,
+        p.legend_title.as_deref(),
+        corner,
+        l.legend_px,
+    )
+}
+
+/// Lines, clipped to the axes and split at cusps, solid or with plotters' dashes.
+fn draw_lines<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    p: &Panel,
+    l: &Layout,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    for s in &p.series {
+        let Style::Line(dash) = s.style else {
+            continue;
+        };
+        let pts: Vec<(f64, f64)> =
+            s.x.iter()
+                .zip(&s.y)
+                .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
+                .collect();
+        let width = if s.source == "guide" && dash == Dash::Dashed {
+            1
+        } else {
+            2
+        };
+        let style = ShapeStyle::from(&rgb(s.color)).stroke_width(width);
+        for piece in clip_polyline(&pts, l.xr, l.yr) {
+            let data: Vec<(f64, f64)> = piece
+                .iter()
+                .map(|&(u, v)| (p.x.inv(u), p.y.inv(v)))
+                .collect();
+            let px: Vec<(f64, f64)> = data
+                .iter()
+                .map(|c| {
+                    let b = chart.backend_coord(c);
+                    (b.0 as f64, b.1 as f64)
+                })
+                .collect();
+            for part in split_sharp(data, &px) {
+                match dash {
+                    Dash::Solid => {
+                        chart.draw_series(std::iter::once(PathElement::new(part, style)))?
+                    }
+                    Dash::Dashed => {
+                        chart.draw_series(DashedLineSeries::new(part, DASHED.0, DASHED.1, style))?
+                    }
+                    Dash::Dotted => {
+                        chart.draw_series(DashedLineSeries::new(part, DOTTED.0, DOTTED.1, style))?
+                    }
+                };
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Points inside the axes with plotters' vertical error bars (clipped to the axes).
+fn draw_points<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    p: &Panel,
+    l: &Layout,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let (xr, yr) = (l.xr, l.yr);
+    // Caps 1.2 % of the plotting area wide.
+    let cap_px = 2 * (0.006 * chart.plotting_area().dim_in_pixel().0 as f64).round() as u32;
+    for s in p.series.iter().filter(|s| s.style == Style::Points) {
+        let col = rgb(s.color);
+        let bar_style = ShapeStyle::from(&col).stroke_width(1);
+        let mut pts = Vec::new();
+        let mut bars = Vec::new();
+        for i in 0..s.x.len() {
+            let (Some(x), Some(y)) = (p.x.tr(s.x[i]), p.y.tr(s.y[i])) else {
+                continue;
+            };
+            if x < xr.0 || x > xr.1 || y < yr.0 || y > yr.1 {
+                continue;
+            }
+            pts.push((s.x[i], s.y[i]));
+            let e = s.y_err.as_ref().map_or(0.0, |e| e[i]);
+            if e.is_finite() && e > 0.0 {
+                let lo = p.y.tr(s.y[i] - e).unwrap_or(yr.0).max(yr.0);
+                let hi = p.y.tr(s.y[i] + e).unwrap_or(yr.1).min(yr.1);
+                bars.push(ErrorBar::new_vertical(
+                    s.x[i],
+                    p.y.inv(lo),
+                    s.y[i],
+                    p.y.inv(hi),
+                    bar_style,
+                    cap_px,
+                ));
+            }
+        }
+        chart.draw_series(bars)?;
+        chart.draw_series(
+            pts.into_iter()
+                .map(|c| Circle::new(c, 3, ShapeStyle::from(&col).filled())),
+        )?;
+    }
+    Ok(())
+}
+
+/// Guide labels inside the axes.
+fn draw_notes<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    p: &Panel,
+    l: &Layout,
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let (xr, yr) = (l.xr, l.yr);
+    for n in &p.notes {
+        if let (Some(x), Some(y)) = (p.x.tr(n.x), p.y.tr(n.y)) {
+            if x >= xr.0 && x <= xr.1 && y >= yr.0 && y <= yr.1 {
+                chart.draw_series(std::iter::once(Text::new(
+                    n.text.clone(),
+                    (n.x, n.y),
+                    (FAMILY, FONT_PX).into_font().color(&rgb(Color::Gray)),
+                )))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Pixel size of the legend box.
+fn legend_size<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    title: Option<&str>,
+) -> (i32, i32) {
+    let mut w = 0i32;
+    for t in entries.iter().map(|e| e.label.as_str()).chain(title) {
+        w = w.max(rich_width(area, t, LEGEND_FONT_PX));
+    }
+    let rows = entries.len() as i32 + i32::from(title.is_some());
+    (SAMPLE_PX + 14 + w + 8, rows * ROW_PX + 10)
+}
+
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[Entry],
+    title: Option<&str>,
+    (x, y): (i32, i32),
+    (w, h): (i32, i32),
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    // The area's own pixel origin: drawing uses coordinates relative to it.
+    let (ax, ay) = area.get_base_pixel();
+    let (x, y) = (x - ax, y - ay);
+    area.draw(&Rectangle::new(
+        [(x, y), (x + w, y + h)],
+        ShapeStyle::from(&WHITE.mix(0.85)).filled(),
+    ))?;
+    area.draw(&Rectangle::new(
+        [(x, y), (x + w, y + h)],
+        ShapeStyle::from(&RGBColor(190, 190, 190)).stroke_width(1),
+    ))?;
+    let mut row = y + 5;
+    if let Some(t) = title {
+        draw_rich(area, t, (x + 8, row + 2), LEGEND_FONT_PX, false)?;
+        row += ROW_PX;
+    }
+    for e in entries {
+        draw_entry(area, e, (x + 8, row + ROW_PX / 2))?;
+        row += ROW_PX;
+    }
+    Ok(())
+}
+
+/// One legend entry: line and/or marker sample from x0, then its text;
+/// `cy` is the vertical centre.
+fn draw_entry<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    e: &Entry,
+    (x0, cy): (i32, i32),
+) -> std::result::Result<(), DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let col = rgb(e.color);
+    let x1 = x0 + SAMPLE_PX;
+    let sample = vec![(x0, cy), (x1, cy)];
+    let style = ShapeStyle::from(&col).stroke_width(2);
+    match e.dash {
+        Some(Dash::Solid) => area.draw(&PathElement::new(sample, style))?,
+        Some(Dash::Dashed) => {
+            area.draw(&DashedPathElement::new(sample, DASHED.0, DASHED.1, style))?
+        }
+        Some(Dash::Dotted) => {
+            area.draw(&DashedPathElement::new(sample, DOTTED.0, DOTTED.1, style))?
+        }
+        None => {}
+    }
+    if e.marker {
+        area.draw(&Circle::new(
+            ((x0 + x1) / 2, cy),
+            4,
+            ShapeStyle::from(&col).filled(),
+        ))?;
+    }
+    let ty = cy - (LEGEND_FONT_PX as i32) / 2 - 1;
+    draw_rich(area, &e.label, (x1 + 8, ty), LEGEND_FONT_PX, false)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::plot::{Axis, Color, Dash, Figure, Note, Panel, Series};
+
+    /// Demo figure: all axis combinations, lines, points with error bars, guides.
+    pub(super) fn demo() -> Figure {
+        let mut f = Figure::new("demo", "Demo figure: λ = 0.5, Σ = 3", 2);
+        let t: Vec<f64> = (0..60)
+            .map(|i| 10f64.powf(-2.0 + 5.0 * i as f64 / 59.0))
+            .collect();
+        let mut a = Panel::new("(a)", "log-log", Axis::log("t"), Axis::log("⟨x²⟩"));
+        for (k, d) in [1.0, 0.3, 0.05].iter().enumerate() {
+            let y: Vec<f64> = t.iter().map(|t| t * t / (1.0 + t / d)).collect();
+            let e: Vec<f64> = y.iter().map(|y| 0.1 * y).collect();
+            a.series.push(Series::points(
+                Some(format!("r = {k}")),
+                Color::Palette(k),
+                "simulation",
+                t.iter().step_by(4).copied().collect(),
+                y.iter().step_by(4).copied().collect(),
+                e.iter().step_by(4).copied().collect(),
+            ));
+            a.series.push(Series::line(
+                Some(format!("r = {k}")),
+                Color::Palette(k),
+                Dash::Solid,
+                "fp",
+                t.clone(),
+                y,
+            ));
+        }
+        a.series.push(Series::line(
+            None,
+            Color::Gray,
+            Dash::Dotted,
+            "guide",
+            vec![0.01, 1.0],
+            vec![1e-4, 1.0],
+        ));
+        a.notes.push(Note {
+            text: "t²".into(),
+            x: 0.05,
+            y: 0.01,
+        });
+        a.legend_title = Some("reset rate".into());
+        f.panels.push(a);
+        let v: Vec<f64> = (0..200).map(|i| -1.2 + 2.4 * i as f64 / 199.0).collect();
+        let mut b = Panel::new(
+            "(b)",
+            "linear",
+            Axis::linear("v"),
+            Axis::linear("P(v)").range(0.0, 2.0),
+        );
+        b.series.push(Series::line(
+            Some("r = 0".into()),
+            Color::Black,
+            Dash::Solid,
+            "analytic",
+            v.clone(),
+            v.iter().map(|v| 0.3 / (1.25 - v.abs()).sqrt()).collect(),
+        ));
+        b.series.push(Series::line(
+            Some("r = 5".into()),
+            Color::Palette(1),
+            Dash::Dashed,
+            "fp",
+            v.clone(),
+            v.iter().map(|v| (-3.0 * v.abs()).exp() * 1.4).collect(),
+        ));
+        f.panels.push(b);
+        f
+    }
+
+    #[test]
+    fn renders_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = demo();
+        let png = dir.path().join("demo.png");
+        let svg = dir.path().join("demo.svg");
+        f.render_png(&png).unwrap();
+        f.render_svg(&svg).unwrap();
+        assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
+        let s = std::fs::read_to_string(&svg).unwrap();
+        assert!(s.contains("<svg") && s.contains("r = 0"));
+        let csv = f.data_csv().unwrap();
+        assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"));
+        if let Ok(d) = std::env::var("IRTP_PLOT_DEMO_DIR") {
+            f.render_png(&std::path::Path::new(&d).join("demo.png"))
+                .unwrap();
+        }
+    }
+}

@@ -1,0 +1,56 @@
+//! # irtp
+//!
+//! Inertial run-and-tumble particles (IRTP) with stochastic velocity resetting
+//! in non-Newtonian media, after Howlader, Mondal & Das, "Velocity resetting of inertial
+//! run-and-tumble particles in non-Newtonian media".
+//!
+//! dv/dt = -g(v) + eta(t), dx/dt = v; eta = ±Sigma flips at rate lambda;
+//! at rate r the velocity is reset to v_r (position and noise state kept).
+//!
+//! Modules, one per concept, with dependencies running one way
+//! (front ends → sweep → app → figures → {mfpt, fp, sim, analytic} → model → numerics):
+//! - [`sweep`]: parameter sweeps over TOML plans, sharded, resumable,
+//!   merged into one table; SLURM job arrays.
+//! - [`app`]: the commands of the `irtp` program (flags, validation, run,
+//!   output files) as library calls, shared by the binary and the Python
+//!   module.
+//! - [`model`]: drag laws g(v) (Table 1), one file each behind the
+//!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
+//!   dispatch; resetting rules behind [`model::Reset`]; validated [`Params`]
+//!   and velocity bounds (Eqs. (8)-(10)).
+//! - [`sim`]: particle samplers (exact event-driven sampler; the paper's
+//!   Euler scheme, Eqs. (30)-(32)) and their mergeable observables.
+//! - [`fp`]: Fokker-Planck equations (Eqs. (11)-(12)): stationary and
+//!   transient densities, <v²> and the exact D_eff.
+//! - [`mfpt`]: first passage to a target velocity: the problem, the backward
+//!   equations (Sec. 2.2 with the generator's signs), particle estimators,
+//!   scans and the optimal resetting rate.
+//! - [`analytic`]: closed forms (linear drag; r = 0 densities, Eqs. (34)-(35)).
+//! - [`figures`]: the paper's figures (`irtp reproduce`), plotting behind the
+//!   `plot` feature.
+//! - [`numerics`]: quadrature, root finding, Chebyshev tables, fast
+//!   elementary functions, point grids.
+//! - [`rng`], [`parallel`], [`stats`]: per-particle streams, deterministic
+//!   parallel reduction, mergeable estimators.
+//! - [`io`]: atomic output directories with provenance.
+//! - [`error`]: the typed library error.
+//!
+//! Equations are cited by the paper's printed numbers; `docs/equations.md`
+//! maps each to its code. The library never prints and never exits; it
+//! returns plain, serialisable result structs. The `irtp` binary and the
+//! Python module are thin layers over [`app`].
+
+pub mod analytic;
+pub mod error;
+pub mod fp;
+pub mod memo;
+pub mod mfpt;
+pub mod model;
+pub mod numerics;
+pub mod parallel;
+pub mod rng;
+pub mod sim;
+pub mod stats;
+
+pub use error::{Error, Result};
+pub use model::{Drag, DragLaw, Params};

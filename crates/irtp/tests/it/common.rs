@@ -1,0 +1,2 @@
+//! The shared test models ([`irtp_testkit`]).
+pub use irtp_testkit::*;
