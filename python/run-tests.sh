@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
 # The Python package's tests, run as a new user would: a fresh virtual
-# environment, `pip install "./python[test]"` (maturin builds the release
-# extension from this checkout), then pytest, which also executes the
-# example notebook and compares every function bit for bit with the CLI.
+# environment, `pip install "./python[test]"` (maturin builds the extension
+# from this checkout), then pytest, which also executes the example notebook
+# and compares every function bit for bit with the CLI.
+#
+# The extension is built in cargo's dev profile (opt-level 3, as the Rust
+# tests), sharing the workspace's target directory and compiled
+# dependencies with `cargo test`; a user's `pip install ./python` builds the
+# release profile. IRTP_PY_PROFILE=release tests that build instead.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv="${IRTP_VENV:-target/py-venv}"
@@ -15,7 +20,8 @@ if ! python3 -m venv "$venv"; then
   python3 -m venv "$venv"
 fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet "./python[test]"
+MATURIN_PEP517_ARGS="--profile ${IRTP_PY_PROFILE:-dev}" \
+  "$venv/bin/python" -m pip install --quiet "./python[test]"
 # The CLI the bit-identity tests compare with (the same crate, this checkout).
 cargo build --locked --bin irtp
 IRTP_BIN=target/debug/irtp IRTP_REQUIRE_CLI=1 "$venv/bin/python" -m pytest -q python/tests "$@"

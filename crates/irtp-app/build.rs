@@ -4,7 +4,11 @@
 use std::process::Command;
 
 fn main() {
-    for path in ["../../.git/HEAD", "../../.git/refs/heads", "../../.git/packed-refs"] {
+    for path in [
+        "../../.git/HEAD",
+        "../../.git/refs/heads",
+        "../../.git/packed-refs",
+    ] {
         println!("cargo:rerun-if-changed={path}");
     }
     let rev = Command::new("git")

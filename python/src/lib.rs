@@ -8,11 +8,11 @@
 
 mod runner;
 
-use irtp_app::keywords::{self as argv, Value, Vocabulary};
-use irtp_paper::Cli;
-use irtp_app::Outcome;
 use irtp::model::Drag;
 use irtp::DragLaw;
+use irtp_app::keywords::{self as argv, Value, Vocabulary};
+use irtp_app::Outcome;
+use irtp_paper::Cli;
 use numpy::PyArray1;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -4,9 +4,9 @@
 //! which cancels the run through [`irtp_app::Reporter::cancelled`]) and to
 //! report progress.
 
+use irtp::parallel::Progress;
 use irtp_app::{Context, Outcome, Reporter};
 use irtp_paper::Command;
-use irtp::parallel::Progress;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

@@ -7,8 +7,8 @@
 //!     cargo bench --bench sweep
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
-use irtp_app::{self as app, keywords, Context, Quiet};
 use irtp_app::sweep::{self, Plan, RunOptions, Shard};
+use irtp_app::{self as app, keywords, Context, Quiet};
 use rayon::prelude::*;
 
 const PLAN: &str = r#"

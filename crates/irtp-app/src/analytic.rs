@@ -3,10 +3,10 @@
 use super::common::NoiseArgs;
 use super::format::{fmt_digits, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
+use clap::Args;
 use irtp::analytic::r0::{EdgeBehaviour, Extremum, Normalisation, R0Density};
 use irtp::numerics::grid::chebyshev;
 use irtp::{DragLaw, Error, Params};
-use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Instant;

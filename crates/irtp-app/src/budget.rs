@@ -11,8 +11,8 @@
 //! mean the backward equations give); they decide whether to start, never
 //! the result.
 
-use irtp::error::{Error, Result};
 use clap::Args;
+use irtp::error::{Error, Result};
 
 /// Default `--max-work`: elementary operations (about an hour of one core).
 pub const DEFAULT_MAX_WORK: f64 = 1e11;
@@ -126,9 +126,7 @@ pub fn particles(
     bins: usize,
 ) -> Cost {
     let n = particles as f64;
-    let chunks = (n / irtp::parallel::CHUNK as f64)
-        .ceil()
-        .clamp(1.0, 1024.0);
+    let chunks = (n / irtp::parallel::CHUNK as f64).ceil().clamp(1.0, 1024.0);
     let per_acc = ACC * (4.0 * samples as f64 + 2.0 * bins as f64 + 8.0);
     Cost {
         work: n * per_particle,

@@ -1,9 +1,9 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
+use clap::Args;
 use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use irtp::model::Drag;
 use irtp::{DragLaw, Params};
-use clap::Args;
 use std::path::PathBuf;
 
 /// Medium and noise flags: `--drag --sigma --lambda` (every subcommand,

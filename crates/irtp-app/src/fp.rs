@@ -3,9 +3,9 @@
 use super::common::{ModelArgs, OutputArgs};
 use super::format::{fmt_digits, fmt_sig};
 use super::{finish, open_out, Context, Outcome, Results, Table};
+use clap::{Args, Subcommand, ValueEnum};
 use irtp::fp::{self, Mesh, StationaryOptions, TransientOptions};
 use irtp::Params;
-use clap::{Args, Subcommand, ValueEnum};
 use serde_json::json;
 use std::time::Instant;
 

@@ -5,11 +5,11 @@ use super::common::{ModelArgs, OutputArgs};
 use super::format::{fmt_digits, fmt_sig};
 use super::fp::MeshArg;
 use super::{finish, open_out, Context, Outcome, Results, Table};
+use clap::Args;
 use irtp::error::finite;
 use irtp::fp::{self, Mesh, MsdOptions};
 use irtp::numerics::time_grid::TimeGrid;
 use irtp::Params;
-use clap::Args;
 use serde_json::json;
 use std::time::Instant;
 

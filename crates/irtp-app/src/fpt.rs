@@ -17,6 +17,7 @@ use super::common::{ModelArgs, OutputArgs};
 use super::mfpt::ProblemArgs;
 use super::simulate::GridArg;
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
+use clap::{Args, ValueEnum};
 use irtp::mfpt::survival::edges;
 use irtp::mfpt::{
     self, backward, BackwardOptions, Distribution, DistributionOptions, FptStats, ParticleOptions,
@@ -24,7 +25,6 @@ use irtp::mfpt::{
 };
 use irtp::sim::TimeGrid;
 use irtp::Error;
-use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -196,12 +196,7 @@ impl DistributionArgs {
         })
     }
 
-    fn backward_kind(
-        &self,
-        backward: BackwardOptions,
-        t_max: f64,
-        tau: f64,
-    ) -> irtp::Result<Kind> {
+    fn backward_kind(&self, backward: BackwardOptions, t_max: f64, tau: f64) -> irtp::Result<Kind> {
         let points = self.points.unwrap_or(201);
         let name = |e: Error| match e {
             Error::InvalidParameter {

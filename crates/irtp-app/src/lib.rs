@@ -9,7 +9,8 @@
 //! Python module hands out its tables as numpy arrays. The same `Args` give
 //! the same numbers, bit for bit, through either.
 //!
-//! Layering: `app` sits above [`crate::figures`] and below the front ends.
+//! Layering: this crate sits above the core (`irtp`) and below the paper's
+//! figures (`irtp-paper`, which adds `reproduce`) and the front ends.
 
 pub mod analytic;
 pub mod budget;
@@ -29,10 +30,10 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The git revision of the build, where it was built from a checkout.
 pub const GIT_REVISION: Option<&str> = option_env!("IRTP_GIT_REVISION");
 
-use irtp::error::{Error, Result};
 use crate::io::{out_in_use, OutputDir, Previous, Provenance};
-use irtp::parallel::Progress;
 use clap::{Parser, Subcommand};
+use irtp::error::{Error, Result};
+use irtp::parallel::Progress;
 use serde::Serialize;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -61,48 +62,113 @@ pub enum Command {
     Fp(fp::FpArgs),
 }
 
+/// What a command's flags do, one implementation per command: the one
+/// place a new command is wired in is [`Command::args`].
+pub trait Runnable {
+    /// Whether `--json` was given.
+    fn json(&self) -> bool;
+    /// Validate the flags as the run would (ranges, combinations), without
+    /// computing anything.
+    fn validate(&self) -> Result<()>;
+    /// Whether the command draws random numbers (so takes `--seed`):
+    /// simulations and particle first-passage methods; the deterministic
+    /// solvers refuse a seed.
+    fn uses_seed(&self) -> bool;
+    /// Run the command.
+    fn run(&self, ctx: &Context) -> Result<Outcome>;
+}
+
 impl Command {
+    /// The command's flags, behind the one interface every command shares.
+    pub fn args(&self) -> &dyn Runnable {
+        match self {
+            Command::Analytic(a) => a,
+            Command::Simulate(a) => a,
+            Command::Mfpt(a) => a,
+            Command::Fp(a) => a,
+        }
+    }
+
     /// Whether `--json` was given.
     pub fn json(&self) -> bool {
-        match self {
-            Command::Analytic(a) => a.json,
-            Command::Simulate(a) => a.output.json,
-            Command::Mfpt(a) => a.json(),
-            Command::Fp(a) => a.json(),
-        }
+        self.args().json()
+    }
+}
+
+impl Runnable for analytic::AnalyticArgs {
+    fn json(&self) -> bool {
+        self.json
+    }
+    fn validate(&self) -> Result<()> {
+        self.config().map(drop)
+    }
+    fn uses_seed(&self) -> bool {
+        false
+    }
+    fn run(&self, ctx: &Context) -> Result<Outcome> {
+        analytic::run(self, ctx)
+    }
+}
+
+impl Runnable for simulate::SimulateArgs {
+    fn json(&self) -> bool {
+        self.output.json
+    }
+    fn validate(&self) -> Result<()> {
+        self.config().map(drop)
+    }
+    fn uses_seed(&self) -> bool {
+        true
+    }
+    fn run(&self, ctx: &Context) -> Result<Outcome> {
+        simulate::run(self, ctx)
+    }
+}
+
+impl Runnable for mfpt::MfptArgs {
+    fn json(&self) -> bool {
+        mfpt::MfptArgs::json(self)
+    }
+    fn validate(&self) -> Result<()> {
+        mfpt::MfptArgs::validate(self)
+    }
+    fn uses_seed(&self) -> bool {
+        mfpt::MfptArgs::uses_seed(self)
+    }
+    fn run(&self, ctx: &Context) -> Result<Outcome> {
+        mfpt::run(self, ctx)
+    }
+}
+
+impl Runnable for fp::FpArgs {
+    fn json(&self) -> bool {
+        fp::FpArgs::json(self)
+    }
+    fn validate(&self) -> Result<()> {
+        fp::FpArgs::validate(self)
+    }
+    fn uses_seed(&self) -> bool {
+        false
+    }
+    fn run(&self, ctx: &Context) -> Result<Outcome> {
+        fp::run(self, ctx)
     }
 }
 
 /// Validate a command's flags as its run would (ranges, combinations),
 /// without computing anything.
 pub fn validate(command: &Command) -> Result<()> {
-    match command {
-        Command::Analytic(a) => a.config().map(drop),
-        Command::Simulate(a) => a.config().map(drop),
-        Command::Mfpt(a) => a.validate(),
-        Command::Fp(a) => a.validate(),
-    }
+    command.args().validate()
 }
 
-/// Whether a command draws random numbers (so takes `--seed`): simulations
-/// and particle first-passage methods; the deterministic solvers refuse a
-/// seed.
+/// Whether a command draws random numbers (so takes `--seed`).
 pub fn uses_seed(command: &Command) -> bool {
-    match command {
-        Command::Simulate(_) => true,
-        Command::Analytic(_) | Command::Fp(_) => false,
-        Command::Mfpt(a) => a.uses_seed(),
-    }
+    command.args().uses_seed()
 }
 
 /// Run a command.
 pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
-    match command {
-        Command::Analytic(a) => analytic::run(a, ctx),
-        Command::Simulate(a) => simulate::run(a, ctx),
-        Command::Mfpt(a) => mfpt::run(a, ctx),
-        Command::Fp(a) => fp::run(a, ctx),
-    }
+    command.args().run(ctx)
 }
 
 /// How a front end shows progress and asks a run to stop.

@@ -16,13 +16,13 @@
 
 use super::common::{ModelArgs, OutputArgs};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
+use clap::{Args, Subcommand, ValueEnum};
 use irtp::mfpt::backward::{profile, BackwardOptions, BackwardSolution, Profile};
 use irtp::mfpt::{
     self, FptSummary, MfptResult, OptimizeOptions, ParticleOptions, Problem, ScanAxis, ScanPoint,
     SurvivalCurve,
 };
 use irtp::Error;
-use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 use std::time::Instant;
 

@@ -3,11 +3,11 @@
 use super::common::{ModelArgs, OutputArgs};
 use super::format::{fmt_pm, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
+use clap::{Args, ValueEnum};
 use irtp::sim::euler::{self, EulerPlan, EventSampling};
 use irtp::sim::exact;
 use irtp::sim::{Observables, PositionHistogram, SimSpec, SimSummary, TimeGrid};
 use irtp::Params;
-use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::time::Instant;
 

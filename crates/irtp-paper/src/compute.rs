@@ -25,8 +25,7 @@ pub fn controlled(
     spec: &SimSpec,
     progress: &dyn Progress,
 ) -> Result<ControlledRun> {
-    let proxy =
-        irtp::analytic::linear_moments::moments(&params.linear_proxy(), spec.grid.times())?;
+    let proxy = irtp::analytic::linear_moments::moments(&params.linear_proxy(), spec.grid.times())?;
     control::run(params, spec, &proxy.x2, progress)
 }
 

@@ -28,9 +28,9 @@ pub mod store;
 
 use clap::{Parser, Subcommand};
 use irtp::error::{Error, Result};
-use irtp_app::keywords::Vocabulary;
-use irtp_app::{Context, Outcome};
 use irtp::parallel::Progress;
+use irtp_app::keywords::Vocabulary;
+use irtp_app::{Context, Outcome, Runnable};
 use serde::Serialize;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,20 +50,22 @@ pub enum Command {
 }
 
 impl Command {
+    /// The command's flags, behind the app's one command interface.
+    pub fn args(&self) -> &dyn Runnable {
+        match self {
+            Command::App(c) => c.args(),
+            Command::Reproduce(a) => a,
+        }
+    }
+
     /// Whether `--json` was given.
     pub fn json(&self) -> bool {
-        match self {
-            Command::App(c) => c.json(),
-            Command::Reproduce(_) => false,
-        }
+        self.args().json()
     }
 
     /// Run the command.
     pub fn run(&self, ctx: &Context) -> Result<Outcome> {
-        match self {
-            Command::App(c) => irtp_app::run(c, ctx),
-            Command::Reproduce(a) => reproduce::run(a, ctx),
-        }
+        self.args().run(ctx)
     }
 }
 

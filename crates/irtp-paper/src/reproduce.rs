@@ -1,9 +1,9 @@
 //! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,fpt,all} --out DIR [--quick] [--seed N]`.
 
-use irtp_app::common::ForceArgs;
-use irtp_app::{Context, Outcome, Results};
 use crate::{self as figures, store, Options, Which, SCALE};
 use clap::Args;
+use irtp_app::common::ForceArgs;
+use irtp_app::{Context, Outcome, Results};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -121,4 +121,19 @@ pub fn run(args: &ReproduceArgs, ctx: &Context) -> irtp::Result<Outcome> {
         written: Some((args.out.clone(), files)),
         warnings: dir.warnings.clone(),
     })
+}
+
+impl irtp_app::Runnable for ReproduceArgs {
+    fn json(&self) -> bool {
+        false
+    }
+    fn validate(&self) -> irtp::Result<()> {
+        Ok(())
+    }
+    fn uses_seed(&self) -> bool {
+        true
+    }
+    fn run(&self, ctx: &Context) -> irtp::Result<Outcome> {
+        run(self, ctx)
+    }
 }

@@ -7,10 +7,10 @@
 
 use super::plan::{Plan, Point};
 use super::store::{write_atomic, PointResult, Store};
+use crate::io::io_err;
 use crate::simulate::Parts;
 use crate::{keywords, Command, Context, Quiet};
 use irtp::error::{Error, Result};
-use crate::io::io_err;
 use irtp::sim::Observables;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -55,11 +55,7 @@ pub fn path(store: &Store, p: &Point, k: u64) -> PathBuf {
 }
 
 /// The point's arguments as `irtp simulate` parses them.
-fn simulate_args(
-    plan: &Plan,
-    store: &Store,
-    p: &Point,
-) -> Result<crate::simulate::SimulateArgs> {
+fn simulate_args(plan: &Plan, store: &Store, p: &Point) -> Result<crate::simulate::SimulateArgs> {
     let argv = plan
         .argv(p, Some(&store.dir(p)))
         .map_err(|e| Error::invalid("plan", p.index, e))?;

@@ -214,7 +214,8 @@ impl Plan {
                 format!("one of {}", SWEEPABLE.join(", ")),
             ));
         }
-        let cmd = keywords::command::<crate::Cli>(&raw.command).map_err(|e| bad("command", &raw.command, e))?;
+        let cmd = keywords::command::<crate::Cli>(&raw.command)
+            .map_err(|e| bad("command", &raw.command, e))?;
         let known: Vec<String> = keywords::keywords(&cmd)
             .iter()
             .map(|a| a.get_id().to_string())

@@ -8,8 +8,8 @@
 //! place.
 
 use super::plan::{statepoint, Plan, Point};
-use irtp::error::{Error, Result};
 use crate::io::io_err as io;
+use irtp::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::fs;
 use std::path::{Path, PathBuf};

@@ -5,8 +5,8 @@
 
 use super::plan::{text, Plan, Point};
 use super::store::{write_atomic, PointResult, Store};
-use irtp::error::{Error, Result};
 use crate::io::io_err as io;
+use irtp::error::{Error, Result};
 use std::fs;
 use std::path::{Path, PathBuf};
 

@@ -2,8 +2,8 @@
 //! a cancelled run writes nothing; the outcome's tables are the CSV files.
 
 use clap::Parser;
-use irtp_app::{self as app, Cli, Context, Reporter};
 use irtp::parallel::{NoProgress, Progress};
+use irtp_app::{self as app, Cli, Context, Reporter};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Cancels once `after` progress stages have been opened.

@@ -12,8 +12,8 @@
 //! failures of a command are collected and reported together.
 
 use clap::Parser;
-use irtp_app::{self as app, Cli, Context, Outcome, Table};
 use irtp::{DragLaw, Params};
+use irtp_app::{self as app, Cli, Context, Outcome, Table};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -836,6 +836,7 @@ fn mfpt_ode_range() {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn mfpt_exact_range() {
     mfpt_range("exact", 150);
 }

@@ -8,8 +8,8 @@
 //! until there is enough to go on (5 % done and 1 s elapsed).
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
-use irtp_app::Reporter;
 use irtp::parallel::Progress;
+use irtp_app::Reporter;
 use std::io::IsTerminal;
 use std::time::Duration;
 

@@ -4,7 +4,6 @@
 //! Kaplan-Meier survival curve (survival.csv). Checked against the backward
 //! equations, for both particle methods, and across thread counts.
 
-
 use crate::common::{assert_success, irtp, irtp_env, json, read_json};
 use serde_json::Value;
 use std::path::Path;

@@ -1,6 +1,5 @@
 //! `irtp analytic` contract: JSON fields, output files, bad input.
 
-
 use crate::common::{assert_rejected, assert_success, irtp, json, read_json};
 use irtp::analytic::r0::R0Density;
 use irtp::DragLaw;

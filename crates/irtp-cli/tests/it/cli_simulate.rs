@@ -1,7 +1,6 @@
 //! `irtp simulate` through the binary: outputs, JSON contract,
 //! thread-count independence, and bad-input handling.
 
-
 use crate::common::{assert_rejected, assert_success, irtp_env, json, read_json};
 use std::path::Path;
 use std::process::Output;

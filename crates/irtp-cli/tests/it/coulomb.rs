@@ -17,7 +17,6 @@
 //!     command naming --sigma and mu; bad specs name the key; exit 2,
 //!     nothing written.
 
-
 use crate::common::stats::bonferroni_z;
 use crate::common::{assert_rejected, irtp};
 use irtp::analytic::r0::R0Density;

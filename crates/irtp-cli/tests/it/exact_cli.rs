@@ -1,7 +1,6 @@
 //! `irtp simulate --method exact` (the default): the same files, columns and
 //! JSON keys as the Euler method.
 
-
 use crate::common::{irtp, json, read_json};
 use std::collections::BTreeSet;
 

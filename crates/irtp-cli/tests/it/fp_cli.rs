@@ -1,6 +1,5 @@
 //! `irtp fp ...` end to end: JSON, output files with provenance, bad input.
 
-
 use crate::common::{assert_rejected, irtp, json, read_json, summary};
 
 #[test]

@@ -3,14 +3,13 @@
 //! Fig. 5 curves against the exact sampler; the long-time slope against the
 //! Green-Kubo D_eff of the same discrete chain; the CLI contract.
 
-
 use crate::common;
 use crate::common::models;
 use irtp::analytic::linear_moments;
-use irtp_paper::{compute, fig5};
 use irtp::fp::{msd, stationary, Mesh, MsdOptions, StationaryOptions};
 use irtp::parallel::NoProgress;
 use irtp::sim::{SimSpec, TimeGrid};
+use irtp_paper::{compute, fig5};
 
 /// Fig. 5's time grid (t = 0 and 35 log-spaced times in [0.01, 100]).
 fn fig5_grid() -> TimeGrid {
@@ -45,11 +44,13 @@ fn linear_against_closed_forms(r: f64) {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn linear_drag_x2_and_v2_match_closed_forms_without_reset() {
     linear_against_closed_forms(0.0);
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn linear_drag_x2_and_v2_match_closed_forms_with_reset() {
     linear_against_closed_forms(1.0);
 }
@@ -60,6 +61,7 @@ fn linear_drag_x2_and_v2_match_closed_forms_with_reset() {
 const Z_BONFERRONI_35: f64 = 4.77;
 
 #[test]
+#[ignore = "slow tier"]
 fn fig5_curves_match_the_exact_sampler() {
     let spec = fig5::Spec::new(false);
     let grid = fig5_grid();
@@ -96,6 +98,7 @@ fn fig5_curves_match_the_exact_sampler() {
 /// value of the same discrete chain (same mesh, no extrapolation on either
 /// side, so the mesh error is shared): agreement to 1e-6 at t = 100.
 #[test]
+#[ignore = "slow tier"]
 fn long_time_slope_is_the_green_kubo_d_eff() {
     for (p, what) in models::fig5() {
         let o = MsdOptions {

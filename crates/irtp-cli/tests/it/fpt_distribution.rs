@@ -3,7 +3,6 @@
 //! the box scheme and against the exact first-passage sampler, on the
 //! parameter sets of Fig. 7; the `irtp mfpt distribution` command's contract.
 
-
 use crate::common;
 use crate::common::{assert_rejected, assert_success, irtp, json};
 use irtp::mfpt::backward::moments;
@@ -62,6 +61,7 @@ fn sample(pr: &Problem, n: u64, seed: u64) -> Vec<(bool, f64)> {
 /// time integral of S agrees to the integrator's global error, about
 /// rtol^(2/3) = 2.2e-3 at the default rtol 1e-4.
 #[test]
+#[ignore = "slow tier"]
 fn mean_of_the_density_is_the_stationary_tau() {
     for pr in fig7_sets() {
         let opts = DistributionOptions {
@@ -142,6 +142,7 @@ fn bins(d: &Distribution) -> Vec<(f64, f64)> {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn sampled_histogram_against_the_backward_density_chi_square() {
     // Level 1e-3 overall, Bonferroni over the three sets: the upper
     // 3.3e-4 quantile of chi-square (Wilson-Hilferty, z = 3.40).
@@ -176,6 +177,7 @@ fn sampled_histogram_against_the_backward_density_chi_square() {
 /// mesh smears f), within the mesh errors the run reports, and S+ drops by
 /// the atom's mass across T_f.
 #[test]
+#[ignore = "slow tier"]
 fn survival_is_a_probability_and_decreases() {
     for pr in fig7_sets() {
         let tau = moments(&pr, &BackwardOptions::with_cells(CELLS))
@@ -218,6 +220,7 @@ fn survival_is_a_probability_and_decreases() {
 /// agree to the reported mesh_error of the coarser run, before and after
 /// the atom.
 #[test]
+#[ignore = "slow tier"]
 fn survival_converges_with_the_mesh() {
     let pr = &fig7_sets()[0];
     let times = linear(3.0, 31);

@@ -126,6 +126,7 @@ fn figure_bytes(dir: &Path) -> Vec<(String, Vec<u8>)> {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn reproduce_resumes_finished_figures() {
     let tmp = tempfile::tempdir().unwrap();
     let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
@@ -166,6 +167,7 @@ fn reproduce_resumes_finished_figures() {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn reproduce_interrupted_keeps_finished_figures() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("figs");
@@ -277,6 +279,7 @@ fn out_holding_another_run_is_refused_unless_force() {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn reproduce_over_another_seed_is_refused_unless_force() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("figs");

@@ -12,7 +12,6 @@
 //!     equations.
 //! (d) Bad specs: exit 2, one line naming the parameter, nothing written.
 
-
 use crate::common::stats::bonferroni_z;
 use irtp::analytic::r0::R0Density;
 use irtp::fp::{stationary, Stationary, StationaryOptions};

@@ -1,6 +1,5 @@
 //! `irtp mfpt` through the binary.
 
-
 use crate::common;
 use crate::common::{assert_rejected, assert_success, irtp, json, read_json};
 

@@ -6,7 +6,6 @@
 //! backward solve, the exact sampler and the point-target limit; and the
 //! Euler samplers against the exact one for a Gaussian target.
 
-
 use crate::common;
 use crate::common::stats::{bonferroni_z, chi2_bonferroni};
 use crate::common::{assert_success, irtp, json};
@@ -161,6 +160,7 @@ fn target_first_moments_match_quadrature() {
 /// with that rule (the point target v_r = 0 gives 2.3e-5 and 7.1e-5 at 4000
 /// cells, falling as cells⁻²: 5.8e-6, 1.8e-5 at 8000).
 #[test]
+#[ignore = "slow tier"]
 fn distribution_moments_match_the_stationary_backward_solve() {
     let mut all = cases();
     let down = params(DragLaw::Tan, 3.0, 1.0, gauss(0.3, 0.25), NoiseAtReset::Kept);

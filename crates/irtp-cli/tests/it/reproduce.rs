@@ -65,6 +65,7 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
 }
 
 #[test]
+#[ignore = "slow tier"]
 fn reproduce_all_quick() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("figs");

@@ -9,7 +9,6 @@
 //! that changes any bit fails here; a deliberate change updates the pins in
 //! a commit that says which and why.
 
-
 use crate::common::irtp;
 use std::path::Path;
 

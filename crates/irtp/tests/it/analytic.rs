@@ -2,7 +2,6 @@
 //! quadrature, the linear-drag Beta law, the stationary forward equations,
 //! agreement with the paper's closed forms, and the regime classification.
 
-
 use crate::common::models;
 use irtp::analytic::linear;
 use irtp::analytic::r0::{paper_formula, regime, EdgeBehaviour, ExtremumKind, R0Density};

@@ -479,3 +479,39 @@ fn scanner_finds_every_form_of_import() {
         m(&["model", "drag", "tan"])
     );
 }
+
+/// The core's normal dependencies (its `Cargo.toml`): none of the front
+/// ends' crates (argument parsing, plotting, configuration files, JSON), so
+/// `cargo tree -p irtp -e normal` shows none of them.
+#[test]
+fn the_core_depends_on_no_front_end_crate() {
+    let manifest =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
+            .expect("read Cargo.toml");
+    let mut section = String::new();
+    let mut deps = Vec::new();
+    for line in manifest.lines().map(str::trim) {
+        if line.starts_with('[') {
+            section = line.to_string();
+        } else if section.ends_with("dependencies]") && !section.contains("dev-") {
+            if let Some((name, _)) = line.split_once(['=', '.']) {
+                deps.push(name.trim().to_string());
+            }
+        }
+    }
+    assert!(deps.contains(&"rand".to_string()), "parsed {deps:?}");
+    for banned in [
+        "clap",
+        "plotters",
+        "toml",
+        "serde_json",
+        "indicatif",
+        "csv",
+        "anyhow",
+    ] {
+        assert!(
+            !deps.iter().any(|d| d == banned),
+            "the core depends on {banned}: {deps:?}"
+        );
+    }
+}

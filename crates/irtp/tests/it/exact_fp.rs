@@ -8,7 +8,6 @@
 //! only the velocity must forget v(0) = 0, at rate >= min g' + r; a burn-in
 //! of 15/(min g' + r) leaves an initial-condition bias below e^{-15}.
 
-
 use crate::common::models;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::model::Drag;

@@ -5,7 +5,6 @@
 //! `irtp::mfpt::solve` with `Method::Exact` (what `irtp mfpt --method exact` runs);
 //! plus a downward problem (mirror frame, swapped noise states).
 
-
 use crate::common::models;
 use irtp::mfpt::{
     self, BackwardOptions, BackwardSolution, FptSummary, Method, ParticleOptions, Problem,

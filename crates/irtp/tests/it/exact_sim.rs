@@ -3,7 +3,6 @@
 //! per check); the sampler has no time step, so there is no discretisation
 //! bias to allow for.
 
-
 use crate::common::models;
 use irtp::analytic::linear;
 use irtp::model::Drag;

@@ -2,7 +2,6 @@
 //! `analytic::linear`, for r >= 0 and v_r != 0, including the singular
 //! r = 0 edge (P ∝ (Σ² - v²)^(λ-1), λ < 1).
 
-
 use crate::common::models;
 use irtp::analytic::linear;
 use irtp::fp::{stationary, Mesh, StationaryOptions};

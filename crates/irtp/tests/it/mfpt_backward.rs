@@ -1,6 +1,5 @@
 //! Backward-equation MFPT solver against exact answers.
 
-
 use crate::common::models;
 use irtp::mfpt::backward::{fixed_point_upwind, profile, rate_derivative_at_zero, solve};
 use irtp::mfpt::{optimize_rate, BackwardOptions, OptimizeOptions, Problem};

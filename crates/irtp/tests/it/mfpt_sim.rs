@@ -1,6 +1,5 @@
 //! Backward equations against the particle simulation (ground truth).
 
-
 use crate::common::models;
 use irtp::mfpt::backward::profile;
 use irtp::mfpt::{
@@ -81,6 +80,7 @@ const CASES: [(DragLaw, f64, f64, f64, f64, f64, f64); 9] = [
 /// v0 = -0.249, v_r = 0 (paper Fig. 7), both media, lambda small and large,
 /// r from 0 to 10, several targets, and one target below v0 (reflection).
 #[test]
+#[ignore = "slow tier"]
 fn backward_equations_match_euler_simulation() {
     let cases = CASES;
     for (i, &(d, s, l, r, vr, v0, vt)) in cases.iter().enumerate() {
@@ -165,11 +165,12 @@ fn censoring_is_reported() {
     assert!(s.rmst > 0.0 && s.rmst <= 2.0, "{s:?}");
 }
 
-/// The measurement behind the tolerance comment on [`dt_for`] (slow, run
-/// with `cargo test --test mfpt_sim -- --ignored --nocapture`): tau at dt and
-/// dt/2 with common random numbers, 2e4 particles, on the whole table.
+/// The measurement behind the tolerance comment on [`dt_for`] (slow tier;
+/// `cargo test -p irtp --test it -- --ignored --nocapture euler_dt_bias` prints
+/// it): tau at dt and dt/2 with common random numbers, 2e4 particles, on the
+/// whole table.
 #[test]
-#[ignore]
+#[ignore = "slow tier"]
 fn euler_dt_bias_measurement() {
     for (i, &(d, s, l, r, vr, v0, vt)) in CASES.iter().enumerate() {
         let p = problem(d, s, l, r, vr, v0, vt);

@@ -2,7 +2,6 @@
 //! the linear-drag answers equal `irtp::analytic::linear`, and the r = 0
 //! sets of Figs. 2 and 3 fall in the regimes their descriptions name.
 
-
 use crate::common::models;
 use irtp::analytic::{linear, r0};
 use irtp::DragLaw;

@@ -3,7 +3,6 @@
 //! (`Observables::msd_fit_d`, `SimSummary::d_eff_msd`): equal to the fit of
 //! the ensemble <x²>, and within 4 standard errors of the exact Newtonian D_eff.
 
-
 use crate::common::models;
 use irtp::analytic::linear;
 use irtp::parallel::NoProgress;

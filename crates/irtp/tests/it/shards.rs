@@ -7,7 +7,6 @@
 //! whole run bit for bit, for both samplers and any thread count, also after
 //! a JSON round trip of every shard.
 
-
 use crate::common::models;
 use irtp::parallel::NoProgress;
 use irtp::parallel::UNIT;

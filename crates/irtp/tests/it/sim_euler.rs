@@ -2,7 +2,6 @@
 //! exactly solvable Euler chain for linear drag, convergence to the continuum
 //! formulas, equivalence of the two event samplers, reproducibility.
 
-
 use crate::common::models;
 use irtp::analytic::linear;
 use irtp::analytic::r0::R0Density;

@@ -19,7 +19,6 @@
 //! (fixed seeds). A method the table lists must run the cell: its error
 //! fails the test; a method it does not list must refuse it.
 
-
 use crate::common::stats::bonferroni_z;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
