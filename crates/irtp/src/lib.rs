@@ -7,13 +7,12 @@
 //! dv/dt = -g(v) + eta(t), dx/dt = v; eta = ±Sigma flips at rate lambda;
 //! at rate r the velocity is reset to v_r (position and noise state kept).
 //!
-//! Modules, one per concept, with dependencies running one way
-//! (front ends → sweep → app → figures → {mfpt, fp, sim, analytic} → model → numerics):
-//! - [`sweep`]: parameter sweeps over TOML plans, sharded, resumable,
-//!   merged into one table; SLURM job arrays.
-//! - [`app`]: the commands of the `irtp` program (flags, validation, run,
-//!   output files) as library calls, shared by the binary and the Python
-//!   module.
+//! The core of the irtp workspace. Crates, with dependencies running one way
+//! (enforced by Cargo): irtp-cli (the `irtp` binary) and irtp-python →
+//! irtp-paper (the paper's figures, `irtp reproduce`) → irtp-app (the
+//! commands as library calls, output directories with provenance, sweeps) →
+//! this crate. Modules here, one per concept ({mfpt, fp, sim, analytic} →
+//! model → numerics):
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
 //!   dispatch; resetting rules behind [`model::Reset`]; validated [`Params`]
@@ -26,19 +25,15 @@
 //!   equations (Sec. 2.2 with the generator's signs), particle estimators,
 //!   scans and the optimal resetting rate.
 //! - [`analytic`]: closed forms (linear drag; r = 0 densities, Eqs. (34)-(35)).
-//! - [`figures`]: the paper's figures (`irtp reproduce`), plotting behind the
-//!   `plot` feature.
 //! - [`numerics`]: quadrature, root finding, Chebyshev tables, fast
 //!   elementary functions, point grids.
-//! - [`rng`], [`parallel`], [`stats`]: per-particle streams, deterministic
-//!   parallel reduction, mergeable estimators.
-//! - [`io`]: atomic output directories with provenance.
+//! - [`rng`], [`parallel`], [`stats`], [`memo`]: per-particle streams,
+//!   deterministic parallel reduction, mergeable estimators, shared tables.
 //! - [`error`]: the typed library error.
 //!
 //! Equations are cited by the paper's printed numbers; `docs/equations.md`
 //! maps each to its code. The library never prints and never exits; it
-//! returns plain, serialisable result structs. The `irtp` binary and the
-//! Python module are thin layers over [`app`].
+//! returns plain, serialisable result structs.
 
 pub mod analytic;
 pub mod error;

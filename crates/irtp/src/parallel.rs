@@ -45,7 +45,7 @@ pub trait Progress: Sync {
     /// Whether the caller wants the computation stopped. The parallel loops
     /// below then skip their remaining chunks, so a long run ends within one
     /// chunk's work; its (partial) result must be discarded by whoever asked,
-    /// as `crate::app` does by returning [`crate::Error::Interrupted`].
+    /// as `irtp_app` does by returning [`crate::Error::Interrupted`].
     fn cancelled(&self) -> bool {
         false
     }

@@ -3,13 +3,13 @@
 //! machine or split into shards (`--shard K/N`, one per SLURM array task,
 //! [`slurm`]), merged into one table that does not depend on the split.
 //!
-//! Each point runs through [`crate::app`] exactly as `irtp <command>` with
+//! Each point runs through [`crate`] exactly as `irtp <command>` with
 //! the point's flags would (its `run.json` records that command line), with
 //! a seed derived from the plan seed and the point's parameters. A point
 //! that fails records its error and the sweep goes on; a killed sweep,
 //! run again, redoes only the points without a `result.json`.
 //!
-//! Layering: `sweep` sits above [`crate::app`], below the binary.
+//! Layering: `sweep` sits above [`crate`], below the binary.
 
 pub mod parts;
 pub mod plan;
