@@ -205,7 +205,7 @@ class FpTransientResult(Result):
 
 class MfptResult(Result):
     summary: Dict[str, Any]
-    # profile (method "ode" only; then tau is the column, summary["tau"] the value)
+    # profile (method "backward" only; then tau is the column, summary["tau"] the value)
     v0: Array
     tau_plus: Any
     tau_minus: Any
@@ -430,7 +430,7 @@ def mfpt(
     v0: float,
     cells: int = ...,
     vt: float,
-    method: Literal["ode", "backward", "exact", "euler"] = ...,
+    method: Literal["backward", "exact", "euler", "ode"] = ...,
     particles: int = ...,
     dt: float = ...,
     t_max: float = ...,
@@ -464,7 +464,7 @@ def mfpt_scan(
     to: float,
     points: int = ...,
     log: bool = ...,
-    method: Literal["ode", "backward", "exact", "euler"] = ...,
+    method: Literal["backward", "exact", "euler", "ode"] = ...,
     particles: int = ...,
     dt: float = ...,
     t_max: float = ...,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import inspect
 import keyword
+import warnings
 import numbers
 import os
 import re
@@ -34,8 +35,8 @@ COMMANDS = {
     "reproduce": "reproduce",
 }
 
-# Names the issue uses for a CLI choice.
-_ALIASES = {"method": {"backward": "ode"}}
+# Former names of a CLI choice: still accepted, with a FutureWarning.
+_ALIASES = {"method": {"ode": "backward"}}
 
 _KINDS: Dict[str, Any] = {"float": float, "int": int, "bool": bool, "str": str}
 
@@ -121,7 +122,14 @@ class Option:
         if self.kind == "list":
             return [value] if isinstance(value, str) else [str(v) for v in value]
         if self.kind == "str" and self.choices and isinstance(value, str):
-            value = self.aliases.get(value, value)
+            if value in self.aliases:
+                new = self.aliases[value]
+                warnings.warn(
+                    f"{self.py}={value!r} is the former name of {self.py}={new!r}; it runs {new!r}",
+                    FutureWarning,
+                    stacklevel=4,
+                )
+                value = new
             if value not in self.choices:
                 allowed = ", ".join(self.choices + tuple(self.aliases))
                 raise ValueError(f"invalid {self.py} = {value!r}: allowed one of {allowed}")

@@ -103,11 +103,12 @@ def test_params_fill_only_what_they_set():
         irtp.analytic(params=irtp.Params(reset=irtp.PoissonReset(0.0, velocity=0.3)))
 
 
-def test_backward_is_ode():
+def test_ode_is_the_former_name_of_backward():
     a = irtp.mfpt(v0=-0.249, vt=0.5, cells=500, method="backward")
-    b = irtp.mfpt(v0=-0.249, vt=0.5, cells=500, method="ode")
+    with pytest.warns(FutureWarning, match="former name"):
+        b = irtp.mfpt(v0=-0.249, vt=0.5, cells=500, method="ode")
     assert difference(strip(a.summary), strip(b.summary)) is None
-    assert a.summary["method"] == "ode"
+    assert a.summary["method"] == "backward"
 
 
 def test_progress_callable_sees_monotone_counts():

@@ -162,7 +162,7 @@ impl ModelArgs {
         let (target, in_spec) = match &self.reset_to {
             Some(s) => reset_spec::parse(s)?,
             None if flag.is_none() => return Ok(base),
-            None => (Target::Point(self.reset_velocity), None),
+            None => (Target::point(self.reset_velocity), None),
         };
         let noise = match (flag, in_spec) {
             (Some(a), Some(b)) if a != b => {

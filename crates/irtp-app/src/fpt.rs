@@ -32,7 +32,9 @@ use std::time::Instant;
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DistMethod {
-    /// Time-dependent backward equations (monotone upwind scheme, atom split off exactly, two meshes extrapolated; TR-BDF2 in time).
+    /// Time-dependent backward equations (monotone upwind scheme, atom split off exactly, two meshes extrapolated; TR-BDF2 in time);
+    /// `ode` is its former name, still accepted with a warning.
+    #[value(alias = "ode")]
     Backward,
     /// Exact event-driven first-passage sampler: histogram and Kaplan-Meier curve.
     Exact,

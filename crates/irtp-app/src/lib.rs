@@ -269,6 +269,30 @@ impl Table {
     }
 }
 
+/// Values accepted under a former name: (flag, old value, current value).
+const OLD_NAMES: &[(&str, &str, &str)] = &[("--method", "ode", "backward")];
+
+/// A warning for each value of `argv` given by its former name
+/// ([`OLD_NAMES`]): the run goes on under the current one.
+fn old_names(argv: &[String]) -> Vec<String> {
+    let mut found = Vec::new();
+    for (i, arg) in argv.iter().enumerate() {
+        for &(flag, old, new) in OLD_NAMES {
+            let value = match arg.strip_prefix(flag) {
+                Some(v) if v.strip_prefix('=') == Some(old) => true,
+                Some("") => argv.get(i + 1).map(String::as_str) == Some(old),
+                _ => false,
+            };
+            if value {
+                found.push(format!(
+                    "{flag} {old} is the former name of {flag} {new}; it runs {flag} {new}"
+                ));
+            }
+        }
+    }
+    found
+}
+
 /// The result of one command: what it computed, its provenance and the
 /// files it wrote.
 #[derive(Clone, Debug)]
@@ -474,13 +498,13 @@ pub(crate) fn finish(
         r.wall_time_s,
     )
     .with_argv(ctx.argv.clone());
-    let mut warnings = Vec::new();
+    let mut warnings = old_names(&ctx.argv);
     let summary = summary(command, r, &to_value(&prov));
     let (provenance, written) = match out {
         None => (to_value(&prov), None),
         Some(mut o) => {
             same_run(&o, &to_value(&prov))?;
-            warnings = o.warnings().to_vec();
+            warnings.extend_from_slice(o.warnings());
             for t in &r.tables {
                 t.write(&mut o)?;
             }

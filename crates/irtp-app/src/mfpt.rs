@@ -1,6 +1,6 @@
 //! `irtp mfpt`: mean first-passage time to a target velocity.
 //!
-//! - `irtp mfpt --v0 V0 --vt VT [--method ode|euler|exact]`: one problem;
+//! - `irtp mfpt --v0 V0 --vt VT [--method backward|euler|exact]`: one problem;
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate;
 //! - `irtp mfpt distribution --vt VT [--method backward|exact]`: the
@@ -67,8 +67,10 @@ pub(super) struct ProblemArgs {
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Backward equations solved directly (second order, with error estimate).
-    Ode,
+    /// Backward equations solved directly (second order, with error
+    /// estimate); `ode` is its former name, still accepted with a warning.
+    #[value(alias = "ode")]
+    Backward,
     /// Particle simulation with the Euler scheme (paper Eqs. (30)-(32)).
     Euler,
     /// Exact event-driven particle sampler: no time step, no overshoot.
@@ -78,8 +80,8 @@ pub enum Method {
 /// Particle-simulation flags.
 #[derive(Args, Debug, Clone)]
 struct SimArgs {
-    /// Method: ode (backward equations), euler or exact (particles).
-    #[arg(long, value_enum, default_value = "ode")]
+    /// Method: backward (the backward equations), euler or exact (particles).
+    #[arg(long, value_enum, default_value = "backward")]
     method: Method,
     /// Particles (half start in +Sigma, half in -Sigma) [default: 10000;
     /// particle methods only].
@@ -189,8 +191,8 @@ impl MfptArgs {
     /// Whether the chosen method is a particle method (takes `--seed`).
     pub fn uses_seed(&self) -> bool {
         match &self.command {
-            None => self.direct.sim.method != Method::Ode,
-            Some(MfptCommand::Scan(a)) => a.sim.method != Method::Ode,
+            None => self.direct.sim.method != Method::Backward,
+            Some(MfptCommand::Scan(a)) => a.sim.method != Method::Backward,
             Some(MfptCommand::Optimize(_)) => false,
             Some(MfptCommand::Distribution(a)) => a.uses_seed(),
         }
@@ -248,8 +250,8 @@ impl SimArgs {
             ("--particles", self.particles.map(|n| n.to_string())),
             ("--t-max", self.t_max.map(|t| t.to_string())),
         ];
-        if self.method == Method::Ode {
-            output.no_seed("the backward-equation method (--method ode)")?;
+        if self.method == Method::Backward {
+            output.no_seed("the backward-equation method (--method backward)")?;
             for (flag, value) in particle_only {
                 if let Some(v) = value {
                     return Err(Error::invalid(
@@ -285,7 +287,7 @@ impl SimArgs {
             seed: output.seed(),
         };
         let method = match self.method {
-            Method::Ode => mfpt::Method::Backward(backward),
+            Method::Backward => mfpt::Method::Backward(backward),
             Method::Euler => mfpt::Method::Euler { dt: self.dt(), run },
             Method::Exact => mfpt::Method::Exact(run),
         };
@@ -392,9 +394,9 @@ struct SimReport {
 }
 
 impl Report {
-    fn ode(problem: Problem, s: &BackwardSolution) -> Self {
+    fn backward(problem: Problem, s: &BackwardSolution) -> Self {
         Report {
-            method: Method::Ode,
+            method: Method::Backward,
             problem,
             tau: s.tau,
             tau_plus: s.tau_plus,
@@ -537,7 +539,7 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (
-                Report::ode(c.problem, &s),
+                Report::backward(c.problem, &s),
                 profile_table(&prof),
                 String::new(),
             )
@@ -577,7 +579,7 @@ fn profile_table(p: &Profile) -> Table {
 
 fn method_name(m: Method) -> &'static str {
     match m {
-        Method::Ode => "backward-box",
+        Method::Backward => "backward-box",
         Method::Euler => "euler",
         Method::Exact => "exact",
     }

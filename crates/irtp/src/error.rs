@@ -140,7 +140,11 @@ impl Error {
                 name,
                 value,
                 allowed,
-            } => format!("invalid {} = {value}: allowed {allowed}", rename(name)),
+            } => format!(
+                "invalid {} = {value}: allowed {}",
+                rename(name),
+                rename_parameters(allowed, &rename)
+            ),
             Error::TooCostly {
                 unit,
                 estimate,
@@ -159,6 +163,72 @@ impl Error {
             other => other.to_string(),
         }
     }
+}
+
+/// The library's parameter names that a range in a message may mention
+/// (`t_max >= dt`): [`Error::message_with`] spells them as the front end
+/// does wherever they stand next to a comparison.
+pub const PARAMETER_NAMES: &[&str] = &[
+    "atol",
+    "bins",
+    "burn_in",
+    "cells",
+    "cfl",
+    "control_cells",
+    "dt",
+    "events",
+    "grid_points",
+    "lambda",
+    "large_tau_ratio",
+    "max_array",
+    "particles",
+    "points",
+    "points_per_task",
+    "r_max",
+    "r_min",
+    "rate",
+    "reset_period",
+    "reset_position",
+    "reset_velocity",
+    "rtol",
+    "samples",
+    "sigma",
+    "t_max",
+    "t_min",
+    "tail",
+    "v0",
+    "vt",
+];
+
+/// `text` with every name of [`PARAMETER_NAMES`] that stands next to a
+/// comparison (`<`, `>`, `=`, `≤`, `≥`, `≠`, spaces between allowed)
+/// replaced by `rename(name)`; every other word unchanged (`mean < 1` in a
+/// reset spec's range is a key, not a parameter).
+fn rename_parameters(text: &str, rename: &impl Fn(&str) -> String) -> String {
+    let is_word = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let is_cmp = |c: Option<char>| matches!(c, Some('<' | '>' | '=' | '≤' | '≥' | '≠'));
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(is_word) {
+        let (before, word_on) = rest.split_at(start);
+        let end = word_on.find(|c: char| !is_word(c)).unwrap_or(word_on.len());
+        let (word, after) = word_on.split_at(end);
+        let prev = before
+            .chars()
+            .rev()
+            .chain(out.chars().rev())
+            .find(|c| *c != ' ');
+        let next = after.chars().find(|c| *c != ' ');
+        out.push_str(before);
+        if PARAMETER_NAMES.contains(&word) && (is_cmp(prev) || is_cmp(next)) {
+            out.push_str(&rename(word));
+        } else {
+            out.push_str(word);
+        }
+        rest = after;
+    }
+    out.push_str(rest);
+    out
 }
 
 /// A number printed by `Display` in full (`1e300` as 301 digits) in
@@ -193,7 +263,12 @@ mod tests {
         assert_eq!(e.message_with(|n| n.to_string()), e.to_string());
         assert_eq!(
             e.message_with(|n| format!("--{}", n.replace('_', "-"))),
-            "invalid --t-max = -1: allowed t_max > 0"
+            "invalid --t-max = -1: allowed --t-max > 0"
+        );
+        let e = Error::invalid("t_max", -1, "t_max >= dt = 0.001, mean < 1, the rate");
+        assert_eq!(
+            e.message_with(|n| format!("--{}", n.replace('_', "-"))),
+            "invalid --t-max = -1: allowed --t-max >= --dt = 0.001, mean < 1, the rate"
         );
         let n = Error::NotConverged {
             method: "m",

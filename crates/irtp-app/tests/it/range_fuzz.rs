@@ -799,7 +799,7 @@ fn mfpt_method_flags(method: &'static str) -> impl Strategy<Value = Vec<String>>
     (count(), magnitude(), magnitude(), count()).prop_map(move |(particles, t_max, dt, cells)| {
         let mut f = flag("method", method.into());
         f.extend(flag("cells", cells));
-        if method != "ode" {
+        if method != "backward" {
             f.extend(flag("particles", particles));
             f.extend(flag("t-max", s(t_max)));
         }
@@ -820,7 +820,7 @@ fn mfpt_range(method: &'static str, cases: u32) {
     let s = (problem(), mfpt_method_flags(method))
         .prop_filter(
             "Sigma beyond the particle samplers' range",
-            move |((m, _, _), _)| method == "ode" || !(m.sigma > MAX_PARTICLE_SIGMA),
+            move |((m, _, _), _)| method == "backward" || !(m.sigma > MAX_PARTICLE_SIGMA),
         )
         .prop_map(|((m, v0, vt), mut f)| {
             f.extend(flag("v0", s(v0)));
@@ -832,7 +832,7 @@ fn mfpt_range(method: &'static str, cases: u32) {
 
 #[test]
 fn mfpt_ode_range() {
-    mfpt_range("ode", 300);
+    mfpt_range("backward", 300);
 }
 
 #[test]

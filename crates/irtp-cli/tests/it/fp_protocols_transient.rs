@@ -56,9 +56,9 @@ fn linear_cases(a: f64, position: Option<f64>, refractory: Option<&str>) -> Vec<
     let base = linear(1.0, 0.6, 1.5, 0.25);
     let mut out = Vec::new();
     for (t, noise) in [
-        (Target::Point(0.25), NoiseAtReset::Kept),
-        (Target::Point(0.25), NoiseAtReset::Redrawn),
-        (Target::Uniform { a, b: 0.5 }, NoiseAtReset::Kept),
+        (Target::point(0.25), NoiseAtReset::Kept),
+        (Target::point(0.25), NoiseAtReset::Redrawn),
+        (Target::uniform(a, 0.5), NoiseAtReset::Kept),
     ] {
         let p = base.with_reset(t, noise).unwrap();
         out.push(with_schedule(p, None, position, refractory));
@@ -152,12 +152,7 @@ fn tan_case(target: Target, position: Option<f64>, refractory: Option<&str>) -> 
 }
 
 fn gauss() -> Target {
-    Target::Gaussian {
-        mean: 0.1,
-        std: 0.3,
-        lo: f64::NEG_INFINITY,
-        hi: f64::INFINITY,
-    }
+    Target::gauss(0.1, 0.3)
 }
 
 fn stationary_opts(cells: usize, extrapolate: bool) -> StationaryOptions {
@@ -185,7 +180,7 @@ fn stationary_opts(cells: usize, extrapolate: bool) -> StationaryOptions {
 #[ignore = "slow tier"]
 fn long_times_reach_the_stationary_solver() {
     let held = Some("exp:mean=0.3");
-    for target in [Target::Point(0.0), gauss()] {
+    for target in [Target::point(0.0), gauss()] {
         let p = tan_case(target, None, held);
         let s = fp::stationary(&p, &stationary_opts(2000, true)).unwrap();
         let tr = fp::transient(&p, &transient_opts(400, &[12.0])).unwrap();
@@ -239,7 +234,7 @@ fn tan_law_matches_the_exact_sampler() {
     let times = vec![0.0, 0.4, 1.0, 2.0, 3.5];
     let z = bonferroni_z(32);
     let cases = [
-        tan_case(Target::Point(0.0), None, Some("exp:mean=0.3")),
+        tan_case(Target::point(0.0), None, Some("exp:mean=0.3")),
         tan_case(gauss(), Some(0.4), Some("exp:mean=0.3")),
     ];
     for (i, p) in cases.iter().enumerate() {
@@ -298,7 +293,7 @@ fn refractory_mean_to_zero_is_the_plain_protocol() {
 /// does `fp transient` with periodic resetting together with one.
 #[test]
 fn paper_scheme_refuses_a_refractory_period() {
-    let p = tan_case(Target::Point(0.0), None, Some("exp:mean=0.3"));
+    let p = tan_case(Target::point(0.0), None, Some("exp:mean=0.3"));
     let o = TransientOptions {
         scheme: Scheme::Paper,
         ..transient_opts(200, &[1.0])

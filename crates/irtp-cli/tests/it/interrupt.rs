@@ -37,9 +37,14 @@ fn long_run(out: &Path) -> Child {
 }
 
 /// Wait until the run's staging directory exists (it is computing).
+/// Wait until a staging directory exists and records its host (a process
+/// killed before that record is written leaves a directory that the next
+/// run cannot attribute, and keeps).
 fn wait_for_staging(parent: &Path) {
     let t0 = Instant::now();
-    while !entries(parent).iter().any(|e| e.contains(".partial-")) {
+    let recorded =
+        |e: &String| e.contains(".partial-") && parent.join(e).join(".irtp-host").exists();
+    while !entries(parent).iter().any(recorded) {
         assert!(t0.elapsed() < Duration::from_secs(20), "no staging dir");
         std::thread::sleep(Duration::from_millis(20));
     }

@@ -9,6 +9,7 @@ mod cli_simulate;
 mod common;
 mod coulomb;
 mod counts;
+mod docs;
 mod exact_cli;
 mod expr_law;
 mod fp_cli;

@@ -22,7 +22,7 @@ fn direct_usage_ode_json() {
     assert!((t - 0.5 * (tp + tm)).abs() < 1e-12);
     assert!((t - 1.7442128).abs() < 1e-6, "{t}");
     assert!(v["error_estimate"].as_f64().unwrap() < 1e-6);
-    assert_eq!(v["method"], "ode");
+    assert_eq!(v["method"], "backward");
 }
 
 #[test]

@@ -74,12 +74,12 @@ fn both(p: &Params, s: &SimSpec) -> [(&'static str, Observables); 2] {
 #[test]
 fn position_resetting_linear_closed_form() {
     let cases = [
-        (1.0, 0.7, 1.5, Target::Point(0.3), NoiseAtReset::Kept, 0.5),
+        (1.0, 0.7, 1.5, Target::point(0.3), NoiseAtReset::Kept, 0.5),
         (
             1.2,
             1.0,
             2.0,
-            Target::Uniform { a: -0.3, b: 0.6 },
+            Target::uniform(-0.3, 0.6),
             NoiseAtReset::Redrawn,
             -1.0,
         ),
@@ -131,12 +131,12 @@ fn position_resetting_linear_closed_form() {
 #[ignore = "slow tier"]
 fn exponential_refractory_linear_closed_form() {
     let cases = [
-        (1.0, 0.8, 1.2, Target::Point(0.4), NoiseAtReset::Kept, 0.5),
+        (1.0, 0.8, 1.2, Target::point(0.4), NoiseAtReset::Kept, 0.5),
         (
             1.0,
             0.5,
             2.0,
-            Target::Uniform { a: -0.2, b: 0.7 },
+            Target::uniform(-0.2, 0.7),
             NoiseAtReset::Redrawn,
             1.0,
         ),
@@ -168,13 +168,8 @@ fn exponential_refractory_linear_closed_form() {
 fn periodic_linear_closed_form() {
     let period = 1.3;
     let cases = [
-        (1.0, 0.6, Target::Point(0.5), NoiseAtReset::Kept),
-        (
-            1.0,
-            0.5,
-            Target::Uniform { a: -0.4, b: 0.2 },
-            NoiseAtReset::Redrawn,
-        ),
+        (1.0, 0.6, Target::point(0.5), NoiseAtReset::Kept),
+        (1.0, 0.5, Target::uniform(-0.4, 0.2), NoiseAtReset::Redrawn),
     ];
     for (i, &(sigma, lambda, target, noise)) in cases.iter().enumerate() {
         let sched = Schedule::parse(Some(period), None, None).unwrap();
@@ -253,7 +248,7 @@ fn fixed_refractory_tan_exact_vs_euler() {
 #[test]
 fn tiny_refractory_is_the_plain_protocol() {
     let sched = Schedule::parse(None, None, Some("fixed:t=1e-7")).unwrap();
-    let p = linear(1.0, 0.7, 1.5, Target::Point(0.3), NoiseAtReset::Kept, sched);
+    let p = linear(1.0, 0.7, 1.5, Target::point(0.3), NoiseAtReset::Kept, sched);
     let want = lp::position_poisson(1.0, 0.7, 1.5, (0.3, 0.09), 0.0);
     let s = spec(
         10_000,

@@ -32,7 +32,7 @@ fn close(a: f64, b: f64, tol: f64, what: &str) {
 fn refractory_cases() -> Vec<Params> {
     let base = linear(1.0, 0.6, 1.5, 0.2);
     let uni = base
-        .with_reset(Target::Uniform { a: -0.3, b: 0.5 }, NoiseAtReset::Kept)
+        .with_reset(Target::uniform(-0.3, 0.5), NoiseAtReset::Kept)
         .unwrap();
     let mut out = Vec::new();
     for p in [base, uni] {
@@ -163,7 +163,7 @@ fn backward_refractory_identities() {
         close(t1.tau_plus, factor * t0.tau_plus, 1e-11, "tau+");
         close(t1.tau_minus, factor * t0.tau_minus, 1e-11, "tau-");
         // The same for a random target below v_t (node weights summing to 1).
-        let uni = Target::Uniform { a: -0.3, b: 0.3 };
+        let uni = Target::uniform(-0.3, 0.3);
         let plain = plain.with_reset(uni, NoiseAtReset::Redrawn).unwrap();
         let held = with_schedule(plain, None, None, Some("exp:mean=0.3"));
         let t0 = backward::solve(&Problem::new(plain, v0, vt).unwrap(), &opts).unwrap();
@@ -271,7 +271,7 @@ fn fp_transient_periodic_matches_linear_moments() {
     // Before the first reset (ts[..2]): the plain r = 0 transient.
     let free = fp::transient(&base, &opts(Scheme::TrBdf2, 400, &ts[..2])).unwrap();
     for noise in [NoiseAtReset::Kept, NoiseAtReset::Redrawn] {
-        let plain = base.with_reset(Target::Point(0.2), noise).unwrap();
+        let plain = base.with_reset(Target::point(0.2), noise).unwrap();
         let p = with_schedule(plain, Some(0.7), None, None);
         let exact = linear_moments::moments(&p, &ts).unwrap();
         for (scheme, cells, tol) in [(Scheme::TrBdf2, 400, 1e-6), (Scheme::Paper, 500, 5e-3)] {

@@ -15,18 +15,18 @@ use irtp::mfpt::{
     self, distribution, optimize_rate, BackwardOptions, Distribution, DistributionOptions, Method,
     OptimizeOptions, ParticleOptions, Problem,
 };
+use irtp::model::reset::target::{LaplaceTarget, TargetLaw};
 use irtp::model::reset::{NoiseAtReset, Reset, Target};
 use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
 
 fn gauss(mean: f64, std: f64) -> Target {
-    Target::Gaussian {
-        mean,
-        std,
-        lo: f64::NEG_INFINITY,
-        hi: f64::INFINITY,
-    }
+    Target::gauss(mean, std)
+}
+
+fn laplace(mean: f64, scale: f64) -> Target {
+    Target::Laplace(LaplaceTarget::from_values(&[mean, scale]))
 }
 
 fn params(drag: DragLaw, sigma: f64, r: f64, t: Target, n: NoiseAtReset) -> Params {
@@ -38,27 +38,16 @@ fn params(drag: DragLaw, sigma: f64, r: f64, t: Target, n: NoiseAtReset) -> Para
 
 /// v_0 = -0.249 -> v_t = 0.5 (Fig. 7's problem), lambda = 0.5: tan Sigma = 3
 /// at r = 2 and tanh Sigma = 0.6 at r = 1, each with a Gaussian and a
-/// uniform target; the tan uniform target reaches beyond v_t (a reset there
+/// uniform target, and tan with a Laplace target re-drawing the noise; the tan uniform target reaches beyond v_t (a reset there
 /// is the passage), the tanh Gaussian one re-draws the noise state.
 fn cases() -> Vec<Problem> {
     let (k, d) = (NoiseAtReset::Kept, NoiseAtReset::Redrawn);
     [
         params(DragLaw::Tan, 3.0, 2.0, gauss(0.1, 0.3), k),
-        params(
-            DragLaw::Tan,
-            3.0,
-            2.0,
-            Target::Uniform { a: -0.5, b: 0.7 },
-            k,
-        ),
+        params(DragLaw::Tan, 3.0, 2.0, Target::uniform(-0.5, 0.7), k),
         params(DragLaw::Tanh, 0.6, 1.0, gauss(0.0, 0.2), d),
-        params(
-            DragLaw::Tanh,
-            0.6,
-            1.0,
-            Target::Uniform { a: -0.4, b: 0.3 },
-            k,
-        ),
+        params(DragLaw::Tanh, 0.6, 1.0, Target::uniform(-0.4, 0.3), k),
+        params(DragLaw::Tan, 3.0, 2.0, laplace(-0.2, 0.15), d),
     ]
     .into_iter()
     .map(|p| Problem::new(p, -0.249, 0.5).unwrap())
@@ -96,11 +85,8 @@ fn rel(a: f64, b: f64) -> f64 {
 fn target_first_moments_match_quadrature() {
     let p = params(DragLaw::Tan, 3.0, 2.0, gauss(0.3, 0.25), NoiseAtReset::Kept);
     let g = p.reset().target();
-    let u = Target::Uniform { a: -0.4, b: 0.3 };
-    let (lo, hi) = match g {
-        Target::Gaussian { lo, hi, .. } => (lo, hi),
-        _ => unreachable!(),
-    };
+    let u = Target::uniform(-0.4, 0.3);
+    let (lo, hi) = g.support();
     let qg = |v: f64| {
         let z = (v - 0.3) / 0.25;
         (-0.5 * z * z).exp() / (0.25 * (2.0 * std::f64::consts::PI).sqrt())
@@ -361,13 +347,10 @@ fn narrow_uniform_target_reproduces_the_point_target() {
         DragLaw::Tan,
         3.0,
         2.0,
-        Target::Point(vr),
+        Target::point(vr),
         NoiseAtReset::Kept,
     );
-    let narrow = Target::Uniform {
-        a: vr - 5e-7,
-        b: vr + 5e-7,
-    };
+    let narrow = Target::uniform(vr - 5e-7, vr + 5e-7);
     let spread = params(DragLaw::Tan, 3.0, 2.0, narrow, NoiseAtReset::Kept);
     assert_eq!(spread.reset().point(), None);
     let (p, q) = (

@@ -30,7 +30,7 @@ use irtp::{DragLaw, Params};
 fn redrawn(drag: DragLaw, sigma: f64, lambda: f64, r: f64, vr: f64) -> Params {
     Params::new(drag, sigma, lambda, r, vr)
         .unwrap()
-        .with_reset(Target::Point(vr), NoiseAtReset::Redrawn)
+        .with_reset(Target::point(vr), NoiseAtReset::Redrawn)
         .unwrap()
 }
 
@@ -343,12 +343,7 @@ fn with_target(
 }
 
 fn gauss(mean: f64, std: f64) -> Target {
-    Target::Gaussian {
-        mean,
-        std,
-        lo: f64::NEG_INFINITY,
-        hi: f64::INFINITY,
-    }
+    Target::gauss(mean, std)
 }
 
 /// Truncated Gaussian moments: the untruncated limit, and a strongly
@@ -401,8 +396,8 @@ fn random_cases() -> Vec<(Target, NoiseAtReset)> {
         (gauss(0.1, 0.3), NoiseAtReset::Kept),
         (gauss(0.1, 0.3), NoiseAtReset::Redrawn),
         (gauss(-0.6, 0.8), NoiseAtReset::Kept),
-        (Target::Uniform { a: -0.5, b: 0.2 }, NoiseAtReset::Kept),
-        (Target::Uniform { a: -0.5, b: 0.2 }, NoiseAtReset::Redrawn),
+        (Target::uniform(-0.5, 0.2), NoiseAtReset::Kept),
+        (Target::uniform(-0.5, 0.2), NoiseAtReset::Redrawn),
     ]
 }
 
@@ -530,7 +525,7 @@ fn random_target_backward_mfpt_matches_exact_sampler() {
     let cases = [
         (gauss(0.0, 0.2), NoiseAtReset::Kept),
         (gauss(0.0, 0.2), NoiseAtReset::Redrawn),
-        (Target::Uniform { a: -0.5, b: 0.7 }, NoiseAtReset::Kept),
+        (Target::uniform(-0.5, 0.7), NoiseAtReset::Kept),
     ];
     let z = bonferroni_z(3 * cases.len());
     for (i, (t, n)) in cases.into_iter().enumerate() {

@@ -614,7 +614,7 @@ mod tests {
             let p = Params::new(d, s, 0.5, 2.0, vr).unwrap();
             let sched = Schedule::parse(None, None, Some("exp:mean=0.3")).unwrap();
             for noise in [NoiseAtReset::Kept, NoiseAtReset::Redrawn] {
-                for t in [Target::Point(vr), Target::Uniform { a: -0.3, b: 0.2 }] {
+                for t in [Target::point(vr), Target::uniform(-0.3, 0.2)] {
                     let q = p
                         .with_reset(t, noise)
                         .unwrap()

@@ -22,7 +22,7 @@
 
 use super::Problem;
 use crate::error::{Error, Result};
-use crate::model::reset::{Refractory, Reset, Target};
+use crate::model::reset::{Refractory, Reset};
 use crate::model::Drag;
 use serde::{Deserialize, Serialize};
 
@@ -695,7 +695,29 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
+    non_negative(&m.v, &tp, &tm)?;
     Ok(to_user_frame(m, tp, tm, swapped))
+}
+
+/// Refuse a profile with a negative (or NaN) mean first-passage time
+/// beyond rounding (1e-12 of the largest value; tau+ at v_t is 0 up to
+/// it): the mesh did not resolve the solution (e.g. at a velocity scale
+/// far beyond the drag's, where the band's entries lose all their digits).
+fn non_negative(v: &[f64], tp: &[f64], tm: &[f64]) -> Result<()> {
+    let scale = tp.iter().chain(tm).fold(0.0f64, |m, t| m.max(t.abs()));
+    let floor = -1e-12 * scale;
+    let bad = (0..v.len()).find(|&i| !(tp[i] >= floor && tm[i] >= floor));
+    match bad {
+        None => Ok(()),
+        Some(i) => Err(Error::Numerical {
+            method: "mfpt backward solve",
+            reason: format!(
+                "tau(v) = ({:e}, {:e}) at v = {:e} is not >= 0: the mesh does not resolve \
+                 the solution; refused",
+                tp[i], tm[i], v[i]
+            ),
+        }),
+    }
 }
 
 /// The [`Error::Overflow`] of the backward solve: tau exceeds the f64 range.
@@ -732,11 +754,7 @@ pub fn lower_bound(problem: &Problem) -> f64 {
     let r = p.rate();
     // The highest velocity a reset can land on (a random target's top; at
     // or beyond v_t the reset is the passage: flow time 0).
-    let top = match p.reset().target() {
-        Target::Point(v) => v,
-        Target::Uniform { b, .. } => b,
-        Target::Gaussian { hi, .. } => hi,
-    };
+    let top = p.reset().target().support().1;
     if r > 0.0 {
         let t = flow(cp.v0()).min(flow(top.min(cp.vt())));
         (r * t).exp_m1() / r

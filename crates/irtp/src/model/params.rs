@@ -2,8 +2,8 @@
 
 use super::drag::{Drag, DragLaw};
 use super::reset::{
-    spec, support, GaussianReset, NoiseAtReset, PoissonReset, RedrawnReset, Reset, ResetRule,
-    Schedule, Solver, Target, UniformReset,
+    spec, support, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule,
+    Schedule, Solver, Target,
 };
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
@@ -198,7 +198,7 @@ impl Params {
             self.rate(),
             reset_velocity,
         )?
-        .with_reset(Target::Point(reset_velocity), self.reset.noise())?
+        .with_reset(Target::point(reset_velocity), self.reset.noise())?
         .with_schedule(self.schedule)
     }
 
@@ -209,8 +209,8 @@ impl Params {
         let rate = self.rate();
         let vu = self.v_upper();
         let written = || spec::write(&target, noise);
-        let reset = match target {
-            Target::Point(v) => {
+        let reset = match target.point_velocity() {
+            Some(v) => {
                 let base = Params::new(self.drag, self.sigma, self.lambda, rate, v)?;
                 match noise {
                     NoiseAtReset::Kept => {
@@ -225,35 +225,13 @@ impl Params {
                     }),
                 }
             }
-            Target::Gaussian { mean, std, .. } => {
-                if !(mean > -vu && mean < vu) {
-                    return Err(Error::invalid(
-                        "reset_to",
-                        written(),
-                        format!("-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the Gaussian is truncated)"),
-                    ));
-                }
-                if !(std > 0.0 && std.is_finite()) {
-                    return Err(Error::invalid("reset_to", written(), "std > 0, finite"));
-                }
-                ResetRule::Gauss(GaussianReset {
-                    rate,
-                    mean,
-                    std,
-                    bound: vu,
-                    noise,
-                })
-            }
-            Target::Uniform { a, b } => {
-                if !(a > -vu && a < b && b < vu) {
-                    return Err(Error::invalid(
-                        "reset_to",
-                        written(),
-                        format!("-{vu:.6} < a < b < {vu:.6} (inside the open velocity interval)"),
-                    ));
-                }
-                ResetRule::Uniform(UniformReset { rate, a, b, noise })
-            }
+            None => ResetRule::Random(RandomReset {
+                rate,
+                target: target
+                    .fit(vu)
+                    .map_err(|allowed| Error::invalid("reset_to", written(), allowed))?,
+                noise,
+            }),
         };
         Ok(Params { reset, ..*self })
     }
@@ -306,9 +284,9 @@ impl Params {
     /// random target (a method that needs a point target refuses the
     /// others through it, never treating them as a point).
     pub fn point_target(&self, method: &str) -> Result<f64> {
-        match self.reset.target() {
-            Target::Point(v) => Ok(v),
-            Target::Gaussian { .. } | Target::Uniform { .. } => Err(Error::invalid(
+        match self.reset.point() {
+            Some(v) => Ok(v),
+            None => Err(Error::invalid(
                 "reset_to",
                 spec::write(&self.reset.target(), self.reset.noise()),
                 format!(
@@ -359,10 +337,7 @@ impl Params {
     /// put a node; the methods that need a point target take it from
     /// [`Params::point_target`] instead, which refuses random targets.
     pub fn reset_velocity(&self) -> f64 {
-        match self.reset.target() {
-            Target::Point(v) => v,
-            t @ (Target::Gaussian { .. } | Target::Uniform { .. }) => t.centre(),
-        }
+        self.reset.target().centre()
     }
 
     /// The resetting rule: rate, target, noise state at a reset.

@@ -66,17 +66,9 @@ fn a_zero_control_is_the_plain_mean() {
 fn the_martingale_has_mean_zero_for_any_control() {
     let base = Params::new(DragLaw::Tan, 3.0, 1.0, 1.5, 0.0).unwrap();
     let targets = [
-        (Target::Point(-0.3), NoiseAtReset::Kept),
-        (
-            Target::Gaussian {
-                mean: 0.1,
-                std: 0.4,
-                lo: f64::NEG_INFINITY,
-                hi: f64::INFINITY,
-            },
-            NoiseAtReset::Redrawn,
-        ),
-        (Target::Uniform { a: -0.6, b: 0.8 }, NoiseAtReset::Kept),
+        (Target::point(-0.3), NoiseAtReset::Kept),
+        (Target::gauss(0.1, 0.4), NoiseAtReset::Redrawn),
+        (Target::uniform(-0.6, 0.8), NoiseAtReset::Kept),
     ];
     let controls: [fn(f64, bool) -> f64; 3] = [
         |v, s| (17.0 * v).sin().signum() + if s { 0.5 } else { 3.0 },

@@ -22,6 +22,7 @@
 use crate::common::stats::bonferroni_z;
 use irtp::fp::{stationary, StationaryOptions};
 use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
+use irtp::model::reset::target::{LaplaceTarget, TargetLaw};
 use irtp::model::reset::{
     NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target,
 };
@@ -54,7 +55,7 @@ struct Protocol {
 }
 
 fn point(vu: f64) -> Target {
-    Target::Point(0.1 * vu)
+    Target::point(0.1 * vu)
 }
 
 fn plain() -> Schedule {
@@ -77,22 +78,20 @@ fn protocols() -> Vec<Protocol> {
         },
         Protocol {
             name: "gauss",
-            target: |vu| Target::Gaussian {
-                mean: 0.1 * vu,
-                std: 0.2 * vu,
-                lo: f64::NEG_INFINITY,
-                hi: f64::INFINITY,
-            },
+            target: |vu| Target::gauss(0.1 * vu, 0.2 * vu),
             noise: NoiseAtReset::Kept,
             schedule: plain,
         },
         Protocol {
             name: "uniform",
-            target: |vu| Target::Uniform {
-                a: -0.3 * vu,
-                b: 0.2 * vu,
-            },
+            target: |vu| Target::uniform(-0.3 * vu, 0.2 * vu),
             noise: NoiseAtReset::Redrawn,
+            schedule: plain,
+        },
+        Protocol {
+            name: "laplace",
+            target: |vu| Target::Laplace(LaplaceTarget::from_values(&[-0.2 * vu, 0.15 * vu])),
+            noise: NoiseAtReset::Kept,
             schedule: plain,
         },
         Protocol {

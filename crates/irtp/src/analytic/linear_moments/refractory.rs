@@ -155,7 +155,7 @@ mod tests {
     /// Long times: the stationary closed forms of (R3) and (R4).
     #[test]
     fn long_times_give_the_stationary_closed_forms() {
-        let targets = [Target::Point(0.2), Target::Uniform { a: -0.3, b: 0.5 }];
+        let targets = [Target::point(0.2), Target::uniform(-0.3, 0.5)];
         for noise in [NoiseAtReset::Kept, NoiseAtReset::Redrawn] {
             for t in targets {
                 let p = held(noise, t, None);

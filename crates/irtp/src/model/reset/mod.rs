@@ -1,22 +1,22 @@
 //! Resetting rules behind the [`Reset`] trait: one file per rule, one registry.
 //!
 //! A rule carries everything a method needs: the rate of the Poisson clock,
-//! the target (a point, later a distribution to sample and to inject into a
-//! Fokker-Planck mesh), the target's moments for the closed forms, and what
-//! happens to the noise state. Engines call [`Reset::draw_velocity`] and
-//! [`Reset::draw_noise`] at a reset event and never write the rule
-//! themselves. Methods that need a point target (the Fokker-Planck mesh, the
-//! backward equations, the closed forms) read it through an exhaustive match
-//! on [`Target`], so a new kind of target cannot slip past them unhandled.
+//! the target (a point or a law to sample and to spread over a mesh), the
+//! target's moments for the closed forms, and what happens to the noise
+//! state. Engines call [`Reset::draw_velocity`] and [`Reset::draw_noise`] at
+//! a reset event and never write the rule themselves. Meshes, backward
+//! equations and closed forms read a target only through the [`TargetLaw`]
+//! interface (its mass on a cell, its moments, its support), so every method
+//! picks up a new kind of target; a method that needs a point target asks
+//! [`crate::Params::point_target`], which refuses the others by name.
 //!
 //! - [`poisson`]: Poissonian resetting to a fixed v_r, noise state kept
 //!   (the paper's Eq. (3)).
 //! - [`redrawn`]: Poissonian resetting to a fixed v_r, noise state re-drawn
 //!   (±Sigma with probability ½ each).
-//! - [`gaussian`]: Poissonian resetting to a velocity drawn from a Gaussian
-//!   truncated to the velocity interval.
-//! - [`uniform`]: Poissonian resetting to a velocity drawn uniformly from
-//!   [a, b].
+//! - [`random`]: Poissonian resetting to a velocity drawn from a random
+//!   target ([`target`]: one file per target law behind [`TargetLaw`],
+//!   one registry line).
 //! - [`registry`]: [`ResetRule`] and the dispatch
 //!   [`with_reset!`](crate::with_reset).
 //!
@@ -25,181 +25,30 @@
 //! with the velocity) and [`refractory`] (velocity held at v_r for a while
 //! after a reset). [`support`] is the table of which method runs which.
 
-pub mod gaussian;
 pub mod periodic;
 pub mod poisson;
 pub mod position;
+pub mod random;
 pub mod redrawn;
 pub mod refractory;
 pub mod registry;
 pub mod spec;
 pub mod support;
-pub mod uniform;
+pub mod target;
 
-pub use gaussian::GaussianReset;
 pub use periodic::Periodic;
 pub use poisson::PoissonReset;
 pub use position::PositionReset;
+pub use random::RandomReset;
 pub use redrawn::RedrawnReset;
 pub use refractory::Refractory;
 pub use registry::ResetRule;
 pub use support::{Feature, Solver};
-pub use uniform::UniformReset;
+pub use target::{Target, TargetLaw};
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-/// Where a reset sends the velocity.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Target {
-    /// A fixed velocity v_r.
-    Point(f64),
-    /// A Gaussian N(mean, std²) truncated to (lo, hi), the admissible
-    /// velocity interval (-v_u, v_u).
-    Gaussian {
-        /// Mean of the untruncated Gaussian (inside (lo, hi)).
-        mean: f64,
-        /// Its standard deviation (> 0).
-        std: f64,
-        /// Lower truncation point.
-        lo: f64,
-        /// Upper truncation point.
-        hi: f64,
-    },
-    /// Uniform on [a, b], inside the admissible interval.
-    Uniform {
-        /// Left end.
-        a: f64,
-        /// Right end (> a).
-        b: f64,
-    },
-}
-
-/// The standard normal density.
-fn phi(z: f64) -> f64 {
-    (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt()
-}
-
-impl Target {
-    /// (<v_r>, <v_r²>): the moments of the target that closed forms need;
-    /// exact for the truncated Gaussian (its normalisation Z by adaptive
-    /// Gauss-Kronrod to 1e-14, the rest in closed form:
-    /// <v_r> = m + s (φ(α) - φ(β))/Z, Var = s² [1 + (α φ(α) - β φ(β))/Z
-    /// - ((φ(α) - φ(β))/Z)²], α, β = (lo - m)/s, (hi - m)/s).
-    pub fn moments(&self) -> (f64, f64) {
-        match *self {
-            Target::Point(v) => (v, v * v),
-            Target::Uniform { a, b } => (0.5 * (a + b), (a * a + a * b + b * b) / 3.0),
-            Target::Gaussian { mean, std, lo, hi } => {
-                let (al, be) = ((lo - mean) / std, (hi - mean) / std);
-                let z = normal_mass(al, be);
-                let d = (phi(al) - phi(be)) / z;
-                let var = std * std * (1.0 + (al * phi(al) - be * phi(be)) / z - d * d);
-                let m1 = mean + std * d;
-                (m1, var + m1 * m1)
-            }
-        }
-    }
-
-    /// The target under v → -v.
-    pub fn mirrored(&self) -> Target {
-        match *self {
-            Target::Point(v) => Target::Point(-v),
-            Target::Gaussian { mean, std, lo, hi } => Target::Gaussian {
-                mean: -mean,
-                std,
-                lo: -hi,
-                hi: -lo,
-            },
-            Target::Uniform { a, b } => Target::Uniform { a: -b, b: -a },
-        }
-    }
-
-    /// The point, the mean of the untruncated Gaussian, or the middle of
-    /// the uniform's support: where meshes put a node.
-    pub fn centre(&self) -> f64 {
-        match *self {
-            Target::Point(v) => v,
-            Target::Gaussian { mean, .. } => mean,
-            Target::Uniform { a, b } => 0.5 * (a + b),
-        }
-    }
-
-    /// The (unnormalised) probability of [x0, x1]: for a point, 1 when it
-    /// lies inside; meshes normalise the cell masses by their sum.
-    pub fn mass(&self, x0: f64, x1: f64) -> f64 {
-        match *self {
-            Target::Point(v) => f64::from(u8::from(x0 <= v && v < x1)),
-            Target::Uniform { a, b } => (x1.min(b) - x0.max(a)).max(0.0) / (b - a),
-            Target::Gaussian { mean, std, lo, hi } => {
-                let (u0, u1) = (x0.max(lo), x1.min(hi));
-                if u1 > u0 {
-                    normal_mass((u0 - mean) / std, (u1 - mean) / std)
-                } else {
-                    0.0
-                }
-            }
-        }
-    }
-
-    /// ∫_{x0}^{x1} (v - x0) dQ(v), unnormalised like [`Target::mass`]: with
-    /// it, meshes weigh a random target by hat functions (exact for a
-    /// piecewise-linear integrand). Closed forms: for the truncated
-    /// Gaussian (m - x0) Z + s (φ(α0) - φ(α1)) on the clipped interval.
-    pub fn moment_from(&self, x0: f64, x1: f64) -> f64 {
-        match *self {
-            Target::Point(v) => (v - x0) * self.mass(x0, x1),
-            Target::Uniform { a, b } => {
-                let (u0, u1) = (x0.max(a), x1.min(b));
-                let d = (u1 - u0).max(0.0);
-                d * (0.5 * (u0 + u1) - x0) / (b - a)
-            }
-            Target::Gaussian { mean, std, lo, hi } => {
-                let (u0, u1) = (x0.max(lo), x1.min(hi));
-                if u1 > u0 {
-                    let (a0, a1) = ((u0 - mean) / std, (u1 - mean) / std);
-                    (mean - x0) * normal_mass(a0, a1) + std * (phi(a0) - phi(a1))
-                } else {
-                    0.0
-                }
-            }
-        }
-    }
-
-    /// A velocity drawn from the target: the truncated Gaussian by
-    /// rejection (from the Gaussian itself when std ≤ half the interval,
-    /// acceptance ≥ 0.34 since the mean is inside; else from the uniform
-    /// on (lo, hi) with acceptance e^{-(v-m)²/2s²} ≥ e^{-2}).
-    pub fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
-        match *self {
-            Target::Point(v) => v,
-            Target::Uniform { a, b } => a + (b - a) * rng.gen::<f64>(),
-            Target::Gaussian { mean, std, lo, hi } => loop {
-                let v = if std <= 0.5 * (hi - lo) {
-                    let z: f64 = rng.sample(rand_distr::StandardNormal);
-                    let v = mean + std * z;
-                    if v > lo && v < hi {
-                        return v;
-                    }
-                    continue;
-                } else {
-                    lo + (hi - lo) * rng.gen::<f64>()
-                };
-                let u = (v - mean) / std;
-                if v > lo && rng.gen::<f64>() < (-0.5 * u * u).exp() {
-                    return v;
-                }
-            },
-        }
-    }
-}
-
-/// ∫_α^β φ by adaptive Gauss-Kronrod (relative 1e-14; the crate has no
-/// erfc accurate to the last digits).
-fn normal_mass(al: f64, be: f64) -> f64 {
-    crate::numerics::quad::integrate(&phi, al, be, 1e-14).unwrap_or(f64::NAN)
-}
 
 /// The modifiers of a resetting rule: when resets happen, whether the
 /// position resets too, and a refractory period after each reset. The
@@ -348,10 +197,7 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
     /// The velocity after a reset (draws from `rng` only for random targets).
     #[inline]
     fn draw_velocity<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
-        match self.target() {
-            Target::Point(v) => v,
-            t => t.draw(rng),
-        }
+        self.target().draw(rng)
     }
 
     /// The noise state after a reset (`plus`: eta = +Sigma before it).
@@ -365,9 +211,6 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
 
     /// The fixed target velocity, for methods that need a point target.
     fn point(&self) -> Option<f64> {
-        match self.target() {
-            Target::Point(v) => Some(v),
-            Target::Gaussian { .. } | Target::Uniform { .. } => None,
-        }
+        self.target().point_velocity()
     }
 }

@@ -21,7 +21,7 @@ impl Reset for PoissonReset {
         self.rate
     }
     fn target(&self) -> Target {
-        Target::Point(self.velocity)
+        Target::point(self.velocity)
     }
     fn noise(&self) -> NoiseAtReset {
         NoiseAtReset::Kept

@@ -22,7 +22,7 @@ impl Reset for RedrawnReset {
         self.rate
     }
     fn target(&self) -> Target {
-        Target::Point(self.velocity)
+        Target::point(self.velocity)
     }
     fn noise(&self) -> NoiseAtReset {
         NoiseAtReset::Redrawn

@@ -13,8 +13,7 @@ macro_rules! reset_rules {
         $crate::$cb! { ($($args)*)
             Poisson => PoissonReset,
             Redrawn => RedrawnReset,
-            Gauss => GaussianReset,
-            Uniform => UniformReset,
+            Random => RandomReset,
         }
     };
 }

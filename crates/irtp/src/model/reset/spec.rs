@@ -5,25 +5,26 @@
 //! Written with every key, each value in Rust's shortest round-trip form, so
 //! the written spec parses back to the same rule bit for bit. Parsing
 //! accepts the keys in any order; an unknown, repeated or missing key and a
-//! value that is not a number are each one error naming the flag.
+//! value that is not a number are each one error naming the flag. The kinds
+//! and their keys come from the target registry ([`super::target`]).
 
 use super::{NoiseAtReset, Target};
 use crate::error::{Error, Result};
 use crate::model::drag::spec::number;
 
-/// The target kinds and their keys, for messages.
-pub const USAGE: &str = "point:v=V, gauss:mean=M,std=S or uniform:a=A,b=B";
-
 /// `point:v=0.2,noise=redrawn`: the canonical spec of a target and noise rule.
 pub fn write(target: &Target, noise: NoiseAtReset) -> String {
-    let t = match *target {
-        Target::Point(v) => format!("point:v={}", number(v)),
-        Target::Gaussian { mean, std, .. } => {
-            format!("gauss:mean={},std={}", number(mean), number(std))
-        }
-        Target::Uniform { a, b } => format!("uniform:a={},b={}", number(a), number(b)),
-    };
-    format!("{t},noise={}", noise.name())
+    let values: Vec<String> = target
+        .keyed_values()
+        .into_iter()
+        .map(|(k, v)| format!("{k}={}", number(v)))
+        .collect();
+    format!(
+        "{}:{},noise={}",
+        target.kind(),
+        values.join(","),
+        noise.name()
+    )
 }
 
 /// Parse a spec: the target (its keys) and the noise rule, if the spec
@@ -35,20 +36,11 @@ pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
         Error::invalid(
             "reset_to",
             spec,
-            format!("{what}, in {USAGE}[,noise=kept|redrawn]"),
+            format!("{what}, in {}[,noise=kept|redrawn]", Target::usage()),
         )
     };
     let (kind, args) = spec.trim().split_once(':').unwrap_or((spec.trim(), ""));
-    let keys: &[&str] = match kind {
-        "point" => &["v"],
-        "gauss" => &["mean", "std"],
-        "uniform" => &["a", "b"],
-        _ => {
-            return Err(bad(format!(
-                "a target kind point, gauss or uniform (not '{kind}')"
-            )))
-        }
-    };
+    let keys = Target::parse_kind(kind).map_err(bad)?;
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
     let mut noise = None;
     for pair in args.split(',').filter(|p| !p.trim().is_empty()) {
@@ -85,19 +77,7 @@ pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
     for (k, v) in keys.iter().zip(values) {
         out.push(v.ok_or_else(|| bad(format!("a value for {k} (required)")))?);
     }
-    let target = match kind {
-        "point" => Target::Point(out[0]),
-        "gauss" => Target::Gaussian {
-            mean: out[0],
-            std: out[1],
-            lo: f64::NEG_INFINITY,
-            hi: f64::INFINITY,
-        },
-        _ => Target::Uniform {
-            a: out[0],
-            b: out[1],
-        },
-    };
+    let target = Target::build(kind, &out).expect("a kind of the registry");
     Ok((target, noise))
 }
 
@@ -107,16 +87,20 @@ mod tests {
 
     #[test]
     fn round_trip_and_errors() {
-        let s = write(&Target::Point(0.2), NoiseAtReset::Redrawn);
+        let s = write(&Target::point(0.2), NoiseAtReset::Redrawn);
         assert_eq!(s, "point:v=0.2,noise=redrawn");
         assert_eq!(
             parse(&s).unwrap(),
-            (Target::Point(0.2), Some(NoiseAtReset::Redrawn))
+            (Target::point(0.2), Some(NoiseAtReset::Redrawn))
         );
         assert_eq!(
             parse("point:v=-1e-3").unwrap(),
-            (Target::Point(-1e-3), None)
+            (Target::point(-1e-3), None)
         );
+        for t in [Target::gauss(0.1, 0.3), Target::uniform(-0.2, 0.5)] {
+            let s = write(&t, NoiseAtReset::Kept);
+            assert_eq!(parse(&s).unwrap(), (t, Some(NoiseAtReset::Kept)), "{s}");
+        }
         for bad in [
             "",
             "dirac:v=0",

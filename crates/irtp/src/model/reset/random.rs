@@ -1,48 +1,43 @@
-//! Poissonian resetting to a random velocity drawn uniformly from [a, b]
-//! (inside the admissible velocity interval); the noise state kept or
+//! Poissonian resetting to a random velocity: any registered target law
+//! other than the point ([`super::target`]); the noise state kept or
 //! re-drawn.
 
 use super::{NoiseAtReset, Reset, Target};
 use serde::{Deserialize, Serialize};
 
-/// At rate r, v → a uniform draw from [a, b]; position kept, noise state by
+/// At rate r, v → a draw of `target`; position kept, noise state by
 /// `noise`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct UniformReset {
+pub struct RandomReset {
     /// Reset rate r.
     pub rate: f64,
-    /// Left end of the support.
-    pub a: f64,
-    /// Right end of the support (> a).
-    pub b: f64,
+    /// Where a reset sends the velocity (checked against the velocity
+    /// interval: [`Target::fit`]).
+    pub target: Target,
     /// What a reset does to the noise state.
     pub noise: NoiseAtReset,
 }
 
-impl Reset for UniformReset {
+impl Reset for RandomReset {
     fn name(&self) -> &'static str {
-        "uniform"
+        self.target.kind()
     }
     fn rate(&self) -> f64 {
         self.rate
     }
     fn target(&self) -> Target {
-        Target::Uniform {
-            a: self.a,
-            b: self.b,
-        }
+        self.target
     }
     fn noise(&self) -> NoiseAtReset {
         self.noise
     }
     fn mirrored(&self) -> Self {
-        UniformReset {
-            a: -self.b,
-            b: -self.a,
+        RandomReset {
+            target: self.target.mirrored(),
             ..*self
         }
     }
     fn with_rate(&self, rate: f64) -> Self {
-        UniformReset { rate, ..*self }
+        RandomReset { rate, ..*self }
     }
 }

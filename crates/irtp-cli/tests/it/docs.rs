@@ -1,0 +1,279 @@
+//! Docs that run: every `irtp …` command printed in a shell block of
+//! README.md, REPRODUCTION.md, bench/README.md and docs/*.md (and README's
+//! `cargo run --release -- …` line) is run as printed, in the repository
+//! root, with the changes README's "Examples" states: each `--out` (and a
+//! later argument naming the same directory) goes to a temporary directory,
+//! `--particles` is at most [`MAX_PARTICLES`], `reproduce` runs `--quick`
+//! and `--submit` is left out (the SLURM test submits). Each example sweep
+//! plan runs as its header comment says. A non-zero exit fails, naming the
+//! file and line. Every repository path a doc names in backquotes exists.
+
+use super::common::BIN;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The particle cap of the documented commands' test runs.
+const MAX_PARTICLES: u64 = 4000;
+
+/// The example plans too long for the fast tier (measured: 58 s and 26 s
+/// on 2 cores); the slow tier runs them.
+const SLOW_PLANS: [&str; 2] = ["fp_stationary_10k.toml", "simulate.toml"];
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The documentation files, relative to the repository root.
+fn doc_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = ["README.md", "REPRODUCTION.md", "bench/README.md"]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(root().join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "md"))
+        .map(|p| PathBuf::from("docs").join(p.file_name().unwrap()))
+        .collect();
+    docs.sort();
+    files.extend(docs);
+    files
+}
+
+/// (line, arguments after `irtp`) of every command in the shell blocks of
+/// `text`: continuation lines (`\`) joined, `# comments` dropped.
+fn commands(text: &str) -> Vec<(usize, Vec<String>)> {
+    let (mut out, mut in_shell, mut pending) = (Vec::new(), false, None::<(usize, String)>);
+    for (i, line) in text.lines().enumerate() {
+        if let Some(fence) = line.trim_start().strip_prefix("```") {
+            in_shell = !in_shell && matches!(fence.trim(), "sh" | "bash" | "console");
+            continue;
+        }
+        if !in_shell {
+            continue;
+        }
+        let (n, joined) = match pending.take() {
+            Some((n, head)) => (n, head + " " + line.trim()),
+            None => (i + 1, line.trim().to_string()),
+        };
+        if let Some(head) = joined.strip_suffix('\\') {
+            pending = Some((n, head.to_string()));
+            continue;
+        }
+        let body = joined.strip_prefix("$ ").unwrap_or(&joined);
+        let rest = body
+            .strip_prefix("irtp ")
+            .or_else(|| body.strip_prefix("cargo run --release -- "));
+        if let Some(rest) = rest {
+            out.push((n, words(rest)));
+        }
+    }
+    out
+}
+
+/// Shell words of `s` up to an unquoted `#` comment.
+fn words(s: &str) -> Vec<String> {
+    let mut lexer = shlex::Shlex::new(s);
+    let mut w: Vec<String> = (&mut lexer).take_while(|w| !w.starts_with('#')).collect();
+    assert!(!lexer.had_error, "unbalanced quotes in {s}");
+    w.retain(|x| !x.is_empty());
+    w
+}
+
+/// The command as the test runs it (see the module doc); `dirs` maps each
+/// documented output directory to its temporary one.
+fn adapt(args: &[String], tmp: &Path, dirs: &mut HashMap<String, PathBuf>) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--out" => {
+                let doc = it.next().expect("--out takes a directory").clone();
+                let n = dirs.len();
+                let dir = dirs
+                    .entry(doc)
+                    .or_insert_with(|| tmp.join(format!("out{n}")));
+                out.extend(["--out".to_string(), dir.display().to_string()]);
+            }
+            "--particles" => {
+                let n: u64 = it.next().unwrap().parse().expect("a particle count");
+                out.extend(["--particles".into(), n.min(MAX_PARTICLES).to_string()]);
+            }
+            "--submit" => {}
+            _ => out.push(match dirs.get(a) {
+                Some(d) => d.display().to_string(),
+                None => a.clone(),
+            }),
+        }
+    }
+    if out.first().map(String::as_str) == Some("reproduce") && !out.iter().any(|a| a == "--quick") {
+        out.push("--quick".into());
+    }
+    out
+}
+
+/// Run one documented command; panics with its place and stderr on a
+/// non-zero exit.
+fn run(place: &str, args: &[String]) {
+    let t0 = std::time::Instant::now();
+    let o = Command::new(BIN)
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run irtp");
+    eprintln!(
+        "{place}: {:.1} s: irtp {}",
+        t0.elapsed().as_secs_f64(),
+        args.join(" ")
+    );
+    assert!(
+        o.status.success(),
+        "{place}: irtp {} exited {:?}: {}",
+        args.join(" "),
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// Every documented command, in order per file; `reproduce all` (also run
+/// by the reproduce tests) only when `with_reproduce_all`.
+fn run_documented(with_reproduce_all: bool) -> usize {
+    let mut ran = 0;
+    for file in doc_files() {
+        let text = std::fs::read_to_string(root().join(&file)).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let mut dirs = HashMap::new();
+        for (line, args) in commands(&text) {
+            let all = args.len() >= 2 && args[0] == "reproduce" && args[1] == "all";
+            if all != with_reproduce_all {
+                continue;
+            }
+            run(
+                &format!("{}:{line}", file.display()),
+                &adapt(&args, tmp.path(), &mut dirs),
+            );
+            ran += 1;
+        }
+    }
+    ran
+}
+
+#[test]
+fn every_documented_command_runs() {
+    let ran = run_documented(false);
+    assert!(ran >= 30, "only {ran} documented commands found");
+}
+
+#[test]
+#[ignore = "slow tier"]
+fn documented_reproduce_all_runs() {
+    assert!(run_documented(true) >= 1);
+}
+
+/// The example plans and the command each one's header prints.
+fn plans() -> Vec<(PathBuf, Vec<String>)> {
+    let mut plans: Vec<_> = std::fs::read_dir(root().join("examples/sweeps"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    plans.sort();
+    plans
+        .into_iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).unwrap();
+            let cmd = text
+                .lines()
+                .find_map(|l| l.trim_start_matches(['#', ' ']).strip_prefix("irtp "))
+                .unwrap_or_else(|| panic!("{p:?}: no `irtp sweep run` line in its header"));
+            (p, words(cmd))
+        })
+        .collect()
+}
+
+fn run_plans(slow: bool) {
+    for (path, args) in plans() {
+        let tmp = tempfile::tempdir().unwrap();
+        let name = path.file_name().unwrap().to_str().unwrap();
+        if SLOW_PLANS.contains(&name) != slow {
+            continue;
+        }
+        let plan = format!("examples/sweeps/{name}");
+        assert!(
+            args.contains(&plan),
+            "{name}: its header runs another plan: {args:?}"
+        );
+        let mut dirs = HashMap::new();
+        run(name, &adapt(&args, tmp.path(), &mut dirs));
+    }
+}
+
+#[test]
+fn example_plans_run() {
+    let commands: Vec<String> = plans()
+        .iter()
+        .map(|(p, _)| std::fs::read_to_string(p).unwrap())
+        .filter_map(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("command = ").map(str::to_string))
+        })
+        .collect();
+    for c in irtp_app::sweep::plan::SWEEPABLE {
+        assert!(
+            commands.contains(&format!("\"{c}\"")),
+            "no example plan for {c}"
+        );
+    }
+    run_plans(false);
+}
+
+#[test]
+#[ignore = "slow tier"]
+fn long_example_plans_run() {
+    run_plans(true);
+}
+
+/// Backquoted repository paths (`crates/…`, `docs/…`, `examples/…`,
+/// `tests/…`, `python/…`, `bench/…`, `src/…`) in the docs.
+fn named_paths(text: &str) -> Vec<String> {
+    const ROOTS: [&str; 8] = [
+        "crates/",
+        "docs/",
+        "examples/",
+        "tests/",
+        "python/",
+        "bench/",
+        "src/",
+        ".ci/",
+    ];
+    let mut out = Vec::new();
+    for (i, chunk) in text.split('`').enumerate() {
+        let p = chunk.trim_end_matches(['/', ',', '.', ':']);
+        let pathlike =
+            !p.contains([' ', '*', '{', '<', '$']) && ROOTS.iter().any(|r| p.starts_with(r));
+        if i % 2 == 1 && pathlike {
+            out.push(p.split_once(':').map_or(p, |(f, _)| f).to_string());
+        }
+    }
+    out
+}
+
+#[test]
+fn every_path_the_docs_name_exists() {
+    let mut missing = Vec::new();
+    let mut files = doc_files();
+    files.push("python/README.md".into());
+    for file in files.iter().filter(|f| root().join(f).exists()) {
+        let text = std::fs::read_to_string(root().join(file)).unwrap();
+        for p in named_paths(&text) {
+            if !root().join(&p).exists() {
+                missing.push(format!("{}: {p}", file.display()));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "paths the docs name but the tree lacks:\n{}",
+        missing.join("\n")
+    );
+}
