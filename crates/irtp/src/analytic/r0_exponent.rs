@@ -16,7 +16,7 @@
 //! about 1e-16/(k w) absolute in ρ, i.e. 1e-16/k in Q per dyadic piece.
 
 use crate::model::Drag;
-use crate::numerics::chebyshev::{self, clenshaw, NC};
+use crate::numerics::chebyshev::{self, clenshaw, Adaptive, Piece, Refine, NC};
 
 /// Largest number of pieces (a law this rough is rejected).
 const MAX_PIECES: usize = 4096;
@@ -52,34 +52,26 @@ impl EdgeIntegral {
             [1.0 / d - 1.0 / (k * w) - 1.0 / (2.0 * sigma - d)]
         };
         let w_min = 1e-9 * vu;
-        let mut pieces: Vec<(f64, chebyshev::Fit<1>)> = Vec::new();
-        let mut a = w_min;
-        while 2.0 * a <= 0.5 * vu {
-            pieces.push((2.0 * a, chebyshev::fit(&rho, a, 2.0 * a)));
-            a *= 2.0;
-        }
-        let mut stack = vec![(a, vu)];
-        while let Some((pa, pb)) = stack.pop() {
-            let f = chebyshev::fit(&rho, pa, pb);
-            // Resolved when the truncation error of λ Q over the piece is
-            // below 1e-15, absolute or relative to the piece's contribution.
+        let (mut pieces, a) = chebyshev::fit_dyadic(&rho, w_min, 0.5 * vu);
+        // Resolved when the truncation error of λ Q over the piece is below
+        // 1e-15, absolute or relative to the piece's contribution.
+        let resolved = |f: &chebyshev::Fit<1>, pa: f64, pb: f64| {
             let err = lambda * f.tail[0] * (pb - pa);
-            let ok = f.finite && err <= 1e-15 * (lambda * f.scale[0] * (pb - pa)).max(1.0);
-            if ok || pb - pa < 1e-12 * vu {
-                if !f.finite || pieces.len() > MAX_PIECES {
-                    return None;
-                }
-                pieces.push((pb, f));
-            } else {
-                let m = 0.5 * (pa + pb);
-                stack.push((m, pb));
-                stack.push((pa, m));
-            }
-        }
-        if !pieces.iter().all(|p| p.1.finite) {
+            f.finite && err <= 1e-15 * (lambda * f.scale[0] * (pb - pa)).max(1.0)
+        };
+        let opts = Adaptive {
+            resolved: &resolved,
+            refine: Refine::Bisect {
+                min_width: &|_, _| 1e-12 * vu,
+                keep_at_floor: &|_, _| true,
+            },
+            max_pieces: MAX_PIECES.saturating_sub(pieces.len()),
+        };
+        pieces.extend(chebyshev::fit_adaptive(&rho, &[(a, vu)], &opts).ok()?);
+        if !pieces.iter().all(|p| p.fit.finite) {
             return None;
         }
-        let slope_min = clenshaw(&pieces[0].1.series[0], -1.0);
+        let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = EdgeIntegral {
             bounds: vec![w_min],
             anti: Vec::with_capacity(pieces.len()),
@@ -88,7 +80,7 @@ impl EdgeIntegral {
             total: 0.0,
         };
         let mut acc = slope_min * w_min;
-        for (b, f) in pieces {
+        for Piece { b, fit: f, .. } in pieces {
             t.bounds.push(b);
             t.offset.push(acc);
             acc += clenshaw(&f.anti[0], 1.0);
