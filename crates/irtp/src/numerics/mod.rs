@@ -12,6 +12,7 @@
 pub mod band;
 pub mod bordered;
 pub mod chebyshev;
+pub mod dense;
 pub mod fastmath;
 pub mod grid;
 pub mod quad;
