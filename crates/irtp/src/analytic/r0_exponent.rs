@@ -16,7 +16,7 @@
 //! about 1e-16/(k w) absolute in ρ, i.e. 1e-16/k in Q per dyadic piece.
 
 use crate::model::Drag;
-use crate::numerics::chebyshev::{self, clenshaw, Adaptive, Piece, Refine, NC};
+use crate::numerics::chebyshev::{self, clenshaw, Piece, NC};
 
 /// Largest number of pieces (a law this rough is rejected).
 const MAX_PIECES: usize = 4096;
@@ -52,25 +52,16 @@ impl EdgeIntegral {
             [1.0 / d - 1.0 / (k * w) - 1.0 / (2.0 * sigma - d)]
         };
         let w_min = 1e-9 * vu;
-        let (mut pieces, a) = chebyshev::fit_dyadic(&rho, w_min, 0.5 * vu);
         // Resolved when the truncation error of λ Q over the piece is below
         // 1e-15, absolute or relative to the piece's contribution.
         let resolved = |f: &chebyshev::Fit<1>, pa: f64, pb: f64| {
             let err = lambda * f.tail[0] * (pb - pa);
             f.finite && err <= 1e-15 * (lambda * f.scale[0] * (pb - pa)).max(1.0)
         };
-        let opts = Adaptive {
-            resolved: &resolved,
-            refine: Refine::Bisect {
-                min_width: &|_, _| 1e-12 * vu,
-                keep_at_floor: &|_, _| true,
-            },
-            max_pieces: MAX_PIECES.saturating_sub(pieces.len()),
-        };
-        pieces.extend(chebyshev::fit_adaptive(&rho, &[(a, vu)], &opts).ok()?);
-        if !pieces.iter().all(|p| p.fit.finite) {
-            return None;
-        }
+        let range = (w_min, 0.5 * vu);
+        let pieces =
+            chebyshev::fit_towards_zero(&rho, range, &[vu], &resolved, 1e-12 * vu, MAX_PIECES)
+                .ok()?;
         let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = EdgeIntegral {
             bounds: vec![w_min],

@@ -301,6 +301,41 @@ pub fn fit_dyadic<const K: usize>(
     (pieces, a)
 }
 
+/// A piecewise fit of a table with a singular end at 0 (the flow and the
+/// r = 0 exponent of a law given by g and g'): dyadic pieces from `lo`
+/// while their right end is at most `limit` ([`fit_dyadic`]), then
+/// [`Refine::Bisect`] from there to `breaks[0]`, from `breaks[0]` to
+/// `breaks[1]`, ..., pieces narrower than `min_width` kept as they are;
+/// at most `max_pieces` in all, and [`Unresolved::Piece`] where a fit has
+/// non-finite values.
+pub fn fit_towards_zero<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    (lo, limit): (f64, f64),
+    breaks: &[f64],
+    resolved: &dyn Fn(&Fit<K>, f64, f64) -> bool,
+    min_width: f64,
+    max_pieces: usize,
+) -> Result<Vec<Piece<K>>, Unresolved> {
+    let (mut pieces, mut a) = fit_dyadic(f, lo, limit);
+    let intervals: Vec<(f64, f64)> = breaks
+        .iter()
+        .map(|&b| (std::mem::replace(&mut a, b), b))
+        .collect();
+    let opts = Adaptive {
+        resolved,
+        refine: Refine::Bisect {
+            min_width: &|_, _| min_width,
+            keep_at_floor: &|_, _| true,
+        },
+        max_pieces: max_pieces.saturating_sub(pieces.len()),
+    };
+    pieces.extend(fit_adaptive(f, &intervals, &opts)?);
+    match pieces.iter().find(|p| !p.fit.finite) {
+        Some(p) => Err(Unresolved::Piece { a: p.a, b: p.b }),
+        None => Ok(pieces),
+    }
+}
+
 /// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
 #[inline]
 pub fn clenshaw(c: &[f64; NC], x: f64) -> f64 {

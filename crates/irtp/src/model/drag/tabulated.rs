@@ -19,7 +19,7 @@
 
 use super::closed::InverseGuide;
 use super::{quadrature_time, quadrature_velocity, reachable, Drag, FlowMap};
-use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, Adaptive, Piece, Refine, NC};
+use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, Piece, NC};
 use crate::numerics::root;
 use std::sync::Arc;
 
@@ -46,24 +46,21 @@ impl Table {
     fn build<D: Drag>(drag: &D, s: f64, vs: f64, k: f64) -> Option<Table> {
         let r1 = |u: f64| [k / drag.drift_at_distance(s, u) - 1.0 / u];
         let u_min = 1e-9 * vs;
-        let (mut pieces, a) = chebyshev::fit_dyadic(&r1, u_min, 0.5 * vs);
         // Resolved when the series' truncation error, integrated over the
         // piece, is below 1e-15 absolute in R.
         let resolved = |f: &chebyshev::Fit<1>, pa: f64, pb: f64| {
             f.finite && f.tail[0] * (pb - pa) <= 1e-15 * f.scale[0].max(1.0)
         };
-        let opts = Adaptive {
-            resolved: &resolved,
-            refine: Refine::Bisect {
-                min_width: &|_, _| 1e-12 * vs,
-                keep_at_floor: &|_, _| true,
-            },
-            max_pieces: MAX_PIECES.saturating_sub(pieces.len()),
-        };
-        pieces.extend(chebyshev::fit_adaptive(&r1, &[(a, vs), (vs, 2.0 * vs)], &opts).ok()?);
-        if !pieces.iter().all(|p| p.fit.finite) {
-            return None;
-        }
+        let range = (u_min, 0.5 * vs);
+        let pieces = chebyshev::fit_towards_zero(
+            &r1,
+            range,
+            &[vs, 2.0 * vs],
+            &resolved,
+            1e-12 * vs,
+            MAX_PIECES,
+        )
+        .ok()?;
         let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = Table {
             bounds: vec![u_min],
