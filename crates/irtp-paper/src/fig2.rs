@@ -24,6 +24,7 @@ use super::{
     curve_seed, fmt_num, json_num, to_json, Claim, FigureOutput, Options, Parameters, Stage,
     Verdict, Which,
 };
+use irtp::analytic::cusp::{one_sided_slopes, slope_jump};
 use irtp::error::Result;
 use irtp::model::{Drag, DragLaw, Params};
 use irtp::parallel::{NoProgress, Progress};
@@ -132,56 +133,6 @@ impl Spec {
     }
 }
 
-/// One-sided slopes of p at v = 0 from quadratic least-squares fits on
-/// [lo, hi] and [-hi, -lo] (away from the unresolved kink); returns
-/// (left slope, right slope).
-pub fn one_sided_slopes(v: &[f64], p: &[f64], lo: f64, hi: f64) -> (f64, f64) {
-    let fit = |sign: f64| {
-        // Fit p = c0 + c1 u + c2 u² with u = sign * v in [lo, hi].
-        let mut s = [[0.0f64; 3]; 3];
-        let mut b = [0.0f64; 3];
-        for (&vv, &pp) in v.iter().zip(p) {
-            let u = sign * vv;
-            if u >= lo && u <= hi {
-                let phi = [1.0, u, u * u];
-                for i in 0..3 {
-                    for j in 0..3 {
-                        s[i][j] += phi[i] * phi[j];
-                    }
-                    b[i] += phi[i] * pp;
-                }
-            }
-        }
-        let c = solve3(s, b);
-        sign * c[1]
-    };
-    (fit(-1.0), fit(1.0))
-}
-
-fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> [f64; 3] {
-    for k in 0..3 {
-        let piv = (k..3)
-            .max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))
-            .expect("non-empty");
-        a.swap(k, piv);
-        b.swap(k, piv);
-        for i in k + 1..3 {
-            let f = a[i][k] / a[k][k];
-            let row = a[k];
-            for (x, y) in a[i][k..].iter_mut().zip(&row[k..]) {
-                *x -= f * y;
-            }
-            b[i] -= f * b[k];
-        }
-    }
-    let mut x = [0.0; 3];
-    for i in (0..3).rev() {
-        let s: f64 = (i + 1..3).map(|j| a[i][j] * x[j]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    x
-}
-
 /// Mean of a finite-volume density (cell averages `p` on cells with `edges`)
 /// over [a, b].
 pub fn bin_average(edges: &[f64], p: &[f64], a: f64, b: f64) -> f64 {
@@ -267,12 +218,6 @@ pub fn edge_class(a: f64) -> EdgeClass {
     } else {
         EdgeClass::Flat
     }
-}
-
-/// Exact slope jump P'(0+) - P'(0-) = -r (2 lambda + r - g'(0)) / Sigma².
-pub fn slope_jump_exact(p: &Params) -> f64 {
-    let r = p.rate();
-    -r * (2.0 * p.lambda() + r - p.drag().derivative(0.0)) / (p.sigma() * p.sigma())
 }
 
 /// Simulation against FP for one curve.
@@ -610,7 +555,7 @@ fn cusp(spec: &Spec, params: &Params, fp: &Density) -> Cusp {
         slope_left: sl,
         slope_right: sr,
         jump_fp: sr - sl,
-        jump_exact: slope_jump_exact(params),
+        jump_exact: slope_jump(params),
     }
 }
 
@@ -914,17 +859,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn slopes_of_a_kink() {
-        let v: Vec<f64> = (0..401).map(|i| -1.0 + i as f64 / 200.0).collect();
-        let p: Vec<f64> = v
-            .iter()
-            .map(|v| 1.0 - 2.0 * v.abs() + 0.5 * v * v)
-            .collect();
-        let (l, r) = one_sided_slopes(&v, &p, 0.02, 0.3);
-        assert!((l - 2.0).abs() < 1e-9 && (r + 2.0).abs() < 1e-9, "{l} {r}");
-    }
-
-    #[test]
     fn bin_average_of_cells() {
         let edges = [0.0, 1.0, 3.0];
         let p = [1.0, 4.0];
@@ -944,18 +878,12 @@ mod tests {
             let fp = compute::fp_stationary(&p, 20_000).unwrap();
             let sc = s / (l + r);
             let (a, b) = one_sided_slopes(&fp.v, &fp.p, 1e-3 * sc, 0.02 * sc);
-            let e = slope_jump_exact(&p);
+            let e = slope_jump(&p);
             assert!(
                 ((b - a) - e).abs() < 2e-3 * e.abs(),
                 "{d}: {} vs {e}",
                 b - a
             );
         }
-    }
-
-    #[test]
-    fn jump_sign() {
-        let p = Params::new(DragLaw::Tan, 3.0, 0.9, 5.0, 0.0).unwrap();
-        assert!((slope_jump_exact(&p) + 5.0 * (1.8 + 5.0 - 1.0) / 9.0).abs() < 1e-12);
     }
 }

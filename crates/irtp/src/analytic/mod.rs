@@ -1,7 +1,9 @@
-//! Closed-form results: the Newtonian (linear-drag) reference case, and the
+//! Closed-form results: the Newtonian (linear-drag) reference case, the
 //! r = 0 stationary densities of the paper (Eqs. (34), (35)) and of any
-//! other drag law (by quadrature).
+//! other drag law (by quadrature), and the cusp of the stationary density
+//! at the reset velocity (Eq. (18)).
 
+pub mod cusp;
 pub mod linear;
 pub mod linear_moments;
 pub mod r0;

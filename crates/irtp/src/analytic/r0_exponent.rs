@@ -16,7 +16,7 @@
 //! about 1e-16/(k w) absolute in ρ, i.e. 1e-16/k in Q per dyadic piece.
 
 use crate::model::Drag;
-use crate::numerics::chebyshev::{self, clenshaw, NC};
+use crate::numerics::chebyshev::{self, clenshaw, Piece, NC};
 
 /// Largest number of pieces (a law this rough is rejected).
 const MAX_PIECES: usize = 4096;
@@ -52,34 +52,17 @@ impl EdgeIntegral {
             [1.0 / d - 1.0 / (k * w) - 1.0 / (2.0 * sigma - d)]
         };
         let w_min = 1e-9 * vu;
-        let mut pieces: Vec<(f64, chebyshev::Fit<1>)> = Vec::new();
-        let mut a = w_min;
-        while 2.0 * a <= 0.5 * vu {
-            pieces.push((2.0 * a, chebyshev::fit(&rho, a, 2.0 * a)));
-            a *= 2.0;
-        }
-        let mut stack = vec![(a, vu)];
-        while let Some((pa, pb)) = stack.pop() {
-            let f = chebyshev::fit(&rho, pa, pb);
-            // Resolved when the truncation error of λ Q over the piece is
-            // below 1e-15, absolute or relative to the piece's contribution.
+        // Resolved when the truncation error of λ Q over the piece is below
+        // 1e-15, absolute or relative to the piece's contribution.
+        let resolved = |f: &chebyshev::Fit<1>, pa: f64, pb: f64| {
             let err = lambda * f.tail[0] * (pb - pa);
-            let ok = f.finite && err <= 1e-15 * (lambda * f.scale[0] * (pb - pa)).max(1.0);
-            if ok || pb - pa < 1e-12 * vu {
-                if !f.finite || pieces.len() > MAX_PIECES {
-                    return None;
-                }
-                pieces.push((pb, f));
-            } else {
-                let m = 0.5 * (pa + pb);
-                stack.push((m, pb));
-                stack.push((pa, m));
-            }
-        }
-        if !pieces.iter().all(|p| p.1.finite) {
-            return None;
-        }
-        let slope_min = clenshaw(&pieces[0].1.series[0], -1.0);
+            f.finite && err <= 1e-15 * (lambda * f.scale[0] * (pb - pa)).max(1.0)
+        };
+        let range = (w_min, 0.5 * vu);
+        let pieces =
+            chebyshev::fit_towards_zero(&rho, range, &[vu], &resolved, 1e-12 * vu, MAX_PIECES)
+                .ok()?;
+        let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = EdgeIntegral {
             bounds: vec![w_min],
             anti: Vec::with_capacity(pieces.len()),
@@ -88,7 +71,7 @@ impl EdgeIntegral {
             total: 0.0,
         };
         let mut acc = slope_min * w_min;
-        for (b, f) in pieces {
+        for Piece { b, fit: f, .. } in pieces {
             t.bounds.push(b);
             t.offset.push(acc);
             acc += clenshaw(&f.anti[0], 1.0);

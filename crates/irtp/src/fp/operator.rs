@@ -44,6 +44,7 @@ use super::solve::ResetFactor;
 use super::stationary::{make_grid, MAX_CELLS, MIN_CELLS};
 use crate::error::{Error, Result};
 use crate::model::Params;
+use crate::numerics::bordered::{Capacitance, LowRank};
 use crate::numerics::trbdf2::ShiftedLinear;
 use crate::numerics::Failure;
 
@@ -52,10 +53,9 @@ use crate::numerics::Failure;
 struct Shifted {
     c: f64,
     factor: ResetFactor,
-    /// Z = B'^{-1} E, the responses to unit sources in the + and - target cells.
-    z: [Vec<f64>; 2],
-    /// S^{-1} (row-major).
-    s_inv: [[f64; 2]; 2],
+    /// The Sherman-Morrison-Woodbury correction: Z = B'^{-1} E, the
+    /// responses to unit sources in the + and - target cells, and S^{-1}.
+    low: LowRank,
     /// With a refractory period: L = (I + cK)^{-1} (row-major).
     l: [[f64; 2]; 2],
 }
@@ -350,7 +350,7 @@ impl ForwardOperator {
                 if inject {
                     let (fp, fm) = state_sums(x);
                     let (f0, f1) = g.reinject(self.rate * fp, self.rate * fm);
-                    smw(s, [f0, f1], x);
+                    s.low.correct(x, [f0, f1]);
                 }
             }
             Some(h) => solve_held(g, h, s, b, x, inject),
@@ -381,8 +381,7 @@ impl ForwardOperator {
             return Shifted {
                 c,
                 factor,
-                z,
-                s_inv,
+                low: LowRank::new(z, s_inv),
                 l,
             };
         }
@@ -397,22 +396,13 @@ impl ForwardOperator {
         let off = [inject(&z[0]).1, inject(&z[1]).0];
         let (s00, s11) = (s - off[0], s - off[1]);
         let det = s * s - s * (off[0] + off[1]);
-        let s_inv = [[s11 / det, -off[1] / det], [-off[0] / det, s00 / det]];
+        let s_inv = Capacitance::inverted([[s00, off[1]], [off[0], s11]], det);
         Shifted {
             c,
             factor,
-            z,
-            s_inv,
+            low: LowRank::new(z, s_inv),
             l: [[0.0; 2]; 2],
         }
-    }
-}
-
-/// x -= Z S^{-1} f: the Sherman-Morrison-Woodbury correction.
-fn smw(s: &Shifted, f: [f64; 2], x: &mut [f64]) {
-    let a = mat2(&s.s_inv, f);
-    for (i, xi) in x.iter_mut().enumerate() {
-        *xi -= s.z[0][i] * a[0] + s.z[1][i] * a[1];
     }
 }
 
@@ -430,7 +420,7 @@ fn mat2(m: &[[f64; 2]; 2], y: [f64; 2]) -> [f64; 2] {
 /// -c/(1 + rc), so each column of S sums to
 /// s = (1 + cκ + rc) / ((1 + cκ)(1 + rc)); the off-diagonal entries are ≤ 0
 /// and the diagonal is s plus their magnitude.
-fn held_s_inv(h: &Held, r: f64, c: f64, z: &[Vec<f64>; 2]) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
+fn held_s_inv(h: &Held, r: f64, c: f64, z: &[Vec<f64>; 2]) -> ([[f64; 2]; 2], Capacitance) {
     let (k, l) = (c * h.kappa, c * h.lambda());
     let det = (1.0 + k) * (1.0 + k + 2.0 * l);
     let (d, o) = ((1.0 + k + l) / det, l / det);
@@ -443,7 +433,7 @@ fn held_s_inv(h: &Held, r: f64, c: f64, z: &[Vec<f64>; 2]) -> ([[f64; 2]; 2], [[
     let s = (1.0 + k + r * c) / ((1.0 + k) * (1.0 + r * c));
     let (s00, s11) = (s - off[0], s - off[1]);
     let det = s * s - s * (off[0] + off[1]);
-    let s_inv = [[s11 / det, -off[1] / det], [-off[0] / det, s00 / det]];
+    let s_inv = Capacitance::inverted([[s00, off[1]], [off[0], s11]], det);
     (lm, s_inv)
 }
 
@@ -468,7 +458,7 @@ fn solve_held(g: &Grid, h: &Held, s: &Shifted, b: &[f64], x: &mut [f64], inject:
     if inject {
         let (fp, fm) = state_sums(xc);
         let f = mat2(&s.l, h.influx(fp, fm)).map(|v| c * h.kappa * v);
-        smw(s, f, xc);
+        s.low.correct(xc, f);
         let (xp, xm) = state_sums(xc);
         inf = mat2(&s.l, h.influx(xp, xm));
     }

@@ -24,6 +24,8 @@ use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::reset::{Refractory, Reset};
 use crate::model::Drag;
+use crate::numerics::band::Band;
+use crate::numerics::bordered::{responses, Capacitance, LowRank};
 use serde::{Deserialize, Serialize};
 
 /// Which drift the ± states carry in the backward equations.
@@ -316,112 +318,6 @@ fn drifts<D: Drag>(g: D, sigma: f64, v: f64, sign: DriftSign) -> (f64, f64) {
     }
 }
 
-/// Banded matrix with partial pivoting (LINPACK-style band LU). Hand-written:
-/// the crate has no banded solver, and with 2 sub- and 2 super-diagonals a
-/// dense or sparse general solver would be far slower.
-pub(super) struct Band {
-    n: usize,
-    kl: usize,
-    ku: usize,
-    w: usize,
-    a: Vec<f64>,
-    piv: Vec<usize>,
-}
-
-impl Band {
-    pub(super) fn new(n: usize, kl: usize, ku: usize) -> Self {
-        let w = 2 * kl + ku + 1;
-        Band {
-            n,
-            kl,
-            ku,
-            w,
-            a: vec![0.0; n * w],
-            piv: vec![0; n],
-        }
-    }
-    #[inline]
-    fn idx(&self, i: usize, j: usize) -> usize {
-        debug_assert!(j + self.kl >= i && j <= i + self.ku + self.kl);
-        i * self.w + (j + self.kl - i)
-    }
-    #[inline]
-    pub(super) fn set(&mut self, i: usize, j: usize, x: f64) {
-        let k = self.idx(i, j);
-        self.a[k] = x;
-    }
-    /// Entry (i, j) of an unfactored matrix, |i - j| within the band.
-    #[inline]
-    pub(super) fn get(&self, i: usize, j: usize) -> f64 {
-        self.a[self.idx(i, j)]
-    }
-    /// The columns j of row i inside the band (unfactored).
-    pub(super) fn row_range(&self, i: usize) -> std::ops::RangeInclusive<usize> {
-        i.saturating_sub(self.kl)..=(i + self.ku).min(self.n - 1)
-    }
-    pub(super) fn factor(&mut self) -> Result<()> {
-        let (n, kl, ku) = (self.n, self.kl, self.ku);
-        for k in 0..n {
-            let last = (k + kl).min(n - 1);
-            let mut p = k;
-            let mut best = self.a[self.idx(k, k)].abs();
-            for i in k + 1..=last {
-                let x = self.a[self.idx(i, k)].abs();
-                if x > best {
-                    best = x;
-                    p = i;
-                }
-            }
-            if !(best > 0.0) || !best.is_finite() {
-                return Err(Error::Numerical {
-                    method: "mfpt backward solve",
-                    reason: format!("singular band matrix at row {k}"),
-                });
-            }
-            self.piv[k] = p;
-            let jmax = (k + ku + kl).min(n - 1);
-            if p != k {
-                for j in k..=jmax {
-                    let (x, y) = (self.idx(k, j), self.idx(p, j));
-                    self.a.swap(x, y);
-                }
-            }
-            let d = self.a[self.idx(k, k)];
-            for i in k + 1..=last {
-                let ik = self.idx(i, k);
-                let l = self.a[ik] / d;
-                self.a[ik] = l;
-                if l != 0.0 {
-                    for j in k + 1..=jmax {
-                        let kj = self.a[self.idx(k, j)];
-                        let ij = self.idx(i, j);
-                        self.a[ij] -= l * kj;
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-    #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
-    pub(super) fn solve(&self, b: &mut [f64]) {
-        let (n, kl, ku) = (self.n, self.kl, self.ku);
-        for k in 0..n {
-            b.swap(k, self.piv[k]);
-            let bk = b[k];
-            for i in k + 1..=(k + kl).min(n - 1) {
-                b[i] -= self.a[self.idx(i, k)] * bk;
-            }
-        }
-        for k in (0..n).rev() {
-            let mut s = b[k];
-            for j in k + 1..=(k + ku + kl).min(n - 1) {
-                s -= self.a[self.idx(k, j)] * b[j];
-            }
-            b[k] = s / self.a[self.idx(k, k)];
-        }
-    }
-}
-
 /// Source terms s± of the equations "... = -s±": 1 for the MFPT itself,
 /// node values for derivatives and higher moments.
 enum Source<'a> {
@@ -526,7 +422,10 @@ fn solve_mesh(
     if rate > 0.0 {
         refractory(p, m, &src, &mut cp, &mut cm, &mut b)?;
     }
-    a.factor()?;
+    a.factor().map_err(|e| Error::Numerical {
+        method: "mfpt backward solve",
+        reason: e.to_string(),
+    })?;
     a.solve(&mut b);
     let mut x = b;
     if rate > 0.0 {
@@ -598,29 +497,18 @@ fn refractory(
 }
 
 /// The reset terms of the backward equations by two extra solves with the
-/// factored matrix: x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and
-/// R± = x±(v_r) at the reset node. Returns false when the 2×2 system is
-/// singular or overflows (tau beyond the f64 range).
-fn reset_correction(
-    a: &Band,
-    x: &mut [f64],
-    mut cp: Vec<f64>,
-    mut cm: Vec<f64>,
-    reset: usize,
-) -> bool {
-    let n = x.len();
-    // x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+, y2 = A⁻¹c-, and R± = x±(v_r).
+/// factored matrix ([`LowRank`]): x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+,
+/// y2 = A⁻¹c-, and R± = x±(v_r) at the reset node. Returns false when the
+/// 2×2 system is singular or overflows (tau beyond the f64 range).
+fn reset_correction(a: &Band, x: &mut [f64], cp: Vec<f64>, cm: Vec<f64>, reset: usize) -> bool {
     // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
     // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
     // so the 2×2 system is rewritten in sums of non-negative terms only:
     // no cancellation even when tau ~ e^{r T} is astronomically large.
-    let mut q = vec![0.0; n];
-    q[n - 1] = 1.0;
-    a.solve(&mut q);
-    a.solve(&mut cp);
-    a.solve(&mut cm);
+    let q = unit_response(a, x.len());
+    let z = responses(|y| a.solve(y), [cp, cm]);
     let (kp, km) = (2 * reset, 2 * reset + 1);
-    let (y1m, y2p) = (cp[km], cm[kp]);
+    let (y1m, y2p) = (z[0][km], z[1][kp]);
     let (qp, qm) = (q[kp], q[km]);
     // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
     let (m11, m22) = (qp - y2p, qm - y1m);
@@ -628,12 +516,18 @@ fn reset_correction(
     if !(det > 0.0) || !det.is_finite() {
         return false;
     }
-    let rp = (x[kp] * m22 - y2p * x[km]) / det;
-    let rm = (m11 * x[km] - y1m * x[kp]) / det;
-    for k in 0..n {
-        x[k] -= rp * cp[k] + rm * cm[k];
-    }
+    let s = Capacitance::with_det([[m11, y2p], [y1m, m22]], det);
+    let f = [x[kp], x[km]];
+    LowRank::new(z, s).correct(x, f);
     true
+}
+
+/// q = A⁻¹ e_last: the response to tau+(v_t) = 1 with no source.
+fn unit_response(a: &Band, n: usize) -> Vec<f64> {
+    let mut q = vec![0.0; n];
+    q[n - 1] = 1.0;
+    a.solve(&mut q);
+    q
 }
 
 /// The probability that a reset of `p` (canonical frame) lands at or
@@ -655,22 +549,18 @@ fn beyond(p: &Problem) -> f64 {
 fn spread_correction(
     a: &Band,
     x: &mut [f64],
-    mut cp: Vec<f64>,
-    mut cm: Vec<f64>,
+    cp: Vec<f64>,
+    cm: Vec<f64>,
     w: &[f64],
     beyond: f64,
 ) -> bool {
-    let n = x.len();
-    let mut q = vec![0.0; n];
-    q[n - 1] = 1.0;
-    a.solve(&mut q);
-    a.solve(&mut cp);
-    a.solve(&mut cm);
+    let q = unit_response(a, x.len());
+    let z = responses(|y| a.solve(y), [cp, cm]);
     let ell = |y: &[f64], s: usize| -> f64 {
         w.iter().enumerate().map(|(j, wj)| wj * y[2 * j + s]).sum()
     };
     // -ℓ+(y2), -ℓ-(y1) >= 0; m11 = 1 + ℓ+(y1), m22 = 1 + ℓ-(y2).
-    let (y2p, y1m) = (-ell(&cm, 0), -ell(&cp, 1));
+    let (y2p, y1m) = (-ell(&z[1], 0), -ell(&z[0], 1));
     let (m11, m22) = (beyond + ell(&q, 0) + y2p, beyond + ell(&q, 1) + y1m);
     let det = (beyond + ell(&q, 0)) * (beyond + ell(&q, 1))
         + (beyond + ell(&q, 0)) * y1m
@@ -678,12 +568,9 @@ fn spread_correction(
     if !(det > 0.0) || !det.is_finite() {
         return false;
     }
-    let (bp, bm) = (ell(x, 0), ell(x, 1));
-    let rp = (bp * m22 + y2p * bm) / det;
-    let rm = (m11 * bm + y1m * bp) / det;
-    for k in 0..n {
-        x[k] -= rp * cp[k] + rm * cm[k];
-    }
+    let s = Capacitance::with_det([[m11, -y2p], [-y1m, m22]], det);
+    let f = [ell(x, 0), ell(x, 1)];
+    LowRank::new(z, s).correct(x, f);
     true
 }
 

@@ -36,10 +36,12 @@
 //! ([`UpwindOperator::set_reset_atom`]).
 //! First order in h: [`super::distribution`] extrapolates two nested meshes.
 
-use super::backward::{Assembly, Band, Mesh};
+use super::backward::{Assembly, Mesh};
 use super::Problem;
 use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Drag;
+use crate::numerics::band::Band;
+use crate::numerics::bordered::{responses, LowRank};
 use crate::numerics::quad::gk15;
 use crate::numerics::trbdf2::ShiftedLinear;
 use crate::numerics::Failure;
@@ -82,8 +84,9 @@ pub(super) struct UpwindOperator {
     ramps: Vec<(f64, f64)>,
     /// Offset of the integrator's clock (it starts at 0 on every call).
     pub(super) t0: f64,
-    /// (c, factored I - cA, (I - cA)⁻¹ of -c times both border columns).
-    cache: Option<(f64, Band, Vec<f64>, Vec<f64>)>,
+    /// (c, factored I - cA, the correction by (I - cA)⁻¹ of -c times both
+    /// border columns).
+    cache: Option<(f64, Band, LowRank)>,
     /// Scales of the integrals I and J (tau, tau²), for their error weights.
     pub(super) scales: (f64, f64),
     /// The reported unknowns: S_c± at v_0 and the four integrals.
@@ -245,10 +248,10 @@ impl UpwindOperator {
         let mut mass = vec![0.0; n + EXTRA];
         self.apply_mass(&self.initial(), &mut mass);
         // (0·M - 1·A) x = b solves -A x = b.
-        let (band, y1, y2) = self.factor(1.0, false)?;
+        let (band, low) = self.factor(1.0, false)?;
         let solve = |mut x: Vec<f64>| {
             band.solve(&mut x);
-            self.remove_borders(&mut x, &y1, &y2);
+            self.remove_borders(&mut x, &low);
             x
         };
         let x1 = solve((0..n).map(|i| mass[i] + f1[i]).collect());
@@ -311,29 +314,18 @@ impl UpwindOperator {
 
     /// x -= R+ y1 + R- y2 with R± the reset values of the solution
     /// ([`UpwindOperator::reset_values`]) solved from the 2×2 system
-    /// (bordering: the reset columns outside the band).
-    fn remove_borders(&self, x: &mut [f64], y1: &[f64], y2: &[f64]) {
-        if !self.borders {
-            return;
-        }
-        let ((y1p, y1m), (y2p, y2m)) = (self.reset_values(y1), self.reset_values(y2));
-        let (xp, xm) = self.reset_values(x);
-        let (a11, a12, a21, a22) = (1.0 + y1p, y2p, y1m, 1.0 + y2m);
-        let det = a11 * a22 - a12 * a21;
-        let (rp, rm) = ((xp * a22 - a12 * xm) / det, (a11 * xm - a21 * xp) / det);
-        for k in 0..self.n {
-            x[k] -= rp * y1[k] + rm * y2[k];
+    /// (bordering: the reset columns outside the band, [`LowRank`]).
+    fn remove_borders(&self, x: &mut [f64], low: &LowRank) {
+        if self.borders {
+            let (p, m) = self.reset_values(x);
+            low.correct(x, [p, m]);
         }
     }
 
     /// M - cA factored (M = I except the algebraic row of S_c+(v_t); no M
     /// when `mass` is false), and its inverse applied to -c times each
     /// border column.
-    fn factor(
-        &self,
-        c: f64,
-        mass: bool,
-    ) -> std::result::Result<(Band, Vec<f64>, Vec<f64>), Failure> {
+    fn factor(&self, c: f64, mass: bool) -> std::result::Result<(Band, LowRank), Failure> {
         let n = self.n;
         let mut b = Band::new(n, 2, 2);
         for i in 0..n {
@@ -348,13 +340,13 @@ impl UpwindOperator {
             method: METHOD,
             at: c,
         })?;
-        let border = |col: &[f64]| {
-            let mut y: Vec<f64> = col.iter().map(|x| -c * x).collect();
-            b.solve(&mut y);
-            y
-        };
-        let (y1, y2) = (border(&self.a.cp), border(&self.a.cm));
-        Ok((b, y1, y2))
+        let scaled = |col: &[f64]| col.iter().map(|x| -c * x).collect::<Vec<f64>>();
+        let z = responses(|y| b.solve(y), [scaled(&self.a.cp), scaled(&self.a.cm)]);
+        let low = LowRank::standard(z, |y| {
+            let (p, m) = self.reset_values(y);
+            [p, m]
+        });
+        Ok((b, low))
     }
 }
 
@@ -447,14 +439,14 @@ impl ShiftedLinear for UpwindOperator {
             .as_ref()
             .map_or(true, |k| k.0.to_bits() != c.to_bits())
         {
-            let (f, y1, y2) = self.factor(c, true)?;
-            self.cache = Some((c, f, y1, y2));
+            let (f, low) = self.factor(c, true)?;
+            self.cache = Some((c, f, low));
         }
-        let (_, f, y1, y2) = self.cache.as_ref().expect("factored above");
+        let (_, f, low) = self.cache.as_ref().expect("factored above");
         let n = self.n;
         x[..n].copy_from_slice(&b[..n]);
         f.solve(&mut x[..n]);
-        self.remove_borders(&mut x[..n], y1, y2);
+        self.remove_borders(&mut x[..n], low);
         // I - c S_c(v_0) = b_I, J - c I = b_J.
         x[n] = b[n] + c * x[2 * self.start];
         x[n + 1] = b[n + 1] + c * x[2 * self.start + 1];

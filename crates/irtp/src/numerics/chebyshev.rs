@@ -1,6 +1,7 @@
 //! Piecewise Chebyshev tables: fit a few smooth functions on a piece by
-//! interpolation at Chebyshev points, integrate the series exactly, and sum
-//! series by Clenshaw's recurrence. Hand-written because the tables are
+//! interpolation at Chebyshev points, refine the pieces adaptively until
+//! the fits are resolved ([`fit_adaptive`]), integrate the series exactly,
+//! and sum series by Clenshaw's recurrence. Hand-written because the tables are
 //! evaluated once per event in the exact sampler: a fixed-degree,
 //! allocation-free kernel is faster than any general crate.
 
@@ -106,6 +107,235 @@ pub fn fit<const K: usize>(f: &dyn Fn(f64) -> [f64; K], a: f64, b: f64) -> Fit<K
     out
 }
 
+/// One piece [a, b] of a piecewise fit.
+#[derive(Clone, Debug)]
+pub struct Piece<const K: usize> {
+    /// Left end.
+    pub a: f64,
+    /// Right end.
+    pub b: f64,
+    /// The fit on [a, b].
+    pub fit: Fit<K>,
+}
+
+/// How [`fit_adaptive`] refines a piece whose fit is not resolved.
+#[derive(Clone, Copy)]
+pub enum Refine<'a> {
+    /// Halve the unresolved piece alone, depth first (pieces come out left
+    /// to right), until it is resolved or narrower than `min_width(a, b)`
+    /// (which may depend on where the piece lies, e.g. finer at a kink).
+    /// There a piece with finite values is kept unresolved where
+    /// `keep_at_floor(a, b)` says so; anywhere else the fit fails.
+    Bisect {
+        /// Width below which a piece [a, b] is not halved again.
+        min_width: &'a dyn Fn(f64, f64) -> f64,
+        /// Whether an unresolved piece at that width is kept.
+        keep_at_floor: &'a dyn Fn(f64, f64) -> bool,
+    },
+    /// Cover each interval with 2^d equal pieces, the smallest
+    /// d ≤ `max_depth` for which every piece is resolved (for tables that
+    /// find a piece by arithmetic instead of a search).
+    Uniform {
+        /// Largest d tried.
+        max_depth: u32,
+    },
+}
+
+/// The options of [`fit_adaptive`].
+#[derive(Clone, Copy)]
+pub struct Adaptive<'a, const K: usize> {
+    /// Whether the fit on [a, b] (the arguments after the fit) is accurate
+    /// enough to keep; the caller's tolerance (coefficient decay, rounding
+    /// noise, integrated error, ...).
+    pub resolved: &'a dyn Fn(&Fit<K>, f64, f64) -> bool,
+    /// The refinement strategy.
+    pub refine: Refine<'a>,
+    /// Most pieces the fit may keep.
+    pub max_pieces: usize,
+}
+
+/// Why [`fit_adaptive`] gave up: the function is too rough (or not finite)
+/// for the tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Unresolved {
+    /// A piece at the smallest width is neither resolved nor kept.
+    #[error("Chebyshev fit not resolved on [{a}, {b}] at the smallest piece width")]
+    Piece {
+        /// Left end of the piece.
+        a: f64,
+        /// Right end of the piece.
+        b: f64,
+    },
+    /// No uniform subdivision up to 2^`max_depth` pieces is resolved.
+    #[error("Chebyshev fit not resolved on [{a}, {b}] with up to 2^{max_depth} pieces")]
+    Depth {
+        /// Left end of the interval.
+        a: f64,
+        /// Right end of the interval.
+        b: f64,
+        /// Deepest subdivision tried.
+        max_depth: u32,
+    },
+    /// More than `max` pieces would be needed.
+    #[error("Chebyshev fit needs more than {max} pieces")]
+    TooManyPieces {
+        /// The limit.
+        max: usize,
+    },
+}
+
+/// Fit `f` (K functions at once) piecewise on consecutive `intervals`,
+/// refining each as `opts` says until every kept piece is resolved. The
+/// pieces come out left to right, covering the intervals.
+pub fn fit_adaptive<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    intervals: &[(f64, f64)],
+    opts: &Adaptive<K>,
+) -> Result<Vec<Piece<K>>, Unresolved> {
+    match opts.refine {
+        Refine::Bisect {
+            min_width,
+            keep_at_floor,
+        } => bisect(f, intervals, opts, min_width, keep_at_floor),
+        Refine::Uniform { max_depth } => {
+            let mut pieces = Vec::new();
+            for &(a, b) in intervals {
+                let budget = opts.max_pieces - pieces.len();
+                pieces.extend(uniform(f, a, b, opts.resolved, max_depth, budget)?);
+            }
+            Ok(pieces)
+        }
+    }
+}
+
+/// [`Refine::Bisect`]: a stack of pieces, the leftmost on top.
+fn bisect<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    intervals: &[(f64, f64)],
+    opts: &Adaptive<K>,
+    min_width: &dyn Fn(f64, f64) -> f64,
+    keep_at_floor: &dyn Fn(f64, f64) -> bool,
+) -> Result<Vec<Piece<K>>, Unresolved> {
+    let mut pieces = Vec::new();
+    let mut stack: Vec<(f64, f64)> = intervals.iter().rev().copied().collect();
+    while let Some((a, b)) = stack.pop() {
+        let fit = fit(f, a, b);
+        let keep = if (opts.resolved)(&fit, a, b) {
+            true
+        } else if b - a < min_width(a, b) {
+            if !(fit.finite && keep_at_floor(a, b)) {
+                return Err(Unresolved::Piece { a, b });
+            }
+            true
+        } else {
+            false
+        };
+        if keep {
+            if pieces.len() >= opts.max_pieces {
+                return Err(Unresolved::TooManyPieces {
+                    max: opts.max_pieces,
+                });
+            }
+            pieces.push(Piece { a, b, fit });
+        } else {
+            let m = 0.5 * (a + b);
+            stack.push((m, b));
+            stack.push((a, m));
+        }
+    }
+    Ok(pieces)
+}
+
+/// [`Refine::Uniform`] on [a, b] with at most `max_pieces` pieces.
+fn uniform<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    a: f64,
+    b: f64,
+    resolved: &dyn Fn(&Fit<K>, f64, f64) -> bool,
+    max_depth: u32,
+    max_pieces: usize,
+) -> Result<Vec<Piece<K>>, Unresolved> {
+    'depth: for d in 0..=max_depth {
+        let m = 1usize << d;
+        if m > max_pieces {
+            return Err(Unresolved::TooManyPieces { max: max_pieces });
+        }
+        let mut pieces = Vec::with_capacity(m);
+        for j in 0..m {
+            let pa = a + (b - a) * j as f64 / m as f64;
+            let pb = if j + 1 == m {
+                b
+            } else {
+                a + (b - a) * (j + 1) as f64 / m as f64
+            };
+            let fit = fit(f, pa, pb);
+            if !resolved(&fit, pa, pb) {
+                continue 'depth;
+            }
+            pieces.push(Piece { a: pa, b: pb, fit });
+        }
+        return Ok(pieces);
+    }
+    Err(Unresolved::Depth { a, b, max_depth })
+}
+
+/// Fits of `f` on the dyadic pieces [lo 2^i, lo 2^(i+1)] whose right end
+/// is at most `limit` (towards a singular end at 0, where the scale of
+/// variation shrinks with the distance), and the right end of the last
+/// one (`lo` when there is none).
+pub fn fit_dyadic<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    lo: f64,
+    limit: f64,
+) -> (Vec<Piece<K>>, f64) {
+    let mut pieces = Vec::new();
+    let mut a = lo;
+    while 2.0 * a <= limit {
+        pieces.push(Piece {
+            a,
+            b: 2.0 * a,
+            fit: fit(f, a, 2.0 * a),
+        });
+        a *= 2.0;
+    }
+    (pieces, a)
+}
+
+/// A piecewise fit of a table with a singular end at 0 (the flow and the
+/// r = 0 exponent of a law given by g and g'): dyadic pieces from `lo`
+/// while their right end is at most `limit` ([`fit_dyadic`]), then
+/// [`Refine::Bisect`] from there to `breaks[0]`, from `breaks[0]` to
+/// `breaks[1]`, ..., pieces narrower than `min_width` kept as they are;
+/// at most `max_pieces` in all, and [`Unresolved::Piece`] where a fit has
+/// non-finite values.
+pub fn fit_towards_zero<const K: usize>(
+    f: &dyn Fn(f64) -> [f64; K],
+    (lo, limit): (f64, f64),
+    breaks: &[f64],
+    resolved: &dyn Fn(&Fit<K>, f64, f64) -> bool,
+    min_width: f64,
+    max_pieces: usize,
+) -> Result<Vec<Piece<K>>, Unresolved> {
+    let (mut pieces, mut a) = fit_dyadic(f, lo, limit);
+    let intervals: Vec<(f64, f64)> = breaks
+        .iter()
+        .map(|&b| (std::mem::replace(&mut a, b), b))
+        .collect();
+    let opts = Adaptive {
+        resolved,
+        refine: Refine::Bisect {
+            min_width: &|_, _| min_width,
+            keep_at_floor: &|_, _| true,
+        },
+        max_pieces: max_pieces.saturating_sub(pieces.len()),
+    };
+    pieces.extend(fit_adaptive(f, &intervals, &opts)?);
+    match pieces.iter().find(|p| !p.fit.finite) {
+        Some(p) => Err(Unresolved::Piece { a: p.a, b: p.b }),
+        None => Ok(pieces),
+    }
+}
+
 /// Σ_{k=0}^{N} c_k T_k(x) by Clenshaw's recurrence.
 #[inline]
 pub fn clenshaw(c: &[f64; NC], x: f64) -> f64 {
@@ -206,5 +436,56 @@ mod tests {
         }
         let g = fit(&|x: f64| [1.0 / (x - 0.49)], 0.5, 1.5);
         assert!(!g.resolved(1e-14));
+    }
+
+    /// A pole just left of the interval: bisection refines towards it, the
+    /// uniform subdivision refines everywhere, both resolve, and a too
+    /// small budget or floor is reported.
+    #[test]
+    fn adaptive_fits_refine_towards_a_pole() {
+        let f = |x: f64| [1.0 / (x - 0.49)];
+        let resolved = |fit: &Fit<1>, _: f64, _: f64| fit.resolved(1e-13);
+        let bisect = Refine::Bisect {
+            min_width: &|_, _| 1e-6,
+            keep_at_floor: &|_, _| false,
+        };
+        let mut opts = Adaptive {
+            resolved: &resolved,
+            refine: bisect,
+            max_pieces: 1000,
+        };
+        let pieces = fit_adaptive(&f, &[(0.5, 1.0), (1.0, 1.5)], &opts).unwrap();
+        assert_eq!((pieces[0].a, pieces.last().unwrap().b), (0.5, 1.5));
+        assert!(pieces.windows(2).all(|w| w[0].b == w[1].a));
+        assert!(pieces[0].b - pieces[0].a < pieces.last().unwrap().b - pieces.last().unwrap().a);
+        for &v in &[0.5, 0.5001, 0.7, 1.5] {
+            let p = pieces.iter().find(|p| p.a <= v && v <= p.b).unwrap();
+            let y = clenshaw(&p.fit.series[0], to_unit(v, p.a, p.b));
+            assert!((y - f(v)[0]).abs() < 1e-11 * f(v)[0], "{v}: {y}");
+        }
+        opts.max_pieces = 3;
+        assert_eq!(
+            fit_adaptive(&f, &[(0.5, 1.5)], &opts).unwrap_err(),
+            Unresolved::TooManyPieces { max: 3 }
+        );
+        opts.max_pieces = 1000;
+        opts.refine = Refine::Bisect {
+            min_width: &|_, _| 0.1,
+            keep_at_floor: &|_, _| false,
+        };
+        assert!(matches!(
+            fit_adaptive(&f, &[(0.5, 1.5)], &opts),
+            Err(Unresolved::Piece { a: 0.5, .. })
+        ));
+        opts.refine = Refine::Uniform { max_depth: 12 };
+        let pieces = fit_adaptive(&f, &[(0.5, 1.5)], &opts).unwrap();
+        assert!(pieces.len().is_power_of_two() && pieces.len() > 8);
+        opts.refine = Refine::Uniform { max_depth: 2 };
+        assert!(matches!(
+            fit_adaptive(&f, &[(0.5, 1.5)], &opts),
+            Err(Unresolved::Depth { max_depth: 2, .. })
+        ));
+        let (dyadic, end) = fit_dyadic(&f, 1e-3, 0.5);
+        assert_eq!((dyadic.len(), end), (8, 0.256));
     }
 }

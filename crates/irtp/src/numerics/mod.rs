@@ -1,14 +1,18 @@
-//! Small hand-written numerical kernels shared by the model (exact flow) and
-//! the closed-form densities: Gauss–Kronrod quadrature, a safeguarded root
-//! finder, Chebyshev tables, fast elementary functions, point grids and
-//! validated time grids.
+//! Small hand-written numerical kernels shared by the model (exact flow),
+//! the solvers and the closed-form densities: Gauss–Kronrod quadrature, a
+//! safeguarded root finder, banded LU and its low-rank corrections,
+//! Chebyshev tables, fast elementary functions, point grids and validated
+//! time grids.
 //! Neutral ground so that `model` does not depend on `analytic`.
 //!
 //! Every iterative kernel reports failure ([`Failure`]) instead of returning
 //! its last iterate: callers either propagate it with `?` (it converts into
 //! [`crate::Error`]) or document their fallback.
 
+pub mod band;
+pub mod bordered;
 pub mod chebyshev;
+pub mod dense;
 pub mod fastmath;
 pub mod grid;
 pub mod quad;

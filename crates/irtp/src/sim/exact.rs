@@ -50,7 +50,9 @@ use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
 use crate::model::reset::{Periodic, Refractory, Reset, ResetRule, Solver};
 use crate::model::{Drag, Params};
-use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
+use crate::numerics::chebyshev::{
+    self, clenshaw, clenshaw2, Adaptive, Piece, Refine, Unresolved, NC,
+};
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use crate::sim::control::Coupled;
@@ -89,66 +91,47 @@ impl DeficitTable {
             };
             [f1, u * f1]
         };
-        let mut pieces: Vec<(f64, f64, [[f64; NC]; 2])> = Vec::new();
-        let mut stack = vec![(lo, hi)];
-        let min_width = (hi - lo) * 1e-9;
-        let kink_width = (hi - lo) * 1e-15;
-        // Initial uniform split, then refine by coefficient decay. Where g
-        // jumps at v = 0 (Coulomb friction) so does the integrand: v = 0 is
-        // made a piece boundary.
-        stack.clear();
-        let init = 8;
-        let jump = drag.static_friction() > 0.0;
-        for i in (0..init).rev() {
-            let a = lo + (hi - lo) * i as f64 / init as f64;
-            let b = if i + 1 == init {
-                hi
-            } else {
-                lo + (hi - lo) * (i + 1) as f64 / init as f64
-            };
-            if jump && a < 0.0 && 0.0 < b {
-                stack.push((0.0, b));
-                stack.push((a, 0.0));
-            } else {
-                stack.push((a, b));
-            }
-        }
-        while let Some((a, b)) = stack.pop() {
-            let fit = chebyshev::fit(&f, a, b);
-            let abscissa = a.abs().max(b.abs()).max(vs.abs());
-            let (ok, c) = (fit.resolved_to_noise(1e-14, abscissa), fit.anti);
-            // A piece at a kink of g with infinite slope (the power law with
-            // n < 1 at v = 0): the series cannot decay to rounding, but the
-            // integrand f is bounded and f(0) + c |v|^n across it, so the
-            // pieces at the kink are halved down to 1e-15 of the table (one
-            // piece per halving) and the last is kept: its antiderivative
-            // error is below its width times the variation of f on it. The
-            // time average of v² is v*² t - 2 v* I_1 + I_2, which cancels
-            // when v* ≫ |v| (n = 0.1 at Sigma = 3: v* = 3^10), so I_1 must be
-            // accurate to far better than 1/v*: a floor of 1e-9 of the table
-            // gave <v²> = 2.58 ± 0.01 there against the FP solver's 1.33.
-            let kink = kink_inside(drag, a, b);
-            let floor = if kink { kink_width } else { min_width };
-            let ok = ok || (kink && fit.finite && b - a < floor);
-            if ok || b - a < floor {
-                if !ok {
-                    return Err(Error::Numerical {
-                        method: "exact sampler table",
-                        reason: format!("deficit integrand not resolved near v = {a} (s = {s})"),
-                    });
+        let (min_width, kink_width) = ((hi - lo) * 1e-9, (hi - lo) * 1e-15);
+        // A piece at a kink of g with infinite slope (the power law with
+        // n < 1 at v = 0): the series cannot decay to rounding, but the
+        // integrand f is bounded and f(0) + c |v|^n across it, so the
+        // pieces at the kink are halved down to 1e-15 of the table (one
+        // piece per halving) and the last is kept: its antiderivative
+        // error is below its width times the variation of f on it. The
+        // time average of v² is v*² t - 2 v* I_1 + I_2, which cancels
+        // when v* ≫ |v| (n = 0.1 at Sigma = 3: v* = 3^10), so I_1 must be
+        // accurate to far better than 1/v*: a floor of 1e-9 of the table
+        // gave <v²> = 2.58 ± 0.01 there against the FP solver's 1.33.
+        let kink = |a: f64, b: f64| kink_inside(drag, a, b);
+        let floor = |a: f64, b: f64| if kink(a, b) { kink_width } else { min_width };
+        let resolved = |fit: &chebyshev::Fit<2>, a: f64, b: f64| {
+            fit.resolved_to_noise(1e-14, a.abs().max(b.abs()).max(vs.abs()))
+        };
+        let opts = Adaptive {
+            resolved: &resolved,
+            refine: Refine::Bisect {
+                min_width: &floor,
+                keep_at_floor: &kink,
+            },
+            max_pieces: usize::MAX,
+        };
+        let pieces =
+            chebyshev::fit_adaptive(&f, &initial_pieces(drag, lo, hi), &opts).map_err(|e| {
+                let a = match e {
+                    Unresolved::Piece { a, .. } => a,
+                    _ => lo,
+                };
+                Error::Numerical {
+                    method: "exact sampler table",
+                    reason: format!("deficit integrand not resolved near v = {a} (s = {s})"),
                 }
-                pieces.push((a, b, c));
-            } else {
-                let m = 0.5 * (a + b);
-                stack.push((m, b));
-                stack.push((a, m));
-            }
-        }
+            })?;
         let mut bounds = vec![lo];
         let mut coef = Vec::with_capacity(pieces.len());
         let mut offset = Vec::with_capacity(pieces.len());
         let mut acc = [0.0, 0.0];
-        for (_, b, c) in pieces {
+        for Piece { b, fit, .. } in pieces {
+            let c = fit.anti;
             bounds.push(b);
             offset.push(acc);
             for k in 0..2 {
@@ -198,6 +181,29 @@ impl DeficitTable {
         let (a, b) = (self.psi(va), self.psi(vb));
         (b[0] - a[0], b[1] - a[1])
     }
+}
+
+/// The deficit table's first pieces: [lo, hi] in 8 equal parts, refined by
+/// coefficient decay from there. Where g jumps at v = 0 (Coulomb friction)
+/// so does the integrand: v = 0 is made a piece boundary.
+fn initial_pieces<D: Drag>(drag: &D, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    let init = 8;
+    let jump = drag.static_friction() > 0.0;
+    let mut out = Vec::with_capacity(init + 1);
+    for i in 0..init {
+        let a = lo + (hi - lo) * i as f64 / init as f64;
+        let b = if i + 1 == init {
+            hi
+        } else {
+            lo + (hi - lo) * (i + 1) as f64 / init as f64
+        };
+        if jump && a < 0.0 && 0.0 < b {
+            out.extend([(a, 0.0), (0.0, b)]);
+        } else {
+            out.push((a, b));
+        }
+    }
+    out
 }
 
 /// Does [a, b] contain v = 0 where g' is infinite or g jumps (a law with a

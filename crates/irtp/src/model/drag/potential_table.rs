@@ -27,7 +27,7 @@
 //! error about ε |Φ| in u, a time error of ε |Φ| / k).
 
 use super::{Drag, FlowMap};
-use crate::numerics::chebyshev::{self, power_sum, to_power};
+use crate::numerics::chebyshev::{self, power_sum, to_power, Adaptive, Piece, Refine};
 use crate::numerics::root;
 use std::sync::Arc;
 
@@ -354,28 +354,26 @@ struct Builder<'a, D, F> {
 }
 
 impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
-    /// Fit one piece [a, b] (in the cell's [`Var`]; the antiderivatives
-    /// integrate u^k dΦ/dt, so they are Q_k in Φ): None unless resolved to
-    /// the noise of its values.
-    fn fit(&self, a: f64, b: f64) -> Option<[[f64; 3]; M]> {
+    /// The integrands of one piece at t (in the cell's [`Var`]): L = ln u
+    /// and u^k dΦ/dt / k, k = 1, 2 (their antiderivatives are Q_k in Φ);
+    /// NaN where the node solve fails, so that the piece is not resolved.
+    fn integrands(&self, t: f64) -> [f64; 3] {
         let k = self.flow.rate();
-        let failed = std::cell::Cell::new(false);
-        let f = |t: f64| -> [f64; 3] {
-            let (phi, dphi) = self.var.map(t);
-            match solve_node(self.drag, self.flow, self.s, phi, self.bracket, self.guess) {
-                Some(lnu) => {
-                    let u = lnu.exp();
-                    [lnu, u / k * dphi, u * u / k * dphi]
-                }
-                None => {
-                    failed.set(true);
-                    [f64::NAN; 3]
-                }
+        let (phi, dphi) = self.var.map(t);
+        match solve_node(self.drag, self.flow, self.s, phi, self.bracket, self.guess) {
+            Some(lnu) => {
+                let u = lnu.exp();
+                [lnu, u / k * dphi, u * u / k * dphi]
             }
-        };
-        let fit = chebyshev::fit(&f, a, b);
-        if failed.get() || !fit.finite {
-            return None;
+            None => [f64::NAN; 3],
+        }
+    }
+
+    /// Whether the fit of one piece [a, b] is resolved to the noise of its
+    /// values at degree M - 1.
+    fn resolved(&self, fit: &chebyshev::Fit<3>, a: f64, b: f64) -> bool {
+        if !fit.finite {
+            return false;
         }
         // Noise of the node values: the potential rounds at ε |Φ|, which moves
         // ln u by ε P |dL/dΦ| (bounded by the series, Markov), and ln u
@@ -395,16 +393,9 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
         // Resolved at degree M - 1: the dropped coefficients of L, and of the
         // integrands (whose antiderivatives gain a degree), below the noise.
         let dropped = |c: &[f64]| c[M - 1..].iter().map(|x| x.abs()).sum::<f64>();
-        let ok = dropped(&fit.series[0][1..]) <= rel * fit.scale[0].max(1.0)
+        dropped(&fit.series[0][1..]) <= rel * fit.scale[0].max(1.0)
             && dropped(&fit.series[1]) <= rel * fit.scale[1]
-            && dropped(&fit.series[2]) <= rel * fit.scale[2];
-        let power = [
-            to_power::<M>(&fit.series[0]),
-            to_power::<M>(&fit.anti[1]),
-            to_power::<M>(&fit.anti[2]),
-        ];
-        let c: [[f64; 3]; M] = std::array::from_fn(|j| [power[0][j], power[1][j], power[2][j]]);
-        ok.then_some(c)
+            && dropped(&fit.series[2]) <= rel * fit.scale[2]
     }
 
     /// |dL/dΦ| = |s - g(v)| / (k u) on a piece next to the kink (where
@@ -423,37 +414,34 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
             * 2.0
     }
 
-    /// Cover [a, b] with 2^d equal pieces, the smallest d that resolves
-    /// them all; None past `MAX_PIECES` in all.
+    /// Cover [a, b] with 2^d equal pieces, the smallest d ≤ 16 that
+    /// resolves them all ([`Refine::Uniform`]); None past `MAX_PIECES` in
+    /// all.
     fn cell(&mut self, a: f64, b: f64) -> Option<u32> {
-        'depth: for d in 0..=16u32 {
-            let m = 1usize << d;
-            if self.coef.len() + m > MAX_PIECES {
-                return None;
-            }
-            let mut fits = Vec::with_capacity(m);
-            for j in 0..m {
-                let pa = a + (b - a) * j as f64 / m as f64;
-                let pb = if j + 1 == m {
-                    b
-                } else {
-                    a + (b - a) * (j + 1) as f64 / m as f64
-                };
-                match self.fit(pa, pb) {
-                    Some(c) => fits.push(c),
-                    None => continue 'depth,
-                }
-            }
-            for c in fits {
-                self.offset.push(self.acc);
-                let end = power_sum(&c, 1.0);
-                self.acc = [self.acc[0] + end[1], self.acc[1] + end[2]];
-                self.guess = end[0];
-                self.coef.push(c);
-            }
-            return Some(d);
+        let this = &*self;
+        let opts = Adaptive {
+            resolved: &|fit, pa, pb| this.resolved(fit, pa, pb),
+            refine: Refine::Uniform { max_depth: 16 },
+            max_pieces: MAX_PIECES - self.coef.len(),
+        };
+        let pieces = chebyshev::fit_adaptive(&|t| this.integrands(t), &[(a, b)], &opts).ok()?;
+        let depth = pieces.len().trailing_zeros();
+        for Piece { fit, .. } in pieces {
+            // The series of L and the antiderivatives, in powers of the unit
+            // variable.
+            let power = [
+                to_power::<M>(&fit.series[0]),
+                to_power::<M>(&fit.anti[1]),
+                to_power::<M>(&fit.anti[2]),
+            ];
+            let c: [[f64; 3]; M] = std::array::from_fn(|j| [power[0][j], power[1][j], power[2][j]]);
+            self.offset.push(self.acc);
+            let end = power_sum(&c, 1.0);
+            self.acc = [self.acc[0] + end[1], self.acc[1] + end[2]];
+            self.guess = end[0];
+            self.coef.push(c);
         }
-        None
+        Some(depth)
     }
 }
 #[cfg(test)]

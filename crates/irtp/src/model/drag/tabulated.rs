@@ -19,7 +19,7 @@
 
 use super::closed::InverseGuide;
 use super::{quadrature_time, quadrature_velocity, reachable, Drag, FlowMap};
-use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, NC};
+use crate::numerics::chebyshev::{self, clenshaw, clenshaw2, Piece, NC};
 use crate::numerics::root;
 use std::sync::Arc;
 
@@ -46,35 +46,22 @@ impl Table {
     fn build<D: Drag>(drag: &D, s: f64, vs: f64, k: f64) -> Option<Table> {
         let r1 = |u: f64| [k / drag.drift_at_distance(s, u) - 1.0 / u];
         let u_min = 1e-9 * vs;
-        let mut pieces: Vec<(f64, f64, chebyshev::Fit<1>)> = Vec::new();
-        let mut a = u_min;
-        while 2.0 * a <= 0.5 * vs {
-            pieces.push((a, 2.0 * a, chebyshev::fit(&r1, a, 2.0 * a)));
-            a *= 2.0;
-        }
-        for (lo, hi) in [(a, vs), (vs, 2.0 * vs)] {
-            let mut stack = vec![(lo, hi)];
-            while let Some((pa, pb)) = stack.pop() {
-                let f = chebyshev::fit(&r1, pa, pb);
-                // Resolved when the series' truncation error, integrated over
-                // the piece, is below 1e-15 absolute in R.
-                let ok = f.finite && f.tail[0] * (pb - pa) <= 1e-15 * f.scale[0].max(1.0);
-                if ok || pb - pa < 1e-12 * vs {
-                    if !f.finite || pieces.len() > MAX_PIECES {
-                        return None;
-                    }
-                    pieces.push((pa, pb, f));
-                } else {
-                    let m = 0.5 * (pa + pb);
-                    stack.push((m, pb));
-                    stack.push((pa, m));
-                }
-            }
-        }
-        if !pieces.iter().all(|p| p.2.finite) {
-            return None;
-        }
-        let slope_min = clenshaw(&pieces[0].2.series[0], -1.0);
+        // Resolved when the series' truncation error, integrated over the
+        // piece, is below 1e-15 absolute in R.
+        let resolved = |f: &chebyshev::Fit<1>, pa: f64, pb: f64| {
+            f.finite && f.tail[0] * (pb - pa) <= 1e-15 * f.scale[0].max(1.0)
+        };
+        let range = (u_min, 0.5 * vs);
+        let pieces = chebyshev::fit_towards_zero(
+            &r1,
+            range,
+            &[vs, 2.0 * vs],
+            &resolved,
+            1e-12 * vs,
+            MAX_PIECES,
+        )
+        .ok()?;
+        let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = Table {
             bounds: vec![u_min],
             coef: Vec::with_capacity(pieces.len()),
@@ -83,7 +70,7 @@ impl Table {
             r_max: (slope_min * u_min).abs(),
         };
         let mut acc = slope_min * u_min;
-        for (_, b, f) in pieces {
+        for Piece { b, fit: f, .. } in pieces {
             t.bounds.push(b);
             t.offset.push(acc);
             acc += clenshaw(&f.anti[0], 1.0);

@@ -1,0 +1,235 @@
+//! Banded LU factorisation with partial pivoting (LINPACK's `dgbfa`/`dgbsl`
+//! layout), for the first-passage solvers' interleaved two-state meshes.
+//!
+//! Hand-written rather than taken from a crate: the matrices have 2 sub-
+//! and 2 super-diagonals and O(10⁵) rows, where a dense or sparse general
+//! solver would be far slower, and no banded solver is in the dependency
+//! tree. Partial pivoting is kept: the box-scheme rows of the backward
+//! equations weigh a cell's two nodes by ±a - h(λ + r)/2 and are not
+//! diagonally dominant, so elimination without row interchanges is not
+//! safe there; the interchanges stay within the band (fill of at most `kl`
+//! extra super-diagonals). The operation order is fixed (row by row, left
+//! to right), so results are reproducible to the bit.
+
+use std::ops::RangeInclusive;
+
+/// A zero or non-finite pivot: the matrix is singular (or overflowed) at
+/// this row of the elimination.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("singular band matrix at row {row}")]
+pub struct Singular {
+    /// Elimination step at which no usable pivot was found.
+    pub row: usize,
+}
+
+/// An n×n band matrix with `kl` sub- and `ku` super-diagonals, stored by
+/// rows with room for the `kl` extra super-diagonals that pivoting fills
+/// in; [`Band::factor`] overwrites it with its LU factors.
+#[derive(Clone, Debug)]
+pub struct Band {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    w: usize,
+    a: Vec<f64>,
+    piv: Vec<usize>,
+}
+
+impl Band {
+    /// The zero n×n matrix with `kl` sub- and `ku` super-diagonals.
+    pub fn new(n: usize, kl: usize, ku: usize) -> Self {
+        let w = 2 * kl + ku + 1;
+        Band {
+            n,
+            kl,
+            ku,
+            w,
+            a: vec![0.0; n * w],
+            piv: vec![0; n],
+        }
+    }
+
+    /// Number of rows (and columns).
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    #[inline]
+    fn idx(&self, i: usize, j: usize) -> usize {
+        debug_assert!(j + self.kl >= i && j <= i + self.ku + self.kl);
+        i * self.w + (j + self.kl - i)
+    }
+
+    /// Set entry (i, j), |i - j| within the band.
+    #[inline]
+    pub fn set(&mut self, i: usize, j: usize, x: f64) {
+        let k = self.idx(i, j);
+        self.a[k] = x;
+    }
+
+    /// Entry (i, j) of an unfactored matrix, |i - j| within the band.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.a[self.idx(i, j)]
+    }
+
+    /// The columns j of row i inside the band (unfactored).
+    pub fn row_range(&self, i: usize) -> RangeInclusive<usize> {
+        i.saturating_sub(self.kl)..=(i + self.ku).min(self.n - 1)
+    }
+
+    /// LU-factor in place (Gaussian elimination with partial pivoting
+    /// within the band); [`Singular`] at the first zero or non-finite pivot.
+    pub fn factor(&mut self) -> Result<(), Singular> {
+        let (n, kl, ku) = (self.n, self.kl, self.ku);
+        for k in 0..n {
+            let last = (k + kl).min(n - 1);
+            let mut p = k;
+            let mut best = self.a[self.idx(k, k)].abs();
+            for i in k + 1..=last {
+                let x = self.a[self.idx(i, k)].abs();
+                if x > best {
+                    best = x;
+                    p = i;
+                }
+            }
+            if !(best > 0.0) || !best.is_finite() {
+                return Err(Singular { row: k });
+            }
+            self.piv[k] = p;
+            let jmax = (k + ku + kl).min(n - 1);
+            if p != k {
+                for j in k..=jmax {
+                    let (x, y) = (self.idx(k, j), self.idx(p, j));
+                    self.a.swap(x, y);
+                }
+            }
+            self.eliminate(k, last, jmax);
+        }
+        Ok(())
+    }
+
+    /// Eliminate column k from rows k+1..=last (columns up to `jmax`),
+    /// storing the multipliers in place of the eliminated entries.
+    #[inline]
+    fn eliminate(&mut self, k: usize, last: usize, jmax: usize) {
+        let d = self.a[self.idx(k, k)];
+        for i in k + 1..=last {
+            let ik = self.idx(i, k);
+            let l = self.a[ik] / d;
+            self.a[ik] = l;
+            if l != 0.0 {
+                for j in k + 1..=jmax {
+                    let kj = self.a[self.idx(k, j)];
+                    let ij = self.idx(i, j);
+                    self.a[ij] -= l * kj;
+                }
+            }
+        }
+    }
+
+    /// Solve A x = b in place with the factors of [`Band::factor`].
+    #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
+    pub fn solve(&self, b: &mut [f64]) {
+        let (n, kl, ku) = (self.n, self.kl, self.ku);
+        for k in 0..n {
+            b.swap(k, self.piv[k]);
+            let bk = b[k];
+            for i in k + 1..=(k + kl).min(n - 1) {
+                b[i] -= self.a[self.idx(i, k)] * bk;
+            }
+        }
+        for k in (0..n).rev() {
+            let mut s = b[k];
+            for j in k + 1..=(k + ku + kl).min(n - 1) {
+                s -= self.a[self.idx(k, j)] * b[j];
+            }
+            b[k] = s / self.a[self.idx(k, k)];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Dense Gaussian elimination with partial pivoting, the reference.
+    fn dense_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+        let n = b.len();
+        for k in 0..n {
+            let p = (k..n)
+                .max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))
+                .unwrap();
+            a.swap(k, p);
+            b.swap(k, p);
+            for i in k + 1..n {
+                let f = a[i][k] / a[k][k];
+                for j in k..n {
+                    a[i][j] -= f * a[k][j];
+                }
+                b[i] -= f * b[k];
+            }
+        }
+        let mut x = vec![0.0; n];
+        for i in (0..n).rev() {
+            let s: f64 = (i + 1..n).map(|j| a[i][j] * x[j]).sum();
+            x[i] = (b[i] - s) / a[i][i];
+        }
+        x
+    }
+
+    /// A pseudo-random band matrix (entries in [-1, 1), a weak diagonal so
+    /// that pivoting is exercised) and its dense copy.
+    fn matrix(n: usize, kl: usize, ku: usize, diag: f64) -> (Band, Vec<Vec<f64>>) {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        let mut band = Band::new(n, kl, ku);
+        let mut dense = vec![vec![0.0; n]; n];
+        for i in 0..n {
+            for j in band.row_range(i) {
+                let x = next() + if i == j { diag } else { 0.0 };
+                band.set(i, j, x);
+                dense[i][j] = x;
+            }
+        }
+        (band, dense)
+    }
+
+    #[test]
+    fn agrees_with_a_dense_solve() {
+        for &(n, kl, ku, diag) in &[
+            (40, 2, 2, 0.1),
+            (40, 2, 2, 5.0),
+            (25, 1, 3, 0.0),
+            (7, 3, 1, 0.5),
+        ] {
+            let (mut band, dense) = matrix(n, kl, ku, diag);
+            assert_eq!(band.get(1, 0), dense[1][0]);
+            let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let want = dense_solve(dense, b.clone());
+            band.factor().unwrap();
+            let mut x = b;
+            band.solve(&mut x);
+            for (x, y) in x.iter().zip(&want) {
+                assert!((x - y).abs() < 1e-10 * (1.0 + y.abs()), "{x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn singular_is_reported() {
+        let mut band = Band::new(4, 1, 1);
+        for i in 0..4 {
+            band.set(i, i, 1.0);
+        }
+        band.set(2, 2, 0.0);
+        band.set(2, 1, 0.0);
+        band.set(3, 2, 0.0);
+        assert_eq!(band.factor(), Err(Singular { row: 2 }));
+    }
+}
