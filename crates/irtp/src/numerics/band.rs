@@ -151,6 +151,8 @@ impl Band {
 
 #[cfg(test)]
 mod tests {
+    // The dense reference solve and the copy read as the textbook loops.
+    #![allow(clippy::needless_range_loop)]
     use super::*;
 
     /// Dense Gaussian elimination with partial pivoting, the reference.

@@ -86,7 +86,7 @@ impl TargetLaw for LaplaceTarget {
         })
     }
     /// By quadrature of (v - lo)^k q over (lo, hi), k = 0, 1, 2:
-    /// <v> = lo + M1/M0, <v²> = M2/M0 + 2 lo <v> - lo².
+    /// `<v> = lo + M1/M0`, `<v²> = M2/M0 + 2 lo <v> - lo²`.
     fn moments(&self) -> (f64, f64) {
         let m = [0, 1, 2].map(|k| self.integral(self.lo, self.hi, k));
         let lo = self.lo;
