@@ -18,7 +18,7 @@
 //! Fᵀ = r W (1+, 1-)ᵀ: the state sums mixed by the noise rule, W = I when the
 //! state is kept, all entries ½ when it is re-drawn; W's columns sum to 1)
 //! and is added by the
-//! Sherman-Morrison-Woodbury formula
+//! Sherman-Morrison-Woodbury formula ([`crate::numerics::bordered`])
 //!   (B' + E Fᵀ)^{-1} y = w - Z S^{-1} Fᵀ w,  w = B'^{-1} y, Z = B'^{-1} E,
 //!   S = I + Fᵀ Z (2×2).
 //! B'^{-1} ≤ 0 entrywise, so Z ≤ 0; the column sums of B' are -(r + 1/c), so

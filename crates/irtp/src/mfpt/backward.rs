@@ -18,7 +18,8 @@
 //! Unknowns (tau+_0, tau-_0, tau+_1, ...) give a banded matrix (2 below,
 //! 2 above the diagonal) plus two columns for the non-local reset values
 //! tau±(v_r). Those are moved to the right-hand side (bordering): four
-//! band solves with one LU factorisation and a 2×2 system, O(N) in all.
+//! band solves with one LU factorisation ([`crate::numerics::band`]) and a
+//! 2×2 system ([`crate::numerics::bordered`]), O(N) in all.
 
 use super::Problem;
 use crate::error::{Error, Result};
