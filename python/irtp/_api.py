@@ -202,6 +202,10 @@ class Command:
         for o in self.options:
             if o.py != o.name:
                 text = re.sub(rf"\binvalid {o.name} =", f"invalid {o.py} =", text)
+                # In the allowed range too: a name next to a comparison.
+                cmp = "[<>=\u2264\u2265\u2260]"
+                text = re.sub(rf"(?<![\w-]){o.name}\b(?=\s*{cmp})", o.py, text)
+                text = re.sub(rf"(?<={cmp} ){o.name}\b", o.py, text)
         return self.flags_to_keywords(text)
 
     def collect(self, figures: Tuple[Any, ...], kwargs: Dict[str, Any]) -> Dict[str, Any]:
