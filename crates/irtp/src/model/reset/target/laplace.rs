@@ -126,7 +126,7 @@ impl TargetLaw for LaplaceTarget {
         if !(u1 > u0) {
             return 0.0;
         }
-        self.integral(u0, u1, 1) + (u0 - x0) * self.integral(u0, u1, 0)
+        self.integral(u0, u1, 1) + (u0 - x0) * self.mass(u0, u1)
     }
     /// By inversion of the distribution function on (F(lo), F(hi)).
     fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
