@@ -7,18 +7,16 @@ mod cli_errors;
 mod cli_simulate;
 #[allow(dead_code)]
 mod common;
-mod coulomb;
 mod counts;
 mod docs;
+mod drag_specs;
 mod exact_cli;
-mod expr_law;
 mod fp_cli;
 mod fp_msd;
 mod fp_protocols_transient;
 mod fpt_distribution;
 #[cfg(unix)]
 mod interrupt;
-mod media_laws;
 mod mfpt_cli;
 mod protocol_samplers;
 mod protocol_solvers;

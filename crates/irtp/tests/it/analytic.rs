@@ -590,3 +590,21 @@ fn extreme_parameters_stay_accurate() {
         assert_eq!(prev, 1.0);
     }
 }
+
+/// Coulomb friction at r = 0: the regime of the density reads the cusp at
+/// v = 0 from the sign of gamma - lambda (P ∝ (Sigma² - g²)^(lambda/gamma - 1),
+/// g = mu + gamma |v|): a minimum below, a maximum above, flat (the uniform
+/// density) at lambda = gamma.
+#[test]
+fn coulomb_r0_regime_reads_the_cusp() {
+    let d: irtp::DragLaw = "coulomb:mu=0.5,gamma=1".parse().unwrap();
+    for (lambda, centre) in [(0.5, "minimum"), (2.0, "maximum"), (1.0, "flat")] {
+        let lib = irtp::analytic::r0::R0Density::by_quadrature(d, 2.0, lambda).unwrap();
+        let label = lib.regime().label.clone();
+        assert!(label.contains(centre), "lambda={lambda}: {label}");
+    }
+    let lib = irtp::analytic::r0::R0Density::by_quadrature(d, 2.0, 1.0).unwrap();
+    for v in [-1.2, -0.3, 0.4, 1.1] {
+        assert!((lib.pdf(v) / lib.pdf(0.0) - 1.0).abs() < 1e-10);
+    }
+}

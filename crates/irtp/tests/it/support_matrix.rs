@@ -30,18 +30,11 @@ use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
 use irtp::{DragLaw, Params};
 
-/// The laws: every shipped family once, at a Sigma inside its range.
-const LAWS: [(&str, f64); 9] = [
-    ("tan", 3.0),
-    ("tanh", 0.6),
-    ("linear", 1.0),
-    ("cubic", 1.5),
-    ("power:n=0.5", 1.5),
-    ("power:n=2", 1.5),
-    ("carreau:n=0.5,a=1", 0.8),
-    ("coulomb:mu=0.5", 1.5),
-    ("expr:v + 0.3*v^3", 1.5),
-];
+/// The laws: every shipped family once, at a Sigma inside its range
+/// (`irtp_testkit::laws::CROSS`, the lines marked `in_matrix`).
+fn laws() -> Vec<(&'static str, f64)> {
+    crate::common::laws::matrix_laws()
+}
 
 const LAMBDA: f64 = 0.5;
 const RATE: f64 = 1.5;
@@ -335,13 +328,13 @@ fn z_scores(what: &str, ests: &[(&'static str, Est)]) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// Every protocol for the law `LAWS[i]`. The Bonferroni bound counts the
+/// Every protocol for the law `laws()[i]`. The Bonferroni bound counts the
 /// most comparisons the whole matrix can make (two per quantity and cell:
 /// three methods, one reference; three quantities with position
 /// resetting), which is conservative.
 fn law_agrees_across_methods(i: usize) {
-    let (law, sigma) = LAWS[i];
-    let most = LAWS.len() * protocols().len() * 6;
+    let (law, sigma) = laws()[i];
+    let most = laws().len() * protocols().len() * 6;
     let bound = bonferroni_z(most);
     let mut zs = Vec::new();
     let mut cells_with_two = 0;
@@ -376,7 +369,7 @@ fn law_agrees_across_methods(i: usize) {
 #[test]
 fn time_dependent_fp_methods_run_what_the_table_lists() {
     use irtp::fp::{msd, transient, MsdOptions, TransientOptions};
-    for (law, sigma) in [LAWS[0], LAWS[2]] {
+    for (law, sigma) in [laws()[0], laws()[2]] {
         for proto in protocols() {
             let p = cell(law, sigma, &proto);
             let what = format!("{law} {}", proto.name);
@@ -421,29 +414,44 @@ fn time_dependent_fp_methods_run_what_the_table_lists() {
     }
 }
 
-macro_rules! per_law {
-    ($($name:ident => $i:expr,)+) => {
-        $(
-            #[test]
-            fn $name() {
-                law_agrees_across_methods($i);
-            }
-        )+
-        #[test]
-        fn every_law_has_a_test() {
-            assert_eq!([$($i),+].len(), LAWS.len());
-        }
-    };
+/// The laws in `SHARDS` tests (law i in shard i mod SHARDS), so the
+/// matrix runs in parallel and a new law needs no line here.
+const SHARDS: usize = 3;
+
+fn shard(k: usize) {
+    for i in (k..laws().len()).step_by(SHARDS) {
+        law_agrees_across_methods(i);
+    }
 }
 
-per_law! {
-    tan_agrees => 0,
-    tanh_agrees => 1,
-    linear_agrees => 2,
-    cubic_agrees => 3,
-    power_thinning_agrees => 4,
-    power_thickening_agrees => 5,
-    carreau_agrees => 6,
-    coulomb_agrees => 7,
-    expression_agrees => 8,
+#[test]
+fn laws_shard_1_of_3() {
+    shard(0);
+}
+
+#[test]
+fn laws_shard_2_of_3() {
+    shard(1);
+}
+
+#[test]
+fn laws_shard_3_of_3() {
+    shard(2);
+}
+
+/// Every registered drag law is in the matrix.
+#[test]
+fn every_law_family_is_in_the_matrix() {
+    let kinds: Vec<&str> = laws()
+        .iter()
+        .map(|(s, _)| crate::common::laws::kind(s))
+        .collect();
+    for d in DragLaw::examples() {
+        let spec = d.to_string();
+        let k = crate::common::laws::kind(&spec);
+        assert!(
+            kinds.contains(&k),
+            "drag law '{k}' is not in the support matrix"
+        );
+    }
 }

@@ -13,7 +13,8 @@
 //!   closed form below). Near v = 0 its local error is then of lower order
 //!   (g is only Hölder continuous there), which the particle crosses in a
 //!   time of order dt; the bias stays O(dt) in practice and is measured
-//!   against the exact sampler (`tests/media_laws.rs`).
+//!   against the Fokker-Planck solver (the conformance suite,
+//!   `crates/irtp/tests/it/conformance.rs`).
 //! - The exact flow is tabulated ([`TabulatedFlow`]), whose table has a
 //!   break at v = 0 and refines adaptively into the |v|^n kink there; the
 //!   exact sampler's potential table ([`super::PotentialTable`]) makes the

@@ -1,21 +1,12 @@
-//! A drag law given only by g and g' runs through every method.
-//!
-//! (a) [`TabulatedFlow`], the flow of such a law, against the closed-form
-//! flows of tan, tanh and linear seen through g and g' alone (every other
-//! trait method, the inverse and slope bound included, left at its default).
-//! (b) The registered law `cubic` (g = v + v³/3): the r = 0 density by
-//! quadrature against the stationary Fokker-Planck solver, the exact sampler
-//! against the Fokker-Planck <v²> at r > 0, and the exact first-passage
-//! sampler against the backward MFPT equations.
+//! A drag law given only by g and g': [`TabulatedFlow`], the flow of such a
+//! law, against the closed-form flows of tan, tanh and linear seen through g
+//! and g' alone (every other trait method, the inverse and slope bound
+//! included, left at its default). The registered laws themselves (cubic,
+//! the expression law, ...) run through every method in the conformance
+//! suite (`conformance.rs`).
 
-use irtp::analytic::r0::R0Density;
-use irtp::fp::{stationary, StationaryOptions};
-use irtp::mfpt::{backward, solve, BackwardOptions, Method, ParticleOptions, Problem};
 use irtp::model::drag::{AnyFlow, TabulatedFlow};
 use irtp::model::{Drag, DragLaw, FlowMap};
-use irtp::parallel::NoProgress;
-use irtp::sim::{exact, SimSpec, TimeGrid};
-use irtp::Params;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use std::sync::OnceLock;
@@ -155,92 +146,5 @@ proptest! {
             let w = f.velocity(va, t);
             prop_assert!((v - w).abs() <= tol, "{d} {sigma} {name} va={va} t={t}: {v} vs {w}");
         }
-    }
-}
-
-/// Cubic, r = 0 (singular edges, interior extrema, smooth edges): the
-/// quadrature density's <v²> against the stationary FP solver (graded mesh,
-/// Richardson-extrapolated). Tolerance: the FP's own error estimate
-/// |X_extrapolated - X_fine| (the fine mesh's error, ~1e-5 here; the
-/// second-order extrapolated value is better) or 1e-6 relative, whichever
-/// is smaller (observed: ~4e-8). The r0 quadrature is good to ~1e-13
-/// (`analytic::r0` unit tests against the closed forms), so the FP error
-/// dominates.
-#[test]
-fn cubic_r0_density_matches_fokker_planck() {
-    for lambda in [0.5, 2.0, 10.0] {
-        let p = Params::new(DragLaw::Cubic, 3.0, lambda, 0.0, 0.0).unwrap();
-        let r0 = R0Density::from_params(&p).unwrap();
-        let fp = stationary(&p, &StationaryOptions::default()).unwrap();
-        let tol = (fp.v2 - fp.fine.v2).abs().min(1e-6 * fp.v2);
-        eprintln!(
-            "cubic lambda={lambda}: r0 <v²> {} FP {} (tol {tol:e}), regime {}",
-            r0.v2(),
-            fp.v2,
-            r0.regime().label
-        );
-        assert!((r0.v2() - fp.v2).abs() <= tol, "lambda={lambda}");
-        assert!((fp.mass - 1.0).abs() < 1e-12);
-    }
-}
-
-/// Cubic, r = 2: the exact sampler's time-averaged stationary <v²> against
-/// the FP solver. One comparison, so 4 standard errors (two-sided
-/// false-alarm rate 6e-5 at a fixed seed); the FP error estimate is added
-/// in quadrature (it is ~1e-4 of the SE).
-#[test]
-fn cubic_exact_sampler_matches_fokker_planck() {
-    let p = Params::new(DragLaw::Cubic, 3.0, 0.5, 2.0, 0.0).unwrap();
-    let fp = stationary(&p, &StationaryOptions::default()).unwrap();
-    let spec = SimSpec::new(
-        4000,
-        TimeGrid::from_times(vec![0.0, 40.0]).unwrap(),
-        10.0,
-        20,
-        2024,
-    )
-    .unwrap();
-    let o = exact::simulate(&p, &spec, &NoProgress).unwrap();
-    let (m, se) = (o.v2_time_avg.mean(), o.v2_time_avg.sem());
-    let se = se.hypot(fp.v2 - fp.fine.v2);
-    eprintln!("cubic r=2: exact <v²> {m} ± {se}, FP {}", fp.v2);
-    assert!(((m - fp.v2) / se).abs() < 4.0, "{m} ± {se} vs {}", fp.v2);
-}
-
-/// Cubic: the exact first-passage sampler's MFPT against the backward
-/// equations (Fig. 7 setting: v_0 = -0.249, v_t = 0.5, v_r = 0). One
-/// comparison per parameter set, two sets: Bonferroni at the family's
-/// two-sided rate 6e-5 gives z < 4.17; the backward discretisation error
-/// estimate is added in quadrature.
-#[test]
-fn cubic_exact_mfpt_matches_backward_equations() {
-    for (i, (lambda, r)) in [(0.5, 2.0), (5.0, 0.5)].into_iter().enumerate() {
-        let p = Params::new(DragLaw::Cubic, 3.0, lambda, r, 0.0).unwrap();
-        let prob = Problem::new(p, -0.249, 0.5).unwrap();
-        let ode = backward::solve(&prob, &BackwardOptions::default()).unwrap();
-        let run = ParticleOptions {
-            particles: 10_000,
-            t_max: f64::INFINITY,
-            seed: 90 + i as u64,
-        };
-        let st = solve(&prob, &Method::Exact(run), &NoProgress)
-            .unwrap()
-            .summary()
-            .expect("particle estimate");
-        assert_eq!(st.censored, 0);
-        let err = if ode.error_estimate.is_finite() {
-            ode.error_estimate
-        } else {
-            0.0
-        };
-        let se = st.tau_err.hypot(err);
-        eprintln!(
-            "cubic lambda={lambda} r={r}: exact tau {} ± {}, backward {}",
-            st.tau, st.tau_err, ode.tau
-        );
-        assert!(
-            ((st.tau - ode.tau) / se).abs() < 4.17,
-            "lambda={lambda} r={r}"
-        );
     }
 }
