@@ -4,12 +4,19 @@
 use std::process::Command;
 
 fn main() {
+    // Only paths that exist: cargo treats a missing one as changed and
+    // would rerun this script, and rebuild everything above irtp-app, on
+    // every build (a checkout may have no packed-refs; a crate outside a
+    // checkout has none of them).
+    println!("cargo:rerun-if-changed=build.rs");
     for path in [
         "../../.git/HEAD",
         "../../.git/refs/heads",
         "../../.git/packed-refs",
     ] {
-        println!("cargo:rerun-if-changed={path}");
+        if std::path::Path::new(path).exists() {
+            println!("cargo:rerun-if-changed={path}");
+        }
     }
     let rev = Command::new("git")
         .args(["rev-parse", "HEAD"])

@@ -1,13 +1,21 @@
 """Docs that run: every ```python block of README.md and docs/*.md is executed
 as printed, each file's blocks in order in one namespace (a later block may use
-an earlier one's names), in a temporary working directory."""
+an earlier one's names), in a temporary working directory, with the changes
+README states for the documented CLI commands: at most 4000 particles and
+`reproduce` with `quick=True` (the module's functions are wrapped for the
+test, so `import irtp` in a block sees them)."""
 
 from __future__ import annotations
 
+import functools
+import inspect
 import pathlib
 import re
 
+import irtp
 import pytest
+
+MAX_PARTICLES = 4000
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -22,9 +30,37 @@ def test_the_docs_have_python_examples():
     assert sum(len(blocks(p)) for p in DOCS) >= 8
 
 
+def reduced(f):
+    """`f` with `particles` capped and `reproduce` quick."""
+
+    @functools.wraps(f)
+    def call(*args, **kwargs):
+        if "particles" in kwargs:
+            kwargs["particles"] = min(kwargs["particles"], MAX_PARTICLES)
+        if f.__name__ == "reproduce":
+            kwargs["quick"] = True
+        return f(*args, **kwargs)
+
+    return call
+
+
+def reduce_sizes(monkeypatch):
+    for name in irtp.__all__:
+        f = getattr(irtp, name)
+        if inspect.isfunction(f) or inspect.isbuiltin(f):
+            monkeypatch.setattr(irtp, name, reduced(f))
+
+
+def test_sizes_are_reduced(monkeypatch):
+    reduce_sizes(monkeypatch)
+    res = irtp.simulate(particles=1_000_000, t_max=2, burn_in=1)
+    assert res.params["particles"] == MAX_PARTICLES
+
+
 @pytest.mark.parametrize("doc", [p for p in DOCS if blocks(p)], ids=lambda p: p.name)
 def test_python_blocks_run(doc, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    reduce_sizes(monkeypatch)
     namespace: dict = {"__name__": "__docs__"}
     for i, code in enumerate(blocks(doc)):
         try:

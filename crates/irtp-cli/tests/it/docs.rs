@@ -4,9 +4,13 @@
 //! root, with the changes README's "Examples" states: each `--out` (and a
 //! later argument naming the same directory) goes to a temporary directory,
 //! `--particles` is at most [`MAX_PARTICLES`], `reproduce` runs `--quick`
-//! and `--submit` is left out (the SLURM test submits). Each example sweep
-//! plan runs as its header comment says. A non-zero exit fails, naming the
-//! file and line. Every repository path a doc names in backquotes exists.
+//! and `--submit` is left out (the SLURM test submits); documented commands
+//! that become the same command this way run once. Each example sweep plan
+//! runs as its header comment says, the long ones ([`LONG_PLANS`]) as one
+//! shard of [`LONG_PLAN_SHARDS`] (`--shard 1/N`: every N-th point, through
+//! the same plan parsing, point seeds and store). A non-zero exit fails,
+//! naming the file and line. Every repository path a doc names in
+//! backquotes exists.
 
 use super::common::BIN;
 use std::collections::HashMap;
@@ -16,9 +20,12 @@ use std::process::Command;
 /// The particle cap of the documented commands' test runs.
 const MAX_PARTICLES: u64 = 4000;
 
-/// The example plans too long for the fast tier (measured: 58 s and 26 s
-/// on 2 cores); the slow tier runs them.
-const SLOW_PLANS: [&str; 2] = ["fp_stationary_10k.toml", "simulate.toml"];
+/// The example plans too long to run whole in a test (measured: 58 s and
+/// 26 s on 2 cores), run as one shard of [`LONG_PLAN_SHARDS`].
+const LONG_PLANS: [&str; 2] = ["fp_stationary_10k.toml", "simulate.toml"];
+
+/// The shards a long plan is cut into in the test: 1/20 of its points.
+const LONG_PLAN_SHARDS: usize = 20;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -137,9 +144,11 @@ fn run(place: &str, args: &[String]) {
 }
 
 /// Every documented command, in order per file; `reproduce all` (also run
-/// by the reproduce tests) only when `with_reproduce_all`.
+/// by the reproduce tests) only when `with_reproduce_all`. A command that
+/// is, once adapted, one already run (output directories aside) runs once.
 fn run_documented(with_reproduce_all: bool) -> usize {
     let mut ran = 0;
+    let mut seen = std::collections::HashSet::new();
     for file in doc_files() {
         let text = std::fs::read_to_string(root().join(&file)).unwrap();
         let tmp = tempfile::tempdir().unwrap();
@@ -149,10 +158,18 @@ fn run_documented(with_reproduce_all: bool) -> usize {
             if all != with_reproduce_all {
                 continue;
             }
-            run(
-                &format!("{}:{line}", file.display()),
-                &adapt(&args, tmp.path(), &mut dirs),
-            );
+            let adapted = adapt(&args, tmp.path(), &mut dirs);
+            let key: Vec<String> = adapted
+                .iter()
+                .map(|a| match a.starts_with(&*tmp.path().to_string_lossy()) {
+                    true => "DIR".to_string(),
+                    false => a.clone(),
+                })
+                .collect();
+            if !seen.insert(key) {
+                continue;
+            }
+            run(&format!("{}:{line}", file.display()), &adapted);
             ran += 1;
         }
     }
@@ -191,11 +208,13 @@ fn plans() -> Vec<(PathBuf, Vec<String>)> {
         .collect()
 }
 
-fn run_plans(slow: bool) {
+/// Run every plan of `plans()` whose name `pick` selects, as its header
+/// says; a long plan as its first shard of [`LONG_PLAN_SHARDS`].
+fn run_plans(pick: impl Fn(&str) -> bool) {
     for (path, args) in plans() {
         let tmp = tempfile::tempdir().unwrap();
         let name = path.file_name().unwrap().to_str().unwrap();
-        if SLOW_PLANS.contains(&name) != slow {
+        if !pick(name) {
             continue;
         }
         let plan = format!("examples/sweeps/{name}");
@@ -204,7 +223,11 @@ fn run_plans(slow: bool) {
             "{name}: its header runs another plan: {args:?}"
         );
         let mut dirs = HashMap::new();
-        run(name, &adapt(&args, tmp.path(), &mut dirs));
+        let mut cmd = adapt(&args, tmp.path(), &mut dirs);
+        if LONG_PLANS.contains(&name) {
+            cmd.extend(["--shard".into(), format!("1/{LONG_PLAN_SHARDS}")]);
+        }
+        run(name, &cmd);
     }
 }
 
@@ -224,13 +247,12 @@ fn example_plans_run() {
             "no example plan for {c}"
         );
     }
-    run_plans(false);
+    run_plans(|name| !LONG_PLANS.contains(&name));
 }
 
 #[test]
-#[ignore = "slow tier"]
-fn long_example_plans_run() {
-    run_plans(true);
+fn long_example_plans_run_one_shard() {
+    run_plans(|name| LONG_PLANS.contains(&name));
 }
 
 /// Backquoted repository paths (`crates/…`, `docs/…`, `examples/…`,

@@ -1,7 +1,7 @@
 //! Exact r = 0 density: construction (normalisation + <v²>) and per-call
 //! pdf / cdf / 100-bin probabilities, for the paper's most singular case
 //! (tan, Sigma = 3, lambda = 0.5, a = -0.95) and a smooth one (lambda = 25).
-//! Run: `cargo bench --bench analytic`.
+//! Run: `cargo bench -p irtp-bench --bench analytic`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use irtp::analytic::r0::R0Density;

@@ -1,6 +1,6 @@
 //! Euler kernel throughput (particle-steps per second), single thread:
 //! tan drag, Sigma = 3, lambda = 0.5, r = 2, dt = 1e-3 (the CLI defaults).
-//! Run: `cargo bench --bench euler`.
+//! Run: `cargo bench -p irtp-bench --bench euler`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use irtp::parallel::NoProgress;

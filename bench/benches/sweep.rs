@@ -4,7 +4,7 @@
 //! same outputs, side by side. (sweep - app) / 100 is the overhead per
 //! point; the target is under 5 ms.
 //!
-//!     cargo bench --bench sweep
+//!     cargo bench -p irtp-bench --bench sweep
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use irtp_app::sweep::{self, Plan, RunOptions, Shard};
