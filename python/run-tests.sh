@@ -22,6 +22,11 @@ fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 MATURIN_PEP517_ARGS="--profile ${IRTP_PY_PROFILE:-dev}" \
   "$venv/bin/python" -m pip install --quiet "./python[test]"
-# The CLI the bit-identity tests compare with (the same crate, this checkout).
-cargo build --locked --bin irtp
-IRTP_BIN=target/debug/irtp IRTP_REQUIRE_CLI=1 "$venv/bin/python" -m pytest -q python/tests "$@"
+# The CLI the bit-identity tests compare with (the same crate, this
+# checkout): built here unless IRTP_BIN names one (CI passes the binary its
+# `cargo test` built, which is the same build).
+if [ -z "${IRTP_BIN:-}" ]; then
+  cargo build --locked --bin irtp
+  IRTP_BIN=target/debug/irtp
+fi
+IRTP_BIN="$IRTP_BIN" IRTP_REQUIRE_CLI=1 "$venv/bin/python" -m pytest -q python/tests "$@"

@@ -4,8 +4,7 @@ use super::common::{ModelArgs, OutputArgs};
 use super::format::{fmt_pm, fmt_sig};
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use clap::{Args, ValueEnum};
-use irtp::sim::euler::{self, EulerPlan, EventSampling};
-use irtp::sim::exact;
+use irtp::sim::euler::{EulerPlan, EventSampling};
 use irtp::sim::{Observables, PositionHistogram, SimSpec, SimSummary, TimeGrid};
 use irtp::Params;
 use serde::Serialize;
@@ -152,6 +151,17 @@ impl Config {
     fn dt(&self) -> Option<f64> {
         self.euler.as_ref().map(|e| e.dt)
     }
+    /// The core's method for this run.
+    fn sim_method(&self) -> irtp::sim::Method {
+        match &self.euler {
+            Some(e) => irtp::sim::Method::Euler {
+                dt: e.dt,
+                events: e.events,
+            },
+            None => irtp::sim::Method::Exact,
+        }
+    }
+
     fn events(&self) -> Option<EventSampling> {
         self.euler.as_ref().map(|e| e.events)
     }
@@ -265,10 +275,7 @@ pub fn run(a: &SimulateArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let start = Instant::now();
     let obs = {
         let bar = ctx.reporter.stage("simulate", c.spec.particles);
-        match &c.euler {
-            Some(e) => euler::simulate_with(&c.params, &c.spec, e.dt, e.events, bar.as_ref())?,
-            None => exact::simulate(&c.params, &c.spec, bar.as_ref())?,
-        }
+        irtp::sim::simulate(&c.params, &c.spec, c.sim_method(), bar.as_ref())?
     };
     report(a, &c, &obs, start.elapsed().as_secs_f64(), out, ctx)
 }
@@ -361,19 +368,7 @@ impl<'a> Parts<'a> {
     /// `parts` parts of the run `a` (at least one unit of particles each).
     pub fn new(a: &'a SimulateArgs, parts: u64) -> irtp::Result<Parts<'a>> {
         let config = a.config()?;
-        let method = match &config.euler {
-            None => irtp::sim::Method::Exact,
-            Some(e) if e.events == EventSampling::Geometric => {
-                irtp::sim::Method::Euler { dt: e.dt }
-            }
-            Some(_) => {
-                return Err(irtp::Error::invalid(
-                    "events",
-                    "bernoulli",
-                    "geometric (the default) when a run is cut into parts",
-                ))
-            }
-        };
+        let method = config.sim_method();
         let units = irtp::sim::unit_count(config.spec.particles);
         if !(parts >= 1 && parts <= units) {
             return Err(irtp::Error::invalid(

@@ -24,8 +24,8 @@ const MAX_PARTICLES: u64 = 4000;
 /// 26 s on 2 cores), run as one shard of [`LONG_PLAN_SHARDS`].
 const LONG_PLANS: [&str; 2] = ["fp_stationary_10k.toml", "simulate.toml"];
 
-/// The shards a long plan is cut into in the test: 1/20 of its points.
-const LONG_PLAN_SHARDS: usize = 20;
+/// The shards a long plan is cut into in the test: 1/40 of its points.
+const LONG_PLAN_SHARDS: usize = 40;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -143,13 +143,31 @@ fn run(place: &str, args: &[String]) {
     );
 }
 
-/// Every documented command, in order per file; `reproduce all` (also run
-/// by the reproduce tests) only when `with_reproduce_all`. A command that
+/// The documentation files are run in `SHARDS` tests, so they run in
+/// parallel: README.md (the most commands) alone, the others in turn; each
+/// file's commands in order in one test.
+const SHARDS: usize = 3;
+/// Every shard at once.
+const ALL: usize = usize::MAX;
+
+/// The shard of the `i`-th of [`doc_files`].
+fn shard_of(i: usize) -> usize {
+    if i == 0 {
+        0
+    } else {
+        1 + (i - 1) % (SHARDS - 1)
+    }
+}
+
+/// Every documented command of the files of `shard`, in order per file;
+/// `reproduce all` (also run by the reproduce tests) only when
+/// `with_reproduce_all`. A command that
 /// is, once adapted, one already run (output directories aside) runs once.
-fn run_documented(with_reproduce_all: bool) -> usize {
+fn run_documented(with_reproduce_all: bool, shard: usize) -> usize {
     let mut ran = 0;
     let mut seen = std::collections::HashSet::new();
-    for file in doc_files() {
+    let files = doc_files().into_iter().enumerate();
+    for (_, file) in files.filter(|&(i, _)| shard == ALL || shard_of(i) == shard) {
         let text = std::fs::read_to_string(root().join(&file)).unwrap();
         let tmp = tempfile::tempdir().unwrap();
         let mut dirs = HashMap::new();
@@ -177,15 +195,33 @@ fn run_documented(with_reproduce_all: bool) -> usize {
 }
 
 #[test]
-fn every_documented_command_runs() {
-    let ran = run_documented(false);
-    assert!(ran >= 30, "only {ran} documented commands found");
+fn the_docs_print_commands() {
+    let n: usize = doc_files()
+        .iter()
+        .map(|f| commands(&std::fs::read_to_string(root().join(f)).unwrap()).len())
+        .sum();
+    assert!(n >= 30, "only {n} documented commands found");
+}
+
+#[test]
+fn documented_commands_run_shard_1_of_3() {
+    run_documented(false, 0);
+}
+
+#[test]
+fn documented_commands_run_shard_2_of_3() {
+    run_documented(false, 1);
+}
+
+#[test]
+fn documented_commands_run_shard_3_of_3() {
+    run_documented(false, 2);
 }
 
 #[test]
 #[ignore = "slow tier"]
 fn documented_reproduce_all_runs() {
-    assert!(run_documented(true) >= 1);
+    assert!(run_documented(true, ALL) >= 1);
 }
 
 /// The example plans and the command each one's header prints.

@@ -394,7 +394,7 @@ fn units_combine_bit_for_bit() {
         .with_schedule(sched)
         .unwrap();
     let s = spec(5_000, TimeGrid::linear(3.0, 4).unwrap(), 1.0, 70);
-    for m in [Method::Exact, Method::Euler { dt: 2e-3 }] {
+    for m in [Method::Exact, Method::euler(2e-3)] {
         let whole = simulate(&p, &s, m, &NoProgress).unwrap();
         let n = unit_count(s.particles);
         let mut units = simulate_units(&p, &s, m, 0..1, &NoProgress).unwrap();

@@ -428,10 +428,7 @@ fn euler_matches_the_exact_sampler_for_a_gaussian_target() {
     let grid = TimeGrid::linear(4.0, 4).unwrap();
     let spec = |seed| SimSpec::new(4_000, grid.clone(), 1.0, 10, seed).unwrap();
     let sim = |m: SimMethod, seed| simulate(&p, &spec(seed), m, &NoProgress).unwrap().summary();
-    let (se, sx) = (
-        sim(SimMethod::Euler { dt: 1e-4 }, 21),
-        sim(SimMethod::Exact, 22),
-    );
+    let (se, sx) = (sim(SimMethod::euler(1e-4), 21), sim(SimMethod::Exact, 22));
     eprintln!(
         "simulate: <v2> euler {} ± {}, exact {} ± {}; <v> {} ± {} vs {} ± {}",
         se.v2, se.v2_err, sx.v2, sx.v2_err, se.v_mean, se.v_mean_err, sx.v_mean, sx.v_mean_err

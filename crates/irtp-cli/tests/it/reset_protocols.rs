@@ -117,7 +117,7 @@ fn redrawn_linear_closed_forms_match_samplers() {
     )
     .unwrap();
     let spec = SimSpec::new(40_000, grid.clone(), 2.0, 10, 4242).unwrap();
-    let methods = [SimMethod::Exact, SimMethod::Euler { dt: 1e-3 }];
+    let methods = [SimMethod::Exact, SimMethod::euler(1e-3)];
     let z = bonferroni_z(2 * (grid.times().len() - 1 + 2));
     for method in methods {
         let obs = simulate(&p, &spec, method, &NoProgress).unwrap();

@@ -69,6 +69,13 @@ pub enum EventSampling {
     Bernoulli,
 }
 
+impl EventSampling {
+    /// Whether this is the default, [`EventSampling::Geometric`].
+    pub fn is_geometric(&self) -> bool {
+        *self == EventSampling::Geometric
+    }
+}
+
 impl std::str::FromStr for EventSampling {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
@@ -214,16 +221,17 @@ pub fn simulate_with_lanes(
     Ok(whole.into_iter().next().expect("one total"))
 }
 
-/// The unit totals of units `units` of [`simulate`]'s run (see
+/// The unit totals of units `units` of [`simulate_with`]'s run (see
 /// [`crate::sim::simulate_units`]).
 pub fn simulate_units(
     params: &Params,
     spec: &SimSpec,
     dt: f64,
+    sampling: EventSampling,
     units: Range<u64>,
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
-    let (sampling, part) = (EventSampling::Geometric, Part::Units(units));
+    let part = Part::Units(units);
     simulate_part(params, spec, dt, sampling, LANES, part, progress)
 }
 

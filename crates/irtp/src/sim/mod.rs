@@ -28,10 +28,15 @@ use std::ops::Range;
 #[serde(tag = "method", rename_all = "lowercase")]
 pub enum Method {
     /// The paper's Euler scheme (Eqs. (30)-(32)) with time step `dt`
-    /// (geometric waiting times for flips and resets, see [`euler`]).
+    /// ([`Method::euler`]: geometric waiting times for flips and resets, see
+    /// [`euler`]).
     Euler {
         /// Time step.
         dt: f64,
+        /// How the per-step flips and resets are drawn (the same law either
+        /// way; not written when geometric, the default).
+        #[serde(default, skip_serializing_if = "euler::EventSampling::is_geometric")]
+        events: euler::EventSampling,
     },
     /// The exact event-driven sampler: no time step, no discretisation bias
     /// (see [`exact`]).
@@ -39,6 +44,15 @@ pub enum Method {
 }
 
 impl Method {
+    /// The Euler scheme with time step `dt` and geometric waiting times
+    /// between events (the default sampling).
+    pub fn euler(dt: f64) -> Method {
+        Method::Euler {
+            dt,
+            events: euler::EventSampling::Geometric,
+        }
+    }
+
     /// Short name written to run.json (`euler`, ...).
     pub fn name(&self) -> &'static str {
         match self {
@@ -57,7 +71,7 @@ pub fn simulate(
     progress: &dyn Progress,
 ) -> Result<Observables> {
     match method {
-        Method::Euler { dt } => euler::simulate(params, spec, dt, progress),
+        Method::Euler { dt, events } => euler::simulate_with(params, spec, dt, events, progress),
         Method::Exact => exact::simulate(params, spec, progress),
     }
 }
@@ -95,7 +109,9 @@ pub fn simulate_units(
         ));
     }
     match method {
-        Method::Euler { dt } => euler::simulate_units(params, spec, dt, units, progress),
+        Method::Euler { dt, events } => {
+            euler::simulate_units(params, spec, dt, events, units, progress)
+        }
         Method::Exact => exact::simulate_units(params, spec, units, progress),
     }
 }
@@ -141,7 +157,7 @@ pub fn combine_units(
 /// records at whole steps, so its times are the plan's).
 fn empty(params: &Params, spec: &SimSpec, method: Method) -> Result<Observables> {
     Ok(match method {
-        Method::Euler { dt } => {
+        Method::Euler { dt, .. } => {
             let plan = euler::EulerPlan::new(params, spec, dt)?;
             euler::template(params, spec, &plan)
         }

@@ -31,7 +31,7 @@ fn half_slope(t: &[f64], y: &[f64], t0: f64) -> f64 {
 fn per_particle_fit_is_the_fit_of_the_ensemble_msd() {
     let p = models::tan(0.9, 2.0);
     let spec = SimSpec::new(600, TimeGrid::linear(12.0, 25).unwrap(), 4.0, 5, 3).unwrap();
-    for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
+    for method in [Method::Exact, Method::euler(1e-3)] {
         let o = sim::simulate(&p, &spec, method, &NoProgress).unwrap();
         let y: Vec<f64> = o.x2.iter().map(|a| a.mean()).collect();
         let want = half_slope(&o.times, &y, 4.0);
@@ -75,7 +75,7 @@ fn matches_exact_newtonian_d_eff() {
         let grid = TimeGrid::linear(60.0 * relax, 31).unwrap();
         let spec = SimSpec::new(5000, grid, 20.0 * relax, 1, 40 + i as u64).unwrap();
         let exact_d = linear::d_eff(&p).unwrap();
-        for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
+        for method in [Method::Exact, Method::euler(1e-3)] {
             let s = sim::simulate(&p, &spec, method, &NoProgress)
                 .unwrap()
                 .summary();

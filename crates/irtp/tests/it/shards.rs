@@ -45,7 +45,7 @@ fn all_same(a: &Observables, b: &Observables) {
 #[test]
 fn shards_merge_into_the_whole_run() {
     let p = models::tan(0.9, 2.0);
-    for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
+    for method in [Method::Exact, Method::euler(1e-3)] {
         let whole = sim::simulate(&p, &spec(1000), method, &NoProgress).unwrap();
         // Uneven split, not on chunk boundaries.
         let cuts = [0u64, 300, 301 + 2, 777, 1000];
@@ -97,7 +97,11 @@ fn unit_shards_combine_into_the_whole_run_bit_for_bit() {
     let p = models::tan(0.9, 2.0);
     let s = unit_spec();
     assert_eq!(sim::unit_count(s.particles), 4);
-    for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
+    let bernoulli = Method::Euler {
+        dt: 1e-3,
+        events: irtp::sim::euler::EventSampling::Bernoulli,
+    };
+    for method in [Method::Exact, Method::euler(1e-3), bernoulli] {
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -127,7 +131,7 @@ fn unit_shards_combine_into_the_whole_run_bit_for_bit() {
 #[test]
 fn observables_survive_a_json_round_trip() {
     let p = models::tan(0.9, 2.0);
-    for method in [Method::Exact, Method::Euler { dt: 1e-3 }] {
+    for method in [Method::Exact, Method::euler(1e-3)] {
         let o = sim::simulate(&p, &spec(300), method, &NoProgress).unwrap();
         let text = serde_json::to_string(&o).unwrap();
         let back: Observables = serde_json::from_str(&text).unwrap();

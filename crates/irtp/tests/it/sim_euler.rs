@@ -49,7 +49,7 @@ fn linear_drag_matches_exact_euler_chain() {
     for (i, &(lambda, r, vr)) in cases.iter().enumerate() {
         let p = models::linear(1.0, lambda, r, vr);
         let s = spec(8000, 4.0, 9, 1.5, 10, 100 + i as u64);
-        let obs = simulate(&p, &s, Method::Euler { dt }, &NoProgress).unwrap();
+        let obs = simulate(&p, &s, Method::euler(dt), &NoProgress).unwrap();
         let plan = EulerPlan::new(&p, &s, dt).unwrap();
         let (v2_window, at) = euler::linear_chain_expectations(&p, &plan).unwrap();
         let sum = obs.summary();
@@ -187,7 +187,7 @@ fn bit_identical_across_thread_counts() {
 fn pinned_values() {
     let p = models::tan(0.5, 2.0);
     let s = spec(300, 0.5, 3, 0.25, 8, 42);
-    let g = simulate(&p, &s, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
+    let g = simulate(&p, &s, Method::euler(1e-3), &NoProgress).unwrap();
     let b = euler::simulate_with(&p, &s, 1e-3, EventSampling::Bernoulli, &NoProgress).unwrap();
     let got = [
         g.summary().v2,
@@ -229,7 +229,7 @@ fn plan_validation_and_rounding() {
     assert_eq!(plan.record_steps, vec![0, 1, 3, 1000]);
     assert_eq!(plan.steps, 1000);
     assert_eq!(plan.burn_in_step, 500);
-    let obs = simulate(&p, &s, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
+    let obs = simulate(&p, &s, Method::euler(1e-3), &NoProgress).unwrap();
     assert_eq!(obs.times, vec![0.0, 1e-3, 3e-3, 1.0]);
     assert_eq!(obs.v[0].mean(), 0.0);
     assert_eq!(obs.x[1].mean(), 0.0); // x moves only from step 2 on (v_0 = 0)
@@ -249,7 +249,7 @@ fn plan_validation_and_rounding() {
     // Times on the same step are recorded once.
     let plan = EulerPlan::new(&p, &close, 1e-3).unwrap();
     assert_eq!(plan.record_steps, vec![0, 10, 1000]);
-    let obs = simulate(&p, &close, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
+    let obs = simulate(&p, &close, Method::euler(1e-3), &NoProgress).unwrap();
     assert_eq!(obs.times, vec![0.0, 0.01, 1.0]);
     assert_eq!(obs.moment_rows().len(), 3);
     assert_eq!(obs.v2[2].n, 10);
@@ -317,7 +317,7 @@ fn r0_density_matches_exact() {
     ] {
         let p = Params::new(drag, sigma, lambda, 0.0, 0.0).unwrap();
         let s = spec(8000, 15.0, 2, 5.0, bins, seed);
-        let obs = simulate(&p, &s, Method::Euler { dt: 1e-3 }, &NoProgress).unwrap();
+        let obs = simulate(&p, &s, Method::euler(1e-3), &NoProgress).unwrap();
         let w = obs.bin_width();
         let exact = R0Density::from_params(&p).unwrap();
         let mut edges: Vec<f64> = (0..=bins).map(|k| obs.v_lo + w * k as f64).collect();

@@ -237,8 +237,8 @@ fn stationary_all(p: &Params, seed: u64) -> (Ests, Ests) {
     if let Some(e) = listed(p, Solver::Euler, || {
         let dt = euler_dt(p);
         richardson2(
-            sim(p, SimMethod::Euler { dt }, 1_000, seed + 1),
-            sim(p, SimMethod::Euler { dt: 0.5 * dt }, 1_000, seed + 2),
+            sim(p, SimMethod::euler(dt), 1_000, seed + 1),
+            sim(p, SimMethod::euler(0.5 * dt), 1_000, seed + 2),
         )
     }) {
         push("euler", e);

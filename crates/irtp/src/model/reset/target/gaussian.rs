@@ -44,12 +44,7 @@ impl TargetLaw for GaussianTarget {
         vec![self.mean, self.std]
     }
     fn fit(&self, vu: f64) -> Result<Self, String> {
-        if !(self.mean > -vu && self.mean < vu) {
-            return Err(format!("-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the Gaussian is truncated)"));
-        }
-        if !(self.std > 0.0 && self.std.is_finite()) {
-            return Err("std > 0, finite".into());
-        }
+        super::check_location_scale(self.mean, "std", self.std, vu)?;
         Ok(GaussianTarget {
             lo: -vu,
             hi: vu,

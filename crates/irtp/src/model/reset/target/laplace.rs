@@ -73,12 +73,7 @@ impl TargetLaw for LaplaceTarget {
         vec![self.mean, self.scale]
     }
     fn fit(&self, vu: f64) -> Result<Self, String> {
-        if !(self.mean > -vu && self.mean < vu) {
-            return Err(format!("-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the law is truncated)"));
-        }
-        if !(self.scale > 0.0 && self.scale.is_finite()) {
-            return Err("scale > 0, finite".into());
-        }
+        super::check_location_scale(self.mean, "scale", self.scale, vu)?;
         Ok(LaplaceTarget {
             lo: -vu,
             hi: vu,

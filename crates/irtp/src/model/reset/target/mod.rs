@@ -23,6 +23,26 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// The range check of a location-scale law truncated to (-v_u, v_u) (the
+/// Gaussian, the Laplace law): its centre `mean` inside the open interval,
+/// its width (`key` = `width`) positive and finite.
+pub(crate) fn check_location_scale(
+    mean: f64,
+    key: &str,
+    width: f64,
+    vu: f64,
+) -> Result<(), String> {
+    if !(mean > -vu && mean < vu) {
+        return Err(format!(
+            "-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the law is truncated)"
+        ));
+    }
+    if !(width > 0.0 && width.is_finite()) {
+        return Err(format!("{key} > 0, finite"));
+    }
+    Ok(())
+}
+
 /// A reset target: a probability law Q of the velocity after a reset, on
 /// the open velocity interval (-v_u, v_u).
 pub trait TargetLaw: Copy + fmt::Debug + PartialEq + Send + Sync {
