@@ -40,6 +40,9 @@ _ALIASES = {"method": {"ode": "backward"}}
 
 _KINDS: Dict[str, Any] = {"float": float, "int": int, "bool": bool, "str": str}
 
+# The most threads a call may start (more only costs memory and start-up).
+MAX_THREADS = 1024
+
 _EXTRAS_DOC = """\
 params : Params or mapping, optional
     Model parameters (drag, sigma, lambda_, rate, reset_velocity) as one
@@ -133,6 +136,10 @@ class Option:
             if value not in self.choices:
                 allowed = ", ".join(self.choices + tuple(self.aliases))
                 raise ValueError(f"invalid {self.py} = {value!r}: allowed one of {allowed}")
+        if self.kind in ("float", "int"):
+            # A string is never read as a number ('3' is a typo for 3 or a bug).
+            what = "a real number" if self.kind == "float" else "an integer"
+            raise TypeError(f"{self.py} must be {what}, not {type(value).__name__} {value!r}")
         return value
 
 
@@ -276,6 +283,8 @@ class Command:
             isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1
         ):
             raise ValueError(f"invalid threads = {threads!r}: allowed threads >= 1")
+        if threads is not None and threads > MAX_THREADS:
+            raise ValueError(f"invalid threads = {threads!r}: allowed 1 <= threads <= {MAX_THREADS}")
         rep = reporter(progress)
         try:
             raw = _irtp.run(self.command, options, progress=rep,

@@ -64,9 +64,17 @@ impl Progress for Stage<'_> {
     }
 }
 
+/// The most threads a call may start (the Python side checks the same).
+const MAX_THREADS: usize = 1024;
+
 /// A rayon pool of `threads` threads, or `None` for the global pool.
 fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     let Some(n) = threads else { return Ok(None) };
+    if n > MAX_THREADS {
+        return Err(PyValueError::new_err(format!(
+            "invalid threads = {n}: allowed 1 <= threads <= {MAX_THREADS}"
+        )));
+    }
     if n == 0 {
         return Err(PyValueError::new_err(
             "invalid threads = 0: allowed threads >= 1",

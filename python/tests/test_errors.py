@@ -146,3 +146,30 @@ def test_expression_drag_passes_through():
             irtp.fp_stationary(drag=spec, sigma=3.0, cells=500)
     with pytest.raises(ValueError, match="sigma"):
         irtp.fp_stationary(drag="expr:tanh(v)", sigma=3.0, cells=500)
+
+
+@pytest.mark.parametrize("kw", [{"sigma": "3"}, {"lambda_": "0.5"}, {"particles": "100"}, {"seed": "7"}])
+def test_strings_are_not_numbers(kw):
+    (name, value), = kw.items()
+    with pytest.raises(TypeError) as e:
+        irtp.simulate(**{"particles": 100, **kw})
+    msg = str(e.value)
+    assert msg.startswith(f"{name} must be ") and repr(value) in msg, msg
+
+
+def test_threads_are_bounded():
+    with pytest.raises(ValueError, match=r"threads <= 1024"):
+        irtp.simulate(particles=100, threads=10**6)
+    with pytest.raises(ValueError, match=r"threads <= 1024"):
+        _irtp.run("analytic", {}, threads=10**6)
+
+
+def test_huge_expression_is_refused_not_a_crash():
+    with pytest.raises(ValueError, match=r"at most 200"):
+        irtp.analytic(drag="expr:" + "+".join(["v"] * 250))
+
+
+def test_out_with_a_newline_is_refused(tmp_path):
+    with pytest.raises(ValueError, match=r"control characters"):
+        irtp.analytic(out=str(tmp_path / "a\nb"))
+    assert list(tmp_path.iterdir()) == []

@@ -39,6 +39,21 @@ pub struct OutputDir {
 /// The file in a staging directory naming the host of the process that owns it.
 const HOST_FILE: &str = ".irtp-host";
 
+/// An output directory's path must be printable: no control characters
+/// (a newline or tab in `--out` would break the provenance files, the
+/// SLURM scripts and every listing that names it).
+pub(crate) fn check_out_path(path: &Path) -> Result<()> {
+    let text = path.to_string_lossy();
+    if text.chars().any(char::is_control) {
+        return Err(Error::invalid(
+            "out",
+            text.escape_debug(),
+            "a path without control characters (newline, tab, ...)",
+        ));
+    }
+    Ok(())
+}
+
 /// This machine's host name.
 fn host_name() -> String {
     gethostname::gethostname().to_string_lossy().into_owned()
@@ -93,6 +108,7 @@ impl OutputDir {
     /// Prepare writing into `target` (created if missing).
     pub fn new(target: impl AsRef<Path>) -> Result<Self> {
         let target = target.as_ref().to_path_buf();
+        check_out_path(&target)?;
         if target.exists() && !target.is_dir() {
             return Err(Error::invalid(
                 "out",

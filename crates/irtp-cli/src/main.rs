@@ -66,9 +66,28 @@ fn usage_error(e: clap::Error) -> ExitCode {
     }
     eprintln!(
         "irtp: error: {} (see --help)",
-        one_line(&e.render().to_string())
+        shorten_value(&one_line(&e.render().to_string()))
     );
     ExitCode::from(2)
+}
+
+/// The value clap quotes in `invalid value '...' for '--flag'`, cut to its
+/// first 40 characters when it is long (a huge expression is not printed
+/// back whole).
+fn shorten_value(msg: &str) -> String {
+    const PREFIX: &str = "invalid value '";
+    let Some(start) = msg.find(PREFIX).map(|i| i + PREFIX.len()) else {
+        return msg.to_string();
+    };
+    let Some(len) = msg[start..].find("' for '") else {
+        return msg.to_string();
+    };
+    let value = &msg[start..start + len];
+    if value.chars().count() <= 80 {
+        return msg.to_string();
+    }
+    let cut: String = value.chars().take(40).collect();
+    format!("{}{cut}...{}", &msg[..start], &msg[start + len..])
 }
 
 /// clap's message in one line: its first line, continued by the indented

@@ -42,14 +42,81 @@ pub struct Scripts {
     pub submit: PathBuf,
 }
 
+impl SlurmOptions {
+    /// Every value that enters the scripts, checked before anything is
+    /// written: the counts, the partition (SLURM's names: letters, digits,
+    /// `_ . -`, commas between several), the time limit (SLURM's formats),
+    /// and the sweep directory `root`, which `#SBATCH --output` lines hold
+    /// unquoted. The array's layout for `items` work items.
+    pub fn check(&self, items: u64, root: &Path) -> Result<(u64, u64)> {
+        if let Some(p) = &self.partition {
+            let name = |x: &str| {
+                !x.is_empty()
+                    && x.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || "_.-".contains(c))
+            };
+            if !p.split(',').all(name) {
+                return Err(Error::invalid(
+                    "partition",
+                    p.escape_debug(),
+                    "a SLURM partition name (letters, digits, _ . -; a comma between several)",
+                ));
+            }
+        }
+        if let Some(t) = &self.time {
+            if !slurm_time(t) {
+                return Err(Error::invalid(
+                    "time",
+                    t.escape_debug(),
+                    "a SLURM time limit: MINUTES, MINUTES:SECONDS, HOURS:MINUTES:SECONDS, \
+                     DAYS-HOURS, DAYS-HOURS:MINUTES, DAYS-HOURS:MINUTES:SECONDS or UNLIMITED",
+                ));
+            }
+        }
+        let text = root.to_string_lossy();
+        if text
+            .chars()
+            .any(|c| c.is_whitespace() || c.is_control() || "\"'%\\".contains(c))
+        {
+            return Err(Error::invalid(
+                "out",
+                text.escape_debug(),
+                "a sweep directory whose path has no spaces, quotes, % or backslashes \
+                 (the #SBATCH --output lines hold it as it is)",
+            ));
+        }
+        layout(items, self)
+    }
+}
+
+/// SLURM's time formats (`sbatch --time`), or UNLIMITED / INFINITE.
+fn slurm_time(t: &str) -> bool {
+    if ["UNLIMITED", "INFINITE"].contains(&t.to_ascii_uppercase().as_str()) {
+        return true;
+    }
+    let number = |s: &str| !s.is_empty() && s.len() <= 9 && s.bytes().all(|b| b.is_ascii_digit());
+    let (days, clock) = match t.split_once('-') {
+        Some((d, rest)) => (Some(d), rest),
+        None => (None, t),
+    };
+    let fields: Vec<&str> = clock.split(':').collect();
+    let days_ok = match days {
+        Some(d) => number(d),
+        None => true,
+    };
+    days_ok && fields.len() <= 3 && fields.iter().all(|f| number(f))
+}
+
 /// The array's size: (tasks, points per task).
 pub fn layout(points: u64, o: &SlurmOptions) -> Result<(u64, u64)> {
-    if o.max_array == 0 || o.throttle == 0 || o.cpus_per_task == 0 {
-        return Err(Error::invalid(
-            "max_array",
-            o.max_array,
-            "max_array, throttle and cpus_per_task >= 1",
-        ));
+    for (name, value) in [
+        ("cpus_per_task", u64::from(o.cpus_per_task)),
+        ("max_array", o.max_array),
+        ("throttle", o.throttle),
+    ] {
+        if value == 0 {
+            return Err(Error::invalid(name, 0, format!("{name} >= 1")));
+        }
     }
     let per = match o.points_per_task {
         Some(0) => return Err(Error::invalid("points_per_task", 0, "points_per_task >= 1")),
@@ -79,7 +146,7 @@ fn quote(p: &Path) -> String {
 /// into the sweep directory `root` (absolute), whose `plan.toml` is `plan`.
 pub fn write_scripts(plan: &Plan, root: &Path, o: &SlurmOptions) -> Result<Scripts> {
     let items = plan.len() as u64 * plan.particle_parts;
-    let (tasks, per) = layout(items, o)?;
+    let (tasks, per) = o.check(items, root)?;
     let dir = root.join("slurm");
     std::fs::create_dir_all(&dir).map_err(|e| crate::io::io_err(&dir, e))?;
     let mut head = String::from("#!/bin/bash\n");

@@ -63,6 +63,7 @@ impl Store {
     /// every point directory in it must belong to the plan with the same
     /// parameters, and no foreign file may sit in it.
     pub fn open(root: &Path, plan: &Plan) -> Result<Store> {
+        crate::io::check_out_path(root)?;
         let store = Store {
             root: root.to_path_buf(),
         };

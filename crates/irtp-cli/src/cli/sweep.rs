@@ -168,13 +168,6 @@ fn status(a: StatusArgs) -> anyhow::Result<u8> {
 
 fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
     let plan = read_plan(&a.plan)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| irtp::Error::Io {
-        path: a.out.display().to_string(),
-        reason: e.to_string(),
-    })?;
-    let root = a.out.canonicalize()?;
-    // The directory holds the plan before any task starts.
-    sweep::Store::open(&root, &plan)?;
     let o = slurm::SlurmOptions {
         partition: a.partition,
         time: a.time,
@@ -184,6 +177,18 @@ fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
         throttle: a.throttle,
         exe: std::env::current_exe()?,
     };
+    // Every value is checked before --out is created.
+    o.check(
+        plan.len() as u64 * plan.particle_parts,
+        &std::path::absolute(&a.out)?,
+    )?;
+    std::fs::create_dir_all(&a.out).map_err(|e| irtp::Error::Io {
+        path: a.out.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    let root = a.out.canonicalize()?;
+    // The directory holds the plan before any task starts.
+    sweep::Store::open(&root, &plan)?;
     let s = slurm::write_scripts(&plan, &root, &o)?;
     println!(
         "{} work items ({} points) in {} array tasks of at most {} items: {}, {}",

@@ -50,7 +50,7 @@ const BAD: [(&str, &str, &str, &str); 41] = [
     ("coulomb:mu=0.5,k=1", "3", "--drag", "unknown key 'k'"),
     ("expr:v^2", "3", "--drag", "not odd"),
     ("expr:v + v^2", "3", "--drag", "not odd"),
-    ("expr:v - v^3", "3", "--drag", "g' <= 0 at v = 0.57"),
+    ("expr:v - v^3", "3", "--drag", "g' < 0 at v = 0.57"),
     ("expr:v +", "3", "--drag", "parse error"),
     ("expr:(v", "3", "--drag", "parse error"),
     ("expr:foo(v)", "3", "--drag", "unknown name 'foo'"),

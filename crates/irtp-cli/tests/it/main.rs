@@ -15,6 +15,7 @@ mod fp_cli;
 mod fp_msd;
 mod fp_protocols_transient;
 mod fpt_distribution;
+mod hostile;
 #[cfg(unix)]
 mod interrupt;
 mod mfpt_cli;

@@ -410,11 +410,36 @@ pub fn transient_with_progress(
     let (times, snaps) = validate(opts)?;
     params.require(Solver::FpTransient)?;
     require_held(params, opts.scheme)?;
-    match opts.scheme {
+    let out = match opts.scheme {
         Scheme::Paper => paper(params, opts, &times, &snaps, progress),
         Scheme::TrBdf2 => run_trbdf2(params, opts, &times, &snaps, progress),
-    }
+    }?;
+    check_mass(&out)?;
+    Ok(out)
 }
+
+/// The total probability (cells and the held refractory mass) at every
+/// recording time within [`MASS_TOLERANCE`] of 1: both schemes conserve it
+/// to rounding, so a loss means the integration broke down (e.g. a
+/// refractory period so short that its exit rate overwhelms the step), and
+/// the answer is refused rather than returned.
+fn check_mass(out: &Transient) -> Result<()> {
+    for (t, m) in out.times.iter().zip(&out.mass) {
+        if !((m - 1.0).abs() <= MASS_TOLERANCE) {
+            return Err(Error::Numerical {
+                method: "fp transient",
+                reason: format!(
+                    "the total probability at t = {t} is {m:e}, not 1 (tolerance {MASS_TOLERANCE:e}); \
+                     the time integration lost mass"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// How far the recorded total probability may be from 1.
+pub const MASS_TOLERANCE: f64 = 1e-8;
 
 /// The paper's explicit upwind scheme on a uniform mesh.
 fn paper(

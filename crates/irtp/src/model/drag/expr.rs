@@ -8,8 +8,9 @@
 //! exact (abs, signum, floor, min, max have no symbolic derivative in
 //! exmex and are refused). Checks, each one line naming `--drag` (or `--sigma`):
 //!
-//! - when parsed ([`Expr::parse`]): the syntax, the one variable v, the
-//!   function names, a derivative in closed form, and oddness
+//! - when parsed ([`Expr::parse`]): its size (at most 4000 characters,
+//!   200 operations, parentheses 50 deep), the syntax, the one variable v,
+//!   the function names, a derivative in closed form, and oddness
 //!   (g(-v) = -g(v) to 1e-10 relative at 81 points from 1e-4 to 1e4, where
 //!   g is finite; g(0) = 0);
 //! - for a given Sigma ([`Drag::admissible`], called by
@@ -17,7 +18,8 @@
 //!   doubling, then a safeguarded Newton root of [`crate::numerics::root`];
 //!   if g stays below Sigma for every v the error names `--sigma` and the
 //!   supremum of g), g is finite and strictly increasing on [0, v_u]
-//!   (g' > 0 at 4097 points, where the first violation is named), and g
+//!   (g' >= 0 and g rising at 4097 points, where the first violation is
+//!   named: g' may vanish at an isolated point, as v^3 at 0), and g
 //!   reaches Sigma continuously.
 //!
 //! The law runs through the generic path: [`TabulatedFlow`] and the
@@ -194,20 +196,137 @@ fn check_names(text: &str) -> Result<()> {
     Ok(())
 }
 
+/// The largest expression accepted: characters, operations (operators and
+/// function calls) and parenthesis depth. exmex parses and differentiates
+/// recursively; these bounds keep that recursion far inside the stack of
+/// the thread that compiles (measured: `v+v+...+v` overflowed an 8 MiB
+/// stack between 60 and 100 terms, so [`COMPILE_STACK`] holds about 30
+/// times the largest accepted expression).
+const MAX_CHARS: usize = 4000;
+const MAX_OPERATIONS: usize = 200;
+const MAX_DEPTH: usize = 50;
+/// The stack of the thread that parses and differentiates (virtual memory,
+/// committed only as used).
+const COMPILE_STACK: usize = 256 << 20;
+
+/// The size bounds above, before anything is parsed (the message shows
+/// the start of an expression over them).
+fn check_size(text: &str) -> Result<()> {
+    let shown = match text.char_indices().nth(40) {
+        Some((i, _)) => format!("{}...", &text[..i]),
+        None => text.to_string(),
+    };
+    if text.len() > MAX_CHARS {
+        let n = text.len();
+        return Err(bad(&shown, format!("{n} characters, at most {MAX_CHARS}")));
+    }
+    let ops = text.chars().filter(|c| "+-*/^".contains(*c)).count()
+        + FUNCTIONS
+            .iter()
+            .map(|f| text.matches(&format!("{f}(")).count())
+            .sum::<usize>();
+    if ops > MAX_OPERATIONS {
+        return Err(bad(
+            &shown,
+            format!("{ops} operations, at most {MAX_OPERATIONS}"),
+        ));
+    }
+    let mut depth = 0usize;
+    let mut deepest = 0usize;
+    for c in text.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        deepest = deepest.max(depth);
+    }
+    if deepest > MAX_DEPTH {
+        return Err(bad(
+            &shown,
+            format!("parentheses nested {deepest} deep, at most {MAX_DEPTH}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The text with every number in exponent notation (`1e-3`, `2.5E+4`),
+/// which exmex does not read, written out as a plain decimal of the same
+/// double (`0.001`, `25000`; Rust prints the shortest digits that round-trip
+/// and never an exponent).
+fn plain_numbers(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < chars.len() {
+        let starts_number = (chars[i].is_ascii_digit() || chars[i] == '.')
+            && (i == 0 || !(chars[i - 1].is_alphanumeric() || chars[i - 1] == '_'));
+        if !starts_number {
+            out.push(chars[i]);
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+            i += 1;
+        }
+        let mantissa_end = i;
+        if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+            let sign = i + 1 < chars.len() && matches!(chars[i + 1], '+' | '-');
+            let digit_at = if sign { i + 2 } else { i + 1 };
+            if digit_at < chars.len() && chars[digit_at].is_ascii_digit() {
+                i = digit_at;
+                while i < chars.len() && chars[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+        }
+        let token: String = chars[start..i].iter().collect();
+        match (i > mantissa_end, token.parse::<f64>()) {
+            (true, Ok(x)) if x.is_finite() => out.push_str(&format!("{x}")),
+            _ => out.push_str(&token),
+        }
+    }
+    out
+}
+
+/// g and g' parsed and differentiated by exmex, on a thread with a stack
+/// of [`COMPILE_STACK`] (the caller's may be a small worker stack).
+fn parse_and_differentiate(text: &str) -> Result<(FlatEx<f64>, FlatEx<f64>)> {
+    let plain = plain_numbers(text);
+    let work = || -> Result<(FlatEx<f64>, FlatEx<f64>)> {
+        let g = exmex::parse::<f64>(&plain).map_err(|e| bad(text, format!("parse error: {e}")))?;
+        if g.var_names() != ["v".to_string()] {
+            return Err(bad(text, "it must depend on v"));
+        }
+        let dg = g
+            .clone()
+            .partial(0)
+            .map_err(|e| bad(text, format!("no symbolic derivative: {e}")))?;
+        Ok((g, dg))
+    };
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .stack_size(COMPILE_STACK)
+            .spawn_scoped(scope, work);
+        match spawned {
+            Ok(handle) => handle
+                .join()
+                .unwrap_or_else(|_| Err(bad(text, "the expression could not be compiled"))),
+            // No thread to be had: compile here (the size bounds still hold).
+            Err(_) => work(),
+        }
+    })
+}
+
 /// Parse, differentiate and check oddness (see the module docs).
 fn compile(text: &str) -> Result<Compiled> {
     if text.is_empty() {
         return Err(bad(text, "empty"));
     }
+    check_size(text)?;
     check_names(text)?;
-    let g = exmex::parse::<f64>(text).map_err(|e| bad(text, format!("parse error: {e}")))?;
-    if g.var_names() != ["v".to_string()] {
-        return Err(bad(text, "it must depend on v"));
-    }
-    let dg = g
-        .clone()
-        .partial(0)
-        .map_err(|e| bad(text, format!("no symbolic derivative: {e}")))?;
+    let (g, dg) = parse_and_differentiate(text)?;
     let law = Compiled {
         text: text.to_string(),
         spec: format!("{NAME}:{text}"),
@@ -409,10 +528,19 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
                 format!("g(v) = {g}, g'(v) = {g1} at v = {v:.6} inside the velocity interval of sigma = {sigma}"),
             ));
         }
-        if !(g1 > 0.0) || g < g_prev {
+        // Strictly increasing: g' >= 0 everywhere and g rising from sample
+        // to sample, so g' may vanish at isolated points (v^3 at v = 0) but
+        // not on an interval.
+        if !(g1 >= 0.0) {
             return Err(bad(
                 d.text(),
-                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' <= 0 at v = {v:.6} (g' = {g1:e})"),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' < 0 at v = {v:.6} (g' = {g1:e})"),
+            ));
+        }
+        if i > 0 && !(g > g_prev) {
+            return Err(bad(
+                d.text(),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g does not rise from v = {:.6} to {v:.6}", vu * (i - 1) as f64 / N as f64),
             ));
         }
         g_prev = g;

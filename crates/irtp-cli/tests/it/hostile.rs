@@ -1,0 +1,229 @@
+//! Hostile and extreme inputs on the newer surfaces: each class is either
+//! answered correctly or refused in one line naming what was typed (exit
+//! 2, nothing written), never a crash or a hang.
+//!
+//! (a) Huge expressions (200-term sums and products, 300 nested functions,
+//!     60 kB): refused by size before exmex's recursive parser sees them,
+//!     in well under a second; sizes below the bounds run without a crash.
+//! (b) Valid expressions once refused: `v^3` (g' vanishes only at 0) is the
+//!     power law n = 3; numbers in exponent notation (`1e-3`) read as the
+//!     same double written out (`0.001`).
+//! (c) SLURM scripts: a partition or time limit SLURM would not accept, or
+//!     a zero count, is refused naming its flag before --out is created.
+//! (d) An --out with a control character is refused naming --out.
+
+use crate::common::{assert_rejected, irtp, json};
+use std::time::{Duration, Instant};
+
+fn expr_of(parts: &[&str], sep: &str) -> String {
+    format!("expr:{}", parts.join(sep))
+}
+
+/// (a) Over the bounds: exit 2, one line naming --drag and the bound,
+/// within a second (no parse is attempted).
+#[test]
+fn huge_expressions_are_refused_by_size() {
+    let sum = expr_of(&["v"; 250], "+");
+    let product = expr_of(&["v"; 250], "*");
+    let nested = format!("expr:{}v{}", "sinh(".repeat(300), ")".repeat(300));
+    let long = format!("expr:v{}", "+0.000001*v".repeat(6000));
+    let deep = format!("expr:{}v{}", "(".repeat(60), ")".repeat(60));
+    for (spec, bound) in [
+        (&sum, "at most 200"),
+        (&product, "at most 200"),
+        (&nested, "at most 200"),
+        (&long, "at most 4000"),
+        (&deep, "at most 50"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let t0 = Instant::now();
+        let o = irtp(&["analytic", "--drag", spec, "--out", out.to_str().unwrap()]);
+        assert!(t0.elapsed() < Duration::from_secs(2), "{}", &spec[..40]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("--drag") && err.contains(bound), "{err}");
+        assert!(
+            err.len() < 600,
+            "the message repeats the input: {} bytes",
+            err.len()
+        );
+        assert!(!out.exists());
+    }
+}
+
+/// (a) Below the bounds, deep expressions compile (on the compile thread's
+/// large stack) and every command runs them: no stack overflow, in the
+/// binary's main thread or in a worker thread.
+#[test]
+fn large_expressions_below_the_bounds_run() {
+    let sum = expr_of(&["0.01*v"; 100], " + ");
+    let nested = format!("expr:{}v{}", "sinh(".repeat(40), ")".repeat(40));
+    for spec in [&sum, &nested] {
+        for cmd in [
+            &["analytic"][..],
+            &["fp", "stationary", "--cells", "200"][..],
+            &[
+                "simulate",
+                "--particles",
+                "200",
+                "--t-max",
+                "4",
+                "--burn-in",
+                "1",
+            ][..],
+        ] {
+            let o = irtp(&[cmd, &["--drag", spec, "--sigma", "0.5", "--json"]].concat());
+            let err = String::from_utf8_lossy(&o.stderr);
+            // An answer, or a refusal or numerical failure with its exit
+            // code; never a signal.
+            assert!(
+                matches!(o.status.code(), Some(0 | 2 | 4)),
+                "{cmd:?} {}: {:?} {err}",
+                &spec[..30],
+                o.status
+            );
+        }
+    }
+    let o = irtp(&["analytic", "--drag", &sum, "--sigma", "0.5", "--json"]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// (b) `expr:v^3` runs and equals `power:n=3` (the r = 0 density's <v²>,
+/// the same law through two code paths, to 1e-9); `1e-3` reads as 0.001.
+#[test]
+fn valid_expressions_are_accepted() {
+    let v2 = |drag: &str| {
+        let o = irtp(&[
+            "analytic", "--drag", drag, "--sigma", "3", "--lambda", "2", "--json",
+        ]);
+        json(&o)["v2"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{drag}: {}", json(&o)))
+    };
+    let (a, b) = (v2("expr:v^3"), v2("power:n=3"));
+    assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
+    let (a, b) = (v2("expr:1e-3*v + v"), v2("expr:0.001*v + v"));
+    assert_eq!(a, b);
+    let (a, b) = (v2("expr:v + 2.5E-1*v^3"), v2("expr:v + 0.25*v^3"));
+    assert_eq!(a, b);
+}
+
+/// (c) Every value that enters a generated script is checked first.
+#[test]
+fn slurm_values_are_checked_before_anything_is_written() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["--partition", "a\nb"], "--partition"),
+        (&["--partition", "a b"], "--partition"),
+        (&["--partition", "$(reboot)"], "--partition"),
+        (&["--time", "banana"], "--time"),
+        (&["--time", "1:2:3:4"], "--time"),
+        (&["--cpus-per-task", "0"], "--cpus-per-task"),
+        (&["--throttle", "0"], "--throttle"),
+    ];
+    for (args, flag) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("sw");
+        let base = [
+            "sweep",
+            "slurm",
+            "../../examples/sweeps/mfpt.toml",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        assert_rejected(&irtp(&[&base[..], args].concat()), flag, &out);
+    }
+    // SLURM's own formats are accepted.
+    for t in [
+        "30",
+        "30:00",
+        "01:00:00",
+        "2-0",
+        "2-12:30",
+        "1-00:00:00",
+        "UNLIMITED",
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("sw");
+        let args = [
+            "sweep",
+            "slurm",
+            "../../examples/sweeps/mfpt.toml",
+            "--out",
+            out.to_str().unwrap(),
+            "--time",
+            t,
+            "--partition",
+            "gpu,short.q",
+        ];
+        let o = irtp(&args);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "--time {t}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let run = std::fs::read_to_string(out.join("slurm/run.sbatch")).unwrap();
+        assert!(run.contains(&format!("#SBATCH --time={t}\n")), "{run}");
+    }
+}
+
+/// (d) A newline or tab in --out.
+#[test]
+fn control_characters_in_out_are_refused() {
+    for name in ["a\nb", "a\tb"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(name);
+        let o = irtp(&["analytic", "--out", out.to_str().unwrap()]);
+        let err = assert_rejected(&o, "--out", &out);
+        assert!(err.contains("control characters"), "{err}");
+    }
+}
+
+/// A refractory period far below every time scale (mean 1e-300) used to
+/// leak probability in `fp transient` (mass 0.0025 at exit 0): the
+/// total probability is now checked at every recorded time and a loss is a
+/// numerical failure (exit 4, one line, nothing written).
+#[test]
+fn fp_transient_refuses_an_answer_that_lost_mass() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tr");
+    let o = irtp(&[
+        "fp",
+        "transient",
+        "--cells",
+        "1000",
+        "--t-max",
+        "3",
+        "--refractory",
+        "exp:mean=1e-300",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("total probability"), "{err}");
+    assert!(!out.exists());
+    // A short but resolved refractory period answers with mass 1.
+    let o = irtp(&[
+        "fp",
+        "transient",
+        "--cells",
+        "400",
+        "--t-max",
+        "1",
+        "--refractory",
+        "exp:mean=0.05",
+        "--json",
+    ]);
+    let r = json(&o);
+    let mass = r["mass"].as_f64();
+    assert!(mass.is_some_and(|m| (m - 1.0).abs() < 1e-8), "{r}");
+}
