@@ -172,6 +172,11 @@ fn axis(key: &str, v: &toml::Value) -> Result<Vec<Value>> {
     Ok(values)
 }
 
+/// The most points a plan may have: counted from its axes before any point
+/// is built or checked (each point's parameters are validated as the
+/// command would, about 10 µs each).
+pub const MAX_POINTS: usize = 1_000_000;
+
 fn range(key: &str, r: &Range) -> Result<Vec<Value>> {
     let text = format!(
         "{{ from = {}, to = {}, points = {} }}",
@@ -179,6 +184,13 @@ fn range(key: &str, r: &Range) -> Result<Vec<Value>> {
     );
     if !(r.from.is_finite() && r.to.is_finite()) || r.points == 0 {
         return Err(bad(key, text, "finite from and to, points >= 1"));
+    }
+    if r.points > MAX_POINTS {
+        return Err(bad(
+            key,
+            text,
+            format!("points <= {MAX_POINTS} (a plan has at most {MAX_POINTS} points)"),
+        ));
     }
     let xs = match r.spacing {
         Spacing::Linear if r.points == 1 => vec![r.from],
@@ -192,13 +204,65 @@ fn range(key: &str, r: &Range) -> Result<Vec<Value>> {
     Ok(xs.into_iter().map(Value::Float).collect())
 }
 
+/// Every axis's values (a zipped group's rows) distinct: a value given
+/// twice, or a zipped row repeated, would be one point computed twice.
+fn check_distinct(groups: &[Group]) -> Result<()> {
+    for g in groups {
+        let mut seen = std::collections::HashSet::new();
+        for row in &g.rows {
+            if !seen.insert(format!("{row:?}")) {
+                let shown: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
+                return Err(bad(
+                    &g.names.join("+"),
+                    shown.join(", "),
+                    "distinct values on an axis (this one appears twice: one point would run twice)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The product of the axes' lengths, refused above [`MAX_POINTS`] (naming
+/// every axis and its length) before anything is enumerated.
+fn count_points(groups: &[Group]) -> Result<usize> {
+    let n = groups.iter().try_fold(1usize, |n, g| {
+        n.checked_mul(g.rows.len()).filter(|&n| n <= MAX_POINTS)
+    });
+    n.ok_or_else(|| {
+        let axes: Vec<String> = groups
+            .iter()
+            .map(|g| format!("{} ({})", g.names.join("+"), g.rows.len()))
+            .collect();
+        bad(
+            "axes",
+            axes.join(" x "),
+            format!("at most {MAX_POINTS} points in a plan (split it into several plans)"),
+        )
+    })
+}
+
+/// A TOML error in one line, with the line it is on (`line 2: seed = -1:
+/// invalid value ...`), so the key that was typed is named.
+fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().lines().next().unwrap_or("").trim().to_string();
+    let Some(span) = e.span() else {
+        return message;
+    };
+    let start = span.start.min(text.len());
+    let line_no = text[..start].matches('\n').count() + 1;
+    let line = text.lines().nth(line_no - 1).unwrap_or("").trim();
+    let shown: String = line.chars().take(80).collect();
+    format!("line {line_no} (`{shown}`): {message}")
+}
+
 impl Plan {
     /// Parse and check a plan: keys, types, axes, and every grid point's
     /// parameters as the command would check them.
     pub fn parse(text: &str) -> Result<Plan> {
         let raw: RawPlan = toml::from_str(text).map_err(|e| Error::InvalidParameter {
             name: "plan",
-            value: e.message().to_string(),
+            value: toml_error(text, &e),
             allowed: "a plan as in docs/sweeps.md".into(),
         })?;
         let plan = Plan::from_raw(raw, text)?;
@@ -259,6 +323,8 @@ impl Plan {
         for z in &raw.zip {
             groups.push(zipped(z, &mut claim)?);
         }
+        count_points(&groups)?;
+        check_distinct(&groups)?;
         let mut fixed = Vec::new();
         for (k, v) in &raw.fixed {
             claim(k)?;
@@ -275,7 +341,7 @@ impl Plan {
         })
     }
 
-    /// Number of grid points.
+    /// Number of grid points (at most [`MAX_POINTS`], checked when parsed).
     pub fn len(&self) -> usize {
         self.groups.iter().map(|g| g.rows.len()).product()
     }

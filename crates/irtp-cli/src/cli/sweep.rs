@@ -105,7 +105,8 @@ fn read_plan(path: &Path) -> anyhow::Result<Plan> {
     Ok(Plan::parse(&text)?)
 }
 
-/// Run `irtp sweep ...`; the process exit code (0, or 3 when points are missing).
+/// Run `irtp sweep ...`; the process exit code (0, or 3 when points are
+/// missing or failed).
 pub fn run(args: SweepArgs) -> anyhow::Result<u8> {
     match args.command {
         SweepCommand::Run(a) => run_points(a),
@@ -143,6 +144,16 @@ fn run_points(a: RunArgs) -> anyhow::Result<u8> {
             a.out.display()
         ),
     }
+    // A failed point of this shard is not success (exit 3, as for missing
+    // points in `status` and `merge`): pipelines must not take the table as done.
+    if r.failed > 0 || r.failed_points > 0 {
+        println!(
+            "{} points of this shard failed: `irtp sweep status {}` lists them; --retry-failed runs them again",
+            r.failed_points.max(r.failed),
+            a.out.display()
+        );
+        return Ok(3);
+    }
     Ok(0)
 }
 
@@ -156,14 +167,18 @@ fn merge(a: MergeArgs) -> anyhow::Result<u8> {
         c.failed,
         c.missing
     );
-    Ok(if c.missing > 0 { 3 } else { 0 })
+    Ok(if c.missing > 0 || c.failed > 0 { 3 } else { 0 })
 }
 
 fn status(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = sweep::plan_of(&a.dir)?;
     let report = sweep::status(&plan, &a.dir)?;
     print!("{report}");
-    Ok(if report.missing.is_empty() { 0 } else { 3 })
+    Ok(if report.missing.is_empty() && report.failed.is_empty() {
+        0
+    } else {
+        3
+    })
 }
 
 fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {

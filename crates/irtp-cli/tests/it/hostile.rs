@@ -227,3 +227,110 @@ fn fp_transient_refuses_an_answer_that_lost_mass() {
     let mass = r["mass"].as_f64();
     assert!(mass.is_some_and(|m| (m - 1.0).abs() < 1e-8), "{r}");
 }
+
+/// A plan of 10⁷ or 4·10⁶ points is refused from its axes' lengths, before
+/// any point is built or checked (it ran silently past a minute), naming
+/// the axis or the axes; nothing is written.
+#[test]
+fn huge_plans_are_counted_before_they_are_enumerated() {
+    let cases = [
+        ("sigma = { from = 0.5, to = 5.0, points = 10000000 }\n", "sigma"),
+        ("sigma = { from = 0.5, to = 5.0, points = 1000000000000000000 }\n", "sigma"),
+        (
+            "sigma = { from = 0.5, to = 5.0, points = 2000 }\nrate = { from = 0.1, to = 10.0, points = 2000 }\n",
+            "sigma (2000) x rate (2000)",
+        ),
+    ];
+    for (axes, named) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = dir.path().join("plan.toml");
+        std::fs::write(
+            &plan,
+            format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n[axes]\n{axes}"),
+        )
+        .unwrap();
+        let out = dir.path().join("sw");
+        for cmd in ["run", "slurm"] {
+            let t0 = Instant::now();
+            let o = irtp(&[
+                "sweep",
+                cmd,
+                plan.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                t0.elapsed() < Duration::from_secs(5),
+                "{cmd}: {:?}",
+                t0.elapsed()
+            );
+            assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
+            assert_eq!(err.lines().count(), 1, "{err}");
+            assert!(err.contains(named) && err.contains("1000000"), "{err}");
+            assert!(!out.exists(), "{cmd} wrote --out");
+        }
+    }
+}
+
+/// A value given twice on an axis, or a zipped row repeated, is refused
+/// naming the axis (it was one point run twice, or an i/o error).
+#[test]
+fn duplicate_points_are_refused_naming_the_axis() {
+    let cases = [
+        ("[axes]\nsigma = [1.0, 2.0, 1.0]\n", "sigma"),
+        (
+            "[axes]\nsigma = [1.0, 2.0]\n[[zip]]\nrate = [1.0, 1.0]\nlambda = [0.5, 0.5]\n",
+            "rate+lambda",
+        ),
+    ];
+    for (axes, named) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = dir.path().join("plan.toml");
+        std::fs::write(
+            &plan,
+            format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n{axes}"),
+        )
+        .unwrap();
+        let out = dir.path().join("sw");
+        let o = irtp(&[
+            "sweep",
+            "run",
+            plan.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(named) && err.contains("twice"), "{err}");
+        assert!(!out.exists());
+    }
+}
+
+/// A plan's TOML error is one line naming the line and what is on it (a
+/// seed of -1 or 2^64 was reported without naming `seed`).
+#[test]
+fn plan_errors_name_the_line() {
+    for seed in ["-1", "18446744073709551616"] {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = dir.path().join("plan.toml");
+        std::fs::write(
+            &plan,
+            format!("command = \"fp stationary\"\nseed = {seed}\n[axes]\nsigma = [1.0, 2.0]\n"),
+        )
+        .unwrap();
+        let out = dir.path().join("sw");
+        let o = irtp(&[
+            "sweep",
+            "run",
+            plan.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(&format!("line 2 (`seed = {seed}`)")), "{err}");
+        assert!(!out.exists());
+    }
+}

@@ -219,15 +219,43 @@ fn a_failing_point_is_recorded_and_the_sweep_goes_on() {
         "command = \"mfpt\"\n[fixed]\nv0 = -0.249\nvt = 0.5\ncells = 2000\n[axes]\nrate = [1.0, 1e6]\n",
     );
     let out = tmp.path().join("out");
-    ok(&["sweep", "run", &plan, "--out", out.to_str().unwrap()]);
+    let o_s = out.to_str().unwrap();
+    // A failed point is not success: exit 3 from run, status, merge and a
+    // retry that fails again (pipelines must not take the table as done).
+    let exit3 = |args: &[&str]| {
+        let o = irtp(args);
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert_eq!(
+            o.status.code(),
+            Some(3),
+            "{args:?}: {text} {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        text
+    };
+    let s = exit3(&["sweep", "run", &plan, "--out", o_s]);
+    assert!(s.contains("1 points of this shard failed"), "{s}");
     let t = table(&out);
     assert!(t[1].contains(",ok,"), "{t:?}");
     assert!(t[2].contains(",failed,numerical failure in mfpt"), "{t:?}");
-    let s = ok(&["sweep", "status", out.to_str().unwrap()]);
+    let s = exit3(&["sweep", "status", o_s]);
     assert!(
         s.contains("2 finished (1 failed)") && s.contains("--retry-failed"),
         "{s}"
     );
+    exit3(&["sweep", "merge", o_s]);
+    exit3(&["sweep", "run", &plan, "--out", o_s, "--retry-failed"]);
+    // A shard whose own points all succeed exits 0 (shard 1/2 holds r = 1).
+    let out2 = tmp.path().join("out2");
+    ok(&[
+        "sweep",
+        "run",
+        &plan,
+        "--out",
+        out2.to_str().unwrap(),
+        "--shard",
+        "1/2",
+    ]);
 }
 
 #[test]
