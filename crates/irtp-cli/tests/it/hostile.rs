@@ -242,33 +242,10 @@ fn huge_plans_are_counted_before_they_are_enumerated() {
         ),
     ];
     for (axes, named) in cases {
-        let dir = tempfile::tempdir().unwrap();
-        let plan = dir.path().join("plan.toml");
-        std::fs::write(
-            &plan,
-            format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n[axes]\n{axes}"),
-        )
-        .unwrap();
-        let out = dir.path().join("sw");
+        let text = format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n[axes]\n{axes}");
         for cmd in ["run", "slurm"] {
-            let t0 = Instant::now();
-            let o = irtp(&[
-                "sweep",
-                cmd,
-                plan.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ]);
-            let err = String::from_utf8_lossy(&o.stderr);
-            assert!(
-                t0.elapsed() < Duration::from_secs(5),
-                "{cmd}: {:?}",
-                t0.elapsed()
-            );
-            assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
-            assert_eq!(err.lines().count(), 1, "{err}");
+            let err = refused_plan(&text, cmd);
             assert!(err.contains(named) && err.contains("1000000"), "{err}");
-            assert!(!out.exists(), "{cmd} wrote --out");
         }
     }
 }
@@ -285,25 +262,9 @@ fn duplicate_points_are_refused_naming_the_axis() {
         ),
     ];
     for (axes, named) in cases {
-        let dir = tempfile::tempdir().unwrap();
-        let plan = dir.path().join("plan.toml");
-        std::fs::write(
-            &plan,
-            format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n{axes}"),
-        )
-        .unwrap();
-        let out = dir.path().join("sw");
-        let o = irtp(&[
-            "sweep",
-            "run",
-            plan.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{err}");
+        let text = format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n{axes}");
+        let err = refused_plan(&text, "run");
         assert!(err.contains(named) && err.contains("twice"), "{err}");
-        assert!(!out.exists());
     }
 }
 
@@ -312,25 +273,36 @@ fn duplicate_points_are_refused_naming_the_axis() {
 #[test]
 fn plan_errors_name_the_line() {
     for seed in ["-1", "18446744073709551616"] {
-        let dir = tempfile::tempdir().unwrap();
-        let plan = dir.path().join("plan.toml");
-        std::fs::write(
-            &plan,
-            format!("command = \"fp stationary\"\nseed = {seed}\n[axes]\nsigma = [1.0, 2.0]\n"),
-        )
-        .unwrap();
-        let out = dir.path().join("sw");
-        let o = irtp(&[
-            "sweep",
-            "run",
-            plan.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{err}");
-        assert_eq!(err.lines().count(), 1, "{err}");
+        let text =
+            format!("command = \"fp stationary\"\nseed = {seed}\n[axes]\nsigma = [1.0, 2.0]\n");
+        let err = refused_plan(&text, "run");
         assert!(err.contains(&format!("line 2 (`seed = {seed}`)")), "{err}");
-        assert!(!out.exists());
     }
+}
+
+/// `irtp sweep CMD` of a plan with the TOML `text` refused: exit 2, one
+/// line, nothing written, in under 5 s; its stderr.
+fn refused_plan(text: &str, cmd: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("plan.toml");
+    std::fs::write(&plan, text).unwrap();
+    let out = dir.path().join("sw");
+    let t0 = Instant::now();
+    let o = irtp(&[
+        "sweep",
+        cmd,
+        plan.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        t0.elapsed() < Duration::from_secs(5),
+        "{cmd}: {:?}",
+        t0.elapsed()
+    );
+    assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!out.exists(), "{cmd} wrote --out");
+    err
 }

@@ -158,20 +158,7 @@ fn check_names(text: &str) -> Result<()> {
     while i < chars.len() {
         let c = chars[i];
         if c.is_ascii_digit() || c == '.' {
-            // a number, with its exponent (1e-3, 2.5E+4)
-            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
-                i += 1;
-            }
-            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
-                let sign = i + 1 < chars.len() && matches!(chars[i + 1], '+' | '-');
-                let digit_at = if sign { i + 2 } else { i + 1 };
-                if digit_at < chars.len() && chars[digit_at].is_ascii_digit() {
-                    i = digit_at;
-                    while i < chars.len() && chars[i].is_ascii_digit() {
-                        i += 1;
-                    }
-                }
-            }
+            i = number_end(&chars, i).1;
         } else if c.is_alphabetic() || c == '_' || c == '{' {
             let start = i;
             while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
@@ -250,6 +237,26 @@ fn check_size(text: &str) -> Result<()> {
     Ok(())
 }
 
+/// The number starting at `chars[i]`, with its exponent (`1e-3`, `2.5E+4`):
+/// (the end of its mantissa, the end of the number).
+fn number_end(chars: &[char], mut i: usize) -> (usize, usize) {
+    while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+        i += 1;
+    }
+    let mantissa_end = i;
+    if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+        let sign = i + 1 < chars.len() && matches!(chars[i + 1], '+' | '-');
+        let digit_at = if sign { i + 2 } else { i + 1 };
+        if digit_at < chars.len() && chars[digit_at].is_ascii_digit() {
+            i = digit_at;
+            while i < chars.len() && chars[i].is_ascii_digit() {
+                i += 1;
+            }
+        }
+    }
+    (mantissa_end, i)
+}
+
 /// The text with every number in exponent notation (`1e-3`, `2.5E+4`),
 /// which exmex does not read, written out as a plain decimal of the same
 /// double (`0.001`, `25000`; Rust prints the shortest digits that round-trip
@@ -267,20 +274,8 @@ fn plain_numbers(text: &str) -> String {
             continue;
         }
         let start = i;
-        while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
-            i += 1;
-        }
-        let mantissa_end = i;
-        if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
-            let sign = i + 1 < chars.len() && matches!(chars[i + 1], '+' | '-');
-            let digit_at = if sign { i + 2 } else { i + 1 };
-            if digit_at < chars.len() && chars[digit_at].is_ascii_digit() {
-                i = digit_at;
-                while i < chars.len() && chars[i].is_ascii_digit() {
-                    i += 1;
-                }
-            }
-        }
+        let (mantissa_end, end) = number_end(&chars, i);
+        i = end;
         let token: String = chars[start..i].iter().collect();
         match (i > mantissa_end, token.parse::<f64>()) {
             (true, Ok(x)) if x.is_finite() => out.push_str(&format!("{x}")),
