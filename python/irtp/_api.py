@@ -40,9 +40,6 @@ _ALIASES = {"method": {"ode": "backward"}}
 
 _KINDS: Dict[str, Any] = {"float": float, "int": int, "bool": bool, "str": str}
 
-# The most threads a call may start (more only costs memory and start-up).
-MAX_THREADS = 1024
-
 _EXTRAS_DOC = """\
 params : Params or mapping, optional
     Model parameters (drag, sigma, lambda_, rate, reset_velocity) as one
@@ -283,8 +280,6 @@ class Command:
             isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1
         ):
             raise ValueError(f"invalid threads = {threads!r}: allowed threads >= 1")
-        if threads is not None and threads > MAX_THREADS:
-            raise ValueError(f"invalid threads = {threads!r}: allowed 1 <= threads <= {MAX_THREADS}")
         rep = reporter(progress)
         try:
             raw = _irtp.run(self.command, options, progress=rep,

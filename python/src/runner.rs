@@ -64,7 +64,7 @@ impl Progress for Stage<'_> {
     }
 }
 
-/// The most threads a call may start (the Python side checks the same).
+/// The most threads a call may start (more only costs memory and start-up).
 const MAX_THREADS: usize = 1024;
 
 /// A rayon pool of `threads` threads, or `None` for the global pool.

@@ -87,7 +87,8 @@ pub struct RunReport {
     /// Items of this shard already finished before the run.
     pub skipped: usize,
     /// Points of this shard whose recorded result is a failure after the
-    /// run (this run's and earlier ones not retried).
+    /// run (this run's, a failed part included, and earlier ones not
+    /// retried).
     pub failed_points: usize,
     /// The table, when every point of the plan is finished.
     pub table: Option<PathBuf>,
@@ -143,14 +144,8 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
         Ok(())
     })?;
     assemble_ready(plan, &store, &points, opts.retry_failed)?;
-    let mut failed_points: Vec<usize> = mine
-        .iter()
-        .filter(|it| store.result(it.point).is_some_and(|r| r.status != "ok"))
-        .map(|it| it.point.index)
-        .collect();
-    failed_points.sort_unstable();
-    failed_points.dedup();
-    let counts = table::counts(plan, &store);
+    let in_shard: std::collections::HashSet<usize> = mine.iter().map(|it| it.point.index).collect();
+    let (counts, failed_points) = table::counts(plan, &store, |p| in_shard.contains(&p.index));
     let table = if counts.missing == 0 {
         Some(write_table(plan, &store)?.0)
     } else {
@@ -163,7 +158,7 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
         ran: todo.len(),
         failed: failed.into_inner() as usize,
         skipped: mine.len() - todo.len(),
-        failed_points: failed_points.len(),
+        failed_points,
         table,
     })
 }

@@ -21,19 +21,22 @@ pub struct Counts {
     pub missing: usize,
 }
 
-/// Count the points of `plan` in `store`.
-pub fn counts(plan: &Plan, store: &Store) -> Counts {
-    let mut c = Counts::default();
+/// Count the points of `plan` in `store`, in one pass over their results;
+/// also how many of the points `selected` picks (a shard's) failed.
+pub fn counts(plan: &Plan, store: &Store, selected: impl Fn(&Point) -> bool) -> (Counts, usize) {
+    let (mut c, mut failed_selected) = (Counts::default(), 0);
     for p in plan.points() {
         match store.result(&p) {
             Some(r) => {
+                let failed = r.status != "ok";
                 c.done += 1;
-                c.failed += usize::from(r.status != "ok");
+                c.failed += usize::from(failed);
+                failed_selected += usize::from(failed && selected(&p));
             }
             None => c.missing += 1,
         }
     }
-    c
+    (c, failed_selected)
 }
 
 /// The summary's scalar entries (numbers, booleans, strings), in order.

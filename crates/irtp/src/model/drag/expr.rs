@@ -207,11 +207,13 @@ fn check_size(text: &str) -> Result<()> {
         let n = text.len();
         return Err(bad(&shown, format!("{n} characters, at most {MAX_CHARS}")));
     }
-    let ops = text.chars().filter(|c| "+-*/^".contains(*c)).count()
-        + FUNCTIONS
-            .iter()
-            .map(|f| text.matches(&format!("{f}(")).count())
-            .sum::<usize>();
+    // Operators, and function calls: a '(' right after a name.
+    let chars: Vec<char> = text.chars().collect();
+    let calls = chars
+        .windows(2)
+        .filter(|w| w[1] == '(' && w[0].is_alphanumeric())
+        .count();
+    let ops = chars.iter().filter(|c| "+-*/^".contains(**c)).count() + calls;
     if ops > MAX_OPERATIONS {
         return Err(bad(
             &shown,
