@@ -216,10 +216,11 @@ impl TransientArgs {
         };
         let opts = TransientOptions::sampled(self.t_max, self.samples, self.snapshots, base)?;
         let plan = irtp::fp::transient_plan(&params, &opts)?;
-        let drivers = match self.scheme {
+        let mut drivers = match self.scheme {
             SchemeArg::Paper => vec!["cells", "t_max", "lambda", "rate", "cfl"],
             SchemeArg::Trbdf2 => vec!["cells", "rtol", "samples", "snapshots"],
         };
+        drivers.extend(params.schedule().cost_drivers());
         self.output.budget.check(&super::budget::Cost {
             work: plan.work,
             unit: "cell updates",

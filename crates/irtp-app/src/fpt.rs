@@ -261,8 +261,9 @@ impl DistributionArgs {
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();
-        let per = (p.lambda() + p.rate()) * tau.min(t_max) + 2.0;
-        let drivers = vec!["particles", "lambda", "rate", "t_max"];
+        let per = p.schedule().event_rate_bound(p.lambda(), p.rate()) * tau.min(t_max) + 2.0;
+        let mut drivers = vec!["particles", "lambda", "rate", "t_max"];
+        drivers.extend(p.schedule().cost_drivers());
         let cost = super::budget::particles(run.particles, per, "particle events", drivers, 0, 0);
         self.output.budget.check(&cost)?;
         Ok(Kind::Exact(run))

@@ -1,10 +1,14 @@
 //! Writing results: all files of a run appear together or not at all, and
 //! every output directory carries `run.json` with its provenance.
 
+use crate::lock::OutLock;
 use irtp::error::{Error, Result};
 use serde::Serialize;
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The [`Error::Io`] of an operation on `path`.
 pub fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
@@ -22,9 +26,15 @@ pub fn io_err(path: &Path, e: impl std::fmt::Display) -> Error {
 /// records the host, and the next `OutputDir` of the same target removes it
 /// once that process is gone (a live process, or one on another host of a
 /// shared file system, keeps its staging directory).
+///
+/// It holds the directory's [`OutLock`] from creation to commit: a second
+/// writer of the same target is refused. At commit it replaces only files
+/// irtp wrote and nobody changed since ([`Previous::ours`]); a staged file
+/// whose name is taken by any other file is refused and nothing is moved.
 #[derive(Debug)]
 pub struct OutputDir {
     target: PathBuf,
+    lock: Arc<OutLock>,
     staging: PathBuf,
     files: Vec<String>,
     /// Files of a previous irtp run in `target` to remove at commit.
@@ -55,7 +65,7 @@ pub(crate) fn check_out_path(path: &Path) -> Result<()> {
 }
 
 /// This machine's host name.
-fn host_name() -> String {
+pub(crate) fn host_name() -> String {
     gethostname::gethostname().to_string_lossy().into_owned()
 }
 
@@ -105,8 +115,18 @@ fn remove_stale_staging(parent: &Path, name: &str) {
 }
 
 impl OutputDir {
-    /// Prepare writing into `target` (created if missing).
+    /// Prepare writing into `target` (created if missing), taking its lock.
     pub fn new(target: impl AsRef<Path>) -> Result<Self> {
+        let target = target.as_ref();
+        check_out_path(target)?;
+        ensure_parent(target)?;
+        let lock = Arc::new(OutLock::acquire(target)?);
+        Self::with_lock(target, lock)
+    }
+
+    /// Prepare writing into `target` under a lock its caller holds (a run
+    /// that commits several times, as `irtp reproduce` does per figure).
+    pub fn with_lock(target: impl AsRef<Path>, lock: Arc<OutLock>) -> Result<Self> {
         let target = target.as_ref().to_path_buf();
         check_out_path(&target)?;
         if target.exists() && !target.is_dir() {
@@ -135,6 +155,7 @@ impl OutputDir {
         fs::write(&owner, host_name()).map_err(|e| io_err(&owner, e))?;
         Ok(OutputDir {
             target,
+            lock,
             staging,
             files: Vec::new(),
             replaced: Vec::new(),
@@ -177,6 +198,11 @@ impl OutputDir {
     /// Files staged so far (relative to the target, in staging order).
     pub fn files(&self) -> &[String] {
         &self.files
+    }
+
+    /// The directory's lock (for further `OutputDir`s of the same run).
+    pub fn lock(&self) -> Arc<OutLock> {
+        self.lock.clone()
     }
 
     /// Final directory.
@@ -232,18 +258,30 @@ impl OutputDir {
     /// write, then move every staged file into the target directory (each
     /// move atomic, in staging order: a provenance file staged last marks the
     /// set complete) and remove the staging directory. Returns the final paths.
+    ///
+    /// Only files irtp wrote and nobody changed since are replaced or
+    /// removed (surveyed again now): a staged name taken by any other entry
+    /// refuses the commit before anything moves.
     pub fn commit(mut self) -> Result<Vec<PathBuf>> {
         fs::create_dir_all(&self.target).map_err(|e| io_err(&self.target, e))?;
+        let now = Previous::read(&self.target, &[])?;
+        if let Some(f) = self
+            .files
+            .iter()
+            .find(|f| fs::symlink_metadata(self.target.join(f)).is_ok() && !now.ours.contains(f))
+        {
+            return Err(Error::invalid(
+                "out",
+                self.target.display(),
+                format!(
+                    "a directory where irtp replaces only its own unchanged files; {f} there \
+                     was not written by irtp or changed since (nothing was written: move it away)"
+                ),
+            ));
+        }
         for f in self.replaced.iter().filter(|f| !self.files.contains(f)) {
-            let p = self.target.join(f);
-            let gone = if p.is_dir() {
-                fs::remove_dir_all(&p)
-            } else {
-                fs::remove_file(&p)
-            };
-            match gone {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&p, e)),
-                _ => {}
+            if now.ours.contains(f) {
+                remove_ours(&self.target, f)?;
             }
         }
         let mut out = Vec::with_capacity(self.files.len());
@@ -260,6 +298,54 @@ impl OutputDir {
         self.committed = true;
         Ok(out)
     }
+
+    /// The checksums of the files staged so far (`sha256:<hex>` by name).
+    pub fn checksums(&self) -> Result<BTreeMap<String, String>> {
+        self.files
+            .iter()
+            .filter(|f| *f != "run.json")
+            .map(|f| Ok((f.clone(), checksum_file(&self.staging.join(f))?)))
+            .collect()
+    }
+}
+
+/// Create `target`'s parent directory (where its lock and staging live).
+fn ensure_parent(target: &Path) -> Result<()> {
+    match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => fs::create_dir_all(p).map_err(|e| io_err(p, e)),
+        _ => Ok(()),
+    }
+}
+
+/// Remove the file `f` (relative, verified as irtp's) of `dir`, then the
+/// directories above it inside `dir` that it leaves empty.
+fn remove_ours(dir: &Path, f: &str) -> Result<()> {
+    let p = dir.join(f);
+    match fs::remove_file(&p) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&p, e)),
+        _ => {}
+    }
+    let mut up = Path::new(f).parent();
+    while let Some(d) = up.filter(|d| !d.as_os_str().is_empty()) {
+        if fs::remove_dir(dir.join(d)).is_err() {
+            break; // not empty: it holds other files
+        }
+        up = d.parent();
+    }
+    Ok(())
+}
+
+/// `sha256:<hex>` of `bytes`.
+pub fn checksum_bytes(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
+    let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
+    format!("sha256:{hex}")
+}
+
+/// `sha256:<hex>` of the file at `path`.
+pub fn checksum_file(path: &Path) -> Result<String> {
+    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
+    Ok(checksum_bytes(&bytes))
 }
 
 impl Drop for OutputDir {
@@ -271,22 +357,68 @@ impl Drop for OutputDir {
 }
 
 /// What an output directory holds before a run writes into it: the
-/// `run.json` of a previous irtp run, the entries that run wrote, and
-/// everything else (entries irtp did not write).
+/// `run.json` of a previous irtp run, the files irtp wrote there (and
+/// nobody changed since), the entries irtp's provenance names that it may
+/// not touch, and everything else.
 #[derive(Debug, Default)]
 pub struct Previous {
     /// `run.json` of the previous irtp run, when there is one.
     pub run: Option<serde_json::Value>,
-    /// Top-level entries irtp wrote (its provenance lists them), present now.
+    /// Files irtp wrote (paths relative to the directory) that it may
+    /// replace or remove: plain files, reached without a symbolic link,
+    /// named as irtp names its outputs, whose content is an irtp provenance
+    /// file or matches the checksum a provenance file records for them.
     pub ours: Vec<String>,
+    /// Entries irtp's provenance names that fail those checks, with why.
+    pub changed: Vec<(String, String)>,
     /// Top-level entries irtp did not write.
     pub foreign: Vec<String>,
 }
 
+/// Whether `f` is named as irtp names its output files: relative, each
+/// component of letters, digits, `_`, `-`, `.`, none hidden, none `..`.
+fn output_name(f: &str) -> bool {
+    f.split('/').all(|c| {
+        !c.is_empty()
+            && !c.starts_with('.')
+            && c.chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || "_-.".contains(ch))
+    })
+}
+
+/// Why the listed file `f` of `dir` may not be replaced or removed, if it
+/// may not (`sums`: the checksums irtp's provenance files record).
+fn not_ours(dir: &Path, f: &str, sums: &BTreeMap<String, String>) -> Option<String> {
+    if !output_name(f) {
+        return Some("is not named as irtp names its files".into());
+    }
+    let mut p = dir.to_path_buf();
+    for c in f.split('/') {
+        p.push(c);
+        match fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => return Some("is a symbolic link".into()),
+            Ok(_) => {}
+            Err(e) => return Some(format!("cannot be read ({e})")),
+        }
+    }
+    if !p.is_file() {
+        return Some("is a directory, not a file irtp wrote".into());
+    }
+    if read_provenance(&p).is_some() {
+        return None;
+    }
+    match (sums.get(f), checksum_file(&p)) {
+        (Some(want), Ok(have)) if *want == have => None,
+        (Some(_), _) => Some("changed since irtp wrote it (its checksum differs)".into()),
+        (None, _) => Some("has no checksum recorded by irtp".into()),
+    }
+}
+
 impl Previous {
-    /// Survey `dir` (missing: empty). Entries listed by its `run.json`, the
-    /// `run.json` itself and the names in `also` (listed by further
-    /// provenance files of the caller) count as irtp's.
+    /// Survey `dir` (missing: empty). Every top-level irtp provenance file
+    /// (`run.json`, a figure's record) contributes its `files` and
+    /// `checksums`; those files, the provenance files themselves and the
+    /// top-level names in `also` (listed by the caller) count as irtp's.
     pub fn read(dir: &Path, also: &[String]) -> Result<Self> {
         let mut prev = Previous::default();
         let entries = match fs::read_dir(dir) {
@@ -294,30 +426,58 @@ impl Previous {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(prev),
             Err(e) => return Err(io_err(dir, e)),
         };
-        prev.run = read_provenance(&dir.join("run.json"));
-        let mut listed: Vec<String> = also.to_vec();
-        if let Some(files) = prev.run.as_ref().and_then(|r| r["files"].as_array()) {
-            listed.extend(
-                files
-                    .iter()
-                    .filter_map(|f| f.as_str())
-                    .map(|f| f.split('/').next().unwrap_or(f).to_string()),
-            );
-            listed.push("run.json".into());
-        }
         let mut names: Vec<String> = entries
             .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
             .collect::<std::io::Result<_>>()
             .map_err(|e| io_err(dir, e))?;
         names.sort();
-        for n in names {
-            if listed.contains(&n) {
-                prev.ours.push(n);
-            } else {
-                prev.foreign.push(n);
+        prev.run = read_provenance(&dir.join("run.json"));
+        let (mut listed, mut sums) = (Vec::new(), BTreeMap::new());
+        for n in names.iter().filter(|n| n.ends_with(".json")) {
+            let Some(v) = read_provenance(&dir.join(n)) else {
+                continue;
+            };
+            listed.push(n.clone());
+            for f in v["files"].as_array().into_iter().flatten() {
+                listed.extend(f.as_str().map(String::from));
+            }
+            for (f, c) in v["checksums"].as_object().into_iter().flatten() {
+                sums.extend(c.as_str().map(|c| (f.clone(), c.to_string())));
             }
         }
+        listed.sort();
+        listed.dedup();
+        for f in listed
+            .iter()
+            .filter(|f| fs::symlink_metadata(dir.join(f)).is_ok())
+        {
+            match not_ours(dir, f, &sums) {
+                None => prev.ours.push(f.clone()),
+                Some(why) => prev.changed.push((f.clone(), why)),
+            }
+        }
+        let top = |f: &String| f.split('/').next().unwrap_or(f).to_string();
+        let known: Vec<String> = listed.iter().map(top).chain(also.iter().cloned()).collect();
+        prev.foreign = names.into_iter().filter(|n| !known.contains(n)).collect();
         Ok(prev)
+    }
+
+    /// Refuse (bad input) when irtp's provenance names an entry it may not
+    /// replace: a file changed since, a directory, a symbolic link.
+    pub fn refuse_changed(&self, dir: &Path) -> Result<()> {
+        let Some((f, why)) = self.changed.first() else {
+            return Ok(());
+        };
+        let more = match self.changed.len() {
+            1 => String::new(),
+            n => format!(" (and {} more)", n - 1),
+        };
+        Err(out_in_use(
+            dir,
+            format!(
+                "{f}{more}, which irtp's provenance lists but which {why}; irtp never removes it"
+            ),
+        ))
     }
 
     /// The previous run's `command` (`simulate`, `fp stationary`, ...).
@@ -401,6 +561,9 @@ pub struct Provenance<P: Serialize> {
     pub finished_unix: u64,
     /// Files written alongside.
     pub files: Vec<String>,
+    /// `sha256:<hex>` of each file written alongside (by name): what
+    /// `--force` and a resumed run check before replacing a file.
+    pub checksums: BTreeMap<String, String>,
 }
 
 impl<P: Serialize> Provenance<P> {
@@ -428,6 +591,7 @@ impl<P: Serialize> Provenance<P> {
                 .map(|d| d.as_secs())
                 .unwrap_or(0),
             files: Vec::new(),
+            checksums: BTreeMap::new(),
         }
     }
 }
@@ -447,6 +611,7 @@ impl OutputDir {
         mut self,
         mut prov: Provenance<P>,
     ) -> Result<(serde_json::Value, Vec<PathBuf>)> {
+        prov.checksums = self.checksums()?;
         prov.files = self.files.clone();
         prov.files.push("run.json".into());
         let value = serde_json::to_value(&prov).map_err(|e| io_err(&self.target, e))?;
@@ -459,6 +624,7 @@ impl OutputDir {
         mut self,
         mut prov: Provenance<P>,
     ) -> Result<Vec<PathBuf>> {
+        prov.checksums = self.checksums()?;
         prov.files = self.files.clone();
         prov.files.push("run.json".into());
         self.write_json("run.json", &prov)?;

@@ -21,6 +21,7 @@ pub mod fp_msd;
 pub mod fpt;
 pub mod io;
 pub mod keywords;
+pub mod lock;
 pub mod mfpt;
 pub mod simulate;
 pub mod sweep;
@@ -362,6 +363,7 @@ pub(crate) fn open_out(
     };
     let out = OutputDir::new(dir)?;
     let prev = Previous::read(dir, &[])?;
+    prev.refuse_changed(dir)?;
     let other = prev.command().filter(|c| *c != command);
     if !force {
         if !prev.foreign.is_empty() {

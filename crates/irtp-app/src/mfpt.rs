@@ -320,7 +320,7 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
     let coarse = mfpt::backward::solve(p, &BackwardOptions::with_cells(1000));
     let t = coarse.map_or(run.t_max, |s| s.tau.min(run.t_max));
     let params = p.params();
-    let (per, unit, drivers) = match method {
+    let (per, unit, mut drivers) = match method {
         mfpt::Method::Euler { dt, .. } => (
             t / dt + 1.0,
             "Euler particle steps",
@@ -336,6 +336,7 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
             vec!["particles", "lambda", "rate", "t_max"],
         ),
     };
+    drivers.extend(params.schedule().cost_drivers());
     super::budget::particles(run.particles, per, unit, drivers, 0, 0)
 }
 

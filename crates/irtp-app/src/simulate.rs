@@ -206,7 +206,7 @@ impl SimulateArgs {
         let samples = self.samples as f64;
         // Each particle also sweeps its histogram once (occupation times).
         let bins = self.bins as f64;
-        let (per, unit, drivers) = match self.method {
+        let (per, unit, mut drivers) = match self.method {
             MethodArg::Euler => (
                 t_max / self.dt.unwrap_or(1e-3) + samples + bins,
                 "Euler particle steps",
@@ -221,6 +221,7 @@ impl SimulateArgs {
         // A step refused by validation (dt <= 0, NaN) gives a meaningless
         // estimate: leave the refusal to the check that names it. An
         // infinite estimate from valid flags (lambda + r overflowing) stays.
+        drivers.extend(p.schedule().cost_drivers());
         let bad_dt = self.method == MethodArg::Euler && !(self.dt.unwrap_or(1e-3) > 0.0);
         let per = if bad_dt || per.is_nan() || per < 0.0 {
             0.0

@@ -14,9 +14,11 @@
 use super::{json_short, FigureOutput, Options, Which, IMAGES, NO_IMAGES};
 use irtp::error::Result;
 use irtp_app::io::{out_in_use, read_provenance, OutputDir, Previous, Provenance};
+use irtp_app::lock::OutLock;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The method recorded for every figure.
 pub const METHOD: &str = "exact event-driven sampler + Fokker-Planck + backward MFPT equations";
@@ -59,6 +61,9 @@ pub struct Record {
     pub finished_unix: u64,
     /// Files of the figure, this record last.
     pub files: Vec<String>,
+    /// `sha256:<hex>` of each file of the figure but this record.
+    #[serde(default)]
+    pub checksums: std::collections::BTreeMap<String, String>,
 }
 
 /// Every file name a figure may write, its record last.
@@ -107,6 +112,8 @@ fn read_record(dir: &Path, w: Which) -> Option<Record> {
 /// An `irtp reproduce` output directory.
 pub struct Dir {
     path: PathBuf,
+    /// Held for the whole run: no other writer while figures are committed.
+    lock: Arc<OutLock>,
     opts: Options,
     /// Figures present, in paper order.
     records: Vec<(Which, Record)>,
@@ -123,7 +130,9 @@ impl Dir {
     /// (unless `force`) when it holds files irtp did not write, another
     /// command's outputs, or figures of another seed or size.
     pub fn open(path: &Path, opts: &Options, force: bool) -> Result<Self> {
-        drop(OutputDir::new(path)?); // a bad path fails here
+        let first = OutputDir::new(path)?; // a bad path, or another writer, fails here
+        let lock = first.lock();
+        drop(first);
         let run = read_provenance(&path.join("run.json"));
         let records: Vec<(Which, Record)> = Which::ALL
             .into_iter()
@@ -144,8 +153,10 @@ impl Dir {
             false => Vec::new(),
         };
         let prev = Previous::read(path, &also)?;
+        prev.refuse_changed(path)?;
         let mut dir = Dir {
             path: path.to_path_buf(),
+            lock,
             opts: *opts,
             records: Vec::new(),
             resume: !force,
@@ -222,7 +233,8 @@ impl Dir {
     /// the index.
     pub fn commit_figure(&mut self, o: &FigureOutput, argv: &[String]) -> Result<()> {
         let name = o.which.name();
-        let mut out = OutputDir::new(&self.path)?.replacing(std::mem::take(&mut self.replaced));
+        let mut out = OutputDir::with_lock(&self.path, self.lock.clone())?
+            .replacing(std::mem::take(&mut self.replaced));
         out.write_bytes(&format!("{name}.csv"), o.figure.data_csv()?)?;
         #[cfg(feature = "plot")]
         {
@@ -246,6 +258,7 @@ impl Dir {
             claims: o.claims.iter().map(super::to_json).collect(),
             wall_time_s: o.wall_time_s,
             finished_unix: unix_now(),
+            checksums: out.checksums()?,
             files,
         };
         out.write_json(&format!("{name}.json"), &record)?;
@@ -265,7 +278,7 @@ impl Dir {
     /// Write the index of the figures present; returns `run.json`'s content
     /// and every file of the directory written by irtp.
     pub fn write_index(&self, argv: &[String]) -> Result<(Value, Vec<PathBuf>)> {
-        let mut out = OutputDir::new(&self.path)?;
+        let mut out = OutputDir::with_lock(&self.path, self.lock.clone())?;
         let mut params = serde_json::Map::new();
         let mut timings = serde_json::Map::new();
         let mut claims = Vec::new();
@@ -293,6 +306,7 @@ impl Dir {
         .with_argv(argv.to_vec());
         files.extend(out.files().iter().cloned());
         files.push("run.json".into());
+        prov.checksums = out.checksums()?;
         prov.files = files.clone();
         let value = super::to_json(&prov);
         out.write_json("run.json", &value)?;

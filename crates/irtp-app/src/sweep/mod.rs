@@ -18,9 +18,10 @@ pub mod store;
 mod table;
 
 pub use plan::{Plan, Point};
-pub use store::{PointResult, Store};
+pub use store::{PointResult, State, Store};
 pub use table::{write_table, Counts};
 
+use crate::lock::{Acquired, FileLock};
 use crate::{keywords, Context, Quiet};
 use irtp::error::{Error, Result};
 use rayon::prelude::*;
@@ -71,6 +72,19 @@ impl Tally for () {
     fn update(&self, _: u64, _: u64, _: u64) {}
 }
 
+/// A point whose files do not verify.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Damaged {
+    /// The point's index in the plan.
+    pub index: usize,
+    /// Its id.
+    pub id: String,
+    /// What does not verify.
+    pub why: String,
+    /// Where a rerun moved its directory.
+    pub moved_to: Option<PathBuf>,
+}
+
 /// What a run did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunReport {
@@ -86,10 +100,14 @@ pub struct RunReport {
     pub failed: usize,
     /// Items of this shard already finished before the run.
     pub skipped: usize,
+    /// Items this run listed that another worker finished meanwhile.
+    pub by_others: usize,
     /// Points of this shard whose recorded result is a failure after the
     /// run (this run's, a failed part included, and earlier ones not
     /// retried).
     pub failed_points: usize,
+    /// Damaged points this run moved aside (and computed again).
+    pub moved_aside: Vec<Damaged>,
     /// The table, when every point of the plan is finished.
     pub table: Option<PathBuf>,
 }
@@ -112,9 +130,43 @@ fn pending(plan: &Plan, store: &Store, it: &parts::Item, retry: bool) -> bool {
     }
 }
 
+/// Counters of a run, shared by its threads.
+#[derive(Default)]
+struct Progress {
+    handled: AtomicU64,
+    ran: AtomicU64,
+    failed: AtomicU64,
+}
+
+impl Progress {
+    fn step(&self, ran: bool, ok: bool, total: u64, tally: &dyn Tally) {
+        self.ran.fetch_add(u64::from(ran), Ordering::Relaxed);
+        self.failed.fetch_add(u64::from(!ok), Ordering::Relaxed);
+        let d = self.handled.fetch_add(1, Ordering::Relaxed) + 1;
+        tally.update(d, self.failed.load(Ordering::Relaxed), total);
+    }
+}
+
+/// Compute item `it` (whose claim the caller holds) if it is still pending:
+/// another worker may have finished it since this run listed it.
+fn work(plan: &Plan, store: &Store, it: &parts::Item, opts: RunOptions) -> Result<Option<bool>> {
+    if !pending(plan, store, it, opts.retry_failed) {
+        return Ok(None);
+    }
+    Ok(Some(match it.part {
+        None => run_point(plan, store, it.point)?.status == "ok",
+        Some(k) => parts::run_part(plan, store, it.point, k)?,
+    }))
+}
+
 /// Run the work items of `plan` this shard takes and has not finished, in
 /// parallel, into `root`; assemble split points whose parts are all there;
 /// write `results.csv` when the whole plan is done.
+///
+/// Each item is claimed first ([`Store::claim_path`]): an item another
+/// worker holds is left to it and, once this run has done the rest, waited
+/// for and computed only if that worker did not finish it. So any number
+/// of workers (shards or not) share one directory, each item computed once.
 pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Result<RunReport> {
     let store = Store::open(root, plan)?;
     write_provenance(&store, plan, opts.shard)?;
@@ -126,52 +178,92 @@ pub fn run(plan: &Plan, root: &Path, opts: RunOptions, tally: &dyn Tally) -> Res
         .filter(|(i, _)| opts.shard.has(*i))
         .map(|(_, it)| *it)
         .collect();
+    let moved = quarantine(&store, &mine)?;
     let todo: Vec<&parts::Item> = mine
         .iter()
         .filter(|it| pending(plan, &store, it, opts.retry_failed))
         .collect();
-    let (done, failed) = (AtomicU64::new(0), AtomicU64::new(0));
+    let progress = Progress::default();
     let total = todo.len() as u64;
     tally.update(0, 0, total);
+    let held = std::sync::Mutex::new(Vec::new());
     todo.par_iter().try_for_each(|it| -> Result<()> {
-        let ok = match it.part {
-            None => run_point(plan, &store, it.point)?.status == "ok",
-            Some(k) => parts::run_part(plan, &store, it.point, k)?,
-        };
-        failed.fetch_add(u64::from(!ok), Ordering::Relaxed);
-        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-        tally.update(d, failed.load(Ordering::Relaxed), total);
+        let claim = store.claim_path(it.point, it.part);
+        match FileLock::try_acquire(&claim)? {
+            Acquired::Mine(_lock) => {
+                let done = work(plan, &store, it, opts)?;
+                progress.step(done.is_some(), done != Some(false), total, tally);
+            }
+            Acquired::Held(_) => held.lock().expect("no panic holds it").push(*it),
+        }
+        Ok(())
+    })?;
+    let held = held.into_inner().expect("no panic holds it");
+    held.par_iter().try_for_each(|it| -> Result<()> {
+        let _lock = FileLock::acquire_waiting(&store.claim_path(it.point, it.part))?;
+        let done = work(plan, &store, it, opts)?;
+        progress.step(done.is_some(), done != Some(false), total, tally);
         Ok(())
     })?;
     assemble_ready(plan, &store, &points, opts.retry_failed)?;
     let in_shard: std::collections::HashSet<usize> = mine.iter().map(|it| it.point.index).collect();
-    let (counts, failed_points) = table::counts(plan, &store, |p| in_shard.contains(&p.index));
-    let table = if counts.missing == 0 {
-        Some(write_table(plan, &store)?.0)
+    let states = table::states(&store, &points);
+    let (counts, failed_points) = table::counts(&points, &states, |p| in_shard.contains(&p.index));
+    let table = if counts.missing == 0 && counts.damaged == 0 {
+        Some(write_table(plan, &store, &points, &states)?.0)
     } else {
         None
     };
+    let ran = progress.ran.into_inner() as usize;
     Ok(RunReport {
         points: plan.len(),
         items: all.len(),
         shard_items: mine.len(),
-        ran: todo.len(),
-        failed: failed.into_inner() as usize,
+        ran,
+        failed: progress.failed.into_inner() as usize,
         skipped: mine.len() - todo.len(),
+        by_others: todo.len() - ran,
         failed_points,
+        moved_aside: moved,
         table,
     })
 }
 
+/// Move aside the damaged points among `items` (each under its point's
+/// claim, checked again once held): (index, id, why, new name).
+fn quarantine(store: &Store, items: &[parts::Item]) -> Result<Vec<Damaged>> {
+    let mut seen = std::collections::HashSet::new();
+    let mut moved = Vec::new();
+    for it in items.iter().filter(|it| seen.insert(it.point.index)) {
+        if !matches!(store.state(it.point), State::Damaged(_)) {
+            continue;
+        }
+        let _lock = FileLock::acquire_waiting(&store.claim_path(it.point, None))?;
+        if let State::Damaged(why) = store.state(it.point) {
+            let to = store.move_aside(it.point)?;
+            moved.push(Damaged {
+                index: it.point.index,
+                id: it.point.id.clone(),
+                why,
+                moved_to: Some(to),
+            });
+        }
+    }
+    Ok(moved)
+}
+
 /// Assemble every split point whose parts are all stored and which has no
-/// result yet (or a failed one, with `retry`).
+/// result yet (or a failed one, with `retry`), under the point's claim.
 fn assemble_ready(plan: &Plan, store: &Store, points: &[Point], retry: bool) -> Result<()> {
     if plan.particle_parts <= 1 {
         return Ok(());
     }
     points.par_iter().try_for_each(|p| -> Result<()> {
         if store.unfinished(p, retry) && parts::complete(plan, store, p) {
-            parts::assemble(plan, store, p)?;
+            let _lock = FileLock::acquire_waiting(&store.claim_path(p, None))?;
+            if store.unfinished(p, retry) && parts::complete(plan, store, p) {
+                parts::assemble(plan, store, p)?;
+            }
         }
         Ok(())
     })
@@ -200,9 +292,7 @@ fn run_point(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
             reason: "internal error (a panic); please report it".into(),
         })
     });
-    let r = point_result(p, outcome, t0.elapsed().as_secs_f64());
-    store.finish(p, &r)?;
-    Ok(r)
+    store.finish(p, point_result(p, outcome, t0.elapsed().as_secs_f64()))
 }
 
 /// A point's record from its command's outcome.
@@ -215,6 +305,8 @@ fn point_result(p: &Point, outcome: Result<crate::Outcome>, wall_time_s: f64) ->
             seed: p.seed,
             wall_time_s,
             summary: stable_summary(o.results.json),
+            files: Default::default(),
+            checksum: None,
         },
         Err(e) => failed(p, e.message_with(|n| n.to_string()), wall_time_s),
     }
@@ -228,6 +320,8 @@ fn failed(p: &Point, error: String, wall_time_s: f64) -> PointResult {
         seed: p.seed,
         wall_time_s,
         summary: serde_json::Value::Null,
+        files: Default::default(),
+        checksum: None,
     }
 }
 
@@ -309,8 +403,9 @@ pub fn plan_of(root: &Path) -> Result<Plan> {
 /// Merge shard directories into `target` (which may be one of them): copy
 /// their finished points that `target` lacks, check that points present in
 /// both agree, and write `results.csv`. Every directory must hold the same
-/// plan.
-pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<Counts> {
+/// plan. Returns the counts and every damaged point seen (in the sources,
+/// and in `target` where no source had a verified copy).
+pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<(Counts, Vec<Damaged>)> {
     let first = sources.first().map(PathBuf::as_path).unwrap_or(target);
     let plan = if target.join("plan.toml").exists() {
         plan_of(target)?
@@ -318,6 +413,7 @@ pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<Counts> {
         plan_of(first)?
     };
     let store = Store::open(target, &plan)?;
+    let mut seen = Vec::new();
     for src in sources {
         if same_dir(src, target) {
             continue;
@@ -332,12 +428,14 @@ pub fn merge(target: &Path, sources: &[PathBuf]) -> Result<Counts> {
         }
         let src_store = Store::open(src, &plan)?;
         for p in plan.points() {
-            table::take_point(&src_store, &store, &p)?;
+            seen.extend(table::take_point(&src_store, &store, &p)?);
         }
     }
     let points: Vec<Point> = plan.points().collect();
     assemble_ready(&plan, &store, &points, false)?;
-    Ok(write_table(&plan, &store)?.1)
+    let states = table::states(&store, &points);
+    seen.extend(table::damaged(&points, &states));
+    Ok((write_table(&plan, &store, &points, &states)?.1, seen))
 }
 
 fn same_dir(a: &Path, b: &Path) -> bool {
@@ -354,50 +452,79 @@ pub struct Status {
     pub dir: PathBuf,
     /// Points of the plan.
     pub points: usize,
-    /// Finished points.
+    /// Finished points (verified).
     pub done: usize,
     /// Failed points: (index, id, error).
     pub failed: Vec<(usize, String, String)>,
     /// Missing points: (index, id, parameters).
     pub missing: Vec<(usize, String, String)>,
+    /// Points whose files do not verify.
+    pub damaged: Vec<Damaged>,
+    /// Work items a live worker holds now: (lock file, holder).
+    pub running: Vec<(String, String)>,
+    /// Damaged point directories a rerun moved aside (kept for inspection).
+    pub moved_aside: Vec<String>,
     /// Leftovers of killed runs (staging directories, temporary files).
     pub leftovers: Vec<String>,
 }
 
-/// The state of the sweep directory `root` holding `plan`.
+impl Status {
+    /// Whether every point is finished, verified and successful.
+    pub fn complete(&self) -> bool {
+        self.missing.is_empty() && self.failed.is_empty() && self.damaged.is_empty()
+    }
+}
+
+/// The state of the sweep directory `root` holding `plan`, every finished
+/// point verified against its checksums (as `merge` and `run` do).
 pub fn status(plan: &Plan, root: &Path) -> Result<Status> {
     let store = Store {
         root: root.to_path_buf(),
     };
+    let points: Vec<Point> = plan.points().collect();
+    let states = table::states(&store, &points);
     let mut s = Status {
         dir: root.to_path_buf(),
         points: plan.len(),
         done: 0,
         failed: Vec::new(),
         missing: Vec::new(),
+        damaged: table::damaged(&points, &states),
+        running: Vec::new(),
+        moved_aside: Vec::new(),
         leftovers: Vec::new(),
     };
-    for p in plan.points() {
-        match store.result(&p) {
-            Some(r) if r.status == "ok" => s.done += 1,
-            Some(r) => {
+    for (p, state) in points.iter().zip(states) {
+        match state {
+            State::Done(r) => {
                 s.done += 1;
-                s.failed
-                    .push((p.index, p.id.clone(), r.error.unwrap_or_default()));
+                if r.status != "ok" {
+                    s.failed
+                        .push((p.index, p.id.clone(), r.error.unwrap_or_default()));
+                }
             }
-            None => s
+            State::Missing => s
                 .missing
                 .push((p.index, p.id.clone(), plan::describe(&p.params))),
+            State::Damaged(_) => {}
         }
     }
     if let Ok(entries) = std::fs::read_dir(store.workspace()) {
         for e in entries.flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
-            if name.starts_with('.') {
-                s.leftovers.push(name);
+            if !name.starts_with('.') {
+                continue;
+            }
+            let lock = name.ends_with(".claim") || name.ends_with(".lock");
+            match lock.then(|| FileLock::holder_of(&e.path())).flatten() {
+                Some(who) => s.running.push((name, who)),
+                None if name.contains(".damaged-") => s.moved_aside.push(name),
+                None => s.leftovers.push(name),
             }
         }
     }
+    s.running.sort();
+    s.moved_aside.sort();
     s.leftovers.sort();
     Ok(s)
 }
@@ -407,14 +534,18 @@ impl std::fmt::Display for Status {
         let d = self.dir.display();
         writeln!(
             f,
-            "{d}: {} points: {} finished ({} failed), {} missing",
+            "{d}: {} points: {} finished ({} failed), {} missing, {} damaged",
             self.points,
             self.done,
             self.failed.len(),
-            self.missing.len()
+            self.missing.len(),
+            self.damaged.len()
         )?;
         for (i, id, e) in &self.failed {
             writeln!(f, "failed  point {i} ({id}): {e}")?;
+        }
+        for p in &self.damaged {
+            writeln!(f, "damaged point {} ({}): {}", p.index, p.id, p.why)?;
         }
         for (i, id, params) in self.missing.iter().take(20) {
             writeln!(f, "missing point {i} ({id}): {params}")?;
@@ -422,12 +553,26 @@ impl std::fmt::Display for Status {
         if self.missing.len() > 20 {
             writeln!(f, "missing ... and {} more", self.missing.len() - 20)?;
         }
+        for (lock, who) in &self.running {
+            writeln!(f, "running {lock}: {who}")?;
+        }
+        if !self.moved_aside.is_empty() {
+            writeln!(
+                f,
+                "{} damaged point directories moved aside in {d}/workspace (kept for inspection): {}",
+                self.moved_aside.len(),
+                self.moved_aside.join(", ")
+            )?;
+        }
         if !self.leftovers.is_empty() {
             writeln!(f, "{} leftovers of interrupted runs in {d}/workspace (ignored; safe to delete when no run is active)", self.leftovers.len())?;
         }
-        match (self.missing.is_empty(), self.failed.is_empty()) {
+        match (self.missing.is_empty() && self.damaged.is_empty(), self.failed.is_empty()) {
             (true, true) => writeln!(f, "complete: {d}/results.csv"),
-            (false, _) => writeln!(f, "to finish: irtp sweep run {d}/plan.toml --out {d}"),
+            (false, _) => writeln!(
+                f,
+                "to finish (damaged points are moved aside and computed again): irtp sweep run {d}/plan.toml --out {d}"
+            ),
             (true, false) => writeln!(
                 f,
                 "to retry the failed points: irtp sweep run {d}/plan.toml --out {d} --retry-failed"

@@ -116,7 +116,7 @@ pub fn run_part(plan: &Plan, store: &Store, p: &Point, k: u64) -> Result<bool> {
                 plan.particle_parts,
                 e.message_with(|n| n.to_string())
             );
-            store.finish(p, &super::failed(p, msg, wall_time_s))?;
+            store.finish(p, super::failed(p, msg, wall_time_s))?;
             Ok(false)
         }
     }
@@ -158,7 +158,5 @@ pub fn assemble(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
     };
     let outcome =
         Parts::new(&a, plan.particle_parts).and_then(|parts| parts.assemble(&units, wall, &ctx));
-    let r = super::point_result(p, outcome, wall);
-    store.finish(p, &r)?;
-    Ok(r)
+    store.finish(p, super::point_result(p, outcome, wall))
 }

@@ -6,11 +6,20 @@
 //! and renamed into place, so a killed run leaves either the whole file or
 //! none of it; a point counts as finished only once its `result.json` is in
 //! place.
+//!
+//! `result.json` records the SHA-256 of every file of the point and of
+//! itself ([`PointResult::seal`]): a point whose files were edited,
+//! truncated or deleted since is [`State::Damaged`], which `status` and
+//! `merge` report and a rerun moves aside (`.ID.damaged-<time stamp>`) and
+//! computes again. Concurrent workers claim each work item with a lock
+//! file in `workspace/` ([`Store::claim_path`]), so each item is computed
+//! once.
 
 use super::plan::{statepoint, Plan, Point};
-use crate::io::io_err as io;
+use crate::io::{checksum_bytes, checksum_file, io_err as io};
 use irtp::error::{Error, Result};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +38,76 @@ pub struct PointResult {
     pub wall_time_s: f64,
     /// The command's JSON summary (what `--json` prints).
     pub summary: serde_json::Value,
+    /// `sha256:<hex>` of every file of the point's directory (by name) when
+    /// it finished, this record aside.
+    #[serde(default)]
+    pub files: BTreeMap<String, String>,
+    /// `sha256:<hex>` of this record (compact JSON) without this field.
+    #[serde(default)]
+    pub checksum: Option<String>,
+}
+
+/// What a point's directory holds.
+#[derive(Clone, Debug)]
+pub enum State {
+    /// No result yet.
+    Missing,
+    /// A result whose files are as the point left them.
+    Done(PointResult),
+    /// A result that does not verify: why.
+    Damaged(String),
+}
+
+impl PointResult {
+    fn digest(&self) -> String {
+        let mut bare = self.clone();
+        bare.checksum = None;
+        checksum_bytes(&serde_json::to_vec(&bare).expect("a result is JSON"))
+    }
+
+    /// Record the checksums of the files of `dir` (regular, not hidden,
+    /// `result.json` aside) and of this record.
+    pub fn seal(&mut self, dir: &Path) -> Result<()> {
+        self.files.clear();
+        for entry in read_dir(dir)? {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let file = entry.file_type().map_err(|e| io(dir, e))?.is_file();
+            if file && !name.starts_with('.') && name != "result.json" {
+                self.files.insert(name, checksum_file(&entry.path())?);
+            }
+        }
+        self.checksum = Some(self.digest());
+        Ok(())
+    }
+
+    /// Why this record (read from `dir`) or a file it records does not
+    /// verify, if one does not.
+    fn damage(&self, dir: &Path) -> Option<String> {
+        match &self.checksum {
+            None => return Some("result.json has no checksum (an older irtp wrote it?)".into()),
+            Some(c) if *c != self.digest() => {
+                return Some("result.json was changed since the point finished".into())
+            }
+            Some(_) => {}
+        }
+        for (name, want) in &self.files {
+            let p = dir.join(name);
+            if name.contains('/') || name.starts_with('.') {
+                return Some(format!(
+                    "result.json records a file outside the point: {name}"
+                ));
+            }
+            match fs::symlink_metadata(&p) {
+                Err(_) => return Some(format!("{name} is missing")),
+                Ok(m) if !m.is_file() => return Some(format!("{name} is not a plain file")),
+                Ok(_) => {}
+            }
+            if checksum_file(&p).ok().as_ref() != Some(want) {
+                return Some(format!("{name} was changed since the point finished"));
+            }
+        }
+        None
+    }
 }
 
 /// Write `bytes` to `path` atomically (temporary file, then rename).
@@ -83,18 +162,61 @@ impl Store {
         self.workspace().join(&p.id)
     }
 
-    /// The finished result of a point, if any.
-    pub fn result(&self, p: &Point) -> Option<PointResult> {
-        read_json(&self.dir(p).join("result.json")).ok()
+    /// What point `p`'s directory holds, verified against its checksums.
+    pub fn state(&self, p: &Point) -> State {
+        let dir = self.dir(p);
+        let path = dir.join("result.json");
+        let text = match fs::read_to_string(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return State::Missing,
+            Err(e) => return State::Damaged(format!("result.json cannot be read ({e})")),
+            Ok(t) => t,
+        };
+        let r: PointResult = match serde_json::from_str(&text) {
+            Err(e) => return State::Damaged(format!("result.json is not a point's result ({e})")),
+            Ok(r) => r,
+        };
+        match r.damage(&dir) {
+            Some(why) => State::Damaged(why),
+            None => State::Done(r),
+        }
     }
 
-    /// Whether point `p` still needs work: no result yet, or a failed one
-    /// when failures are retried.
-    pub fn unfinished(&self, p: &Point, retry: bool) -> bool {
-        match self.result(p) {
-            None => true,
-            Some(r) => retry && r.status != "ok",
+    /// The verified result of a point, if any.
+    pub fn result(&self, p: &Point) -> Option<PointResult> {
+        match self.state(p) {
+            State::Done(r) => Some(r),
+            _ => None,
         }
+    }
+
+    /// Whether point `p` still needs work: no result yet, a damaged one, or
+    /// a failed one when failures are retried.
+    pub fn unfinished(&self, p: &Point, retry: bool) -> bool {
+        match self.state(p) {
+            State::Done(r) => retry && r.status != "ok",
+            _ => true,
+        }
+    }
+
+    /// The lock file a worker holds while it computes point `p` (or its
+    /// part `part`), or assembles or moves aside a split point.
+    pub fn claim_path(&self, p: &Point, part: Option<u64>) -> PathBuf {
+        match part {
+            None => self.workspace().join(format!(".{}.claim", p.id)),
+            Some(k) => self.workspace().join(format!(".{}.part-{k}.claim", p.id)),
+        }
+    }
+
+    /// Move a damaged point's directory aside (to `.ID.damaged-<time stamp>`
+    /// in the workspace, kept for inspection); its new name.
+    pub fn move_aside(&self, p: &Point) -> Result<PathBuf> {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        let to = self.workspace().join(format!(".{}.damaged-{now}", p.id));
+        fs::rename(self.dir(p), &to).map_err(|e| io(&self.dir(p), e))?;
+        Ok(to)
     }
 
     /// Record a point's statepoint (before it runs).
@@ -107,9 +229,12 @@ impl Store {
         )
     }
 
-    /// Record a point's result (last: it marks the point finished).
-    pub fn finish(&self, p: &Point, r: &PointResult) -> Result<()> {
-        write_json(&self.dir(p).join("result.json"), r)
+    /// Record a point's result with the checksums of its files (last: it
+    /// marks the point finished).
+    pub fn finish(&self, p: &Point, mut r: PointResult) -> Result<PointResult> {
+        r.seal(&self.dir(p))?;
+        write_json(&self.dir(p).join("result.json"), &r)?;
+        Ok(r)
     }
 
     /// Files and directories the sweep does not know about, and point

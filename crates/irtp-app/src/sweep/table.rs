@@ -4,39 +4,77 @@
 //! times the run).
 
 use super::plan::{text, Plan, Point};
-use super::store::{write_atomic, PointResult, Store};
+use super::store::{write_atomic, State, Store};
+use super::Damaged;
 use crate::io::io_err as io;
 use irtp::error::{Error, Result};
+use rayon::prelude::*;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Points finished, failed among them, and missing.
+/// Points finished, failed among them, missing and damaged.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
-    /// Points with a result (ok or failed).
+    /// Points with a verified result (ok or failed).
     pub done: usize,
     /// Points whose computation failed.
     pub failed: usize,
     /// Points without a result yet.
     pub missing: usize,
+    /// Points whose files do not verify.
+    pub damaged: usize,
 }
 
-/// Count the points of `plan` in `store`, in one pass over their results;
-/// also how many of the points `selected` picks (a shard's) failed.
-pub fn counts(plan: &Plan, store: &Store, selected: impl Fn(&Point) -> bool) -> (Counts, usize) {
+impl Counts {
+    /// Whether every point is finished, verified and successful.
+    pub fn complete(&self) -> bool {
+        self.missing == 0 && self.failed == 0 && self.damaged == 0
+    }
+}
+
+/// The verified state of every point (in parallel: it reads every file).
+pub fn states(store: &Store, points: &[Point]) -> Vec<State> {
+    points.par_iter().map(|p| store.state(p)).collect()
+}
+
+/// Count the `points` by their `states`; also how many of the points
+/// `selected` picks (a shard's) failed.
+pub fn counts(
+    points: &[Point],
+    states: &[State],
+    selected: impl Fn(&Point) -> bool,
+) -> (Counts, usize) {
     let (mut c, mut failed_selected) = (Counts::default(), 0);
-    for p in plan.points() {
-        match store.result(&p) {
-            Some(r) => {
+    for (p, s) in points.iter().zip(states) {
+        match s {
+            State::Done(r) => {
                 let failed = r.status != "ok";
                 c.done += 1;
                 c.failed += usize::from(failed);
-                failed_selected += usize::from(failed && selected(&p));
+                failed_selected += usize::from(failed && selected(p));
             }
-            None => c.missing += 1,
+            State::Missing => c.missing += 1,
+            State::Damaged(_) => c.damaged += 1,
         }
     }
     (c, failed_selected)
+}
+
+/// The damaged points among `states`.
+pub fn damaged(points: &[Point], states: &[State]) -> Vec<Damaged> {
+    points
+        .iter()
+        .zip(states)
+        .filter_map(|(p, s)| match s {
+            State::Damaged(why) => Some(Damaged {
+                index: p.index,
+                id: p.id.clone(),
+                why: why.clone(),
+                moved_to: None,
+            }),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The summary's scalar entries (numbers, booleans, strings), in order.
@@ -63,12 +101,19 @@ fn scalars(summary: &serde_json::Value) -> Vec<(String, String)> {
 /// Write `results.csv` (atomically): point, id, the parameters, seed,
 /// method, status, error, wall_time_s, then every scalar of the summaries
 /// (the union, in order of first appearance). Missing points get status
-/// `missing`.
-pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
-    let points: Vec<Point> = plan.points().collect();
-    let results: Vec<Option<PointResult>> = points.iter().map(|p| store.result(p)).collect();
+/// `missing`, damaged ones `damaged` with what does not verify as error.
+pub fn write_table(
+    plan: &Plan,
+    store: &Store,
+    points: &[Point],
+    states: &[State],
+) -> Result<(PathBuf, Counts)> {
+    let results = states.iter().filter_map(|s| match s {
+        State::Done(r) => Some(r),
+        _ => None,
+    });
     let mut extra: Vec<String> = Vec::new();
-    for r in results.iter().flatten() {
+    for r in results {
         for (k, _) in scalars(&r.summary) {
             if !extra.contains(&k) {
                 extra.push(k);
@@ -83,15 +128,12 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
     let path = store.root.join("results.csv");
     let csv_err = |e: csv::Error| io(&path, e);
     w.write_record(&header).map_err(csv_err)?;
-    let mut counts = Counts::default();
-    for (p, r) in points.iter().zip(&results) {
+    for (p, state) in points.iter().zip(states) {
         let mut row = vec![p.index.to_string(), p.id.clone()];
         row.extend(p.params.iter().map(|(_, v)| text(v)));
         row.push(p.seed.map(|s| s.to_string()).unwrap_or_default());
-        match r {
-            Some(r) => {
-                counts.done += 1;
-                counts.failed += usize::from(r.status != "ok");
+        match state {
+            State::Done(r) => {
                 let s: std::collections::HashMap<String, String> =
                     scalars(&r.summary).into_iter().collect();
                 row.extend([
@@ -102,14 +144,12 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
                 row.push(crate::io::format_float(r.wall_time_s));
                 row.extend(extra.iter().map(|k| s.get(k).cloned().unwrap_or_default()));
             }
-            None => {
-                counts.missing += 1;
-                row.extend([
-                    String::new(),
-                    "missing".into(),
-                    String::new(),
-                    String::new(),
-                ]);
+            other => {
+                let (status, why) = match other {
+                    State::Damaged(why) => ("damaged", why.as_str()),
+                    _ => ("missing", ""),
+                };
+                row.extend([String::new(), status.into(), why.into(), String::new()]);
                 row.extend(extra.iter().map(|_| String::new()));
             }
         }
@@ -117,34 +157,53 @@ pub fn write_table(plan: &Plan, store: &Store) -> Result<(PathBuf, Counts)> {
     }
     let bytes = w.into_inner().map_err(|e| io(&path, e))?;
     write_atomic(&path, &bytes)?;
-    Ok((path, counts))
+    Ok((path, counts(points, states, |_| false).0))
 }
 
 /// Bring point `p` from `src` into `dst`: copied when only `src` has its
-/// result; when both do, the results must agree (up to timing).
-pub fn take_point(src: &Store, dst: &Store, p: &Point) -> Result<()> {
-    let Some(theirs) = src.result(p) else {
-        return take_parts(src, dst, p);
+/// verified result (a damaged copy in `dst` moved aside first); when both
+/// do, the results must agree (up to timing). Returns the damage seen.
+pub fn take_point(src: &Store, dst: &Store, p: &Point) -> Result<Option<Damaged>> {
+    let report = |why: String, moved_to| Damaged {
+        index: p.index,
+        id: p.id.clone(),
+        why,
+        moved_to,
     };
-    if let Some(ours) = dst.result(p) {
-        let same = ours.status == theirs.status
-            && ours.summary == theirs.summary
-            && ours.error == theirs.error;
-        if !same {
-            return Err(Error::invalid(
-                "sweep_dir",
-                src.root.display(),
-                format!(
-                    "the same results as {} for point {} ({})",
-                    dst.root.display(),
-                    p.index,
-                    p.id
-                ),
-            ));
+    let theirs = match src.state(p) {
+        State::Missing => return take_parts(src, dst, p).map(|_| None),
+        State::Damaged(why) => {
+            let why = format!("{why} (in {}; not taken)", src.root.display());
+            return Ok(Some(report(why, None)));
         }
-        return Ok(());
+        State::Done(r) => r,
+    };
+    let ours = match dst.state(p) {
+        State::Missing => return copy_dir(&src.dir(p), &dst.dir(p)).map(|_| None),
+        State::Damaged(why) => {
+            let to = dst.move_aside(p)?;
+            copy_dir(&src.dir(p), &dst.dir(p))?;
+            let why = format!("{why} (replaced by the copy in {})", src.root.display());
+            return Ok(Some(report(why, Some(to))));
+        }
+        State::Done(ours) => ours,
+    };
+    let same = ours.status == theirs.status
+        && ours.summary == theirs.summary
+        && ours.error == theirs.error;
+    if !same {
+        return Err(Error::invalid(
+            "sweep_dir",
+            src.root.display(),
+            format!(
+                "the same results as {} for point {} ({})",
+                dst.root.display(),
+                p.index,
+                p.id
+            ),
+        ));
     }
-    copy_dir(&src.dir(p), &dst.dir(p))
+    Ok(None)
 }
 
 /// Copy the stored parts of an unfinished split point that `dst` lacks.

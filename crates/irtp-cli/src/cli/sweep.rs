@@ -125,8 +125,18 @@ fn run_points(a: RunArgs) -> anyhow::Result<u8> {
     };
     let r = sweep::run(&plan, &a.out, opts, &bar)?;
     drop(bar);
+    for d in &r.moved_aside {
+        let to = d.moved_to.as_ref().map(|p| p.display().to_string());
+        println!(
+            "damaged point {} ({}): {}; moved aside to {} and computed again",
+            d.index,
+            d.id,
+            d.why,
+            to.unwrap_or_default()
+        );
+    }
     println!(
-        "{}: {} points, {} work items; shard {}/{} has {}: ran {} ({} failed), {} already finished",
+        "{}: {} points, {} work items; shard {}/{} has {}: ran {} ({} failed), {} already finished, {} finished by another worker",
         a.out.display(),
         r.points,
         r.items,
@@ -135,7 +145,8 @@ fn run_points(a: RunArgs) -> anyhow::Result<u8> {
         r.shard_items,
         r.ran,
         r.failed,
-        r.skipped
+        r.skipped,
+        r.by_others
     );
     match r.table {
         Some(t) => println!("all points finished: {}", t.display()),
@@ -159,26 +170,30 @@ fn run_points(a: RunArgs) -> anyhow::Result<u8> {
 
 fn merge(a: MergeArgs) -> anyhow::Result<u8> {
     let (target, sources) = a.dirs.split_first().expect("clap requires one dir");
-    let c = sweep::merge(target, sources)?;
+    let (c, damaged) = sweep::merge(target, sources)?;
+    for d in &damaged {
+        let moved = match &d.moved_to {
+            Some(p) => format!("; the damaged copy moved aside to {}", p.display()),
+            None => String::new(),
+        };
+        println!("damaged point {} ({}): {}{moved}", d.index, d.id, d.why);
+    }
     println!(
-        "{}: {} points finished ({} failed), {} missing; wrote results.csv",
+        "{}: {} points finished ({} failed), {} missing, {} damaged; wrote results.csv",
         target.display(),
         c.done,
         c.failed,
-        c.missing
+        c.missing,
+        c.damaged
     );
-    Ok(if c.missing > 0 || c.failed > 0 { 3 } else { 0 })
+    Ok(if c.complete() { 0 } else { 3 })
 }
 
 fn status(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = sweep::plan_of(&a.dir)?;
     let report = sweep::status(&plan, &a.dir)?;
     print!("{report}");
-    Ok(if report.missing.is_empty() && report.failed.is_empty() {
-        0
-    } else {
-        3
-    })
+    Ok(if report.complete() { 0 } else { 3 })
 }
 
 fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {

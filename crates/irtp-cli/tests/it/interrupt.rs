@@ -82,9 +82,12 @@ fn sigkill_staging_is_removed_by_the_next_run() {
     wait_for_staging(tmp.path());
     child.kill().unwrap();
     child.wait().unwrap();
+    // A killed run leaves its staging directory and its (now unlocked)
+    // lock file: the kernel released the lock with the process.
     let stale: Vec<String> = entries(tmp.path());
-    assert_eq!(stale.len(), 1, "{stale:?}");
-    assert!(stale[0].starts_with(".res.partial-"), "{stale:?}");
+    assert_eq!(stale.len(), 2, "{stale:?}");
+    assert_eq!(stale[0], ".res.lock", "{stale:?}");
+    assert!(stale[1].starts_with(".res.partial-"), "{stale:?}");
     // A staging dir of a live process (ours) or of another host is kept.
     let live = tmp
         .path()

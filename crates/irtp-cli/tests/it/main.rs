@@ -8,6 +8,7 @@ mod cli_simulate;
 #[allow(dead_code)]
 mod common;
 mod counts;
+mod data_safety;
 mod docs;
 mod drag_specs;
 mod exact_cli;

@@ -119,6 +119,13 @@ impl Schedule {
         lambda + resets * per_reset
     }
 
+    /// The parameters of this schedule a run's cost grows with, beyond the
+    /// Poisson `rate` (a periodic clock's `reset_period`: each period is
+    /// one more event), for the refusal of a costly run to name them.
+    pub fn cost_drivers(&self) -> Vec<&'static str> {
+        self.periodic.map(|_| "reset_period").into_iter().collect()
+    }
+
     /// Whether it is the paper's (no modifier).
     pub fn is_plain(&self) -> bool {
         *self == Schedule::default()
