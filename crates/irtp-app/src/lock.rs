@@ -11,9 +11,90 @@
 
 use crate::io::io_err;
 use irtp::error::{Error, Result};
-use std::fs::{self, File, OpenOptions, TryLockError};
+use std::fs::{self, File, OpenOptions};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
+
+/// `flock(2)` on an open file. Written against libc rather than
+/// `std::fs::File::lock` (stable only since Rust 1.89; the workspace
+/// supports 1.80). Elsewhere than unix, std's locks are used.
+mod flock {
+    use std::fs::File;
+    use std::io;
+
+    #[cfg(unix)]
+    fn call(file: &File, op: libc::c_int) -> io::Result<bool> {
+        use std::os::unix::io::AsRawFd;
+        loop {
+            // SAFETY: flock only reads the descriptor, which `file` keeps
+            // open for the duration of the call.
+            if unsafe { libc::flock(file.as_raw_fd(), op) } == 0 {
+                return Ok(true);
+            }
+            let e = io::Error::last_os_error();
+            match e.raw_os_error() {
+                Some(libc::EINTR) => continue,
+                Some(libc::EWOULDBLOCK) => return Ok(false),
+                _ => return Err(e),
+            }
+        }
+    }
+
+    /// Take the exclusive lock if free: `Ok(false)` if another holds it.
+    #[cfg(unix)]
+    pub fn try_exclusive(file: &File) -> io::Result<bool> {
+        call(file, libc::LOCK_EX | libc::LOCK_NB)
+    }
+
+    /// Take a shared lock if no one holds the exclusive one.
+    #[cfg(unix)]
+    pub fn try_shared(file: &File) -> io::Result<bool> {
+        call(file, libc::LOCK_SH | libc::LOCK_NB)
+    }
+
+    /// Take the exclusive lock, waiting for its holder.
+    #[cfg(unix)]
+    pub fn exclusive(file: &File) -> io::Result<()> {
+        call(file, libc::LOCK_EX).map(|_| ())
+    }
+
+    #[cfg(unix)]
+    pub fn unlock(file: &File) -> io::Result<()> {
+        call(file, libc::LOCK_UN).map(|_| ())
+    }
+
+    #[cfg(not(unix))]
+    #[allow(clippy::incompatible_msrv)]
+    pub fn try_exclusive(file: &File) -> io::Result<bool> {
+        match file.try_lock() {
+            Ok(()) => Ok(true),
+            Err(std::fs::TryLockError::WouldBlock) => Ok(false),
+            Err(std::fs::TryLockError::Error(e)) => Err(e),
+        }
+    }
+
+    #[cfg(not(unix))]
+    #[allow(clippy::incompatible_msrv)]
+    pub fn try_shared(file: &File) -> io::Result<bool> {
+        match file.try_lock_shared() {
+            Ok(()) => Ok(true),
+            Err(std::fs::TryLockError::WouldBlock) => Ok(false),
+            Err(std::fs::TryLockError::Error(e)) => Err(e),
+        }
+    }
+
+    #[cfg(not(unix))]
+    #[allow(clippy::incompatible_msrv)]
+    pub fn exclusive(file: &File) -> io::Result<()> {
+        file.lock()
+    }
+
+    #[cfg(not(unix))]
+    #[allow(clippy::incompatible_msrv)]
+    pub fn unlock(file: &File) -> io::Result<()> {
+        file.unlock()
+    }
+}
 
 /// A lock held by this process until dropped (which removes its file).
 #[derive(Debug)]
@@ -76,10 +157,10 @@ impl FileLock {
     pub fn try_acquire(path: &Path) -> Result<Acquired> {
         loop {
             let mut file = open(path)?;
-            match file.try_lock() {
-                Ok(()) => {}
-                Err(TryLockError::WouldBlock) => return Ok(Acquired::Held(holder(&mut file))),
-                Err(TryLockError::Error(e)) => return Err(io_err(path, e)),
+            match flock::try_exclusive(&file) {
+                Ok(true) => {}
+                Ok(false) => return Ok(Acquired::Held(holder(&mut file))),
+                Err(e) => return Err(io_err(path, e)),
             }
             if let Some(lock) = Self::claim(file, path)? {
                 return Ok(Acquired::Mine(lock));
@@ -91,13 +172,13 @@ impl FileLock {
     /// it for longer than the probe, and without removing its file).
     pub fn holder_of(path: &Path) -> Option<String> {
         let mut file = File::open(path).ok()?;
-        match file.try_lock_shared() {
-            Ok(()) => {
-                let _ = file.unlock();
+        match flock::try_shared(&file) {
+            Ok(true) => {
+                let _ = flock::unlock(&file);
                 None
             }
-            Err(TryLockError::WouldBlock) => Some(holder(&mut file)),
-            Err(TryLockError::Error(_)) => None,
+            Ok(false) => Some(holder(&mut file)),
+            Err(_) => None,
         }
     }
 
@@ -105,7 +186,7 @@ impl FileLock {
     pub fn acquire_waiting(path: &Path) -> Result<FileLock> {
         loop {
             let file = open(path)?;
-            file.lock().map_err(|e| io_err(path, e))?;
+            flock::exclusive(&file).map_err(|e| io_err(path, e))?;
             if let Some(lock) = Self::claim(file, path)? {
                 return Ok(lock);
             }
@@ -133,7 +214,7 @@ impl Drop for FileLock {
     fn drop(&mut self) {
         // Removed while still locked, then unlocked by closing the file.
         let _ = fs::remove_file(&self.path);
-        let _ = self.file.unlock();
+        let _ = flock::unlock(&self.file);
     }
 }
 

@@ -259,6 +259,9 @@ pub(super) fn target_weights(p: &Problem, v: &[f64]) -> Option<Vec<f64>> {
         let total = target.mass(-vu, vu);
         let mut w = vec![0.0; v.len()];
         for (i, c) in v.windows(2).enumerate() {
+            if !(c[1] > c[0]) {
+                continue; // a node repeated (v0 or v_r on a mesh node)
+            }
             // The cell's mass split by the hat functions of its two nodes.
             let mass = target.mass(c[0], c[1]);
             let upper = (target.moment_from(c[0], c[1]) / (c[1] - c[0])).clamp(0.0, mass);
