@@ -10,6 +10,8 @@
 use super::Cli;
 use clap::{Arg, ArgAction, Command, Parser};
 use std::any::TypeId;
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 /// A command-line vocabulary keywords are read against: a clap parser and
 /// the command paths it runs.
@@ -49,8 +51,30 @@ pub enum Value {
     List(Vec<String>),
 }
 
-/// The clap command of `irtp <path>` (`"fp stationary"`).
-pub fn command<C: Vocabulary>(path: &str) -> Result<Command, String> {
+/// Run `f` on this thread's built root command of vocabulary `C`, built
+/// once: building the whole program's clap tree (and, in debug builds, its
+/// consistency asserts) costs ~1 ms, which a plan of 10⁶ points paid
+/// several times per point.
+fn with_root<C: Vocabulary + 'static, R>(f: impl FnOnce(&mut Command) -> R) -> R {
+    thread_local! {
+        static ROOTS: RefCell<HashMap<TypeId, Command>> = RefCell::new(HashMap::new());
+    }
+    ROOTS.with(|roots| {
+        let mut roots = roots.borrow_mut();
+        let root = roots.entry(TypeId::of::<C>()).or_insert_with(|| {
+            let mut c = C::command();
+            c.build();
+            c
+        });
+        f(root)
+    })
+}
+
+/// Run `f` on the clap command of `irtp <path>` (`"fp stationary"`).
+fn with_command<C: Vocabulary + 'static, R>(
+    path: &str,
+    f: impl FnOnce(&Command) -> R,
+) -> Result<R, String> {
     let known = C::commands();
     if !known.contains(&path) {
         return Err(format!(
@@ -58,15 +82,20 @@ pub fn command<C: Vocabulary>(path: &str) -> Result<Command, String> {
             known.join(", ")
         ));
     }
-    let mut cur = C::command();
-    cur.build();
-    for part in path.split(' ') {
-        cur = cur
-            .find_subcommand(part)
-            .cloned()
-            .ok_or_else(|| format!("unknown command '{path}'"))?;
-    }
-    Ok(cur)
+    with_root::<C, _>(|root| {
+        let mut cur: &Command = root;
+        for part in path.split(' ') {
+            cur = cur
+                .find_subcommand(part)
+                .ok_or_else(|| format!("unknown command '{path}'"))?;
+        }
+        Ok(f(cur))
+    })
+}
+
+/// The clap command of `irtp <path>` (`"fp stationary"`).
+pub fn command<C: Vocabulary + 'static>(path: &str) -> Result<Command, String> {
+    with_command::<C, _>(path, Command::clone)
 }
 
 /// How an error names a command: its Python function (`fp stationary` →
@@ -105,28 +134,29 @@ pub fn kind(a: &Arg) -> &'static str {
 
 /// `irtp <path> --flag value ...` for the given keywords (in their order);
 /// an unknown keyword or a value of the wrong kind is an error naming it.
-pub fn build<C: Vocabulary>(
+pub fn build<C: Vocabulary + 'static>(
     path: &str,
     options: Vec<(String, Value)>,
 ) -> Result<Vec<String>, String> {
-    let cmd = command::<C>(path)?;
-    let args = keywords(&cmd);
-    let mut argv: Vec<String> = std::iter::once("irtp")
-        .chain(path.split(' '))
-        .map(String::from)
-        .collect();
-    for (name, value) in options {
-        let Some(arg) = args.iter().find(|a| a.get_id().as_str() == name) else {
-            let known: Vec<&str> = args.iter().map(|a| a.get_id().as_str()).collect();
-            return Err(format!(
-                "unknown keyword '{name}' for {} (known: {})",
-                function(path),
-                known.join(", ")
-            ));
-        };
-        push(&mut argv, arg, &name, value)?;
-    }
-    Ok(argv)
+    with_command::<C, _>(path, |cmd| {
+        let args = keywords(cmd);
+        let mut argv: Vec<String> = std::iter::once("irtp")
+            .chain(path.split(' '))
+            .map(String::from)
+            .collect();
+        for (name, value) in options {
+            let Some(arg) = args.iter().find(|a| a.get_id().as_str() == name) else {
+                let known: Vec<&str> = args.iter().map(|a| a.get_id().as_str()).collect();
+                return Err(format!(
+                    "unknown keyword '{name}' for {} (known: {})",
+                    function(path),
+                    known.join(", ")
+                ));
+            };
+            push(&mut argv, arg, &name, value)?;
+        }
+        Ok(argv)
+    })?
 }
 
 /// Append one keyword's flag and value.
@@ -158,8 +188,12 @@ fn push(argv: &mut Vec<String>, arg: &Arg, name: &str, value: Value) -> Result<(
 
 /// Parse a command line built by [`build`]; a clap error becomes one line
 /// naming keywords instead of flags.
-pub fn parse<C: Vocabulary>(path: &str, argv: &[String]) -> Result<C, String> {
-    C::try_parse_from(argv).map_err(|e| {
+pub fn parse<C: Vocabulary + 'static>(path: &str, argv: &[String]) -> Result<C, String> {
+    let parsed = with_root::<C, _>(|root| {
+        let mut m = root.try_get_matches_from_mut(argv)?;
+        C::from_arg_matches_mut(&mut m).map_err(|e| e.format(root))
+    });
+    parsed.map_err(|e| {
         // The message up to clap's usage line, on one line.
         let rendered = e.render().to_string();
         let lines: Vec<&str> = rendered
@@ -174,7 +208,7 @@ pub fn parse<C: Vocabulary>(path: &str, argv: &[String]) -> Result<C, String> {
 }
 
 /// Replace `--flag <VALUE>` and `--flag` by the keyword names.
-pub fn flags_to_keywords<C: Vocabulary>(path: &str, text: &str) -> String {
+pub fn flags_to_keywords<C: Vocabulary + 'static>(path: &str, text: &str) -> String {
     let Ok(cmd) = command::<C>(path) else {
         return text.to_string();
     };

@@ -306,7 +306,12 @@ impl Dir {
         .with_argv(argv.to_vec());
         files.extend(out.files().iter().cloned());
         files.push("run.json".into());
-        prov.checksums = out.checksums()?;
+        // The index vouches for every figure's files too: a rerun removes a
+        // figure's old record before it commits the new one.
+        for (_, r) in &self.records {
+            prov.checksums.extend(r.checksums.clone());
+        }
+        prov.checksums.extend(out.checksums()?);
         prov.files = files.clone();
         let value = super::to_json(&prov);
         out.write_json("run.json", &value)?;

@@ -175,6 +175,7 @@ pub const PARAMETER_NAMES: &[&str] = &[
     "cells",
     "cfl",
     "control_cells",
+    "cpus_per_task",
     "dt",
     "events",
     "grid_points",
@@ -196,6 +197,7 @@ pub const PARAMETER_NAMES: &[&str] = &[
     "t_max",
     "t_min",
     "tail",
+    "throttle",
     "v0",
     "vt",
 ];

@@ -36,12 +36,16 @@ pub const SWEEPABLE: [&str; 6] = [
 ];
 
 /// Keywords a plan may not set: the sweep owns them.
-const RESERVED: [(&str, &str); 2] = [
+const RESERVED: [(&str, &str); 3] = [
     (
         "seed",
         "set the plan's top-level `seed`; each point's seed derives from it",
     ),
     ("out", "the sweep writes each point into its own directory"),
+    (
+        "force",
+        "the sweep owns each point's directory (a rerun resumes; --retry-failed recomputes failed points)",
+    ),
 ];
 
 #[derive(Deserialize)]
@@ -123,10 +127,39 @@ pub struct Point {
 
 /// A plan error: `InvalidParameter` naming the plan key.
 fn bad(key: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Error {
+    let value = one_line(&value.to_string());
+    let value = match value.char_indices().nth(120) {
+        Some((i, _)) => format!("{}…", &value[..i]),
+        None => value,
+    };
     Error::InvalidParameter {
         name: "plan",
         value: format!("{key} = {value}"),
-        allowed: allowed.into(),
+        allowed: one_line(&allowed.into()),
+    }
+}
+
+/// Whitespace runs (a TOML error's line breaks among them) as one space.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// A TOML value for a message: numbers in their shortest form (toml
+/// prints 1e300 as 301 digits), tables and arrays inline.
+fn shown(v: &toml::Value) -> String {
+    let join = |items: Vec<String>| items.join(", ");
+    match v {
+        toml::Value::Float(x) => crate::io::format_float(*x),
+        toml::Value::Array(a) => format!("[{}]", join(a.iter().map(shown).collect())),
+        toml::Value::Table(t) => format!(
+            "{{ {} }}",
+            join(
+                t.iter()
+                    .map(|(k, v)| format!("{k} = {}", shown(v)))
+                    .collect()
+            )
+        ),
+        other => other.to_string(),
     }
 }
 
@@ -137,7 +170,7 @@ fn scalar(key: &str, v: &toml::Value) -> Result<Value> {
         toml::Value::Integer(i) => Ok(Value::Int(*i as i128)),
         toml::Value::Float(x) => Ok(Value::Float(*x)),
         toml::Value::String(s) => Ok(Value::Str(s.clone())),
-        other => Err(bad(key, other, "a number, string or boolean")),
+        other => Err(bad(key, shown(other), "a number, string or boolean")),
     }
 }
 
@@ -152,7 +185,7 @@ fn axis(key: &str, v: &toml::Value) -> Result<Vec<Value>> {
             let r: Range = t.clone().try_into().map_err(|e| {
                 bad(
                     key,
-                    v,
+                    shown(v),
                     format!("a list or {{ from, to, points, spacing }} ({e})"),
                 )
             })?;
@@ -161,7 +194,7 @@ fn axis(key: &str, v: &toml::Value) -> Result<Vec<Value>> {
         other => {
             return Err(bad(
                 key,
-                other,
+                shown(other),
                 "a list or a { from, to, points, spacing } table",
             ))
         }
@@ -180,7 +213,9 @@ pub const MAX_POINTS: usize = 1_000_000;
 fn range(key: &str, r: &Range) -> Result<Vec<Value>> {
     let text = format!(
         "{{ from = {}, to = {}, points = {} }}",
-        r.from, r.to, r.points
+        crate::io::format_float(r.from),
+        crate::io::format_float(r.to),
+        r.points
     );
     if !(r.from.is_finite() && r.to.is_finite()) || r.points == 0 {
         return Err(bad(key, text, "finite from and to, points >= 1"));

@@ -118,7 +118,7 @@ fn valid_expressions_are_accepted() {
 /// (c) Every value that enters a generated script is checked first.
 #[test]
 fn slurm_values_are_checked_before_anything_is_written() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 9] = [
         (&["--partition", "a\nb"], "--partition"),
         (&["--partition", "a b"], "--partition"),
         (&["--partition", "$(reboot)"], "--partition"),
@@ -126,6 +126,8 @@ fn slurm_values_are_checked_before_anything_is_written() {
         (&["--time", "1:2:3:4"], "--time"),
         (&["--cpus-per-task", "0"], "--cpus-per-task"),
         (&["--throttle", "0"], "--throttle"),
+        (&["--points-per-task", "0"], "--points-per-task"),
+        (&["--max-array", "0"], "--max-array"),
     ];
     for (args, flag) in cases {
         let dir = tempfile::tempdir().unwrap();
@@ -265,6 +267,33 @@ fn duplicate_points_are_refused_naming_the_axis() {
         let text = format!("command = \"fp stationary\"\n[fixed]\ncells = 200\n{axes}");
         let err = refused_plan(&text, "run");
         assert!(err.contains(named) && err.contains("twice"), "{err}");
+    }
+}
+
+/// A plan may not set `force` (nor `out`, `seed`) in any of its tables:
+/// refused naming the key before --out is written (a `[fixed]` force was
+/// refused only after the sweep directory had been created; an axis of
+/// force values was accepted by `sweep slurm`).
+#[test]
+fn plans_may_not_set_what_the_sweep_owns() {
+    let tables = [
+        "[fixed]\nforce = true\n[axes]\nsigma = [1.0, 2.0]\n",
+        "[axes]\nsigma = [1.0, 2.0]\nforce = [true, false]\n",
+        "[axes]\nsigma = [1.0, 2.0]\n[[zip]]\nforce = [true, false]\nrate = [0.5, 1.0]\n",
+        "[fixed]\nout = \"x\"\n[axes]\nsigma = [1.0, 2.0]\n",
+        "[fixed]\nseed = 3\n[axes]\nsigma = [1.0, 2.0]\n",
+    ];
+    for (i, t) in tables.iter().enumerate() {
+        let text = format!("command = \"fp stationary\"\n{t}");
+        let key = ["force", "force", "force", "out", "seed"][i];
+        for cmd in ["run", "slurm"] {
+            let err = refused_plan(&text, cmd);
+            assert!(
+                err.contains(&format!("invalid --plan = {key} = …"))
+                    && err.contains("not set by a plan"),
+                "{cmd} {t}: {err}"
+            );
+        }
     }
 }
 

@@ -415,7 +415,7 @@ pub fn transient_with_progress(
         Scheme::TrBdf2 => run_trbdf2(params, opts, &times, &snaps, progress),
     }?;
     check_mass(&out)?;
-    Ok(out)
+    nonnegative(out)
 }
 
 /// The total probability (cells and the held refractory mass) at every
@@ -437,6 +437,39 @@ fn check_mass(out: &Transient) -> Result<()> {
     }
     Ok(())
 }
+
+/// The snapshots' densities with the round-off negatives of the solves (at
+/// most [`NEGATIVE_TOLERANCE`] of the snapshot's largest density in
+/// magnitude) set to 0; a larger negative density means the integration
+/// lost positivity (TR-BDF2's second stage has a right-hand side of mixed
+/// sign), and the answer is refused.
+fn nonnegative(mut out: Transient) -> Result<Transient> {
+    for snap in &mut out.snapshots {
+        let scale = snap.p.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let floor = -NEGATIVE_TOLERANCE * scale;
+        for col in [&mut snap.p_plus, &mut snap.p_minus] {
+            if let Some(x) = col.iter().find(|&&x| !(x >= floor)) {
+                return Err(Error::Numerical {
+                    method: "fp transient",
+                    reason: format!(
+                        "a density of {x:e} at t = {} (largest {scale:e}): the time \
+                         integration lost positivity; raise --cells or lower --rtol",
+                        snap.t
+                    ),
+                });
+            }
+            col.iter_mut().filter(|x| **x < 0.0).for_each(|x| *x = 0.0);
+        }
+        for ((p, a), b) in snap.p.iter_mut().zip(&snap.p_plus).zip(&snap.p_minus) {
+            *p = a + b;
+        }
+    }
+    Ok(out)
+}
+
+/// How negative a snapshot's density may come out (relative to its largest
+/// value) and still count as round-off, reported as 0.
+pub const NEGATIVE_TOLERANCE: f64 = 1e-12;
 
 /// How far the recorded total probability may be from 1.
 pub const MASS_TOLERANCE: f64 = 1e-8;

@@ -194,7 +194,8 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug + 'static {
         let vs = self.inverse(s);
         if u.abs() <= 0.25 * vs.abs() {
             let (a, b) = (vs - u, vs);
-            u * adaptive_mean_derivative(self, a, b, mean_derivative(self, a, b), 16)
+            let mut panels = MEAN_DERIVATIVE_PANELS;
+            u * adaptive_mean_derivative(self, a, b, mean_derivative(self, a, b), 16, &mut panels)
         } else {
             self.drift(s, vs - u)
         }
@@ -265,18 +266,33 @@ fn mean_derivative<D: Drag>(d: &D, a: f64, b: f64) -> f64 {
 /// the halves agree with the whole (`whole`, its GL value) to 1e-13: the
 /// rule is of order 16, so the halves are then exact to rounding. One level
 /// for the short intervals near v*; several where g' varies fast (tan next
-/// to its pole, Sigma ≫ 1). `depth` caps the recursion.
-fn adaptive_mean_derivative<D: Drag>(d: &D, a: f64, b: f64, whole: f64, depth: u32) -> f64 {
+/// to its pole, Sigma ≫ 1). `depth` caps the recursion and `panels` the
+/// number of halvings (a law whose g' never settles, e.g. an expression
+/// next to a pole, would otherwise cost 2^depth panels on every call); a
+/// panel past either bound keeps its halves' value.
+fn adaptive_mean_derivative<D: Drag>(
+    d: &D,
+    a: f64,
+    b: f64,
+    whole: f64,
+    depth: u32,
+    panels: &mut u32,
+) -> f64 {
     let m = 0.5 * (a + b);
     let (l, r) = (mean_derivative(d, a, m), mean_derivative(d, m, b));
     let halves = 0.5 * (l + r);
-    if depth == 0 || (halves - whole).abs() <= 1e-13 * halves.abs() {
+    if depth == 0 || *panels == 0 || (halves - whole).abs() <= 1e-13 * halves.abs() {
         halves
     } else {
-        0.5 * (adaptive_mean_derivative(d, a, m, l, depth - 1)
-            + adaptive_mean_derivative(d, m, b, r, depth - 1))
+        *panels -= 1;
+        0.5 * (adaptive_mean_derivative(d, a, m, l, depth - 1, panels)
+            + adaptive_mean_derivative(d, m, b, r, depth - 1, panels))
     }
 }
+
+/// The most halvings of one [`adaptive_mean_derivative`] call (each 16
+/// evaluations of g'): the shipped laws converge within a few.
+const MEAN_DERIVATIVE_PANELS: u32 = 32;
 
 /// g⁻¹(f) for an odd increasing g: expand a bracket from 0, then bisect to
 /// the last bit (g is only assumed continuous, so no Newton). Exactly odd.

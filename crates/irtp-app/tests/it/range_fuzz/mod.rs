@@ -9,7 +9,9 @@
 //! Every case runs under `--max-work 2e7 --max-memory 2e8`, so an accepted
 //! case costs well under a second; a case slower than [`MAX_CASE_SECONDS`]
 //! fails. The cases are drawn from a fixed seed (reproducible in CI); all
-//! failures of a command are collected and reported together.
+//! failures of a command are collected and reported together;
+//! `IRTP_FUZZ_SHOW_REFUSALS=1` prints every refusal (to see what a generator
+//! exercises).
 
 use clap::Parser;
 use irtp::{DragLaw, Params};
@@ -33,23 +35,42 @@ const MASS_TOL: f64 = 1e-6;
 
 const SEED: [u8; 32] = *b"irtp range fuzz, fixed seed 0001";
 
+mod surfaces;
+
 /// One drawn command line with the model it describes.
 #[derive(Clone, Debug)]
 struct Case {
     args: Vec<String>,
-    drag: DragLaw,
+    /// The drawn law; None for a drawn spec that does not parse.
+    drag: Option<DragLaw>,
     sigma: f64,
     lambda: f64,
     rate: f64,
     vr: f64,
+    /// With a drawn reset protocol: the velocities a reset can land on,
+    /// [lo, hi] (resets may happen at rate 0: a periodic protocol).
+    reach: Option<(f64, f64)>,
 }
 
 impl Case {
     /// v_u of the drawn model (when it is admissible).
     fn v_upper(&self) -> Option<f64> {
-        Params::new(self.drag, self.sigma, self.lambda, self.rate, self.vr)
+        Params::new(self.drag?, self.sigma, self.lambda, self.rate, self.vr)
             .ok()
             .map(|p| p.v_upper())
+    }
+
+    /// The least time to go from v0 (or, after a reset, from where a reset
+    /// lands) to vt at reset rate `rate`: the velocity changes at most at
+    /// |g(v)| + Sigma <= 2 Sigma.
+    fn least_time(&self, rate: f64, v0: f64, vt: f64) -> f64 {
+        let direct = (vt - v0).abs();
+        let d = match self.reach {
+            Some((lo, hi)) => direct.min((lo - vt).max(vt - hi).max(0.0)),
+            None if rate > 0.0 => direct.min((vt - self.vr).abs()),
+            None => direct,
+        };
+        d / (2.0 * self.sigma)
     }
 }
 
@@ -173,11 +194,12 @@ fn model(reset: bool) -> impl Strategy<Value = Case> {
             }
             Case {
                 args,
-                drag,
+                drag: Some(drag),
                 sigma,
                 lambda,
                 rate,
                 vr,
+                reach: None,
             }
         })
 }
@@ -269,6 +291,9 @@ fn check(case: &Case) -> Result<bool, String> {
             } else if msg.trim().is_empty() || msg.contains('\n') {
                 Err(format!("error message not one line: {msg:?}"))
             } else {
+                if std::env::var_os("IRTP_FUZZ_SHOW_REFUSALS").is_some() {
+                    eprintln!("refused: irtp {}: {msg}", case.args.join(" "));
+                }
                 Ok(false)
             }
         }
@@ -450,7 +475,14 @@ fn simulate(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
 fn fp_stationary(case: &Case, json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
     finite_tables(o, &[])?;
     in_v2_range("v2", num(json, "v2")?, vu)?;
-    if case.lambda == 0.0 {
+    if case.args.iter().any(|a| a == "--reset-position") {
+        // Documented: with position resetting x is stationary, D_eff is
+        // omitted (null) and x_moments is given.
+        no_nulls(json, &["fine", "coarse", "grading", "d_eff"])?;
+        ensure(json["d_eff"].is_null(), || {
+            "d_eff with position resetting".into()
+        })?;
+    } else if case.lambda == 0.0 {
         // Documented: D_eff = ∞ at lambda = 0 (ballistic), JSON null.
         no_nulls(json, &["fine", "coarse", "grading", "d_eff", "x_moments"])?;
         ensure(json["d_eff"].is_null(), || {
@@ -468,8 +500,14 @@ fn fp_stationary(case: &Case, json: &Value, o: &Outcome, vu: f64) -> Result<(), 
     for c in ["p", "p_plus", "p_minus"] {
         nonneg(c, column(t, c))?;
     }
+    // With a refractory period the held point mass is not in the density.
+    let held = num(json, "refractory_mass")?;
+    ensure((0.0..=1.0).contains(&held), || {
+        format!("refractory_mass = {held}")
+    })?;
     let (p, dv) = (column(t, "p"), column(t, "dv"));
-    mass_one("density.csv", p.iter().zip(dv).map(|(p, d)| p * d).sum())
+    let continuous: f64 = p.iter().zip(dv).map(|(p, d)| p * d).sum();
+    mass_one("density.csv + refractory_mass", continuous + held)
 }
 
 fn fp_transient(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
@@ -491,17 +529,6 @@ fn fp_transient(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
     Ok(())
 }
 
-/// The least time to go from v0 (or, after a reset, from v_r) to vt: the
-/// velocity changes at most at |g(v)| + Sigma <= 2 Sigma.
-fn least_time(sigma: f64, rate: f64, vr: f64, v0: f64, vt: f64) -> f64 {
-    let d = if rate > 0.0 {
-        (vt - v0).abs().min((vt - vr).abs())
-    } else {
-        (vt - v0).abs()
-    };
-    d / (2.0 * sigma)
-}
-
 /// tau at or above its least value (rounding slack of the solvers: 1e-9).
 fn tau_bound(what: &str, tau: f64, least: f64) -> Result<(), String> {
     ensure(tau >= 0.0 && tau >= least * (1.0 - 1e-9), || {
@@ -520,7 +547,7 @@ fn mfpt_direct(case: &Case, json: &Value, o: &Outcome) -> Result<(), String> {
         flag_value(case, "--v0").unwrap(),
         flag_value(case, "--vt").unwrap(),
     );
-    let least = least_time(case.sigma, case.rate, case.vr, v0, vt);
+    let least = case.least_time(case.rate, v0, vt);
     finite_tables(o, &[])?;
     let censored = json.get("censored").and_then(Value::as_u64);
     if let Some(c) = censored {
@@ -603,7 +630,7 @@ fn mfpt_scan(case: &Case, o: &Outcome) -> Result<(), String> {
         } else {
             (x, flag_value(case, "--vt").unwrap())
         };
-        let least = least_time(case.sigma, rate, case.vr, v0, vt);
+        let least = case.least_time(rate, v0, vt);
         let overflow = column(t, "tau")[i] == f64::INFINITY;
         for c in marked {
             let y = column(t, c)[i];
@@ -656,16 +683,8 @@ fn mfpt_optimize(case: &Case, json: &Value, o: &Outcome) -> Result<(), String> {
     ensure(r_opt == 0.0 || (r_opt >= r_min && r_opt <= r_max), || {
         format!("r_opt = {r_opt} outside {{0}} ∪ [{r_min}, {r_max}]")
     })?;
-    tau_bound(
-        "tau_opt",
-        tau_opt,
-        least_time(case.sigma, r_opt, case.vr, v0, vt),
-    )?;
-    tau_bound(
-        "tau_r0",
-        tau_r0,
-        least_time(case.sigma, 0.0, case.vr, v0, vt),
-    )?;
+    tau_bound("tau_opt", tau_opt, case.least_time(r_opt, v0, vt))?;
+    tau_bound("tau_r0", tau_r0, case.least_time(0.0, v0, vt))?;
     let grid = o.results.table("rate_grid").ok_or("no rate_grid table")?;
     let best = column(grid, "tau").iter().fold(tau_r0, |a, &b| a.min(b));
     ensure(tau_opt <= best * (1.0 + 1e-9), || {
@@ -722,7 +741,7 @@ fn simulate_flags(euler: bool) -> impl Strategy<Value = Vec<String>> {
 /// -8e6 at Sigma = 1 - 2^-53): the closed-form flow integrals lose all
 /// precision there.
 fn tanh_next_to_its_limit(m: &Case) -> bool {
-    m.drag == DragLaw::Tanh && m.sigma > 1.0 - 1e-12
+    m.drag == Some(DragLaw::Tanh) && m.sigma > 1.0 - 1e-12
 }
 
 #[test]
