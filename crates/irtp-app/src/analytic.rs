@@ -82,10 +82,13 @@ impl AnalyticArgs {
         // About 100 operations and 64 bytes per density point (measured:
         // 4.5 µs and 37 MB for 1e6 points).
         let cost = super::budget::mesh(self.points, 100.0, 64.0, vec!["points"]);
-        self.budget.check(&super::budget::Cost {
-            memory_drivers: vec!["points"],
-            ..cost
-        })?;
+        self.budget.check(
+            &super::budget::Cost {
+                memory_drivers: vec!["points"],
+                ..cost
+            }
+            .per_drag_evaluation(&params.drag()),
+        )?;
         Ok(Config {
             params,
             points: self.points,

@@ -13,6 +13,7 @@
 
 use clap::Args;
 use irtp::error::{Error, Result};
+use irtp::model::Drag;
 
 /// Default `--max-work`: elementary operations (about an hour of one core).
 pub const DEFAULT_MAX_WORK: f64 = 1e11;
@@ -80,6 +81,21 @@ impl Cost {
             if !self.drivers.contains(&d) {
                 self.drivers.push(d);
             }
+        }
+        self
+    }
+}
+
+impl Cost {
+    /// The same estimate for a method that evaluates `drag` in each unit of
+    /// its work (a mesh cell, a density point, an Euler step): the work is
+    /// [`Drag::evaluation_weight`] times dearer, and `drag` drives it where
+    /// that weight exceeds 1 (a long expression law).
+    pub fn per_drag_evaluation(mut self, drag: &impl Drag) -> Cost {
+        let weight = drag.evaluation_weight();
+        if weight > 1.0 {
+            self.work *= weight;
+            self.drivers.push("drag");
         }
         self
     }

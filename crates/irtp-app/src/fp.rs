@@ -153,7 +153,9 @@ impl StationaryArgs {
         // Measured: about 2.4 µs (~100 operations) and 128 bytes per cell
         // (2e6 cells: 4.8 s, 255 MB); 256 leaves room.
         let cost = super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"]);
-        self.output.budget.check(&cost)?;
+        self.output
+            .budget
+            .check(&cost.per_drag_evaluation(&params.drag()))?;
         Ok((params, opts))
     }
 }
@@ -221,13 +223,16 @@ impl TransientArgs {
             SchemeArg::Trbdf2 => vec!["cells", "rtol", "samples", "snapshots"],
         };
         drivers.extend(params.schedule().cost_drivers());
-        self.output.budget.check(&super::budget::Cost {
-            work: plan.work,
-            unit: "cell updates",
-            drivers,
-            memory,
-            memory_drivers,
-        })?;
+        self.output.budget.check(
+            &super::budget::Cost {
+                work: plan.work,
+                unit: "cell updates",
+                drivers,
+                memory,
+                memory_drivers,
+            }
+            .per_drag_evaluation(&params.drag()),
+        )?;
         Ok((params, opts))
     }
 }

@@ -97,13 +97,16 @@ impl MsdArgs {
         }
         let cells: f64 = (0..self.levels).map(|j| (self.cells << j) as f64).sum();
         let finest = (self.cells << (self.levels - 1)) as f64;
-        self.output.budget.check(&super::budget::Cost {
-            work: cells * OPS_PER_CELL_STEP * expected_steps(rtol, self.samples),
-            unit: "cell updates",
-            drivers: vec!["cells", "levels", "rtol", "samples"],
-            memory: finest * 2.0 * 3.0 * 8.0 * 12.0 + 64.0 * 8.0 * self.samples as f64,
-            memory_drivers: vec!["cells", "levels", "samples"],
-        })?;
+        self.output.budget.check(
+            &super::budget::Cost {
+                work: cells * OPS_PER_CELL_STEP * expected_steps(rtol, self.samples),
+                unit: "cell updates",
+                drivers: vec!["cells", "levels", "rtol", "samples"],
+                memory: finest * 2.0 * 3.0 * 8.0 * 12.0 + 64.0 * 8.0 * self.samples as f64,
+                memory_drivers: vec!["cells", "levels", "samples"],
+            }
+            .per_drag_evaluation(&params.drag()),
+        )?;
         let opts = MsdOptions {
             cells: self.cells,
             mesh: match self.mesh {

@@ -153,12 +153,10 @@ impl DistributionArgs {
         };
         let (problem, backward) = problem_args.config(self.vt)?;
         // Before the time stepping: the stationary solve (cost ~ cells).
-        self.output.budget.check(&super::budget::mesh(
-            self.cells,
-            100.0,
-            256.0,
-            vec!["cells"],
-        ))?;
+        self.output.budget.check(
+            &super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"])
+                .per_drag_evaluation(&problem.params().drag()),
+        )?;
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact
         // one without a default.
@@ -188,7 +186,7 @@ impl DistributionArgs {
             return Err(Error::invalid("--t-max", t_max, "0 < t-max < inf"));
         }
         let kind = match self.method {
-            DistMethod::Backward => self.backward_kind(backward, t_max, tau)?,
+            DistMethod::Backward => self.backward_kind(&problem, backward, t_max, tau)?,
             DistMethod::Exact => self.exact_kind(&problem, t_max, tau)?,
         };
         Ok(Config {
@@ -198,7 +196,13 @@ impl DistributionArgs {
         })
     }
 
-    fn backward_kind(&self, backward: BackwardOptions, t_max: f64, tau: f64) -> irtp::Result<Kind> {
+    fn backward_kind(
+        &self,
+        problem: &Problem,
+        backward: BackwardOptions,
+        t_max: f64,
+        tau: f64,
+    ) -> irtp::Result<Kind> {
         let points = self.points.unwrap_or(201);
         let name = |e: Error| match e {
             Error::InvalidParameter {
@@ -242,13 +246,16 @@ impl DistributionArgs {
         let cells = backward.cells as f64;
         let steps = 800.0 * (1e-4 / opts.rtol).cbrt()
             + 1e3 * (1.0 + (t_max / tau.max(1e-300)).ln().max(0.0));
-        self.output.budget.check(&super::budget::Cost {
-            work: steps * cells * 400.0,
-            unit: "cell updates",
-            drivers: vec!["cells", "t_max", "rtol"],
-            memory: 2.0 * cells * 8.0 * 40.0 + 64.0 * points as f64,
-            memory_drivers: vec!["cells", "points"],
-        })?;
+        self.output.budget.check(
+            &super::budget::Cost {
+                work: steps * cells * 400.0,
+                unit: "cell updates",
+                drivers: vec!["cells", "t_max", "rtol"],
+                memory: 2.0 * cells * 8.0 * 40.0 + 64.0 * points as f64,
+                memory_drivers: vec!["cells", "points"],
+            }
+            .per_drag_evaluation(&problem.params().drag()),
+        )?;
         Ok(Kind::Backward(grid, opts))
     }
 

@@ -315,7 +315,7 @@ impl SimArgs {
 fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budget::Cost {
     let backward = super::budget::mesh(cells, 100.0, 256.0, vec!["cells"]);
     let Some(run) = method.particles() else {
-        return backward;
+        return backward.per_drag_evaluation(&p.params().drag());
     };
     let coarse = mfpt::backward::solve(p, &BackwardOptions::with_cells(1000));
     let t = coarse.map_or(run.t_max, |s| s.tau.min(run.t_max));
@@ -337,7 +337,12 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
         ),
     };
     drivers.extend(params.schedule().cost_drivers());
-    super::budget::particles(run.particles, per, unit, drivers, 0, 0)
+    let cost = super::budget::particles(run.particles, per, unit, drivers, 0, 0);
+    match method {
+        // The exact sampler reads the law's flows from tables built once.
+        mfpt::Method::Euler { .. } => cost.per_drag_evaluation(&params.drag()),
+        _ => cost,
+    }
 }
 
 /// tau of one problem by `method`, with a progress stage for particles.
@@ -845,11 +850,14 @@ impl OptimizeArgs {
         // The coarse grid, then a golden-section refinement (about 60 solves).
         let solves = self.grid_points as f64 + 60.0;
         let per_solve = super::budget::mesh(self.problem.cells, 100.0, 256.0, vec!["cells"]);
-        self.output.budget.check(&super::budget::Cost {
-            work: per_solve.work * solves,
-            drivers: vec!["grid_points", "cells"],
-            ..per_solve
-        })?;
+        self.output.budget.check(
+            &super::budget::Cost {
+                work: per_solve.work * solves,
+                drivers: vec!["grid_points", "cells"],
+                ..per_solve
+            }
+            .per_drag_evaluation(&problem.params().drag()),
+        )?;
         Ok((problem, opts))
     }
 }

@@ -228,14 +228,13 @@ impl SimulateArgs {
         } else {
             per
         };
-        Ok(super::budget::particles(
-            self.particles,
-            per,
-            unit,
-            drivers,
-            self.samples,
-            self.bins,
-        ))
+        let cost =
+            super::budget::particles(self.particles, per, unit, drivers, self.samples, self.bins);
+        Ok(match self.method {
+            MethodArg::Euler => cost.per_drag_evaluation(&p.drag()),
+            // The exact sampler reads the law's flows from tables built once.
+            MethodArg::Exact => cost,
+        })
     }
 
     fn euler_setup(&self, params: &Params, spec: &SimSpec) -> irtp::Result<EulerSetup> {

@@ -95,6 +95,62 @@ fn large_expressions_below_the_bounds_run() {
     );
 }
 
+/// (a) A long expression law is dearer per evaluation than a shipped law:
+/// the cost estimate of every mesh method weighs it, so a run the budget
+/// admits for `tan` is refused for a 45-factor product (about 700 times
+/// dearer) before any work, naming `--drag` among the drivers, and nothing
+/// is written.
+#[test]
+fn an_expensive_law_counts_in_the_cost_estimate() {
+    let product = format!("expr:{}*v", ["(1+0.01*v^2)"; 45].join("*"));
+    for (cmd, budget) in [
+        (&["fp", "stationary", "--cells", "2000"][..], "1e7"),
+        (
+            &["mfpt", "--v0", "0", "--vt", "0.2", "--cells", "2000"][..],
+            "1e7",
+        ),
+        (
+            &[
+                "fp",
+                "msd",
+                "--cells",
+                "200",
+                "--levels",
+                "2",
+                "--t-min",
+                "0.1",
+                "--t-max",
+                "2",
+                "--samples",
+                "5",
+            ][..],
+            "1e9",
+        ),
+    ] {
+        let run = |drag: &str, out: &[&str]| {
+            let args = [
+                cmd,
+                &["--drag", drag, "--sigma", "0.5", "--max-work", budget],
+                out,
+            ];
+            irtp(&args.concat())
+        };
+        let o = run("tan", &["--json"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{cmd:?}: {err}");
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let o = run(&product, &["--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{cmd:?}: {err}");
+        assert!(
+            err.contains("too costly") && err.contains("--drag"),
+            "{cmd:?}: {err}"
+        );
+        assert!(!out.exists());
+    }
+}
+
 /// (b) `expr:v^3` runs and equals `power:n=3` (the r = 0 density's <v²>,
 /// the same law through two code paths, to 1e-9); `1e-3` reads as 0.001.
 #[test]

@@ -11,7 +11,8 @@
 //! fails. The cases are drawn from a fixed seed (reproducible in CI); all
 //! failures of a command are collected and reported together;
 //! `IRTP_FUZZ_SHOW_REFUSALS=1` prints every refusal (to see what a generator
-//! exercises).
+//! exercises); `IRTP_FUZZ_EXPLORE=K,N` draws N times the cases from other
+//! seeds (K = 1, 2, ...) to look further by hand.
 
 use clap::Parser;
 use irtp::{DragLaw, Params};
@@ -65,9 +66,15 @@ impl Case {
     /// |g(v)| + Sigma <= 2 Sigma.
     fn least_time(&self, rate: f64, v0: f64, vt: f64) -> f64 {
         let direct = (vt - v0).abs();
+        // A reset that lands on or beyond vt, seen from v0, is a passage
+        // at the reset instant; otherwise it shortens the way to vt.
+        let across = |lo: f64, hi: f64| {
+            let gap = if v0 < vt { vt - hi } else { lo - vt };
+            direct.min(gap.max(0.0))
+        };
         let d = match self.reach {
-            Some((lo, hi)) => direct.min((lo - vt).max(vt - hi).max(0.0)),
-            None if rate > 0.0 => direct.min((vt - self.vr).abs()),
+            Some((lo, hi)) => across(lo, hi),
+            None if rate > 0.0 => across(self.vr, self.vr),
             None => direct,
         };
         d / (2.0 * self.sigma)
@@ -217,6 +224,29 @@ fn flag(name: &str, value: String) -> Vec<String> {
     vec![format!("--{name}"), value]
 }
 
+/// `IRTP_FUZZ_EXPLORE=K,N`: draw N times the cases from seeds perturbed by K
+/// (to look further afield by hand; CI and plain `cargo test` use the fixed
+/// seeds, K = 0, N = 1).
+fn explore() -> (u8, u32) {
+    let v = std::env::var("IRTP_FUZZ_EXPLORE").unwrap_or_default();
+    let mut it = v.split(',').map(|x| x.trim().parse::<u32>().ok());
+    match (it.next().flatten(), it.next().flatten()) {
+        (Some(k), Some(n)) if n >= 1 => (k as u8, n),
+        _ => (0, 1),
+    }
+}
+
+/// The generator of the fuzz named `name`: the fixed seed with the name
+/// (and the [`explore`] perturbation) mixed in.
+fn rng(name: &str) -> TestRng {
+    let mut seed = SEED;
+    for (b, n) in seed.iter_mut().zip(name.bytes()) {
+        *b ^= n;
+    }
+    seed[31] ^= explore().0;
+    TestRng::from_seed(RngAlgorithm::ChaCha, &seed)
+}
+
 /// Draw `cases` cases of `strategy` from the fixed seed, run each through
 /// [`check`], and fail with every failure listed.
 fn fuzz(name: &str, cases: u32, strategy: impl Strategy<Value = Case>) {
@@ -224,15 +254,10 @@ fn fuzz(name: &str, cases: u32, strategy: impl Strategy<Value = Case>) {
         failure_persistence: None,
         ..Config::default()
     };
-    let mut seed = SEED;
-    for (b, n) in seed.iter_mut().zip(name.bytes()) {
-        *b ^= n;
-    }
-    let mut runner =
-        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
+    let mut runner = TestRunner::new_with_rng(config, rng(name));
     let mut failures = Vec::new();
     let (mut ok, mut refused) = (0, 0);
-    for _ in 0..cases {
+    for _ in 0..cases * explore().1 {
         let case = strategy.new_tree(&mut runner).expect("a case").current();
         match check(&case) {
             Ok(true) => ok += 1,

@@ -480,12 +480,9 @@ fn sweep_plan_range() {
         failure_persistence: None,
         ..Config::default()
     };
-    let mut seed = SEED;
-    seed[0] ^= b'p';
-    let mut runner =
-        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
+    let mut runner = TestRunner::new_with_rng(config, rng("sweep plans"));
     let (mut ok, mut refused, mut failures) = (0, 0, Vec::new());
-    for _ in 0..400 {
+    for _ in 0..400 * explore().1 {
         let case = plan().new_tree(&mut runner).expect("a case").current();
         match check_plan(&case) {
             Ok(true) => ok += 1,

@@ -143,6 +143,12 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug + 'static {
     fn static_friction(&self) -> f64 {
         0.0
     }
+    /// The cost of one evaluation of g and g' relative to a shipped law's
+    /// (about 50 ns): budgets multiply the work of methods that evaluate the
+    /// law per cell, point or step by it. Default: 1.
+    fn evaluation_weight(&self) -> f64 {
+        1.0
+    }
 
     /// Check that the law is a valid drag law at noise amplitude Sigma
     /// (0 < Sigma < [`Drag::force_limit`] already holds): g⁻¹(Sigma) exists

@@ -248,6 +248,9 @@ impl Drag for DragLaw {
     fn static_friction(&self) -> f64 {
         crate::with_drag!(self, |d| d.static_friction())
     }
+    fn evaluation_weight(&self) -> f64 {
+        crate::with_drag!(self, |d| d.evaluation_weight())
+    }
     fn admissible(&self, sigma: f64) -> crate::error::Result<()> {
         crate::with_drag!(self, |d| d.admissible(sigma))
     }
