@@ -246,7 +246,7 @@ fn check_distinct(groups: &[Group]) -> Result<()> {
         let mut seen = std::collections::HashSet::new();
         for row in &g.rows {
             if !seen.insert(format!("{row:?}")) {
-                let shown: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
+                let shown: Vec<String> = row.iter().map(text).collect();
                 return Err(bad(
                     &g.names.join("+"),
                     shown.join(", "),
