@@ -41,6 +41,7 @@ from ._api import (
 )
 from ._irtp import NumericalError
 from ._load import load
+from ._sweep import collect, load_sweep
 from ._model import Drag, Params, PoissonReset, Reset, drag_laws
 from ._results import (
     AnalyticResult,
@@ -76,6 +77,8 @@ __all__ = [
     "mfpt_distribution",
     "reproduce",
     "load",
+    "load_sweep",
+    "collect",
     "Drag",
     "Reset",
     "PoissonReset",
