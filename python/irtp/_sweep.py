@@ -353,7 +353,11 @@ def collect(path: PathLike, out: PathLike, format: str = "netcdf",
     ``xarray.open_zarr``."""
     if format not in FORMATS:
         raise ValueError(f"invalid format = {format!r}: allowed {', '.join(FORMATS)}")
-    ds = load_sweep(path)
+    return write(load_sweep(path), out, format, engine)
+
+
+def write(ds: Any, out: PathLike, format: str, engine: Optional[str] = None) -> pathlib.Path:
+    """``ds`` (a :func:`load_sweep` Dataset) written as ``format``."""
     target = pathlib.Path(out)
     if format == "netcdf":
         ds.to_netcdf(target, engine=engine or netcdf_engine())
@@ -363,7 +367,8 @@ def collect(path: PathLike, out: PathLike, format: str = "netcdf",
             # spec; xarray writes it for fast opening and reads either way.
             warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
             ds.to_zarr(target, mode="w")
+    elif format == "csv":
+        write_csv(ds, target, [str(d) for d in ds["point"].dims])
     else:
-        axes = [str(d) for d in ds["point"].dims]
-        write_csv(ds, target, axes)
+        raise ValueError(f"invalid format = {format!r}: allowed {', '.join(FORMATS)}")
     return target
