@@ -232,11 +232,15 @@ def stack(datasets: Dict[Tuple[int, ...], Any], grid: Grid) -> Tuple[Dict[str, A
     for ds in datasets.values():
         for name in ds.data_vars:
             names.setdefault(str(name), None)
+    axes = set(grid.coords())
     for name in names:
         have = {pos: ds[name].values for pos, ds in datasets.items() if name in ds.data_vars}
         first = next(ds for ds in datasets.values() if name in ds.data_vars)[name]
         dims = (*grid.dims, *(str(d) for d in first.dims))
-        data[name] = (dims, stacked(have, grid.shape, len(have) == n), dict(first.attrs))
+        # A summary value named as a swept parameter (analytic's sigma) is
+        # the command's own record of it: kept as summary_<name>.
+        out = f"summary_{name}" if name in axes else name
+        data[out] = (dims, stacked(have, grid.shape, len(have) == n), dict(first.attrs))
     return data, coords
 
 
