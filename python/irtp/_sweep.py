@@ -142,15 +142,21 @@ class Point:
         result = path / "result.json"
         self.record: Optional[Dict[str, Any]] = (
             json.loads(result.read_text()) if result.is_file() else None)
+        # The files are hashed once, here.
+        self.damaged: Optional[str] = self.damage() if self.ok_record() else None
+
+    def ok_record(self) -> bool:
+        """Whether result.json says the point finished."""
+        return self.record is not None and self.record.get("status") == "ok"
 
     @property
     def status(self) -> str:
         """"ok", "failed", "damaged" or "missing" (no result.json: killed)."""
         if self.record is None:
             return "missing"
-        if self.record.get("status") != "ok":
+        if not self.ok_record():
             return "failed"
-        return "ok" if self.damage() is None else "damaged"
+        return "ok" if self.damaged is None else "damaged"
 
     def damage(self) -> Optional[str]:
         """The first file whose SHA-256 differs from result.json's record."""
@@ -209,31 +215,30 @@ def stacked(values: Dict[Tuple[int, ...], np.ndarray], shape: Tuple[int, ...],
     return out
 
 
-def stack(datasets: Dict[Tuple[int, ...], Any], grid: Grid) -> Tuple[Dict[str, Any], Dict[str, Any]]:
-    """The data variables and per-point coordinates of the stacked Dataset."""
-    n = math.prod(grid.shape)
-    data: Dict[str, Any] = {}
+def stack_coords(datasets: Dict[Tuple[int, ...], Any], grid: Grid) -> Dict[str, Any]:
+    """The per-point dimension coordinates: shared (the same bit for bit at
+    every point) as they are, else as ``<dim>_grid`` over (axes..., dim)."""
     coords: Dict[str, Any] = {}
-    dims_seen: Dict[str, None] = {}
-    for ds in datasets.values():
-        for name in ds.sizes:
-            dims_seen.setdefault(str(name), None)
-    for dim in dims_seen:
+    dims = dict.fromkeys(str(d) for ds in datasets.values() for d in ds.sizes)
+    for dim in dims:
         have = {pos: ds[dim].values for pos, ds in datasets.items() if dim in ds.coords}
-        first = next(iter(have.values()), None)
-        if first is None:
+        if not have:
             continue
-        if all(same(v, first) for v in have.values()) and len(have) == len(datasets):
-            coords[dim] = ((dim,), first, dict(next(iter(datasets.values()))[dim].attrs))
+        first = next(iter(have.values()))
+        if len(have) == len(datasets) and all(same(v, first) for v in have.values()):
+            attrs = dict(next(ds for ds in datasets.values() if dim in ds.coords)[dim].attrs)
+            coords[dim] = ((dim,), first, attrs)
         else:
             attrs = {**var_attrs(dim), "note": f"the {dim} grid of each point (they differ)"}
             coords[f"{dim}_grid"] = ((*grid.dims, dim), stacked(have, grid.shape, False), attrs)
-    names: Dict[str, None] = {}
-    for ds in datasets.values():
-        for name in ds.data_vars:
-            names.setdefault(str(name), None)
-    axes = set(grid.coords())
-    for name in names:
+    return coords
+
+
+def stack_vars(datasets: Dict[Tuple[int, ...], Any], grid: Grid) -> Dict[str, Any]:
+    """The data variables of every point over (axes..., their own dims)."""
+    n, axes = math.prod(grid.shape), set(grid.coords())
+    data: Dict[str, Any] = {}
+    for name in dict.fromkeys(str(v) for ds in datasets.values() for v in ds.data_vars):
         have = {pos: ds[name].values for pos, ds in datasets.items() if name in ds.data_vars}
         first = next(ds for ds in datasets.values() if name in ds.data_vars)[name]
         dims = (*grid.dims, *(str(d) for d in first.dims))
@@ -241,7 +246,7 @@ def stack(datasets: Dict[Tuple[int, ...], Any], grid: Grid) -> Tuple[Dict[str, A
         # the command's own record of it: kept as summary_<name>.
         out = f"summary_{name}" if name in axes else name
         data[out] = (dims, stacked(have, grid.shape, len(have) == n), dict(first.attrs))
-    return data, coords
+    return data
 
 
 def listing(points: Sequence[Tuple[Tuple[int, ...], Optional[Point]]], grid: Grid,
@@ -255,7 +260,7 @@ def listing(points: Sequence[Tuple[Tuple[int, ...], Optional[Point]]], grid: Gri
             entry["id"] = p.path.name
             if with_error:
                 rec = p.record or {}
-                entry["error"] = rec.get("error") if p.status == "failed" else p.damage()
+                entry["error"] = rec.get("error") if p.status == "failed" else p.damaged
         out.append(entry)
     return json.dumps(out)
 
@@ -309,7 +314,7 @@ def load_sweep(path: PathLike) -> Any:
     points = scan(d / "workspace", grid, plan)
     ok = {pos: p for pos, p in points.items() if p.status == "ok"}
     datasets = {pos: load(p.path).to_xarray() for pos, p in ok.items()}
-    data, coords = stack(datasets, grid) if datasets else ({}, {})
+    data, coords = stack_vars(datasets, grid), stack_coords(datasets, grid)
     coords.update(grid.coords())
     coords["point"] = (tuple(grid.dims), np.arange(math.prod(grid.shape)).reshape(grid.shape),
                        {"long_name": "point index in plan order (results.csv's point)"})
