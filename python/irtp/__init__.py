@@ -19,8 +19,11 @@ One function per CLI command, keywords named as the flags (``lambda_`` and
 
 Model pieces: :class:`Drag`, :class:`PoissonReset`, :class:`Params`.
 Results: :class:`Result` (numpy columns as attributes, ``summary``,
-``params``, ``provenance``, ``to_dict()``, ``to_pandas()``). Numerical
-failures raise :class:`NumericalError` (a RuntimeError).
+``params``, ``provenance``, ``to_dict()``, ``to_pandas()``,
+``to_xarray()``). :func:`load` opens a run's ``--out`` directory as its
+Result; :func:`load_sweep` stacks a sweep into one xarray Dataset and
+:func:`collect` writes it as netCDF, zarr or CSV. Numerical failures raise
+:class:`NumericalError` (a RuntimeError).
 """
 
 from . import _irtp
@@ -37,6 +40,8 @@ from ._api import (
     simulate,
 )
 from ._irtp import NumericalError
+from ._load import load
+from ._sweep import collect, load_sweep
 from ._model import Drag, Params, PoissonReset, Reset, drag_laws
 from ._results import (
     AnalyticResult,
@@ -71,6 +76,9 @@ __all__ = [
     "mfpt_optimize",
     "mfpt_distribution",
     "reproduce",
+    "load",
+    "load_sweep",
+    "collect",
     "Drag",
     "Reset",
     "PoissonReset",

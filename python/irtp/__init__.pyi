@@ -2,6 +2,7 @@
 # definitions (help(irtp.simulate) shows them); here they are written `...`.
 
 import os
+import pathlib
 from typing import (
     Any,
     Callable,
@@ -116,6 +117,8 @@ class Result:
     def __getattr__(self, name: str) -> Any: ...
     def to_dict(self, lists: bool = False) -> Dict[str, Any]: ...
     def to_pandas(self, table: Optional[str] = None) -> Any: ...
+    # An xarray.Dataset (xarray is optional: pip install 'irtp[xarray]').
+    def to_xarray(self) -> Any: ...
 
 class SimulateResult(Result):
     summary: Dict[str, Any]
@@ -547,3 +550,14 @@ def reproduce(
     progress: ProgressArg = ...,
     threads: Optional[int] = ...,
 ) -> ReproduceResult: ...
+
+# Reading what the CLI (or ``out=``) wrote; xarray.Dataset results are Any
+# (xarray is an optional dependency).
+def load(path: PathLike) -> Result: ...
+def load_sweep(path: PathLike) -> Any: ...
+def collect(
+    path: PathLike,
+    out: PathLike,
+    format: Literal["netcdf", "zarr", "csv"] = ...,
+    engine: Optional[Literal["h5netcdf", "netcdf4"]] = ...,
+) -> pathlib.Path: ...

@@ -191,6 +191,26 @@ class Result:
         scalars = {k: v for k, v in (self.summary or {}).items() if isinstance(v, _SCALARS)}
         return pd.DataFrame([scalars])
 
+    def to_xarray(self) -> Any:
+        """The result as an ``xarray.Dataset`` (xarray is imported only here;
+        ``pip install 'irtp[xarray]'``).
+
+        Each table's first column is a dimension coordinate (``t``, ``v``,
+        ``x``, ``v0``, ...) and its other columns are variables along it,
+        standard errors as their own variables (``v2_err``); ``fp_transient``'s
+        snapshots are 2-D over (``t_snapshot``, ``v``). The summary's scalars
+        are 0-d variables (null as NaN; one named like a column is
+        ``summary_<name>``, except for ``mfpt``, whose profile columns become
+        ``profile_<name>``). Variables carry ``long_name``, ``symbol`` (the
+        paper's) and ``units`` ("1": the model is dimensionless). Attributes:
+        command, method, seed, irtp_version, ``param.*``, ``provenance.*``,
+        ``result.*`` (non-scalar summary entries), flattened to strings and
+        numbers so ``to_netcdf`` works.
+        """
+        from ._xarray import to_dataset
+
+        return to_dataset(self)
+
 
 class SimulateResult(Result):
     """Result of :func:`irtp.simulate`: tables "moments" and "density"."""
@@ -205,7 +225,8 @@ class FpStationaryResult(Result):
 
 
 class FpTransientResult(Result):
-    """Result of :func:`irtp.fp_transient`: tables "moments" and "snapshots"."""
+    """Result of :func:`irtp.fp_transient`: tables "moments" and "snapshots"
+    (long format; 2-D over (t_snapshot, v) in ``to_xarray()``)."""
 
 
 class FpMsdResult(Result):

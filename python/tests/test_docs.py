@@ -3,12 +3,15 @@ as printed, each file's blocks in order in one namespace (a later block may use
 an earlier one's names), in a temporary working directory, with the changes
 README states for the documented CLI commands: at most 4000 particles and
 `reproduce` with `quick=True` (the module's functions are wrapped for the
-test, so `import irtp` in a block sees them)."""
+test, so `import irtp` in a block sees them). A file whose blocks run the
+CLI (`subprocess.run(["irtp", ...])`) finds the CLI under test ($IRTP_BIN) as
+`irtp` on PATH; matplotlib draws with the Agg backend."""
 
 from __future__ import annotations
 
 import functools
 import inspect
+import os
 import pathlib
 import re
 
@@ -57,8 +60,21 @@ def test_sizes_are_reduced(monkeypatch):
     assert res.params["particles"] == MAX_PARTICLES
 
 
+def cli_on_path(request, tmp_path, monkeypatch) -> None:
+    """The CLI under test as `irtp` on PATH, for blocks that run it (a sweep
+    before `irtp.load_sweep`); skipped like the CLI tests when it is missing."""
+    cli = request.getfixturevalue("cli")
+    bin_dir = tmp_path / "_bin"
+    bin_dir.mkdir()
+    (bin_dir / "irtp").symlink_to(cli.path)
+    monkeypatch.setenv("PATH", f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}")
+
+
 @pytest.mark.parametrize("doc", [p for p in DOCS if blocks(p)], ids=lambda p: p.name)
-def test_python_blocks_run(doc, tmp_path, monkeypatch):
+def test_python_blocks_run(doc, tmp_path, monkeypatch, request):
+    if any('"irtp"' in code for code in blocks(doc)):
+        cli_on_path(request, tmp_path, monkeypatch)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
     monkeypatch.chdir(tmp_path)
     reduce_sizes(monkeypatch)
     namespace: dict = {"__name__": "__docs__"}
