@@ -10,6 +10,10 @@
 # cluster of ours already up is kept; any other running slurmctld or slurmd
 # is stopped first.
 #
+# MaxArraySize is set low (IRTP_SLURM_MAX_ARRAY, default 11) so that the
+# sweep test's plans need several arrays, as a plan larger than a real
+# cluster's MaxArraySize does.
+#
 # Exit status 0 once `sinfo` shows the node up; non-zero otherwise, with the
 # failing step and the daemons' logs on stderr (the daemons themselves log
 # only to their files).
@@ -18,6 +22,7 @@ as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo -n "$@"; fi; }
 cluster=irtp-local
 spool=/var/spool/irtp-slurm
 logs=/var/log/irtp-slurm
+max_array=${IRTP_SLURM_MAX_ARRAY:-11}
 
 diagnose() {
   echo "start-local-slurm: failed at line $1: $2" >&2
@@ -29,7 +34,8 @@ trap 'diagnose $LINENO "$BASH_COMMAND"' ERR
 node_up() { sinfo -h -o %t 2>/dev/null | grep -qE '^(idle|mix|alloc)'; }
 ours_up() {
   pgrep -x slurmctld >/dev/null && pgrep -x slurmd >/dev/null \
-    && scontrol show config 2>/dev/null | grep -qE "^ClusterName += $cluster\$" && node_up
+    && scontrol show config 2>/dev/null | grep -qE "^ClusterName += $cluster\$" \
+    && scontrol show config 2>/dev/null | grep -qE "^MaxArraySize += $max_array\$" && node_up
 }
 
 if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
@@ -82,7 +88,7 @@ SlurmdLogFile=$logs/slurmd.log
 SlurmctldPidFile=$spool/slurmctld.pid
 SlurmdPidFile=$spool/slurmd.pid
 ReturnToService=2
-MaxArraySize=1001
+MaxArraySize=$max_array
 MpiDefault=none
 JobAcctGatherType=jobacct_gather/none
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN

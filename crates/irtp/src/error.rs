@@ -182,6 +182,7 @@ pub const PARAMETER_NAMES: &[&str] = &[
     "lambda",
     "large_tau_ratio",
     "max_array",
+    "max_tasks",
     "particles",
     "points",
     "points_per_task",

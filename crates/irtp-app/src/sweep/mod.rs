@@ -392,6 +392,23 @@ fn write_provenance(store: &Store, plan: &Plan, shard: Shard) -> Result<()> {
     )
 }
 
+/// The work items of `plan` still to compute in `root`, as plan-order item
+/// indices (the numbering of [`Shard`]): missing and damaged points, and
+/// failed ones with `retry_failed`. A SLURM resubmission runs only the
+/// array tasks that hold one ([`slurm`]).
+pub fn pending_items(plan: &Plan, root: &Path, retry_failed: bool) -> Result<Vec<u64>> {
+    let store = Store {
+        root: root.to_path_buf(),
+    };
+    let points: Vec<Point> = plan.points().collect();
+    Ok(parts::items(plan, &points)
+        .iter()
+        .enumerate()
+        .filter(|(_, it)| pending(plan, &store, it, retry_failed))
+        .map(|(i, _)| i as u64)
+        .collect())
+}
+
 /// Read the plan a sweep directory holds.
 pub fn plan_of(root: &Path) -> Result<Plan> {
     let path = root.join("plan.toml");
@@ -466,6 +483,9 @@ pub struct Status {
     pub moved_aside: Vec<String>,
     /// Leftovers of killed runs (staging directories, temporary files).
     pub leftovers: Vec<String>,
+    /// The sweep was submitted to SLURM (`slurm/layout.json`): the command
+    /// that finishes it resubmits the tasks of the missing points.
+    pub slurm: bool,
 }
 
 impl Status {
@@ -493,6 +513,7 @@ pub fn status(plan: &Plan, root: &Path) -> Result<Status> {
         running: Vec::new(),
         moved_aside: Vec::new(),
         leftovers: Vec::new(),
+        slurm: root.join("slurm").join("layout.json").is_file(),
     };
     for (p, state) in points.iter().zip(states) {
         match state {
@@ -567,16 +588,24 @@ impl std::fmt::Display for Status {
         if !self.leftovers.is_empty() {
             writeln!(f, "{} leftovers of interrupted runs in {d}/workspace (ignored; safe to delete when no run is active)", self.leftovers.len())?;
         }
-        match (self.missing.is_empty() && self.damaged.is_empty(), self.failed.is_empty()) {
-            (true, true) => writeln!(f, "complete: {d}/results.csv"),
-            (false, _) => writeln!(
-                f,
-                "to finish (damaged points are moved aside and computed again): irtp sweep run {d}/plan.toml --out {d}"
+        let (what, retry) = match (
+            self.missing.is_empty() && self.damaged.is_empty(),
+            self.failed.is_empty(),
+        ) {
+            (true, true) => return writeln!(f, "complete: {d}/results.csv"),
+            (false, _) => (
+                "to finish (damaged points are moved aside and computed again)",
+                "",
             ),
-            (true, false) => writeln!(
+            (true, false) => ("to retry the failed points", " --retry-failed"),
+        };
+        writeln!(f, "{what}: irtp sweep run {d}/plan.toml --out {d}{retry}")?;
+        if self.slurm {
+            writeln!(
                 f,
-                "to retry the failed points: irtp sweep run {d}/plan.toml --out {d} --retry-failed"
-            ),
+                "or on the cluster, only the array tasks that hold them: irtp sweep slurm {d}/plan.toml --out {d} --missing{retry} --submit"
+            )?;
         }
+        Ok(())
     }
 }

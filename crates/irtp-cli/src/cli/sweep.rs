@@ -69,15 +69,35 @@ struct SlurmArgs {
     /// CPUs (threads) per array task.
     #[arg(long, default_value_t = 1)]
     cpus_per_task: u32,
-    /// The cluster's MaxArraySize: the array has at most this many tasks.
-    #[arg(long, default_value_t = 1000)]
-    max_array: u64,
-    /// Points per array task [default: the fewest that fit --max-array].
+    /// The cluster's MaxArraySize: an array has at most this many tasks, and
+    /// a larger sweep is split into several arrays [default: from `scontrol
+    /// show config`, else SLURM's default 1001].
+    #[arg(long)]
+    max_array: Option<u64>,
+    /// At most this many array tasks in the whole sweep; beyond it points are
+    /// bundled into tasks.
+    #[arg(long, default_value_t = 10_000)]
+    max_tasks: u64,
+    /// Points per array task [default: 1, or the fewest that fit --max-tasks].
     #[arg(long)]
     points_per_task: Option<u64>,
-    /// Array tasks running at once (the % of --array).
+    /// Array tasks running at once (the % of --array; the arrays of a sweep
+    /// run one after the other, so this holds for the whole sweep).
     #[arg(long, default_value_t = 100)]
     throttle: u64,
+    /// Only the array tasks that still hold a missing or damaged point, in
+    /// the layout of the first submission into --out (`sweep status` prints
+    /// this command).
+    #[arg(long)]
+    missing: bool,
+    /// The tasks run failed points again too (with --missing: and the tasks
+    /// holding a failed point are submitted).
+    #[arg(long)]
+    retry_failed: bool,
+    /// Print the scripts instead of writing them; nothing is written or
+    /// submitted.
+    #[arg(long, conflicts_with = "submit")]
+    dry_run: bool,
     /// Submit both jobs (sbatch) and print their ids.
     #[arg(long)]
     submit: bool,
@@ -198,20 +218,60 @@ fn status(a: StatusArgs) -> anyhow::Result<u8> {
 
 fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
     let plan = read_plan(&a.plan)?;
+    let (max_array, source) = match a.max_array {
+        Some(m) => (m, "--max-array"),
+        None => match slurm::cluster_max_array() {
+            Some(m) => (m, "scontrol show config"),
+            None => (
+                slurm::DEFAULT_MAX_ARRAY,
+                "SLURM's default; scontrol did not say",
+            ),
+        },
+    };
     let o = slurm::SlurmOptions {
         partition: a.partition,
         time: a.time,
         cpus_per_task: a.cpus_per_task,
-        max_array: a.max_array,
+        max_array,
+        max_tasks: a.max_tasks,
         points_per_task: a.points_per_task,
         throttle: a.throttle,
+        retry_failed: a.retry_failed,
         exe: std::env::current_exe()?,
     };
     // Every value is checked before --out is created.
-    o.check(
-        plan.len() as u64 * plan.particle_parts,
-        &std::path::absolute(&a.out)?,
-    )?;
+    let out = std::path::absolute(&a.out)?;
+    let mut layout = o.check(plan.len() as u64 * plan.particle_parts, &out)?;
+    let selected = if a.missing {
+        layout = slurm::read_layout(&out)?;
+        let pending = sweep::pending_items(&plan, &out, a.retry_failed)?;
+        Some(slurm::tasks_of(&layout, &pending))
+    } else {
+        None
+    };
+    let specs = slurm::arrays(&layout, selected.as_deref());
+    if specs.is_empty() {
+        println!("{}: no missing points: nothing to submit", out.display());
+        return Ok(0);
+    }
+    let files = slurm::render(&plan, &out, &o, &layout, &specs);
+    let tasks: u64 = specs.iter().map(|s| s.count).sum();
+    let summary = format!(
+        "{} work items ({} points), {} of {} array tasks of at most {} items in {} arrays (MaxArraySize {max_array}: {source})",
+        layout.items,
+        plan.len(),
+        tasks,
+        layout.tasks,
+        layout.points_per_task,
+        specs.len()
+    );
+    if a.dry_run {
+        println!("# dry run: {summary}; nothing written");
+        for (path, text) in &files {
+            println!("# ---- {} ----\n{text}", path.display());
+        }
+        return Ok(0);
+    }
     std::fs::create_dir_all(&a.out).map_err(|e| irtp::Error::Io {
         path: a.out.display().to_string(),
         reason: e.to_string(),
@@ -219,19 +279,16 @@ fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
     let root = a.out.canonicalize()?;
     // The directory holds the plan before any task starts.
     sweep::Store::open(&root, &plan)?;
-    let s = slurm::write_scripts(&plan, &root, &o)?;
-    println!(
-        "{} work items ({} points) in {} array tasks of at most {} items: {}, {}",
-        plan.len() as u64 * plan.particle_parts,
-        plan.len(),
-        s.tasks,
-        s.points_per_task,
-        s.run.display(),
-        s.merge.display()
-    );
+    let files = slurm::render(&plan, &root, &o, &layout, &specs);
+    let s = slurm::write_scripts(&files, &layout, &specs, &root)?;
+    println!("{summary}: {}", s.submit.display());
     if a.submit {
-        let (array, merge) = slurm::submit(&s)?;
-        println!("submitted: array job {array}, merge job {merge} (afterany:{array})");
+        let (arrays, merge) = slurm::submit(&s)?;
+        println!(
+            "submitted: array jobs {}; merge job {merge} (afterany:{})",
+            arrays.join(", "),
+            arrays.join(":")
+        );
     } else {
         println!("submit with: bash {}", s.submit.display());
     }

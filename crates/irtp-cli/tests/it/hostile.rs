@@ -174,7 +174,7 @@ fn valid_expressions_are_accepted() {
 /// (c) Every value that enters a generated script is checked first.
 #[test]
 fn slurm_values_are_checked_before_anything_is_written() {
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["--partition", "a\nb"], "--partition"),
         (&["--partition", "a b"], "--partition"),
         (&["--partition", "$(reboot)"], "--partition"),
@@ -184,6 +184,7 @@ fn slurm_values_are_checked_before_anything_is_written() {
         (&["--throttle", "0"], "--throttle"),
         (&["--points-per-task", "0"], "--points-per-task"),
         (&["--max-array", "0"], "--max-array"),
+        (&["--max-tasks", "0"], "--max-tasks"),
     ];
     for (args, flag) in cases {
         let dir = tempfile::tempdir().unwrap();
@@ -219,6 +220,8 @@ fn slurm_values_are_checked_before_anything_is_written() {
             t,
             "--partition",
             "gpu,short.q",
+            "--max-array",
+            "1000",
         ];
         let o = irtp(&args);
         assert_eq!(
@@ -227,7 +230,7 @@ fn slurm_values_are_checked_before_anything_is_written() {
             "--time {t}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
-        let run = std::fs::read_to_string(out.join("slurm/run.sbatch")).unwrap();
+        let run = std::fs::read_to_string(out.join("slurm/run-1.sbatch")).unwrap();
         assert!(run.contains(&format!("#SBATCH --time={t}\n")), "{run}");
     }
 }
