@@ -13,6 +13,7 @@
 
 pub mod parts;
 pub mod plan;
+pub mod signac;
 pub mod slurm;
 pub mod store;
 mod table;

@@ -121,7 +121,7 @@ pub struct Point {
     pub params: Vec<(String, Value)>,
     /// The seed derived from (plan seed, parameters), when the command takes one.
     pub seed: Option<u64>,
-    /// Identifier: 32 hex digits of the SHA-256 of the statepoint.
+    /// Identifier: signac's job id of the statepoint (32 hex digits of its MD5).
     pub id: String,
 }
 
@@ -408,10 +408,7 @@ impl Plan {
         params.extend(self.fixed.iter().cloned());
         let seed =
             (self.seeded && self.draws_random_numbers(&params)).then(|| self.point_seed(&params));
-        let id = hex(&Sha256::digest(
-            statepoint(&self.command, &params, seed).to_string(),
-        ))[..32]
-            .to_string();
+        let id = super::signac::calc_id(&statepoint(&self.command, &params, seed));
         Point {
             index,
             params,
@@ -557,8 +554,16 @@ fn canonical(params: &[(String, Value)]) -> serde_json::Value {
     serde_json::to_value(sorted).expect("JSON of scalars")
 }
 
+/// The id irtp gave a point before ids were signac's: the first 32 hex
+/// digits of the SHA-256 of the statepoint's compact JSON. A sweep
+/// directory written then is renamed to the new ids when opened.
+pub fn legacy_id(statepoint: &serde_json::Value) -> String {
+    hex(&Sha256::digest(statepoint.to_string()))[..32].to_string()
+}
+
 /// The statepoint of a point (its `signac_statepoint.json`): the command,
-/// its parameters (keys sorted) and its seed.
+/// its parameters (keys sorted) and its seed. The point's id is signac's
+/// job id of it ([`super::signac::calc_id`]).
 pub fn statepoint(
     command: &str,
     params: &[(String, Value)],

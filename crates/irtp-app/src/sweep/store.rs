@@ -66,13 +66,15 @@ impl PointResult {
     }
 
     /// Record the checksums of the files of `dir` (regular, not hidden,
-    /// `result.json` aside) and of this record.
+    /// `result.json` and signac's job document aside) and of this record.
     pub fn seal(&mut self, dir: &Path) -> Result<()> {
         self.files.clear();
         for entry in read_dir(dir)? {
             let name = entry.file_name().to_string_lossy().into_owned();
             let file = entry.file_type().map_err(|e| io(dir, e))?.is_file();
-            if file && !name.starts_with('.') && name != "result.json" {
+            // signac's job document is the user's to edit (job.doc).
+            let own = name == "result.json" || name == super::signac::DOCUMENT;
+            if file && !name.starts_with('.') && !own {
                 self.files.insert(name, checksum_file(&entry.path())?);
             }
         }
@@ -149,6 +151,12 @@ impl Store {
         fs::create_dir_all(store.workspace()).map_err(|e| io(root, e))?;
         store.check(plan)?;
         write_atomic(&root.join("plan.toml"), plan.text.as_bytes())?;
+        let config = root.join(super::signac::CONFIG);
+        if !config.exists() {
+            let dir = config.parent().expect("a file in .signac");
+            fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+            write_atomic(&config, super::signac::CONFIG_TEXT.as_bytes())?;
+        }
         Ok(store)
     }
 
@@ -232,13 +240,19 @@ impl Store {
     /// Record a point's result with the checksums of its files (last: it
     /// marks the point finished).
     pub fn finish(&self, p: &Point, mut r: PointResult) -> Result<PointResult> {
+        let doc = serde_json::json!({
+            "status": r.status, "error": r.error, "method": r.method,
+            "seed": r.seed, "wall_time_s": r.wall_time_s, "summary": r.summary,
+        });
+        write_json(&self.dir(p).join(super::signac::DOCUMENT), &doc)?;
         r.seal(&self.dir(p))?;
         write_json(&self.dir(p).join("result.json"), &r)?;
         Ok(r)
     }
 
-    /// Files and directories the sweep does not know about, and point
-    /// directories whose statepoint is not the plan's.
+    /// Files and directories the sweep does not know about (plain files
+    /// are the user's in a sweep of this plan), and point directories
+    /// whose statepoint is not the plan's.
     fn check(&self, plan: &Plan) -> Result<()> {
         const OWN: [&str; 6] = [
             "plan.toml",
@@ -248,8 +262,16 @@ impl Store {
             "slurm",
             "runs",
         ];
+        // A sweep of this very plan may hold the user's own files beside
+        // irtp's (a row workflow.toml and its action scripts).
+        let this_plan = fs::read_to_string(self.root.join("plan.toml")).ok();
+        let ours = this_plan.as_deref() == Some(plan.text.as_str());
         for entry in read_dir(&self.root)? {
             let name = entry.file_name().to_string_lossy().into_owned();
+            let file = entry.file_type().is_ok_and(|t| t.is_file());
+            if ours && file {
+                continue;
+            }
             if !OWN.contains(&name.as_str()) && !name.starts_with('.') {
                 return Err(foreign(
                     &self.root.join(&name),
@@ -259,6 +281,7 @@ impl Store {
         }
         let points: std::collections::HashMap<String, Point> =
             plan.points().map(|p| (p.id.clone(), p)).collect();
+        self.rename_legacy(plan, &points)?;
         for entry in read_dir(&self.workspace())? {
             let name = entry.file_name().to_string_lossy().into_owned();
             if name.starts_with('.') {
@@ -279,6 +302,45 @@ impl Store {
                         &sp_path,
                         "holds other parameters than the plan's point",
                     ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Store {
+    /// Point directories named by the ids of an older irtp
+    /// ([`super::plan::legacy_id`]) renamed to their signac ids (nothing
+    /// is copied or removed; a directory whose new name is taken is left
+    /// for [`Store::check`] to report).
+    fn rename_legacy(
+        &self,
+        plan: &Plan,
+        points: &std::collections::HashMap<String, Point>,
+    ) -> Result<()> {
+        let names: Vec<String> = read_dir(&self.workspace())?
+            .iter()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !n.starts_with('.') && !points.contains_key(n))
+            .collect();
+        if names.is_empty() {
+            return Ok(());
+        }
+        let legacy: std::collections::HashMap<String, &Point> = points
+            .values()
+            .map(|p| {
+                (
+                    super::plan::legacy_id(&statepoint(&plan.command, &p.params, p.seed)),
+                    p,
+                )
+            })
+            .collect();
+        for name in names {
+            if let Some(p) = legacy.get(&name) {
+                let (from, to) = (self.workspace().join(&name), self.dir(p));
+                if !to.exists() {
+                    fs::rename(&from, &to).map_err(|e| io(&from, e))?;
                 }
             }
         }

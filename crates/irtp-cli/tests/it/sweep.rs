@@ -347,3 +347,39 @@ fn too_many_parts_are_refused() {
         "{err}"
     );
 }
+
+/// A point directory named by the ids of an older irtp (SHA-256 of the
+/// compact statepoint) is renamed to its signac id when the sweep is
+/// opened again: nothing is computed twice, nothing lost, the table the
+/// same.
+#[test]
+fn point_directories_of_an_older_irtp_are_renamed_to_signac_ids() {
+    use sha2::{Digest, Sha256};
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(tmp.path(), PLAN);
+    let out = tmp.path().join("sw");
+    let out_s = out.to_str().unwrap();
+    ok(&["sweep", "run", &plan, "--out", out_s]);
+    let before = table(&out);
+    let ws = out.join("workspace");
+    let mut renamed = 0;
+    for e in std::fs::read_dir(&ws).unwrap() {
+        let path = e.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.starts_with('.') {
+            continue;
+        }
+        let sp = std::fs::read_to_string(path.join("signac_statepoint.json")).unwrap();
+        let sp: serde_json::Value = serde_json::from_str(&sp).unwrap();
+        let old: String = Sha256::digest(sp.to_string())
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        std::fs::rename(&path, ws.join(&old[..32])).unwrap();
+        renamed += 1;
+    }
+    assert_eq!(renamed, 12);
+    let s = ok(&["sweep", "run", &plan, "--out", out_s]);
+    assert!(s.contains("ran 0 "), "{s}");
+    assert_eq!(table(&out), before);
+}
