@@ -58,6 +58,9 @@ from ._results import (
 )
 
 __version__: str = _irtp.__version__
+#: The git revision the extension was built from (None outside a checkout):
+#: with ``__version__``, what every provenance record names.
+__git_revision__: "str | None" = _irtp.__git_revision__
 
 for _cls in (Drag, Reset, PoissonReset, Params, Result, SimulateResult, AnalyticResult,
              FpStationaryResult, FpTransientResult, FpMsdResult, MfptResult, MfptScanResult,
@@ -97,4 +100,5 @@ __all__ = [
     "MfptDistributionResult",
     "ReproduceResult",
     "__version__",
+    "__git_revision__",
 ]

@@ -21,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__git_revision__: Optional[str]
 
 Array = npt.NDArray[np.float64]
 PathLike = Union[str, "os.PathLike[str]"]

@@ -216,7 +216,8 @@ fn drag_laws<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
 /// The module `irtp._irtp`.
 #[pymodule]
 fn _irtp(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("__version__", irtp_app::VERSION)?;
+    m.add("__git_revision__", irtp_app::GIT_REVISION)?;
     m.add("NumericalError", m.py().get_type::<NumericalError>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(commands, m)?)?;

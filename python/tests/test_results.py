@@ -181,8 +181,18 @@ def test_help_is_useful_on_its_own():
     assert "from_" in irtp.mfpt_scan.__doc__ and "'backward'" in irtp.mfpt.__doc__
 
 
-def test_version():
+def test_version(cli, tmp_path):
+    """The module and the CLI name the version and git revision that
+    provenance records."""
     assert irtp.__version__ == _irtp.__version__
+    res = irtp.analytic(points=11, out=str(tmp_path / "a"))
+    prov = res.provenance
+    assert (prov["version"], prov.get("git_revision")) == (irtp.__version__, irtp.__git_revision__)
+    line = cli.run(["--version"]).stdout.strip()
+    if irtp.__git_revision__ is None:
+        assert line.startswith(f"irtp {irtp.__version__} (no git revision")
+    else:
+        assert line == f"irtp {irtp.__version__} (git {irtp.__git_revision__})"
 
 
 def test_nan_free_summary_numbers():

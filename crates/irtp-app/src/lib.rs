@@ -31,6 +31,17 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The git revision of the build, where it was built from a checkout.
 pub const GIT_REVISION: Option<&str> = option_env!("IRTP_GIT_REVISION");
 
+/// `0.1.0 (git <revision>)`: the version and git revision every provenance
+/// file records (`irtp --version`; the Python module's `__version__` and
+/// `__git_revision__`).
+pub fn long_version() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| match GIT_REVISION {
+        Some(rev) => format!("{VERSION} (git {rev})"),
+        None => format!("{VERSION} (no git revision: built outside a checkout)"),
+    })
+}
+
 use crate::io::{out_in_use, OutputDir, Previous, Provenance};
 use clap::{Parser, Subcommand};
 use irtp::error::{Error, Result};

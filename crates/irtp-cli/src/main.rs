@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 /// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
 #[derive(Parser, Debug)]
-#[command(name = "irtp", version, about, long_about = None)]
+#[command(name = "irtp", version = irtp_app::long_version(), about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: TopCommand,
