@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import pathlib
 
 import pytest
@@ -9,12 +10,16 @@ import pytest
 NOTEBOOK = pathlib.Path(__file__).resolve().parents[2] / "docs" / "examples" / "quickstart.ipynb"
 
 
-def test_quickstart_notebook_runs(tmp_path, monkeypatch):
+def test_quickstart_notebook_runs(tmp_path, monkeypatch, cli):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     pytest.importorskip("matplotlib")
     # The kernel draws with matplotlib's inline backend: no display needed.
     monkeypatch.delenv("MPLBACKEND", raising=False)
+    # The sweep cells run the CLI as `irtp`, as a user's PATH has it.
+    (tmp_path / "bin").mkdir()
+    (tmp_path / "bin" / "irtp").symlink_to(cli.path.resolve())
+    monkeypatch.setenv("PATH", f"{tmp_path / 'bin'}{os.pathsep}{os.environ['PATH']}")
     nb = nbformat.read(NOTEBOOK, as_version=4)
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code"), \
         "the notebook is stored with outputs"
@@ -26,4 +31,4 @@ def test_quickstart_notebook_runs(tmp_path, monkeypatch):
     assert errors == []
     images = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
               if "image/png" in o.get("data", {})]
-    assert len(images) == 2, "Fig. 2(a) and Fig. 7(b)"
+    assert len(images) == 3, "Fig. 2(a), Fig. 7(b) and the sweep's heat map"
