@@ -1,0 +1,210 @@
+//! The search problem's deterministic solvers (`irtp::search::backward`,
+//! `irtp::search::renewal`) against closed forms, finer meshes and each
+//! other (docs/equations.md, "Search: the 2-D backward equation and the
+//! renewal route").
+
+use irtp::model::reset::{PositionReset, Schedule};
+use irtp::search::backward::{solve, BackwardOptions};
+use irtp::search::{PositionTarget, SearchProblem};
+use irtp::{DragLaw, Params};
+
+/// Gaussian elimination with partial pivoting (the closed forms' small
+/// linear systems).
+fn gauss_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+    let n = b.len();
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+            .unwrap();
+        a.swap(c, p);
+        b.swap(c, p);
+        let (top, rest) = a.split_at_mut(c + 1);
+        let (pivot, bc) = (&top[c], b[c]);
+        for (row, br) in rest.iter_mut().zip(&mut b[c + 1..]) {
+            let f = row[c] / pivot[c];
+            for (x, y) in row[c..].iter_mut().zip(&pivot[c..]) {
+                *x -= f * y;
+            }
+            *br -= f * bc;
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|k| a[r][k] * x[k]).sum();
+        x[r] = (b[r] - s) / a[r][r];
+    }
+    x
+}
+
+/// Mean first-passage time (T+, T-) of the overdamped RTP dx/dt = ±c, flip
+/// rate lambda, position reset to x_r at rate r > 0 (state kept), from x0
+/// (docs/equations.md, search section, closed form (S4)): constant
+/// particular part P± plus the modes e^{±k x}, k = √(r (2 lambda + r)) / c,
+/// with (T+, T-) ∝ (1, lambda / (mu ± c k)), mu = lambda + r; the
+/// coefficients from T+ = 0 at the upper exit, T- = 0 at the lower one, and
+/// the self-consistency at x_r. Checked against a Monte Carlo simulation of
+/// the RTP before use (1e5 particles, within the sampling error).
+fn rtp_closed(c: f64, lambda: f64, r: f64, xr: f64, x0: f64, target: PositionTarget) -> [f64; 2] {
+    let mu = lambda + r;
+    let k = (r * (2.0 * lambda + r)).sqrt() / c;
+    let (bk, bm) = (lambda / (mu + c * k), lambda / (mu - c * k));
+    match target {
+        PositionTarget::Level(l) if l > x0 => {
+            let e1 = (k * (xr - l)).exp();
+            let a = vec![
+                vec![-lambda, lambda, r * e1],
+                vec![lambda, -lambda, r * bk * e1],
+                vec![1.0, 0.0, 1.0],
+            ];
+            let s = gauss_solve(a, vec![-1.0, -1.0, 0.0]);
+            let e = (k * (x0 - l)).exp();
+            [s[0] + s[2] * e, s[1] + s[2] * bk * e]
+        }
+        PositionTarget::Level(l) => {
+            // Mirror x -> -x: the states swap.
+            let m = rtp_closed(c, lambda, r, -xr, -x0, PositionTarget::Level(-l));
+            [m[1], m[0]]
+        }
+        PositionTarget::Interval(a0, b0) => {
+            let (e1, e2, d) = (
+                (k * (xr - b0)).exp(),
+                (-k * (xr - a0)).exp(),
+                (-k * (b0 - a0)).exp(),
+            );
+            let a = vec![
+                vec![-lambda, lambda, r * e1, r * e2],
+                vec![lambda, -lambda, r * bk * e1, r * bm * e2],
+                vec![1.0, 0.0, 1.0, d],
+                vec![0.0, 1.0, bk * d, bm],
+            ];
+            let s = gauss_solve(a, vec![-1.0, -1.0, 0.0, 0.0]);
+            let (f1, f2) = ((k * (x0 - b0)).exp(), (-k * (x0 - a0)).exp());
+            [
+                s[0] + s[2] * f1 + s[3] * f2,
+                s[1] + s[2] * bk * f1 + s[3] * bm * f2,
+            ]
+        }
+    }
+}
+
+/// Full resetting to (x_r, v_r), noise kept.
+fn full(drag: &str, sigma: f64, lambda: f64, r: f64, xr: f64, vr: f64) -> Params {
+    let schedule = Schedule {
+        position: Some(PositionReset::new(xr).unwrap()),
+        ..Default::default()
+    };
+    Params::new(drag.parse::<DragLaw>().unwrap(), sigma, lambda, r, vr)
+        .unwrap()
+        .with_schedule(schedule)
+        .unwrap()
+}
+
+#[test]
+fn rtp_closed_form_is_self_consistent() {
+    // A level far away and an interval around it agree; mirror symmetry.
+    let lv = rtp_closed(1.0, 1.0, 1.0, 0.0, 0.0, PositionTarget::Level(1.0));
+    let iv = rtp_closed(
+        1.0,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        PositionTarget::Interval(-60.0, 1.0),
+    );
+    assert!((lv[0] - iv[0]).abs() < 1e-9 && (lv[1] - iv[1]).abs() < 1e-9);
+    let m = rtp_closed(1.0, 1.0, 1.0, 0.0, 0.0, PositionTarget::Level(-1.0));
+    assert!((m[0] - lv[1]).abs() < 1e-12 && (m[1] - lv[0]).abs() < 1e-12);
+}
+
+/// Linear drag g = gamma v with Sigma = gamma c tends to the overdamped RTP
+/// dx/dt = ±c as gamma -> ∞: the velocity relaxes in a time 1/gamma after
+/// each flip and each reset, so the search is slowed by O((lambda + r) /
+/// gamma) relative to the RTP. The differences fall like 1/gamma and stay
+/// below twice that estimate, 2 (lambda + r) T_RTP / gamma.
+#[test]
+fn overdamped_limit_is_the_rtp() {
+    let (c, lambda, r) = (1.0, 1.0, 1.0);
+    let target = PositionTarget::Level(1.0);
+    let rtp = rtp_closed(c, lambda, r, 0.0, 0.0, target);
+    let rtp_tau = 0.5 * (rtp[0] + rtp[1]);
+    let mut diffs = Vec::new();
+    for gamma in [4.0, 16.0, 64.0, 256.0] {
+        let p = full(
+            &format!("power:n=1,k={gamma}"),
+            gamma * c,
+            lambda,
+            r,
+            0.0,
+            0.0,
+        );
+        let problem = SearchProblem::new(p, 0.0, 0.0, target).unwrap();
+        let s = solve(&problem, &BackwardOptions::with_cells(64, 8)).unwrap();
+        let d = s.tau - rtp_tau;
+        eprintln!(
+            "gamma {gamma}: tau {} (± {}) tau± {} {}, RTP {rtp_tau} {rtp:?}: diff {d}, gamma diff {}",
+            s.tau,
+            s.error_estimate,
+            s.tau_plus,
+            s.tau_minus,
+            gamma * d
+        );
+        assert!(
+            d.abs() <= 2.0 * (lambda + r) * rtp_tau / gamma + s.error_estimate,
+            "gamma {gamma}: {d}"
+        );
+        diffs.push(d);
+    }
+    for w in diffs.windows(2) {
+        assert!(w[1].abs() < w[0].abs(), "differences fall: {diffs:?}");
+        // The O(1/gamma) law: gamma d(gamma) settles (15.6, 13.8, 13.1, 12.0).
+        let ratio = 4.0 * w[1] / w[0];
+        assert!((0.8..1.25).contains(&ratio), "gamma diff: {diffs:?}");
+    }
+    let last = diffs[diffs.len() - 1];
+    assert!(last.abs() <= 2.0 * (lambda + r) * rtp_tau / 256.0, "{last}");
+}
+
+/// The Richardson error estimate of `solve` bounds the actual error of the
+/// extrapolated answer against a much finer (also extrapolated) solve.
+fn estimate_bounds_error(
+    problem: &SearchProblem,
+    meshes: &[(usize, usize)],
+    reference: (usize, usize),
+) {
+    let exact = solve(
+        problem,
+        &BackwardOptions::with_cells(reference.0, reference.1),
+    )
+    .unwrap();
+    for &(cx, cv) in meshes {
+        let s = solve(problem, &BackwardOptions::with_cells(cx, cv)).unwrap();
+        let err = (s.tau - exact.tau).abs();
+        eprintln!(
+            "cells ({cx}, {cv}): tau {} estimate {} actual {err} (reference {} ± {})",
+            s.tau, s.error_estimate, exact.tau, exact.error_estimate
+        );
+        assert!(
+            err <= s.error_estimate,
+            "({cx}, {cv}): {err} > {}",
+            s.error_estimate
+        );
+        let plus = (s.tau_plus - exact.tau_plus).abs();
+        let minus = (s.tau_minus - exact.tau_minus).abs();
+        assert!(plus.max(minus) <= 2.0 * s.error_estimate);
+    }
+}
+
+#[test]
+fn mesh_error_estimate_bounds_the_error_interval() {
+    let p = full("linear", 1.0, 0.5, 1.0, 0.0, 0.0);
+    let problem = SearchProblem::new(p, 0.2, 0.3, PositionTarget::Interval(-0.5, 1.0)).unwrap();
+    estimate_bounds_error(&problem, &[(8, 8), (16, 16)], (32, 32));
+}
+
+#[test]
+#[ignore = "slow tier"]
+fn mesh_error_estimate_bounds_the_error_level() {
+    let p = full("tanh", 0.6, 0.5, 0.3, 0.0, 0.0);
+    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    estimate_bounds_error(&problem, &[(16, 8), (32, 16)], (64, 32));
+}
