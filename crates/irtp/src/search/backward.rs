@@ -517,7 +517,11 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
                 band.solve(&mut w);
                 w
             });
-            let tr = self_consistent(&t, &w, kr)?;
+            let mut hit: Vec<f64> = (0..g.dim())
+                .map(|k| if g.absorbing[k] { 1.0 } else { 0.0 })
+                .collect();
+            band.solve(&mut hit);
+            let tr = self_consistent(&t, &w, [hit[kr[0]], hit[kr[1]]], kr)?;
             for (k, tk) in t.iter_mut().enumerate() {
                 *tk += tr[0] * w[0][k] + tr[1] * w[1][k];
             }
@@ -533,24 +537,40 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
 
 /// T_r(s) = U(k_s) + Σ_s' T_r(s') W_s'(k_s): the 2×2 system (I - M) T_r = U_r,
 /// M[s][s'] = W_s'(k_s) (the chance that a reset comes before the target,
-/// into state s'); its rows sum below 1 when the target can be reached.
-fn self_consistent(u: &[f64], w: &[Vec<f64>; 2], kr: [usize; 2]) -> Result<[f64; 2]> {
+/// into state s'). `escape[s]` = 1 - Σ_s' M[s][s'], the chance of reaching
+/// the target before a reset, is solved for directly (no cancellation when
+/// it is small), and det(I - M) formed from non-negative terms.
+fn self_consistent(
+    u: &[f64],
+    w: &[Vec<f64>; 2],
+    escape: [f64; 2],
+    kr: [usize; 2],
+) -> Result<[f64; 2]> {
     let m = [0, 1].map(|s| [w[0][kr[s]], w[1][kr[s]]]);
-    let escape = [0, 1].map(|s| 1.0 - m[s][0] - m[s][1]);
-    let s = [[1.0 - m[0][0], -m[0][1]], [-m[1][0], 1.0 - m[1][1]]];
-    let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
-    if !(escape[0] > 0.0 && escape[1] > 0.0 && det > 0.0) {
+    Ok(capacitance(m, escape, "search backward solve")?.solve([u[kr[0]], u[kr[1]]]))
+}
+
+/// The system I - M of a renewal at the reset point, with the rows' escape
+/// chances e_s = 1 - Σ_s' M[s][s'] known: diagonal e_s + M[s][s̄],
+/// det = e0 e1 + e0 M10 + M01 e1 (non-negative terms). Refused (typed)
+/// unless both escape chances are positive.
+pub(crate) fn capacitance(
+    m: [[f64; 2]; 2],
+    e: [f64; 2],
+    method: &'static str,
+) -> Result<Capacitance> {
+    if !(e[0] > 0.0 && e[1] > 0.0 && m.iter().flatten().all(|x| *x >= 0.0)) {
         return Err(Error::Numerical {
-            method: "search backward solve",
+            method,
             reason: format!(
-                "the target is not reached between resets on this mesh (chance of a reset \
-                 before the target from x_r: {:e}, {:e})",
-                1.0 - escape[0],
-                1.0 - escape[1]
+                "the target is not reached between resets (chance of reaching it first from                  x_r: {:e}, {:e})",
+                e[0], e[1]
             ),
         });
     }
-    Ok(Capacitance::with_det(s, det).solve([u[kr[0]], u[kr[1]]]))
+    let s = [[e[0] + m[0][1], -m[0][1]], [-m[1][0], e[1] + m[1][0]]];
+    let det = e[0] * e[1] + e[0] * m[1][0] + m[0][1] * e[1];
+    Ok(Capacitance::inverted(s, det))
 }
 
 /// Verified or refused: T finite and ≥ 0 everywhere (round-off allowed),

@@ -24,7 +24,7 @@
 //! the period; the neglected tail is bounded (S, Q ≤ 1) and reported.
 
 use super::backward::{
-    check_budget, cost_of, factor, mesh_info, verify, Cost, MeshInfo, Resetting, Setup,
+    capacitance, check_budget, cost_of, factor, mesh_info, verify, Cost, MeshInfo, Resetting, Setup,
 };
 use super::mesh::{Generator, Mesh};
 use super::SearchProblem;
@@ -91,21 +91,34 @@ impl WaitingTime {
         }
     }
 
-    /// Trapezoidal weights on t_n = n t_max / steps of ∫ w f dt and
-    /// ∫ rho f dt (the point mass of a periodic clock at t_max).
-    fn weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>) {
+    /// Weights on t_n = n t_max / steps of ∫ w f dt and ∫ rho f dt for f
+    /// linear between the t_n (product integration: exact for such f, so
+    /// the rho weights sum to P(R ≤ t_max) exactly), and P(R > t_max).
+    fn weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
         let dt = t_max / steps as f64;
-        let trap = |n: usize| if n == 0 || n == steps { 0.5 * dt } else { dt };
         match *self {
-            WaitingTime::Poisson { rate } => (0..=steps)
-                .map(|n| {
-                    let w = (-rate * n as f64 * dt).exp();
-                    (trap(n) * w, trap(n) * rate * w)
-                })
-                .unzip(),
-            WaitingTime::Periodic { .. } => (0..=steps)
-                .map(|n| (trap(n), if n == steps { 1.0 } else { 0.0 }))
-                .unzip(),
+            WaitingTime::Poisson { rate } => {
+                let z = rate * dt;
+                let i0 = -(-z).exp_m1();
+                let i1 = i0 / z - (-z).exp();
+                let mut rq = vec![0.0; steps + 1];
+                for n in 0..steps {
+                    let e = (-rate * n as f64 * dt).exp();
+                    rq[n] += e * (i0 - i1);
+                    rq[n + 1] += e * i1;
+                }
+                let wq = rq.iter().map(|x| x / rate).collect();
+                (wq, rq, (-rate * t_max).exp())
+            }
+            WaitingTime::Periodic { .. } => {
+                let wq = (0..=steps)
+                    .map(|n| if n == 0 || n == steps { 0.5 * dt } else { dt })
+                    .collect();
+                let rq = (0..=steps)
+                    .map(|n| if n == steps { 1.0 } else { 0.0 })
+                    .collect();
+                (wq, rq, 0.0)
+            }
         }
     }
 }
@@ -205,6 +218,9 @@ struct Periods {
     a: [[f64; 2]; 2],
     /// B_ss' at the reset point, then at the start.
     b: [[[f64; 2]; 2]; 2],
+    /// e_s = 1 - Σ_s' B_ss' = P(T0 < R), integrated as ∫ rho (1 - S) dt +
+    /// P(R > t_max) (no cancellation when it is small), at the reset point.
+    e: [f64; 2],
 }
 
 /// The answer of one mesh and step: tau±, T_r±, textbook, tail bound.
@@ -343,16 +359,20 @@ fn answer(
     ];
     let g = Generator::assemble(mesh, &setup.params, None);
     let series = survival_series(&g, t_max, steps, &watch)?;
-    let (wq, rq) = waiting.weights(t_max, steps);
+    let (wq, rq, beyond) = waiting.weights(t_max, steps);
     let mut p = Periods {
         a: [[0.0; 2]; 2],
         b: [[[0.0; 2]; 2]; 2],
+        e: [beyond; 2],
     };
     for (n, q) in series.iter().enumerate() {
         for at in 0..2 {
             for s in 0..2 {
                 let k = 2 * at + s;
                 p.a[at][s] += wq[n] * (q[0][k] + q[1][k]);
+                if at == 0 {
+                    p.e[s] += rq[n] * (1.0 - q[0][k] - q[1][k]);
+                }
                 for (b, qs) in p.b[at][s].iter_mut().zip(q) {
                     *b += rq[n] * qs[k];
                 }
@@ -367,32 +387,20 @@ fn answer(
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
     const METHOD: &str = "search renewal route";
     let mix = setup.mix;
-    // M = B(x_r) mix: T_r = a_r + M T_r.
+    // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
+    // escape chances of M are those of B.
     let m =
         [0, 1].map(|s| [0, 1].map(|u| (0..2).map(|s2| p.b[0][s][s2] * mix[s2][u]).sum::<f64>()));
-    let escape = [0, 1].map(|s| 1.0 - m[s][0] - m[s][1]);
-    let det = (1.0 - m[0][0]) * (1.0 - m[1][1]) - m[0][1] * m[1][0];
-    if !(escape[0] > 0.0 && escape[1] > 0.0 && det > 0.0) {
-        return Err(Error::Numerical {
-            method: METHOD,
-            reason: format!(
-                "the target is not reached between resets (chance of a reset first from x_r: \
-                 {:e}, {:e})",
-                1.0 - escape[0],
-                1.0 - escape[1]
-            ),
-        });
-    }
-    let inv = [[1.0 - m[1][1], m[0][1]], [m[1][0], 1.0 - m[0][0]]].map(|r| r.map(|x| x / det));
-    let solve2 = |f: [f64; 2]| [0, 1].map(|s| inv[s][0] * f[0] + inv[s][1] * f[1]);
-    let reset = solve2(p.a[0]);
+    let system = capacitance(m, p.e, METHOD)?;
+    let reset = system.solve(p.a[0]);
     let next = [0, 1].map(|u| (0..2).map(|s2| mix[u][s2] * reset[s2]).sum::<f64>());
     let tau = [0, 1].map(|s| p.a[1][s] + p.b[1][s][0] * next[0] + p.b[1][s][1] * next[1]);
     let a_bar = 0.5 * (p.a[0][0] + p.a[0][1]);
-    let b_bar = 0.5 * (p.b[0][0][0] + p.b[0][0][1] + p.b[0][1][0] + p.b[0][1][1]);
-    let norm = inv
-        .iter()
-        .map(|r| r[0].abs() + r[1].abs())
+    let e_bar = 0.5 * (p.e[0] + p.e[1]);
+    // ‖(I - M)⁻¹‖∞ from its columns: the tail's effect on T_r.
+    let cols = [system.solve([1.0, 0.0]), system.solve([0.0, 1.0])];
+    let norm = (0..2)
+        .map(|i| cols[0][i].abs() + cols[1][i].abs())
         .fold(0.0, f64::max);
     let per = tail_a + tail_b * reset[0].max(reset[1]);
     let tail = per + norm * per;
@@ -401,7 +409,7 @@ fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Ans
     Ok(Answer {
         tau,
         reset,
-        textbook: a_bar / (1.0 - b_bar),
+        textbook: a_bar / e_bar,
         tail,
     })
 }
