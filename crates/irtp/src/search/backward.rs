@@ -183,8 +183,8 @@ pub(crate) struct Setup {
 }
 
 impl Setup {
-    /// Check what the search solvers run: point targets only, no refractory
-    /// period; a finite mean. `renewal`: full resetting required, any
+    /// Check what the search solvers run: no refractory period; a finite
+    /// mean. `renewal`: full resetting required, any
     /// clock (the renewal route takes its waiting-time law separately);
     /// otherwise a Poisson clock only.
     pub fn new(problem: &SearchProblem, method: &str, renewal: bool) -> Result<Setup> {
@@ -207,7 +207,9 @@ impl Setup {
                 ),
             ));
         }
-        let vr = p.point_target(method)?;
+        // A random target enters through its node weights; meshes put a
+        // node at its centre.
+        let vr = p.reset_velocity();
         if let (None, true) = (s.position, renewal) {
             return Err(Error::invalid(
                 "reset_position",
@@ -396,7 +398,7 @@ fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
 /// Solve for the mean first-passage time at (x0, v0), tau for each
 /// starting noise state and their mean, with the mesh and truncation
 /// error estimates (module docs). Refuses (typed) periodic clocks (see
-/// [`super::renewal::solve`]), refractory periods, random targets, an
+/// [`super::renewal::solve`]), refractory periods, an
 /// infinite mean (one-sided level without full resetting), and a solve
 /// above the budgets of `opts` ([`estimate`]).
 pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSolution> {
@@ -486,18 +488,24 @@ pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str)
 
 /// Solve `L T = -1` on `mesh` (module docs): superposition for full
 /// resetting, the reset inside the band for velocity-only resetting.
+/// With the target's node weights w_j the reset values are
+/// R_s = Σ_j w_j T(x_r, v_j, s) (T(x_r, v_r, s) for a point target):
+/// `R = M R + U_r`, M[s][s'] = Σ_j w_j W_s'(x_r, v_j, s) (the chance that a
+/// reset comes first, into state s'), its escape chances
+/// e_s = Σ_j w_j h(x_r, v_j, s) from the hitting chance h solved for
+/// directly (no cancellation when it is small).
 fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     const METHOD: &str = "search backward solve";
     let p = &setup.params;
     let local = match setup.resetting {
-        Resetting::Velocity { v } => Some(LocalReset {
+        Resetting::Velocity { .. } => Some(LocalReset {
             rate: p.rate(),
-            j: mesh.node(setup.x0, v)?.1,
+            target: mesh.target_weights(p)?,
             mix: setup.mix,
         }),
         _ => None,
     };
-    let g = Generator::assemble(mesh, p, local);
+    let g = Generator::assemble(mesh, p, local.as_ref());
     let full = matches!(setup.resetting, Resetting::Full { .. });
     let r = if full { p.rate() } else { 0.0 };
     let band = factor(&g, r, 1.0, METHOD)?;
@@ -510,8 +518,14 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     band.solve(&mut t);
     let reset = match setup.resetting {
         Resetting::Full { x, v } => {
-            let (i, j) = mesh.node(x, v)?;
-            let kr = [mesh.idx(i, j, 0), mesh.idx(i, j, 1)];
+            let ir = mesh.node(x, v)?.0;
+            let weights = mesh.target_weights(p)?;
+            let at_reset = |f: &[f64], s: usize| -> f64 {
+                weights
+                    .iter()
+                    .map(|&(j, w)| w * f[mesh.idx(ir, j, s)])
+                    .sum()
+            };
             let w = [0, 1].map(|s2| {
                 let mut w = fill(&|k| r * setup.mix[k % 2][s2]);
                 band.solve(&mut w);
@@ -521,7 +535,10 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
                 .map(|k| if g.absorbing[k] { 1.0 } else { 0.0 })
                 .collect();
             band.solve(&mut hit);
-            let tr = self_consistent(&t, &w, [hit[kr[0]], hit[kr[1]]], kr)?;
+            let m = [0, 1].map(|s| [at_reset(&w[0], s), at_reset(&w[1], s)]);
+            let escape = [0, 1].map(|s| at_reset(&hit, s));
+            let u = [0, 1].map(|s| at_reset(&t, s));
+            let tr = capacitance(m, escape, METHOD)?.solve(u);
             for (k, tk) in t.iter_mut().enumerate() {
                 *tk += tr[0] * w[0][k] + tr[1] * w[1][k];
             }
@@ -533,21 +550,6 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     let tau = [t[mesh.idx(i0, j0, 0)], t[mesh.idx(i0, j0, 1)]];
     verify(&t, tau, setup, METHOD)?;
     Ok(NodeAnswer { tau, reset })
-}
-
-/// T_r(s) = U(k_s) + Σ_s' T_r(s') W_s'(k_s): the 2×2 system (I - M) T_r = U_r,
-/// M[s][s'] = W_s'(k_s) (the chance that a reset comes before the target,
-/// into state s'). `escape[s]` = 1 - Σ_s' M[s][s'], the chance of reaching
-/// the target before a reset, is solved for directly (no cancellation when
-/// it is small), and det(I - M) formed from non-negative terms.
-fn self_consistent(
-    u: &[f64],
-    w: &[Vec<f64>; 2],
-    escape: [f64; 2],
-    kr: [usize; 2],
-) -> Result<[f64; 2]> {
-    let m = [0, 1].map(|s| [w[0][kr[s]], w[1][kr[s]]]);
-    Ok(capacitance(m, escape, "search backward solve")?.solve([u[kr[0]], u[kr[1]]]))
 }
 
 /// The system I - M of a renewal at the reset point, with the rows' escape

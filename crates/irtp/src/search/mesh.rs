@@ -16,6 +16,7 @@
 //! column: the generator is banded with 2 n_v sub- and super-diagonals.
 
 use crate::error::{Error, Result};
+use crate::model::reset::Reset;
 use crate::model::Drag;
 use crate::numerics::band::Band;
 use crate::Params;
@@ -244,16 +245,48 @@ impl Mesh {
     }
 }
 
-/// A velocity-only reset inside the generator: rate r, target node j_r and
-/// the noise rule's weights `mix[s][s']` (state s before, s' after).
-#[derive(Clone, Copy, Debug)]
+/// A velocity-only reset inside the generator: rate r, the target's node
+/// weights and the noise rule's weights `mix[s][s']` (state s before, s'
+/// after).
+#[derive(Clone, Debug)]
 pub(crate) struct LocalReset {
     /// Rate r.
     pub rate: f64,
-    /// Index of v_r.
-    pub j: usize,
+    /// (j, w_j): the reset target on the v nodes ([`Mesh::target_weights`]).
+    pub target: Vec<(usize, f64)>,
     /// mix[s][s']: probability of state s' after a reset from state s.
     pub mix: [[f64; 2]; 2],
+}
+
+impl Mesh {
+    /// The reset target as weights on the v nodes: (j_r, 1) for a point
+    /// target (v_r is a node), for a random one w_j = ∫ q φ_j, φ_j the hat
+    /// function of node j (exact for T linear between nodes; normalised
+    /// over (v_l, v_u)), zero weights dropped.
+    pub fn target_weights(&self, p: &Params) -> Result<Vec<(usize, f64)>> {
+        let reset = p.reset();
+        if let Some(v) = reset.point() {
+            let j = self.v.iter().position(|&z| z == v);
+            return j.map(|j| vec![(j, 1.0)]).ok_or_else(|| Error::Numerical {
+                method: "search mesh",
+                reason: format!("no mesh node at v_r = {v}"),
+            });
+        }
+        let target = reset.target();
+        let (vl, vu) = p.bounds();
+        let total = target.mass(vl, vu);
+        let mut w = vec![0.0; self.v.len()];
+        for (i, c) in self.v.windows(2).enumerate() {
+            let mass = target.mass(c[0], c[1]);
+            let upper = (target.moment_from(c[0], c[1]) / (c[1] - c[0])).clamp(0.0, mass);
+            w[i] += (mass - upper) / total;
+            w[i + 1] += upper / total;
+        }
+        Ok(w.into_iter()
+            .enumerate()
+            .filter(|(_, x)| *x > 0.0)
+            .collect())
+    }
 }
 
 /// The upwind generator A (a Markov generator: off-diagonal entries ≥ 0,
@@ -272,7 +305,7 @@ impl Generator {
     /// Assemble the reset-free generator of docs/equations.md (search
     /// section) on `mesh`: upwind x- and v-transport, flips at rate lambda,
     /// and a velocity-only reset if `local` is given.
-    pub fn assemble(mesh: &Mesh, p: &Params, local: Option<LocalReset>) -> Generator {
+    pub fn assemble(mesh: &Mesh, p: &Params, local: Option<&LocalReset>) -> Generator {
         let n = mesh.unknowns();
         let mut g = Generator {
             start: Vec::with_capacity(n + 1),
@@ -346,7 +379,7 @@ impl Generator {
 fn upwind_row(
     mesh: &Mesh,
     p: &Params,
-    local: Option<LocalReset>,
+    local: Option<&LocalReset>,
     (i, j, s): (usize, usize, usize),
     row: &mut Vec<(usize, f64)>,
 ) {
@@ -374,8 +407,8 @@ fn upwind_row(
     }
     if let Some(r) = local {
         for t in 0..2 {
-            if r.mix[s][t] > 0.0 {
-                add(row, mesh.idx(i, r.j, t), r.rate * r.mix[s][t]);
+            for &(jr, w) in r.target.iter().filter(|_| r.mix[s][t] > 0.0) {
+                add(row, mesh.idx(i, jr, t), r.rate * r.mix[s][t] * w);
             }
         }
     }

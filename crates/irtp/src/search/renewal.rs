@@ -286,7 +286,7 @@ pub fn estimate(
 /// Mean first-passage time to the position target under full resetting
 /// with resets at the renewal times of `waiting` (module docs; the clock of
 /// the parameters is [`WaitingTime::of`]). Refuses (typed) velocity-only
-/// resetting, refractory periods, random targets and a solve above the
+/// resetting, refractory periods and a solve above the
 /// budgets of `opts` ([`estimate`]).
 pub fn solve(
     problem: &SearchProblem,
@@ -338,7 +338,10 @@ pub fn solve(
     })
 }
 
-/// The renewal answer on one mesh with `steps` time steps to `t_max`.
+/// The renewal answer on one mesh with `steps` time steps to `t_max`. The
+/// reset-point quantities are weighed by the target's node weights
+/// (a_s(x_r) = Σ_j w_j a_s(x_r, v_j), likewise B and e: the reset lands on
+/// v_j with probability w_j), so random targets need nothing else.
 fn answer(
     setup: &Setup,
     mesh: &Mesh,
@@ -349,36 +352,38 @@ fn answer(
     let Resetting::Full { x: xr, v: vr } = setup.resetting else {
         unreachable!("Setup::new with renewal = true makes full resetting");
     };
-    let (ir, jr) = mesh.node(xr, vr)?;
+    let ir = mesh.node(xr, vr)?.0;
     let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
-    let watch = [
-        mesh.idx(ir, jr, 0),
-        mesh.idx(ir, jr, 1),
-        mesh.idx(i0, j0, 0),
-        mesh.idx(i0, j0, 1),
-    ];
+    // Watched points: the start (weight 1), then the reset target.
+    let start = vec![(i0, j0, 1.0)];
+    let target: Vec<_> = mesh
+        .target_weights(&setup.params)?
+        .into_iter()
+        .map(|(j, w)| (ir, j, w))
+        .collect();
     let g = Generator::assemble(mesh, &setup.params, None);
-    let series = survival_series(&g, t_max, steps, &watch)?;
     let (wq, rq, beyond) = waiting.weights(t_max, steps);
     let mut p = Periods {
         a: [[0.0; 2]; 2],
         b: [[[0.0; 2]; 2]; 2],
         e: [beyond; 2],
     };
-    for (n, q) in series.iter().enumerate() {
-        for at in 0..2 {
+    survival_series(&g, t_max, steps, |n, q| {
+        for (at, points) in [&target, &start].into_iter().enumerate() {
             for s in 0..2 {
-                let k = 2 * at + s;
-                p.a[at][s] += wq[n] * (q[0][k] + q[1][k]);
-                if at == 0 {
-                    p.e[s] += rq[n] * (1.0 - q[0][k] - q[1][k]);
-                }
-                for (b, qs) in p.b[at][s].iter_mut().zip(q) {
-                    *b += rq[n] * qs[k];
+                for &(i, j, w) in points {
+                    let k = mesh.idx(i, j, s);
+                    let (qp, qm) = (q[0][k], q[1][k]);
+                    p.a[at][s] += w * wq[n] * (qp + qm);
+                    p.b[at][s][0] += w * rq[n] * qp;
+                    p.b[at][s][1] += w * rq[n] * qm;
+                    if at == 0 {
+                        p.e[s] += w * rq[n] * (1.0 - qp - qm);
+                    }
                 }
             }
         }
-    }
+    })?;
     renew(setup, &p, waiting.tail(t_max))
 }
 
@@ -414,14 +419,15 @@ fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Ans
     })
 }
 
-/// Q_s'(t_n) at the `watch` nodes, n = 0..=steps, for s' = ± (Q(0) = 1 in
-/// state s' off the target): TR-BDF2 with a fixed step on `I - d dt A`.
+/// Q_s'(t_n), n = 0..=steps, for s' = ± (Q(0) = 1 in state s' off the
+/// target), handed to `record(n, [Q+, Q-])`: TR-BDF2 with a fixed step on
+/// `I - d dt A`.
 fn survival_series(
     g: &Generator,
     t_max: f64,
     steps: usize,
-    watch: &[usize; 4],
-) -> Result<Vec<[[f64; 4]; 2]>> {
+    mut record: impl FnMut(usize, &[Vec<f64>; 2]),
+) -> Result<()> {
     const METHOD: &str = "search renewal route (reset-free survival)";
     let gamma = 2.0 - std::f64::consts::SQRT_2;
     let dt = t_max / steps as f64;
@@ -439,15 +445,13 @@ fn survival_series(
             })
             .collect()
     });
-    let read = |q: &[Vec<f64>; 2]| [0, 1].map(|s2| watch.map(|k| q[s2][k]));
-    let mut out = Vec::with_capacity(steps + 1);
-    out.push(read(&q));
+    record(0, &q);
     let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
     let (c1, c0) = (
         1.0 / (gamma * (2.0 - gamma)),
         (1.0 - gamma).powi(2) / (gamma * (2.0 - gamma)),
     );
-    for _ in 0..steps {
+    for step in 1..=steps {
         for u in q.iter_mut() {
             g.apply(u, &mut au);
             for k in 0..n {
@@ -459,14 +463,13 @@ fn survival_series(
             }
             band.solve(u);
         }
-        let r = read(&q);
-        if r.iter().flatten().any(|x| !x.is_finite()) {
+        if q.iter().flatten().any(|x| !x.is_finite()) {
             return Err(Error::NonFinite {
                 method: METHOD,
-                at: dt * out.len() as f64,
+                at: dt * step as f64,
             });
         }
-        out.push(r);
+        record(step, &q);
     }
-    Ok(out)
+    Ok(())
 }

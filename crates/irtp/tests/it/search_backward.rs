@@ -427,17 +427,6 @@ fn refusals_name_the_parameter() {
         name(solve(&pr, &BackwardOptions::default()).unwrap_err()),
         "refractory"
     );
-    let random = Params::new(DragLaw::Linear, 1.0, 0.5, 1.0, 0.0)
-        .unwrap()
-        .with_reset(Target::gauss(0.0, 0.1), NoiseAtReset::Kept)
-        .unwrap()
-        .with_schedule(Schedule::parse(None, Some(0.0), None).unwrap())
-        .unwrap();
-    let pr = SearchProblem::new(random, 0.0, 0.0, level).unwrap();
-    assert_eq!(
-        name(solve(&pr, &BackwardOptions::default()).unwrap_err()),
-        "reset_to"
-    );
     // A reset position beyond the level, and a budget too small.
     let beyond = full("linear", 1.0, 0.5, 1.0, 2.0, 0.0);
     let e = SearchProblem::new(beyond, 0.0, 0.0, level).unwrap_err();
@@ -460,4 +449,79 @@ fn refusals_name_the_parameter() {
     );
     let cost = estimate(&ok, &BackwardOptions::default()).unwrap();
     assert!(cost.work > 1e3 && cost.memory > 0.0);
+}
+
+/// Full resetting with another protocol: the direct solve and the renewal
+/// route on one mesh agree (as in `direct_vs_renewal`).
+fn routes_agree(p: Params, target: PositionTarget) -> f64 {
+    let problem = SearchProblem::new(p, 0.0, 0.0, target).unwrap();
+    let d = solve(
+        &problem,
+        &BackwardOptions {
+            refine: false,
+            ..BackwardOptions::with_cells(16, 8)
+        },
+    )
+    .unwrap();
+    let opts = RenewalOptions {
+        cells_x: 16,
+        cells_v: 8,
+        refine: false,
+        steps: 100,
+        ..Default::default()
+    };
+    let s = renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts).unwrap();
+    let diff = (s.tau - d.tau).abs();
+    let allowed = s.time_error + s.tail_bound + s.truncation_error + d.truncation_error;
+    eprintln!("direct {d:?}\nrenewal {s:?}\ndiff {diff:e} allowed {allowed:e}");
+    assert!(diff <= allowed, "{diff} > {allowed}");
+    d.tau
+}
+
+/// Noise re-drawn at a reset: the periods are independent, so the textbook
+/// renewal formula is exact (to the route's own time error).
+#[test]
+fn redrawn_noise_routes_agree() {
+    let p = full("linear", 1.0, 0.5, 0.3, 0.0, 0.0)
+        .with_reset(Target::point(0.0), NoiseAtReset::Redrawn)
+        .unwrap();
+    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    routes_agree(p, PositionTarget::Level(1.0));
+    let opts = RenewalOptions {
+        cells_x: 16,
+        cells_v: 8,
+        refine: false,
+        steps: 100,
+        ..Default::default()
+    };
+    let s = renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts).unwrap();
+    assert!((s.textbook - s.tau).abs() <= 1e-10 * s.tau, "{s:?}");
+}
+
+/// A random velocity target: the routes agree; a Gaussian much narrower
+/// than a cell is the point target at its centre (hat weights: all but
+/// O(std/h) on the centre node, the rest split evenly between its
+/// neighbours, so T moves by O(std h T_vv): 7.7e-6 relative at std = 1e-4,
+/// below 1e-6 at std = 1e-6).
+#[test]
+fn random_target_routes_agree() {
+    let level = PositionTarget::Level(1.0);
+    let uniform = full("tanh", 0.6, 0.5, 1.0, 0.0, 0.0)
+        .with_reset(Target::uniform(-0.3, 0.4), NoiseAtReset::Kept)
+        .unwrap();
+    routes_agree(uniform, level);
+    let point = full("linear", 1.0, 0.5, 1.0, 0.0, 0.1);
+    let narrow = point
+        .with_reset(Target::gauss(0.1, 1e-6), NoiseAtReset::Kept)
+        .unwrap();
+    let (tp, tn) = (routes_agree(point, level), routes_agree(narrow, level));
+    assert!((tp - tn).abs() <= 1e-6 * tp, "{tp} {tn}");
+    // Velocity-only resetting to an interval takes it too.
+    let v_only = Params::new(DragLaw::Linear, 1.0, 0.5, 1.0, 0.0)
+        .unwrap()
+        .with_reset(Target::uniform(-0.3, 0.4), NoiseAtReset::Redrawn)
+        .unwrap();
+    let pr = SearchProblem::new(v_only, 0.0, 0.0, PositionTarget::Interval(-0.5, 1.0)).unwrap();
+    let s = solve(&pr, &BackwardOptions::with_cells(16, 16)).unwrap();
+    assert!(s.tau > 0.5 && s.error_estimate < 0.1 * s.tau, "{s:?}");
 }
