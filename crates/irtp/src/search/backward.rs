@@ -126,7 +126,8 @@ pub struct SearchSolution {
     pub tau_plus: f64,
     /// Start in the -Sigma state.
     pub tau_minus: f64,
-    /// Error estimate of tau: mesh plus truncation.
+    /// Error estimate of tau: mesh plus truncation (NaN without
+    /// refinement).
     pub error_estimate: f64,
     /// |T_{h/2} - T_h| of tau (NaN without refinement).
     pub mesh_error: f64,
@@ -428,6 +429,13 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
     } else {
         (coarse.clone(), f64::NAN, &meshes[0])
     };
+    // The extrapolated values pass the same checks as each mesh's.
+    verify(
+        &best.tau,
+        best.tau,
+        &setup,
+        "search backward solve (extrapolated)",
+    )?;
     let truncation_error = if setup.truncated() {
         (answers[answers.len() - 1].mean() - coarse.mean()).abs()
     } else {

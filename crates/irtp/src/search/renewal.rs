@@ -147,10 +147,10 @@ pub struct RenewalOptions {
 impl Default for RenewalOptions {
     fn default() -> Self {
         RenewalOptions {
-            cells_x: 64,
-            cells_v: 32,
+            cells_x: 32,
+            cells_v: 16,
             refine: true,
-            steps: 200,
+            steps: 100,
             tail: 1e-8,
             max_work: 1e11,
             max_memory: 4e9,
@@ -192,7 +192,8 @@ pub struct RenewalSolution {
     pub tau_minus: f64,
     /// T(x_r, v_r, ±).
     pub reset_values: [f64; 2],
-    /// Error estimate of tau: mesh + time + truncation + tail.
+    /// Error estimate of tau: mesh + time + truncation + tail (NaN without
+    /// refinement).
     pub error_estimate: f64,
     /// |T_{h/2} - T_h| of tau (NaN without refinement).
     pub mesh_error: f64,
@@ -276,10 +277,10 @@ pub fn estimate(
     waiting.validate()?;
     let setup = Setup::new(problem, "the search renewal route", true)?;
     let m = meshes(&setup, waiting, opts);
-    let c = cost_of(&m, 12.0 * opts.steps as f64);
+    let solves = cost_of(&m, 12.0 * opts.steps as f64);
     Ok(Cost {
-        work: 2.0 * c.work,
-        memory: c.memory,
+        work: solves.work + cost_of(&m, 0.0).work,
+        memory: solves.memory,
     })
 }
 
@@ -318,6 +319,13 @@ pub fn solve(
     } else {
         0.0
     };
+    // The extrapolated values pass the same checks as each mesh's.
+    verify(
+        &best.tau,
+        best.tau,
+        &setup,
+        "search renewal route (extrapolated)",
+    )?;
     let error_estimate = mesh_error + time_error + truncation_error + best.tail;
     Ok(RenewalSolution {
         tau: best.mean(),

@@ -447,8 +447,15 @@ fn refusals_name_the_parameter() {
         ),
         "{e}"
     );
+    // The default options fit the default budgets.
     let cost = estimate(&ok, &BackwardOptions::default()).unwrap();
-    assert!(cost.work > 1e3 && cost.memory > 0.0);
+    assert!(
+        cost.work > 1e3 && cost.work < 1e11 && cost.memory < 4e9,
+        "{cost:?}"
+    );
+    let poisson = WaitingTime::Poisson { rate: 1.0 };
+    let cost = renewal::estimate(&ok, &poisson, &RenewalOptions::default()).unwrap();
+    assert!(cost.work < 1e11 && cost.memory < 4e9, "{cost:?}");
 }
 
 /// Full resetting with another protocol: the direct solve and the renewal
