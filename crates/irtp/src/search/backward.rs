@@ -21,6 +21,30 @@
 //! resetting stays inside the band (same x-column). Answers on the meshes h
 //! and h/2 are extrapolated (first order: `2 T_{h/2} - T_h`), and a
 //! truncated domain is solved again at 1.5 X; both differences are reported.
+//!
+//! Use (a front end checks [`estimate`] against its budget first; `solve`
+//! refuses above the budgets of its options in any case):
+//!
+//! ```
+//! use irtp::model::reset::Schedule;
+//! use irtp::search::backward::{self, BackwardOptions};
+//! use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
+//! use irtp::search::{PositionTarget, SearchProblem};
+//! use irtp::{DragLaw, Params};
+//!
+//! // Full resetting to (x_r, v_r) = (0, 0) at rate 0.3, noise state kept.
+//! let schedule = Schedule::parse(None, Some(0.0), None)?;
+//! let p = Params::new(DragLaw::Linear, 1.0, 0.5, 0.3, 0.0)?.with_schedule(schedule)?;
+//! let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0))?;
+//! let opts = BackwardOptions::with_cells(16, 8);
+//! let cost = backward::estimate(&problem, &opts)?;
+//! assert!(cost.work < 1e9);
+//! let direct = backward::solve(&problem, &opts)?;
+//! let ropts = RenewalOptions { cells_x: 16, cells_v: 8, ..Default::default() };
+//! let renewed = renewal::solve(&problem, &WaitingTime::of(&p)?, &ropts)?;
+//! assert!((direct.tau - renewed.tau).abs() <= direct.error_estimate + renewed.error_estimate);
+//! # Ok::<(), irtp::Error>(())
+//! ```
 
 use super::mesh::{Generator, Layout, LocalReset, Mesh, Side};
 use super::{PositionTarget, SearchProblem};

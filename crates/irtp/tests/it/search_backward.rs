@@ -532,3 +532,39 @@ fn random_target_routes_agree() {
     let s = solve(&pr, &BackwardOptions::with_cells(16, 16)).unwrap();
     assert!(s.tau > 0.5 && s.error_estimate < 0.1 * s.tau, "{s:?}");
 }
+
+/// x -> -x, v -> -v, eta -> -eta maps the level 1 to the level -1 (odd
+/// drag, x_r = v_r = 0): tau± swap, on both routes; without resets an
+/// interval still has a finite mean, and no reset values.
+#[test]
+fn mirror_symmetry_and_no_resets() {
+    let p = full("tan", 3.0, 0.5, 1.0, 0.0, 0.0);
+    let opts = BackwardOptions::with_cells(16, 8);
+    let up = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let down = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(-1.0)).unwrap();
+    let (u, d) = (solve(&up, &opts).unwrap(), solve(&down, &opts).unwrap());
+    assert!(
+        (u.tau_plus - d.tau_minus).abs() <= 1e-9 * u.tau,
+        "{u:?} {d:?}"
+    );
+    assert!((u.tau_minus - d.tau_plus).abs() <= 1e-9 * u.tau);
+    let ropts = RenewalOptions {
+        cells_x: 16,
+        cells_v: 8,
+        refine: false,
+        ..Default::default()
+    };
+    let poisson = WaitingTime::Poisson { rate: 1.0 };
+    let ru = renewal::solve(&up, &poisson, &ropts).unwrap();
+    let rd = renewal::solve(&down, &poisson, &ropts).unwrap();
+    assert!((ru.tau - rd.tau).abs() <= 1e-9 * ru.tau);
+    let free = Params::new(DragLaw::Tanh, 0.6, 0.5, 0.0, 0.0).unwrap();
+    let pr = SearchProblem::new(free, 0.1, 0.2, PositionTarget::Interval(-0.5, 0.5)).unwrap();
+    assert!(pr.mean_is_finite());
+    let s = solve(&pr, &BackwardOptions::with_cells(16, 16)).unwrap();
+    assert!(s.reset_values.is_none() && s.truncation_error == 0.0);
+    assert!(
+        s.tau >= 0.4 / free.v_upper() && s.error_estimate < 0.1 * s.tau,
+        "{s:?}"
+    );
+}
