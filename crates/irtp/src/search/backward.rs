@@ -155,7 +155,9 @@ pub struct SearchSolution {
     pub error_estimate: f64,
     /// |T_{h/2} - T_h| of tau (NaN without refinement).
     pub mesh_error: f64,
-    /// |T_{1.5X} - T_X| of tau on the coarse mesh (0 without truncation).
+    /// |T_{1.5X} - T_X| / (1 - √truncation) of tau on the coarse mesh
+    /// (0 without truncation): a bound on the truncation error of T_X
+    /// (the far field decays at least like e^{-r X / v_u}).
     pub truncation_error: f64,
     /// T(x_r, v_r, ±) for full resetting (extrapolated like tau).
     pub reset_values: Option<[f64; 2]>,
@@ -461,7 +463,8 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         "search backward solve (extrapolated)",
     )?;
     let truncation_error = if setup.truncated() {
-        (answers[answers.len() - 1].mean() - coarse.mean()).abs()
+        let diff = (answers[answers.len() - 1].mean() - coarse.mean()).abs();
+        diff * truncation_factor(opts.truncation)
     } else {
         0.0
     };
@@ -480,6 +483,14 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         reset_values: best.reset,
         mesh: mesh_info(finest),
     })
+}
+
+/// From |T_{1.5X} - T_X| to a bound on the error of T_X when
+/// X = v_u ln(1/tol) / r: the far field's influence decays at least like
+/// e^{-r X / v_u} (the chance of travelling X before a reset), so the
+/// step X → 1.5 X removes at least a share 1 - √tol of the error.
+pub(crate) fn truncation_factor(tol: f64) -> f64 {
+    1.0 / (1.0 - tol.sqrt())
 }
 
 /// The size of `m`.

@@ -24,7 +24,8 @@
 //! the period; the neglected tail is bounded (S, Q ≤ 1) and reported.
 
 use super::backward::{
-    capacitance, check_budget, cost_of, factor, mesh_info, verify, Cost, MeshInfo, Resetting, Setup,
+    capacitance, check_budget, cost_of, factor, mesh_info, truncation_factor, verify, Cost,
+    MeshInfo, Resetting, Setup,
 };
 use super::mesh::{Generator, Mesh};
 use super::SearchProblem;
@@ -315,7 +316,14 @@ pub fn solve(
     };
     let truncation_error = if setup.truncated() {
         let wide = on(&meshes[meshes.len() - 1], opts.steps)?;
-        (wide.mean() - on(&meshes[0], opts.steps)?.mean()).abs()
+        let diff = (wide.mean() - on(&meshes[0], opts.steps)?.mean()).abs();
+        // Poisson: X = v_u ln(1/tail) / r, as for the direct solve; a
+        // period T: X = v_u T is beyond the reach of the reset-free
+        // particle, only the mesh's numerical spreading is cut.
+        match waiting {
+            WaitingTime::Poisson { .. } => diff * truncation_factor(opts.tail),
+            WaitingTime::Periodic { .. } => diff,
+        }
     } else {
         0.0
     };

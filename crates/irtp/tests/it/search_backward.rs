@@ -568,3 +568,30 @@ fn mirror_symmetry_and_no_resets() {
         "{s:?}"
     );
 }
+
+/// A far side cut short: the reported truncation error bounds the change
+/// against the default cut (where truncation dominates the difference:
+/// at tol = 0.5, 0.2 the cut is at 0.7, 1.6 while the default is at 18).
+#[test]
+fn truncation_error_bounds_a_short_cut() {
+    let p = full("linear", 1.0, 0.5, 1.0, 0.0, 0.0);
+    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let reference = solve(&problem, &BackwardOptions::with_cells(16, 8)).unwrap();
+    for tol in [0.5, 0.2] {
+        let opts = BackwardOptions {
+            truncation: tol,
+            ..BackwardOptions::with_cells(16, 8)
+        };
+        let s = solve(&problem, &opts).unwrap();
+        let actual = (s.tau - reference.tau).abs();
+        eprintln!(
+            "tol {tol}: truncation error {} actual {actual}",
+            s.truncation_error
+        );
+        assert!(
+            actual <= s.truncation_error,
+            "tol {tol}: {actual} > {}",
+            s.truncation_error
+        );
+    }
+}
