@@ -12,7 +12,8 @@
 //! over the waiting-time law of the resets (density rho, survival w; a
 //! point mass for periodic resetting), with S and P(...) those of the
 //! reset-free search started from (x_r, v_r, s) (from (x0, v0, s) for the
-//! first period). mix is the noise rule (identity when kept).
+//! first period). mix is the noise rule (identity when kept). A random
+//! velocity target weighs the reset-point quantities by its node weights.
 //!
 //! P(T0 > t, eta(t) = s' | start) = Q_s'(t) solves the reset-free backward
 //! equation ∂t Q = L0 Q with Q(0) = 1[eta = s'] and Q = 0 on the target:
@@ -21,7 +22,11 @@
 //! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
 //! second order), and on the meshes h and h/2 (first order). The integrals
 //! stop at the horizon t_max where w(t_max) is below `tail` (Poisson) or at
-//! the period; the neglected tail is bounded (S, Q ≤ 1) and reported.
+//! the period; the neglected tail is bounded (S, Q ≤ 1) and reported. The
+//! integrals are product integration (exact for Q linear between steps),
+//! and the escape chances P(T0 < R) = ∫ rho (1 - S) + P(R > t_max) are
+//! integrated directly: 1 - Σ B would cancel when the target is rarely
+//! reached between resets (about 2e-3 at r = 3 in the tests).
 
 use super::backward::{
     capacitance, check_budget, cost_of, factor, mesh_info, truncation_factor, verify, Cost,
