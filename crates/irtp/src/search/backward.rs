@@ -385,9 +385,13 @@ pub(crate) fn cost_of(meshes: &[Mesh], solves: f64) -> Cost {
     c
 }
 
-/// Refuse `cost` above the budgets of `opts`, naming what it grows with.
-pub(crate) fn check_budget(cost: &Cost, max_work: f64, max_memory: f64) -> Result<()> {
-    let drivers = vec!["cells_x", "cells_v", "rate", "truncation"];
+/// Refuse `cost` above the budgets (`max_work`, `max_memory`), naming
+/// what it grows with (`drivers`).
+pub(crate) fn check_budget(
+    cost: &Cost,
+    (max_work, max_memory): (f64, f64),
+    drivers: Vec<&'static str>,
+) -> Result<()> {
     if !(cost.work <= max_work) {
         return Err(Error::TooCostly {
             unit: "floating-point operations",
@@ -438,7 +442,11 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
     opts.validate()?;
     let setup = Setup::new(problem, "the search backward solver", false)?;
     let meshes = meshes(&setup, opts);
-    check_budget(&cost_of(&meshes, 3.0), opts.max_work, opts.max_memory)?;
+    check_budget(
+        &cost_of(&meshes, 3.0),
+        (opts.max_work, opts.max_memory),
+        vec!["cells_x", "cells_v", "rate", "truncation"],
+    )?;
     let answers = meshes
         .iter()
         .map(|m| solve_on(&setup, m))

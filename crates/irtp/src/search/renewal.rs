@@ -301,7 +301,11 @@ pub fn solve(
     opts: &RenewalOptions,
 ) -> Result<RenewalSolution> {
     let cost = estimate(problem, waiting, opts)?;
-    check_budget(&cost, opts.max_work, opts.max_memory)?;
+    check_budget(
+        &cost,
+        (opts.max_work, opts.max_memory),
+        vec!["cells_x", "cells_v", "steps", "rate", "tail"],
+    )?;
     let setup = Setup::new(problem, "the search renewal route", true)?;
     let meshes = meshes(&setup, waiting, opts);
     let t_max = waiting.horizon(opts.tail);

@@ -447,6 +447,19 @@ fn refusals_name_the_parameter() {
         ),
         "{e}"
     );
+    let tiny = RenewalOptions {
+        max_memory: 1e3,
+        ..RenewalOptions::default()
+    };
+    let e = renewal::solve(&ok, &WaitingTime::Poisson { rate: 1.0 }, &tiny).unwrap_err();
+    match e {
+        Error::TooCostly {
+            limit_name,
+            drivers,
+            ..
+        } => assert!(limit_name == "max_memory" && drivers.contains(&"steps")),
+        other => panic!("{other}"),
+    }
     // The default options fit the default budgets.
     let cost = estimate(&ok, &BackwardOptions::default()).unwrap();
     assert!(
