@@ -44,6 +44,7 @@ pub mod model;
 pub mod numerics;
 pub mod parallel;
 pub mod rng;
+pub mod search;
 pub mod sim;
 pub mod stats;
 

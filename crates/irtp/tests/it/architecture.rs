@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 /// Layers of the library's top-level modules, highest first.
 const LAYERS: &[&[&str]] = &[
-    &["mfpt", "fp", "sim", "analytic"],
+    &["mfpt", "fp", "sim", "analytic", "search"],
     &["model"],
     &["numerics"],
 ];

@@ -1,0 +1,664 @@
+//! Mean first-passage time to a position target from the 2-D backward
+//! equation (docs/equations.md, "Search: the 2-D backward equation and the
+//! renewal route").
+//!
+//! `L T = -1` for T(x, v, ±) with the generator
+//! `L f = v ∂x f + (eta - g(v)) ∂v f + lambda [f(x, v, -eta) - f] + R f`,
+//! R the reset term: `r [f(x_r, v_r, eta') - f]` for full resetting,
+//! `r [f(x, v_r, eta') - f]` for velocity-only resetting (eta' = eta kept,
+//! or averaged over ± when re-drawn; a random target's law replaces v_r by
+//! an average over it, on the mesh by hat-function node weights). T = 0
+//! where x leaves through the
+//! target with v pointing out; no condition at the velocity edges (the
+//! state whose drift vanishes there has no v-derivative term); a one-sided
+//! level is truncated at distance X on the far side, zero gradient there.
+//!
+//! Discretisation: first-order upwind in x and v on the mesh of
+//! `search::mesh` (a Markov generator: the matrix `r I - A` is an M-matrix,
+//! so T ≥ 0 and the mean speed bound T ≥ distance / v_u hold exactly on
+//! the mesh), one banded LU ([`crate::numerics::band`], 2 n_v sub- and
+//! super-diagonals). Full resetting couples every row to the two values
+//! T(x_r, v_r, ±) (weighted means over a random target): superposition `T = U + T_r(+) W+ + T_r(-) W-` (three
+//! solves with one factorisation) and a 2×2 self-consistency. Velocity-only
+//! resetting stays inside the band (same x-column). Answers on the meshes h
+//! and h/2 are extrapolated (first order: `2 T_{h/2} - T_h`), and a
+//! truncated domain is solved again at 1.5 X; both differences are reported
+//! (the second as a bound, see `truncation_factor`). The mesh error
+//! estimate |T_{h/2} - T_h| is that of T_{h/2}: for the extrapolated value
+//! it is conservative (measured 5-15× in the tests, whose extrapolated
+//! values converge at about second order).
+//!
+//! Use (a front end checks [`estimate`] against its budget first; `solve`
+//! refuses above the budgets of its options in any case):
+//!
+//! ```
+//! use irtp::model::reset::Schedule;
+//! use irtp::search::backward::{self, BackwardOptions};
+//! use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
+//! use irtp::search::{PositionTarget, SearchProblem};
+//! use irtp::{DragLaw, Params};
+//!
+//! // Full resetting to (x_r, v_r) = (0, 0) at rate 0.3, noise state kept.
+//! let schedule = Schedule::parse(None, Some(0.0), None)?;
+//! let p = Params::new(DragLaw::Linear, 1.0, 0.5, 0.3, 0.0)?.with_schedule(schedule)?;
+//! let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0))?;
+//! let opts = BackwardOptions::with_cells(16, 8);
+//! let cost = backward::estimate(&problem, &opts)?;
+//! assert!(cost.work < 1e9);
+//! let direct = backward::solve(&problem, &opts)?;
+//! let ropts = RenewalOptions { cells_x: 16, cells_v: 8, ..Default::default() };
+//! let renewed = renewal::solve(&problem, &WaitingTime::of(&p)?, &ropts)?;
+//! assert!((direct.tau - renewed.tau).abs() <= direct.error_estimate + renewed.error_estimate);
+//! # Ok::<(), irtp::Error>(())
+//! ```
+
+use super::mesh::{Generator, Layout, LocalReset, Mesh, Side};
+use super::{PositionTarget, SearchProblem};
+use crate::error::{Error, Result};
+use crate::model::reset::{NoiseAtReset, Reset};
+use crate::numerics::band::Band;
+use crate::numerics::bordered::Capacitance;
+use crate::Params;
+use serde::{Deserialize, Serialize};
+
+/// Options of the direct (backward) search solver.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BackwardOptions {
+    /// Cells of the coarse mesh across the near part of x (from the lowest
+    /// to the highest of start, reset position and target ends); the far
+    /// stretch of a truncated side adds cells of the same size next to it,
+    /// growing geometrically.
+    pub cells_x: usize,
+    /// Cells of the coarse mesh on (v_l, v_u).
+    pub cells_v: usize,
+    /// Solve on the mesh halved too and extrapolate (Richardson); without
+    /// it the coarse answer is returned and the mesh error is NaN.
+    pub refine: bool,
+    /// Truncation tolerance of a one-sided level: the far side is cut at
+    /// X = v_u ln(1/tol) / r (the chance of travelling X before a reset is
+    /// below tol); checked by a solve at 1.5 X.
+    pub truncation: f64,
+    /// Refuse a solve estimated above this many floating-point operations.
+    pub max_work: f64,
+    /// Refuse a solve estimated above this many bytes.
+    pub max_memory: f64,
+}
+
+impl Default for BackwardOptions {
+    fn default() -> Self {
+        BackwardOptions {
+            cells_x: 64,
+            cells_v: 32,
+            refine: true,
+            truncation: 1e-8,
+            max_work: 1e11,
+            max_memory: 4e9,
+        }
+    }
+}
+
+impl BackwardOptions {
+    /// Options with the given coarse mesh.
+    pub fn with_cells(cells_x: usize, cells_v: usize) -> Self {
+        BackwardOptions {
+            cells_x,
+            cells_v,
+            ..Default::default()
+        }
+    }
+
+    /// 2 ≤ cells ≤ 10⁵ each, 0 < truncation < 1, positive budgets.
+    pub fn validate(&self) -> Result<()> {
+        for (name, c) in [("cells_x", self.cells_x), ("cells_v", self.cells_v)] {
+            if !(2..=100_000).contains(&c) {
+                return Err(Error::invalid(name, c, "2 <= cells <= 100000"));
+            }
+        }
+        if !(self.truncation > 0.0 && self.truncation < 1.0) {
+            return Err(Error::invalid(
+                "truncation",
+                self.truncation,
+                "0 < truncation < 1",
+            ));
+        }
+        for (name, b) in [("max_work", self.max_work), ("max_memory", self.max_memory)] {
+            if !(b > 0.0) {
+                return Err(Error::invalid(name, b, "a positive budget"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The mesh a search answer came from.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshInfo {
+    /// x nodes of the finest mesh solved.
+    pub nodes_x: usize,
+    /// v nodes of the finest mesh solved.
+    pub nodes_v: usize,
+    /// Unknowns of the finest mesh (2 n_x n_v).
+    pub unknowns: usize,
+    /// Sub- and super-diagonals of its band matrix.
+    pub band: usize,
+    /// The x-domain solved: [x_min, x_max] (a truncated side at distance X).
+    pub x_min: f64,
+    /// Upper end of the x-domain.
+    pub x_max: f64,
+}
+
+/// Mean first-passage time to the position target.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SearchSolution {
+    /// tau = (tau+ + tau-)/2: the paper's random noise start.
+    pub tau: f64,
+    /// Start in the +Sigma state.
+    pub tau_plus: f64,
+    /// Start in the -Sigma state.
+    pub tau_minus: f64,
+    /// Error estimate of tau: mesh plus truncation (NaN without
+    /// refinement).
+    pub error_estimate: f64,
+    /// |T_{h/2} - T_h| of tau (NaN without refinement).
+    pub mesh_error: f64,
+    /// |T_{1.5X} - T_X| / (1 - √truncation) of tau on the coarse mesh
+    /// (0 without truncation): a bound on the truncation error of T_X
+    /// (the far field decays at least like e^{-r X / v_u}).
+    pub truncation_error: f64,
+    /// T(x_r, v_r, ±) for full resetting (extrapolated like tau).
+    pub reset_values: Option<[f64; 2]>,
+    /// The finest mesh.
+    pub mesh: MeshInfo,
+}
+
+/// The work and memory a solve is estimated to need.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cost {
+    /// Floating-point operations (band factorisations and solves, all meshes).
+    pub work: f64,
+    /// Bytes at the peak (the finest band matrix and its vectors).
+    pub memory: f64,
+}
+
+/// How resets act on the search, from the parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Resetting {
+    /// No resets (r = 0 and no period).
+    None,
+    /// x → x_r and v → v_r.
+    Full {
+        /// Reset position.
+        x: f64,
+        /// Reset velocity.
+        v: f64,
+    },
+    /// v → v_r, x kept.
+    Velocity {
+        /// Reset velocity.
+        v: f64,
+    },
+}
+
+/// A validated, solver-ready description of a search problem.
+#[derive(Clone, Debug)]
+pub(crate) struct Setup {
+    pub params: Params,
+    pub x0: f64,
+    pub v0: f64,
+    pub resetting: Resetting,
+    /// mix[s][s']: chance of state s' after a reset from state s.
+    pub mix: [[f64; 2]; 2],
+    pub sides: (Side, Side),
+    /// x breakpoints of the near part.
+    pub near: Vec<f64>,
+    /// Distance from x0 to the nearest exit.
+    pub distance: f64,
+}
+
+impl Setup {
+    /// Check what the search solvers run: no refractory period; a finite
+    /// mean. `renewal`: full resetting required, any
+    /// clock (the renewal route takes its waiting-time law separately);
+    /// otherwise a Poisson clock only.
+    pub fn new(problem: &SearchProblem, method: &str, renewal: bool) -> Result<Setup> {
+        let p = *problem.params();
+        let s = p.schedule();
+        if let Some(r) = s.refractory {
+            return Err(Error::invalid(
+                "refractory",
+                r.spec(),
+                format!("no refractory period: {method} does not run one"),
+            ));
+        }
+        if let (Some(t), false) = (s.periodic, renewal) {
+            return Err(Error::invalid(
+                "reset_period",
+                t.period,
+                format!(
+                    "a Poisson clock for {method}; periodic resetting is run by the renewal \
+                     route (search::renewal)"
+                ),
+            ));
+        }
+        // A random target enters through its node weights; meshes put a
+        // node at its centre.
+        let vr = p.reset_velocity();
+        if let (None, true) = (s.position, renewal) {
+            return Err(Error::invalid(
+                "reset_position",
+                "none",
+                format!("a reset position (full resetting) for {method}: only full resetting renews the search"),
+            ));
+        }
+        let resets = renewal || p.rate() > 0.0 || s.periodic.is_some();
+        let resetting = match (resets, s.position) {
+            (false, _) => Resetting::None,
+            (true, Some(x)) => Resetting::Full { x: x.x, v: vr },
+            (true, None) => Resetting::Velocity { v: vr },
+        };
+        refuse_infinite(problem, resetting)?;
+        let mix = match p.reset().noise() {
+            NoiseAtReset::Kept => [[1.0, 0.0], [0.0, 1.0]],
+            NoiseAtReset::Redrawn => [[0.5, 0.5], [0.5, 0.5]],
+        };
+        let (x0, v0) = (problem.x0(), problem.v0());
+        let mut near = vec![x0];
+        if let Resetting::Full { x, .. } = resetting {
+            near.push(x);
+        }
+        let (sides, distance) = match problem.target() {
+            PositionTarget::Level(l) if l > x0 => ((Side::Truncated, Side::Target), l - x0),
+            PositionTarget::Level(l) => ((Side::Target, Side::Truncated), x0 - l),
+            PositionTarget::Interval(a, b) => ((Side::Target, Side::Target), (x0 - a).min(b - x0)),
+        };
+        match problem.target() {
+            PositionTarget::Level(l) => near.push(l),
+            PositionTarget::Interval(a, b) => near.extend([a, b]),
+        }
+        Ok(Setup {
+            params: p,
+            x0,
+            v0,
+            resetting,
+            mix,
+            sides,
+            near,
+            distance,
+        })
+    }
+
+    /// The velocities that must be nodes: 0 (where v changes sign at the
+    /// target), v_0, v_r.
+    pub fn v_points(&self) -> Vec<f64> {
+        let mut v = vec![0.0, self.v0];
+        match self.resetting {
+            Resetting::Full { v: vr, .. } | Resetting::Velocity { v: vr } => v.push(vr),
+            Resetting::None => {}
+        }
+        v
+    }
+
+    /// Whether the x-domain has a truncated side.
+    pub fn truncated(&self) -> bool {
+        self.sides.0 == Side::Truncated || self.sides.1 == Side::Truncated
+    }
+
+    /// The mesh layout with a far stretch of length `extent` on the scale
+    /// of the far field's decay, v_u / √(r_e (2 lambda + r_e)) (r_e: the
+    /// reset rate, or 1/T for a period).
+    pub fn layout(&self, cells: (usize, usize), extent: f64) -> Layout {
+        let p = &self.params;
+        let re = match p.schedule().periodic {
+            Some(t) => 1.0 / t.period,
+            None => p.rate(),
+        };
+        let scale = (p.v_upper() / (re * (2.0 * p.lambda() + re)).sqrt()).min(extent);
+        Layout::new(
+            p,
+            self.near.clone(),
+            self.sides,
+            extent,
+            scale,
+            cells,
+            &self.v_points(),
+        )
+    }
+}
+
+/// Refuse a problem whose mean first-passage time is infinite, naming
+/// what would make it finite.
+fn refuse_infinite(problem: &SearchProblem, resetting: Resetting) -> Result<()> {
+    if let PositionTarget::Level(l) = problem.target() {
+        match resetting {
+            Resetting::Full { .. } => {}
+            Resetting::Velocity { .. } => {
+                return Err(Error::invalid(
+                    "reset_position",
+                    "none",
+                    format!(
+                        "a reset position (full resetting) for the level {l}: with \
+                         velocity-only resetting the mean first-passage time to a one-sided \
+                         level is infinite"
+                    ),
+                ))
+            }
+            Resetting::None => {
+                return Err(Error::invalid(
+                    "rate",
+                    problem.params().rate(),
+                    format!(
+                        "rate > 0 with a reset position for the level {l}: without resets \
+                         the mean first-passage time to a one-sided level is infinite"
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The truncation distance X = v_u ln(1/tol) / r (Poisson clock).
+fn extent(p: &Params, tol: f64) -> f64 {
+    p.v_upper() * (1.0 / tol).ln() / p.rate()
+}
+
+/// Estimated cost of [`solve`]: the band LU of each mesh (n kl (2 kl + ku)
+/// operations, kl = ku = 2 n_v) and its solves (three with full resetting),
+/// memory of the finest band matrix (n (3 kl + 1) values) and six vectors.
+pub fn estimate(problem: &SearchProblem, opts: &BackwardOptions) -> Result<Cost> {
+    opts.validate()?;
+    let setup = Setup::new(problem, "the search backward solver", false)?;
+    Ok(cost_of(&meshes(&setup, opts), 3.0))
+}
+
+/// Cost of factorising each of `meshes` and `solves` solves with each.
+pub(crate) fn cost_of(meshes: &[Mesh], solves: f64) -> Cost {
+    let mut c = Cost {
+        work: 0.0,
+        memory: 0.0,
+    };
+    for m in meshes {
+        let (n, kl) = (m.unknowns() as f64, m.band() as f64);
+        c.work += n * kl * 3.0 * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
+        c.memory = c.memory.max(8.0 * n * (3.0 * kl + 7.0));
+    }
+    c
+}
+
+/// Refuse `cost` above the budgets (`max_work`, `max_memory`), naming
+/// what it grows with (`drivers`).
+pub(crate) fn check_budget(
+    cost: &Cost,
+    (max_work, max_memory): (f64, f64),
+    drivers: Vec<&'static str>,
+) -> Result<()> {
+    if !(cost.work <= max_work) {
+        return Err(Error::TooCostly {
+            unit: "floating-point operations",
+            estimate: cost.work,
+            drivers,
+            limit_name: "max_work",
+            limit: max_work,
+        });
+    }
+    if !(cost.memory <= max_memory) {
+        return Err(Error::TooCostly {
+            unit: "bytes of memory",
+            estimate: cost.memory,
+            drivers,
+            limit_name: "max_memory",
+            limit: max_memory,
+        });
+    }
+    Ok(())
+}
+
+/// The meshes [`solve`] uses: coarse, halved (if refining), and the coarse
+/// one widened to 1.5 X (if truncated).
+fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
+    let x = if setup.truncated() {
+        extent(&setup.params, opts.truncation)
+    } else {
+        0.0
+    };
+    let layout = setup.layout((opts.cells_x, opts.cells_v), x);
+    let mut out = vec![Mesh::build(&layout, 0)];
+    if opts.refine {
+        out.push(Mesh::build(&layout, 1));
+    }
+    if setup.truncated() {
+        out.push(Mesh::build(&layout.widened(1.5), 0));
+    }
+    out
+}
+
+/// Solve for the mean first-passage time at (x0, v0), tau for each
+/// starting noise state and their mean, with the mesh and truncation
+/// error estimates (module docs). Refuses (typed) periodic clocks (see
+/// [`super::renewal::solve`]), refractory periods, an
+/// infinite mean (one-sided level without full resetting), and a solve
+/// above the budgets of `opts` ([`estimate`]).
+pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSolution> {
+    opts.validate()?;
+    let setup = Setup::new(problem, "the search backward solver", false)?;
+    let meshes = meshes(&setup, opts);
+    check_budget(
+        &cost_of(&meshes, 3.0),
+        (opts.max_work, opts.max_memory),
+        vec!["cells_x", "cells_v", "rate", "truncation"],
+    )?;
+    let answers = meshes
+        .iter()
+        .map(|m| solve_on(&setup, m))
+        .collect::<Result<Vec<_>>>()?;
+    let coarse = &answers[0];
+    let (best, mesh_error, finest) = if opts.refine {
+        let fine = &answers[1];
+        let ex = |c: f64, f: f64| 2.0 * f - c;
+        let best = NodeAnswer {
+            tau: [
+                ex(coarse.tau[0], fine.tau[0]),
+                ex(coarse.tau[1], fine.tau[1]),
+            ],
+            reset: coarse
+                .reset
+                .zip(fine.reset)
+                .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
+        };
+        (best, (fine.mean() - coarse.mean()).abs(), &meshes[1])
+    } else {
+        (coarse.clone(), f64::NAN, &meshes[0])
+    };
+    // The extrapolated values pass the same checks as each mesh's.
+    verify(
+        &best.tau,
+        best.tau,
+        &setup,
+        "search backward solve (extrapolated)",
+    )?;
+    let truncation_error = if setup.truncated() {
+        let diff = (answers[answers.len() - 1].mean() - coarse.mean()).abs();
+        diff * truncation_factor(opts.truncation)
+    } else {
+        0.0
+    };
+    let error_estimate = if opts.refine {
+        mesh_error + truncation_error
+    } else {
+        f64::NAN
+    };
+    Ok(SearchSolution {
+        tau: best.mean(),
+        tau_plus: best.tau[0],
+        tau_minus: best.tau[1],
+        error_estimate,
+        mesh_error,
+        truncation_error,
+        reset_values: best.reset,
+        mesh: mesh_info(finest),
+    })
+}
+
+/// From |T_{1.5X} - T_X| to a bound on the error of T_X when
+/// X = v_u ln(1/tol) / r: the far field's influence decays at least like
+/// e^{-r X / v_u} (the chance of travelling X before a reset), so the
+/// step X → 1.5 X removes at least a share 1 - √tol of the error.
+pub(crate) fn truncation_factor(tol: f64) -> f64 {
+    1.0 / (1.0 - tol.sqrt())
+}
+
+/// The size of `m`.
+pub(crate) fn mesh_info(m: &Mesh) -> MeshInfo {
+    MeshInfo {
+        nodes_x: m.x.len(),
+        nodes_v: m.v.len(),
+        unknowns: m.unknowns(),
+        band: m.band(),
+        x_min: m.x[0],
+        x_max: m.x[m.x.len() - 1],
+    }
+}
+
+/// T(x0, v0, ±) and T(x_r, v_r, ±) on one mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct NodeAnswer {
+    pub tau: [f64; 2],
+    pub reset: Option<[f64; 2]>,
+}
+
+impl NodeAnswer {
+    /// (tau+ + tau-)/2.
+    pub fn mean(&self) -> f64 {
+        0.5 * (self.tau[0] + self.tau[1])
+    }
+}
+
+/// Factorise `r I - A` (identity rows on the target).
+pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str) -> Result<Band> {
+    let mut band = g.shifted(alpha, beta);
+    band.factor().map_err(|e| Error::Numerical {
+        method,
+        reason: format!("{e} (the upwind matrix should be a non-singular M-matrix)"),
+    })?;
+    Ok(band)
+}
+
+/// Solve `L T = -1` on `mesh` (module docs): superposition for full
+/// resetting, the reset inside the band for velocity-only resetting.
+/// With the target's node weights w_j the reset values are
+/// R_s = Σ_j w_j T(x_r, v_j, s) (T(x_r, v_r, s) for a point target):
+/// `R = M R + U_r`, M[s][s'] = Σ_j w_j W_s'(x_r, v_j, s) (the chance that a
+/// reset comes first, into state s'), its escape chances
+/// e_s = Σ_j w_j h(x_r, v_j, s) from the hitting chance h solved for
+/// directly (no cancellation when it is small).
+fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
+    const METHOD: &str = "search backward solve";
+    let p = &setup.params;
+    let local = match setup.resetting {
+        Resetting::Velocity { .. } => Some(LocalReset {
+            rate: p.rate(),
+            target: mesh.target_weights(p)?,
+            mix: setup.mix,
+        }),
+        _ => None,
+    };
+    let g = Generator::assemble(mesh, p, local.as_ref());
+    let full = matches!(setup.resetting, Resetting::Full { .. });
+    let r = if full { p.rate() } else { 0.0 };
+    let band = factor(&g, r, 1.0, METHOD)?;
+    let fill = |f: &dyn Fn(usize) -> f64| -> Vec<f64> {
+        (0..g.dim())
+            .map(|k| if g.absorbing[k] { 0.0 } else { f(k) })
+            .collect()
+    };
+    let mut t = fill(&|_| 1.0);
+    band.solve(&mut t);
+    let reset = match setup.resetting {
+        Resetting::Full { x, v } => {
+            let ir = mesh.node(x, v)?.0;
+            let weights = mesh.target_weights(p)?;
+            let at_reset = |f: &[f64], s: usize| -> f64 {
+                weights
+                    .iter()
+                    .map(|&(j, w)| w * f[mesh.idx(ir, j, s)])
+                    .sum()
+            };
+            let w = [0, 1].map(|s2| {
+                let mut w = fill(&|k| r * setup.mix[k % 2][s2]);
+                band.solve(&mut w);
+                w
+            });
+            let mut hit: Vec<f64> = (0..g.dim())
+                .map(|k| if g.absorbing[k] { 1.0 } else { 0.0 })
+                .collect();
+            band.solve(&mut hit);
+            let m = [0, 1].map(|s| [at_reset(&w[0], s), at_reset(&w[1], s)]);
+            let escape = [0, 1].map(|s| at_reset(&hit, s));
+            let u = [0, 1].map(|s| at_reset(&t, s));
+            let tr = capacitance(m, escape, METHOD)?.solve(u);
+            for (k, tk) in t.iter_mut().enumerate() {
+                *tk += tr[0] * w[0][k] + tr[1] * w[1][k];
+            }
+            Some(tr)
+        }
+        _ => None,
+    };
+    let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
+    let tau = [t[mesh.idx(i0, j0, 0)], t[mesh.idx(i0, j0, 1)]];
+    verify(&t, tau, setup, METHOD)?;
+    Ok(NodeAnswer { tau, reset })
+}
+
+/// The system I - M of a renewal at the reset point, with the rows' escape
+/// chances e_s = 1 - Σ_s' M[s][s'] known: diagonal e_s + M[s][s̄],
+/// det = e0 e1 + e0 M10 + M01 e1 (non-negative terms). Refused (typed)
+/// unless both escape chances are positive.
+pub(crate) fn capacitance(
+    m: [[f64; 2]; 2],
+    e: [f64; 2],
+    method: &'static str,
+) -> Result<Capacitance> {
+    if !(e[0] > 0.0 && e[1] > 0.0 && m.iter().flatten().all(|x| *x >= 0.0)) {
+        return Err(Error::Numerical {
+            method,
+            reason: format!(
+                "the target is not reached between resets (chance of reaching it first from                  x_r: {:e}, {:e})",
+                e[0], e[1]
+            ),
+        });
+    }
+    let s = [[e[0] + m[0][1], -m[0][1]], [-m[1][0], e[1] + m[1][0]]];
+    let det = e[0] * e[1] + e[0] * m[1][0] + m[0][1] * e[1];
+    Ok(Capacitance::inverted(s, det))
+}
+
+/// Verified or refused: T finite and ≥ 0 everywhere (round-off allowed),
+/// T at the start at least distance / v_u (the mean speed bound, exact on
+/// the mesh).
+pub(crate) fn verify(t: &[f64], tau: [f64; 2], setup: &Setup, method: &'static str) -> Result<()> {
+    let max = t.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
+    if !max.is_finite() {
+        return Err(Error::NonFinite {
+            method,
+            at: setup.x0,
+        });
+    }
+    if let Some(bad) = t.iter().find(|&&x| x < -1e-12 * max) {
+        return Err(Error::Numerical {
+            method,
+            reason: format!("negative mean first-passage time {bad:e} on the mesh"),
+        });
+    }
+    let bound = setup.distance / setup.params.v_upper();
+    for x in tau {
+        if !(x >= bound * (1.0 - 1e-12)) {
+            return Err(Error::Numerical {
+                method,
+                reason: format!(
+                    "tau = {x} below distance / v_u = {bound} (the particle cannot be faster)"
+                ),
+            });
+        }
+    }
+    Ok(())
+}

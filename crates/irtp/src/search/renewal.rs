@@ -1,0 +1,500 @@
+//! The state-resolved renewal route for full resetting (docs/equations.md,
+//! "Search: the 2-D backward equation and the renewal route", (S5)-(S7)).
+//!
+//! A reset puts the particle back at (x_r, v_r) but keeps the noise state,
+//! so the periods between resets are not independent of each other: the
+//! textbook `T_r = E[min(T0, R)] / P(T0 < R)` (one start law for every
+//! period) is wrong. Resolved by the noise state the renewal is exact:
+//!
+//!   T_s = a_s + Σ_s' B_ss' Σ_s'' mix(s', s'') T_s''(x_r, v_r),
+//!   a_s = ∫ w(t) S_s(t) dt,  B_ss' = ∫ rho(t) P(T0 > t, eta(t) = s' | s) dt,
+//!
+//! over the waiting-time law of the resets (density rho, survival w; a
+//! point mass for periodic resetting), with S and P(...) those of the
+//! reset-free search started from (x_r, v_r, s) (from (x0, v0, s) for the
+//! first period). mix is the noise rule (identity when kept). A random
+//! velocity target weighs the reset-point quantities by its node weights.
+//!
+//! P(T0 > t, eta(t) = s' | start) = Q_s'(t) solves the reset-free backward
+//! equation ∂t Q = L0 Q with Q(0) = 1[eta = s'] and Q = 0 on the target:
+//! integrated for both s' on the upwind mesh of the direct solver
+//! ([`super::backward`]) by TR-BDF2 with a fixed step (one factorisation of
+//! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
+//! second order), and on the meshes h and h/2 (first order). The integrals
+//! stop at the horizon t_max where w(t_max) is below `tail` (Poisson) or at
+//! the period; the neglected tail is bounded (S, Q ≤ 1) and reported. The
+//! integrals are product integration (exact for Q linear between steps),
+//! and the escape chances P(T0 < R) = ∫ rho (1 - S) + P(R > t_max) are
+//! integrated directly: 1 - Σ B would cancel when the target is rarely
+//! reached between resets (about 2e-3 at r = 3 in the tests).
+
+use super::backward::{
+    capacitance, check_budget, cost_of, factor, mesh_info, truncation_factor, verify, Cost,
+    MeshInfo, Resetting, Setup,
+};
+use super::mesh::{Generator, Mesh};
+use super::SearchProblem;
+use crate::error::{Error, Result};
+use crate::Params;
+use serde::{Deserialize, Serialize};
+
+/// The law of the time between resets.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum WaitingTime {
+    /// Poisson clock of rate r: rho = r e^{-rt}, w = e^{-rt}.
+    Poisson {
+        /// Rate r > 0.
+        rate: f64,
+    },
+    /// Periodic (sharp) resetting every T: rho = delta(t - T), w = 1 on [0, T).
+    Periodic {
+        /// Period T > 0.
+        period: f64,
+    },
+}
+
+impl WaitingTime {
+    /// The clock of `p`: its period if periodic, else its Poisson rate
+    /// (refused if 0: no resets).
+    pub fn of(p: &Params) -> Result<Self> {
+        match p.schedule().periodic {
+            Some(t) => Ok(WaitingTime::Periodic { period: t.period }),
+            None if p.rate() > 0.0 => Ok(WaitingTime::Poisson { rate: p.rate() }),
+            None => Err(Error::invalid(
+                "rate",
+                p.rate(),
+                "rate > 0 (or a reset period)",
+            )),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let (name, x) = match *self {
+            WaitingTime::Poisson { rate } => ("rate", rate),
+            WaitingTime::Periodic { period } => ("reset_period", period),
+        };
+        if !(x > 0.0 && x.is_finite()) {
+            return Err(Error::invalid(name, x, "a positive finite number"));
+        }
+        Ok(())
+    }
+
+    /// Where the integrals stop: w(t_max) ≤ `tail` (Poisson), the period.
+    pub fn horizon(&self, tail: f64) -> f64 {
+        match *self {
+            WaitingTime::Poisson { rate } => (1.0 / tail).ln() / rate,
+            WaitingTime::Periodic { period } => period,
+        }
+    }
+
+    /// Bounds on what the integrals miss beyond `t`: (∫_t^∞ w, w(t)), the
+    /// largest possible parts of a_s and of Σ_s' B_ss' (S, Q ≤ 1).
+    pub fn tail(&self, t: f64) -> (f64, f64) {
+        match *self {
+            WaitingTime::Poisson { rate } => ((-rate * t).exp() / rate, (-rate * t).exp()),
+            WaitingTime::Periodic { period } if t >= period => (0.0, 0.0),
+            WaitingTime::Periodic { .. } => (f64::INFINITY, 1.0),
+        }
+    }
+
+    /// Weights on t_n = n t_max / steps of ∫ w f dt and ∫ rho f dt for f
+    /// linear between the t_n (product integration: exact for such f, so
+    /// the rho weights sum to P(R ≤ t_max) exactly), and P(R > t_max).
+    fn weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+        let dt = t_max / steps as f64;
+        match *self {
+            WaitingTime::Poisson { rate } => {
+                let z = rate * dt;
+                let i0 = -(-z).exp_m1();
+                let i1 = i0 / z - (-z).exp();
+                let mut rq = vec![0.0; steps + 1];
+                for n in 0..steps {
+                    let e = (-rate * n as f64 * dt).exp();
+                    rq[n] += e * (i0 - i1);
+                    rq[n + 1] += e * i1;
+                }
+                let wq = rq.iter().map(|x| x / rate).collect();
+                (wq, rq, (-rate * t_max).exp())
+            }
+            WaitingTime::Periodic { .. } => {
+                let wq = (0..=steps)
+                    .map(|n| if n == 0 || n == steps { 0.5 * dt } else { dt })
+                    .collect();
+                let rq = (0..=steps)
+                    .map(|n| if n == steps { 1.0 } else { 0.0 })
+                    .collect();
+                (wq, rq, 0.0)
+            }
+        }
+    }
+}
+
+/// Options of the renewal route.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RenewalOptions {
+    /// Cells of the coarse mesh across the near part of x (as
+    /// [`super::backward::BackwardOptions::cells_x`]).
+    pub cells_x: usize,
+    /// Cells of the coarse mesh on (v_l, v_u).
+    pub cells_v: usize,
+    /// Solve on the mesh halved too and extrapolate (first order).
+    pub refine: bool,
+    /// Time steps to the horizon (also run with twice as many).
+    pub steps: usize,
+    /// Poisson horizon: w(t_max) ≤ tail; the far side of a one-sided level
+    /// is cut at X = v_u t_max (checked by a solve at 1.5 X).
+    pub tail: f64,
+    /// Refuse a solve estimated above this many floating-point operations.
+    pub max_work: f64,
+    /// Refuse a solve estimated above this many bytes.
+    pub max_memory: f64,
+}
+
+impl Default for RenewalOptions {
+    fn default() -> Self {
+        RenewalOptions {
+            cells_x: 32,
+            cells_v: 16,
+            refine: true,
+            steps: 100,
+            tail: 1e-8,
+            max_work: 1e11,
+            max_memory: 4e9,
+        }
+    }
+}
+
+impl RenewalOptions {
+    /// 2 ≤ cells ≤ 10⁵, 4 ≤ steps ≤ 10⁶, 0 < tail < 1, positive budgets.
+    pub fn validate(&self) -> Result<()> {
+        for (name, c) in [("cells_x", self.cells_x), ("cells_v", self.cells_v)] {
+            if !(2..=100_000).contains(&c) {
+                return Err(Error::invalid(name, c, "2 <= cells <= 100000"));
+            }
+        }
+        if !(4..=1_000_000).contains(&self.steps) {
+            return Err(Error::invalid("steps", self.steps, "4 <= steps <= 1000000"));
+        }
+        if !(self.tail > 0.0 && self.tail < 1.0) {
+            return Err(Error::invalid("tail", self.tail, "0 < tail < 1"));
+        }
+        for (name, b) in [("max_work", self.max_work), ("max_memory", self.max_memory)] {
+            if !(b > 0.0) {
+                return Err(Error::invalid(name, b, "a positive budget"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Mean first-passage time by the renewal route.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RenewalSolution {
+    /// tau = (tau+ + tau-)/2 at (x0, v0): the random noise start.
+    pub tau: f64,
+    /// Start in the +Sigma state.
+    pub tau_plus: f64,
+    /// Start in the -Sigma state.
+    pub tau_minus: f64,
+    /// T(x_r, v_r, ±).
+    pub reset_values: [f64; 2],
+    /// Error estimate of tau: mesh + time + truncation + tail (NaN without
+    /// refinement).
+    pub error_estimate: f64,
+    /// |T_{h/2} - T_h| of tau (NaN without refinement).
+    pub mesh_error: f64,
+    /// |T_{dt/2} - T_dt| / 3 of tau (finest mesh).
+    pub time_error: f64,
+    /// |T_{1.5X} - T_X| of tau on the coarse mesh (0 without truncation).
+    pub truncation_error: f64,
+    /// Bound on what the horizon cuts off (0 for a periodic clock).
+    pub tail_bound: f64,
+    /// The textbook formula E[min(T0, R)] / P(T0 < R) for a start at the
+    /// reset point with a random noise state, each period started afresh
+    /// (wrong when the noise state is kept).
+    pub textbook: f64,
+    /// The finest mesh.
+    pub mesh: MeshInfo,
+}
+
+/// The renewal quantities at (x_r, v_r) and at (x0, v0) on one mesh and
+/// time step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Periods {
+    /// a_s at the reset point, then at the start.
+    a: [[f64; 2]; 2],
+    /// B_ss' at the reset point, then at the start.
+    b: [[[f64; 2]; 2]; 2],
+    /// e_s = 1 - Σ_s' B_ss' = P(T0 < R), integrated as ∫ rho (1 - S) dt +
+    /// P(R > t_max) (no cancellation when it is small), at the reset point.
+    e: [f64; 2],
+}
+
+/// The answer of one mesh and step: tau±, T_r±, textbook, tail bound.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Answer {
+    tau: [f64; 2],
+    reset: [f64; 2],
+    textbook: f64,
+    tail: f64,
+}
+
+impl Answer {
+    fn mean(&self) -> f64 {
+        0.5 * (self.tau[0] + self.tau[1])
+    }
+    /// c0 self + c1 other, componentwise.
+    fn combine(&self, c0: f64, other: &Answer, c1: f64) -> Answer {
+        let f = |x: f64, y: f64| c0 * x + c1 * y;
+        Answer {
+            tau: [f(self.tau[0], other.tau[0]), f(self.tau[1], other.tau[1])],
+            reset: [
+                f(self.reset[0], other.reset[0]),
+                f(self.reset[1], other.reset[1]),
+            ],
+            textbook: f(self.textbook, other.textbook),
+            tail: self.tail.max(other.tail),
+        }
+    }
+}
+
+/// The meshes of [`solve`] and the truncation distance.
+fn meshes(setup: &Setup, waiting: &WaitingTime, opts: &RenewalOptions) -> Vec<Mesh> {
+    let x = setup.params.v_upper() * waiting.horizon(opts.tail);
+    let layout = setup.layout((opts.cells_x, opts.cells_v), x);
+    let mut out = vec![Mesh::build(&layout, 0)];
+    if opts.refine {
+        out.push(Mesh::build(&layout, 1));
+    }
+    if setup.truncated() {
+        out.push(Mesh::build(&layout.widened(1.5), 0));
+    }
+    out
+}
+
+/// Estimated cost of [`solve`]: per mesh two factorisations (steps dt and
+/// dt/2) and 2 × 2 × 3 `steps` band solves (two stages, two final states).
+pub fn estimate(
+    problem: &SearchProblem,
+    waiting: &WaitingTime,
+    opts: &RenewalOptions,
+) -> Result<Cost> {
+    opts.validate()?;
+    waiting.validate()?;
+    let setup = Setup::new(problem, "the search renewal route", true)?;
+    let m = meshes(&setup, waiting, opts);
+    let solves = cost_of(&m, 12.0 * opts.steps as f64);
+    Ok(Cost {
+        work: solves.work + cost_of(&m, 0.0).work,
+        memory: solves.memory,
+    })
+}
+
+/// Mean first-passage time to the position target under full resetting
+/// with resets at the renewal times of `waiting` (module docs; the clock of
+/// the parameters is [`WaitingTime::of`]). Refuses (typed) velocity-only
+/// resetting, refractory periods and a solve above the
+/// budgets of `opts` ([`estimate`]).
+pub fn solve(
+    problem: &SearchProblem,
+    waiting: &WaitingTime,
+    opts: &RenewalOptions,
+) -> Result<RenewalSolution> {
+    let cost = estimate(problem, waiting, opts)?;
+    check_budget(
+        &cost,
+        (opts.max_work, opts.max_memory),
+        vec!["cells_x", "cells_v", "steps", "rate", "tail"],
+    )?;
+    let setup = Setup::new(problem, "the search renewal route", true)?;
+    let meshes = meshes(&setup, waiting, opts);
+    let t_max = waiting.horizon(opts.tail);
+    let on = |m: &Mesh, steps: usize| answer(&setup, m, waiting, t_max, steps);
+    let in_time = |m: &Mesh| -> Result<(Answer, f64)> {
+        let (a1, a2) = (on(m, opts.steps)?, on(m, 2 * opts.steps)?);
+        let err = (a2.mean() - a1.mean()).abs() / 3.0;
+        Ok((a2.combine(4.0 / 3.0, &a1, -1.0 / 3.0), err))
+    };
+    let (coarse, coarse_time) = in_time(&meshes[0])?;
+    let (best, mesh_error, time_error, finest) = if opts.refine {
+        let (fine, fine_time) = in_time(&meshes[1])?;
+        let e = (fine.mean() - coarse.mean()).abs();
+        (fine.combine(2.0, &coarse, -1.0), e, fine_time, &meshes[1])
+    } else {
+        (coarse, f64::NAN, coarse_time, &meshes[0])
+    };
+    let truncation_error = if setup.truncated() {
+        let wide = on(&meshes[meshes.len() - 1], opts.steps)?;
+        let diff = (wide.mean() - on(&meshes[0], opts.steps)?.mean()).abs();
+        // Poisson: X = v_u ln(1/tail) / r, as for the direct solve; a
+        // period T: X = v_u T is beyond the reach of the reset-free
+        // particle, only the mesh's numerical spreading is cut.
+        match waiting {
+            WaitingTime::Poisson { .. } => diff * truncation_factor(opts.tail),
+            WaitingTime::Periodic { .. } => diff,
+        }
+    } else {
+        0.0
+    };
+    // The extrapolated values pass the same checks as each mesh's.
+    verify(
+        &best.tau,
+        best.tau,
+        &setup,
+        "search renewal route (extrapolated)",
+    )?;
+    let error_estimate = mesh_error + time_error + truncation_error + best.tail;
+    Ok(RenewalSolution {
+        tau: best.mean(),
+        tau_plus: best.tau[0],
+        tau_minus: best.tau[1],
+        reset_values: best.reset,
+        error_estimate: if opts.refine {
+            error_estimate
+        } else {
+            f64::NAN
+        },
+        mesh_error,
+        time_error,
+        truncation_error,
+        tail_bound: best.tail,
+        textbook: best.textbook,
+        mesh: mesh_info(finest),
+    })
+}
+
+/// The renewal answer on one mesh with `steps` time steps to `t_max`. The
+/// reset-point quantities are weighed by the target's node weights
+/// (a_s(x_r) = Σ_j w_j a_s(x_r, v_j), likewise B and e: the reset lands on
+/// v_j with probability w_j), so random targets need nothing else.
+fn answer(
+    setup: &Setup,
+    mesh: &Mesh,
+    waiting: &WaitingTime,
+    t_max: f64,
+    steps: usize,
+) -> Result<Answer> {
+    let Resetting::Full { x: xr, v: vr } = setup.resetting else {
+        unreachable!("Setup::new with renewal = true makes full resetting");
+    };
+    let ir = mesh.node(xr, vr)?.0;
+    let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
+    // Watched points: the start (weight 1), then the reset target.
+    let start = vec![(i0, j0, 1.0)];
+    let target: Vec<_> = mesh
+        .target_weights(&setup.params)?
+        .into_iter()
+        .map(|(j, w)| (ir, j, w))
+        .collect();
+    let g = Generator::assemble(mesh, &setup.params, None);
+    let (wq, rq, beyond) = waiting.weights(t_max, steps);
+    let mut p = Periods {
+        a: [[0.0; 2]; 2],
+        b: [[[0.0; 2]; 2]; 2],
+        e: [beyond; 2],
+    };
+    survival_series(&g, t_max, steps, |n, q| {
+        for (at, points) in [&target, &start].into_iter().enumerate() {
+            for s in 0..2 {
+                for &(i, j, w) in points {
+                    let k = mesh.idx(i, j, s);
+                    let (qp, qm) = (q[0][k], q[1][k]);
+                    p.a[at][s] += w * wq[n] * (qp + qm);
+                    p.b[at][s][0] += w * rq[n] * qp;
+                    p.b[at][s][1] += w * rq[n] * qm;
+                    if at == 0 {
+                        p.e[s] += w * rq[n] * (1.0 - qp - qm);
+                    }
+                }
+            }
+        }
+    })?;
+    renew(setup, &p, waiting.tail(t_max))
+}
+
+/// Solve the renewal equations (module docs) from the period integrals,
+/// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
+fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
+    const METHOD: &str = "search renewal route";
+    let mix = setup.mix;
+    // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
+    // escape chances of M are those of B.
+    let m =
+        [0, 1].map(|s| [0, 1].map(|u| (0..2).map(|s2| p.b[0][s][s2] * mix[s2][u]).sum::<f64>()));
+    let system = capacitance(m, p.e, METHOD)?;
+    let reset = system.solve(p.a[0]);
+    let next = [0, 1].map(|u| (0..2).map(|s2| mix[u][s2] * reset[s2]).sum::<f64>());
+    let tau = [0, 1].map(|s| p.a[1][s] + p.b[1][s][0] * next[0] + p.b[1][s][1] * next[1]);
+    let a_bar = 0.5 * (p.a[0][0] + p.a[0][1]);
+    let e_bar = 0.5 * (p.e[0] + p.e[1]);
+    // ‖(I - M)⁻¹‖∞ from its columns: the tail's effect on T_r.
+    let cols = [system.solve([1.0, 0.0]), system.solve([0.0, 1.0])];
+    let norm = (0..2)
+        .map(|i| cols[0][i].abs() + cols[1][i].abs())
+        .fold(0.0, f64::max);
+    let per = tail_a + tail_b * reset[0].max(reset[1]);
+    let tail = per + norm * per;
+    let all = [tau[0], tau[1], reset[0], reset[1]];
+    verify(&all, tau, setup, METHOD)?;
+    Ok(Answer {
+        tau,
+        reset,
+        textbook: a_bar / e_bar,
+        tail,
+    })
+}
+
+/// Q_s'(t_n), n = 0..=steps, for s' = ± (Q(0) = 1 in state s' off the
+/// target), handed to `record(n, [Q+, Q-])`: TR-BDF2 with a fixed step on
+/// `I - d dt A`.
+fn survival_series(
+    g: &Generator,
+    t_max: f64,
+    steps: usize,
+    mut record: impl FnMut(usize, &[Vec<f64>; 2]),
+) -> Result<()> {
+    const METHOD: &str = "search renewal route (reset-free survival)";
+    let gamma = 2.0 - std::f64::consts::SQRT_2;
+    let dt = t_max / steps as f64;
+    let d = 0.5 * gamma * dt;
+    let band = factor(g, 1.0, d, METHOD)?;
+    let n = g.dim();
+    let mut q: [Vec<f64>; 2] = [0, 1].map(|s2| {
+        (0..n)
+            .map(|k| {
+                if !g.absorbing[k] && k % 2 == s2 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    });
+    record(0, &q);
+    let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
+    let (c1, c0) = (
+        1.0 / (gamma * (2.0 - gamma)),
+        (1.0 - gamma).powi(2) / (gamma * (2.0 - gamma)),
+    );
+    for step in 1..=steps {
+        for u in q.iter_mut() {
+            g.apply(u, &mut au);
+            for k in 0..n {
+                star[k] = u[k] + d * au[k];
+            }
+            band.solve(&mut star);
+            for k in 0..n {
+                u[k] = c1 * star[k] - c0 * u[k];
+            }
+            band.solve(u);
+        }
+        if q.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(Error::NonFinite {
+                method: METHOD,
+                at: dt * step as f64,
+            });
+        }
+        record(step, &q);
+    }
+    Ok(())
+}
