@@ -335,3 +335,23 @@ def test_collect_csv_and_the_command_line(sweep, tmp_path):
     p = subprocess.run([*run[:3], "collect", str(tmp_path / "none"), "--out", "x.nc"],
                        capture_output=True, text=True)
     assert p.returncode == 2 and "sweep.json" in p.stderr
+
+
+def test_irtp_sweep_collect_runs_the_module(cli, sweep, tmp_path):
+    """The binary's `irtp sweep collect` is the module's collect (exit codes
+    passed on); a Python without the module is refused naming --python."""
+    ds = irtp.load_sweep(sweep)
+    p = cli.run(["sweep", "collect", str(sweep), "--format", "netcdf",
+                 "--out", str(tmp_path / "bin.nc"), "--python", sys.executable])
+    assert p.returncode == 0, p.stderr
+    with xr.open_dataset(tmp_path / "bin.nc") as back:
+        xr.testing.assert_identical(back.load(), ds)
+    sw = copy_of(sweep, tmp_path)
+    shutil.rmtree(next(points(sw))[2])
+    p = cli.run(["sweep", "collect", str(sw), "--format", "zarr",
+                 "--out", str(tmp_path / "part.zarr"), "--python", sys.executable], check=False)
+    assert p.returncode == 3, p.stderr
+    err = cli.error(["sweep", "collect", str(sweep), "--out", str(tmp_path / "x.nc"),
+                     "--python", str(tmp_path / "no-python")])
+    assert err.startswith("invalid --python") and "xarray extra" in err
+    assert not (tmp_path / "x.nc").exists()

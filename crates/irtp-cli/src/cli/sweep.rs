@@ -23,6 +23,26 @@ enum SweepCommand {
     Status(StatusArgs),
     /// Write (and with --submit, submit) a SLURM job array and its merge job.
     Slurm(SlurmArgs),
+    /// The sweep as one dataset file over the plan's axes: netCDF, zarr or CSV (through the Python module).
+    Collect(CollectArgs),
+}
+
+/// `irtp sweep collect`: the Python module's `python -m irtp collect`, whose
+/// libraries (xarray with h5netcdf, zarr) write these formats; the binary
+/// itself writes only CSV and JSON.
+#[derive(Args, Debug)]
+struct CollectArgs {
+    /// Sweep directory.
+    dir: PathBuf,
+    /// netcdf (a .nc file), zarr (a store directory) or csv (a directory).
+    #[arg(long, default_value = "netcdf", value_parser = ["netcdf", "zarr", "csv"])]
+    format: String,
+    /// The file (netcdf) or directory (zarr, csv) to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// The Python interpreter that has the irtp module with its xarray extra.
+    #[arg(long, default_value = "python3")]
+    python: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -133,6 +153,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<u8> {
         SweepCommand::Merge(a) => merge(a),
         SweepCommand::Status(a) => status(a),
         SweepCommand::Slurm(a) => slurm_scripts(a),
+        SweepCommand::Collect(a) => collect(a),
     }
 }
 
@@ -293,4 +314,38 @@ fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
         println!("submit with: bash {}", s.submit.display());
     }
     Ok(0)
+}
+
+/// Run `python -m irtp collect` (exit code passed on: 0, 3 for unfinished
+/// points, 2 for bad input); refused naming `--python` where that Python
+/// lacks the module or its xarray extra.
+fn collect(a: CollectArgs) -> anyhow::Result<u8> {
+    sweep::plan_of(&a.dir)?;
+    let python = a.python.display().to_string();
+    let missing = |why: String| {
+        irtp::Error::InvalidParameter {
+        name: "--python",
+        value: python.clone(),
+        allowed: format!(
+            "a Python with the irtp module and its xarray extra (pip install './python[xarray]'): {why}"
+        ),
+    }
+    };
+    let probe = std::process::Command::new(&a.python)
+        .args(["-c", "import irtp._sweep, xarray"])
+        .output()
+        .map_err(|e| missing(format!("cannot run it ({e})")))?;
+    if !probe.status.success() {
+        let err = String::from_utf8_lossy(&probe.stderr);
+        let last = err.trim().lines().last().unwrap_or("").to_string();
+        return Err(missing(last).into());
+    }
+    let status = std::process::Command::new(&a.python)
+        .args(["-m", "irtp", "collect"])
+        .arg(&a.dir)
+        .args(["--format", &a.format, "--out"])
+        .arg(&a.out)
+        .status()
+        .map_err(|e| missing(format!("cannot run it ({e})")))?;
+    Ok(status.code().map_or(1, |c| c.clamp(0, 255) as u8))
 }

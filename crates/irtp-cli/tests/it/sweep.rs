@@ -383,3 +383,42 @@ fn point_directories_of_an_older_irtp_are_renamed_to_signac_ids() {
     assert!(s.contains("ran 0 "), "{s}");
     assert_eq!(table(&out), before);
 }
+
+/// `irtp sweep collect` with a Python that cannot run the module: refused
+/// naming --python, nothing written (the Python tests run it for real).
+#[test]
+fn collect_without_the_python_module_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(
+        tmp.path(),
+        PLAN.replace("particles = 300", "particles = 50").as_str(),
+    );
+    let out = tmp.path().join("sw");
+    ok(&[
+        "sweep",
+        "run",
+        &plan,
+        "--out",
+        out.to_str().unwrap(),
+        "--shard",
+        "1/12",
+    ]);
+    let nc = tmp.path().join("sw.nc");
+    let missing = tmp.path().join("no-python");
+    let o = irtp(&[
+        "sweep",
+        "collect",
+        out.to_str().unwrap(),
+        "--out",
+        nc.to_str().unwrap(),
+        "--python",
+        missing.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--python") && err.contains("xarray extra"),
+        "{err}"
+    );
+    assert!(!nc.exists());
+}
