@@ -24,6 +24,9 @@
 //! - [`mfpt`]: first passage to a target velocity: the problem, the backward
 //!   equations (Sec. 2.2 with the generator's signs), particle estimators,
 //!   scans and the optimal resetting rate.
+//! - [`search`]: first passage in position (the search problem): a level
+//!   or an interval, by the exact event-driven sampler; the tail exponent
+//!   where the mean search time is infinite.
 //! - [`analytic`]: closed forms (linear drag; r = 0 densities, Eqs. (34)-(35)).
 //! - [`numerics`]: quadrature, root finding, Chebyshev tables, fast
 //!   elementary functions, point grids.
@@ -44,6 +47,7 @@ pub mod model;
 pub mod numerics;
 pub mod parallel;
 pub mod rng;
+pub mod search;
 pub mod sim;
 pub mod stats;
 

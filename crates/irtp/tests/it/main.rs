@@ -22,6 +22,7 @@ mod mfpt_sim;
 mod models;
 mod msd_fit;
 mod power_kink;
+mod search_exact;
 mod shards;
 mod sim_euler;
 mod support_matrix;
