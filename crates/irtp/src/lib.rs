@@ -11,7 +11,7 @@
 //! (enforced by Cargo): irtp-cli (the `irtp` binary) and irtp-python →
 //! irtp-paper (the paper's figures, `irtp reproduce`) → irtp-app (the
 //! commands as library calls, output directories with provenance, sweeps) →
-//! this crate. Modules here, one per concept ({mfpt, fp, sim, analytic} →
+//! this crate. Modules here, one per concept ({search, mfpt, fp, sim, analytic} →
 //! model → numerics):
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
