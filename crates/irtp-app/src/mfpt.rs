@@ -28,7 +28,7 @@ use irtp::Error;
 use serde::Serialize;
 use std::time::Instant;
 
-mod search;
+pub(crate) mod search;
 
 /// `irtp mfpt`.
 #[derive(Args, Debug)]

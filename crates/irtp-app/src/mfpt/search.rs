@@ -10,9 +10,10 @@
 //! `tail_exponent`; `survival.csv` holds the Kaplan-Meier curve.
 
 use super::super::budget::{self, Cost};
+use super::super::common::ModelArgs;
 use super::super::{finish, open_out, to_value, Context, Outcome, Results};
 use super::{survival_table, text_lines, DirectArgs, Method};
-use irtp::mfpt::{FptSummary, ParticleOptions};
+use irtp::mfpt::{FptStats, FptSummary, ParticleOptions};
 use irtp::parallel::NoProgress;
 use irtp::search::{
     self, PositionTarget, SearchMethod, SearchProblem, SearchResult, TailFit, INFINITE_MEAN_REASON,
@@ -22,9 +23,9 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// The validated inputs of a search.
-pub(super) struct SearchConfig {
-    problem: SearchProblem,
-    method: SearchMethod,
+pub(crate) struct SearchConfig {
+    pub(crate) problem: SearchProblem,
+    pub(crate) method: SearchMethod,
 }
 
 /// `A,B` → the interval target (both numbers; the order is checked with
@@ -37,6 +38,55 @@ fn parse_interval(s: &str) -> irtp::Result<PositionTarget> {
     Ok(PositionTarget::Interval(a, b))
 }
 
+/// The flags of a search problem, from `irtp mfpt` or `irtp mfpt distribution`.
+pub(crate) struct SearchFlags<'a> {
+    pub(crate) model: &'a ModelArgs,
+    pub(crate) v0: Option<f64>,
+    pub(crate) x0: Option<f64>,
+    pub(crate) xt: Option<f64>,
+    pub(crate) interval: Option<&'a str>,
+}
+
+impl SearchFlags<'_> {
+    /// Flags → validated problem.
+    pub(crate) fn problem(&self) -> irtp::Result<SearchProblem> {
+        let target = match (self.xt, self.interval) {
+            (Some(l), _) => PositionTarget::Level(l),
+            (None, Some(s)) => parse_interval(s)?,
+            (None, None) => unreachable!("a search has --xt or --interval"),
+        };
+        let params = self.model.params()?;
+        let v0 = self
+            .v0
+            .ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
+        SearchProblem::new(params, self.x0.unwrap_or(0.0), v0, target)
+    }
+}
+
+/// The refusal of a method other than exact for a search (`name`: the
+/// method given).
+pub(crate) fn only_exact(name: &str) -> Error {
+    Error::invalid(
+        "--method",
+        name,
+        "exact with a search target in position (--xt, --interval): the sampler is the \
+         only solver of the search problem yet",
+    )
+}
+
+/// The exact method for `problem` with `run`, validated and its cost
+/// checked against `budget` before any output exists.
+pub(crate) fn exact_method(
+    problem: &SearchProblem,
+    run: ParticleOptions,
+    budget: &budget::BudgetArgs,
+) -> irtp::Result<SearchMethod> {
+    let method = SearchMethod::Exact(run);
+    method.check(problem)?;
+    budget.check(&cost(problem, &method)?)?;
+    Ok(method)
+}
+
 /// Flags → validated problem and method, the cost checked before any
 /// output exists.
 pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
@@ -46,32 +96,23 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
             Method::Euler => "euler",
             Method::Exact => "exact",
         };
-        return Err(Error::invalid(
-            "--method",
-            name,
-            "exact with a search target in position (--xt, --interval): the sampler is the \
-             only solver of the search problem yet",
-        ));
+        return Err(only_exact(name));
     }
     a.sim.reject_inapplicable(&a.output)?;
-    let target = match (a.xt, a.interval.as_deref()) {
-        (Some(l), _) => PositionTarget::Level(l),
-        (None, Some(s)) => parse_interval(s)?,
-        (None, None) => unreachable!("a search has --xt or --interval"),
+    let flags = SearchFlags {
+        model: &a.problem.model,
+        v0: a.problem.v0,
+        x0: a.x0,
+        xt: a.xt,
+        interval: a.interval.as_deref(),
     };
-    let params = a.problem.model.params()?;
-    let v0 = a
-        .problem
-        .v0
-        .ok_or_else(|| Error::invalid("--v0", "missing", "a velocity"))?;
-    let problem = SearchProblem::new(params, a.x0.unwrap_or(0.0), v0, target)?;
-    let method = SearchMethod::Exact(ParticleOptions {
+    let problem = flags.problem()?;
+    let run = ParticleOptions {
         particles: a.sim.particles(),
         t_max: a.sim.t_max(),
         seed: a.output.seed(),
-    });
-    method.check(&problem)?;
-    a.output.budget.check(&cost(&problem, &method)?)?;
+    };
+    let method = exact_method(&problem, run, &a.output.budget)?;
     Ok(SearchConfig { problem, method })
 }
 
@@ -113,7 +154,7 @@ fn cost(problem: &SearchProblem, method: &SearchMethod) -> irtp::Result<Cost> {
 
 /// What `irtp mfpt --xt/--interval --json` prints.
 #[derive(Serialize)]
-struct SearchReport {
+pub(crate) struct SearchReport {
     method: &'static str,
     problem: SearchProblem,
     /// null where the mean is infinite or any particle is censored.
@@ -140,7 +181,12 @@ struct SearchReport {
 }
 
 impl SearchReport {
-    fn new(c: &SearchConfig, s: &FptSummary, finite: bool, tail: Option<TailFit>) -> Self {
+    pub(crate) fn new(
+        c: &SearchConfig,
+        s: &FptSummary,
+        finite: bool,
+        tail: Option<TailFit>,
+    ) -> Self {
         let run = c.method.particles().expect("a particle method");
         let mean = |x: f64| if finite { x } else { f64::NAN };
         SearchReport {
@@ -169,7 +215,7 @@ impl SearchReport {
 
 /// The flags leading the text report: an infinite mean (with the tail),
 /// or censored particles.
-fn note(r: &SearchReport) -> String {
+pub(crate) fn note(r: &SearchReport) -> String {
     if r.infinite_mean {
         let tail = r.tail_exponent.map_or(
             "the survival curve has too few resolved points for a tail fit".into(),
@@ -197,11 +243,9 @@ fn note(r: &SearchReport) -> String {
     )
 }
 
-/// Run a search: `summary.json`, `run.json`, `mfpt.json` and `survival.csv`.
-pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
-    let c = config(a)?;
-    let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
-    let t0 = Instant::now();
+/// Solve a validated search with a progress stage: its statistics and
+/// report.
+pub(crate) fn solve(c: &SearchConfig, ctx: &Context) -> irtp::Result<(FptStats, SearchReport)> {
     let total = c.method.particles().map_or(1, |r| r.particles);
     let result = {
         let bar = ctx.reporter.stage("search", total);
@@ -209,7 +253,16 @@ pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     };
     ctx.check()?;
     let SearchResult::Particles(r) = result;
-    let report = SearchReport::new(&c, &r.stats.summary(), r.mean_is_finite, r.tail);
+    let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
+    Ok((r.stats, report))
+}
+
+/// Run a search: `summary.json`, `run.json`, `mfpt.json` and `survival.csv`.
+pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
+    let c = config(a)?;
+    let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
+    let t0 = Instant::now();
+    let (stats, report) = solve(&c, ctx)?;
     let wall = t0.elapsed().as_secs_f64();
     let json = to_value(&report);
     let results = Results {
@@ -217,7 +270,7 @@ pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
         seed: Some(report.seed),
         json: json.clone(),
         parameters: json.clone(),
-        tables: vec![survival_table(&r.stats.survival())],
+        tables: vec![survival_table(&stats.survival())],
         json_files: vec![("mfpt.json", json.clone())],
         text: note(&report) + &text_lines(&json),
         wall_time_s: wall,

@@ -201,3 +201,52 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
     );
     assert!(!dir.exists());
 }
+
+/// `irtp mfpt distribution --xt`: the sampled search-time histogram and
+/// Kaplan-Meier curve; its density integrates to the arrived fraction and
+/// no passage comes before |L - x0| / v_max; the backward method (the
+/// default) is refused naming `--method`.
+#[test]
+fn a_search_distribution_writes_the_histogram_and_survival() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "mfpt",
+        "distribution",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--method",
+        "exact",
+        "--particles",
+        "4000",
+        "--out",
+        d,
+        "--json",
+    ];
+    let r = json(&irtp(&args));
+    assert_eq!(r["infinite_mean"], false);
+    assert!(r["tau"].as_f64().unwrap() > 0.0);
+    let hist = std::fs::read_to_string(dir.join("histogram.csv")).unwrap();
+    let mut mass = 0.0;
+    // tan at Sigma = 3: v_max = atan(3).
+    let least = 1.0 / 3f64.atan();
+    for line in hist.lines().skip(1) {
+        let row: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        mass += row[2] * (row[1] - row[0]);
+        if row[4] > 0.0 {
+            assert!(row[1] >= least, "{line}");
+        }
+    }
+    assert!((mass - 1.0).abs() < 1e-9, "{mass}");
+    assert!(dir.join("survival.csv").exists() && dir.join("distribution.json").exists());
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let d = dir.to_str().unwrap();
+    let out = irtp(&["mfpt", "distribution", "--xt", "1", "--v0", "0", "--out", d]);
+    assert_rejected(&out, "--method", &dir);
+}
