@@ -250,3 +250,34 @@ fn a_search_distribution_writes_the_histogram_and_survival() {
     let out = irtp(&["mfpt", "distribution", "--xt", "1", "--v0", "0", "--out", d]);
     assert_rejected(&out, "--method", &dir);
 }
+
+/// The cost is estimated before any work (a pilot of a few particles
+/// gives the mean time in flight): too many particles, or an unbounded
+/// time in flight, are refused naming the flags, exit 2, nothing written.
+#[test]
+fn a_costly_search_is_refused_before_it_starts() {
+    let base = ["mfpt", "--v0", "0", "--method", "exact"];
+    let cases: [(&[&str], &str); 2] = [
+        (&["--xt", "1", "--particles", "1e12"], "--particles"),
+        (
+            &["--xt", "1e300", "--reset-position", "0", "--t-max", "inf"],
+            "--t-max",
+        ),
+    ];
+    for (extra, flag) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let d = dir.to_str().unwrap();
+        let start = std::time::Instant::now();
+        let out = irtp(&[&base[..], extra, &["--out", d]].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("too costly") && err.contains(flag), "{err}");
+        assert!(
+            err.contains("--max-work") && err.lines().count() == 1,
+            "{err}"
+        );
+        assert!(!dir.exists());
+        assert!(start.elapsed().as_secs_f64() < 10.0);
+    }
+}
