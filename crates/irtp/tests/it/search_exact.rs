@@ -366,7 +366,7 @@ fn euler_search(pr: &SearchProblem, plus: bool, dt: f64, t_max: f64, seed: u64, 
         } else {
             t >= next_periodic || (u >= lambda * dt && u < (lambda + r) * dt)
         };
-        if u < lambda * dt && !(t >= next_periodic && !held) {
+        if u < lambda * dt && (held || t < next_periodic) {
             plus = !plus;
         }
         if reset {
