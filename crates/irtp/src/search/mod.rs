@@ -25,7 +25,7 @@ pub mod tail;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::FptStats;
 use crate::mfpt::ParticleOptions;
-use crate::model::reset::{NoiseAtReset, Refractory, Reset, Solver};
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
@@ -336,13 +336,13 @@ pub const INFINITE_MEAN_REASON: &str = "the mean search time is infinite: with v
      never; the tail exponent is reported instead";
 
 /// Solve `problem` by `method`, validated first ([`SearchMethod::check`]).
-/// Particle estimates are bit-identical for any thread count.
+/// The exact sampler runs every resetting protocol and drag law. Particle
+/// estimates are bit-identical for any thread count.
 pub fn solve(
     problem: &SearchProblem,
     method: &SearchMethod,
     progress: &dyn Progress,
 ) -> Result<SearchResult> {
-    problem.params().require(Solver::MfptExact)?;
     method.check(problem)?;
     match *method {
         SearchMethod::Exact(run) => {
