@@ -137,7 +137,8 @@ impl<D: Drag> SearchSampler<D> {
             let step = if periodic { next_periodic - w.t } else { gap };
             let span = step.min(t_max - w.t);
             let (b, x) = match self.segment(w.si, &w.a, w.x, span) {
-                Segment::Hit(tau) => return (Some(w.t + tau), events),
+                // At most t_max (t + (t_max - t) may round above it).
+                Segment::Hit(tau) => return (Some((w.t + tau).min(t_max)), events),
                 Segment::Moved(b, x) => (b, x),
             };
             if span < step || w.t + step >= t_max {
@@ -178,7 +179,7 @@ impl<D: Drag> SearchSampler<D> {
         if let Some(r) = self.refractory {
             let d = r.draw(rng);
             if let Some(tau) = self.held_crossing(w.x, v, d.min(t_max - w.t)) {
-                return Some(Some(w.t + tau));
+                return Some(Some((w.t + tau).min(t_max)));
             }
             if w.t + d >= t_max {
                 return Some(None);
