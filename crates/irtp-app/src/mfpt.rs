@@ -2,7 +2,7 @@
 //!
 //! - `irtp mfpt --v0 V0 --vt VT [--method backward|euler|exact]`: one problem;
 //! - `irtp mfpt --xt L | --interval A,B [--x0 X0] --v0 V0 --method exact`: the
-//!   search problem, first passage in position ([`search`]);
+//!   search problem, first passage in position (the `search` submodule);
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate;
 //! - `irtp mfpt distribution --vt VT [--method backward|exact]`: the
