@@ -214,7 +214,8 @@ fn thread_count_does_not_change_a_bit() {
     assert_eq!(one.particles(), 9_000);
 }
 
-/// A small set of laws and protocols (every drag law, every modifier).
+/// A small set of laws and protocols (every drag law, every modifier,
+/// point and random reset targets, the noise kept or re-drawn).
 fn laws_and_protocols() -> Vec<Params> {
     let laws = [
         "tan",
@@ -238,6 +239,21 @@ fn laws_and_protocols() -> Vec<Params> {
             _ => Schedule::parse(None, None, None),
         }
         .unwrap();
+        // Random targets (every other law), one with the noise re-drawn.
+        let vu = base.v_upper();
+        let random = match i % 3 {
+            0 => Some(format!("uniform:a={},b={}", -0.5 * vu, 0.3 * vu)),
+            1 => Some(format!("laplace:mean=0,scale={},noise=redrawn", 0.2 * vu)),
+            _ => None,
+        };
+        let base = match random {
+            Some(r) => {
+                let (target, noise) = spec::parse(&r).unwrap();
+                let noise = noise.unwrap_or(irtp::model::reset::NoiseAtReset::Kept);
+                base.with_reset(target, noise).unwrap()
+            }
+            None => base,
+        };
         out.push(base.with_schedule(sched).unwrap());
         let periodic = base.with_rate(0.0).unwrap();
         let sched = Schedule::parse(Some(0.7), (i % 2 == 0).then_some(0.0), None).unwrap();
