@@ -144,7 +144,7 @@ fn velocity_only_resetting_has_an_infinite_mean_and_a_half_tail() {
     let p = Params::new(DragLaw::Linear, 1.0, 2.0, 1.0, 0.0).unwrap();
     let pr = level(p, 0.0, 0.0, 0.5);
     assert!(!pr.mean_is_finite());
-    let res = solve(&pr, &exact(20_000, 1e4, 5));
+    let res = solve(&pr, &exact(10_000, 1e4, 5));
     assert!(res.tau().is_nan());
     let fit = res.tail.expect("a resolved tail");
     let z = (fit.theta - 0.5) / fit.theta_err;
