@@ -80,7 +80,10 @@ fn crossing_is_exact_against_the_linear_closed_form() {
         let t = t.unwrap();
         let want = linear_root(s, v0, dist, 50.0);
         assert_eq!(events, 0, "case {i}: a flip before passage");
-        println!("case {i}: t = {t:e}, relative error {:.1e}", (t - want) / want);
+        println!(
+            "case {i}: t = {t:e}, relative error {:.1e}",
+            (t - want) / want
+        );
         assert!(
             ((t - want) / want).abs() < 1e-12,
             "case {i}: sampled {t:e}, closed form {want:e}"
