@@ -12,8 +12,11 @@
 //!   fixed log grid of [`irtp::mfpt::survival`]) and the Kaplan-Meier
 //!   survival curve (`survival.csv`, censored at `--t-max`), so the two
 //!   overlay.
+//! - `--xt L | --interval A,B [--x0 X0] --method exact`: the same for the
+//!   search time (first passage in position, [`irtp::search`]).
 
 use super::common::{ModelArgs, OutputArgs};
+use super::mfpt::search::{self, SearchConfig};
 use super::mfpt::ProblemArgs;
 use super::simulate::GridArg;
 use super::{finish, open_out, to_value, Context, Outcome, Results, Table};
@@ -56,8 +59,24 @@ pub struct DistributionArgs {
     #[arg(long, default_value_t = 4000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
     /// Target velocity v_t (v_l < v_t < v_u).
-    #[arg(long, required = true, allow_hyphen_values = true)]
-    vt: f64,
+    #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
+    vt: Option<f64>,
+    /// Search target in position (instead of --vt): the first time x reaches the level L
+    /// (--method exact: histogram and Kaplan-Meier curve of the search time).
+    #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
+    xt: Option<f64>,
+    /// Search target in position (instead of --vt): the first exit of x from (A, B)
+    /// (--method exact).
+    #[arg(
+        long,
+        value_name = "A,B",
+        allow_hyphen_values = true,
+        conflicts_with = "vt"
+    )]
+    interval: Option<String>,
+    /// Initial position x_0 of a search (--xt or --interval) [default: 0].
+    #[arg(long, value_name = "X0", allow_hyphen_values = true)]
+    x0: Option<f64>,
     /// Method: backward (S(t), f(t) from the backward equations) or exact (sampled histogram).
     #[arg(long, value_enum, default_value = "backward")]
     method: DistMethod,
@@ -141,17 +160,64 @@ impl DistributionArgs {
 
     /// Validate the flags (the same checks as a run, before any work).
     pub(super) fn validate(&self) -> irtp::Result<()> {
+        if self.is_search() {
+            return self.search_config().map(drop);
+        }
         self.config().map(drop)
+    }
+
+    /// Whether a search target in position (--xt or --interval) was given.
+    fn is_search(&self) -> bool {
+        self.xt.is_some() || self.interval.is_some()
+    }
+
+    /// The search problem's config: the exact method only, its flags
+    /// checked as for a velocity target, t-max default 1e4 (no backward
+    /// estimate of the mean to scale it) and finite.
+    fn search_config(&self) -> irtp::Result<SearchConfig> {
+        if self.method != DistMethod::Exact {
+            return Err(search::only_exact("backward"));
+        }
+        self.reject_inapplicable()?;
+        let flags = search::SearchFlags {
+            model: &self.model,
+            v0: Some(self.v0),
+            x0: self.x0,
+            xt: self.xt,
+            interval: self.interval.as_deref(),
+        };
+        let problem = flags.problem()?;
+        let t_max = self.t_max.unwrap_or(1e4);
+        if !(t_max > 0.0 && t_max.is_finite()) {
+            return Err(Error::invalid("--t-max", t_max, "0 < t-max < inf"));
+        }
+        let run = ParticleOptions {
+            particles: self.particles.unwrap_or(100_000),
+            t_max,
+            seed: self.output.seed(),
+        };
+        let method = search::exact_method(&problem, run, &self.output.budget)?;
+        Ok(SearchConfig { problem, method })
     }
 
     fn config(&self) -> irtp::Result<Config> {
         self.reject_inapplicable()?;
+        if let Some(x0) = self.x0 {
+            return Err(Error::invalid(
+                "--x0",
+                x0,
+                "only with a search target in position (--xt or --interval)",
+            ));
+        }
         let problem_args = ProblemArgs {
             model: self.model.clone(),
             v0: Some(self.v0),
             cells: self.cells,
         };
-        let (problem, backward) = problem_args.config(self.vt)?;
+        let vt = self
+            .vt
+            .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
+        let (problem, backward) = problem_args.config(vt)?;
         // Before the time stepping: the stationary solve (cost ~ cells).
         self.output.budget.check(
             &super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"])
@@ -345,8 +411,41 @@ struct ExactPart {
     seed: u64,
 }
 
+/// Run `irtp mfpt distribution` for a search target in position:
+/// `histogram.csv`, `survival.csv`, `distribution.json` (the report of
+/// `irtp mfpt --xt/--interval`).
+fn run_search(a: &DistributionArgs, ctx: &Context) -> irtp::Result<Outcome> {
+    let c = a.search_config()?;
+    let out = open_out(
+        "mfpt distribution",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
+    let t0 = Instant::now();
+    let (st, report) = search::solve(&c, ctx)?;
+    let wall = t0.elapsed().as_secs_f64();
+    let json = to_value(&report);
+    let results = Results {
+        method: c.method.name().into(),
+        seed: Some(a.output.seed()),
+        json: json.clone(),
+        parameters: json.clone(),
+        tables: vec![
+            histogram_table(&st),
+            super::mfpt::survival_table(&st.survival()),
+        ],
+        json_files: vec![("distribution.json", json.clone())],
+        text: search::note(&report) + &super::mfpt::text_lines(&json),
+        wall_time_s: wall,
+    };
+    finish("mfpt distribution", results, out, ctx)
+}
+
 /// Run `irtp mfpt distribution`.
 pub fn run(a: &DistributionArgs, ctx: &Context) -> irtp::Result<Outcome> {
+    if a.is_search() {
+        return run_search(a, ctx);
+    }
     let c = a.config()?;
     let out = open_out(
         "mfpt distribution",

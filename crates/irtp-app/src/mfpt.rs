@@ -1,6 +1,8 @@
 //! `irtp mfpt`: mean first-passage time to a target velocity.
 //!
 //! - `irtp mfpt --v0 V0 --vt VT [--method backward|euler|exact]`: one problem;
+//! - `irtp mfpt --xt L | --interval A,B [--x0 X0] --v0 V0 --method exact`: the
+//!   search problem, first passage in position (the `search` submodule);
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate;
 //! - `irtp mfpt distribution --vt VT [--method backward|exact]`: the
@@ -25,6 +27,8 @@ use irtp::mfpt::{
 use irtp::Error;
 use serde::Serialize;
 use std::time::Instant;
+
+pub(crate) mod search;
 
 /// `irtp mfpt`.
 #[derive(Args, Debug)]
@@ -108,8 +112,25 @@ pub struct DirectArgs {
     #[command(flatten)]
     problem: ProblemArgs,
     /// Target velocity v_t (v_l < v_t < v_u).
-    #[arg(long, required = true, allow_hyphen_values = true)]
+    #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
     vt: Option<f64>,
+    /// Search target in position (instead of --vt): the first time x reaches the level L
+    /// (one-sided; --method exact). With velocity-only resetting the mean search time is
+    /// infinite: tau is null, `infinite_mean` true, and the tail exponent of S(t) is reported.
+    #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
+    xt: Option<f64>,
+    /// Search target in position (instead of --vt): the first exit of x from the open
+    /// interval (A, B), A < x0 < B (--method exact).
+    #[arg(
+        long,
+        value_name = "A,B",
+        allow_hyphen_values = true,
+        conflicts_with = "vt"
+    )]
+    interval: Option<String>,
+    /// Initial position x_0 of a search (--xt or --interval) [default: 0].
+    #[arg(long, value_name = "X0", allow_hyphen_values = true)]
+    x0: Option<f64>,
     #[command(flatten)]
     sim: SimArgs,
     #[command(flatten)]
@@ -201,6 +222,7 @@ impl MfptArgs {
     /// Validate the flags (every point of a scan) without solving.
     pub(crate) fn validate(&self) -> irtp::Result<()> {
         match &self.command {
+            None if self.direct.is_search() => search::config(&self.direct).map(drop),
             None => self.direct.config().map(drop),
             Some(MfptCommand::Scan(a)) => a.config().map(drop),
             Some(MfptCommand::Optimize(a)) => a.config().map(drop),
@@ -212,6 +234,7 @@ impl MfptArgs {
 /// Run `irtp mfpt [scan | optimize]`.
 pub fn run(args: &MfptArgs, ctx: &Context) -> irtp::Result<Outcome> {
     match &args.command {
+        None if args.direct.is_search() => search::run(&args.direct, ctx),
         None => run_direct(&args.direct, ctx),
         Some(MfptCommand::Scan(a)) => run_scan(a, ctx),
         Some(MfptCommand::Optimize(a)) => run_optimize(a, ctx),
@@ -523,7 +546,19 @@ struct DirectConfig {
 }
 
 impl DirectArgs {
+    /// Whether a search target in position (--xt or --interval) was given.
+    fn is_search(&self) -> bool {
+        self.xt.is_some() || self.interval.is_some()
+    }
+
     fn config(&self) -> irtp::Result<DirectConfig> {
+        if let Some(x0) = self.x0 {
+            return Err(Error::invalid(
+                "--x0",
+                x0,
+                "only with a search target in position (--xt or --interval)",
+            ));
+        }
         let vt = self
             .vt
             .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;

@@ -11,7 +11,7 @@
 //! (enforced by Cargo): irtp-cli (the `irtp` binary) and irtp-python →
 //! irtp-paper (the paper's figures, `irtp reproduce`) → irtp-app (the
 //! commands as library calls, output directories with provenance, sweeps) →
-//! this crate. Modules here, one per concept ({mfpt, fp, sim, analytic} →
+//! this crate. Modules here, one per concept ({search, mfpt, fp, sim, analytic} →
 //! model → numerics):
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
@@ -24,6 +24,9 @@
 //! - [`mfpt`]: first passage to a target velocity: the problem, the backward
 //!   equations (Sec. 2.2 with the generator's signs), particle estimators,
 //!   scans and the optimal resetting rate.
+//! - [`search`]: first passage in position (the search problem): a level
+//!   or an interval, by the exact event-driven sampler; the tail exponent
+//!   where the mean search time is infinite.
 //! - [`analytic`]: closed forms (linear drag; r = 0 densities, Eqs. (34)-(35)).
 //! - [`numerics`]: quadrature, root finding, Chebyshev tables, fast
 //!   elementary functions, point grids.

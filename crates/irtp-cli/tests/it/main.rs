@@ -25,6 +25,7 @@ mod protocol_solvers;
 mod random_target_fpt;
 mod reproduce;
 mod reset_protocols;
+mod search_cli;
 mod sweep;
 mod value_stability;
 mod verified;

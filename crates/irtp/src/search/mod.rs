@@ -1,20 +1,43 @@
-//! The search problem: first passage of the position x to a target
-//! (docs/equations.md, "Search: the 2-D backward equation and the renewal
-//! route").
+//! The search problem: first passage in *position*.
 //!
-//! - [`backward`]: the mean first-passage time from the backward equation
-//!   `L T = -1` for T(x, v, eta) on a 2-D mesh (full resetting; velocity-only
-//!   resetting for an interval target).
-//! - [`renewal`]: the state-resolved renewal route for full resetting, over
-//!   any waiting-time law of the resets (Poisson, periodic).
+//! The particle starts at (x_0, v_0) with eta(0) = ±Sigma (equally likely)
+//! and the search ends the first time x(t) reaches a level L
+//! ([`PositionTarget::Level`], one-sided) or leaves an interval (a, b)
+//! ([`PositionTarget::Interval`]). Every resetting protocol of the model
+//! runs: velocity resetting (x kept), full resetting (`--reset-position`:
+//! x → x_r with the velocity), periodic clocks, refractory periods, random
+//! velocity targets and re-drawn noise.
+//!
+//! With velocity-only resetting the position is unbounded: a one-sided
+//! level is reached with a survival that decays as a power law
+//! (S(t) ~ t^(-1/2) when the stationary mean velocity is zero), so the mean
+//! search time is infinite; [`SearchProblem::mean_is_finite`] says when it
+//! is finite, and [`tail`] fits the exponent of S(t) where it is not.
+//!
+//! - [`exact`]: the exact event-driven sampler (flow segments, the crossing
+//!   of x found by a safeguarded root on each monotone piece).
+//! - [`backward`]: the 2-D backward equation for T(x, v, eta) on an upwind
+//!   mesh, Richardson-extrapolated with an error estimate.
+//! - [`renewal`]: the state-resolved renewal route for full resetting, from
+//!   the reset-free survival resolved by the final noise state.
+//! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
+//! - [`solve`] with a [`SearchMethod`]: the one entry point.
 
 pub mod backward;
+pub mod exact;
 mod mesh;
 pub mod renewal;
+pub mod tail;
 
 use crate::error::{finite, Error, Result};
-use crate::Params;
+use crate::mfpt::estimator::FptStats;
+use crate::mfpt::ParticleOptions;
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
+use crate::model::{Drag, Params};
+use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
+
+pub use tail::{fit_tail, TailFit};
 
 /// Where the search ends.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -25,8 +48,21 @@ pub enum PositionTarget {
     Interval(f64, f64),
 }
 
-/// A validated search problem.
-#[derive(Clone, Copy, Debug, PartialEq)]
+impl PositionTarget {
+    /// The absorbing boundaries (lo, hi): the search runs while
+    /// lo < x < hi (an unbounded side is ∓∞). `x0` picks the side of a level.
+    pub fn bounds(&self, x0: f64) -> (f64, f64) {
+        match *self {
+            PositionTarget::Level(l) if l > x0 => (f64::NEG_INFINITY, l),
+            PositionTarget::Level(l) => (l, f64::INFINITY),
+            PositionTarget::Interval(a, b) => (a, b),
+        }
+    }
+}
+
+/// A validated search problem (build with SearchProblem::new).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawSearchProblem", into = "RawSearchProblem")]
 pub struct SearchProblem {
     params: Params,
     x0: f64,
@@ -34,46 +70,105 @@ pub struct SearchProblem {
     target: PositionTarget,
 }
 
+/// Unvalidated mirror of [`SearchProblem`] for (de)serialisation.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct RawSearchProblem {
+    /// Model parameters.
+    pub params: Params,
+    /// Initial position x_0.
+    pub x0: f64,
+    /// Initial velocity v_0.
+    pub v0: f64,
+    /// Where the search ends.
+    pub target: PositionTarget,
+}
+
+impl TryFrom<RawSearchProblem> for SearchProblem {
+    type Error = Error;
+    fn try_from(r: RawSearchProblem) -> Result<Self> {
+        SearchProblem::new(r.params, r.x0, r.v0, r.target)
+    }
+}
+
+impl From<SearchProblem> for RawSearchProblem {
+    fn from(p: SearchProblem) -> Self {
+        RawSearchProblem {
+            params: p.params,
+            x0: p.x0,
+            v0: p.v0,
+            target: p.target,
+        }
+    }
+}
+
+/// Validate the target against the start: a level finite and not at x0
+/// (`xt`), an interval finite with a < x0 < b (`interval`).
+fn check_target(x0: f64, target: PositionTarget) -> Result<()> {
+    match target {
+        PositionTarget::Level(l) => {
+            if !(l.is_finite() && l != x0) {
+                return Err(Error::invalid(
+                    "xt",
+                    l,
+                    format!("a finite level L != x0 = {x0}"),
+                ));
+            }
+        }
+        PositionTarget::Interval(a, b) => {
+            if !(a.is_finite() && b.is_finite() && a < x0 && x0 < b) {
+                return Err(Error::invalid(
+                    "interval",
+                    format!("{a},{b}"),
+                    format!(
+                        "finite A,B with A < x0 = {x0} < B (a non-empty interval around the start)"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A reset position must lie strictly on the start side of the target: a
+/// full reset must not jump across (or onto) it.
+fn check_reset_position(x0: f64, target: PositionTarget, xr: f64) -> Result<()> {
+    let ok = match target {
+        PositionTarget::Level(l) => (xr < l) == (x0 < l) && xr != l,
+        PositionTarget::Interval(a, b) => a < xr && xr < b,
+    };
+    if ok {
+        return Ok(());
+    }
+    let allowed = match target {
+        PositionTarget::Level(l) => {
+            let side = if x0 < l { "<" } else { ">" };
+            format!("x_r {side} L = {l}, on the side of x0 = {x0} (a reset cannot jump across the target)")
+        }
+        PositionTarget::Interval(a, b) => {
+            format!("{a} < x_r < {b}, inside the interval (a reset cannot jump out of it)")
+        }
+    };
+    Err(Error::invalid("reset_position", xr, allowed))
+}
+
 impl SearchProblem {
-    /// Validate: x0, v0 and the target finite; `L != x0` for a level,
-    /// `a < x0 < b` for an interval; v0 in (v_l, v_u); a reset position
-    /// (`params.schedule().position`) strictly on the start side of a level,
-    /// strictly inside an interval.
+    /// Validate: x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
+    /// (v_l, v_u); a reset position strictly on the start side (the same
+    /// side of L as x0, or inside (a, b)). NaN fails every check.
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;
         let (vl, vu) = params.bounds();
         if !(v0 > vl && v0 < vu) {
-            return Err(Error::invalid("v0", v0, format!("{vl:.6} < v0 < {vu:.6}")));
+            return Err(Error::invalid(
+                "v0",
+                v0,
+                format!("{vl:.6} < v0 < {vu:.6} (the open velocity interval)"),
+            ));
         }
-        let inside: Box<dyn Fn(f64) -> bool> = match target {
-            PositionTarget::Level(l) => {
-                let l = finite("target", l)?;
-                if l == x0 {
-                    return Err(Error::invalid("target", l, "a level L != x0"));
-                }
-                Box::new(move |x: f64| (x - l) * (x0 - l) > 0.0)
-            }
-            PositionTarget::Interval(a, b) => {
-                let (a, b) = (finite("target", a)?, finite("target", b)?);
-                if !(a < x0 && x0 < b) {
-                    return Err(Error::invalid(
-                        "x0",
-                        x0,
-                        format!("a < x0 < b for the interval ({a}, {b})"),
-                    ));
-                }
-                Box::new(move |x: f64| a < x && x < b)
-            }
-        };
+        check_target(x0, target)?;
         if let Some(p) = params.schedule().position {
-            if !inside(p.x) {
-                return Err(Error::invalid(
-                    "reset_position",
-                    p.x,
-                    "strictly on the start side of the target (inside an interval)",
-                ));
-            }
+            check_reset_position(x0, target, p.x)?;
         }
         Ok(SearchProblem {
             params,
@@ -83,32 +178,189 @@ impl SearchProblem {
         })
     }
 
-    /// Model parameters (drag, noise, resetting rule and schedule).
+    /// Model parameters.
     pub fn params(&self) -> &Params {
         &self.params
     }
-    /// Start position.
+    /// Initial position x_0.
     pub fn x0(&self) -> f64 {
         self.x0
     }
-    /// Start velocity.
+    /// Initial velocity v_0.
     pub fn v0(&self) -> f64 {
         self.v0
     }
-    /// The target.
+    /// Where the search ends.
     pub fn target(&self) -> PositionTarget {
         self.target
     }
-    /// Whether the mean first-passage time is finite: always for an
-    /// interval; for a level only with full resetting (position reset) and
-    /// resets that happen (a Poisson rate r > 0 or a period).
+
+    /// True when the mean search time is finite: an interval target, or
+    /// full resetting (params.schedule().position is Some) with a reset
+    /// rate/period. Refinements, each a case where the particle can never
+    /// arrive with positive probability: a level with the noise kept at
+    /// resets needs lambda > 0 (else a particle in the state pointing away
+    /// never turns); a periodic clock with position resetting needs the
+    /// target within reach of one period from x_r (the + or - flow from the
+    /// extreme reset velocity, or v_max times the cycle with a fixed
+    /// refractory period), else the walk restarts before it can get there, forever.
+    /// With velocity-only resetting and a level, S(t) decays as a power law
+    /// (or tends to a constant): infinite. (A nonzero stationary mean
+    /// velocity towards the level would make that mean finite; it is not
+    /// detected, so such a problem is reported as infinite.)
     pub fn mean_is_finite(&self) -> bool {
+        let p = &self.params;
+        let sched = p.schedule();
+        let Some(pos) = sched.position else {
+            return matches!(self.target, PositionTarget::Interval(..));
+        };
+        let resets = p.rate() > 0.0 || sched.periodic.is_some();
+        let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
         match self.target {
-            PositionTarget::Interval(..) => true,
-            PositionTarget::Level(_) => {
-                let s = self.params.schedule();
-                s.position.is_some() && (self.params.rate() > 0.0 || s.periodic.is_some())
+            PositionTarget::Level(_) if !(resets && turns) => false,
+            _ => match sched.periodic {
+                Some(per) => self.reachable_within(pos.x, per.period),
+                None => true,
+            },
+        }
+    }
+
+    /// Whether a particle reset to `xr` can reach the target within one
+    /// period `period` of a periodic clock (the farthest displacement: the
+    /// ± flow from the extreme reset velocity, no flip; with a fixed
+    /// refractory period, v_max over the whole cycle; an exponential one is
+    /// taken as reaching).
+    fn reachable_within(&self, xr: f64, period: f64) -> bool {
+        let p = &self.params;
+        let (lo, hi) = self.target.bounds(self.x0);
+        let (up, down) = match p.schedule().refractory {
+            // An exponential hold is unbounded: held at a nonzero velocity
+            // the particle reaches any level.
+            Some(Refractory::Exp { .. }) => return true,
+            Some(r) => {
+                let per = crate::model::reset::Periodic { period };
+                let reach = p.v_upper() * per.cycle(Some(r));
+                (reach, -reach)
             }
+            None => {
+                let (vlo, vhi) = p.reset().target().support();
+                let s = p.sigma();
+                crate::with_drag!(p.drag(), |d| (
+                    d.flow_displacement(s, vhi, period),
+                    d.flow_displacement(-s, vlo, period)
+                ))
+            }
+        };
+        xr + up >= hi || xr + down <= lo
+    }
+}
+
+/// How a search problem is solved. The one dispatch point: a deterministic
+/// method joins as a variant here and an arm in [`solve`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "lowercase")]
+pub enum SearchMethod {
+    /// Exact event-driven particles (see [`exact`]).
+    Exact(ParticleOptions),
+}
+
+impl SearchMethod {
+    /// Short name (`exact`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            SearchMethod::Exact(_) => "exact",
+        }
+    }
+
+    /// The particle options of a particle method.
+    pub fn particles(&self) -> Option<&ParticleOptions> {
+        match self {
+            SearchMethod::Exact(run) => Some(run),
+        }
+    }
+
+    /// Validate before anything runs: at least 4 particles (two per
+    /// starting state), t_max > 0, and a finite t_max where the mean search
+    /// time is infinite (some particles would never stop).
+    pub fn check(&self, problem: &SearchProblem) -> Result<()> {
+        match self {
+            SearchMethod::Exact(run) => {
+                if run.particles < 4 {
+                    return Err(Error::invalid("particles", run.particles, "particles >= 4"));
+                }
+                crate::mfpt::exact::check_t_max(run.t_max)?;
+                if run.t_max.is_infinite() && !problem.mean_is_finite() {
+                    return Err(Error::invalid(
+                        "t_max",
+                        run.t_max,
+                        "a finite t_max: the mean search time of this problem is infinite \
+                         (velocity-only resetting with a one-sided level, or a target out of \
+                         reach), so some particles would never stop",
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// A particle estimate of a search problem.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParticleSearch {
+    /// Mergeable first-passage statistics (the Kaplan-Meier curve included).
+    pub stats: FptStats,
+    /// Whether the mean search time is finite ([`SearchProblem::mean_is_finite`]).
+    pub mean_is_finite: bool,
+    /// Where the mean is infinite: the fitted tail exponent of S(t)
+    /// (`None` where the curve has too few resolved points).
+    pub tail: Option<TailFit>,
+}
+
+/// The result of [`solve`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", content = "result", rename_all = "lowercase")]
+pub enum SearchResult {
+    /// From particles.
+    Particles(ParticleSearch),
+}
+
+impl ParticleSearch {
+    /// tau = (tau+ + tau-)/2, or NaN where the mean is infinite or any
+    /// particle was censored.
+    pub fn tau(&self) -> f64 {
+        if self.mean_is_finite {
+            self.stats.summary().tau
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// Why tau is not reported for a problem with an infinite mean, in one line.
+pub const INFINITE_MEAN_REASON: &str = "the mean search time is infinite: with velocity-only \
+     resetting (no position reset) x is unbounded and a one-sided level is reached with a \
+     power-law survival S(t) ~ t^-theta (theta = 1/2 with zero mean velocity) or, out of reach, \
+     never; the tail exponent is reported instead";
+
+/// Solve `problem` by `method`, validated first ([`SearchMethod::check`]).
+/// The exact sampler runs every resetting protocol and drag law. Particle
+/// estimates are bit-identical for any thread count.
+pub fn solve(
+    problem: &SearchProblem,
+    method: &SearchMethod,
+    progress: &dyn Progress,
+) -> Result<SearchResult> {
+    method.check(problem)?;
+    match *method {
+        SearchMethod::Exact(run) => {
+            let stats = exact::stats(problem, run.t_max, run.particles, run.seed, progress)?;
+            let finite = problem.mean_is_finite();
+            let tail = if finite { None } else { fit_tail(&stats) };
+            Ok(SearchResult::Particles(ParticleSearch {
+                stats,
+                mean_is_finite: finite,
+                tail,
+            }))
         }
     }
 }

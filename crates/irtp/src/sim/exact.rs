@@ -219,7 +219,7 @@ fn kink_inside<D: Drag>(drag: &D, a: f64, b: f64) -> bool {
 /// 1 - Sigma = 1e-12, negative at 1e-14).
 const MIN_RELAXATION_RATE: f64 = 1e-10;
 
-fn check_relaxation<D: Drag>(drag: &D, sigma: f64, vu: f64) -> Result<()> {
+pub(crate) fn check_relaxation<D: Drag>(drag: &D, sigma: f64, vu: f64) -> Result<()> {
     let rate = drag.derivative(vu);
     if !(rate >= MIN_RELAXATION_RATE) {
         return Err(Error::invalid(
@@ -271,7 +271,7 @@ fn check_cancellation(params: &Params) -> Result<()> {
 /// iterative velocity solve with the deficit table in v (the same answers
 /// to rounding).
 #[derive(Clone)]
-enum Segments<F> {
+pub(crate) enum Segments<F> {
     Table(PotentialTable<F>),
     Solve(F, DeficitTable),
 }
@@ -279,7 +279,7 @@ enum Segments<F> {
 impl<F: FlowMap> Segments<F> {
     /// The segment start at velocity v.
     #[inline]
-    fn at(&self, v: f64) -> FlowPoint {
+    pub(crate) fn at(&self, v: f64) -> FlowPoint {
         match self {
             Segments::Table(t) => t.at(v),
             Segments::Solve(f, d) => {
@@ -295,7 +295,7 @@ impl<F: FlowMap> Segments<F> {
 
     /// The point reached from p after time dt ≥ 0.
     #[inline]
-    fn advance(&self, p: &FlowPoint, dt: f64) -> FlowPoint {
+    pub(crate) fn advance(&self, p: &FlowPoint, dt: f64) -> FlowPoint {
         match self {
             Segments::Table(t) => t.advance(p, dt),
             Segments::Solve(f, d) => {
@@ -416,7 +416,7 @@ struct Scratch {
 /// with n < 1, is a kink of Φ at a known potential, which the table makes
 /// a cell boundary, tabulating the cells next to an infinite slope in a
 /// variable that resolves it.)
-fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Segments<D::Flow>> {
+pub(crate) fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Segments<D::Flow>> {
     let table = PotentialTable::new(drag, s);
     Ok(match table {
         Some(t) => Segments::Table(t),

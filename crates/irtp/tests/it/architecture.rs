@@ -2,13 +2,14 @@
 //!
 //! Between crates Cargo enforces the direction (irtp-cli, irtp-python →
 //! irtp-paper → irtp-app → irtp); inside the core the rules it cannot see
-//! are checked here: {`mfpt`, `fp`, `sim`, `analytic`} → `model` →
-//! `numerics`. A module may import from its own layer's allowed siblings
+//! are checked here: {`search`, `mfpt`, `fp`, `sim`, `analytic`} → `model`
+//! → `numerics`. A module may import from its own layer's allowed siblings
 //! ([`SIBLINGS`]) and from any layer below it. `error`, `rng`, `parallel`,
 //! `stats`, `memo` are utilities: importable from `model` and above, and
 //! importing only each other; `numerics` may import only `error`. In
 //! particular `sim` (the samplers) never imports `mfpt` (first passage,
-//! which uses the samplers).
+//! which uses the samplers), and `search` (first passage in position) may
+//! import both, never the reverse.
 //!
 //! An import is any path in code (comments and literals stripped) that
 //! starts with `crate::` or `$crate::` (also `use crate::{a, b::c}` groups),
@@ -22,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 /// Layers of the library's top-level modules, highest first.
 const LAYERS: &[&[&str]] = &[
-    &["mfpt", "fp", "sim", "analytic", "search"],
+    &["search", "mfpt", "fp", "sim", "analytic"],
     &["model"],
     &["numerics"],
 ];
@@ -31,7 +32,7 @@ const LAYERS: &[&[&str]] = &[
 const UTILITIES: &[&str] = &["error", "rng", "parallel", "stats", "memo"];
 
 /// The allowed imports within one layer, (from, to).
-const SIBLINGS: &[(&str, &str)] = &[("mfpt", "sim")];
+const SIBLINGS: &[(&str, &str)] = &[("mfpt", "sim"), ("search", "mfpt"), ("search", "sim")];
 
 /// Utilities `numerics` may import.
 const NUMERICS_UTILITIES: &[&str] = &["error"];

@@ -1,0 +1,283 @@
+//! `irtp mfpt --xt L | --interval A,B`: the search problem (first passage in
+//! position) from the command line: the output contract with provenance,
+//! the infinite mean (exit 0, tau null, the tail exponent), thread-count
+//! invariance, and every class of bad input refused naming its flag
+//! (exit 2, one line, nothing written).
+
+use crate::common::{assert_rejected, irtp, irtp_env, json, read_json, summary};
+
+const FULL: [&str; 12] = [
+    "mfpt",
+    "--xt",
+    "0.8",
+    "--x0",
+    "0.1",
+    "--v0",
+    "0.2",
+    "--method",
+    "exact",
+    "--reset-position",
+    "0",
+    "--particles",
+];
+
+#[test]
+fn a_search_writes_its_results_with_provenance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let d = dir.to_str().unwrap();
+    let out = irtp(&[&FULL[..], &["2000", "--seed", "5", "--out", d, "--json"]].concat());
+    let v = summary(&out);
+    assert_eq!(v["method"], "exact");
+    let r = &v["results"];
+    assert_eq!(r["infinite_mean"], false);
+    assert!(r["tail_exponent"].is_null());
+    let tau = r["tau"].as_f64().expect("a finite mean");
+    assert!(tau > 0.0 && r["tau_err"].as_f64().unwrap() > 0.0, "{r}");
+    assert_eq!(r["problem"]["x0"], 0.1);
+    assert_eq!(r["problem"]["v0"], 0.2);
+    assert_eq!(r["problem"]["target"]["Level"], 0.8);
+    assert_eq!(r["problem"]["params"]["reset_position"], 0.0);
+    for f in ["summary.json", "run.json", "mfpt.json", "survival.csv"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let run = read_json(&dir.join("run.json"));
+    let text = run.to_string();
+    for key in ["\"seed\":5", "\"version\"", "\"Level\":0.8", "\"x0\":0.1"] {
+        assert!(text.contains(key), "run.json lacks {key}: {text}");
+    }
+    let surv = std::fs::read_to_string(dir.join("survival.csv")).unwrap();
+    assert!(
+        surv.starts_with("t,survival,survival_err,at_risk"),
+        "{surv}"
+    );
+}
+
+#[test]
+fn an_interval_search_runs_and_threads_do_not_change_it() {
+    let args = [
+        "mfpt",
+        "--interval",
+        "-0.4,0.5",
+        "--v0",
+        "0",
+        "--method",
+        "exact",
+        "--drag",
+        "tanh",
+        "--sigma",
+        "0.6",
+        "--particles",
+        "3000",
+        "--json",
+    ];
+    let one = json(&irtp_env(&args, &[("RAYON_NUM_THREADS", "1")]));
+    let two = json(&irtp_env(&args, &[("RAYON_NUM_THREADS", "2")]));
+    assert_eq!(one, two);
+    assert_eq!(one["problem"]["target"]["Interval"][0], -0.4);
+    assert!(one["tau"].as_f64().unwrap() > 0.0, "{one}");
+}
+
+/// Velocity-only resetting and a one-sided level: exit 0, tau null,
+/// `infinite_mean` true with its reason, and the tail exponent with its
+/// error and window.
+#[test]
+fn an_infinite_mean_is_reported_as_such() {
+    let out = irtp(&[
+        "mfpt",
+        "--xt",
+        "0.5",
+        "--v0",
+        "0",
+        "--method",
+        "exact",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--lambda",
+        "2",
+        "--rate",
+        "1",
+        "--particles",
+        "2000",
+        "--t-max",
+        "1000",
+        "--json",
+    ]);
+    let r = json(&out);
+    assert!(r["tau"].is_null() && r["tau_plus"].is_null() && r["tau_err"].is_null());
+    assert_eq!(r["infinite_mean"], true);
+    assert!(r["infinite_mean_reason"]
+        .as_str()
+        .unwrap()
+        .contains("infinite"));
+    let tail = &r["tail_exponent"];
+    let (theta, err) = (
+        tail["theta"].as_f64().unwrap(),
+        tail["theta_err"].as_f64().unwrap(),
+    );
+    assert!(theta > 0.0 && err > 0.0, "{tail}");
+    assert!(tail["t_to"].as_f64().unwrap() <= 1000.0, "{tail}");
+    // The text report leads with it.
+    let text = irtp(&[
+        "mfpt",
+        "--xt",
+        "0.5",
+        "--v0",
+        "0",
+        "--method",
+        "exact",
+        "--particles",
+        "200",
+        "--t-max",
+        "100",
+    ]);
+    let s = String::from_utf8_lossy(&text.stdout);
+    assert!(s.starts_with("INFINITE MEAN: tau is not reported"), "{s}");
+}
+
+/// Each class of bad input: exit 2, one line naming the flag, no output
+/// directory.
+#[test]
+fn bad_search_inputs_are_refused_naming_the_flag() {
+    let base = ["mfpt", "--v0", "0", "--method", "exact"];
+    let cases: [(&[&str], &str); 10] = [
+        (&["--xt", "1", "--reset-position", "2"], "--reset-position"),
+        (
+            &["--xt", "-1", "--reset-position", "-1"],
+            "--reset-position",
+        ),
+        (
+            &["--interval", "-1,1", "--reset-position", "3"],
+            "--reset-position",
+        ),
+        (&["--interval", "1,-1"], "--interval"),
+        (&["--interval", "0.5,0.5", "--x0", "0.5"], "--interval"),
+        (&["--interval", "-1,nan"], "--interval"),
+        (&["--interval", "-1"], "--interval"),
+        (&["--xt", "nan"], "--xt"),
+        (&["--xt", "1", "--x0", "nan"], "--x0"),
+        (&["--xt", "0.5", "--t-max", "inf"], "--t-max"),
+    ];
+    for (extra, flag) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let d = dir.to_str().unwrap();
+        let out = irtp(&[&base[..], extra, &["--out", d]].concat());
+        assert_rejected(&out, flag, &dir);
+    }
+    // The backward solver (the default method) and Euler: not for a search.
+    for method in [
+        &[][..],
+        &["--method", "backward"][..],
+        &["--method", "euler"][..],
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let d = dir.to_str().unwrap();
+        let out = irtp(
+            &[
+                &["mfpt", "--xt", "1", "--v0", "0"][..],
+                method,
+                &["--out", d],
+            ]
+            .concat(),
+        );
+        assert_rejected(&out, "--method", &dir);
+    }
+    // --x0 without a search target, and a velocity and a position target.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let d = dir.to_str().unwrap();
+    let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--x0", "1", "--out", d]);
+    assert_rejected(&out, "--x0", &dir);
+    let out = irtp(&["mfpt", "--vt", "0.5", "--xt", "1", "--v0", "0", "--out", d]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--xt") && err.contains("--vt") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!dir.exists());
+}
+
+/// `irtp mfpt distribution --xt`: the sampled search-time histogram and
+/// Kaplan-Meier curve; its density integrates to the arrived fraction and
+/// no passage comes before |L - x0| / v_max; the backward method (the
+/// default) is refused naming `--method`.
+#[test]
+fn a_search_distribution_writes_the_histogram_and_survival() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "mfpt",
+        "distribution",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--method",
+        "exact",
+        "--particles",
+        "4000",
+        "--out",
+        d,
+        "--json",
+    ];
+    let r = json(&irtp(&args));
+    assert_eq!(r["infinite_mean"], false);
+    assert!(r["tau"].as_f64().unwrap() > 0.0);
+    let hist = std::fs::read_to_string(dir.join("histogram.csv")).unwrap();
+    let mut mass = 0.0;
+    // tan at Sigma = 3: v_max = atan(3).
+    let least = 1.0 / 3f64.atan();
+    for line in hist.lines().skip(1) {
+        let row: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        mass += row[2] * (row[1] - row[0]);
+        if row[4] > 0.0 {
+            assert!(row[1] >= least, "{line}");
+        }
+    }
+    assert!((mass - 1.0).abs() < 1e-9, "{mass}");
+    assert!(dir.join("survival.csv").exists() && dir.join("distribution.json").exists());
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let d = dir.to_str().unwrap();
+    let out = irtp(&["mfpt", "distribution", "--xt", "1", "--v0", "0", "--out", d]);
+    assert_rejected(&out, "--method", &dir);
+}
+
+/// The cost is estimated before any work (a pilot of a few particles
+/// gives the mean time in flight): too many particles, or an unbounded
+/// time in flight, are refused naming the flags, exit 2, nothing written.
+#[test]
+fn a_costly_search_is_refused_before_it_starts() {
+    let base = ["mfpt", "--v0", "0", "--method", "exact"];
+    let cases: [(&[&str], &str); 2] = [
+        (&["--xt", "1", "--particles", "1e12"], "--particles"),
+        (
+            &["--xt", "1e300", "--reset-position", "0", "--t-max", "inf"],
+            "--t-max",
+        ),
+    ];
+    for (extra, flag) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let d = dir.to_str().unwrap();
+        let start = std::time::Instant::now();
+        let out = irtp(&[&base[..], extra, &["--out", d]].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("too costly") && err.contains(flag), "{err}");
+        assert!(
+            err.contains("--max-work") && err.lines().count() == 1,
+            "{err}"
+        );
+        assert!(!dir.exists());
+        assert!(start.elapsed().as_secs_f64() < 10.0);
+    }
+}

@@ -1,0 +1,369 @@
+//! Exact first passage in position: the event-driven sampler of
+//! [`crate::sim::exact`] run until x leaves the search region.
+//!
+//! Between events (noise flips and Poisson resets: a clock of rate
+//! lambda + r; periodic reset times; the end of a refractory period) the
+//! velocity follows the exact flow dv/dt = s - g(v), and x along a flow
+//! segment is the flow's displacement v* t - ∫ (v* - v) dt (the flow
+//! potential tables of the simulation sampler). Along a segment v moves
+//! monotonically towards v* = g⁻¹(s), so it changes sign at most once (at
+//! the flow time to v = 0): x(t) is monotone on at most two pieces. On a
+//! piece that moves towards a boundary and ends beyond it, the crossing is
+//! the root of x(t) = boundary, found by safeguarded Halley steps with
+//! dx/dt = v and d²x/dt² = s - g(v) inside the piece's bracket
+//! ([`crate::numerics::root::solve_increasing`], bisection where it does
+//! not converge): exact to rounding, no time step, no overshoot.
+//!
+//! At a reset the velocity is drawn from the reset target, the noise state
+//! kept or re-drawn by the rule, and with position resetting x → x_r (on
+//! the start side of the target, so a reset is never a passage). A
+//! refractory period holds v at the reset velocity: x moves linearly (its
+//! crossing is closed-form), Poisson resets are off, the noise state flips
+//! with the probability ½(1 - e^{-2 lambda D}) of an odd number of flips,
+//! and the periodic times inside it or at its end are skipped (as in
+//! [`crate::mfpt::exact`]).
+
+use super::SearchProblem;
+use crate::error::Result;
+use crate::mfpt::estimator::{first_passage_stats, FptSample, FptStats};
+use crate::model::drag::{FlowMap, FlowPoint};
+use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::Drag;
+use crate::numerics::root::solve_increasing;
+use crate::parallel::Progress;
+use crate::rng::Rng;
+use crate::sim::exact::{check_relaxation, exp_gap, segments, Segments};
+use rand::Rng as _;
+
+/// Prepared exact sampler of one search problem (flow tables built once).
+#[derive(Clone)]
+pub struct SearchSampler<D: Drag> {
+    drag: D,
+    /// Flow segments of s = +Sigma (index 0) and s = -Sigma (index 1).
+    segs: [Segments<D::Flow>; 2],
+    /// The same flows, for flow times (the turning point v = 0).
+    flows: [D::Flow; 2],
+    /// Fixed points v* and noise values s, per state.
+    vs: [f64; 2],
+    s: [f64; 2],
+    lambda: f64,
+    total_rate: f64,
+    reset: ResetRule,
+    periodic: Option<Periodic>,
+    refractory: Option<Refractory>,
+    x_reset: Option<f64>,
+    /// The search region lo < x < hi (an open side is ∓∞).
+    lo: f64,
+    hi: f64,
+}
+
+/// The state of one walk between events.
+struct Walk {
+    t: f64,
+    x: f64,
+    /// Noise state: 0 for +Sigma, 1 for -Sigma.
+    si: usize,
+    /// The start of the current flow segment.
+    a: FlowPoint,
+}
+
+/// The end of one flow segment.
+enum Segment {
+    /// x reached a boundary after this time into the segment.
+    Hit(f64),
+    /// No crossing: the segment's end point and x there.
+    Moved(FlowPoint, f64),
+}
+
+impl<D: Drag> SearchSampler<D> {
+    /// Prepare for `problem` with the law `drag` (its own type: the walk
+    /// is monomorphised). Errors where the flow tables cannot resolve the
+    /// law (as the simulation sampler).
+    pub fn new(drag: &D, problem: &SearchProblem) -> Result<Self> {
+        let params = problem.params();
+        let sigma = params.sigma();
+        let (vl, vu) = params.bounds();
+        check_relaxation(drag, sigma, vu)?;
+        let segs = [
+            segments(drag, sigma, vl, vu)?,
+            segments(drag, -sigma, vl, vu)?,
+        ];
+        let flows = [
+            drag.flow(sigma).accelerated(),
+            drag.flow(-sigma).accelerated(),
+        ];
+        let (lo, hi) = problem.target().bounds(problem.x0());
+        let sched = params.schedule();
+        Ok(SearchSampler {
+            drag: drag.clone(),
+            vs: [flows[0].fixed_point(), flows[1].fixed_point()],
+            s: [sigma, -sigma],
+            segs,
+            flows,
+            lambda: params.lambda(),
+            total_rate: params.lambda() + params.rate(),
+            reset: *params.reset(),
+            periodic: sched.periodic,
+            refractory: sched.refractory,
+            x_reset: sched.position.map(|p| p.x),
+            lo,
+            hi,
+        })
+    }
+
+    /// One search from (x0, v0) in noise state +Sigma (`start_plus`) or
+    /// -Sigma: (the first time x leaves the search region, or None if not
+    /// by `t_max`; the number of events).
+    pub fn run(
+        &self,
+        x0: f64,
+        v0: f64,
+        start_plus: bool,
+        t_max: f64,
+        rng: &mut Rng,
+    ) -> (Option<f64>, u64) {
+        let si = usize::from(!start_plus);
+        let mut w = Walk {
+            t: 0.0,
+            x: x0,
+            si,
+            a: self.segs[si].at(v0),
+        };
+        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut events = 0u64;
+        loop {
+            let gap = exp_gap(rng, self.total_rate);
+            let periodic = next_periodic - w.t <= gap;
+            let step = if periodic { next_periodic - w.t } else { gap };
+            let span = step.min(t_max - w.t);
+            let (b, x) = match self.segment(w.si, &w.a, w.x, span) {
+                // At most t_max (t + (t_max - t) may round above it).
+                Segment::Hit(tau) => return (Some((w.t + tau).min(t_max)), events),
+                Segment::Moved(b, x) => (b, x),
+            };
+            if span < step || w.t + step >= t_max {
+                return (None, events);
+            }
+            w.x = x;
+            w.t = if periodic { next_periodic } else { w.t + step };
+            events += 1;
+            if !periodic && rng.gen::<f64>() * self.total_rate < self.lambda {
+                w.si = 1 - w.si;
+                w.a = self.segs[w.si].at(b.v);
+                continue;
+            }
+            if let Some(hit) = self.reset_at(&mut w, t_max, rng, &mut events) {
+                return (hit, events);
+            }
+            if let Some(p) = self.periodic {
+                next_periodic = p.next_after(w.t);
+            }
+        }
+    }
+
+    /// A reset at w.t: velocity and noise by the rule, x → x_r with
+    /// position resetting, then the refractory hold if any. `Some` ends
+    /// the walk: the passage time during the hold, or None past t_max.
+    fn reset_at(
+        &self,
+        w: &mut Walk,
+        t_max: f64,
+        rng: &mut Rng,
+        events: &mut u64,
+    ) -> Option<Option<f64>> {
+        let v = self.reset.draw_velocity(rng);
+        w.si = usize::from(!self.reset.draw_noise(w.si == 0, rng));
+        if let Some(xr) = self.x_reset {
+            w.x = xr;
+        }
+        if let Some(r) = self.refractory {
+            let d = r.draw(rng);
+            if let Some(tau) = self.held_crossing(w.x, v, d.min(t_max - w.t)) {
+                return Some(Some((w.t + tau).min(t_max)));
+            }
+            if w.t + d >= t_max {
+                return Some(None);
+            }
+            if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
+                w.si = 1 - w.si;
+            }
+            w.t += d;
+            w.x += v * d;
+            *events += 1;
+        }
+        w.a = self.segs[w.si].at(v);
+        None
+    }
+
+    /// The crossing time of x + v t (held velocity) within `span`, if any.
+    fn held_crossing(&self, x: f64, v: f64, span: f64) -> Option<f64> {
+        let bound = if v > 0.0 {
+            self.hi
+        } else if v < 0.0 {
+            self.lo
+        } else {
+            return None;
+        };
+        let tau = (bound - x) / v;
+        (tau <= span).then_some(tau)
+    }
+
+    /// x after flowing for `dt` from `a` (state `si`, position `x`), and the
+    /// end point: x + v* dt - ∫ (v* - v) dt from the deficit antiderivatives.
+    #[inline]
+    fn advance(&self, si: usize, a: &FlowPoint, x: f64, dt: f64) -> (FlowPoint, f64) {
+        let b = self.segs[si].advance(a, dt);
+        (b, x + self.vs[si] * dt - (a.q[0] - b.q[0]))
+    }
+
+    /// Flow for `span` from `a` at position `x` in state `si`: the first
+    /// crossing of a boundary inside, else the end point. x(t) is monotone
+    /// on [0, t0] and [t0, span] with t0 the flow time to v = 0 (only when
+    /// v starts on the other side of 0 from v*).
+    fn segment(&self, si: usize, a: &FlowPoint, x: f64, span: f64) -> Segment {
+        let vs = self.vs[si];
+        let turn = if a.v * vs < 0.0 {
+            self.flows[si].time(a.v, 0.0)
+        } else {
+            f64::INFINITY
+        };
+        // The direction of x before the turn (from v* where v starts at 0).
+        let first_up = if a.v != 0.0 { a.v > 0.0 } else { vs > 0.0 };
+        let (mut t1, mut x1, mut up) = (0.0, x, first_up);
+        if turn < span {
+            let (_, xb) = self.advance(si, a, x, turn);
+            if let Some(tau) = self.piece(si, a, x, (0.0, x), (turn, xb), first_up) {
+                return Segment::Hit(tau);
+            }
+            (t1, x1, up) = (turn, xb, vs > 0.0);
+        }
+        let end = if span.is_finite() {
+            span
+        } else if (up && self.hi.is_infinite()) || (!up && self.lo.is_infinite()) {
+            // Endless and moving away from the only boundary: never a hit.
+            return Segment::Moved(*a, x);
+        } else {
+            // An endless segment (no clock, no t_max): the flow towards
+            // v* ≠ 0 crosses eventually; find a time beyond the crossing.
+            self.beyond(si, a, x, t1, up)
+        };
+        let (b, xb) = self.advance(si, a, x, end);
+        match self.piece(si, a, x, (t1, x1), (end, xb), up) {
+            Some(tau) => Segment::Hit(tau),
+            None => Segment::Moved(b, xb),
+        }
+    }
+
+    /// A time after `from` at which the monotone piece moving `up` from
+    /// `a` (position x) is past its boundary (doubling; the last doubling
+    /// tried if the boundary is never passed within the f64 range).
+    fn beyond(&self, si: usize, a: &FlowPoint, x: f64, from: f64, up: bool) -> f64 {
+        let mut t = from.max(1.0) * 2.0;
+        for _ in 0..2000 {
+            let (_, xt) = self.advance(si, a, x, t);
+            if (up && xt >= self.hi) || (!up && xt <= self.lo) || !(t * 2.0).is_finite() {
+                return t;
+            }
+            t *= 2.0;
+        }
+        t
+    }
+
+    /// The crossing inside the monotone piece [t1, t2] of the segment from
+    /// `a` (position x at its start), x(t1) = x1, x(t2) = x2, moving `up`
+    /// (x increasing) or down: None unless x2 is at or past the boundary
+    /// in that direction.
+    fn piece(
+        &self,
+        si: usize,
+        a: &FlowPoint,
+        x: f64,
+        (t1, x1): (f64, f64),
+        (t2, x2): (f64, f64),
+        up: bool,
+    ) -> Option<f64> {
+        let (bound, dir) = if up { (self.hi, 1.0) } else { (self.lo, -1.0) };
+        if !(dir * (x2 - bound) >= 0.0) {
+            return None;
+        }
+        let s = self.s[si];
+        // H(t) = ±(x(t) - bound), increasing on [t1, t2]: H(t1) < 0 <= H(t2).
+        let h = |t: f64| {
+            let (b, xt) = self.advance(si, a, x, t);
+            let accel = self.drag.drift(s, b.v);
+            (dir * (xt - bound), dir * b.v, dir * accel)
+        };
+        let frac = (bound - x1) / (x2 - x1);
+        let frac = if frac.is_finite() {
+            frac.clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let guess = t1 + (t2 - t1) * frac;
+        Some(monotone_root(&h, t1, t2, guess))
+    }
+}
+
+/// Root of the increasing H on [lo, hi] (H(lo) < 0 <= H(hi)): safeguarded
+/// Halley steps ([`solve_increasing`], to ~1e-18 relative), falling back to
+/// bisection to adjacent doubles where those do not converge (a crossing
+/// at a turning point, where H' = v → 0).
+fn monotone_root(h: &dyn Fn(f64) -> (f64, f64, f64), lo: f64, hi: f64, guess: f64) -> f64 {
+    if let Ok(t) = solve_increasing(h, lo, hi, guess, 1e-6, 0.0) {
+        return t;
+    }
+    let (mut a, mut b) = (lo, hi);
+    loop {
+        let m = 0.5 * (a + b);
+        if !(m > a && m < b) {
+            return b;
+        }
+        if h(m).0 >= 0.0 {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+}
+
+/// Search statistics of `problem` by the exact sampler through the
+/// method-agnostic driver [`first_passage_stats`] (particle i: stream
+/// (seed, i), start state +Sigma for even i, censored at `t_max`),
+/// monomorphised for the law's type. Bit-identical for any thread count.
+pub fn stats(
+    problem: &SearchProblem,
+    t_max: f64,
+    particles: u64,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<FptStats> {
+    crate::with_drag!(problem.params().drag(), |d| {
+        let sampler = SearchSampler::new(d, problem)?;
+        let (x0, v0) = (problem.x0(), problem.v0());
+        Ok(first_passage_stats(
+            particles,
+            seed,
+            t_max,
+            progress,
+            |_, rng, plus| {
+                let (time, work) = sampler.run(x0, v0, plus, t_max, rng);
+                FptSample { time, work }
+            },
+        ))
+    })
+}
+
+/// One search of `problem` (any law, dispatched per call; for many
+/// particles build a [`SearchSampler`] once, as [`stats`] does): the
+/// passage time (None if not by `t_max`) and the number of events.
+pub fn search_once(
+    problem: &SearchProblem,
+    start_plus: bool,
+    t_max: f64,
+    rng: &mut Rng,
+) -> Result<(Option<f64>, u64)> {
+    crate::with_drag!(problem.params().drag(), |d| {
+        let sampler = SearchSampler::new(d, problem)?;
+        Ok(sampler.run(problem.x0(), problem.v0(), start_plus, t_max, rng))
+    })
+}
