@@ -115,12 +115,12 @@ pub struct DirectArgs {
     #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
     vt: Option<f64>,
     /// Search target in position (instead of --vt): the first time x reaches the level L
-    /// (one-sided; --method exact). With velocity-only resetting the mean search time is
+    /// (one-sided; --method exact or backward). With velocity-only resetting the mean search time is
     /// infinite: tau is null, `infinite_mean` true, and the tail exponent of S(t) is reported.
     #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
     xt: Option<f64>,
     /// Search target in position (instead of --vt): the first exit of x from the open
-    /// interval (A, B), A < x0 < B (--method exact).
+    /// interval (A, B), A < x0 < B (--method exact or backward).
     #[arg(
         long,
         value_name = "A,B",
@@ -131,6 +131,13 @@ pub struct DirectArgs {
     /// Initial position x_0 of a search (--xt or --interval) [default: 0].
     #[arg(long, value_name = "X0", allow_hyphen_values = true)]
     x0: Option<f64>,
+    /// Cells in x of the coarse mesh of a search's backward equation (--xt or
+    /// --interval with --method backward; refined once and extrapolated).
+    #[arg(long, default_value_t = 64)]
+    cells_x: usize,
+    /// Cells in v of the coarse mesh of a search's backward equation.
+    #[arg(long, default_value_t = 32)]
+    cells_v: usize,
     #[command(flatten)]
     sim: SimArgs,
     #[command(flatten)]

@@ -2,8 +2,9 @@
 //! search problem, first passage in position, through the library's one
 //! entry point `irtp::search::solve`.
 //!
-//! Only the exact sampler solves it for now: `--method backward` (the
-//! default) and `euler` are refused naming `--method`. Where the mean search
+//! `--method exact` runs the exact sampler, `--method backward` (the
+//! default) the 2-D backward equation (`--cells-x`, `--cells-v`; Richardson
+//! error estimate); `euler` is refused naming `--method`. Where the mean search
 //! time is infinite (velocity-only resetting and a one-sided level) the run
 //! succeeds (exit 0) with `tau` null, `infinite_mean` true, the reason in
 //! `infinite_mean_reason` and the fitted tail exponent of S(t) in
@@ -63,14 +64,13 @@ impl SearchFlags<'_> {
     }
 }
 
-/// The refusal of a method other than exact for a search (`name`: the
-/// method given).
+/// The refusal of the Euler method for a search (`name`: the method
+/// given).
 pub(crate) fn only_exact(name: &str) -> Error {
     Error::invalid(
         "--method",
         name,
-        "exact with a search target in position (--xt, --interval): the sampler is the \
-         only solver of the search problem yet",
+        "exact or backward with a search target in position (--xt, --interval)",
     )
 }
 
@@ -90,15 +90,6 @@ pub(crate) fn exact_method(
 /// Flags → validated problem and method, the cost checked before any
 /// output exists.
 pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
-    if a.sim.method != Method::Exact {
-        let name = match a.sim.method {
-            Method::Backward => "backward",
-            Method::Euler => "euler",
-            Method::Exact => "exact",
-        };
-        return Err(only_exact(name));
-    }
-    a.sim.reject_inapplicable(&a.output)?;
     let flags = SearchFlags {
         model: &a.problem.model,
         v0: a.problem.v0,
@@ -106,14 +97,67 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
         xt: a.xt,
         interval: a.interval.as_deref(),
     };
-    let problem = flags.problem()?;
-    let run = ParticleOptions {
-        particles: a.sim.particles(),
-        t_max: a.sim.t_max(),
-        seed: a.output.seed(),
+    match a.sim.method {
+        Method::Euler => Err(only_exact("euler")),
+        Method::Backward => {
+            let problem = flags.problem()?;
+            let method = backward_method(&problem, a.cells_x, a.cells_v, &a.output.budget)?;
+            Ok(SearchConfig { problem, method })
+        }
+        Method::Exact => {
+            a.sim.reject_inapplicable(&a.output)?;
+            let problem = flags.problem()?;
+            let run = ParticleOptions {
+                particles: a.sim.particles(),
+                t_max: a.sim.t_max(),
+                seed: a.output.seed(),
+            };
+            let method = exact_method(&problem, run, &a.output.budget)?;
+            Ok(SearchConfig { problem, method })
+        }
+    }
+}
+
+/// The backward method on a coarse mesh of `cells_x` × `cells_v` (refined
+/// once), validated and its cost checked against `budget` (the solver's
+/// own refusals of a problem it cannot solve come first).
+fn backward_method(
+    problem: &SearchProblem,
+    cells_x: usize,
+    cells_v: usize,
+    budget: &budget::BudgetArgs,
+) -> irtp::Result<SearchMethod> {
+    let opts = search::backward::BackwardOptions {
+        max_work: f64::INFINITY,
+        max_memory: f64::INFINITY,
+        ..search::backward::BackwardOptions::with_cells(cells_x, cells_v)
     };
-    let method = exact_method(&problem, run, &a.output.budget)?;
-    Ok(SearchConfig { problem, method })
+    let method = SearchMethod::Backward(opts);
+    let named = |e: Error| match e {
+        Error::InvalidParameter {
+            name: n @ ("cells_x" | "cells_v"),
+            value,
+            allowed,
+        } => Error::InvalidParameter {
+            name: if n == "cells_x" {
+                "--cells-x"
+            } else {
+                "--cells-v"
+            },
+            value,
+            allowed,
+        },
+        e => e,
+    };
+    let cost = method.cost(problem).map_err(named)?.expect("a mesh method");
+    budget.check(&Cost {
+        work: cost.work,
+        unit: "operations",
+        drivers: vec!["cells_x", "cells_v", "rate"],
+        memory: cost.memory,
+        memory_drivers: vec!["cells_x", "cells_v"],
+    })?;
+    Ok(method)
 }
 
 /// Particles of the pilot run that estimates the mean time in flight.
@@ -243,8 +287,8 @@ pub(crate) fn note(r: &SearchReport) -> String {
     )
 }
 
-/// Solve a validated search with a progress stage: its statistics and
-/// report.
+/// Solve a validated search with a progress stage (particles only: the
+/// particle statistics and report).
 pub(crate) fn solve(c: &SearchConfig, ctx: &Context) -> irtp::Result<(FptStats, SearchReport)> {
     let total = c.method.particles().map_or(1, |r| r.particles);
     let result = {
@@ -252,27 +296,60 @@ pub(crate) fn solve(c: &SearchConfig, ctx: &Context) -> irtp::Result<(FptStats, 
         search::solve(&c.problem, &c.method, bar.as_ref())?
     };
     ctx.check()?;
-    let SearchResult::Particles(r) = result;
-    let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
-    Ok((r.stats, report))
+    match result {
+        SearchResult::Particles(r) => {
+            let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
+            Ok((r.stats, report))
+        }
+        _ => unreachable!("a particle method gives particle statistics"),
+    }
 }
 
-/// Run a search: `summary.json`, `run.json`, `mfpt.json` and `survival.csv`.
+/// What `irtp mfpt --xt/--interval --method backward --json` prints.
+#[derive(Serialize)]
+struct BackwardReport {
+    method: &'static str,
+    problem: SearchProblem,
+    #[serde(flatten)]
+    solution: search::backward::SearchSolution,
+}
+
+/// Run a search: `summary.json`, `run.json`, `mfpt.json` and, by
+/// particles, `survival.csv`.
 pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let c = config(a)?;
     let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
-    let (stats, report) = solve(&c, ctx)?;
+    let (json, seed, tables, note_text) = if c.method.particles().is_some() {
+        let (stats, report) = solve(&c, ctx)?;
+        let json = to_value(&report);
+        let table = survival_table(&stats.survival());
+        (json, Some(report.seed), vec![table], note(&report))
+    } else {
+        let result = {
+            let _bar = ctx.reporter.stage("search (backward equation)", 1);
+            search::solve(&c.problem, &c.method, &irtp::parallel::NoProgress)?
+        };
+        ctx.check()?;
+        let SearchResult::Backward(solution) = result else {
+            unreachable!("the backward method gives a backward solution")
+        };
+        let report = BackwardReport {
+            method: c.method.name(),
+            problem: c.problem,
+            solution,
+        };
+        (to_value(&report), None, vec![], String::new())
+    };
     let wall = t0.elapsed().as_secs_f64();
-    let json = to_value(&report);
     let results = Results {
         method: c.method.name().into(),
-        seed: Some(report.seed),
+        seed,
         json: json.clone(),
         parameters: json.clone(),
-        tables: vec![survival_table(&stats.survival())],
+        tables,
         json_files: vec![("mfpt.json", json.clone())],
-        text: note(&report) + &text_lines(&json),
+        text: note_text + &text_lines(&json),
         wall_time_s: wall,
     };
     finish("mfpt", results, out, ctx)

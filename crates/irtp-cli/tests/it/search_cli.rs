@@ -167,11 +167,20 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
         let out = irtp(&[&base[..], extra, &["--out", d]].concat());
         assert_rejected(&out, flag, &dir);
     }
-    // The backward solver (the default method) and Euler: not for a search.
-    for method in [
-        &[][..],
-        &["--method", "backward"][..],
-        &["--method", "euler"][..],
+    // Euler: not for a search; the backward solver (the default) refuses
+    // velocity-only resetting with a one-sided level (an infinite mean)
+    // naming --reset-position, and a mesh out of range naming its flag.
+    for (extra, flag) in [
+        (&["--method", "euler"][..], "--method"),
+        (&[][..], "--reset-position"),
+        (
+            &["--reset-position", "0", "--cells-x", "1"][..],
+            "--cells-x",
+        ),
+        (
+            &["--reset-position", "0", "--cells-v", "0"][..],
+            "--cells-v",
+        ),
     ] {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("out");
@@ -179,13 +188,35 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
         let out = irtp(
             &[
                 &["mfpt", "--xt", "1", "--v0", "0"][..],
-                method,
+                extra,
                 &["--out", d],
             ]
             .concat(),
         );
-        assert_rejected(&out, "--method", &dir);
+        assert_rejected(&out, flag, &dir);
     }
+    // The mesh's cost is checked before anything is written.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let args = [
+        "mfpt",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--max-work",
+        "1e3",
+    ];
+    let out = irtp(&[&args[..], &["--out", dir.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("too costly") && err.contains("--cells-x"),
+        "{err}"
+    );
+    assert!(!dir.exists());
     // --x0 without a search target, and a velocity and a position target.
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");

@@ -262,13 +262,20 @@ impl SearchProblem {
 pub enum SearchMethod {
     /// Exact event-driven particles (see [`exact`]).
     Exact(ParticleOptions),
+    /// The 2-D backward equation (see [`backward`]).
+    Backward(backward::BackwardOptions),
+    /// The state-resolved renewal route of full resetting, over the
+    /// parameters' own reset clock (see [`renewal`]).
+    Renewal(renewal::RenewalOptions),
 }
 
 impl SearchMethod {
-    /// Short name (`exact`).
+    /// Short name (`exact`, `backward`, `renewal`).
     pub fn name(&self) -> &'static str {
         match self {
             SearchMethod::Exact(_) => "exact",
+            SearchMethod::Backward(_) => "backward",
+            SearchMethod::Renewal(_) => "renewal",
         }
     }
 
@@ -276,6 +283,20 @@ impl SearchMethod {
     pub fn particles(&self) -> Option<&ParticleOptions> {
         match self {
             SearchMethod::Exact(run) => Some(run),
+            _ => None,
+        }
+    }
+
+    /// Work and memory of a deterministic method (its refusals of a
+    /// problem it cannot solve, first); None for particles.
+    pub fn cost(&self, problem: &SearchProblem) -> Result<Option<backward::Cost>> {
+        match self {
+            SearchMethod::Exact(_) => Ok(None),
+            SearchMethod::Backward(o) => backward::estimate(problem, o).map(Some),
+            SearchMethod::Renewal(o) => {
+                let waiting = renewal::WaitingTime::of(problem.params())?;
+                renewal::estimate(problem, &waiting, o).map(Some)
+            }
         }
     }
 
@@ -284,6 +305,7 @@ impl SearchMethod {
     /// time is infinite (some particles would never stop).
     pub fn check(&self, problem: &SearchProblem) -> Result<()> {
         match self {
+            SearchMethod::Backward(_) | SearchMethod::Renewal(_) => self.cost(problem).map(|_| ()),
             SearchMethod::Exact(run) => {
                 if run.particles < 4 {
                     return Err(Error::invalid("particles", run.particles, "particles >= 4"));
@@ -322,6 +344,26 @@ pub struct ParticleSearch {
 pub enum SearchResult {
     /// From particles.
     Particles(ParticleSearch),
+    /// From the 2-D backward equation.
+    Backward(backward::SearchSolution),
+    /// From the renewal route.
+    Renewal(renewal::RenewalSolution),
+}
+
+impl SearchResult {
+    /// (tau, tau+, tau-) and the error of tau: a standard error for
+    /// particles, an error estimate for the deterministic routes (NaN where
+    /// the mean is infinite or particles were censored).
+    pub fn tau(&self) -> (f64, f64, f64, f64) {
+        match self {
+            SearchResult::Particles(p) => {
+                let s = p.stats.summary();
+                (p.tau(), s.tau_plus, s.tau_minus, s.tau_err)
+            }
+            SearchResult::Backward(b) => (b.tau, b.tau_plus, b.tau_minus, b.error_estimate),
+            SearchResult::Renewal(r) => (r.tau, r.tau_plus, r.tau_minus, r.error_estimate),
+        }
+    }
 }
 
 impl ParticleSearch {
@@ -361,6 +403,11 @@ pub fn solve(
                 mean_is_finite: finite,
                 tail,
             }))
+        }
+        SearchMethod::Backward(o) => backward::solve(problem, &o).map(SearchResult::Backward),
+        SearchMethod::Renewal(o) => {
+            let waiting = renewal::WaitingTime::of(problem.params())?;
+            renewal::solve(problem, &waiting, &o).map(SearchResult::Renewal)
         }
     }
 }

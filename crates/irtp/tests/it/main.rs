@@ -23,6 +23,7 @@ mod models;
 mod msd_fit;
 mod power_kink;
 mod search_backward;
+mod search_cross;
 mod search_exact;
 mod shards;
 mod sim_euler;

@@ -29,6 +29,7 @@ fn exact(particles: u64, t_max: f64, seed: u64) -> SearchMethod {
 fn solve(p: &SearchProblem, m: &SearchMethod) -> search::ParticleSearch {
     match search::solve(p, m, &NoProgress).unwrap() {
         SearchResult::Particles(r) => r,
+        other => panic!("a particle method gave {other:?}"),
     }
 }
 
