@@ -58,25 +58,8 @@ pub struct DistributionArgs {
     /// mesh_error.
     #[arg(long, default_value_t = 4000, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     cells: usize,
-    /// Target velocity v_t (v_l < v_t < v_u).
-    #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
-    vt: Option<f64>,
-    /// Search target in position (instead of --vt): the first time x reaches the level L
-    /// (--method exact: histogram and Kaplan-Meier curve of the search time).
-    #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
-    xt: Option<f64>,
-    /// Search target in position (instead of --vt): the first exit of x from (A, B)
-    /// (--method exact).
-    #[arg(
-        long,
-        value_name = "A,B",
-        allow_hyphen_values = true,
-        conflicts_with = "vt"
-    )]
-    interval: Option<String>,
-    /// Initial position x_0 of a search (--xt or --interval) [default: 0].
-    #[arg(long, value_name = "X0", allow_hyphen_values = true)]
-    x0: Option<f64>,
+    #[command(flatten)]
+    target: super::mfpt::TargetArgs,
     /// Method: backward (S(t), f(t) from the backward equations) or exact (sampled histogram).
     #[arg(long, value_enum, default_value = "backward")]
     method: DistMethod,
@@ -168,7 +151,7 @@ impl DistributionArgs {
 
     /// Whether a search target in position (--xt or --interval) was given.
     fn is_search(&self) -> bool {
-        self.xt.is_some() || self.interval.is_some()
+        self.target.is_search()
     }
 
     /// The search problem's config: the exact method only, its flags
@@ -179,13 +162,7 @@ impl DistributionArgs {
             return Err(search::only_exact("backward"));
         }
         self.reject_inapplicable()?;
-        let flags = search::SearchFlags {
-            model: &self.model,
-            v0: Some(self.v0),
-            x0: self.x0,
-            xt: self.xt,
-            interval: self.interval.as_deref(),
-        };
+        let flags = self.target.search(&self.model, Some(self.v0));
         let problem = flags.problem()?;
         let t_max = self.t_max.unwrap_or(1e4);
         if !(t_max > 0.0 && t_max.is_finite()) {
@@ -202,21 +179,12 @@ impl DistributionArgs {
 
     fn config(&self) -> irtp::Result<Config> {
         self.reject_inapplicable()?;
-        if let Some(x0) = self.x0 {
-            return Err(Error::invalid(
-                "--x0",
-                x0,
-                "only with a search target in position (--xt or --interval)",
-            ));
-        }
+        let vt = self.target.velocity()?;
         let problem_args = ProblemArgs {
             model: self.model.clone(),
             v0: Some(self.v0),
             cells: self.cells,
         };
-        let vt = self
-            .vt
-            .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
         let (problem, backward) = problem_args.config(vt)?;
         // Before the time stepping: the stationary solve (cost ~ cells).
         self.output.budget.check(

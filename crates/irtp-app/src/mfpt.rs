@@ -106,31 +106,75 @@ struct SimArgs {
     t_max: Option<f64>,
 }
 
-/// `irtp mfpt` for one problem.
-#[derive(Args, Debug)]
-pub struct DirectArgs {
-    #[command(flatten)]
-    problem: ProblemArgs,
+/// The target of a first passage, in velocity (`--vt`) or in position
+/// (`--xt`, `--interval`, from `--x0`): `irtp mfpt` and `irtp mfpt
+/// distribution`.
+#[derive(Args, Debug, Clone)]
+pub(crate) struct TargetArgs {
     /// Target velocity v_t (v_l < v_t < v_u).
     #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
-    vt: Option<f64>,
+    pub(crate) vt: Option<f64>,
     /// Search target in position (instead of --vt): the first time x reaches the level L
-    /// (one-sided; --method exact or backward). With velocity-only resetting the mean search time is
-    /// infinite: tau is null, `infinite_mean` true, and the tail exponent of S(t) is reported.
+    /// (one-sided). With velocity-only resetting the mean search time is infinite: tau is
+    /// null, `infinite_mean` true, and the tail exponent of S(t) is reported (--method exact).
     #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
-    xt: Option<f64>,
+    pub(crate) xt: Option<f64>,
     /// Search target in position (instead of --vt): the first exit of x from the open
-    /// interval (A, B), A < x0 < B (--method exact or backward).
+    /// interval (A, B), A < x0 < B.
     #[arg(
         long,
         value_name = "A,B",
         allow_hyphen_values = true,
         conflicts_with = "vt"
     )]
-    interval: Option<String>,
+    pub(crate) interval: Option<String>,
     /// Initial position x_0 of a search (--xt or --interval) [default: 0].
     #[arg(long, value_name = "X0", allow_hyphen_values = true)]
-    x0: Option<f64>,
+    pub(crate) x0: Option<f64>,
+}
+
+impl TargetArgs {
+    /// Whether a search target in position (--xt or --interval) was given.
+    pub(crate) fn is_search(&self) -> bool {
+        self.xt.is_some() || self.interval.is_some()
+    }
+
+    /// The target velocity (refusing --x0, which only a search takes).
+    pub(crate) fn velocity(&self) -> irtp::Result<f64> {
+        if let Some(x0) = self.x0 {
+            return Err(Error::invalid(
+                "--x0",
+                x0,
+                "only with a search target in position (--xt or --interval)",
+            ));
+        }
+        self.vt
+            .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))
+    }
+
+    /// The search's flags with `model` and the start velocity `v0`.
+    pub(crate) fn search<'a>(
+        &'a self,
+        model: &'a super::common::ModelArgs,
+        v0: Option<f64>,
+    ) -> search::SearchFlags<'a> {
+        search::SearchFlags {
+            model,
+            v0,
+            x0: self.x0,
+            xt: self.xt,
+            interval: self.interval.as_deref(),
+        }
+    }
+}
+
+/// `irtp mfpt` for one problem.
+#[derive(Args, Debug)]
+pub struct DirectArgs {
+    #[command(flatten)]
+    problem: ProblemArgs,
+    #[command(flatten)]
+    target: TargetArgs,
     /// Cells in x of the coarse mesh of a search's backward equation (--xt or
     /// --interval with --method backward; refined once and extrapolated).
     #[arg(long, default_value_t = 64)]
@@ -555,20 +599,11 @@ struct DirectConfig {
 impl DirectArgs {
     /// Whether a search target in position (--xt or --interval) was given.
     fn is_search(&self) -> bool {
-        self.xt.is_some() || self.interval.is_some()
+        self.target.is_search()
     }
 
     fn config(&self) -> irtp::Result<DirectConfig> {
-        if let Some(x0) = self.x0 {
-            return Err(Error::invalid(
-                "--x0",
-                x0,
-                "only with a search target in position (--xt or --interval)",
-            ));
-        }
-        let vt = self
-            .vt
-            .ok_or_else(|| Error::invalid("--vt", "missing", "a velocity"))?;
+        let vt = self.target.velocity()?;
         let (problem, backward) = self.problem.config(vt)?;
         let method = self.sim.config(&[problem], backward, &self.output)?;
         Ok(DirectConfig {

@@ -90,13 +90,7 @@ pub(crate) fn exact_method(
 /// Flags → validated problem and method, the cost checked before any
 /// output exists.
 pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
-    let flags = SearchFlags {
-        model: &a.problem.model,
-        v0: a.problem.v0,
-        x0: a.x0,
-        xt: a.xt,
-        interval: a.interval.as_deref(),
-    };
+    let flags = a.target.search(&a.problem.model, a.problem.v0);
     match a.sim.method {
         Method::Euler => Err(only_exact("euler")),
         Method::Backward => {
