@@ -383,7 +383,11 @@ DOCS: Dict[str, Doc] = {
         "particles (exact event-driven sampler, or Eqs. (30)-(32)). Particles not\n"
         "arrived by t_max are censored: then tau is None (never a mean of the\n"
         "arrived ones) and rmst ± rmst_err, the restricted mean E[min(T, t_max)],\n"
-        "is its lower bound tau_lower_bound.",
+        "is its lower bound tau_lower_bound. With xt=L (or interval='A,B', from x0)\n"
+        "instead of vt the target is a position (the search problem): method\n"
+        "'backward' solves the 2-D backward equation (cells_x, cells_v), 'exact'\n"
+        "samples it; with velocity-only resetting and a level the mean is infinite\n"
+        "(tau None, summary['infinite_mean'], the tail exponent of S(t)).",
         "MfptResult\n"
         "    ``summary`` holds tau, tau_plus, tau_minus and error_estimate (ode) or\n"
         "        tau_err, particles, censored, censored_fraction, rmst, rmst_err,\n"
