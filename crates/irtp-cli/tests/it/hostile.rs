@@ -448,3 +448,31 @@ fn refused_plan(text: &str, cmd: &str) -> String {
     assert!(!out.exists(), "{cmd} wrote --out");
     err
 }
+
+/// (a) A law no table resolves (an expression growing like
+/// cosh(asinh(v)^5), Sigma = 5e206; found by the expression fuzz): the
+/// exact sampler's table attempts are bounded by the law's evaluation
+/// cost, so the numerical failure (exit 4) comes within seconds (it took
+/// 18 s), and its message prints Sigma in short form, not 207 digits.
+#[test]
+fn an_unresolvable_law_fails_fast_with_short_numbers() {
+    let t0 = Instant::now();
+    let o = irtp(&[
+        "simulate",
+        "--drag",
+        "expr:((1.5805886672038444E-2*v)*cosh(2.9559526457315466e-2*(v)))*cosh((asinh(v))^5)",
+        "--sigma",
+        "5.0110866728289255e206",
+        "--particles",
+        "50",
+        "--t-max",
+        "0.9",
+        "--burn-in",
+        "0.45",
+        "--json",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+    assert!(err.contains("5.011087e206") && err.len() < 300, "{err}");
+}

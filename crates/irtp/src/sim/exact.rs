@@ -77,6 +77,9 @@ pub struct DeficitTable {
     offset: Vec<[f64; 2]>,
 }
 
+/// The most Chebyshev pieces of a [`DeficitTable`].
+const MAX_PIECES: usize = 4096;
+
 impl DeficitTable {
     /// Build the table for drag `drag`, noise value `s` on [lo, hi].
     pub fn new<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Self> {
@@ -113,17 +116,25 @@ impl DeficitTable {
                 min_width: &floor,
                 keep_at_floor: &kink,
             },
-            max_pieces: usize::MAX,
+            // A bound on the work (a table of the shipped laws has tens of
+            // pieces): an integrand no polynomial pieces resolve, as that of
+            // an expression law growing like cosh(asinh(v)^5) at Sigma =
+            // 5e206, is refused within a second or two instead of after
+            // minutes of bisection.
+            max_pieces: MAX_PIECES,
         };
         let pieces =
             chebyshev::fit_adaptive(&f, &initial_pieces(drag, lo, hi), &opts).map_err(|e| {
-                let a = match e {
-                    Unresolved::Piece { a, .. } => a,
-                    _ => lo,
+                let at = match e {
+                    Unresolved::Piece { a, .. } => format!("near v = {a:.6e}"),
+                    _ => format!("in {MAX_PIECES} pieces"),
                 };
                 Error::Numerical {
                     method: "exact sampler table",
-                    reason: format!("deficit integrand not resolved near v = {a} (s = {s})"),
+                    reason: format!(
+                        "deficit integrand not resolved {at} (Sigma = {:.6e})",
+                        s.abs()
+                    ),
                 }
             })?;
         let mut bounds = vec![lo];

@@ -41,6 +41,21 @@ const M: usize = 12;
 /// 2^d equal pieces as its resolution needs.
 const MAX_PIECES: usize = 4096;
 
+/// The most pieces for `drag`: [`MAX_PIECES`] over the law's
+/// [`Drag::evaluation_weight`], so the attempt costs at most what 4096
+/// pieces of a shipped law cost (every piece solves its nodes with g): an
+/// expression 10 times dearer to evaluate gets 409 pieces before the
+/// iterative solve takes over (measured: a failing attempt on
+/// `cosh(asinh(v)^5)` at Sigma = 5e206 took 18 s at 4096 pieces).
+fn max_pieces<D: Drag>(drag: &D) -> usize {
+    let w = drag.evaluation_weight();
+    if w > 1.0 {
+        ((MAX_PIECES as f64 / w) as usize).max(64)
+    } else {
+        MAX_PIECES
+    }
+}
+
 /// One point of a flow segment: the velocity, its potential Φ and the
 /// deficit antiderivatives (real frame: I_k(a → b) = q_k(a) - q_k(b)).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -101,7 +116,8 @@ impl<F: FlowMap> PotentialTable<F> {
         let phi_lo = flow.potential_at_distance(u_lo);
         let phi_top = flow.potential_at_distance(2.0 * vs);
         let (n, range, phi_top, u_top, kink) = layout(drag, &flow, vs, phi_lo, phi_top)?;
-        if n > MAX_PIECES {
+        let most = max_pieces(drag);
+        if n > most {
             return None;
         }
         let mut bld = Builder {
@@ -114,6 +130,7 @@ impl<F: FlowMap> PotentialTable<F> {
             var: Var::Phi,
             coef: Vec::new(),
             offset: Vec::new(),
+            most,
         };
         let mut cells = Vec::with_capacity(n);
         for i in 0..n {
@@ -351,6 +368,8 @@ struct Builder<'a, D, F> {
     var: Var,
     coef: Vec<[[f64; 3]; M]>,
     offset: Vec<[f64; 2]>,
+    /// The most pieces of this table ([`max_pieces`]).
+    most: usize,
 }
 
 impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
@@ -422,7 +441,7 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
         let opts = Adaptive {
             resolved: &|fit, pa, pb| this.resolved(fit, pa, pb),
             refine: Refine::Uniform { max_depth: 16 },
-            max_pieces: MAX_PIECES - self.coef.len(),
+            max_pieces: self.most - self.coef.len(),
         };
         let pieces = chebyshev::fit_adaptive(&|t| this.integrands(t), &[(a, b)], &opts).ok()?;
         let depth = pieces.len().trailing_zeros();
