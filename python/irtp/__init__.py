@@ -41,6 +41,7 @@ from ._api import (
 )
 from ._irtp import NumericalError
 from ._load import load
+from ._plot import plot_sweep
 from ._sweep import collect, load_sweep
 from ._model import Drag, Params, PoissonReset, Reset, drag_laws
 from ._results import (
@@ -79,6 +80,7 @@ __all__ = [
     "load",
     "load_sweep",
     "collect",
+    "plot_sweep",
     "Drag",
     "Reset",
     "PoissonReset",

@@ -11,8 +11,10 @@
 //! of `mfpt` with the backward equations, and τ against the scanned axis
 //! (`mfpt scan`, `mfpt optimize`). A sweep directory (one with
 //! `plan.toml`) gives a heat map of one scalar column of `results.csv`
-//! (`--var`, default the first `result.*` column) over the plan's two
-//! crossed axes; a plan crossing another number of axes is refused.
+//! (`--var`, default the first `result.*` column) over the plan's first
+//! two crossed axes (a `[[zip]]` group is one axis); further crossed axes
+//! stay at their first value, which the title names; a plan crossing one
+//! axis is refused.
 //!
 //! The image goes to `DIR/plot.png` unless `--out` names another file. No
 //! checksum of irtp covers that name: `run.json` lists the files a run
@@ -687,21 +689,19 @@ fn write(_: &Picture, out: &Path, _: bool) -> Result<()> {
 }
 
 /// The heat map of the sweep in `dir`: column `var` of its `results.csv`
-/// over the plan's two crossed axes (the first, varying slowest, upwards;
-/// the second across).
+/// over the plan's first two crossed axes (the first, varying slowest,
+/// upwards; the second across). With more crossed axes the others stay at
+/// their first value, which the title names; a plan crossing one axis is
+/// refused.
 fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
     let text = fs::read_to_string(dir.join("plan.toml")).map_err(|_| not_irtp(dir))?;
     let crossed = Plan::parse(&text)?.crossed();
-    if crossed.len() != 2 {
-        let names: Vec<String> = crossed.iter().map(|(n, _)| n.join(" + ")).collect();
+    if crossed.len() < 2 {
         return Err(Error::invalid(
             "dir",
             dir.display(),
-            format!(
-                "for a heat map, a sweep whose plan.toml crosses exactly two axes (it crosses {}: {})",
-                crossed.len(),
-                names.join(", ")
-            ),
+            "for a heat map, a sweep whose plan.toml crosses at least two axes (this one crosses one: \
+             its results.csv is the table to read)",
         ));
     }
     let unfinished = || {
@@ -737,31 +737,55 @@ fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
         let j = header.iter().position(|h| h == name);
         j.and_then(|j| rec.get(j)).unwrap_or("").to_string()
     };
+    let values = |rec: &csv::StringRecord, names: &[String]| -> String {
+        names
+            .iter()
+            .map(|n| at(rec, n))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut others = String::new();
     for rec in &records {
-        let Ok(p) = at(rec, "point").parse::<usize>() else {
+        let Some(digits) = at(rec, "point")
+            .parse()
+            .ok()
+            .and_then(|p| digits(p, &crossed))
+        else {
             continue;
         };
-        let (j, i) = (p / xs.1, p % xs.1);
-        if j >= ys.1 {
+        if digits[2..].iter().any(|&d| d != 0) {
             continue;
         }
-        h.y_ticks[j] =
-            ys.0.iter()
-                .map(|n| at(rec, n))
-                .collect::<Vec<_>>()
-                .join(", ");
-        h.x_ticks[i] =
-            xs.0.iter()
-                .map(|n| at(rec, n))
-                .collect::<Vec<_>>()
-                .join(", ");
+        let (j, i) = (digits[0], digits[1]);
+        h.y_ticks[j] = values(rec, &ys.0);
+        h.x_ticks[i] = values(rec, &xs.0);
         let ok = at(rec, "status") == "ok";
         h.values[j][i] = at(rec, &var)
             .parse::<f64>()
             .ok()
             .filter(|v| ok && v.is_finite());
+        let rest: Vec<String> = crossed[2..]
+            .iter()
+            .flat_map(|g| g.0.iter().map(|n| format!("{n} = {}", at(rec, n))))
+            .collect();
+        others = rest.join(", ");
+    }
+    if !others.is_empty() {
+        h.title = format!("{} at {others}", h.title);
     }
     Ok(h)
+}
+
+/// The position of plan point `p` on each crossed axis (the first axis
+/// varies slowest); `None` past the plan's end.
+fn digits(p: usize, crossed: &[(Vec<String>, usize)]) -> Option<Vec<usize>> {
+    let mut rest = p;
+    let mut out = vec![0; crossed.len()];
+    for (k, &(_, n)) in crossed.iter().enumerate().rev() {
+        out[k] = rest % n.max(1);
+        rest /= n.max(1);
+    }
+    (rest == 0).then_some(out)
 }
 
 /// The `results.csv` column `var` names (`result.` may be left out), or
