@@ -19,9 +19,11 @@
 //! The image goes to `DIR/plot.png` unless `--out` names another file. No
 //! checksum of irtp covers that name: `run.json` lists the files a run
 //! wrote and a sweep point's `result.json` the files it had when it
-//! finished, so a plot beside them damages neither (a later run with
-//! `--force` into `DIR` leaves it alone as a file irtp did not write). It
-//! is written to a temporary name and renamed into place, so a failed
+//! finished, so a plot beside them damages neither, and a later run into
+//! `DIR` leaves `plot.png` alone ([`irtp_app::io::PLOT_FILE`]; an image
+//! of another name there is a file irtp did not write, in the way of a
+//! run without `--force`). It is written to a temporary name and renamed
+//! into place, so a failed
 //! drawing leaves nothing. Bad input (not an irtp directory, an unknown
 //! `--var`, an `--out` that is not a writable `.png` or `.svg` path) is an
 //! [`Error::InvalidParameter`]: one line, exit code 2, nothing written.
@@ -64,7 +66,7 @@ pub fn run(args: &PlotArgs) -> Result<PathBuf> {
     let out = args
         .out
         .clone()
-        .unwrap_or_else(|| args.dir.join("plot.png"));
+        .unwrap_or_else(|| args.dir.join(irtp_app::io::PLOT_FILE));
     let svg = image_kind(&out)?;
     let picture = picture(&args.dir, args.var.as_deref())?;
     write(&picture, &out, svg)?;

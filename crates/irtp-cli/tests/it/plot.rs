@@ -77,6 +77,9 @@ fn plots(args: &[&str], size: (u32, u32)) {
         drawn * 100 > pixels,
         "{args:?}: {drawn} of {pixels} pixels drawn"
     );
+    // The same run again into the directory: the plot is not in its way.
+    assert_success(&irtp(&a));
+    assert!(png.is_file());
 }
 
 #[test]
@@ -188,7 +191,10 @@ fn a_sweep_is_a_heat_map_and_its_points_stay_sound() {
     // A third crossed axis (a zip group) stays at its first value.
     let three = tmp.path().join("three");
     let zip = "[[zip]]\nlambda = [0.5, 5.0]\nreset_velocity = [0.0, 0.0]\n";
-    sweep(&three, &format!("sigma = [2.0, 3.0]\nrate = [0.5, 1.0]\n{zip}"));
+    sweep(
+        &three,
+        &format!("sigma = [2.0, 3.0]\nrate = [0.5, 1.0]\n{zip}"),
+    );
     assert_success(&irtp(&["plot", three.to_str().unwrap(), "--var", "v2"]));
     assert_eq!(decode(&three.join("plot.png")).0, HEAT_MAP);
     // A plot inside a point directory damages nothing.
