@@ -815,3 +815,50 @@ fn choose_var(header: &[String], var: Option<&str>) -> Result<String> {
         format!("a column of results.csv: {}{more}", list.join(", ")),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn axes(ns: &[usize]) -> Vec<(Vec<String>, usize)> {
+        ns.iter().map(|&n| (vec![format!("a{n}")], n)).collect()
+    }
+
+    #[test]
+    fn digits_follow_plan_order_first_axis_slowest() {
+        let c = axes(&[3, 2, 2]);
+        assert_eq!(digits(0, &c), Some(vec![0, 0, 0]));
+        assert_eq!(digits(1, &c), Some(vec![0, 0, 1]));
+        assert_eq!(digits(6, &c), Some(vec![1, 1, 0]));
+        assert_eq!(digits(11, &c), Some(vec![2, 1, 1]));
+        assert_eq!(digits(12, &c), None);
+    }
+
+    #[test]
+    fn var_takes_the_prefix_or_not_and_defaults_to_the_first_result() {
+        let h: Vec<String> = ["point", "sigma", "status", "result.v2", "result.d_eff"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(choose_var(&h, None).unwrap(), "result.v2");
+        assert_eq!(choose_var(&h, Some("d_eff")).unwrap(), "result.d_eff");
+        assert_eq!(
+            choose_var(&h, Some("result.d_eff")).unwrap(),
+            "result.d_eff"
+        );
+        let err = choose_var(&h, Some("tau")).unwrap_err().to_string();
+        assert!(err.contains("result.v2, result.d_eff"), "{err}");
+        assert!(choose_var(&h[..3], None).is_err());
+    }
+
+    #[test]
+    fn out_must_be_png_or_svg_in_an_existing_directory() {
+        let tmp = tempfile::tempdir().unwrap();
+        assert!(!image_kind(&tmp.path().join("a.png")).unwrap());
+        assert!(image_kind(&tmp.path().join("a.SVG")).unwrap());
+        assert!(image_kind(&tmp.path().join("a.pdf")).is_err());
+        assert!(image_kind(&tmp.path().join("no/a.png")).is_err());
+        let dir = tmp.path().join("d.png");
+        std::fs::create_dir(&dir).unwrap();
+        assert!(image_kind(&dir).is_err());
+    }
+}
