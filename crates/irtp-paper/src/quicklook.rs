@@ -706,25 +706,8 @@ fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
              its results.csv is the table to read)",
         ));
     }
-    let unfinished = || {
-        Error::invalid(
-            "dir",
-            dir.display(),
-            "a finished sweep (results.csv is written once every point is done: irtp sweep status DIR)",
-        )
-    };
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).map_err(|_| unfinished())?;
-    let header: Vec<String> = r
-        .headers()
-        .map_err(|_| unfinished())?
-        .iter()
-        .map(String::from)
-        .collect();
+    let (header, records) = read_results(dir)?;
     let var = choose_var(&header, var)?;
-    let records: Vec<csv::StringRecord> = r
-        .records()
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| unfinished())?;
     let (ys, xs) = (&crossed[0], &crossed[1]);
     let mut h = HeatMap {
         title: format!("irtp sweep: {}", dir_name(dir)),
@@ -776,6 +759,30 @@ fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
         h.title = format!("{} at {others}", h.title);
     }
     Ok(h)
+}
+
+/// The header and rows of a sweep's `results.csv`; refused when it is
+/// missing (the sweep has not finished) or unreadable.
+fn read_results(dir: &Path) -> Result<(Vec<String>, Vec<csv::StringRecord>)> {
+    let unfinished = || {
+        Error::invalid(
+            "dir",
+            dir.display(),
+            "a finished sweep (results.csv is written once every point is done: irtp sweep status DIR)",
+        )
+    };
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).map_err(|_| unfinished())?;
+    let header = r
+        .headers()
+        .map_err(|_| unfinished())?
+        .iter()
+        .map(String::from)
+        .collect();
+    let records = r
+        .records()
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| unfinished())?;
+    Ok((header, records))
 }
 
 /// The position of plan point `p` on each crossed axis (the first axis
