@@ -686,7 +686,7 @@ fn write(_: &Picture, out: &Path, _: bool) -> Result<()> {
     Err(Error::invalid(
         "out",
         out.display(),
-        "nothing here: this irtp was built without the cargo feature `plot`, which `irtp plot` needs",
+        "only in a build with the cargo feature `plot` (irtp-cli's default; this irtp was built without it)",
     ))
 }
 

@@ -258,6 +258,13 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
     let empty = fresh();
     let o = irtp(&["plot", empty.path().to_str().unwrap()]);
     assert_rejected(&o, "DIR", &empty.path().join("plot.png"));
+    // irtp reproduce drew its figures already.
+    let fig = fresh();
+    let prov = r#"{"software": "irtp", "command": "reproduce", "files": []}"#;
+    std::fs::write(fig.path().join("run.json"), prov).unwrap();
+    let o = irtp(&["plot", fig.path().to_str().unwrap()]);
+    let err = assert_rejected(&o, "DIR", &fig.path().join("plot.png"));
+    assert!(err.contains("figN.png"), "{err}");
     // --out: not .png/.svg, a missing directory, not writable.
     let out = fresh();
     let jpg = out.path().join("x.jpg");
