@@ -220,17 +220,24 @@ def plot_result(res: Any, panel: Optional[int] = None, ax: Any = None) -> Any:
     return axes[0]
 
 
+def _tick(v: Any) -> str:
+    """A coordinate value as a tick label."""
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
 def plot_sweep(ds: Any, var: Optional[str] = None, ax: Any = None) -> Any:
-    """A heat map of ``var`` over the two axes of a sweep's Dataset."""
+    """A heat map of ``var`` over the first two axes of a sweep's Dataset
+    (further axes at their first value, named in the title), as
+    ``irtp plot DIR --var VAR`` draws it."""
     import matplotlib.pyplot as plt
 
     dims = [str(d) for d in ds["point"].dims]
-    if len(dims) != 2:
-        raise ValueError(f"a heat map needs a sweep over exactly two axes; this one has "
+    if len(dims) < 2:
+        raise ValueError(f"a heat map needs a sweep over at least two axes; this one has "
                          f"{len(dims)} ({', '.join(dims)}): use ds[var].plot() from xarray")
     scalars = [str(n) for n, v in ds.data_vars.items()
                if tuple(str(d) for d in v.dims) == tuple(dims) and v.dtype.kind in "fiu"
-               and str(n) != "wall_time_s"]
+               and str(n) not in ("wall_time_s", "point")]
     if var is None:
         if not scalars:
             raise ValueError("the sweep has no numeric variable over its axes")
@@ -239,14 +246,15 @@ def plot_sweep(ds: Any, var: Optional[str] = None, ax: Any = None) -> Any:
     if name not in scalars:
         raise ValueError(f"var={var!r}: not a numeric variable over the axes; one of "
                          f"{', '.join(scalars)}")
-    values = np.asarray(ds[name].transpose(*dims).values, dtype=float)
+    rest = {d: 0 for d in dims[2:]}
+    values = np.asarray(ds[name].isel(rest).transpose(*dims[:2]).values, dtype=float)
     if ax is None:
         ax = plt.subplots(figsize=(6.4, 4.8))[1]
     mesh = ax.pcolormesh(np.ma.masked_invalid(values), cmap="viridis")
     ax.figure.colorbar(mesh, ax=ax, label=name)
-    ticks = [[f"{v:g}" if isinstance(v, float) else str(v) for v in ds[d].values.tolist()]
-             for d in dims]
+    ticks = [[_tick(v) for v in ds[d].values.tolist()] for d in dims[:2]]
     ax.set_yticks(np.arange(len(ticks[0])) + 0.5, ticks[0])
     ax.set_xticks(np.arange(len(ticks[1])) + 0.5, ticks[1])
-    ax.set(ylabel=dims[0], xlabel=dims[1], title=f"sweep: {name}")
+    at = ", ".join(f"{d} = {_tick(ds[d].values.tolist()[0])}" for d in rest)
+    ax.set(ylabel=dims[0], xlabel=dims[1], title=f"sweep: {name}" + (f" at {at}" if at else ""))
     return ax

@@ -104,3 +104,19 @@ def test_plot_sweep_is_a_heat_map(cli, tmp_path):
     assert_drawn(irtp.plot_sweep(ds, var="result.d_eff"), tmp_path / "d_eff.png")
     with pytest.raises(ValueError, match="var='nope'"):
         irtp.plot_sweep(ds, var="nope")
+
+
+def test_plot_sweep_of_three_axes_fixes_the_third(cli, tmp_path):
+    pytest.importorskip("xarray")
+    plan = PLAN + "lambda = [0.5, 5.0]\n"
+    (tmp_path / "plan.toml").write_text(plan)
+    cli.run(["sweep", "run", str(tmp_path / "plan.toml"), "--out", str(tmp_path / "sw")])
+    ds = irtp.load_sweep(tmp_path / "sw")
+    ax = irtp.plot_sweep(ds, var="v2")
+    assert ax.get_title() == "sweep: v2 at lambda = 0.5"
+    assert_drawn(ax, tmp_path / "three.png")
+    one = "command = \"fp stationary\"\n[fixed]\ncells = 40\n[axes]\nrate = [0.5, 2.0]\n"
+    (tmp_path / "one.toml").write_text(one)
+    cli.run(["sweep", "run", str(tmp_path / "one.toml"), "--out", str(tmp_path / "one")])
+    with pytest.raises(ValueError, match="at least two axes"):
+        irtp.plot_sweep(irtp.load_sweep(tmp_path / "one"))
