@@ -20,9 +20,10 @@ One function per CLI command, keywords named as the flags (``lambda_`` and
 Model pieces: :class:`Drag`, :class:`PoissonReset`, :class:`Params`.
 Results: :class:`Result` (numpy columns as attributes, ``summary``,
 ``params``, ``provenance``, ``to_dict()``, ``to_pandas()``,
-``to_xarray()``). :func:`load` opens a run's ``--out`` directory as its
+``to_xarray()``, ``plot()``). :func:`load` opens a run's ``--out`` directory as its
 Result; :func:`load_sweep` stacks a sweep into one xarray Dataset and
-:func:`collect` writes it as netCDF, zarr or CSV. Numerical failures raise
+:func:`collect` writes it as netCDF, zarr or CSV; :func:`plot_sweep` draws a
+heat map of it. Numerical failures raise
 :class:`NumericalError` (a RuntimeError).
 """
 
@@ -41,6 +42,7 @@ from ._api import (
 )
 from ._irtp import NumericalError
 from ._load import load
+from ._plot import plot_sweep
 from ._sweep import collect, load_sweep
 from ._model import Drag, Params, PoissonReset, Reset, drag_laws
 from ._results import (
@@ -82,6 +84,7 @@ __all__ = [
     "load",
     "load_sweep",
     "collect",
+    "plot_sweep",
     "Drag",
     "Reset",
     "PoissonReset",

@@ -211,6 +211,23 @@ class Result:
 
         return to_dataset(self)
 
+    def plot(self, panel: Optional[int] = None, ax: Any = None) -> Any:
+        """Draw the result's natural figure with matplotlib (imported only
+        here; ``pip install 'irtp[plot]'``): the figure ``irtp plot DIR``
+        draws (densities with ±1 standard-error bands, moments on log axes,
+        snapshots, survival curves, tau against the scanned quantity).
+
+        Without arguments: every panel side by side in a new figure. With
+        ``panel=k`` (0-based) or ``ax=``: one panel (the first by default)
+        in a new Axes or in ``ax``. Returns the (first) Axes drawn into;
+        ``ax.figure`` is its figure (``ax.figure.savefig("plot.png")``).
+        Raises ValueError for a ``reproduce`` result (its figures are
+        files already) or a panel out of range.
+        """
+        from ._plot import plot_result
+
+        return plot_result(self, panel=panel, ax=ax)
+
 
 class SimulateResult(Result):
     """Result of :func:`irtp.simulate`: tables "moments" and "density"."""

@@ -518,6 +518,11 @@ pub fn out_in_use(dir: &Path, what: String) -> Error {
     )
 }
 
+/// The image `irtp plot DIR` writes into `DIR` by default. It is no output
+/// of a run (no provenance lists it, no checksum covers it), and a rerun
+/// into `DIR` does not count it as a file in the way: it is left alone.
+pub const PLOT_FILE: &str = "plot.png";
+
 /// An irtp provenance file (`"software": "irtp"`), if `path` holds one.
 pub fn read_provenance(path: &Path) -> Option<serde_json::Value> {
     let text = fs::read_to_string(path).ok()?;

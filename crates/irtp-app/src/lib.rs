@@ -373,7 +373,8 @@ pub(crate) fn open_out(
         return Ok(None);
     };
     let out = OutputDir::new(dir)?;
-    let prev = Previous::read(dir, &[])?;
+    // The default picture of `irtp plot` is not in a rerun's way.
+    let prev = Previous::read(dir, &[io::PLOT_FILE.to_string()])?;
     prev.refuse_changed(dir)?;
     let other = prev.command().filter(|c| *c != command);
     if !force {

@@ -14,7 +14,7 @@ struct Cli {
     command: TopCommand,
 }
 
-/// The library's commands ([`irtp_paper::Command`]) and the sweeps.
+/// The library's commands ([`irtp_paper::Command`]), the sweeps and `plot`.
 // Parsed once per run: the size of the largest flag set costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
@@ -23,6 +23,8 @@ enum TopCommand {
     App(Command),
     /// Parameter sweeps from a TOML plan: run (sharded, resumable), merge, status, SLURM arrays.
     Sweep(cli::sweep::SweepArgs),
+    /// Draw the natural figure of an output directory (a run or a sweep) as PNG or SVG.
+    Plot(irtp_paper::quicklook::PlotArgs),
 }
 
 /// Run the command; the exit code on success (0; `sweep` may report 3;
@@ -47,6 +49,11 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             Ok(0)
         }
         TopCommand::Sweep(a) => cli::sweep::run(a),
+        TopCommand::Plot(a) => {
+            let path = irtp_paper::quicklook::run(&a)?;
+            println!("wrote {}", path.display());
+            Ok(0)
+        }
     }
 }
 

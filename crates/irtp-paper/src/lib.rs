@@ -23,6 +23,7 @@ pub mod fig7;
 pub mod fpt;
 pub mod media;
 pub mod plot;
+pub mod quicklook;
 pub mod reproduce;
 pub mod store;
 

@@ -30,6 +30,7 @@
 use irtp::error::{Error, Result};
 use serde::Serialize;
 
+pub mod heatmap;
 #[cfg(feature = "plot")]
 mod render;
 

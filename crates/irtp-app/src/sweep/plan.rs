@@ -386,6 +386,16 @@ impl Plan {
         self.len() == 0
     }
 
+    /// The crossed axes in plan order (the first varies slowest), each as
+    /// its parameter names (one for an `[axes]` entry, several for a
+    /// `[[zip]]` group) and its number of values.
+    pub fn crossed(&self) -> Vec<(Vec<String>, usize)> {
+        self.groups
+            .iter()
+            .map(|g| (g.names.clone(), g.rows.len()))
+            .collect()
+    }
+
     /// The parameter names of every point: axes (plan order), then fixed.
     pub fn names(&self) -> Vec<String> {
         let axes = self.groups.iter().flat_map(|g| g.names.iter().cloned());

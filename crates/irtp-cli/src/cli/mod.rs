@@ -13,7 +13,7 @@ use std::io::Write;
 /// with `_` → `-` (`t_max` → `--t-max`), except for the names in the table;
 /// a name the CLI already spelt as a flag (`--v0`) is kept.
 pub fn flag_for(name: &str) -> String {
-    const TABLE: &[(&str, &str)] = &[("figure", "FIGURE")];
+    const TABLE: &[(&str, &str)] = &[("figure", "FIGURE"), ("dir", "DIR")];
     if name.starts_with('-') {
         return name.to_string();
     }

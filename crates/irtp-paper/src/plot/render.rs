@@ -24,6 +24,9 @@ use std::ops::Range;
 use std::path::Path;
 use std::sync::Once;
 
+mod heatmap;
+pub(super) use heatmap::{heatmap_png, heatmap_svg};
+
 /// The embedded sans-serif font (DejaVu Sans, free license, see assets/fonts).
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 const FAMILY: &str = "sans-serif";

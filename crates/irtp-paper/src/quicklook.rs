@@ -1,0 +1,871 @@
+//! `irtp plot DIR [--out FILE.png|.svg] [--var COLUMN]`: the natural
+//! figure of an output directory, so a result can be seen without writing
+//! plotting code.
+//!
+//! The command of the directory (its `run.json`) picks the figure:
+//! densities with their standard errors (`simulate`'s P_s(v), `analytic`
+//! and `fp stationary`'s p(v) with p₊ and p₋), moments in time on log axes
+//! (`simulate`'s ⟨v²⟩(t), ⟨x²⟩(t) with their errors; `fp msd`'s ⟨x²⟩(t)
+//! and its exponent α(t)), the snapshots of `fp transient`, survival
+//! curves S(t) (`mfpt` with a particle method, `mfpt distribution`), τ(v₀)
+//! of `mfpt` with the backward equations, and τ against the scanned axis
+//! (`mfpt scan`, `mfpt optimize`). A sweep directory (one with
+//! `plan.toml`) gives a heat map of one scalar column of `results.csv`
+//! (`--var`, default the first `result.*` column) over the plan's first
+//! two crossed axes (a `[[zip]]` group is one axis); further crossed axes
+//! stay at their first value, which the title names; a plan crossing one
+//! axis is refused.
+//!
+//! The image goes to `DIR/plot.png` unless `--out` names another file. No
+//! checksum of irtp covers that name: `run.json` lists the files a run
+//! wrote and a sweep point's `result.json` the files it had when it
+//! finished, so a plot beside them damages neither, and a later run into
+//! `DIR` leaves `plot.png` alone ([`irtp_app::io::PLOT_FILE`]; an image
+//! of another name there is a file irtp did not write, in the way of a
+//! run without `--force`). It is written to a temporary name and renamed
+//! into place, so a failed
+//! drawing leaves nothing. Bad input (not an irtp directory, an unknown
+//! `--var`, an `--out` that is not a writable `.png` or `.svg` path) is an
+//! [`Error::InvalidParameter`]: one line, exit code 2, nothing written.
+//! Drawing needs the cargo feature `plot`; without it the command checks
+//! its input and then refuses.
+
+use crate::plot::heatmap::HeatMap;
+use crate::plot::{Axis, Color, Dash, Figure, Panel, Series};
+use clap::Args;
+use irtp::error::{Error, Result};
+use irtp_app::sweep::Plan;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// Draw the natural figure of an irtp output directory (a run or a sweep) as PNG or SVG.
+#[derive(Args, Debug, Clone)]
+pub struct PlotArgs {
+    /// A directory irtp wrote: a command's `--out`, or a sweep's directory.
+    pub dir: PathBuf,
+    /// The image to write, ending in .png or .svg [default: DIR/plot.png].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Sweep directories: the results.csv column to colour the heat map by (`result.d_eff` or `d_eff`) [default: the first result.* column].
+    #[arg(long)]
+    pub var: Option<String>,
+}
+
+/// What `irtp plot` draws: a figure of panels or a heat map.
+#[derive(Clone, Debug)]
+pub enum Picture {
+    /// Curves and points (one run's tables).
+    Figure(Figure),
+    /// One scalar over a sweep's two crossed axes.
+    Heat(HeatMap),
+}
+
+/// Check the flags, draw the picture of `args.dir` and write it; the path
+/// written.
+pub fn run(args: &PlotArgs) -> Result<PathBuf> {
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| args.dir.join(irtp_app::io::PLOT_FILE));
+    let svg = image_kind(&out)?;
+    let picture = picture(&args.dir, args.var.as_deref())?;
+    write(&picture, &out, svg)?;
+    Ok(out)
+}
+
+/// Whether `out` names an SVG (else a PNG) file in an existing directory;
+/// refused otherwise.
+fn image_kind(out: &Path) -> Result<bool> {
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let svg = match ext.as_deref() {
+        Some("png") => false,
+        Some("svg") => true,
+        _ => {
+            return Err(Error::invalid(
+                "out",
+                out.display(),
+                "a file name ending in .png or .svg",
+            ))
+        }
+    };
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(Error::invalid(
+            "out",
+            out.display(),
+            "a file in an existing directory",
+        ));
+    }
+    if out.is_dir() {
+        return Err(Error::invalid(
+            "out",
+            out.display(),
+            "a file name, not a directory",
+        ));
+    }
+    Ok(svg)
+}
+
+/// The picture of `dir`: a heat map of a sweep, else the figure of the
+/// command its `run.json` names.
+pub fn picture(dir: &Path, var: Option<&str>) -> Result<Picture> {
+    if dir.join("plan.toml").is_file() {
+        return sweep_heat_map(dir, var).map(Picture::Heat);
+    }
+    let Some(run) = irtp_app::io::read_provenance(&dir.join("run.json")) else {
+        return Err(not_irtp(dir));
+    };
+    if let Some(v) = var {
+        return Err(Error::invalid(
+            "var",
+            v,
+            "only with a sweep directory (one with plan.toml)",
+        ));
+    }
+    let command = run["command"].as_str().unwrap_or_default();
+    run_figure(dir, command).map(Picture::Figure)
+}
+
+/// The refusal of a directory irtp did not write.
+fn not_irtp(dir: &Path) -> Error {
+    Error::invalid(
+        "dir",
+        dir.display(),
+        "a directory irtp wrote: a command's --out (with its run.json) or a sweep (with plan.toml)",
+    )
+}
+
+/// The figure of one run of `command` in `dir`.
+fn run_figure(dir: &Path, command: &str) -> Result<Figure> {
+    let title = format!("irtp {command}: {}", dir_name(dir));
+    let mut fig = Figure::new("plot", title, 2);
+    fig.panels = match command {
+        "simulate" => simulate_panels(dir)?,
+        "analytic" => vec![analytic_panel(dir)?],
+        "fp stationary" => vec![fp_stationary_panel(dir)?],
+        "fp transient" => fp_transient_panels(dir)?,
+        "fp msd" => fp_msd_panels(dir)?,
+        "mfpt" => vec![mfpt_panel(dir)?],
+        "mfpt scan" => vec![scan_panel(dir)?],
+        "mfpt optimize" => vec![optimize_panel(dir)?],
+        "mfpt distribution" => distribution_panels(dir)?,
+        "reproduce" => {
+            return Err(Error::invalid(
+                "dir",
+                dir.display(),
+                "a run or a sweep (irtp reproduce drew its figures already: figN.png there)",
+            ))
+        }
+        _ => return Err(not_irtp(dir)),
+    };
+    fig.cols = fig.panels.len().min(2);
+    Ok(fig)
+}
+
+/// The last component of `dir` (the whole path when it has none).
+fn dir_name(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
+/// A CSV table of numbers read whole (`nan`, `inf` included; a cell that
+/// is not a number reads as nan).
+struct Table {
+    names: Vec<String>,
+    rows: Vec<Vec<f64>>,
+}
+
+impl Table {
+    /// Read `dir/name`; an unreadable or missing table is bad input (the
+    /// directory is not what its run.json says).
+    fn read(dir: &Path, name: &str) -> Result<Table> {
+        let path = dir.join(name);
+        let bad =
+            |why: String| Error::invalid("dir", dir.display(), format!("{name} readable ({why})"));
+        let mut r = csv::Reader::from_path(&path).map_err(|e| bad(e.to_string()))?;
+        let names = r
+            .headers()
+            .map_err(|e| bad(e.to_string()))?
+            .iter()
+            .map(String::from)
+            .collect();
+        let mut rows = Vec::new();
+        for rec in r.records() {
+            let rec = rec.map_err(|e| bad(e.to_string()))?;
+            rows.push(
+                rec.iter()
+                    .map(|c| c.trim().parse().unwrap_or(f64::NAN))
+                    .collect(),
+            );
+        }
+        Ok(Table { names, rows })
+    }
+
+    /// Whether the table has column `name`.
+    fn has(&self, name: &str) -> bool {
+        self.names.iter().any(|n| n == name)
+    }
+
+    /// Column `name` (all nan when absent, so a missing optional column
+    /// draws nothing).
+    fn col(&self, name: &str) -> Vec<f64> {
+        match self.names.iter().position(|n| n == name) {
+            Some(j) => self
+                .rows
+                .iter()
+                .map(|r| r.get(j).copied().unwrap_or(f64::NAN))
+                .collect(),
+            None => vec![f64::NAN; self.rows.len()],
+        }
+    }
+}
+
+/// A line from two columns of `t`.
+fn line(t: &Table, x: &str, y: &str, label: &str, color: Color, dash: Dash) -> Series {
+    Series::line(Some(label.into()), color, dash, y, t.col(x), t.col(y))
+}
+
+/// Points with error bars from three columns of `t`.
+fn points(t: &Table, x: &str, y: &str, err: &str, label: &str, color: Color) -> Series {
+    let e = t
+        .col(err)
+        .into_iter()
+        .map(|e| if e.is_finite() { e } else { 0.0 })
+        .collect();
+    Series::points(Some(label.into()), color, y, t.col(x), t.col(y), e)
+}
+
+/// A panel with its series.
+fn panel(label: &str, title: &str, x: Axis, y: Axis, series: Vec<Series>) -> Panel {
+    let mut p = Panel::new(label, title, x, y);
+    p.series = series;
+    p
+}
+
+/// `simulate`: the stationary density with its errors, the moments in
+/// time on log axes, and P(x) with `--reset-position`.
+fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
+    let d = Table::read(dir, "density.csv")?;
+    let m = Table::read(dir, "moments.csv")?;
+    let mut panels = vec![
+        panel(
+            "(a)",
+            "velocity density",
+            Axis::linear("v"),
+            Axis::linear("P_{s}(v)"),
+            vec![
+                points(&d, "v", "p", "p_err", "time average", Color::Palette(0)),
+                line(
+                    &d,
+                    "v",
+                    "p_final",
+                    "at t_{max}",
+                    Color::Palette(1),
+                    Dash::Dashed,
+                ),
+            ],
+        ),
+        panel(
+            "(b)",
+            "moments",
+            Axis::log("t"),
+            Axis::log("moment"),
+            vec![
+                points(&m, "t", "v2", "v2_err", "⟨v²⟩", Color::Palette(0)),
+                points(&m, "t", "x2", "x2_err", "⟨x²⟩", Color::Palette(3)),
+            ],
+        ),
+    ];
+    if dir.join("position.csv").is_file() {
+        let x = Table::read(dir, "position.csv")?;
+        let s = points(&x, "x", "p", "p_err", "x(t_{max})", Color::Palette(2));
+        panels.push(panel(
+            "(c)",
+            "position density",
+            Axis::linear("x"),
+            Axis::linear("P(x)"),
+            vec![s],
+        ));
+    }
+    Ok(panels)
+}
+
+/// `analytic`: the exact r = 0 stationary density.
+fn analytic_panel(dir: &Path) -> Result<Panel> {
+    let d = Table::read(dir, "density.csv")?;
+    let s = line(
+        &d,
+        "v",
+        "p",
+        "p(v), exact (r = 0)",
+        Color::Black,
+        Dash::Solid,
+    );
+    Ok(panel(
+        "",
+        "stationary density",
+        Axis::linear("v"),
+        Axis::linear("p(v)"),
+        vec![s],
+    ))
+}
+
+/// `fp stationary`: p = p₊ + p₋ and its two parts.
+fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
+    let d = Table::read(dir, "density.csv")?;
+    let series = vec![
+        line(
+            &d,
+            "v",
+            "p",
+            "p = p_{+} + p_{-}",
+            Color::Palette(0),
+            Dash::Solid,
+        ),
+        line(&d, "v", "p_plus", "p_{+}", Color::Palette(1), Dash::Dashed),
+        line(&d, "v", "p_minus", "p_{-}", Color::Palette(2), Dash::Dotted),
+    ];
+    Ok(panel(
+        "",
+        "stationary density",
+        Axis::linear("v"),
+        Axis::linear("p(v)"),
+        series,
+    ))
+}
+
+/// The most snapshots `fp transient`'s figure shows (evenly picked).
+const MAX_SNAPSHOTS: usize = 8;
+
+/// `fp transient`: the density snapshots and the moments in time.
+fn fp_transient_panels(dir: &Path) -> Result<Vec<Panel>> {
+    let s = Table::read(dir, "snapshots.csv")?;
+    let (t, v, p) = (s.col("t"), s.col("v"), s.col("p"));
+    let mut blocks: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
+    for i in 0..t.len() {
+        if blocks.last().map_or(true, |b| b.0 != t[i]) {
+            blocks.push((t[i], Vec::new(), Vec::new()));
+        }
+        let b = blocks.last_mut().expect("a block");
+        b.1.push(v[i]);
+        b.2.push(p[i]);
+    }
+    let n = blocks.len();
+    let picked: Vec<usize> = match n <= MAX_SNAPSHOTS {
+        true => (0..n).collect(),
+        false => (0..MAX_SNAPSHOTS)
+            .map(|k| k * (n - 1) / (MAX_SNAPSHOTS - 1))
+            .collect(),
+    };
+    let series = picked
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| {
+            let (t, v, p) = blocks[i].clone();
+            let label = format!("t = {}", irtp_app::io::format_float(t));
+            Series::line(Some(label), Color::Palette(k), Dash::Solid, "p", v, p)
+        })
+        .collect();
+    let m = Table::read(dir, "moments.csv")?;
+    let moments = vec![
+        line(&m, "t", "v2", "⟨v²⟩", Color::Palette(0), Dash::Solid),
+        line(&m, "t", "v_mean", "⟨v⟩", Color::Palette(1), Dash::Dashed),
+    ];
+    Ok(vec![
+        panel(
+            "(a)",
+            "density snapshots",
+            Axis::linear("v"),
+            Axis::linear("p(v, t)"),
+            series,
+        ),
+        panel(
+            "(b)",
+            "moments",
+            Axis::linear("t"),
+            Axis::linear("moment"),
+            moments,
+        ),
+    ])
+}
+
+/// `fp msd`: ⟨x²⟩(t) on log axes and its exponent α(t).
+fn fp_msd_panels(dir: &Path) -> Result<Vec<Panel>> {
+    let m = Table::read(dir, "moments.csv")?;
+    let x2 = if m.has("x2_err") {
+        points(&m, "t", "x2", "x2_err", "⟨x²⟩", Color::Palette(0))
+    } else {
+        line(&m, "t", "x2", "⟨x²⟩", Color::Palette(0), Dash::Solid)
+    };
+    let alpha = line(
+        &m,
+        "t",
+        "alpha",
+        "α = d ln⟨x²⟩ / d ln t",
+        Color::Palette(3),
+        Dash::Solid,
+    );
+    Ok(vec![
+        panel(
+            "(a)",
+            "mean squared displacement",
+            Axis::log("t"),
+            Axis::log("⟨x²⟩"),
+            vec![x2],
+        ),
+        panel(
+            "(b)",
+            "exponent",
+            Axis::log("t"),
+            Axis::linear("α"),
+            vec![alpha],
+        ),
+    ])
+}
+
+/// The survival curve S(t) of `survival.csv`, with its errors.
+fn survival_panel(dir: &Path, label: &str) -> Result<Panel> {
+    let s = Table::read(dir, "survival.csv")?;
+    let p = points(
+        &s,
+        "t",
+        "survival",
+        "survival_err",
+        "Kaplan-Meier",
+        Color::Palette(0),
+    );
+    Ok(panel(
+        label,
+        "survival",
+        Axis::log("t"),
+        Axis::linear("S(t)"),
+        vec![p],
+    ))
+}
+
+/// `mfpt`: τ(v₀) of the backward equations, or the sampled survival curve.
+fn mfpt_panel(dir: &Path) -> Result<Panel> {
+    if !dir.join("profile.csv").is_file() {
+        return survival_panel(dir, "");
+    }
+    let t = Table::read(dir, "profile.csv")?;
+    let series = vec![
+        line(&t, "v0", "tau", "τ", Color::Palette(0), Dash::Solid),
+        line(
+            &t,
+            "v0",
+            "tau_plus",
+            "τ_{+}",
+            Color::Palette(1),
+            Dash::Dashed,
+        ),
+        line(
+            &t,
+            "v0",
+            "tau_minus",
+            "τ_{-}",
+            Color::Palette(2),
+            Dash::Dotted,
+        ),
+    ];
+    Ok(panel(
+        "",
+        "mean first-passage time",
+        Axis::linear("v_{0}"),
+        Axis::linear("τ"),
+        series,
+    ))
+}
+
+/// A log axis where every finite value of `vals` is positive and they span
+/// more than a decade and a half, else a linear one.
+fn auto_axis(label: &str, vals: &[f64]) -> Axis {
+    let finite: Vec<f64> = vals.iter().copied().filter(|v| v.is_finite()).collect();
+    let lo = finite.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    match lo > 0.0 && hi / lo > 30.0 {
+        true => Axis::log(label),
+        false => Axis::linear(label),
+    }
+}
+
+/// `mfpt scan`: τ against the scanned quantity (the first column), with
+/// the sampled τ and its errors when a particle method ran too.
+fn scan_panel(dir: &Path) -> Result<Panel> {
+    let t = Table::read(dir, "mfpt_scan.csv")?;
+    let axis = t.names.first().cloned().unwrap_or_default();
+    let mut series = vec![
+        line(
+            &t,
+            &axis,
+            "tau",
+            "τ (backward equations)",
+            Color::Palette(0),
+            Dash::Solid,
+        ),
+        line(
+            &t,
+            &axis,
+            "tau_plus",
+            "τ_{+}",
+            Color::Palette(1),
+            Dash::Dashed,
+        ),
+        line(
+            &t,
+            &axis,
+            "tau_minus",
+            "τ_{-}",
+            Color::Palette(2),
+            Dash::Dotted,
+        ),
+    ];
+    if t.has("tau_sim") {
+        series.push(points(
+            &t,
+            &axis,
+            "tau_sim",
+            "tau_sim_err",
+            "τ (sampled)",
+            Color::Palette(3),
+        ));
+    }
+    let x = auto_axis(&axis, &t.col(&axis));
+    let y = auto_axis("τ", &t.col("tau"));
+    Ok(panel("", "mean first-passage time", x, y, series))
+}
+
+/// `mfpt optimize`: the searched grid τ(r) and the optimum found.
+fn optimize_panel(dir: &Path) -> Result<Panel> {
+    let t = Table::read(dir, "rate_grid.csv")?;
+    let mut series = vec![line(
+        &t,
+        "rate",
+        "tau",
+        "τ(r), grid",
+        Color::Palette(0),
+        Dash::Solid,
+    )];
+    let opt = fs::read_to_string(dir.join("optimum.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok());
+    if let Some(o) = opt {
+        if let (Some(r), Some(tau)) = (o["r_opt"].as_f64(), o["tau_opt"].as_f64()) {
+            let s = Series::points(
+                Some("optimum".into()),
+                Color::Palette(3),
+                "optimum",
+                vec![r],
+                vec![tau],
+                vec![0.0],
+            );
+            series.push(s);
+        }
+    }
+    let x = auto_axis("r", &t.col("rate"));
+    Ok(panel(
+        "",
+        "mean first-passage time against the reset rate",
+        x,
+        Axis::linear("τ"),
+        series,
+    ))
+}
+
+/// `mfpt distribution`: S(t) and the density f(t) of the first-passage
+/// time (backward equations, or the sampled histogram and survival).
+fn distribution_panels(dir: &Path) -> Result<Vec<Panel>> {
+    if !dir.join("distribution.csv").is_file() {
+        let h = Table::read(dir, "histogram.csv")?;
+        let mid = h
+            .col("t_lo")
+            .iter()
+            .zip(h.col("t_hi"))
+            .map(|(a, b)| (a * b).sqrt())
+            .collect();
+        let e = h
+            .col("density_err")
+            .into_iter()
+            .map(|e| if e.is_finite() { e } else { 0.0 })
+            .collect();
+        let f = Series::points(
+            Some("sampled".into()),
+            Color::Palette(0),
+            "density",
+            mid,
+            h.col("density"),
+            e,
+        );
+        let density = panel(
+            "(b)",
+            "first-passage-time density",
+            Axis::log("t"),
+            Axis::log("f(t)"),
+            vec![f],
+        );
+        return Ok(vec![survival_panel(dir, "(a)")?, density]);
+    }
+    let d = Table::read(dir, "distribution.csv")?;
+    let three = |what: &str| {
+        vec![
+            line(&d, "t", what, "mixture", Color::Palette(0), Dash::Solid),
+            line(
+                &d,
+                "t",
+                &format!("{what}_plus"),
+                "start +Σ",
+                Color::Palette(1),
+                Dash::Dashed,
+            ),
+            line(
+                &d,
+                "t",
+                &format!("{what}_minus"),
+                "start −Σ",
+                Color::Palette(2),
+                Dash::Dotted,
+            ),
+        ]
+    };
+    Ok(vec![
+        panel(
+            "(a)",
+            "survival",
+            Axis::log("t"),
+            Axis::linear("S(t)"),
+            three("survival"),
+        ),
+        panel(
+            "(b)",
+            "first-passage-time density",
+            Axis::log("t"),
+            Axis::log("f(t)"),
+            three("density"),
+        ),
+    ])
+}
+
+/// Write `picture` to `out` (a temporary name beside it, then renamed): a
+/// location that cannot be written is bad input and leaves nothing.
+#[cfg(feature = "plot")]
+fn write(picture: &Picture, out: &Path, svg: bool) -> Result<()> {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = if svg { "svg" } else { "png" };
+    let tmp = out.with_file_name(format!(".{name}.tmp-{}.{ext}", std::process::id()));
+    let refused = |why: String| {
+        let _ = fs::remove_file(&tmp);
+        Error::invalid(
+            "out",
+            out.display(),
+            format!("a writable image path ({why})"),
+        )
+    };
+    let drawn = match (picture, svg) {
+        (Picture::Figure(f), false) => f.render_png(&tmp),
+        (Picture::Figure(f), true) => f.render_svg(&tmp),
+        (Picture::Heat(h), false) => h.render_png(&tmp),
+        (Picture::Heat(h), true) => h.render_svg(&tmp),
+    };
+    drawn.map_err(|e| refused(e.to_string()))?;
+    fs::rename(&tmp, out).map_err(|e| refused(e.to_string()))
+}
+
+/// Without the `plot` feature there is nothing to draw with: refused after
+/// the input was checked, nothing written.
+#[cfg(not(feature = "plot"))]
+fn write(_: &Picture, out: &Path, _: bool) -> Result<()> {
+    Err(Error::invalid(
+        "out",
+        out.display(),
+        "only in a build with the cargo feature `plot` (irtp-cli's default; this irtp was built without it)",
+    ))
+}
+
+/// The heat map of the sweep in `dir`: column `var` of its `results.csv`
+/// over the plan's first two crossed axes (the first, varying slowest,
+/// upwards; the second across). With more crossed axes the others stay at
+/// their first value, which the title names; a plan crossing one axis is
+/// refused.
+fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
+    let text = fs::read_to_string(dir.join("plan.toml")).map_err(|_| not_irtp(dir))?;
+    let crossed = Plan::parse(&text)?.crossed();
+    if crossed.len() < 2 {
+        return Err(Error::invalid(
+            "dir",
+            dir.display(),
+            "for a heat map, a sweep whose plan.toml crosses at least two axes (this one crosses one: \
+             its results.csv is the table to read)",
+        ));
+    }
+    let (header, records) = read_results(dir)?;
+    let var = choose_var(&header, var)?;
+    let (ys, xs) = (&crossed[0], &crossed[1]);
+    let mut h = HeatMap {
+        title: format!("irtp sweep: {}", dir_name(dir)),
+        x_label: xs.0.join(", "),
+        y_label: ys.0.join(", "),
+        value_label: var.clone(),
+        x_ticks: vec![String::new(); xs.1],
+        y_ticks: vec![String::new(); ys.1],
+        values: vec![vec![None; xs.1]; ys.1],
+    };
+    let at = |rec: &csv::StringRecord, name: &str| -> String {
+        let j = header.iter().position(|h| h == name);
+        j.and_then(|j| rec.get(j)).unwrap_or("").to_string()
+    };
+    let values = |rec: &csv::StringRecord, names: &[String]| -> String {
+        names
+            .iter()
+            .map(|n| at(rec, n))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut others = String::new();
+    for rec in &records {
+        let Some(digits) = at(rec, "point")
+            .parse()
+            .ok()
+            .and_then(|p| digits(p, &crossed))
+        else {
+            continue;
+        };
+        if digits[2..].iter().any(|&d| d != 0) {
+            continue;
+        }
+        let (j, i) = (digits[0], digits[1]);
+        h.y_ticks[j] = values(rec, &ys.0);
+        h.x_ticks[i] = values(rec, &xs.0);
+        let ok = at(rec, "status") == "ok";
+        h.values[j][i] = at(rec, &var)
+            .parse::<f64>()
+            .ok()
+            .filter(|v| ok && v.is_finite());
+        let rest: Vec<String> = crossed[2..]
+            .iter()
+            .flat_map(|g| g.0.iter().map(|n| format!("{n} = {}", at(rec, n))))
+            .collect();
+        others = rest.join(", ");
+    }
+    if !others.is_empty() {
+        h.title = format!("{} at {others}", h.title);
+    }
+    Ok(h)
+}
+
+/// The header and rows of a sweep's `results.csv`; refused when it is
+/// missing (the sweep has not finished) or unreadable.
+fn read_results(dir: &Path) -> Result<(Vec<String>, Vec<csv::StringRecord>)> {
+    let unfinished = || {
+        Error::invalid(
+            "dir",
+            dir.display(),
+            "a finished sweep (results.csv is written once every point is done: irtp sweep status DIR)",
+        )
+    };
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).map_err(|_| unfinished())?;
+    let header = r
+        .headers()
+        .map_err(|_| unfinished())?
+        .iter()
+        .map(String::from)
+        .collect();
+    let records = r
+        .records()
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| unfinished())?;
+    Ok((header, records))
+}
+
+/// The position of plan point `p` on each crossed axis (the first axis
+/// varies slowest); `None` past the plan's end.
+fn digits(p: usize, crossed: &[(Vec<String>, usize)]) -> Option<Vec<usize>> {
+    let mut rest = p;
+    let mut out = vec![0; crossed.len()];
+    for (k, &(_, n)) in crossed.iter().enumerate().rev() {
+        out[k] = rest % n.max(1);
+        rest /= n.max(1);
+    }
+    (rest == 0).then_some(out)
+}
+
+/// The `results.csv` column `var` names (`result.` may be left out), or
+/// the first `result.*` column; an unknown one is refused listing them.
+fn choose_var(header: &[String], var: Option<&str>) -> Result<String> {
+    let results: Vec<&String> = header.iter().filter(|h| h.starts_with("result.")).collect();
+    let Some(v) = var else {
+        return results.first().map(|s| s.to_string()).ok_or_else(|| {
+            Error::invalid(
+                "var",
+                "(default)",
+                "a result.* column of results.csv; it has none",
+            )
+        });
+    };
+    let full = format!("result.{v}");
+    if let Some(h) = header.iter().find(|h| *h == v || **h == full) {
+        return Ok(h.clone());
+    }
+    let list: Vec<&str> = results.iter().take(12).map(|s| s.as_str()).collect();
+    let more = if results.len() > 12 { ", ..." } else { "" };
+    Err(Error::invalid(
+        "var",
+        v,
+        format!("a column of results.csv: {}{more}", list.join(", ")),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn axes(ns: &[usize]) -> Vec<(Vec<String>, usize)> {
+        ns.iter().map(|&n| (vec![format!("a{n}")], n)).collect()
+    }
+
+    #[test]
+    fn digits_follow_plan_order_first_axis_slowest() {
+        let c = axes(&[3, 2, 2]);
+        assert_eq!(digits(0, &c), Some(vec![0, 0, 0]));
+        assert_eq!(digits(1, &c), Some(vec![0, 0, 1]));
+        assert_eq!(digits(6, &c), Some(vec![1, 1, 0]));
+        assert_eq!(digits(11, &c), Some(vec![2, 1, 1]));
+        assert_eq!(digits(12, &c), None);
+    }
+
+    #[test]
+    fn var_takes_the_prefix_or_not_and_defaults_to_the_first_result() {
+        let h: Vec<String> = ["point", "sigma", "status", "result.v2", "result.d_eff"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(choose_var(&h, None).unwrap(), "result.v2");
+        assert_eq!(choose_var(&h, Some("d_eff")).unwrap(), "result.d_eff");
+        assert_eq!(
+            choose_var(&h, Some("result.d_eff")).unwrap(),
+            "result.d_eff"
+        );
+        let err = choose_var(&h, Some("tau")).unwrap_err().to_string();
+        assert!(err.contains("result.v2, result.d_eff"), "{err}");
+        assert!(choose_var(&h[..3], None).is_err());
+    }
+
+    #[test]
+    fn out_must_be_png_or_svg_in_an_existing_directory() {
+        let tmp = tempfile::tempdir().unwrap();
+        assert!(!image_kind(&tmp.path().join("a.png")).unwrap());
+        assert!(image_kind(&tmp.path().join("a.SVG")).unwrap());
+        assert!(image_kind(&tmp.path().join("a.pdf")).is_err());
+        assert!(image_kind(&tmp.path().join("no/a.png")).is_err());
+        let dir = tmp.path().join("d.png");
+        std::fs::create_dir(&dir).unwrap();
+        assert!(image_kind(&dir).is_err());
+    }
+}
