@@ -452,6 +452,16 @@ fn survival_panel(dir: &Path, label: &str) -> Result<Panel> {
 /// `mfpt`: τ(v₀) of the backward equations, or the sampled survival curve.
 fn mfpt_panel(dir: &Path) -> Result<Panel> {
     if !dir.join("profile.csv").is_file() {
+        if !dir.join("survival.csv").is_file() {
+            // A search by the backward equation: one number, no table.
+            return Err(Error::invalid(
+                "dir",
+                dir.display(),
+                "an output with a table to draw: this mfpt run holds only its numbers \
+                 (mfpt.json: a search solved by the backward equation); `--method exact` \
+                 gives its survival curve S(t)",
+            ));
+        }
         return survival_panel(dir, "");
     }
     let t = Table::read(dir, "profile.csv")?;
