@@ -337,8 +337,10 @@ fn refuse_infinite(problem: &SearchProblem, resetting: Resetting) -> Result<()> 
                     "none",
                     format!(
                         "a reset position (full resetting) for the level {l}: with \
-                         velocity-only resetting the mean first-passage time to a one-sided \
-                         level is infinite"
+                         velocity-only resetting x is unbounded and the mean first-passage \
+                         time to a one-sided level is infinite (or, with a reset velocity \
+                         driving x towards the level, finite but not on a bounded mesh: \
+                         --method exact samples both)"
                     ),
                 ))
             }

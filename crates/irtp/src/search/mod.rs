@@ -205,14 +205,17 @@ impl SearchProblem {
     /// extreme reset velocity, or v_max times the cycle with a fixed
     /// refractory period), else the walk restarts before it can get there, forever.
     /// With velocity-only resetting and a level, S(t) decays as a power law
-    /// (or tends to a constant): infinite. (A nonzero stationary mean
-    /// velocity towards the level would make that mean finite; it is not
-    /// detected, so such a problem is reported as infinite.)
+    /// (or tends to a constant): infinite, unless the resets give the
+    /// velocity a stationary mean towards the level ([`Self::drifts_towards`]):
+    /// then x moves ballistically on average and the mean is finite.
     pub fn mean_is_finite(&self) -> bool {
         let p = &self.params;
         let sched = p.schedule();
         let Some(pos) = sched.position else {
-            return matches!(self.target, PositionTarget::Interval(..));
+            return match self.target {
+                PositionTarget::Interval(..) => true,
+                PositionTarget::Level(l) => self.drifts_towards(l),
+            };
         };
         let resets = p.rate() > 0.0 || sched.periodic.is_some();
         let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
@@ -223,6 +226,19 @@ impl SearchProblem {
                 None => true,
             },
         }
+    }
+
+    /// Whether resets (Poisson or periodic) to a target whose mean <v_r>
+    /// is not 0 drive x towards the level `l`. The noise is symmetric and
+    /// g odd, so <v_r> = 0 gives <v> = 0 by mirror symmetry, and the flow
+    /// is monotone in its start, so a reset distribution shifted up (down)
+    /// gives a larger (smaller) stationary velocity: <v> has the sign of
+    /// <v_r>.
+    fn drifts_towards(&self, l: f64) -> bool {
+        let p = &self.params;
+        let resets = p.rate() > 0.0 || p.schedule().periodic.is_some();
+        let (mean_vr, _) = p.reset().target().moments();
+        resets && mean_vr != 0.0 && (l - self.x0) * mean_vr > 0.0
     }
 
     /// Whether a particle reset to `xr` can reach the target within one

@@ -452,3 +452,23 @@ fn exact_sampler_agrees_with_an_euler_walk_under_every_modifier() {
         assert!(z.abs() < 4.0, "case {k}: z = {z}");
     }
 }
+
+/// Velocity-only resetting to v_r ≠ 0: <v> has the sign of v_r, so a level
+/// on that side is reached with a finite mean (tau reported, an infinite
+/// t_max accepted, no tail fit), one on the other side is not; v_r = 0
+/// stays infinite. The finite mean is bounded below by the ballistic time.
+#[test]
+fn a_drift_from_the_reset_velocity_makes_the_mean_finite() {
+    let p = Params::new(DragLaw::Tanh, 0.6, 1.0, 2.0, 0.3).unwrap();
+    let ahead = level(p, 0.0, 0.0, 1.0);
+    let behind = level(p, 0.0, 0.0, -1.0);
+    assert!(ahead.mean_is_finite() && !behind.mean_is_finite());
+    let still = level(p.with_reset_velocity(0.0).unwrap(), 0.0, 0.0, 1.0);
+    assert!(!still.mean_is_finite());
+    let r = solve(&ahead, &exact(4000, f64::INFINITY, 3));
+    assert!(r.mean_is_finite && r.tail.is_none());
+    let s = r.stats.summary();
+    assert_eq!(s.censored, 0);
+    let v_max = p.v_upper();
+    assert!(r.tau() >= 1.0 / v_max && r.tau().is_finite(), "{}", r.tau());
+}
