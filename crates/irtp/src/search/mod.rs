@@ -206,7 +206,7 @@ impl SearchProblem {
     /// refractory period), else the walk restarts before it can get there, forever.
     /// With velocity-only resetting and a level, S(t) decays as a power law
     /// (or tends to a constant): infinite, unless the resets give the
-    /// velocity a stationary mean towards the level ([`Self::drifts_towards`]):
+    /// velocity a stationary mean towards the level (`drifts_towards`):
     /// then x moves ballistically on average and the mean is finite.
     pub fn mean_is_finite(&self) -> bool {
         let p = &self.params;
