@@ -28,6 +28,7 @@ use irtp::Error;
 use serde::Serialize;
 use std::time::Instant;
 
+pub(crate) mod parts;
 pub(crate) mod search;
 
 /// `irtp mfpt`.
@@ -669,7 +670,22 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let c = a.config()?;
     let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
-    let (report, table, note) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
+    let result = estimate(&c.method, &c.problem, "mfpt", ctx)?;
+    write_direct(a, &c, result, (t0, 0.0), out, ctx)
+}
+
+/// Write the outputs of a solved velocity-target problem. The wall time
+/// reported is `clock.1` plus the time since `clock.0` (the backward
+/// profile is computed here).
+fn write_direct(
+    a: &DirectArgs,
+    c: &DirectConfig,
+    result: MfptResult,
+    clock: (Instant, f64),
+    out: Option<crate::io::OutputDir>,
+    ctx: &Context,
+) -> irtp::Result<Outcome> {
+    let (report, table, note) = match result {
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (
@@ -687,7 +703,7 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
             )
         }
     };
-    let wall = t0.elapsed().as_secs_f64();
+    let wall = clock.1 + clock.0.elapsed().as_secs_f64();
     let json = to_value(&report);
     let results = Results {
         method: method_name(report.method).into(),
