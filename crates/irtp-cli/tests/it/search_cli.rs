@@ -167,12 +167,28 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
         let out = irtp(&[&base[..], extra, &["--out", d]].concat());
         assert_rejected(&out, flag, &dir);
     }
-    // Euler: not for a search; the backward solver (the default) refuses
+    // The backward solver (the default) and the renewal route refuse
     // velocity-only resetting with a one-sided level (an infinite mean)
-    // naming --reset-position, and a mesh out of range naming its flag.
+    // naming --reset-position, a mesh or time grid out of range naming its
+    // flag; Euler a step out of range; a method's flags with another.
     for (extra, flag) in [
-        (&["--method", "euler"][..], "--method"),
         (&[][..], "--reset-position"),
+        (&["--method", "renewal", "--rate", "1"][..], "--reset-position"),
+        (
+            &["--method", "renewal", "--reset-position", "0", "--time-steps", "2"][..],
+            "--time-steps",
+        ),
+        (
+            &["--method", "renewal", "--reset-position", "0", "--horizon-tail", "2"][..],
+            "--horizon-tail",
+        ),
+        (
+            &["--method", "renewal", "--reset-position", "0", "--seed", "2"][..],
+            "--seed",
+        ),
+        (&["--reset-position", "0", "--time-steps", "50"][..], "--time-steps"),
+        (&["--method", "euler", "--dt", "-1"][..], "--dt"),
+        (&["--method", "euler", "--dt", "0.01", "--t-max", "inf"][..], "--t-max"),
         (
             &["--reset-position", "0", "--cells-x", "1"][..],
             "--cells-x",
@@ -223,6 +239,8 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
     let d = dir.to_str().unwrap();
     let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--x0", "1", "--out", d]);
     assert_rejected(&out, "--x0", &dir);
+    let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--method", "renewal", "--out", d]);
+    assert_rejected(&out, "--method", &dir);
     let out = irtp(&["mfpt", "--vt", "0.5", "--xt", "1", "--v0", "0", "--out", d]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -311,4 +329,60 @@ fn a_costly_search_is_refused_before_it_starts() {
         assert!(!dir.exists());
         assert!(start.elapsed().as_secs_f64() < 10.0);
     }
+}
+
+/// `--method renewal`: the renewal route of full resetting, its options in
+/// the report (provenance) and its tau within the error estimates of the
+/// direct backward solve; `--method euler`: tau = 2 T(dt/2) - T(dt) from
+/// the two runs reported, within the combined errors of the exact sampler
+/// (4 sigma), survival.csv from the run at dt/2.
+#[test]
+fn renewal_and_euler_searches_report_their_estimates() {
+    let base = [
+        "mfpt",
+        "--xt",
+        "0.8",
+        "--v0",
+        "0",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--rate",
+        "0.5",
+        "--reset-position",
+        "0",
+        "--json",
+    ];
+    let mesh = ["--cells-x", "16", "--cells-v", "8"];
+    let with = |extra: &[&str]| json(&irtp(&[&base[..], extra].concat()));
+    let renewal = with(&[&mesh[..], &["--method", "renewal", "--time-steps", "40"]].concat());
+    assert_eq!(renewal["method"], "renewal");
+    assert_eq!(renewal["options"]["steps"], 40);
+    assert_eq!(renewal["options"]["cells_x"], 16);
+    let backward = with(&[&mesh[..], &["--method", "backward"]].concat());
+    let (tr, tb) = (renewal["tau"].as_f64().unwrap(), backward["tau"].as_f64().unwrap());
+    let e = renewal["error_estimate"].as_f64().unwrap() + backward["error_estimate"].as_f64().unwrap();
+    assert!((tr - tb).abs() <= e, "renewal {tr}, backward {tb}, errors {e}");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("e");
+    let euler = with(&[
+        "--method",
+        "euler",
+        "--dt",
+        "0.02",
+        "--particles",
+        "20000",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let f = |k: &str| euler[k].as_f64().unwrap();
+    let (c, h) = (&euler["coarse"], &euler["fine"]);
+    assert_eq!(f("tau"), 2.0 * h["tau"].as_f64().unwrap() - c["tau"].as_f64().unwrap());
+    assert_eq!(f("dt"), 0.02);
+    assert!(dir.join("survival.csv").exists());
+    let exact = with(&["--method", "exact", "--particles", "20000", "--seed", "9"]);
+    let (tx, ex) = (exact["tau"].as_f64().unwrap(), exact["tau_err"].as_f64().unwrap());
+    let z = (f("tau") - tx).abs() / (f("tau_err").powi(2) + ex * ex).sqrt();
+    assert!(z < 4.0, "euler {} ± {}, exact {tx} ± {ex}", f("tau"), f("tau_err"));
 }
