@@ -21,12 +21,15 @@
 //! - [`renewal`]: the state-resolved renewal route for full resetting, from
 //!   the reset-free survival resolved by the final noise state.
 //! - [`euler`]: the Euler scheme's passage at dt and dt/2, extrapolated.
+//! - [`distribution`]: S(t) and f(t) by the time-dependent backward
+//!   equation with resets.
 //! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
 //! - [`solve`] with a [`SearchMethod`]: the one entry point. A particle
 //!   method's run is cut into units of particles ([`particle_units`]) that
 //!   [`assemble`] merges into the whole run's result, bit for bit.
 
 pub mod backward;
+pub mod distribution;
 pub mod euler;
 pub mod exact;
 mod mesh;

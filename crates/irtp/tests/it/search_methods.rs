@@ -176,3 +176,118 @@ fn particle_runs_in_parts_are_bit_identical_to_the_whole() {
         }
     }
 }
+
+/// The distribution's options: a 16 × 8 coarse mesh (refined once), `steps`
+/// steps to `t_max`.
+fn dist_opts(t_max: f64, steps: usize) -> search::distribution::DistributionOptions {
+    search::distribution::DistributionOptions {
+        mesh: search::backward::BackwardOptions::with_cells(16, 8),
+        t_max,
+        steps,
+    }
+}
+
+/// S(t) by linear interpolation on the uniform grid of `d`.
+fn s_at(d: &search::distribution::SearchDistribution, t: f64) -> (f64, f64) {
+    let dt = d.t[1];
+    let i = ((t / dt).floor() as usize).min(d.t.len() - 2);
+    let a = (t - d.t[i]) / dt;
+    let lerp = |v: &[f64]| (1.0 - a) * v[i] + a * v[i + 1];
+    (lerp(&d.survival), lerp(&d.survival_err).max(d.survival_err[i]))
+}
+
+/// S(t) by the time-dependent backward equation with full resetting
+/// against the exact sampler's Kaplan-Meier curve at 10 times spread over
+/// the curve, for linear drag (a level) and tan drag (an interval): within
+/// 4 standard errors of the curve plus the backward error estimate (20
+/// comparisons, Bonferroni: each two-sided 4 sigma has a chance below
+/// 6.4e-5). The curve is a probability, non-increasing, f = -dS/dt is its
+/// slope, and ∫ S dt is the stationary solver's tau within both errors.
+#[test]
+fn backward_distribution_matches_the_sampler_and_the_mean() {
+    let cases = [
+        (
+            full(DragLaw::Linear, 1.0, 0.5),
+            0.0,
+            PositionTarget::Level(0.8),
+        ),
+        (
+            full(DragLaw::Tan, 1.0, 1.0),
+            0.1,
+            PositionTarget::Interval(-0.6, 0.5),
+        ),
+    ];
+    for (p, v0, target) in cases {
+        let pr = SearchProblem::new(p, 0.0, v0, target).unwrap();
+        let mean = search::backward::solve(&pr, &search::backward::BackwardOptions::with_cells(16, 8))
+            .unwrap();
+        let t_max = 12.0 * mean.tau;
+        let d = search::distribution::solve(&pr, &dist_opts(t_max, 200)).unwrap();
+        let n = d.t.len() - 1;
+        assert_eq!(d.survival[0], 1.0);
+        for i in 1..=n {
+            let e = d.survival_err[i] + d.survival_err[i - 1] + 1e-9;
+            assert!(d.survival[i] <= d.survival[i - 1] + e && d.survival[i] >= -e);
+        }
+        // f is -dS/dt: its trapezoid integral is the drop of S.
+        let drop: f64 = (1..=n)
+            .map(|i| 0.5 * (d.density[i] + d.density[i - 1]) * d.t[1])
+            .sum();
+        assert!((drop - (1.0 - d.survival[n])).abs() < 1e-2, "{drop} {}", d.survival[n]);
+        // ∫ S dt against tau: the tail beyond t_max adds at most
+        // S(t_max) times the mean of a fresh search from there, below tau
+        // from the worst start; bounded by S(t_max) (tau + error) · 2.
+        let integral_err: f64 = d.survival_err.iter().sum::<f64>() * d.t[1];
+        let tail = d.survival[n] * 2.0 * (mean.tau + mean.error_estimate);
+        let gap = (d.restricted_mean - mean.tau).abs();
+        assert!(
+            gap <= integral_err + mean.error_estimate + tail,
+            "{target:?}: ∫S = {} ± {integral_err}, tau = {} ± {}, tail {tail}",
+            d.restricted_mean,
+            mean.tau,
+            mean.error_estimate
+        );
+        let exact = search::exact::stats(&pr, t_max, 40_000, 21, &NoProgress).unwrap();
+        let km = exact.survival();
+        let inside: Vec<usize> = (1..km.t.len())
+            .filter(|&i| km.t[i] < t_max && km.survival[i] > 0.02)
+            .collect();
+        assert!(inside.len() >= 10, "{}", inside.len());
+        for k in 0..10 {
+            let i = inside[k * (inside.len() - 1) / 9];
+            let (s, err) = s_at(&d, km.t[i]);
+            let bound = 4.0 * km.survival_err[i] + err;
+            assert!(
+                (s - km.survival[i]).abs() <= bound,
+                "{target:?} at t = {}: backward {s} ± {err}, sampler {} ± {}",
+                km.t[i],
+                km.survival[i],
+                km.survival_err[i]
+            );
+        }
+    }
+}
+
+/// The distribution refuses by name what it does not run: a level with
+/// velocity-only resetting (x unbounded), a periodic clock.
+#[test]
+fn backward_distribution_refuses_by_name() {
+    let name = |pr: &SearchProblem| match search::distribution::solve(pr, &dist_opts(5.0, 50)) {
+        Err(irtp::Error::InvalidParameter { name, .. }) => name,
+        r => panic!("{r:?}"),
+    };
+    let velocity_only = Params::new(DragLaw::Linear, 1.0, 1.0, 0.5, 0.0).unwrap();
+    let pr = SearchProblem::new(velocity_only, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    assert_eq!(name(&pr), "reset_position");
+    let periodic = Params::new(DragLaw::Linear, 1.0, 1.0, 0.0, 0.0)
+        .unwrap()
+        .with_schedule(Schedule::parse(Some(2.0), Some(0.0), None).unwrap())
+        .unwrap();
+    let pr = SearchProblem::new(periodic, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    assert_eq!(name(&pr), "reset_period");
+    // An interval with velocity-only resetting runs (a bounded x).
+    let pr = SearchProblem::new(velocity_only, 0.0, 0.0, PositionTarget::Interval(-0.5, 0.5))
+        .unwrap();
+    let d = search::distribution::solve(&pr, &dist_opts(20.0, 100)).unwrap();
+    assert!(d.survival[100] < 0.5 && d.survival[100] >= 0.0);
+}
