@@ -67,16 +67,6 @@ impl SearchFlags<'_> {
     }
 }
 
-/// The refusal of a method a search's distribution does not run (`name`:
-/// the method given).
-pub(crate) fn only_exact(name: &str) -> Error {
-    Error::invalid(
-        "--method",
-        name,
-        "exact for the distribution of a search target in position (--xt, --interval)",
-    )
-}
-
 /// The exact method for `problem` with `run`, validated and its cost
 /// checked against `budget` before any output exists.
 pub(crate) fn exact_method(

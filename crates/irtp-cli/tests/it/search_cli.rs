@@ -296,8 +296,53 @@ fn a_search_distribution_writes_the_histogram_and_survival() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("d");
     let d = dir.to_str().unwrap();
+    // The backward equation (the default) refuses a level without full
+    // resetting (x unbounded) naming --reset-position.
     let out = irtp(&["mfpt", "distribution", "--xt", "1", "--v0", "0", "--out", d]);
-    assert_rejected(&out, "--method", &dir);
+    assert_rejected(&out, "--reset-position", &dir);
+    for (extra, flag) in [
+        (&["--reset-position", "0", "--grid", "log"][..], "--grid"),
+        (&["--reset-position", "0", "--rtol", "1e-3"][..], "--rtol"),
+        (&["--reset-position", "0", "--cells-x", "1"][..], "--cells-x"),
+        (&["--reset-position", "0", "--points", "2"][..], "--points"),
+        (&["--reset-position", "0", "--seed", "2"][..], "--seed"),
+        (&["--reset-position", "0", "--method", "exact", "--cells-v", "8"][..], "--cells-v"),
+    ] {
+        let args = [&["mfpt", "distribution", "--xt", "1", "--v0", "0"][..], extra, &["--out", d]];
+        assert_rejected(&irtp(&args.concat()), flag, &dir);
+    }
+}
+
+/// `irtp mfpt distribution --xt --method backward`: S(t), its error and
+/// f(t) on a uniform grid; S is a non-increasing probability, and its
+/// integral (restricted_mean, S(t_max) ~ 1e-5 beyond) is the stationary
+/// solver's tau within their errors.
+#[test]
+fn a_search_distribution_by_the_backward_equation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let base = ["mfpt", "--xt", "1", "--v0", "0", "--reset-position", "0", "--cells-x", "16", "--cells-v", "8"];
+    let args = [&base[..1], &["distribution"], &base[1..], &["--points", "101", "--json", "--out", dir.to_str().unwrap()]].concat();
+    let r = json(&irtp(&args));
+    assert_eq!(r["method"], "backward");
+    assert_eq!(r["options"]["steps"], 100);
+    let mean = json(&irtp(&[&base[..], &["--json"]].concat()));
+    let text = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,survival,survival_err,density");
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101);
+    let mut integral_err = 0.0;
+    for w in rows.windows(2) {
+        assert!(w[1][1] <= w[0][1] + w[0][2] + w[1][2] + 1e-9 && w[1][1] >= -w[1][2] - 1e-9);
+        integral_err += w[1][2] * (w[1][0] - w[0][0]);
+    }
+    let (tau, e) = (mean["tau"].as_f64().unwrap(), mean["error_estimate"].as_f64().unwrap());
+    let m = r["restricted_mean"].as_f64().unwrap();
+    let tail = 2.0 * r["survival_t_max"].as_f64().unwrap() * (tau + e);
+    assert!((m - tau).abs() <= integral_err + e + tail, "∫S = {m} ± {integral_err}, tau = {tau} ± {e}");
 }
 
 /// The cost is estimated before any work (a pilot of a few particles
