@@ -544,6 +544,8 @@ def mfpt_distribution(
     t_min: float = ...,
     rtol: float = ...,
     particles: int = ...,
+    cells_x: int = ...,
+    cells_v: int = ...,
     seed: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,

@@ -444,7 +444,11 @@ DOCS: Dict[str, Doc] = {
         "exactly: S+ drops by it, density is f of the rest. The moments come\n"
         "from L T1 = -1 (tau, Eq. (28)) and L T2 = -2 T1 (variance, cv); the\n"
         "distribution's own mean (distribution_mean) agrees with tau.\n"
-        "method='exact': the exact sampler's histogram and Kaplan-Meier curve.",
+        "method='exact': the exact sampler's histogram and Kaplan-Meier curve.\n"
+        "With xt=L (or interval='A,B', from x0) the target is a position: method\n"
+        "'backward' integrates the 2-D backward equation with the resets\n"
+        "(cells_x, cells_v; points - 1 fixed steps to t_max), giving\n"
+        "distribution: t, survival, survival_err, density.",
         "MfptDistributionResult\n"
         "    distribution: t, survival, density, survival_plus, density_plus,\n"
         "        survival_minus, density_minus (backward); histogram: t_lo, t_hi,\n"

@@ -46,6 +46,8 @@ CASES = [
                           cells_v=8, time_steps=40, horizon_tail=1e-6)),
     ("mfpt", "mfpt", dict(v0=0.0, xt=0.5, reset_position=0.0, method="euler", dt=0.01,
                           particles=400, seed=3)),
+    ("mfpt_distribution", "mfpt distribution",
+     dict(v0=0.0, xt=0.5, reset_position=0.0, cells_x=16, cells_v=8, points=51)),
     ("mfpt_scan", "mfpt scan",
      dict(v0=-0.249, vt=0.5, over="rate", from_=0.1, to=10.0, points=5, log=True, cells=1000)),
     ("mfpt_scan", "mfpt scan",
