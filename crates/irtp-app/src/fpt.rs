@@ -26,8 +26,8 @@ use irtp::mfpt::{
     self, backward, BackwardOptions, Distribution, DistributionOptions, FptStats, ParticleOptions,
     Problem,
 };
-use irtp::sim::TimeGrid;
 use irtp::search::distribution::DistributionOptions as SearchDistOptions;
+use irtp::sim::TimeGrid;
 use irtp::Error;
 use serde::Serialize;
 use std::time::Instant;
@@ -530,7 +530,9 @@ fn run_search_backward(
     )?;
     let t0 = Instant::now();
     let d = {
-        let _bar = ctx.reporter.stage("search distribution (backward equation)", 1);
+        let _bar = ctx
+            .reporter
+            .stage("search distribution (backward equation)", 1);
         irtp::search::distribution::solve(&c.problem, &c.opts)?
     };
     ctx.check()?;

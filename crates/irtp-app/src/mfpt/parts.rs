@@ -100,12 +100,7 @@ impl<'a> MfptParts<'a> {
     /// The outcome of the whole run from every part's unit totals (in part
     /// order) and the parts' summed wall time: written to `--out` as the
     /// run made whole would.
-    pub fn assemble(
-        &self,
-        units: &[FptStats],
-        wall: f64,
-        ctx: &Context,
-    ) -> irtp::Result<Outcome> {
+    pub fn assemble(&self, units: &[FptStats], wall: f64, ctx: &Context) -> irtp::Result<Outcome> {
         let o = &self.args.output;
         let out = open_out("mfpt", o.out.as_deref(), o.force.force)?;
         let t0 = Instant::now();

@@ -379,8 +379,7 @@ fn euler_report(c: &SearchConfig, e: search::EulerSearch) -> (EulerReport, Table
     let m = |v: f64| if e.mean_is_finite { v } else { f64::NAN };
     let x = e.extrapolated;
     let (coarse, fine) = (e.coarse.summary(), e.fine.summary());
-    let notes = [&coarse, &fine]
-        .map(|s| note(&SearchReport::new(c, s, e.mean_is_finite, e.tail)));
+    let notes = [&coarse, &fine].map(|s| note(&SearchReport::new(c, s, e.mean_is_finite, e.tail)));
     let report = EulerReport {
         method: c.method.name(),
         problem: c.problem,
@@ -419,7 +418,12 @@ pub(crate) fn report_of(
         SearchResult::Particles(r) => {
             let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
             let table = survival_table(&r.stats.survival());
-            (to_value(&report), Some(report.seed), vec![table], note(&report))
+            (
+                to_value(&report),
+                Some(report.seed),
+                vec![table],
+                note(&report),
+            )
         }
         SearchResult::Euler(e) => {
             let (report, table, text) = euler_report(c, e);

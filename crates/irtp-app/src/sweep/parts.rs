@@ -131,7 +131,8 @@ fn point_cli(plan: &Plan, store: &Store, p: &Point) -> Result<crate::Cli> {
     let argv = plan
         .argv(p, Some(&store.dir(p)))
         .map_err(|e| Error::invalid("plan", p.index, e))?;
-    keywords::parse::<crate::Cli>(&plan.command, &argv).map_err(|e| Error::invalid("plan", p.index, e))
+    keywords::parse::<crate::Cli>(&plan.command, &argv)
+        .map_err(|e| Error::invalid("plan", p.index, e))
 }
 
 /// Check that every point can be cut into the plan's parts.
@@ -142,12 +143,12 @@ pub fn check(plan: &Plan, p: &Point, cli: &crate::Cli) -> Result<()> {
     Split::new(&cli.command, plan.particle_parts)
         .map(drop)
         .map_err(|e| {
-        Error::invalid(
-            "plan",
-            format!("point {}", p.index),
-            e.message_with(|n| n.to_string()),
-        )
-    })
+            Error::invalid(
+                "plan",
+                format!("point {}", p.index),
+                e.message_with(|n| n.to_string()),
+            )
+        })
 }
 
 /// Compute part `k` of point `p` and store it; a failure of the computation

@@ -2,5 +2,5 @@
 //! Each module is one former test file; shared helpers live in `common`.
 
 mod app;
-mod search;
 mod range_fuzz;
+mod search;

@@ -173,22 +173,52 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
     // flag; Euler a step out of range; a method's flags with another.
     for (extra, flag) in [
         (&[][..], "--reset-position"),
-        (&["--method", "renewal", "--rate", "1"][..], "--reset-position"),
         (
-            &["--method", "renewal", "--reset-position", "0", "--time-steps", "2"][..],
+            &["--method", "renewal", "--rate", "1"][..],
+            "--reset-position",
+        ),
+        (
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--time-steps",
+                "2",
+            ][..],
             "--time-steps",
         ),
         (
-            &["--method", "renewal", "--reset-position", "0", "--horizon-tail", "2"][..],
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--horizon-tail",
+                "2",
+            ][..],
             "--horizon-tail",
         ),
         (
-            &["--method", "renewal", "--reset-position", "0", "--seed", "2"][..],
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--seed",
+                "2",
+            ][..],
             "--seed",
         ),
-        (&["--reset-position", "0", "--time-steps", "50"][..], "--time-steps"),
+        (
+            &["--reset-position", "0", "--time-steps", "50"][..],
+            "--time-steps",
+        ),
         (&["--method", "euler", "--dt", "-1"][..], "--dt"),
-        (&["--method", "euler", "--dt", "0.01", "--t-max", "inf"][..], "--t-max"),
+        (
+            &["--method", "euler", "--dt", "0.01", "--t-max", "inf"][..],
+            "--t-max",
+        ),
         (
             &["--reset-position", "0", "--cells-x", "1"][..],
             "--cells-x",
@@ -239,7 +269,9 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
     let d = dir.to_str().unwrap();
     let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--x0", "1", "--out", d]);
     assert_rejected(&out, "--x0", &dir);
-    let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--method", "renewal", "--out", d]);
+    let out = irtp(&[
+        "mfpt", "--vt", "0.5", "--v0", "0", "--method", "renewal", "--out", d,
+    ]);
     assert_rejected(&out, "--method", &dir);
     let out = irtp(&["mfpt", "--vt", "0.5", "--xt", "1", "--v0", "0", "--out", d]);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -303,12 +335,29 @@ fn a_search_distribution_writes_the_histogram_and_survival() {
     for (extra, flag) in [
         (&["--reset-position", "0", "--grid", "log"][..], "--grid"),
         (&["--reset-position", "0", "--rtol", "1e-3"][..], "--rtol"),
-        (&["--reset-position", "0", "--cells-x", "1"][..], "--cells-x"),
+        (
+            &["--reset-position", "0", "--cells-x", "1"][..],
+            "--cells-x",
+        ),
         (&["--reset-position", "0", "--points", "2"][..], "--points"),
         (&["--reset-position", "0", "--seed", "2"][..], "--seed"),
-        (&["--reset-position", "0", "--method", "exact", "--cells-v", "8"][..], "--cells-v"),
+        (
+            &[
+                "--reset-position",
+                "0",
+                "--method",
+                "exact",
+                "--cells-v",
+                "8",
+            ][..],
+            "--cells-v",
+        ),
     ] {
-        let args = [&["mfpt", "distribution", "--xt", "1", "--v0", "0"][..], extra, &["--out", d]];
+        let args = [
+            &["mfpt", "distribution", "--xt", "1", "--v0", "0"][..],
+            extra,
+            &["--out", d],
+        ];
         assert_rejected(&irtp(&args.concat()), flag, &dir);
     }
 }
@@ -321,8 +370,26 @@ fn a_search_distribution_writes_the_histogram_and_survival() {
 fn a_search_distribution_by_the_backward_equation() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("d");
-    let base = ["mfpt", "--xt", "1", "--v0", "0", "--reset-position", "0", "--cells-x", "16", "--cells-v", "8"];
-    let args = [&base[..1], &["distribution"], &base[1..], &["--points", "101", "--json", "--out", dir.to_str().unwrap()]].concat();
+    let base = [
+        "mfpt",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+    ];
+    let args = [
+        &base[..1],
+        &["distribution"],
+        &base[1..],
+        &["--points", "101", "--json", "--out", dir.to_str().unwrap()],
+    ]
+    .concat();
     let r = json(&irtp(&args));
     assert_eq!(r["method"], "backward");
     assert_eq!(r["options"]["steps"], 100);
@@ -339,10 +406,16 @@ fn a_search_distribution_by_the_backward_equation() {
         assert!(w[1][1] <= w[0][1] + w[0][2] + w[1][2] + 1e-9 && w[1][1] >= -w[1][2] - 1e-9);
         integral_err += w[1][2] * (w[1][0] - w[0][0]);
     }
-    let (tau, e) = (mean["tau"].as_f64().unwrap(), mean["error_estimate"].as_f64().unwrap());
+    let (tau, e) = (
+        mean["tau"].as_f64().unwrap(),
+        mean["error_estimate"].as_f64().unwrap(),
+    );
     let m = r["restricted_mean"].as_f64().unwrap();
     let tail = 2.0 * r["survival_t_max"].as_f64().unwrap() * (tau + e);
-    assert!((m - tau).abs() <= integral_err + e + tail, "∫S = {m} ± {integral_err}, tau = {tau} ± {e}");
+    assert!(
+        (m - tau).abs() <= integral_err + e + tail,
+        "∫S = {m} ± {integral_err}, tau = {tau} ± {e}"
+    );
 }
 
 /// The cost is estimated before any work (a pilot of a few particles
@@ -406,9 +479,16 @@ fn renewal_and_euler_searches_report_their_estimates() {
     assert_eq!(renewal["options"]["steps"], 40);
     assert_eq!(renewal["options"]["cells_x"], 16);
     let backward = with(&[&mesh[..], &["--method", "backward"]].concat());
-    let (tr, tb) = (renewal["tau"].as_f64().unwrap(), backward["tau"].as_f64().unwrap());
-    let e = renewal["error_estimate"].as_f64().unwrap() + backward["error_estimate"].as_f64().unwrap();
-    assert!((tr - tb).abs() <= e, "renewal {tr}, backward {tb}, errors {e}");
+    let (tr, tb) = (
+        renewal["tau"].as_f64().unwrap(),
+        backward["tau"].as_f64().unwrap(),
+    );
+    let e =
+        renewal["error_estimate"].as_f64().unwrap() + backward["error_estimate"].as_f64().unwrap();
+    assert!(
+        (tr - tb).abs() <= e,
+        "renewal {tr}, backward {tb}, errors {e}"
+    );
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("e");
     let euler = with(&[
@@ -423,11 +503,22 @@ fn renewal_and_euler_searches_report_their_estimates() {
     ]);
     let f = |k: &str| euler[k].as_f64().unwrap();
     let (c, h) = (&euler["coarse"], &euler["fine"]);
-    assert_eq!(f("tau"), 2.0 * h["tau"].as_f64().unwrap() - c["tau"].as_f64().unwrap());
+    assert_eq!(
+        f("tau"),
+        2.0 * h["tau"].as_f64().unwrap() - c["tau"].as_f64().unwrap()
+    );
     assert_eq!(f("dt"), 0.02);
     assert!(dir.join("survival.csv").exists());
     let exact = with(&["--method", "exact", "--particles", "20000", "--seed", "9"]);
-    let (tx, ex) = (exact["tau"].as_f64().unwrap(), exact["tau_err"].as_f64().unwrap());
+    let (tx, ex) = (
+        exact["tau"].as_f64().unwrap(),
+        exact["tau_err"].as_f64().unwrap(),
+    );
     let z = (f("tau") - tx).abs() / (f("tau_err").powi(2) + ex * ex).sqrt();
-    assert!(z < 4.0, "euler {} ± {}, exact {tx} ± {ex}", f("tau"), f("tau_err"));
+    assert!(
+        z < 4.0,
+        "euler {} ± {}, exact {tx} ± {ex}",
+        f("tau"),
+        f("tau_err")
+    );
 }

@@ -336,7 +336,10 @@ fn mfpt_points_split_into_particle_parts_merge_bit_for_bit() {
     // Fixed keywords and the axis of two points.
     let targets = [
         ("v0 = 0.0\nvt = 0.5\n", "method = [\"exact\", \"euler\"]"),
-        ("v0 = 0.0\nxt = 0.5\nreset_position = 0.0\nmethod = \"exact\"\n", "rate = [1.0, 2.0]"),
+        (
+            "v0 = 0.0\nxt = 0.5\nreset_position = 0.0\nmethod = \"exact\"\n",
+            "rate = [1.0, 2.0]",
+        ),
         (
             "v0 = 0.0\nxt = 0.5\nreset_position = 0.0\nmethod = \"euler\"\ndt = 0.02\n",
             "rate = [1.0, 2.0]",
@@ -350,7 +353,10 @@ fn mfpt_points_split_into_particle_parts_merge_bit_for_bit() {
         let split_plan = format!("particle_parts = 3\n{whole_plan}");
         let whole = write_plan_as(tmp.path(), &format!("whole{i}.toml"), &whole_plan);
         let split = write_plan_as(tmp.path(), &format!("split{i}.toml"), &split_plan);
-        let (a, b) = (tmp.path().join(format!("w{i}")), tmp.path().join(format!("s{i}")));
+        let (a, b) = (
+            tmp.path().join(format!("w{i}")),
+            tmp.path().join(format!("s{i}")),
+        );
         let run = |plan: &str, out: &Path, threads: &str| {
             let o = Command::new(env!("CARGO_BIN_EXE_irtp"))
                 .args(["sweep", "run", plan, "--out", out.to_str().unwrap()])
@@ -377,10 +383,19 @@ fn mfpt_points_split_into_particle_parts_merge_bit_for_bit() {
         tmp.path(),
         "command = \"mfpt\"\nparticle_parts = 2\n[fixed]\nv0 = 0.0\nvt = 0.5\n",
     );
-    let o = irtp(&["sweep", "run", &plan, "--out", tmp.path().join("o").to_str().unwrap()]);
+    let o = irtp(&[
+        "sweep",
+        "run",
+        &plan,
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("particle_parts") && err.contains("deterministic"), "{err}");
+    assert!(
+        err.contains("particle_parts") && err.contains("deterministic"),
+        "{err}"
+    );
 }
 
 #[test]

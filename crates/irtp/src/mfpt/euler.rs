@@ -14,7 +14,6 @@
 //! v_t is the passage at that step.
 
 use super::estimator::{merge_units, FptSample, FptStats, FptSummary};
-use std::ops::Range;
 use super::Problem;
 use crate::error::{finite, Error, Result};
 use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
@@ -23,6 +22,7 @@ use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use crate::sim::euler::{euler_step, geometric_gap};
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// Euler first-passage sampler (paper Eqs. (30)-(32)), step order as in
 /// [`crate::sim::euler`]: with probability r dt, v ← v_r (noise kept),
@@ -84,7 +84,13 @@ impl EulerFpt {
     /// The unit totals of units `units` of [`EulerFpt::stats`]'s run of
     /// `n` particles ([`crate::mfpt::estimator::first_passage_units`]'s
     /// contract: merged in unit order, the whole run's bits).
-    pub fn units(&self, n: u64, units: Range<u64>, seed: u64, progress: &dyn Progress) -> Vec<FptStats> {
+    pub fn units(
+        &self,
+        n: u64,
+        units: Range<u64>,
+        seed: u64,
+        progress: &dyn Progress,
+    ) -> Vec<FptStats> {
         let c = Chain::new(self, seed);
         let scheduled = c.periodic.is_some() || c.refractory.is_some();
         crate::with_drag!(self.problem.params().drag(), |d| {

@@ -5,13 +5,13 @@
 
 use super::backward::{self, BackwardOptions, BackwardSolution};
 use super::estimator::{merge_units, FptStats, FptSummary};
-use std::ops::Range;
 use super::euler::EulerFpt;
 use super::{exact, Problem};
 use crate::error::{Error, Result};
 use crate::model::reset::Solver;
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// A particle estimate: how many particles, the time cap, the seed.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -190,12 +190,9 @@ pub fn particle_units(
         Method::Exact(run) => {
             exact::units(problem, run.t_max, run.particles, run.seed, units, progress)
         }
-        Method::Euler { dt, run } => EulerFpt::new(*problem, dt, run.t_max)?.units(
-            run.particles,
-            units,
-            run.seed,
-            progress,
-        ),
+        Method::Euler { dt, run } => {
+            EulerFpt::new(*problem, dt, run.t_max)?.units(run.particles, units, run.seed, progress)
+        }
     })
 }
 

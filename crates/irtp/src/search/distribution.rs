@@ -142,7 +142,10 @@ pub struct SearchDistribution {
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
     let setup = Setup::new(problem, "the search distribution", false)?;
-    Ok(cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0))
+    Ok(cost_of(
+        &meshes(&setup, &opts.mesh),
+        6.0 * opts.steps as f64 + 4.0,
+    ))
 }
 
 /// The survival and density of the search (module docs), refused (typed)
@@ -158,7 +161,10 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
     let meshes = meshes(&setup, &opts.mesh);
     let n = opts.steps;
     let in_time = |m: &Mesh| -> Result<(Curve, Vec<f64>, Curve)> {
-        let (c1, c2) = (run(&setup, m, opts.t_max, n)?, run(&setup, m, opts.t_max, 2 * n)?);
+        let (c1, c2) = (
+            run(&setup, m, opts.t_max, n)?,
+            run(&setup, m, opts.t_max, 2 * n)?,
+        );
         let c2 = c2.every_other();
         let err = (0..=n).map(|i| (c2.s[i] - c1.s[i]).abs() / 3.0).collect();
         Ok((c2.combine(4.0 / 3.0, &c1, -1.0 / 3.0), err, c1))
@@ -174,7 +180,9 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
     let trunc: Vec<f64> = if setup.truncated() {
         let wide = run(&setup, &meshes[meshes.len() - 1], opts.t_max, n)?;
         let k = truncation_factor(opts.mesh.truncation);
-        (0..=n).map(|i| (wide.s[i] - coarse_raw.s[i]).abs() * k).collect()
+        (0..=n)
+            .map(|i| (wide.s[i] - coarse_raw.s[i]).abs() * k)
+            .collect()
     } else {
         vec![0.0; n + 1]
     };
@@ -190,7 +198,11 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         survival: best.s,
         density: best.f,
         survival_err: err,
-        mesh_error: if opts.mesh.refine { max(&mesh_err) } else { f64::NAN },
+        mesh_error: if opts.mesh.refine {
+            max(&mesh_err)
+        } else {
+            f64::NAN
+        },
         time_error: max(&time_err),
         truncation_error: max(&trunc),
         restricted_mean,
@@ -279,7 +291,13 @@ impl Operator<'_> {
     /// The column U_s'' of the reset coupling, scaled by `c`.
     fn column(&self, s2: usize, c: f64) -> Vec<f64> {
         (0..self.g.dim())
-            .map(|k| if self.g.absorbing[k] { 0.0 } else { c * self.mix[k % 2][s2] })
+            .map(|k| {
+                if self.g.absorbing[k] {
+                    0.0
+                } else {
+                    c * self.mix[k % 2][s2]
+                }
+            })
             .collect()
     }
 }

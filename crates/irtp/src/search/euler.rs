@@ -68,12 +68,19 @@ impl SearchEuler {
             return Err(Error::invalid(
                 "dt",
                 dt,
-                format!("rate * dt < 1 (the reset probability per step), i.e. dt < {}", 1.0 / p.rate()),
+                format!(
+                    "rate * dt < 1 (the reset probability per step), i.e. dt < {}",
+                    1.0 / p.rate()
+                ),
             ));
         }
         let t_max = finite("t_max", t_max)?;
         if !(t_max >= dt) {
-            return Err(Error::invalid("t_max", t_max, format!("a finite t_max >= dt = {dt}")));
+            return Err(Error::invalid(
+                "t_max",
+                t_max,
+                format!("a finite t_max >= dt = {dt}"),
+            ));
         }
         if let Some(r) = p.schedule().refractory {
             return Err(Error::invalid(
@@ -108,9 +115,14 @@ impl SearchEuler {
     ) -> Vec<FptStats> {
         let c = self.chain();
         crate::with_drag!(self.problem.params().drag(), |d| {
-            first_passage_units(n, units.clone(), seed, self.t_max, progress, |_, rng, plus| {
-                c.run(d, plus, rng)
-            })
+            first_passage_units(
+                n,
+                units.clone(),
+                seed,
+                self.t_max,
+                progress,
+                |_, rng, plus| c.run(d, plus, rng),
+            )
         })
     }
 

@@ -26,7 +26,6 @@
 use super::SearchProblem;
 use crate::error::Result;
 use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
-use std::ops::Range;
 use crate::model::drag::{FlowMap, FlowPoint};
 use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
 use crate::model::Drag;
@@ -35,6 +34,7 @@ use crate::parallel::Progress;
 use crate::rng::Rng;
 use crate::sim::exact::{check_relaxation, exp_gap, segments, Segments};
 use rand::Rng as _;
+use std::ops::Range;
 
 /// Prepared exact sampler of one search problem (flow tables built once).
 #[derive(Clone)]

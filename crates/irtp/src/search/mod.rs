@@ -39,12 +39,12 @@ pub mod tail;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{merge_units, FptStats};
 use crate::mfpt::euler::{extrapolate, Extrapolated};
-use std::ops::Range;
 use crate::mfpt::ParticleOptions;
 use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 pub use tail::{fit_tail, TailFit};
 

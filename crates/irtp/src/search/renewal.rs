@@ -475,7 +475,12 @@ fn survival_series(
     let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
     for step in 1..=steps {
         for u in q.iter_mut() {
-            stepper.step(u, (&mut au, &mut star), |x, y| g.apply(x, y), |y| band.solve(y));
+            stepper.step(
+                u,
+                (&mut au, &mut star),
+                |x, y| g.apply(x, y),
+                |y| band.solve(y),
+            );
         }
         if q.iter().flatten().any(|x| !x.is_finite()) {
             return Err(Error::NonFinite {

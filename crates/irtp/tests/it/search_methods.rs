@@ -79,8 +79,13 @@ fn euler_search_extrapolates_to_the_exact_sampler() {
 /// period by name.
 #[test]
 fn euler_search_refuses_by_name() {
-    let pr = SearchProblem::new(full(DragLaw::Linear, 1.0, 0.5), 0.0, 0.0, PositionTarget::Level(1.0))
-        .unwrap();
+    let pr = SearchProblem::new(
+        full(DragLaw::Linear, 1.0, 0.5),
+        0.0,
+        0.0,
+        PositionTarget::Level(1.0),
+    )
+    .unwrap();
     let name = |m: SearchMethod, pr: &SearchProblem| match m.check(pr).unwrap_err() {
         irtp::Error::InvalidParameter { name, .. } => name,
         e => panic!("{e}"),
@@ -124,8 +129,13 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 #[test]
 fn particle_runs_in_parts_are_bit_identical_to_the_whole() {
     let n = 3 * irtp::parallel::UNIT + 3;
-    let pr = SearchProblem::new(full(DragLaw::Tanh, 0.6, 1.0), 0.0, 0.1, PositionTarget::Level(0.3))
-        .unwrap();
+    let pr = SearchProblem::new(
+        full(DragLaw::Tanh, 0.6, 1.0),
+        0.0,
+        0.1,
+        PositionTarget::Level(0.3),
+    )
+    .unwrap();
     for method in [
         SearchMethod::Exact(run(n, 5)),
         SearchMethod::Euler {
@@ -140,9 +150,8 @@ fn particle_runs_in_parts_are_bit_identical_to_the_whole() {
             let parts: Vec<_> = split(units, 3)
                 .into_iter()
                 .flat_map(|r| {
-                    pool(threads).install(|| {
-                        search::particle_units(&pr, &method, r, &NoProgress).unwrap()
-                    })
+                    pool(threads)
+                        .install(|| search::particle_units(&pr, &method, r, &NoProgress).unwrap())
                 })
                 .collect();
             let merged = search::assemble(&pr, &method, &parts).unwrap();
@@ -193,7 +202,10 @@ fn s_at(d: &search::distribution::SearchDistribution, t: f64) -> (f64, f64) {
     let i = ((t / dt).floor() as usize).min(d.t.len() - 2);
     let a = (t - d.t[i]) / dt;
     let lerp = |v: &[f64]| (1.0 - a) * v[i] + a * v[i + 1];
-    (lerp(&d.survival), lerp(&d.survival_err).max(d.survival_err[i]))
+    (
+        lerp(&d.survival),
+        lerp(&d.survival_err).max(d.survival_err[i]),
+    )
 }
 
 /// S(t) by the time-dependent backward equation with full resetting
@@ -219,8 +231,9 @@ fn backward_distribution_matches_the_sampler_and_the_mean() {
     ];
     for (p, v0, target) in cases {
         let pr = SearchProblem::new(p, 0.0, v0, target).unwrap();
-        let mean = search::backward::solve(&pr, &search::backward::BackwardOptions::with_cells(16, 8))
-            .unwrap();
+        let mean =
+            search::backward::solve(&pr, &search::backward::BackwardOptions::with_cells(16, 8))
+                .unwrap();
         let t_max = 12.0 * mean.tau;
         let d = search::distribution::solve(&pr, &dist_opts(t_max, 200)).unwrap();
         let n = d.t.len() - 1;
@@ -233,7 +246,11 @@ fn backward_distribution_matches_the_sampler_and_the_mean() {
         let drop: f64 = (1..=n)
             .map(|i| 0.5 * (d.density[i] + d.density[i - 1]) * d.t[1])
             .sum();
-        assert!((drop - (1.0 - d.survival[n])).abs() < 1e-2, "{drop} {}", d.survival[n]);
+        assert!(
+            (drop - (1.0 - d.survival[n])).abs() < 1e-2,
+            "{drop} {}",
+            d.survival[n]
+        );
         // ∫ S dt against tau: the tail beyond t_max adds at most
         // S(t_max) times the mean of a fresh search from there, below tau
         // from the worst start; bounded by S(t_max) (tau + error) · 2.
@@ -286,8 +303,8 @@ fn backward_distribution_refuses_by_name() {
     let pr = SearchProblem::new(periodic, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     assert_eq!(name(&pr), "reset_period");
     // An interval with velocity-only resetting runs (a bounded x).
-    let pr = SearchProblem::new(velocity_only, 0.0, 0.0, PositionTarget::Interval(-0.5, 0.5))
-        .unwrap();
+    let pr =
+        SearchProblem::new(velocity_only, 0.0, 0.0, PositionTarget::Interval(-0.5, 0.5)).unwrap();
     let d = search::distribution::solve(&pr, &dist_opts(20.0, 100)).unwrap();
     assert!(d.survival[100] < 0.5 && d.survival[100] >= 0.0);
 }
