@@ -3,7 +3,7 @@
 //! item, which any shard can run; it stores the unit totals of its
 //! particles as `part-<k>.json` in the point's directory. Once all M parts
 //! exist, the point is assembled from them ([`crate::simulate::Parts`],
-//! [`crate::mfpt::parts::MfptParts`]; [`Split`] is the one registry of the
+//! `mfpt::parts::MfptParts`; `Split` is the one registry of the
 //! commands that split): the same outputs, bit for bit, as the point run
 //! whole.
 
