@@ -62,6 +62,11 @@ fn euler_search_extrapolates_to_the_exact_sampler() {
         let (tau, _, _, err) = exact.tau();
         let (ex, _, _, ex_err) = SearchResult::Euler(e.clone()).tau();
         let z = (ex - tau).abs() / (ex_err * ex_err + err * err).sqrt();
+        eprintln!(
+            "{target:?}: Euler dt {} ± {}, dt/2 {} ± {}, extrapolated {ex} ± {ex_err}; \
+             exact {tau} ± {err}; z = {z:.2}",
+            c.tau, c.tau_err, f.tau, f.tau_err
+        );
         assert!(
             z < 4.0,
             "{target:?}: Euler extrapolated {ex} ± {ex_err}, exact {tau} ± {err} (z = {z:.2}); \
@@ -257,6 +262,10 @@ fn backward_distribution_matches_the_sampler_and_the_mean() {
         let integral_err: f64 = d.survival_err.iter().sum::<f64>() * d.t[1];
         let tail = d.survival[n] * 2.0 * (mean.tau + mean.error_estimate);
         let gap = (d.restricted_mean - mean.tau).abs();
+        eprintln!(
+            "{target:?}: ∫S = {} ± {integral_err}, tau = {} ± {}, S(t_max) = {}",
+            d.restricted_mean, mean.tau, mean.error_estimate, d.survival[n]
+        );
         assert!(
             gap <= integral_err + mean.error_estimate + tail,
             "{target:?}: ∫S = {} ± {integral_err}, tau = {} ± {}, tail {tail}",
@@ -274,6 +283,10 @@ fn backward_distribution_matches_the_sampler_and_the_mean() {
             let i = inside[k * (inside.len() - 1) / 9];
             let (s, err) = s_at(&d, km.t[i]);
             let bound = 4.0 * km.survival_err[i] + err;
+            eprintln!(
+                "  t = {:.4}: backward {s:.5} ± {err:.1e}, Kaplan-Meier {:.5} ± {:.1e}",
+                km.t[i], km.survival[i], km.survival_err[i]
+            );
             assert!(
                 (s - km.survival[i]).abs() <= bound,
                 "{target:?} at t = {}: backward {s} ± {err}, sampler {} ± {}",
