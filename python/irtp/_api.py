@@ -386,8 +386,12 @@ DOCS: Dict[str, Doc] = {
         "is its lower bound tau_lower_bound. With xt=L (or interval='A,B', from x0)\n"
         "instead of vt the target is a position (the search problem): method\n"
         "'backward' solves the 2-D backward equation (cells_x, cells_v), 'exact'\n"
-        "samples it; with velocity-only resetting and a level the mean is infinite\n"
-        "(tau None, summary['infinite_mean'], the tail exponent of S(t)).",
+        "samples it, 'renewal' (full resetting: reset_position) renews the\n"
+        "reset-free survival of the time-dependent backward equation (cells_x,\n"
+        "cells_v, time_steps, horizon_tail), 'euler' runs the Euler scheme at dt\n"
+        "and dt/2 extrapolated to dt -> 0; with velocity-only resetting and a\n"
+        "level the mean is infinite (tau None, summary['infinite_mean'], the tail\n"
+        "exponent of S(t)).",
         "MfptResult\n"
         "    ``summary`` holds tau, tau_plus, tau_minus and error_estimate (ode) or\n"
         "        tau_err, particles, censored, censored_fraction, rmst, rmst_err,\n"
@@ -440,7 +444,11 @@ DOCS: Dict[str, Doc] = {
         "exactly: S+ drops by it, density is f of the rest. The moments come\n"
         "from L T1 = -1 (tau, Eq. (28)) and L T2 = -2 T1 (variance, cv); the\n"
         "distribution's own mean (distribution_mean) agrees with tau.\n"
-        "method='exact': the exact sampler's histogram and Kaplan-Meier curve.",
+        "method='exact': the exact sampler's histogram and Kaplan-Meier curve.\n"
+        "With xt=L (or interval='A,B', from x0) the target is a position: method\n"
+        "'backward' integrates the 2-D backward equation with the resets\n"
+        "(cells_x, cells_v; points - 1 fixed steps to t_max), giving\n"
+        "distribution: t, survival, survival_err, density.",
         "MfptDistributionResult\n"
         "    distribution: t, survival, density, survival_plus, density_plus,\n"
         "        survival_minus, density_minus (backward); histogram: t_lo, t_hi,\n"

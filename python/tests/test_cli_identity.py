@@ -39,9 +39,15 @@ CASES = [
     ("mfpt", "mfpt", dict(v0=-0.249, vt=0.5, method="exact", particles=400, seed=5)),
     ("mfpt", "mfpt", dict(v0=-0.249, vt=0.5, method="euler", particles=100, dt=0.001)),
     ("mfpt", "mfpt", dict(v0=0.0, vt=0.5, rate=60.0, t_max=1.0, method="exact", particles=500)),
-    # The search problem (first passage in position): backward and exact.
+    # The search problem (first passage in position): backward, exact, renewal, euler.
     ("mfpt", "mfpt", dict(v0=0.0, xt=0.5, reset_position=0.0, cells_x=16, cells_v=8)),
     ("mfpt", "mfpt", dict(v0=0.0, interval="-0.5,0.5", method="exact", particles=400, seed=2)),
+    ("mfpt", "mfpt", dict(v0=0.0, xt=0.5, reset_position=0.0, method="renewal", cells_x=16,
+                          cells_v=8, time_steps=40, horizon_tail=1e-6)),
+    ("mfpt", "mfpt", dict(v0=0.0, xt=0.5, reset_position=0.0, method="euler", dt=0.01,
+                          particles=400, seed=3)),
+    ("mfpt_distribution", "mfpt distribution",
+     dict(v0=0.0, xt=0.5, reset_position=0.0, cells_x=16, cells_v=8, points=51)),
     ("mfpt_scan", "mfpt scan",
      dict(v0=-0.249, vt=0.5, over="rate", from_=0.1, to=10.0, points=5, log=True, cells=1000)),
     ("mfpt_scan", "mfpt scan",

@@ -26,6 +26,7 @@ use irtp::mfpt::{
     self, backward, BackwardOptions, Distribution, DistributionOptions, FptStats, ParticleOptions,
     Problem,
 };
+use irtp::search::distribution::DistributionOptions as SearchDistOptions;
 use irtp::sim::TimeGrid;
 use irtp::Error;
 use serde::Serialize;
@@ -82,8 +83,27 @@ pub struct DistributionArgs {
     /// Particles, half started in each noise state [default: 100000; exact only].
     #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_count)]
     particles: Option<u64>,
+    /// Cells in x of the coarse mesh of a search's backward distribution (--xt or --interval
+    /// with --method backward; refined once and extrapolated) [default: 32].
+    #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_size)]
+    cells_x: Option<usize>,
+    /// Cells in v of that mesh [default: 16].
+    #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_size)]
+    cells_v: Option<usize>,
     #[command(flatten)]
     output: OutputArgs,
+}
+
+/// A search's distribution: by particles, or by the backward equation.
+enum SearchDist {
+    Particles(SearchConfig),
+    Backward(SearchBackward),
+}
+
+/// The validated inputs of a search's backward distribution.
+struct SearchBackward {
+    problem: irtp::search::SearchProblem,
+    opts: SearchDistOptions,
 }
 
 /// The validated inputs.
@@ -146,6 +166,7 @@ impl DistributionArgs {
         if self.is_search() {
             return self.search_config().map(drop);
         }
+        self.refuse_search_mesh()?;
         self.config().map(drop)
     }
 
@@ -154,14 +175,15 @@ impl DistributionArgs {
         self.target.is_search()
     }
 
-    /// The search problem's config: the exact method only, its flags
-    /// checked as for a velocity target, t-max default 1e4 (no backward
-    /// estimate of the mean to scale it) and finite.
-    fn search_config(&self) -> irtp::Result<SearchConfig> {
-        if self.method != DistMethod::Exact {
-            return Err(search::only_exact("backward"));
+    /// The search problem's config: the exact method (its flags checked as
+    /// for a velocity target, t-max default 1e4 and finite), or the backward
+    /// equation ([`SearchBackward`]).
+    fn search_config(&self) -> irtp::Result<SearchDist> {
+        if self.method == DistMethod::Backward {
+            return self.search_backward().map(SearchDist::Backward);
         }
         self.reject_inapplicable()?;
+        self.refuse_search_mesh()?;
         let flags = self.target.search(&self.model, Some(self.v0));
         let problem = flags.problem()?;
         let t_max = self.t_max.unwrap_or(1e4);
@@ -174,7 +196,71 @@ impl DistributionArgs {
             seed: self.output.seed(),
         };
         let method = search::exact_method(&problem, run, &self.output.budget)?;
-        Ok(SearchConfig { problem, method })
+        Ok(SearchDist::Particles(SearchConfig { problem, method }))
+    }
+
+    /// --cells-x and --cells-v only with a search's backward distribution.
+    fn refuse_search_mesh(&self) -> irtp::Result<()> {
+        let only = "--method backward with a search target (--xt or --interval)";
+        refuse("--cells-x", self.cells_x.map(|n| n.to_string()), only)?;
+        refuse("--cells-v", self.cells_v.map(|n| n.to_string()), only)
+    }
+
+    /// The search's backward distribution: a fixed step (`--points` - 1
+    /// steps to `--t-max`; no log grid, no --rtol), t-max default 10 tau
+    /// (tau from the stationary solve on a 16 × 8 mesh), its cost checked.
+    fn search_backward(&self) -> irtp::Result<SearchBackward> {
+        self.reject_inapplicable()?;
+        let only = "--method backward with a time grid of fixed steps for a search (--points)";
+        refuse("--grid", self.grid.map(|g| format!("{g:?}")), only)?;
+        refuse("--rtol", self.rtol.map(|r| r.to_string()), only)?;
+        let problem = self.target.search(&self.model, Some(self.v0)).problem()?;
+        let named = |e: Error| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                allowed,
+            } => Error::InvalidParameter {
+                name: match name {
+                    "cells_x" => "--cells-x",
+                    "cells_v" => "--cells-v",
+                    "steps" => "--points",
+                    "t_max" => "--t-max",
+                    n => n,
+                },
+                value,
+                allowed,
+            },
+            e => e,
+        };
+        let t_max = match self.t_max {
+            Some(t) => t,
+            None => {
+                let coarse = irtp::search::backward::BackwardOptions::with_cells(16, 8);
+                10.0 * irtp::search::backward::solve(&problem, &coarse)?.tau
+            }
+        };
+        let opts = SearchDistOptions {
+            mesh: irtp::search::backward::BackwardOptions {
+                max_work: f64::INFINITY,
+                max_memory: f64::INFINITY,
+                ..irtp::search::backward::BackwardOptions::with_cells(
+                    self.cells_x.unwrap_or(32),
+                    self.cells_v.unwrap_or(16),
+                )
+            },
+            t_max,
+            steps: self.points.unwrap_or(201).saturating_sub(1),
+        };
+        let cost = irtp::search::distribution::estimate(&problem, &opts).map_err(named)?;
+        self.output.budget.check(&super::budget::Cost {
+            work: cost.work,
+            unit: "operations",
+            drivers: vec!["cells_x", "cells_v", "points", "rate"],
+            memory: cost.memory,
+            memory_drivers: vec!["cells_x", "cells_v"],
+        })?;
+        Ok(SearchBackward { problem, opts })
     }
 
     fn config(&self) -> irtp::Result<Config> {
@@ -383,7 +469,10 @@ struct ExactPart {
 /// `histogram.csv`, `survival.csv`, `distribution.json` (the report of
 /// `irtp mfpt --xt/--interval`).
 fn run_search(a: &DistributionArgs, ctx: &Context) -> irtp::Result<Outcome> {
-    let c = a.search_config()?;
+    let c = match a.search_config()? {
+        SearchDist::Particles(c) => c,
+        SearchDist::Backward(b) => return run_search_backward(a, &b, ctx),
+    };
     let out = open_out(
         "mfpt distribution",
         a.output.out.as_deref(),
@@ -409,11 +498,79 @@ fn run_search(a: &DistributionArgs, ctx: &Context) -> irtp::Result<Outcome> {
     finish("mfpt distribution", results, out, ctx)
 }
 
+/// What `irtp mfpt distribution --xt/--interval --method backward --json`
+/// prints: the options (provenance) and the solution's summary.
+#[derive(Serialize)]
+struct SearchBackwardReport<'a> {
+    method: &'static str,
+    problem: &'a irtp::search::SearchProblem,
+    options: &'a SearchDistOptions,
+    /// ∫_0^t_max S dt = E[min(T, t_max)].
+    restricted_mean: f64,
+    /// S(t_max) and its error estimate.
+    survival_t_max: f64,
+    survival_t_max_err: f64,
+    mesh_error: f64,
+    time_error: f64,
+    truncation_error: f64,
+    mesh: irtp::search::backward::MeshInfo,
+}
+
+/// `distribution.csv` (t, survival, survival_err, density) and
+/// `distribution.json` of a search's backward distribution.
+fn run_search_backward(
+    a: &DistributionArgs,
+    c: &SearchBackward,
+    ctx: &Context,
+) -> irtp::Result<Outcome> {
+    let out = open_out(
+        "mfpt distribution",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
+    let t0 = Instant::now();
+    let d = {
+        let _bar = ctx
+            .reporter
+            .stage("search distribution (backward equation)", 1);
+        irtp::search::distribution::solve(&c.problem, &c.opts)?
+    };
+    ctx.check()?;
+    let n = d.t.len() - 1;
+    let report = SearchBackwardReport {
+        method: "backward",
+        problem: &c.problem,
+        options: &c.opts,
+        restricted_mean: d.restricted_mean,
+        survival_t_max: d.survival[n],
+        survival_t_max_err: d.survival_err[n],
+        mesh_error: d.mesh_error,
+        time_error: d.time_error,
+        truncation_error: d.truncation_error,
+        mesh: d.mesh,
+    };
+    let rows = (0..=n).map(|i| [d.t[i], d.survival[i], d.survival_err[i], d.density[i]]);
+    let header = ["t", "survival", "survival_err", "density"];
+    let json = to_value(&report);
+    let results = Results {
+        method: "backward-upwind 2-D (2-mesh, 2-step Richardson) + TR-BDF2".into(),
+        seed: None,
+        json: json.clone(),
+        parameters: json.clone(),
+        tables: vec![Table::from_rows("distribution", &header, rows)],
+        json_files: vec![("distribution.json", json.clone())],
+        text: super::mfpt::text_lines(&json),
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    };
+    finish("mfpt distribution", results, out, ctx)
+}
+
 /// Run `irtp mfpt distribution`.
 pub fn run(a: &DistributionArgs, ctx: &Context) -> irtp::Result<Outcome> {
     if a.is_search() {
         return run_search(a, ctx);
     }
+    a.refuse_search_mesh()?;
     let c = a.config()?;
     let out = open_out(
         "mfpt distribution",

@@ -28,6 +28,7 @@ use irtp::Error;
 use serde::Serialize;
 use std::time::Instant;
 
+pub(crate) mod parts;
 pub(crate) mod search;
 
 /// `irtp mfpt`.
@@ -79,12 +80,17 @@ pub enum Method {
     Euler,
     /// Exact event-driven particle sampler: no time step, no overshoot.
     Exact,
+    /// The state-resolved renewal route of a search under full resetting
+    /// (--xt or --interval with --reset-position): the reset-free survival by
+    /// the time-dependent 2-D backward equation, renewed at the resets.
+    Renewal,
 }
 
 /// Particle-simulation flags.
 #[derive(Args, Debug, Clone)]
 struct SimArgs {
-    /// Method: backward (the backward equations), euler or exact (particles).
+    /// Method: backward (the backward equations), euler or exact (particles), renewal
+    /// (a search under full resetting).
     #[arg(long, value_enum, default_value = "backward")]
     method: Method,
     /// Particles (half start in +Sigma, half in -Sigma) [default: 10000;
@@ -182,6 +188,15 @@ pub struct DirectArgs {
     /// Cells in v of the coarse mesh of a search's backward equation.
     #[arg(long, default_value_t = 32)]
     cells_v: usize,
+    /// Time steps to the horizon of the renewal route's reset-free survival (TR-BDF2; also
+    /// run with twice as many and extrapolated) [default: 100; --method renewal only].
+    #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_size)]
+    time_steps: Option<usize>,
+    /// The renewal route's horizon: its integrals stop where the reset clock's survival is
+    /// below this (Poisson clock; a periodic clock stops at its period), the bound on the cut
+    /// tail reported [default: 1e-8; --method renewal only].
+    #[arg(long, allow_hyphen_values = true)]
+    horizon_tail: Option<f64>,
     #[command(flatten)]
     sim: SimArgs,
     #[command(flatten)]
@@ -263,8 +278,8 @@ impl MfptArgs {
     /// Whether the chosen method is a particle method (takes `--seed`).
     pub fn uses_seed(&self) -> bool {
         match &self.command {
-            None => self.direct.sim.method != Method::Backward,
-            Some(MfptCommand::Scan(a)) => a.sim.method != Method::Backward,
+            None => self.direct.sim.method.is_particles(),
+            Some(MfptCommand::Scan(a)) => a.sim.method.is_particles(),
             Some(MfptCommand::Optimize(_)) => false,
             Some(MfptCommand::Distribution(a)) => a.uses_seed(),
         }
@@ -307,6 +322,13 @@ impl ProblemArgs {
     }
 }
 
+impl Method {
+    /// Whether this is a particle method (takes --seed, --particles, --t-max).
+    pub(crate) fn is_particles(self) -> bool {
+        matches!(self, Method::Euler | Method::Exact)
+    }
+}
+
 impl SimArgs {
     fn particles(&self) -> u64 {
         self.particles.unwrap_or(10_000)
@@ -324,8 +346,11 @@ impl SimArgs {
             ("--particles", self.particles.map(|n| n.to_string())),
             ("--t-max", self.t_max.map(|t| t.to_string())),
         ];
-        if self.method == Method::Backward {
-            output.no_seed("the backward-equation method (--method backward)")?;
+        if !self.method.is_particles() {
+            output.no_seed(match self.method {
+                Method::Renewal => "the renewal route (--method renewal)",
+                _ => "the backward-equation method (--method backward)",
+            })?;
             for (flag, value) in particle_only {
                 if let Some(v) = value {
                     return Err(Error::invalid(
@@ -364,6 +389,15 @@ impl SimArgs {
             Method::Backward => mfpt::Method::Backward(backward),
             Method::Euler => mfpt::Method::Euler { dt: self.dt(), run },
             Method::Exact => mfpt::Method::Exact(run),
+            Method::Renewal => {
+                return Err(Error::invalid(
+                    "--method",
+                    "renewal",
+                    "backward, euler or exact with a target velocity (--vt): the renewal \
+                     route solves a search in position under full resetting (--xt or \
+                     --interval with --reset-position)",
+                ))
+            }
         };
         for p in problems {
             method.check(p)?;
@@ -597,6 +631,23 @@ struct DirectConfig {
 }
 
 impl DirectArgs {
+    /// The renewal route's flags are an error with any other method.
+    pub(crate) fn reject_renewal_flags(&self) -> irtp::Result<()> {
+        if self.sim.method == Method::Renewal {
+            return Ok(());
+        }
+        let given = [
+            ("--time-steps", self.time_steps.map(|n| n.to_string())),
+            ("--horizon-tail", self.horizon_tail.map(|t| t.to_string())),
+        ];
+        for (flag, value) in given {
+            if let Some(v) = value {
+                return Err(Error::invalid(flag, v, "only with --method renewal"));
+            }
+        }
+        Ok(())
+    }
+
     /// Whether a search target in position (--xt or --interval) was given.
     fn is_search(&self) -> bool {
         self.target.is_search()
@@ -604,6 +655,7 @@ impl DirectArgs {
 
     fn config(&self) -> irtp::Result<DirectConfig> {
         let vt = self.target.velocity()?;
+        self.reject_renewal_flags()?;
         let (problem, backward) = self.problem.config(vt)?;
         let method = self.sim.config(&[problem], backward, &self.output)?;
         Ok(DirectConfig {
@@ -618,7 +670,22 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let c = a.config()?;
     let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
-    let (report, table, note) = match estimate(&c.method, &c.problem, "mfpt", ctx)? {
+    let result = estimate(&c.method, &c.problem, "mfpt", ctx)?;
+    write_direct(a, &c, result, (t0, 0.0), out, ctx)
+}
+
+/// Write the outputs of a solved velocity-target problem. The wall time
+/// reported is `clock.1` plus the time since `clock.0` (the backward
+/// profile is computed here).
+fn write_direct(
+    a: &DirectArgs,
+    c: &DirectConfig,
+    result: MfptResult,
+    clock: (Instant, f64),
+    out: Option<crate::io::OutputDir>,
+    ctx: &Context,
+) -> irtp::Result<Outcome> {
+    let (report, table, note) = match result {
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (
@@ -636,7 +703,7 @@ fn run_direct(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
             )
         }
     };
-    let wall = t0.elapsed().as_secs_f64();
+    let wall = clock.1 + clock.0.elapsed().as_secs_f64();
     let json = to_value(&report);
     let results = Results {
         method: method_name(report.method).into(),
@@ -665,6 +732,7 @@ fn method_name(m: Method) -> &'static str {
         Method::Backward => "backward-box",
         Method::Euler => "euler",
         Method::Exact => "exact",
+        Method::Renewal => "renewal",
     }
 }
 

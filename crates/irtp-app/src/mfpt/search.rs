@@ -4,7 +4,10 @@
 //!
 //! `--method exact` runs the exact sampler, `--method backward` (the
 //! default) the 2-D backward equation (`--cells-x`, `--cells-v`; Richardson
-//! error estimate); `euler` is refused naming `--method`. Where the mean search
+//! error estimate), `--method renewal` the renewal route of full resetting
+//! (`--cells-x`, `--cells-v`, `--time-steps`, `--horizon-tail`), `--method
+//! euler` the Euler scheme at `--dt` and dt/2, extrapolated to dt → 0
+//! (`survival.csv` from the run at dt/2). Where the mean search
 //! time is infinite (velocity-only resetting and a one-sided level) the run
 //! succeeds (exit 0) with `tau` null, `infinite_mean` true, the reason in
 //! `infinite_mean_reason` and the fitted tail exponent of S(t) in
@@ -12,7 +15,7 @@
 
 use super::super::budget::{self, Cost};
 use super::super::common::ModelArgs;
-use super::super::{finish, open_out, to_value, Context, Outcome, Results};
+use super::super::{finish, open_out, to_value, Context, Outcome, Results, Table};
 use super::{survival_table, text_lines, DirectArgs, Method};
 use irtp::mfpt::{FptStats, FptSummary, ParticleOptions};
 use irtp::parallel::NoProgress;
@@ -64,16 +67,6 @@ impl SearchFlags<'_> {
     }
 }
 
-/// The refusal of the Euler method for a search (`name`: the method
-/// given).
-pub(crate) fn only_exact(name: &str) -> Error {
-    Error::invalid(
-        "--method",
-        name,
-        "exact or backward with a search target in position (--xt, --interval)",
-    )
-}
-
 /// The exact method for `problem` with `run`, validated and its cost
 /// checked against `budget` before any output exists.
 pub(crate) fn exact_method(
@@ -81,7 +74,15 @@ pub(crate) fn exact_method(
     run: ParticleOptions,
     budget: &budget::BudgetArgs,
 ) -> irtp::Result<SearchMethod> {
-    let method = SearchMethod::Exact(run);
+    particle_method(problem, SearchMethod::Exact(run), budget)
+}
+
+/// A particle method, validated and its cost checked against `budget`.
+fn particle_method(
+    problem: &SearchProblem,
+    method: SearchMethod,
+    budget: &budget::BudgetArgs,
+) -> irtp::Result<SearchMethod> {
     method.check(problem)?;
     budget.check(&cost(problem, &method)?)?;
     Ok(method)
@@ -91,63 +92,86 @@ pub(crate) fn exact_method(
 /// output exists.
 pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
     let flags = a.target.search(&a.problem.model, a.problem.v0);
-    match a.sim.method {
-        Method::Euler => Err(only_exact("euler")),
+    a.reject_renewal_flags()?;
+    a.sim.reject_inapplicable(&a.output)?;
+    let problem = flags.problem()?;
+    let run = ParticleOptions {
+        particles: a.sim.particles(),
+        t_max: a.sim.t_max(),
+        seed: a.output.seed(),
+    };
+    let budget = &a.output.budget;
+    let method = match a.sim.method {
+        Method::Euler => {
+            let dt = a.sim.dt();
+            particle_method(&problem, SearchMethod::Euler { dt, run }, budget)?
+        }
+        Method::Exact => particle_method(&problem, SearchMethod::Exact(run), budget)?,
         Method::Backward => {
-            let problem = flags.problem()?;
-            let method = backward_method(&problem, a.cells_x, a.cells_v, &a.output.budget)?;
-            Ok(SearchConfig { problem, method })
-        }
-        Method::Exact => {
-            a.sim.reject_inapplicable(&a.output)?;
-            let problem = flags.problem()?;
-            let run = ParticleOptions {
-                particles: a.sim.particles(),
-                t_max: a.sim.t_max(),
-                seed: a.output.seed(),
+            let opts = search::backward::BackwardOptions {
+                max_work: f64::INFINITY,
+                max_memory: f64::INFINITY,
+                ..search::backward::BackwardOptions::with_cells(a.cells_x, a.cells_v)
             };
-            let method = exact_method(&problem, run, &a.output.budget)?;
-            Ok(SearchConfig { problem, method })
+            mesh_method(&problem, SearchMethod::Backward(opts), budget)?
         }
+        Method::Renewal => {
+            let defaults = search::renewal::RenewalOptions::default();
+            let opts = search::renewal::RenewalOptions {
+                cells_x: a.cells_x,
+                cells_v: a.cells_v,
+                steps: a.time_steps.unwrap_or(defaults.steps),
+                tail: a.horizon_tail.unwrap_or(defaults.tail),
+                max_work: f64::INFINITY,
+                max_memory: f64::INFINITY,
+                ..defaults
+            };
+            mesh_method(&problem, SearchMethod::Renewal(opts), budget)?
+        }
+    };
+    Ok(SearchConfig { problem, method })
+}
+
+/// The library's option names → the flags that set them.
+fn flag_of(name: &'static str) -> &'static str {
+    match name {
+        "cells_x" => "--cells-x",
+        "cells_v" => "--cells-v",
+        "steps" => "--time-steps",
+        "tail" => "--horizon-tail",
+        n => n,
     }
 }
 
-/// The backward method on a coarse mesh of `cells_x` × `cells_v` (refined
-/// once), validated and its cost checked against `budget` (the solver's
-/// own refusals of a problem it cannot solve come first).
-fn backward_method(
+/// A mesh method (backward or renewal), validated and its cost checked
+/// against `budget` (the solver's own refusals of a problem it cannot
+/// solve come first, naming the flags).
+fn mesh_method(
     problem: &SearchProblem,
-    cells_x: usize,
-    cells_v: usize,
+    method: SearchMethod,
     budget: &budget::BudgetArgs,
 ) -> irtp::Result<SearchMethod> {
-    let opts = search::backward::BackwardOptions {
-        max_work: f64::INFINITY,
-        max_memory: f64::INFINITY,
-        ..search::backward::BackwardOptions::with_cells(cells_x, cells_v)
-    };
-    let method = SearchMethod::Backward(opts);
     let named = |e: Error| match e {
         Error::InvalidParameter {
-            name: n @ ("cells_x" | "cells_v"),
+            name,
             value,
             allowed,
         } => Error::InvalidParameter {
-            name: if n == "cells_x" {
-                "--cells-x"
-            } else {
-                "--cells-v"
-            },
+            name: flag_of(name),
             value,
             allowed,
         },
         e => e,
     };
     let cost = method.cost(problem).map_err(named)?.expect("a mesh method");
+    let mut drivers = vec!["cells_x", "cells_v", "rate"];
+    if let SearchMethod::Renewal(_) = method {
+        drivers.extend(["time_steps", "horizon_tail"]);
+    }
     budget.check(&Cost {
         work: cost.work,
         unit: "operations",
-        drivers: vec!["cells_x", "cells_v", "rate"],
+        drivers,
         memory: cost.memory,
         memory_drivers: vec!["cells_x", "cells_v"],
     })?;
@@ -179,15 +203,15 @@ fn cost(problem: &SearchProblem, method: &SearchMethod) -> irtp::Result<Cost> {
     };
     let mut drivers = vec!["particles", "lambda", "rate", "t_max"];
     drivers.extend(p.schedule().cost_drivers());
-    let per = rate * time + 2.0;
-    Ok(budget::particles(
-        run.particles,
-        per,
-        "particle events",
-        drivers,
-        0,
-        0,
-    ))
+    let (per, unit) = match *method {
+        // Steps of the runs at dt and dt/2.
+        SearchMethod::Euler { dt, .. } => {
+            drivers.push("dt");
+            (3.0 * time / dt + 2.0, "Euler particle steps")
+        }
+        _ => (rate * time + 2.0, "particle events"),
+    };
+    Ok(budget::particles(run.particles, per, unit, drivers, 0, 0))
 }
 
 /// What `irtp mfpt --xt/--interval --json` prints.
@@ -308,34 +332,150 @@ struct BackwardReport {
     solution: search::backward::SearchSolution,
 }
 
+/// What `irtp mfpt --xt/--interval --method renewal --json` prints: the
+/// options (provenance) and the solution.
+#[derive(Serialize)]
+struct RenewalReport {
+    method: &'static str,
+    problem: SearchProblem,
+    options: search::renewal::RenewalOptions,
+    #[serde(flatten)]
+    solution: search::renewal::RenewalSolution,
+}
+
+/// What `irtp mfpt --xt/--interval --method euler --json` prints: the
+/// extrapolated tau (null where the mean is infinite or a run censored),
+/// and the summaries of the runs at dt and dt/2.
+#[derive(Serialize)]
+struct EulerReport {
+    method: &'static str,
+    problem: SearchProblem,
+    tau: f64,
+    tau_err: f64,
+    tau_plus: f64,
+    tau_plus_err: f64,
+    tau_minus: f64,
+    tau_minus_err: f64,
+    /// tau(dt/2) - tau(dt), the measured step bias.
+    step_bias: f64,
+    infinite_mean: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    infinite_mean_reason: Option<&'static str>,
+    tail_exponent: Option<TailFit>,
+    dt: f64,
+    particles: u64,
+    t_max: f64,
+    seed: u64,
+    /// The run at dt.
+    coarse: FptSummary,
+    /// The run at dt/2.
+    fine: FptSummary,
+}
+
+/// The report, survival table and text note of an Euler search.
+fn euler_report(c: &SearchConfig, e: search::EulerSearch) -> (EulerReport, Table, String) {
+    let run = c.method.particles().expect("a particle method");
+    let (tau, tau_plus, tau_minus, tau_err) = SearchResult::Euler(e.clone()).tau();
+    let m = |v: f64| if e.mean_is_finite { v } else { f64::NAN };
+    let x = e.extrapolated;
+    let (coarse, fine) = (e.coarse.summary(), e.fine.summary());
+    let notes = [&coarse, &fine].map(|s| note(&SearchReport::new(c, s, e.mean_is_finite, e.tail)));
+    let report = EulerReport {
+        method: c.method.name(),
+        problem: c.problem,
+        tau,
+        tau_err,
+        tau_plus,
+        tau_plus_err: m(x.tau_plus_err),
+        tau_minus,
+        tau_minus_err: m(x.tau_minus_err),
+        step_bias: m(x.step_bias),
+        infinite_mean: !e.mean_is_finite,
+        infinite_mean_reason: (!e.mean_is_finite).then_some(INFINITE_MEAN_REASON),
+        tail_exponent: e.tail,
+        dt: e.dt,
+        particles: run.particles,
+        t_max: run.t_max,
+        seed: run.seed,
+        coarse,
+        fine,
+    };
+    let text = if notes[0].is_empty() {
+        notes[1].clone()
+    } else {
+        notes[0].clone()
+    };
+    (report, survival_table(&e.fine.survival()), text)
+}
+
+/// The report of a solved search: (JSON, seed, tables, text note).
+pub(crate) fn report_of(
+    c: &SearchConfig,
+    result: SearchResult,
+) -> (serde_json::Value, Option<u64>, Vec<Table>, String) {
+    let (method, problem) = (c.method.name(), c.problem);
+    match result {
+        SearchResult::Particles(r) => {
+            let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
+            let table = survival_table(&r.stats.survival());
+            (
+                to_value(&report),
+                Some(report.seed),
+                vec![table],
+                note(&report),
+            )
+        }
+        SearchResult::Euler(e) => {
+            let (report, table, text) = euler_report(c, e);
+            (to_value(&report), Some(report.seed), vec![table], text)
+        }
+        SearchResult::Backward(solution) => {
+            let report = BackwardReport {
+                method,
+                problem,
+                solution,
+            };
+            (to_value(&report), None, vec![], String::new())
+        }
+        SearchResult::Renewal(solution) => {
+            let SearchMethod::Renewal(options) = c.method else {
+                unreachable!("the renewal route gives a renewal solution")
+            };
+            let report = RenewalReport {
+                method,
+                problem,
+                options,
+                solution,
+            };
+            (to_value(&report), None, vec![], String::new())
+        }
+    }
+}
+
 /// Run a search: `summary.json`, `run.json`, `mfpt.json` and, by
 /// particles, `survival.csv`.
 pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let c = config(a)?;
     let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
-    let (json, seed, tables, note_text) = if c.method.particles().is_some() {
-        let (stats, report) = solve(&c, ctx)?;
-        let json = to_value(&report);
-        let table = survival_table(&stats.survival());
-        (json, Some(report.seed), vec![table], note(&report))
-    } else {
-        let result = {
-            let _bar = ctx.reporter.stage("search (backward equation)", 1);
-            search::solve(&c.problem, &c.method, &irtp::parallel::NoProgress)?
-        };
-        ctx.check()?;
-        let SearchResult::Backward(solution) = result else {
-            unreachable!("the backward method gives a backward solution")
-        };
-        let report = BackwardReport {
-            method: c.method.name(),
-            problem: c.problem,
-            solution,
-        };
-        (to_value(&report), None, vec![], String::new())
+    let result = {
+        let total = c.method.particles().map_or(1, |r| r.particles);
+        let bar = ctx.reporter.stage("search", total);
+        search::solve(&c.problem, &c.method, bar.as_ref())?
     };
-    let wall = t0.elapsed().as_secs_f64();
+    ctx.check()?;
+    write(&c, result, t0.elapsed().as_secs_f64(), out, ctx)
+}
+
+/// Write a solved search's outputs (`wall`: its computing time).
+pub(crate) fn write(
+    c: &SearchConfig,
+    result: SearchResult,
+    wall: f64,
+    out: Option<crate::io::OutputDir>,
+    ctx: &Context,
+) -> irtp::Result<Outcome> {
+    let (json, seed, tables, note_text) = report_of(c, result);
     let results = Results {
         method: c.method.name().into(),
         seed,

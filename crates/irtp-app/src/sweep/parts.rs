@@ -1,27 +1,99 @@
 //! Points whose particles are cut into parts (`particle_parts = M`, command
-//! `simulate`): part k of a point is its own work item, which any shard can
-//! run; it stores the unit totals of its particles as `part-<k>.json` in the
-//! point's directory. Once all M parts exist, the point is assembled from
-//! them ([`crate::simulate::Parts`]): the same outputs, bit for bit, as
-//! the point run whole.
+//! `simulate`, or `mfpt` by particles): part k of a point is its own work
+//! item, which any shard can run; it stores the unit totals of its
+//! particles as `part-<k>.json` in the point's directory. Once all M parts
+//! exist, the point is assembled from them ([`crate::simulate::Parts`],
+//! `mfpt::parts::MfptParts`; `Split` is the one registry of the
+//! commands that split): the same outputs, bit for bit, as the point run
+//! whole.
 
 use super::plan::{Plan, Point};
 use super::store::{write_atomic, PointResult, Store};
 use crate::io::io_err;
+use crate::mfpt::parts::MfptParts;
+use crate::mfpt::MfptArgs;
 use crate::simulate::Parts;
-use crate::{keywords, Command, Context, Quiet};
+use crate::{keywords, Command, Context, Outcome, Quiet};
 use irtp::error::{Error, Result};
-use irtp::sim::Observables;
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::path::PathBuf;
 
-/// One stored part.
+/// One stored part: its unit totals as the command's JSON (`simulate`:
+/// observables; `mfpt`: first-passage statistics).
 #[derive(Serialize, Deserialize)]
 struct Part {
     part: u64,
     parts: u64,
     wall_time_s: f64,
-    units: Vec<Observables>,
+    units: Vec<Value>,
+}
+
+/// The commands whose points split into parts: one arm per command.
+enum Split<'a> {
+    Simulate(Parts<'a>),
+    Mfpt(MfptParts<'a>),
+}
+
+/// The refusal of a command that does not split.
+fn unsplittable(parts: u64) -> Error {
+    Error::invalid(
+        "particle_parts",
+        parts,
+        "only with command = \"simulate\" or \"mfpt\" (one problem by particles)",
+    )
+}
+
+/// Decode stored unit totals.
+fn decode<T: for<'de> Deserialize<'de>>(units: &[Value]) -> Result<Vec<T>> {
+    units
+        .iter()
+        .map(|u| {
+            serde_json::from_value(u.clone())
+                .map_err(|e| Error::invalid("part", "…", format!("stored unit totals: {e}")))
+        })
+        .collect()
+}
+
+/// Encode unit totals for storage.
+fn encode<T: Serialize>(units: &[T]) -> Result<Vec<Value>> {
+    units
+        .iter()
+        .map(|u| {
+            serde_json::to_value(u)
+                .map_err(|e| Error::invalid("part", "…", format!("unit totals: {e}")))
+        })
+        .collect()
+}
+
+impl<'a> Split<'a> {
+    /// `parts` parts of the run `command` describes.
+    fn new(command: &'a Command, parts: u64) -> Result<Split<'a>> {
+        match command {
+            Command::Simulate(a) => Parts::new(a, parts).map(Split::Simulate),
+            Command::Mfpt(MfptArgs {
+                command: None,
+                direct,
+            }) => MfptParts::new(direct, parts).map(Split::Mfpt),
+            _ => Err(unsplittable(parts)),
+        }
+    }
+
+    /// The unit totals of part `k`, encoded.
+    fn compute(&self, k: u64, ctx: &Context) -> Result<Vec<Value>> {
+        match self {
+            Split::Simulate(s) => encode(&s.compute(k, ctx)?),
+            Split::Mfpt(s) => encode(&s.compute(k, ctx)?),
+        }
+    }
+
+    /// The outcome of the whole run from every part's unit totals.
+    fn assemble(&self, units: &[Value], wall: f64, ctx: &Context) -> Result<Outcome> {
+        match self {
+            Split::Simulate(s) => s.assemble(&decode(units)?, wall, ctx),
+            Split::Mfpt(s) => s.assemble(&decode(units)?, wall, ctx),
+        }
+    }
 }
 
 /// A unit of work: a whole point, or part `k` of a split point.
@@ -54,39 +126,29 @@ pub fn path(store: &Store, p: &Point, k: u64) -> PathBuf {
     store.dir(p).join(format!("part-{k}.json"))
 }
 
-/// The point's arguments as `irtp simulate` parses them.
-fn simulate_args(plan: &Plan, store: &Store, p: &Point) -> Result<crate::simulate::SimulateArgs> {
+/// The point's command line, parsed.
+fn point_cli(plan: &Plan, store: &Store, p: &Point) -> Result<crate::Cli> {
     let argv = plan
         .argv(p, Some(&store.dir(p)))
         .map_err(|e| Error::invalid("plan", p.index, e))?;
-    match keywords::parse::<crate::Cli>(&plan.command, &argv)
-        .map_err(|e| Error::invalid("plan", p.index, e))?
-        .command
-    {
-        Command::Simulate(a) => Ok(a),
-        _ => Err(Error::invalid(
-            "particle_parts",
-            plan.particle_parts,
-            "only with command = \"simulate\"",
-        )),
-    }
+    keywords::parse::<crate::Cli>(&plan.command, &argv)
+        .map_err(|e| Error::invalid("plan", p.index, e))
 }
 
 /// Check that every point can be cut into the plan's parts.
 pub fn check(plan: &Plan, p: &Point, cli: &crate::Cli) -> Result<()> {
-    match &cli.command {
-        Command::Simulate(a) if plan.particle_parts > 1 => {
-            Parts::new(a, plan.particle_parts).map(drop)
-        }
-        _ => Ok(()),
+    if plan.particle_parts <= 1 {
+        return Ok(());
     }
-    .map_err(|e| {
-        Error::invalid(
-            "plan",
-            format!("point {}", p.index),
-            e.message_with(|n| n.to_string()),
-        )
-    })
+    Split::new(&cli.command, plan.particle_parts)
+        .map(drop)
+        .map_err(|e| {
+            Error::invalid(
+                "plan",
+                format!("point {}", p.index),
+                e.message_with(|n| n.to_string()),
+            )
+        })
 }
 
 /// Compute part `k` of point `p` and store it; a failure of the computation
@@ -94,9 +156,10 @@ pub fn check(plan: &Plan, p: &Point, cli: &crate::Cli) -> Result<()> {
 pub fn run_part(plan: &Plan, store: &Store, p: &Point, k: u64) -> Result<bool> {
     store.begin(plan, p)?;
     let t0 = std::time::Instant::now();
-    let a = simulate_args(plan, store, p)?;
+    let cli = point_cli(plan, store, p)?;
     let ctx = Context::new(&Quiet);
-    let units = Parts::new(&a, plan.particle_parts).and_then(|parts| parts.compute(k, &ctx));
+    let units =
+        Split::new(&cli.command, plan.particle_parts).and_then(|parts| parts.compute(k, &ctx));
     let wall_time_s = t0.elapsed().as_secs_f64();
     match units {
         Ok(units) => {
@@ -148,7 +211,7 @@ pub fn assemble(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
         wall += part.wall_time_s;
         units.extend(part.units);
     }
-    let a = simulate_args(plan, store, p)?;
+    let cli = point_cli(plan, store, p)?;
     let argv = plan
         .argv(p, Some(&store.dir(p)))
         .map_err(|e| Error::invalid("plan", p.index, e))?;
@@ -156,7 +219,7 @@ pub fn assemble(plan: &Plan, store: &Store, p: &Point) -> Result<PointResult> {
         reporter: &Quiet,
         argv,
     };
-    let outcome =
-        Parts::new(&a, plan.particle_parts).and_then(|parts| parts.assemble(&units, wall, &ctx));
+    let outcome = Split::new(&cli.command, plan.particle_parts)
+        .and_then(|parts| parts.assemble(&units, wall, &ctx));
     store.finish(p, super::point_result(p, outcome, wall))
 }

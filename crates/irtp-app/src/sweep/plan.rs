@@ -4,7 +4,7 @@
 //! ```toml
 //! command = "fp stationary"     # simulate, analytic, fp stationary, fp transient, mfpt, mfpt optimize
 //! seed = 1                      # plan seed: each point's seed derives from it and the point
-//! particle_parts = 4            # simulate only: each point's particles in 4 separate work items
+//! particle_parts = 4            # simulate, mfpt by particles: each point's particles in 4 work items
 //!
 //! [fixed]                       # keywords = the command's flags (`--t-max` → t_max)
 //! drag = "tan"
@@ -321,11 +321,11 @@ impl Plan {
             .collect();
         let seeded = known.iter().any(|k| k == "seed");
         let parts = raw.particle_parts.unwrap_or(1);
-        if parts == 0 || (parts > 1 && raw.command != "simulate") {
+        if parts == 0 || (parts > 1 && !["simulate", "mfpt"].contains(&raw.command.as_str())) {
             return Err(bad(
                 "particle_parts",
                 parts,
-                "1, or >= 1 with command = \"simulate\"",
+                "1, or >= 1 with command = \"simulate\" or \"mfpt\" (by particles)",
             ));
         }
         let mut names: Vec<String> = Vec::new();

@@ -3,3 +3,4 @@
 
 mod app;
 mod range_fuzz;
+mod search;

@@ -167,12 +167,58 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
         let out = irtp(&[&base[..], extra, &["--out", d]].concat());
         assert_rejected(&out, flag, &dir);
     }
-    // Euler: not for a search; the backward solver (the default) refuses
+    // The backward solver (the default) and the renewal route refuse
     // velocity-only resetting with a one-sided level (an infinite mean)
-    // naming --reset-position, and a mesh out of range naming its flag.
+    // naming --reset-position, a mesh or time grid out of range naming its
+    // flag; Euler a step out of range; a method's flags with another.
     for (extra, flag) in [
-        (&["--method", "euler"][..], "--method"),
         (&[][..], "--reset-position"),
+        (
+            &["--method", "renewal", "--rate", "1"][..],
+            "--reset-position",
+        ),
+        (
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--time-steps",
+                "2",
+            ][..],
+            "--time-steps",
+        ),
+        (
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--horizon-tail",
+                "2",
+            ][..],
+            "--horizon-tail",
+        ),
+        (
+            &[
+                "--method",
+                "renewal",
+                "--reset-position",
+                "0",
+                "--seed",
+                "2",
+            ][..],
+            "--seed",
+        ),
+        (
+            &["--reset-position", "0", "--time-steps", "50"][..],
+            "--time-steps",
+        ),
+        (&["--method", "euler", "--dt", "-1"][..], "--dt"),
+        (
+            &["--method", "euler", "--dt", "0.01", "--t-max", "inf"][..],
+            "--t-max",
+        ),
         (
             &["--reset-position", "0", "--cells-x", "1"][..],
             "--cells-x",
@@ -223,6 +269,10 @@ fn bad_search_inputs_are_refused_naming_the_flag() {
     let d = dir.to_str().unwrap();
     let out = irtp(&["mfpt", "--vt", "0.5", "--v0", "0", "--x0", "1", "--out", d]);
     assert_rejected(&out, "--x0", &dir);
+    let out = irtp(&[
+        "mfpt", "--vt", "0.5", "--v0", "0", "--method", "renewal", "--out", d,
+    ]);
+    assert_rejected(&out, "--method", &dir);
     let out = irtp(&["mfpt", "--vt", "0.5", "--xt", "1", "--v0", "0", "--out", d]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -278,8 +328,94 @@ fn a_search_distribution_writes_the_histogram_and_survival() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("d");
     let d = dir.to_str().unwrap();
+    // The backward equation (the default) refuses a level without full
+    // resetting (x unbounded) naming --reset-position.
     let out = irtp(&["mfpt", "distribution", "--xt", "1", "--v0", "0", "--out", d]);
-    assert_rejected(&out, "--method", &dir);
+    assert_rejected(&out, "--reset-position", &dir);
+    for (extra, flag) in [
+        (&["--reset-position", "0", "--grid", "log"][..], "--grid"),
+        (&["--reset-position", "0", "--rtol", "1e-3"][..], "--rtol"),
+        (
+            &["--reset-position", "0", "--cells-x", "1"][..],
+            "--cells-x",
+        ),
+        (&["--reset-position", "0", "--points", "2"][..], "--points"),
+        (&["--reset-position", "0", "--seed", "2"][..], "--seed"),
+        (
+            &[
+                "--reset-position",
+                "0",
+                "--method",
+                "exact",
+                "--cells-v",
+                "8",
+            ][..],
+            "--cells-v",
+        ),
+    ] {
+        let args = [
+            &["mfpt", "distribution", "--xt", "1", "--v0", "0"][..],
+            extra,
+            &["--out", d],
+        ];
+        assert_rejected(&irtp(&args.concat()), flag, &dir);
+    }
+}
+
+/// `irtp mfpt distribution --xt --method backward`: S(t), its error and
+/// f(t) on a uniform grid; S is a non-increasing probability, and its
+/// integral (restricted_mean, S(t_max) ~ 1e-5 beyond) is the stationary
+/// solver's tau within their errors.
+#[test]
+fn a_search_distribution_by_the_backward_equation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let base = [
+        "mfpt",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+    ];
+    let args = [
+        &base[..1],
+        &["distribution"],
+        &base[1..],
+        &["--points", "101", "--json", "--out", dir.to_str().unwrap()],
+    ]
+    .concat();
+    let r = json(&irtp(&args));
+    assert_eq!(r["method"], "backward");
+    assert_eq!(r["options"]["steps"], 100);
+    let mean = json(&irtp(&[&base[..], &["--json"]].concat()));
+    let text = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,survival,survival_err,density");
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101);
+    let mut integral_err = 0.0;
+    for w in rows.windows(2) {
+        assert!(w[1][1] <= w[0][1] + w[0][2] + w[1][2] + 1e-9 && w[1][1] >= -w[1][2] - 1e-9);
+        integral_err += w[1][2] * (w[1][0] - w[0][0]);
+    }
+    let (tau, e) = (
+        mean["tau"].as_f64().unwrap(),
+        mean["error_estimate"].as_f64().unwrap(),
+    );
+    let m = r["restricted_mean"].as_f64().unwrap();
+    let tail = 2.0 * r["survival_t_max"].as_f64().unwrap() * (tau + e);
+    assert!(
+        (m - tau).abs() <= integral_err + e + tail,
+        "∫S = {m} ± {integral_err}, tau = {tau} ± {e}"
+    );
 }
 
 /// The cost is estimated before any work (a pilot of a few particles
@@ -311,4 +447,78 @@ fn a_costly_search_is_refused_before_it_starts() {
         assert!(!dir.exists());
         assert!(start.elapsed().as_secs_f64() < 10.0);
     }
+}
+
+/// `--method renewal`: the renewal route of full resetting, its options in
+/// the report (provenance) and its tau within the error estimates of the
+/// direct backward solve; `--method euler`: tau = 2 T(dt/2) - T(dt) from
+/// the two runs reported, within the combined errors of the exact sampler
+/// (4 sigma), survival.csv from the run at dt/2.
+#[test]
+fn renewal_and_euler_searches_report_their_estimates() {
+    let base = [
+        "mfpt",
+        "--xt",
+        "0.8",
+        "--v0",
+        "0",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--rate",
+        "0.5",
+        "--reset-position",
+        "0",
+        "--json",
+    ];
+    let mesh = ["--cells-x", "16", "--cells-v", "8"];
+    let with = |extra: &[&str]| json(&irtp(&[&base[..], extra].concat()));
+    let renewal = with(&[&mesh[..], &["--method", "renewal", "--time-steps", "40"]].concat());
+    assert_eq!(renewal["method"], "renewal");
+    assert_eq!(renewal["options"]["steps"], 40);
+    assert_eq!(renewal["options"]["cells_x"], 16);
+    let backward = with(&[&mesh[..], &["--method", "backward"]].concat());
+    let (tr, tb) = (
+        renewal["tau"].as_f64().unwrap(),
+        backward["tau"].as_f64().unwrap(),
+    );
+    let e =
+        renewal["error_estimate"].as_f64().unwrap() + backward["error_estimate"].as_f64().unwrap();
+    assert!(
+        (tr - tb).abs() <= e,
+        "renewal {tr}, backward {tb}, errors {e}"
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("e");
+    let euler = with(&[
+        "--method",
+        "euler",
+        "--dt",
+        "0.02",
+        "--particles",
+        "20000",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let f = |k: &str| euler[k].as_f64().unwrap();
+    let (c, h) = (&euler["coarse"], &euler["fine"]);
+    assert_eq!(
+        f("tau"),
+        2.0 * h["tau"].as_f64().unwrap() - c["tau"].as_f64().unwrap()
+    );
+    assert_eq!(f("dt"), 0.02);
+    assert!(dir.join("survival.csv").exists());
+    let exact = with(&["--method", "exact", "--particles", "20000", "--seed", "9"]);
+    let (tx, ex) = (
+        exact["tau"].as_f64().unwrap(),
+        exact["tau_err"].as_f64().unwrap(),
+    );
+    let z = (f("tau") - tx).abs() / (f("tau_err").powi(2) + ex * ex).sqrt();
+    assert!(
+        z < 4.0,
+        "euler {} ± {}, exact {tx} ± {ex}",
+        f("tau"),
+        f("tau_err")
+    );
 }

@@ -326,6 +326,78 @@ method = ["exact", "euler"]
     }
 }
 
+/// `mfpt` points by particles (a velocity target and a search, exact and
+/// Euler) split into 3 parts and run on 1 thread give the table and the
+/// outputs of the points run whole on 2 threads, bit for bit; a
+/// deterministic method is refused with parts.
+#[test]
+fn mfpt_points_split_into_particle_parts_merge_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Fixed keywords and the axis of two points.
+    let targets = [
+        ("v0 = 0.0\nvt = 0.5\n", "method = [\"exact\", \"euler\"]"),
+        (
+            "v0 = 0.0\nxt = 0.5\nreset_position = 0.0\nmethod = \"exact\"\n",
+            "rate = [1.0, 2.0]",
+        ),
+        (
+            "v0 = 0.0\nxt = 0.5\nreset_position = 0.0\nmethod = \"euler\"\ndt = 0.02\n",
+            "rate = [1.0, 2.0]",
+        ),
+    ];
+    for (i, (target, axis)) in targets.iter().enumerate() {
+        let whole_plan = format!(
+            "command = \"mfpt\"\nseed = 5\n[fixed]\nparticles = 8200\nt_max = 1000\n{target}\
+             [axes]\n{axis}\n"
+        );
+        let split_plan = format!("particle_parts = 3\n{whole_plan}");
+        let whole = write_plan_as(tmp.path(), &format!("whole{i}.toml"), &whole_plan);
+        let split = write_plan_as(tmp.path(), &format!("split{i}.toml"), &split_plan);
+        let (a, b) = (
+            tmp.path().join(format!("w{i}")),
+            tmp.path().join(format!("s{i}")),
+        );
+        let run = |plan: &str, out: &Path, threads: &str| {
+            let o = Command::new(env!("CARGO_BIN_EXE_irtp"))
+                .args(["sweep", "run", plan, "--out", out.to_str().unwrap()])
+                .env("RAYON_NUM_THREADS", threads)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            String::from_utf8(o.stdout).unwrap()
+        };
+        run(&whole, &a, "2");
+        let s = run(&split, &b, "1");
+        assert!(s.contains("2 points, 6 work items"), "{s}");
+        assert_eq!(table(&b), table(&a), "{target}");
+        for entry in std::fs::read_dir(a.join("workspace")).unwrap() {
+            let id = entry.unwrap().file_name();
+            for f in ["survival.csv", "mfpt.json"] {
+                let x = std::fs::read(a.join("workspace").join(&id).join(f)).unwrap();
+                let y = std::fs::read(b.join("workspace").join(&id).join(f)).unwrap();
+                assert_eq!(x, y, "{f} of {target}");
+            }
+        }
+    }
+    let plan = write_plan(
+        tmp.path(),
+        "command = \"mfpt\"\nparticle_parts = 2\n[fixed]\nv0 = 0.0\nvt = 0.5\n",
+    );
+    let o = irtp(&[
+        "sweep",
+        "run",
+        &plan,
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("particle_parts") && err.contains("deterministic"),
+        "{err}"
+    );
+}
+
 #[test]
 fn too_many_parts_are_refused() {
     let tmp = tempfile::tempdir().unwrap();

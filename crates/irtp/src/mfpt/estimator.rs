@@ -16,6 +16,7 @@ use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
 use crate::stats::MeanAcc;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// One particle's first passage.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -233,6 +234,48 @@ where
         |a, b| a.merge(&b),
         progress,
     )
+}
+
+/// The unit totals of units `units` of the run of [`first_passage_stats`]
+/// over `n` particles ([`parallel::reduce_units`]: unit u holds particles
+/// u·UNIT..(u+1)·UNIT, each with its own stream (seed, i) and start state).
+/// [`merge_units`] of all units' totals, in unit order and however they were
+/// split into calls, is [`first_passage_stats`]'s result bit for bit.
+pub fn first_passage_units<S>(
+    n: u64,
+    units: Range<u64>,
+    seed: u64,
+    t_max: f64,
+    progress: &dyn Progress,
+    sample: S,
+) -> Vec<FptStats>
+where
+    S: Fn(u64, &mut Rng, bool) -> FptSample + Sync,
+{
+    parallel::reduce_units(
+        n,
+        units,
+        || FptStats::new(t_max),
+        |lo, hi, acc| {
+            for i in lo..hi {
+                let mut rng = rng::stream(seed, i);
+                let plus = i % 2 == 0;
+                acc.push(plus, sample(i, &mut rng, plus));
+            }
+        },
+        |a, b| a.merge(&b),
+        progress,
+    )
+}
+
+/// Unit totals merged in unit order into empty statistics at `t_max`: the
+/// same additions as the reduction that made them, so the same bits.
+pub fn merge_units(t_max: f64, units: &[FptStats]) -> FptStats {
+    let mut total = FptStats::new(t_max);
+    for u in units {
+        total.merge(u);
+    }
+    total
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! resets; a Poisson clock of rate lambda + r) the velocity follows the exact
 //! flow dv/dt = s - g(v) (Eq. (5)), and a flow segment is tested with the
 //! exact flow time to v_t: no time step, no overshoot. Estimates are gathered
-//! by [`first_passage_stats`]; the entry point is [`super::solve`] with
+//! by [`super::first_passage_stats`]'s driver; the entry point is [`super::solve`] with
 //! [`super::Method::Exact`].
 //!
 //! With a periodic reset clock (resets at T, 2T, ... from t = 0) a flow
@@ -15,7 +15,7 @@
 //! Poisson resets are off during it and the periodic times inside it or at
 //! its end are skipped.
 
-use super::estimator::{first_passage_stats, FptSample, FptStats};
+use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
@@ -304,25 +304,35 @@ pub fn check_t_max(t_max: f64) -> Result<f64> {
     Ok(t_max)
 }
 
-/// First-passage statistics of `problem` (either direction) by the exact
-/// sampler, through the method-agnostic driver [`first_passage_stats`]
-/// (particle i: stream (seed, i), start state +Sigma for even i). Downward
-/// problems run in the mirrored upward frame ([`Problem::canonical`]), where
-/// the noise states swap. Inputs are checked by [`super::Method::check`].
-pub(super) fn stats(
+/// The unit totals of units `units` of the first-passage run of `problem`
+/// (either direction) by the exact sampler over `particles` particles,
+/// through the method-agnostic driver
+/// ([`super::estimator::first_passage_units`]: particle i has the stream
+/// (seed, i), start state +Sigma for even i). Downward problems run in the
+/// mirrored upward frame ([`Problem::canonical`]), where the noise states
+/// swap. Inputs are checked by [`super::Method::check`].
+pub(super) fn units(
     problem: &Problem,
     t_max: f64,
     particles: u64,
     seed: u64,
+    units: std::ops::Range<u64>,
     progress: &dyn Progress,
-) -> FptStats {
+) -> Vec<FptStats> {
     let (cp, swapped) = problem.canonical();
     crate::with_drag!(cp.params().drag(), |d| {
         let fpt = FirstPassage::for_drag(d, cp.params(), true);
-        first_passage_stats(particles, seed, t_max, progress, |_, rng, plus| {
-            let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
-            FptSample { time, work }
-        })
+        first_passage_units(
+            particles,
+            units.clone(),
+            seed,
+            t_max,
+            progress,
+            |_, rng, plus| {
+                let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
+                FptSample { time, work }
+            },
+        )
     })
 }
 

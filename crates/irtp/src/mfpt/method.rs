@@ -4,13 +4,14 @@
 //! and [`solve`].
 
 use super::backward::{self, BackwardOptions, BackwardSolution};
-use super::estimator::{FptStats, FptSummary};
+use super::estimator::{merge_units, FptStats, FptSummary};
 use super::euler::EulerFpt;
 use super::{exact, Problem};
 use crate::error::{Error, Result};
 use crate::model::reset::Solver;
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// A particle estimate: how many particles, the time cap, the seed.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -147,15 +148,85 @@ pub fn solve(problem: &Problem, method: &Method, progress: &dyn Progress) -> Res
         Method::Euler { .. } => Solver::MfptEuler,
     })?;
     method.check(problem)?;
-    let stats = match *method {
-        Method::Backward(opts) => {
-            return Ok(MfptResult::Backward(backward::solve(problem, &opts)?))
+    match (method, method.unit_count()) {
+        (Method::Backward(opts), _) => Ok(MfptResult::Backward(backward::solve(problem, opts)?)),
+        (_, Some(all)) => assemble(
+            problem,
+            method,
+            &particle_units(problem, method, 0..all, progress)?,
+        ),
+        (_, None) => unreachable!("a particle method has units"),
+    }
+}
+
+impl Method {
+    /// The units of particles ([`crate::parallel::UNIT`] each) of a
+    /// particle method's run: the grain of cutting it into parts
+    /// ([`particle_units`]); None for the backward equations.
+    pub fn unit_count(&self) -> Option<u64> {
+        self.particles()
+            .map(|r| crate::parallel::unit_count(r.particles))
+    }
+}
+
+/// The unit totals of units `units` of a particle method's run (validated
+/// first): computed anywhere, [`assemble`]d from all units (in unit
+/// order, however split) they give [`solve`]'s result bit for bit.
+pub fn particle_units(
+    problem: &Problem,
+    method: &Method,
+    units: Range<u64>,
+    progress: &dyn Progress,
+) -> Result<Vec<FptStats>> {
+    problem.params().require(match method {
+        Method::Backward(_) => Solver::Backward,
+        Method::Exact(_) => Solver::MfptExact,
+        Method::Euler { .. } => Solver::MfptEuler,
+    })?;
+    method.check(problem)?;
+    check_units(method.unit_count(), &units)?;
+    Ok(match *method {
+        Method::Backward(_) => unreachable!("checked: a particle method"),
+        Method::Exact(run) => {
+            exact::units(problem, run.t_max, run.particles, run.seed, units, progress)
         }
-        Method::Exact(run) => exact::stats(problem, run.t_max, run.particles, run.seed, progress),
         Method::Euler { dt, run } => {
-            EulerFpt::new(*problem, dt, run.t_max)?.stats(run.particles, run.seed, progress)
+            EulerFpt::new(*problem, dt, run.t_max)?.units(run.particles, units, run.seed, progress)
         }
+    })
+}
+
+/// Refuse a unit range outside `0..count` (or a method without units).
+pub(crate) fn check_units(count: Option<u64>, units: &Range<u64>) -> Result<()> {
+    match count {
+        Some(n) if units.start <= units.end && units.end <= n => Ok(()),
+        Some(n) => Err(Error::invalid(
+            "units",
+            format!("{units:?}"),
+            format!("a range inside 0..{n} (the run's units of particles)"),
+        )),
+        None => Err(Error::invalid(
+            "method",
+            "backward",
+            "a particle method (only particles are cut into units)",
+        )),
+    }
+}
+
+/// The result of a particle method's run from the totals of all its units
+/// ([`particle_units`], in unit order), verified.
+pub fn assemble(problem: &Problem, method: &Method, units: &[FptStats]) -> Result<MfptResult> {
+    let (Some(run), Some(all)) = (method.particles(), method.unit_count()) else {
+        return Err(check_units(None, &(0..0)).expect_err("no units"));
     };
+    if units.len() as u64 != all {
+        return Err(Error::invalid(
+            "units",
+            units.len(),
+            format!("all {all} units of the run, in order"),
+        ));
+    }
+    let stats = merge_units(run.t_max, units);
     verify_particles(problem, &stats.summary())?;
     Ok(MfptResult::Particles(stats))
 }
@@ -232,7 +303,7 @@ mod tests {
     fn solve_dispatches_to_the_samplers() {
         let pr = problem();
         let a = solve(&pr, &Method::Exact(run(20, 1e4)), &NoProgress).unwrap();
-        let b = exact::stats(&pr, 1e4, 20, 7, &NoProgress);
+        let b = merge_units(1e4, &exact::units(&pr, 1e4, 20, 7, 0..1, &NoProgress));
         assert_eq!(a.stats(), Some(&b));
         let e = Method::Euler {
             dt: 1e-2,

@@ -51,7 +51,7 @@ pub use distribution::{distribution, Distribution, DistributionOptions};
 pub use estimator::{first_passage_stats, FptSample, FptStats, FptSummary};
 pub use euler::EulerFpt;
 pub use exact::FirstPassage;
-pub use method::{solve, Method, MfptResult, ParticleOptions};
+pub use method::{assemble, particle_units, solve, Method, MfptResult, ParticleOptions};
 pub use optimize::{optimize_rate, scan, OptimizeOptions, Optimum, ScanAxis, ScanPoint};
 pub use survival::SurvivalCurve;
 

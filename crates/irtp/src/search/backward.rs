@@ -417,7 +417,7 @@ pub(crate) fn check_budget(
 
 /// The meshes [`solve`] uses: coarse, halved (if refining), and the coarse
 /// one widened to 1.5 X (if truncated).
-fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
+pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
     let x = if setup.truncated() {
         extent(&setup.params, opts.truncation)
     } else {

@@ -25,7 +25,7 @@
 
 use super::SearchProblem;
 use crate::error::Result;
-use crate::mfpt::estimator::{first_passage_stats, FptSample, FptStats};
+use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
 use crate::model::drag::{FlowMap, FlowPoint};
 use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
 use crate::model::Drag;
@@ -34,6 +34,7 @@ use crate::parallel::Progress;
 use crate::rng::Rng;
 use crate::sim::exact::{check_relaxation, exp_gap, segments, Segments};
 use rand::Rng as _;
+use std::ops::Range;
 
 /// Prepared exact sampler of one search problem (flow tables built once).
 #[derive(Clone)]
@@ -326,22 +327,26 @@ fn monotone_root(h: &dyn Fn(f64) -> (f64, f64, f64), lo: f64, hi: f64, guess: f6
     }
 }
 
-/// Search statistics of `problem` by the exact sampler through the
-/// method-agnostic driver [`first_passage_stats`] (particle i: stream
-/// (seed, i), start state +Sigma for even i, censored at `t_max`),
-/// monomorphised for the law's type. Bit-identical for any thread count.
-pub fn stats(
+/// The unit totals of units `units` of the search run of `particles`
+/// particles of `problem` by the exact sampler, through the method-agnostic
+/// driver [`first_passage_units`] (particle i: stream (seed, i), start
+/// state +Sigma for even i, censored at `t_max`), monomorphised for the
+/// law's type. Merged in unit order ([`stats`]) they are bit-identical for
+/// any thread count and any split into parts.
+pub fn units(
     problem: &SearchProblem,
     t_max: f64,
     particles: u64,
     seed: u64,
+    units: Range<u64>,
     progress: &dyn Progress,
-) -> Result<FptStats> {
+) -> Result<Vec<FptStats>> {
     crate::with_drag!(problem.params().drag(), |d| {
         let sampler = SearchSampler::new(d, problem)?;
         let (x0, v0) = (problem.x0(), problem.v0());
-        Ok(first_passage_stats(
+        Ok(first_passage_units(
             particles,
+            units.clone(),
             seed,
             t_max,
             progress,
@@ -351,6 +356,20 @@ pub fn stats(
             },
         ))
     })
+}
+
+/// Search statistics of `problem` by the exact sampler: all [`units`]
+/// merged. Bit-identical for any thread count.
+pub fn stats(
+    problem: &SearchProblem,
+    t_max: f64,
+    particles: u64,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<FptStats> {
+    let all = crate::parallel::unit_count(particles);
+    let u = units(problem, t_max, particles, seed, 0..all, progress)?;
+    Ok(merge_units(t_max, &u))
 }
 
 /// One search of `problem` (any law, dispatched per call; for many

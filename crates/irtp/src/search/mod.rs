@@ -20,22 +20,31 @@
 //!   mesh, Richardson-extrapolated with an error estimate.
 //! - [`renewal`]: the state-resolved renewal route for full resetting, from
 //!   the reset-free survival resolved by the final noise state.
+//! - [`euler`]: the Euler scheme's passage at dt and dt/2, extrapolated.
+//! - [`distribution`]: S(t) and f(t) by the time-dependent backward
+//!   equation with resets.
 //! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
-//! - [`solve`] with a [`SearchMethod`]: the one entry point.
+//! - [`solve`] with a [`SearchMethod`]: the one entry point. A particle
+//!   method's run is cut into units of particles ([`particle_units`]) that
+//!   [`assemble`] merges into the whole run's result, bit for bit.
 
 pub mod backward;
+pub mod distribution;
+pub mod euler;
 pub mod exact;
 mod mesh;
 pub mod renewal;
 pub mod tail;
 
 use crate::error::{finite, Error, Result};
-use crate::mfpt::estimator::FptStats;
+use crate::mfpt::estimator::{merge_units, FptStats};
+use crate::mfpt::euler::{extrapolate, Extrapolated};
 use crate::mfpt::ParticleOptions;
 use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 pub use tail::{fit_tail, TailFit};
 
@@ -283,23 +292,45 @@ pub enum SearchMethod {
     /// The state-resolved renewal route of full resetting, over the
     /// parameters' own reset clock (see [`renewal`]).
     Renewal(renewal::RenewalOptions),
+    /// Euler particles at `dt` and `dt/2`, extrapolated to dt → 0 (see
+    /// [`euler`]).
+    Euler {
+        /// The coarser time step.
+        dt: f64,
+        /// Particles (per step), time cap and seed (both steps).
+        #[serde(flatten)]
+        run: ParticleOptions,
+    },
 }
 
 impl SearchMethod {
-    /// Short name (`exact`, `backward`, `renewal`).
+    /// Short name (`exact`, `backward`, `renewal`, `euler`).
     pub fn name(&self) -> &'static str {
         match self {
             SearchMethod::Exact(_) => "exact",
             SearchMethod::Backward(_) => "backward",
             SearchMethod::Renewal(_) => "renewal",
+            SearchMethod::Euler { .. } => "euler",
         }
     }
 
     /// The particle options of a particle method.
     pub fn particles(&self) -> Option<&ParticleOptions> {
         match self {
-            SearchMethod::Exact(run) => Some(run),
+            SearchMethod::Exact(run) | SearchMethod::Euler { run, .. } => Some(run),
             _ => None,
+        }
+    }
+
+    /// The units of particles ([`crate::parallel::UNIT`] each) of a
+    /// particle method's run, the grain of cutting it into parts: those of
+    /// its particles, twice over for Euler (units of the run at dt, then
+    /// of the run at dt/2); None for a deterministic method.
+    pub fn unit_count(&self) -> Option<u64> {
+        let per_run = crate::parallel::unit_count(self.particles()?.particles);
+        match self {
+            SearchMethod::Euler { .. } => Some(2 * per_run),
+            _ => Some(per_run),
         }
     }
 
@@ -307,7 +338,7 @@ impl SearchMethod {
     /// problem it cannot solve, first); None for particles.
     pub fn cost(&self, problem: &SearchProblem) -> Result<Option<backward::Cost>> {
         match self {
-            SearchMethod::Exact(_) => Ok(None),
+            SearchMethod::Exact(_) | SearchMethod::Euler { .. } => Ok(None),
             SearchMethod::Backward(o) => backward::estimate(problem, o).map(Some),
             SearchMethod::Renewal(o) => {
                 let waiting = renewal::WaitingTime::of(problem.params())?;
@@ -320,8 +351,14 @@ impl SearchMethod {
     /// starting state), t_max > 0, and a finite t_max where the mean search
     /// time is infinite (some particles would never stop).
     pub fn check(&self, problem: &SearchProblem) -> Result<()> {
-        match self {
+        match *self {
             SearchMethod::Backward(_) | SearchMethod::Renewal(_) => self.cost(problem).map(|_| ()),
+            SearchMethod::Euler { dt, run } => {
+                if run.particles < 4 {
+                    return Err(Error::invalid("particles", run.particles, "particles >= 4"));
+                }
+                euler::SearchEuler::new(problem, dt, run.t_max).map(drop)
+            }
             SearchMethod::Exact(run) => {
                 if run.particles < 4 {
                     return Err(Error::invalid("particles", run.particles, "particles >= 4"));
@@ -364,6 +401,26 @@ pub enum SearchResult {
     Backward(backward::SearchSolution),
     /// From the renewal route.
     Renewal(renewal::RenewalSolution),
+    /// From Euler particles at two steps.
+    Euler(EulerSearch),
+}
+
+/// An Euler estimate of a search problem: the runs at dt and dt/2 and
+/// their extrapolation to dt → 0 ([`euler`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EulerSearch {
+    /// The coarser step.
+    pub dt: f64,
+    /// The run at dt.
+    pub coarse: FptStats,
+    /// The run at dt/2 (its Kaplan-Meier curve is the reported one).
+    pub fine: FptStats,
+    /// 2 T(dt/2) - T(dt), with its standard-error bound.
+    pub extrapolated: Extrapolated,
+    /// Whether the mean search time is finite (else tau is NaN).
+    pub mean_is_finite: bool,
+    /// Where the mean is infinite: the tail exponent of the run at dt/2.
+    pub tail: Option<TailFit>,
 }
 
 impl SearchResult {
@@ -378,6 +435,11 @@ impl SearchResult {
             }
             SearchResult::Backward(b) => (b.tau, b.tau_plus, b.tau_minus, b.error_estimate),
             SearchResult::Renewal(r) => (r.tau, r.tau_plus, r.tau_minus, r.error_estimate),
+            SearchResult::Euler(e) => {
+                let x = &e.extrapolated;
+                let m = |v: f64| if e.mean_is_finite { v } else { f64::NAN };
+                (m(x.tau), m(x.tau_plus), m(x.tau_minus), m(x.tau_err))
+            }
         }
     }
 }
@@ -409,21 +471,135 @@ pub fn solve(
     progress: &dyn Progress,
 ) -> Result<SearchResult> {
     method.check(problem)?;
-    match *method {
-        SearchMethod::Exact(run) => {
-            let stats = exact::stats(problem, run.t_max, run.particles, run.seed, progress)?;
-            let finite = problem.mean_is_finite();
-            let tail = if finite { None } else { fit_tail(&stats) };
-            Ok(SearchResult::Particles(ParticleSearch {
-                stats,
-                mean_is_finite: finite,
-                tail,
-            }))
-        }
-        SearchMethod::Backward(o) => backward::solve(problem, &o).map(SearchResult::Backward),
-        SearchMethod::Renewal(o) => {
+    match (*method, method.unit_count()) {
+        (SearchMethod::Backward(o), _) => backward::solve(problem, &o).map(SearchResult::Backward),
+        (SearchMethod::Renewal(o), _) => {
             let waiting = renewal::WaitingTime::of(problem.params())?;
             renewal::solve(problem, &waiting, &o).map(SearchResult::Renewal)
         }
+        (_, Some(all)) => assemble(
+            problem,
+            method,
+            &particle_units(problem, method, 0..all, progress)?,
+        ),
+        (_, None) => unreachable!("a particle method has units"),
     }
+}
+
+/// The unit totals of units `units` (inside `0..unit_count`) of a particle
+/// method's run, validated first: computed anywhere, [`assemble`]d from all
+/// units in order they give [`solve`]'s result bit for bit. Euler's units
+/// are those of the run at dt, then those of the run at dt/2.
+pub fn particle_units(
+    problem: &SearchProblem,
+    method: &SearchMethod,
+    units: Range<u64>,
+    progress: &dyn Progress,
+) -> Result<Vec<FptStats>> {
+    method.check(problem)?;
+    crate::mfpt::method::check_units(method.unit_count(), &units)?;
+    match *method {
+        SearchMethod::Exact(run) => {
+            exact::units(problem, run.t_max, run.particles, run.seed, units, progress)
+        }
+        SearchMethod::Euler { dt, run } => {
+            let per = crate::parallel::unit_count(run.particles);
+            let mut out = Vec::new();
+            for (k, step) in [dt, 0.5 * dt].into_iter().enumerate() {
+                let base = k as u64 * per;
+                let lo = units.start.clamp(base, base + per) - base;
+                let hi = units.end.clamp(base, base + per) - base;
+                let e = euler::SearchEuler::new(problem, step, run.t_max)?;
+                out.extend(e.units(run.particles, lo..hi, run.seed, progress));
+            }
+            Ok(out)
+        }
+        _ => unreachable!("checked: a particle method"),
+    }
+}
+
+/// The result of a particle method's run from the totals of all its units
+/// ([`particle_units`], in unit order), its invariants checked.
+pub fn assemble(
+    problem: &SearchProblem,
+    method: &SearchMethod,
+    units: &[FptStats],
+) -> Result<SearchResult> {
+    let (Some(run), Some(all)) = (method.particles(), method.unit_count()) else {
+        return Err(Error::invalid(
+            "method",
+            method.name(),
+            "a particle method (only particles are cut into units)",
+        ));
+    };
+    if units.len() as u64 != all {
+        return Err(Error::invalid(
+            "units",
+            units.len(),
+            format!("all {all} units of the run, in order"),
+        ));
+    }
+    let finite = problem.mean_is_finite();
+    let tail_of = |s: &FptStats| if finite { None } else { fit_tail(s) };
+    let result = match *method {
+        SearchMethod::Euler { dt, .. } => {
+            let half = units.len() / 2;
+            let coarse = merge_units(run.t_max, &units[..half]);
+            let fine = merge_units(run.t_max, &units[half..]);
+            SearchResult::Euler(EulerSearch {
+                dt,
+                extrapolated: extrapolate(&coarse.summary(), &fine.summary()),
+                mean_is_finite: finite,
+                tail: tail_of(&fine),
+                coarse,
+                fine,
+            })
+        }
+        _ => {
+            let stats = merge_units(run.t_max, units);
+            SearchResult::Particles(ParticleSearch {
+                tail: tail_of(&stats),
+                stats,
+                mean_is_finite: finite,
+            })
+        }
+    };
+    verify_particles(problem, &result)?;
+    Ok(result)
+}
+
+/// Every passage covers the distance to the target from the start (or
+/// from x_r after a full reset) at a speed of at most max |v|: the
+/// restricted means of both starting states must respect it (on the
+/// Euler grid as well: x moves at most max |v| dt per step), or the
+/// sampler lost precision and the answer is refused.
+fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()> {
+    let (lo, hi) = problem.target().bounds(problem.x0());
+    let gap = |x: f64| (x - lo).min(hi - x);
+    let p = problem.params();
+    let mut distance = gap(problem.x0());
+    if let Some(pos) = p.schedule().position {
+        distance = distance.min(gap(pos.x));
+    }
+    let (vl, vu) = p.bounds();
+    let bound = distance / vl.abs().max(vu.abs()) * (1.0 - 1e-12);
+    let runs: Vec<&FptStats> = match result {
+        SearchResult::Particles(r) => vec![&r.stats],
+        SearchResult::Euler(e) => vec![&e.coarse, &e.fine],
+        _ => vec![],
+    };
+    for s in runs.iter().map(|r| r.summary()) {
+        for (name, m) in [("rmst_plus", s.rmst_plus), ("rmst_minus", s.rmst_minus)] {
+            if !(m >= bound) {
+                return Err(Error::Numerical {
+                    method: "search sampler",
+                    reason: format!(
+                        "{name} = {m:e} is below the least search time {bound:e} (distance / \
+                         max |v|): the sampler lost precision for these parameters; refused"
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
 }

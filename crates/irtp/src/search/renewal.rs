@@ -18,7 +18,8 @@
 //! P(T0 > t, eta(t) = s' | start) = Q_s'(t) solves the reset-free backward
 //! equation ∂t Q = L0 Q with Q(0) = 1[eta = s'] and Q = 0 on the target:
 //! integrated for both s' on the upwind mesh of the direct solver
-//! ([`super::backward`]) by TR-BDF2 with a fixed step (one factorisation of
+//! ([`super::backward`]) by TR-BDF2 with a fixed step (the stepper of
+//! [`super::distribution`]; one factorisation of
 //! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
 //! second order), and on the meshes h and h/2 (first order). The integrals
 //! stop at the horizon t_max where w(t_max) is below `tail` (Poisson) or at
@@ -32,6 +33,7 @@ use super::backward::{
     capacitance, check_budget, cost_of, factor, mesh_info, truncation_factor, verify, Cost,
     MeshInfo, Resetting, Setup,
 };
+use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
 use super::SearchProblem;
 use crate::error::{Error, Result};
@@ -454,10 +456,9 @@ fn survival_series(
     mut record: impl FnMut(usize, &[Vec<f64>; 2]),
 ) -> Result<()> {
     const METHOD: &str = "search renewal route (reset-free survival)";
-    let gamma = 2.0 - std::f64::consts::SQRT_2;
     let dt = t_max / steps as f64;
-    let d = 0.5 * gamma * dt;
-    let band = factor(g, 1.0, d, METHOD)?;
+    let stepper = Stepper::new(dt);
+    let band = factor(g, 1.0, stepper.d(), METHOD)?;
     let n = g.dim();
     let mut q: [Vec<f64>; 2] = [0, 1].map(|s2| {
         (0..n)
@@ -472,21 +473,14 @@ fn survival_series(
     });
     record(0, &q);
     let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
-    let (c1, c0) = (
-        1.0 / (gamma * (2.0 - gamma)),
-        (1.0 - gamma).powi(2) / (gamma * (2.0 - gamma)),
-    );
     for step in 1..=steps {
         for u in q.iter_mut() {
-            g.apply(u, &mut au);
-            for k in 0..n {
-                star[k] = u[k] + d * au[k];
-            }
-            band.solve(&mut star);
-            for k in 0..n {
-                u[k] = c1 * star[k] - c0 * u[k];
-            }
-            band.solve(u);
+            stepper.step(
+                u,
+                (&mut au, &mut star),
+                |x, y| g.apply(x, y),
+                |y| band.solve(y),
+            );
         }
         if q.iter().flatten().any(|x| !x.is_finite()) {
             return Err(Error::NonFinite {
