@@ -1,0 +1,79 @@
+//! `fixed:t=T`: every waiting time is T (sharp resetting). With no
+//! refractory period the resets fall at T, 2T, ... as with
+//! `--reset-period T`; the next time is then computed as that clock does
+//! (the next multiple of T), so the two give the same bits and rounding
+//! does not accumulate over many periods.
+
+use super::{bad, check_mean, keyed, Law};
+use crate::error::Result;
+use crate::model::drag::spec::number;
+use crate::model::reset::Periodic;
+use rand::Rng;
+
+/// A deterministic waiting time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixedClock {
+    /// The waiting time T > 0.
+    pub t: f64,
+}
+
+impl Law for FixedClock {
+    const KIND: &'static str = "fixed";
+    const USAGE: &'static str = "fixed:t=T (T > 0)";
+    fn parse(args: &str, spec: &str) -> Result<Self> {
+        let v = keyed(args, spec, &["t"], Self::USAGE)?;
+        if !(v[0] > 0.0) {
+            return Err(bad(spec, "t > 0", Self::USAGE));
+        }
+        Ok(FixedClock { t: v[0] })
+    }
+    fn spec(&self) -> String {
+        format!("fixed:t={}", number(self.t))
+    }
+    #[inline]
+    fn draw<R: Rng + ?Sized>(&self, _rng: &mut R) -> f64 {
+        self.t
+    }
+    fn survival(&self, t: f64) -> f64 {
+        if t < self.t {
+            1.0
+        } else {
+            0.0
+        }
+    }
+    fn density(&self, _t: f64) -> Option<f64> {
+        None
+    }
+    fn mean(&self) -> f64 {
+        self.t
+    }
+    fn with_mean(&self, mean: f64) -> Result<Self> {
+        Ok(FixedClock {
+            t: check_mean(mean)?,
+        })
+    }
+    fn tail_integral(&self, t: f64) -> f64 {
+        (self.t - t).max(0.0)
+    }
+    fn survival_integral(&self, a: f64, b: f64) -> f64 {
+        b.min(self.t) - a.min(self.t)
+    }
+    fn survival_moment(&self, a: f64, b: f64) -> f64 {
+        let e = b.min(self.t).max(a) - a;
+        0.5 * e * e
+    }
+    fn horizon(&self, _tail: f64) -> f64 {
+        self.t
+    }
+    /// The next multiple of T when `free` is one (as a periodic clock
+    /// computes it), else free + T.
+    #[inline]
+    fn next_after<R: Rng + ?Sized>(&self, free: f64, _rng: &mut R) -> f64 {
+        let periodic = Periodic { period: self.t };
+        if (free / self.t).round() * self.t == free {
+            periodic.next_after(free)
+        } else {
+            free + self.t
+        }
+    }
+}
