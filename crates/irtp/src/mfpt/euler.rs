@@ -16,7 +16,7 @@
 use super::estimator::{FptSample, FptStats};
 use super::Problem;
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -77,7 +77,7 @@ impl EulerFpt {
     /// at a time, for any thread count.
     pub fn stats(&self, n: u64, seed: u64, progress: &dyn Progress) -> FptStats {
         let c = Chain::new(self, seed);
-        let scheduled = c.periodic.is_some() || c.refractory.is_some();
+        let scheduled = c.schedule.scheduled_clock() || c.refractory.is_some();
         crate::with_drag!(self.problem.params().drag(), |d| {
             parallel::reduce_chunks(
                 n,
@@ -113,7 +113,7 @@ struct Chain {
     max_steps: u64,
     reset: ResetRule,
     seed: u64,
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     refractory: Option<Refractory>,
 }
 
@@ -159,7 +159,7 @@ impl Chain {
             max_steps: (e.t_max / dt).floor() as u64,
             reset: *par.reset(),
             seed,
-            periodic: par.schedule().periodic,
+            schedule: *par.schedule(),
             refractory: par.schedule().refractory,
         }
     }
@@ -170,6 +170,7 @@ impl Chain {
         let plus = (i % 2 == 0) != self.swapped;
         let next_flip = geometric_gap(&mut rng, self.ln_flip);
         let next_reset = geometric_gap(&mut rng, self.ln_reset);
+        let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             i,
             rng,
@@ -179,7 +180,7 @@ impl Chain {
             next_reset,
             step: 0,
             hold: 0,
-            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
+            next_periodic,
         }
     }
 
@@ -258,8 +259,9 @@ impl Chain {
             if let Some(r) = self.refractory {
                 l.hold = (r.draw(&mut l.rng) / self.dt).round() as u64;
             }
-            if let Some(p) = self.periodic {
-                l.next_periodic = p.next_after(l.next_periodic + l.hold as f64 * self.dt);
+            if self.schedule.scheduled_clock() {
+                let free = l.next_periodic + l.hold as f64 * self.dt;
+                l.next_periodic = self.schedule.next_reset(free, &mut l.rng);
             }
         } else {
             l.v = euler_step(drag, l.v, l.s, self.dt);

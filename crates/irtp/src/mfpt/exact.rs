@@ -19,7 +19,7 @@ use super::estimator::{first_passage_stats, FptSample, FptStats};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -55,7 +55,7 @@ pub struct FirstPassage<F = AnyFlow> {
     /// The resetting rule (target and noise state at a reset).
     reset: ResetRule,
     /// Periodic reset clock.
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     /// Refractory period after each reset.
     refractory: Option<Refractory>,
 }
@@ -94,7 +94,7 @@ impl<F: FlowMap> FirstPassage<F> {
             rate: params.rate(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
-            periodic: params.schedule().periodic,
+            schedule: *params.schedule(),
             refractory: params.schedule().refractory,
         }
     }
@@ -107,7 +107,7 @@ impl<F: FlowMap> FirstPassage<F> {
     /// (lambda, r, the resetting rule, whether a periodic or refractory
     /// schedule runs).
     pub(super) fn rates(&self) -> (f64, f64, &ResetRule, bool) {
-        let scheduled = self.periodic.is_some() || self.refractory.is_some();
+        let scheduled = self.schedule.scheduled_clock() || self.refractory.is_some();
         (self.lambda, self.rate, &self.reset, scheduled)
     }
 
@@ -140,7 +140,7 @@ impl<F: FlowMap> FirstPassage<F> {
         if v0 >= vt {
             return (Some(0.0), 0);
         }
-        if self.periodic.is_some() || self.refractory.is_some() {
+        if self.schedule.scheduled_clock() || self.refractory.is_some() {
             return self.run_scheduled(v0, vt, start_plus, t_max, rng);
         }
         let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
@@ -237,7 +237,7 @@ impl<F: FlowMap> FirstPassage<F> {
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
         let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut next_periodic = self.schedule.first_reset(rng);
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
@@ -269,8 +269,8 @@ impl<F: FlowMap> FirstPassage<F> {
                 t += d;
                 events += 1;
             }
-            if let Some(p) = self.periodic {
-                next_periodic = p.next_after(t);
+            if self.schedule.scheduled_clock() {
+                next_periodic = self.schedule.next_reset(t, rng);
             }
         }
     }

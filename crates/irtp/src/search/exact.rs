@@ -27,7 +27,7 @@ use super::SearchProblem;
 use crate::error::Result;
 use crate::mfpt::estimator::{first_passage_stats, FptSample, FptStats};
 use crate::model::drag::{FlowMap, FlowPoint};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
@@ -49,7 +49,7 @@ pub struct SearchSampler<D: Drag> {
     lambda: f64,
     total_rate: f64,
     reset: ResetRule,
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     refractory: Option<Refractory>,
     x_reset: Option<f64>,
     /// The search region lo < x < hi (an open side is ∓∞).
@@ -103,7 +103,7 @@ impl<D: Drag> SearchSampler<D> {
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
-            periodic: sched.periodic,
+            schedule: *sched,
             refractory: sched.refractory,
             x_reset: sched.position.map(|p| p.x),
             lo,
@@ -129,7 +129,7 @@ impl<D: Drag> SearchSampler<D> {
             si,
             a: self.segs[si].at(v0),
         };
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut next_periodic = self.schedule.first_reset(rng);
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
@@ -155,8 +155,8 @@ impl<D: Drag> SearchSampler<D> {
             if let Some(hit) = self.reset_at(&mut w, t_max, rng, &mut events) {
                 return (hit, events);
             }
-            if let Some(p) = self.periodic {
-                next_periodic = p.next_after(w.t);
+            if self.schedule.scheduled_clock() {
+                next_periodic = self.schedule.next_reset(w.t, rng);
             }
         }
     }

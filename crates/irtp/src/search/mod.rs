@@ -217,14 +217,21 @@ impl SearchProblem {
                 PositionTarget::Level(l) => self.drifts_towards(l),
             };
         };
-        let resets = p.rate() > 0.0 || sched.periodic.is_some();
+        let resets = p.rate() > 0.0 || sched.scheduled_clock();
         let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
+        // A failed period of a level search lasts the waiting time R:
+        // E[R] = ∞ makes the mean search time infinite.
+        let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
+        // The longest period: T, or the end of a renewal law's support.
+        let longest = match (sched.periodic, sched.clock) {
+            (Some(per), _) => per.period,
+            (None, Some(c)) => c.support_end(),
+            (None, None) => f64::INFINITY,
+        };
         match self.target {
-            PositionTarget::Level(_) if !(resets && turns) => false,
-            _ => match sched.periodic {
-                Some(per) => self.reachable_within(pos.x, per.period),
-                None => true,
-            },
+            PositionTarget::Level(_) if !(resets && turns) || heavy => false,
+            _ if longest.is_finite() => self.reachable_within(pos.x, longest),
+            _ => true,
         }
     }
 
@@ -236,7 +243,7 @@ impl SearchProblem {
     /// <v_r>.
     fn drifts_towards(&self, l: f64) -> bool {
         let p = &self.params;
-        let resets = p.rate() > 0.0 || p.schedule().periodic.is_some();
+        let resets = p.rate() > 0.0 || p.schedule().scheduled_clock();
         let (mean_vr, _) = p.reset().target().moments();
         resets && mean_vr != 0.0 && (l - self.x0) * mean_vr > 0.0
     }

@@ -48,7 +48,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule, Solver};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule, Solver};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{
     self, clenshaw, clenshaw2, Adaptive, Piece, Refine, Unresolved, NC,
@@ -396,8 +396,8 @@ struct Sampler<F> {
     plain: bool,
     /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
     inv_lambda: f64,
-    /// Periodic reset clock.
-    periodic: Option<Periodic>,
+    /// The schedule (its periodic or renewal clock).
+    schedule: Schedule,
     /// Position resetting: x_r.
     x_reset: Option<f64>,
     /// Refractory period after each reset.
@@ -486,7 +486,7 @@ impl<F: FlowMap> Sampler<F> {
         Ok(Sampler {
             plain: schedule.is_plain(),
             inv_lambda: if lambda > 0.0 { 1.0 / lambda } else { 0.0 },
-            periodic: schedule.periodic,
+            schedule: *schedule,
             x_reset: schedule.position.map(|p| p.x),
             refractory: schedule.refractory,
             vs,
@@ -546,6 +546,7 @@ impl<F: FlowMap> Sampler<F> {
     fn start(&self, i: u64) -> Lane {
         let mut rng = rng::stream(self.seed, i);
         let si = usize::from(!rng.gen::<bool>());
+        let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             rng,
             si,
@@ -560,7 +561,7 @@ impl<F: FlowMap> Sampler<F> {
             done: false,
             held: false,
             hold_until: f64::INFINITY,
-            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
+            next_periodic,
         }
     }
 
@@ -719,8 +720,8 @@ impl<F: FlowMap> Sampler<F> {
             p.hold_until = p.t + r.draw(&mut p.rng);
             free = p.hold_until;
         }
-        if let Some(per) = self.periodic {
-            p.next_periodic = per.next_after(free);
+        if self.schedule.scheduled_clock() {
+            p.next_periodic = self.schedule.next_reset(free, &mut p.rng);
         }
     }
 

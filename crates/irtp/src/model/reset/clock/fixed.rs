@@ -65,6 +65,9 @@ impl Law for FixedClock {
     fn horizon(&self, _tail: f64) -> f64 {
         self.t
     }
+    fn support_end(&self) -> f64 {
+        self.t
+    }
     /// The next multiple of T when `free` is one (as a periodic clock
     /// computes it), else free + T.
     #[inline]

@@ -85,6 +85,11 @@ pub trait Law: Copy + fmt::Debug + PartialEq + Send + Sync + Sized {
     fn horizon(&self, tail: f64) -> f64 {
         horizon_by_bisection(|t| self.survival(t), tail)
     }
+    /// The end of the support: the longest possible waiting time (∞ for
+    /// an unbounded law).
+    fn support_end(&self) -> f64 {
+        f64::INFINITY
+    }
     /// The next reset time when the clock restarts at `free`.
     #[inline]
     fn next_after<R: Rng + ?Sized>(&self, free: f64, rng: &mut R) -> f64 {
@@ -300,6 +305,10 @@ impl Clock {
     /// ∫_a^b W(s) (s - a) ds.
     pub fn survival_moment(&self, a: f64, b: f64) -> f64 {
         with_law!(self, |l| l.survival_moment(a, b))
+    }
+    /// The longest possible waiting time (∞ for an unbounded law).
+    pub fn support_end(&self) -> f64 {
+        with_law!(self, |l| l.support_end())
     }
     /// The smallest t with W(t) ≤ tail.
     pub fn horizon(&self, tail: f64) -> f64 {

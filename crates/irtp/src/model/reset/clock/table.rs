@@ -190,6 +190,10 @@ impl Law for TableClock {
         let i = self.segment(t);
         Some((d.w[i] - d.w[i + 1]) / (d.t[i + 1] - d.t[i]))
     }
+    /// The first point with W = 0.
+    fn support_end(&self) -> f64 {
+        self.data.t[self.data.w.partition_point(|&w| w > 0.0)]
+    }
     fn mean(&self) -> f64 {
         self.data.cum[self.data.cum.len() - 1]
     }
