@@ -5,8 +5,8 @@
 //! ([`PositionTarget::Level`], one-sided) or leaves an interval (a, b)
 //! ([`PositionTarget::Interval`]). Every resetting protocol of the model
 //! runs: velocity resetting (x kept), full resetting (`--reset-position`:
-//! x → x_r with the velocity), periodic clocks, refractory periods, random
-//! velocity targets and re-drawn noise.
+//! x → x_r with the velocity), periodic and renewal clocks, refractory
+//! periods, random velocity targets and re-drawn noise.
 //!
 //! With velocity-only resetting the position is unbounded: a one-sided
 //! level is reached with a survival that decays as a power law
@@ -19,11 +19,15 @@
 //! - [`backward`]: the 2-D backward equation for T(x, v, eta) on an upwind
 //!   mesh, Richardson-extrapolated with an error estimate.
 //! - [`renewal`]: the state-resolved renewal route for full resetting, from
-//!   the reset-free survival resolved by the final noise state.
+//!   the reset-free survival resolved by the final noise state, over any
+//!   waiting-time law of the resets.
+//! - [`clock_optimize`]: the renewal clock's best mean waiting time (its
+//!   shape fixed) by the renewal route.
 //! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
 //! - [`solve`] with a [`SearchMethod`]: the one entry point.
 
 pub mod backward;
+pub mod clock_optimize;
 pub mod exact;
 mod mesh;
 pub mod renewal;

@@ -5,6 +5,7 @@ mod analytic;
 mod architecture;
 mod common;
 mod conformance;
+mod clock;
 mod control_variate;
 mod exact_flow;
 mod exact_fp;

@@ -55,6 +55,24 @@ impl Law for ExpClock {
     fn survival_integral(&self, a: f64, b: f64) -> f64 {
         self.survival(a) * -(-self.rate * (b - a)).exp_m1() / self.rate
     }
+    /// Closed form: on step n, ∫ rho (1 - s) = e_n (i0 - i1) and
+    /// ∫ rho s = e_n i1 with e_n = e^{-R n dt}, z = R dt, i0 = 1 - e^{-z},
+    /// i1 = i0/z - e^{-z}; W = rho / R.
+    fn renewal_weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+        let rate = self.rate;
+        let dt = t_max / steps as f64;
+        let z = rate * dt;
+        let i0 = -(-z).exp_m1();
+        let i1 = i0 / z - (-z).exp();
+        let mut rq = vec![0.0; steps + 1];
+        for n in 0..steps {
+            let e = (-rate * n as f64 * dt).exp();
+            rq[n] += e * (i0 - i1);
+            rq[n + 1] += e * i1;
+        }
+        let wq = rq.iter().map(|x| x / rate).collect();
+        (wq, rq, (-rate * t_max).exp())
+    }
     fn horizon(&self, tail: f64) -> f64 {
         (1.0 / tail).ln() / self.rate
     }

@@ -65,6 +65,18 @@ impl Law for FixedClock {
     fn horizon(&self, _tail: f64) -> f64 {
         self.t
     }
+    /// With t_max = T: the trapezoid weights of ∫_0^T f, and the point
+    /// mass of rho at T.
+    fn renewal_weights(&self, _t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+        let dt = self.t / steps as f64;
+        let wq = (0..=steps)
+            .map(|n| if n == 0 || n == steps { 0.5 * dt } else { dt })
+            .collect();
+        let rq = (0..=steps)
+            .map(|n| if n == steps { 1.0 } else { 0.0 })
+            .collect();
+        (wq, rq, 0.0)
+    }
     fn support_end(&self) -> f64 {
         self.t
     }

@@ -85,6 +85,16 @@ pub trait Law: Copy + fmt::Debug + PartialEq + Send + Sync + Sized {
     fn horizon(&self, tail: f64) -> f64 {
         horizon_by_bisection(|t| self.survival(t), tail)
     }
+    /// Product-integration weights on t_n = n t_max / steps of ∫ W f and
+    /// ∫ rho f over [0, t_max] for f linear between the t_n, and
+    /// W(t_max) = P(R > t_max) (docs/equations.md, (S7')): on a step
+    /// [t_n, t_n+1] with s = (t - t_n)/dt, ∫ rho (1 - s) and ∫ rho s are
+    /// F(t_n+1) - F(t_n) - i1 and i1 = ∫W/dt - W(t_n+1) (by parts), exact
+    /// for the law's CDF; ∫ W (1 - s) and ∫ W s from
+    /// [`Law::survival_integral`] and [`Law::survival_moment`].
+    fn renewal_weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+        product_weights(self, t_max, steps)
+    }
     /// The end of the support: the longest possible waiting time (∞ for
     /// an unbounded law).
     fn support_end(&self) -> f64 {
@@ -95,6 +105,27 @@ pub trait Law: Copy + fmt::Debug + PartialEq + Send + Sync + Sized {
     fn next_after<R: Rng + ?Sized>(&self, free: f64, rng: &mut R) -> f64 {
         free + self.draw(rng)
     }
+}
+
+/// [`Law::renewal_weights`] for any law.
+pub fn product_weights<L: Law>(law: &L, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+    let dt = t_max / steps as f64;
+    let (mut wq, mut rq) = (vec![0.0; steps + 1], vec![0.0; steps + 1]);
+    let mut w0 = law.survival(0.0);
+    for n in 0..steps {
+        let (a, b) = (n as f64 * dt, (n + 1) as f64 * dt);
+        let w1 = law.survival(b);
+        let int = law.survival_integral(a, b);
+        let moment = law.survival_moment(a, b) / dt;
+        wq[n] += int - moment;
+        wq[n + 1] += moment;
+        let i0 = w0 - w1;
+        let i1 = (int / dt - w1).clamp(0.0, i0);
+        rq[n] += i0 - i1;
+        rq[n + 1] += i1;
+        w0 = w1;
+    }
+    (wq, rq, law.survival(t_max))
 }
 
 /// The smallest t with `w(t) ≤ tail` of a nonincreasing `w` to rounding:
@@ -309,6 +340,10 @@ impl Clock {
     /// The longest possible waiting time (∞ for an unbounded law).
     pub fn support_end(&self) -> f64 {
         with_law!(self, |l| l.support_end())
+    }
+    /// [`Law::renewal_weights`].
+    pub fn renewal_weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
+        with_law!(self, |l| l.renewal_weights(t_max, steps))
     }
     /// The smallest t with W(t) ≤ tail.
     pub fn horizon(&self, tail: f64) -> f64 {
