@@ -167,13 +167,14 @@ fn draws_follow_the_law() {
     }
     let g = clock("gamma:k=2,theta=0.5");
     check("table of gamma", gamma_table(), g, 99);
-    // The table's W is the Gamma's between its points to O(h²).
+    // The table's W is the Gamma's between its points to the linear
+    // interpolation bound h² max|W''| / 8 = 0.005² · 4 / 8 = 1.25e-5.
     let t = gamma_table();
     let worst = (0..1000)
         .map(|i| 0.0137 * i as f64)
         .map(|x| (t.survival(x) - g.survival(x)).abs())
         .fold(0.0, f64::max);
-    assert!(worst < 1e-5, "table vs gamma W: {worst}");
+    assert!(worst < 1.25e-5, "table vs gamma W: {worst}");
 }
 
 /// with_mean keeps the shape and sets the mean; an infinite mean refuses.
@@ -328,19 +329,21 @@ const SLOW_CASES: [(DragLaw, f64, &str); 8] = [
     (DragLaw::Tanh, 0.6, "gamma:k=3,theta=0.3"),
     (DragLaw::Linear, 1.0, "weibull:k=1.5,scale=1"),
     (DragLaw::Tanh, 0.6, "pareto:alpha=2.5,scale=0.5"),
-    (DragLaw::Linear, 1.0, "fixed:t=1.5"),
-    (DragLaw::Tanh, 0.6, "fixed:t=1.2"),
+    (DragLaw::Linear, 1.0, "fixed:t=3"),
+    (DragLaw::Tanh, 0.6, "fixed:t=4"),
     (DragLaw::Linear, 1.0, "table:0:1;0.5:0.8;1:0.5;2:0.1;4:0"),
     (DragLaw::Tanh, 0.6, "hazard:0.5+a"),
 ];
 
-/// The fast subset: gamma (k = 3) and a fixed clock on linear drag.
+/// The fast subset: gamma (k = 3) and a fixed clock on linear drag (T = 3:
+/// a period of 1.5 could not reach the level, the + flow from v = 0 covers
+/// 1.5 - (1 - e^{-1.5}) = 0.72 < 1).
 #[test]
 fn search_sampler_matches_the_renewal_route() {
     sampler_vs_renewal(
         &[
             (DragLaw::Linear, 1.0, "gamma:k=3,theta=0.4"),
-            (DragLaw::Linear, 1.0, "fixed:t=1.5"),
+            (DragLaw::Linear, 1.0, "fixed:t=3"),
         ],
         20_000,
         2,

@@ -146,12 +146,17 @@ impl Schedule {
 
     /// The next scheduled reset time when the clock restarts at `free`
     /// (a reset, or the end of its refractory period): the first multiple
-    /// of T after it (periodic), free plus a drawn waiting time (renewal),
-    /// ∞ without either.
+    /// of T after it (periodic, and a fixed renewal clock without a
+    /// refractory period, whose restarts are the multiples of T: see
+    /// [`clock::fixed`]), free plus a drawn waiting time (renewal), ∞
+    /// without either.
     #[inline]
     pub fn next_reset<R: Rng + ?Sized>(&self, free: f64, rng: &mut R) -> f64 {
         match (self.periodic, self.clock) {
             (Some(p), _) => p.next_after(free),
+            (None, Some(Clock::Fixed(f))) if self.refractory.is_none() => {
+                Periodic { period: f.t }.next_after(free)
+            }
             (None, Some(c)) => c.next_after(free, rng),
             (None, None) => f64::INFINITY,
         }

@@ -1,13 +1,13 @@
 //! `fixed:t=T`: every waiting time is T (sharp resetting). With no
-//! refractory period the resets fall at T, 2T, ... as with
-//! `--reset-period T`; the next time is then computed as that clock does
-//! (the next multiple of T), so the two give the same bits and rounding
-//! does not accumulate over many periods.
+//! refractory period the clock restarts at the resets themselves, T, 2T,
+//! ..., as with `--reset-period T`: [`crate::model::reset::Schedule`] then
+//! computes the next one as that clock does (the next multiple of T), so
+//! the two give the same bits and rounding does not accumulate over many
+//! periods. After a refractory period the next reset is its end + T.
 
 use super::{bad, check_mean, keyed, Law};
 use crate::error::Result;
 use crate::model::drag::spec::number;
-use crate::model::reset::Periodic;
 use rand::Rng;
 
 /// A deterministic waiting time.
@@ -79,16 +79,5 @@ impl Law for FixedClock {
     }
     fn support_end(&self) -> f64 {
         self.t
-    }
-    /// The next multiple of T when `free` is one (as a periodic clock
-    /// computes it), else free + T.
-    #[inline]
-    fn next_after<R: Rng + ?Sized>(&self, free: f64, _rng: &mut R) -> f64 {
-        let periodic = Periodic { period: self.t };
-        if (free / self.t).round() * self.t == free {
-            periodic.next_after(free)
-        } else {
-            free + self.t
-        }
     }
 }
