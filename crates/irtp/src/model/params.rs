@@ -256,18 +256,13 @@ impl Params {
                 ));
             }
         }
-        if let Some(c) = schedule.clock {
-            if self.rate() != 0.0 {
-                return Err(Error::invalid(
-                    "rate",
-                    self.rate(),
-                    format!(
-                        "0 (or no --rate) with --reset-clock {} (the renewal clock replaces the \
-                         Poisson clock; exp:rate=R is the Poisson clock as a renewal clock)",
-                        c.spec()
-                    ),
-                ));
-            }
+        if schedule.clock.is_some() && self.rate() != 0.0 {
+            return Err(Error::invalid(
+                "rate",
+                self.rate(),
+                "0 (or no --rate) with --reset-clock (the renewal clock replaces the Poisson \
+                 clock; its law exp is the Poisson clock as a renewal clock)",
+            ));
         }
         Ok(Params { schedule, ..*self })
     }

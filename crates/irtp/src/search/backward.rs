@@ -245,8 +245,8 @@ impl Setup {
                 "reset_clock",
                 c.spec(),
                 format!(
-                    "a Poisson clock for {method}; a renewal clock is run by the renewal route \
-                     (search::renewal) and the exact sampler"
+                    "a Poisson clock for {method}; a renewal clock is run by the exact sampler \
+                     (--method exact) and the renewal route (search::renewal)"
                 ),
             ));
         }
