@@ -9,8 +9,10 @@
 //!   T_s = a_s + Σ_s' B_ss' Σ_s'' mix(s', s'') T_s''(x_r, v_r),
 //!   a_s = ∫ w(t) S_s(t) dt,  B_ss' = ∫ rho(t) P(T0 > t, eta(t) = s' | s) dt,
 //!
-//! over the waiting-time law of the resets (density rho, survival w; a
-//! point mass for periodic resetting), with S and P(...) those of the
+//! over the waiting-time law of the resets (density rho, survival w: any
+//! law of [`crate::model::reset::clock`], docs/equations.md (S5')-(S7');
+//! the Poisson clock is `exp:rate=r`, periodic resetting `fixed:t=T`, a
+//! point mass), with S and P(...) those of the
 //! reset-free search started from (x_r, v_r, s) (from (x0, v0, s) for the
 //! first period). mix is the noise rule (identity when kept). A random
 //! velocity target weighs the reset-point quantities by its node weights.
@@ -21,9 +23,12 @@
 //! ([`super::backward`]) by TR-BDF2 with a fixed step (one factorisation of
 //! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
 //! second order), and on the meshes h and h/2 (first order). The integrals
-//! stop at the horizon t_max where w(t_max) is below `tail` (Poisson) or at
-//! the period; the neglected tail is bounded (S, Q ≤ 1) and reported. The
-//! integrals are product integration (exact for Q linear between steps),
+//! stop at the horizon t_max where w(t_max) is below `tail` (at the latest
+//! at the end of a bounded law's support: the period); the neglected tail
+//! is bounded by the law's ∫_{t_max}^∞ w and w(t_max) (S, Q ≤ 1) and
+//! reported, and a law whose tail integral is infinite (an infinite mean)
+//! is refused naming `reset_clock`. The integrals are product integration
+//! from the law's CDF (exact for Q linear between steps),
 //! and the escape chances P(T0 < R) = ∫ rho (1 - S) + P(R > t_max) are
 //! integrated directly: 1 - Σ B would cancel when the target is rarely
 //! reached between resets (about 2e-3 at r = 3 in the tests).
