@@ -67,7 +67,10 @@ fn a_table_file_is_recorded_inline() {
     ]);
     assert_success(&out);
     let run = std::fs::read_to_string(dir.join("run.json")).unwrap();
-    assert!(run.contains("\"reset_clock\": \"table:0:1;0.5:0.6;2:0\""), "{run}");
+    assert!(
+        run.contains("\"reset_clock\": \"table:0:1;0.5:0.6;2:0\""),
+        "{run}"
+    );
 }
 
 #[test]
@@ -77,8 +80,14 @@ fn bad_clocks_exit_2_naming_the_flag() {
         (&["--reset-clock", "weibull:k=nan,scale=1"], "--reset-clock"),
         (&["--reset-clock", "pareto:alpha=2"], "--reset-clock"),
         (&["--reset-clock", "hazard:exp(-a)"], "--reset-clock"),
-        (&["--reset-clock", "table:file=/nonexistent/w.csv"], "--reset-clock"),
-        (&["--reset-clock", "fixed:t=1", "--reset-period", "1"], "--reset-clock"),
+        (
+            &["--reset-clock", "table:file=/nonexistent/w.csv"],
+            "--reset-clock",
+        ),
+        (
+            &["--reset-clock", "fixed:t=1", "--reset-period", "1"],
+            "--reset-clock",
+        ),
         (&["--reset-clock", "exp:rate=1", "--rate", "1"], "--rate"),
     ];
     for (flags, flag) in cases {

@@ -16,9 +16,9 @@ pub mod exact;
 pub use crate::numerics::time_grid::TimeGrid;
 
 use crate::error::{finite, Error, Result};
+use crate::model::reset::{Clock, Refractory};
 use crate::model::Params;
 use crate::model::Reset;
-use crate::model::reset::{Clock, Refractory};
 use crate::parallel::{self, Progress};
 use crate::stats::{merge_all, MeanAcc};
 use serde::{Deserialize, Serialize};

@@ -55,7 +55,10 @@ fn draws(c: &Clock, n: usize, seed: u64) -> Vec<f64> {
 fn gamma_table() -> Clock {
     let g = GammaClock { k: 2.0, theta: 0.5 };
     let t: Vec<f64> = (0..=4000).map(|i| i as f64 * 0.005).collect();
-    let mut w: Vec<f64> = t.iter().map(|&x| irtp::model::reset::clock::Law::survival(&g, x)).collect();
+    let mut w: Vec<f64> = t
+        .iter()
+        .map(|&x| irtp::model::reset::clock::Law::survival(&g, x))
+        .collect();
     w[0] = 1.0;
     *w.last_mut().unwrap() = 0.0;
     Clock::Table(TableClock::new(t, w).unwrap())
@@ -196,7 +199,10 @@ fn with_mean_rescales_time() {
         // Shape kept: W_r(t) = W(t m / m_r).
         let f = c.mean() / 0.37;
         for t in [0.1, 0.3, 0.9] {
-            assert!((r.survival(t) - c.survival(t * f)).abs() < 1e-9, "{s} at {t}");
+            assert!(
+                (r.survival(t) - c.survival(t * f)).abs() < 1e-9,
+                "{s} at {t}"
+            );
         }
     }
     let e = clock("pareto:alpha=1,scale=1").with_mean(1.0).unwrap_err();
@@ -226,15 +232,18 @@ fn special_cases_bit_for_bit() {
     let rate = 1.7;
     let gamma = format!("gamma:k=1,theta={}", 1.0 / rate);
     let exp = format!("exp:rate={rate}");
-    assert_eq!(
-        draws(&clock(&gamma), 1000, 5),
-        draws(&clock(&exp), 1000, 5)
-    );
+    assert_eq!(draws(&clock(&gamma), 1000, 5), draws(&clock(&exp), 1000, 5));
     let grid = irtp::numerics::time_grid::TimeGrid::log(0.1, 7.6, 6).unwrap();
     let spec = SimSpec::new(400, grid, 0.6, 20, 7).unwrap();
     let pairs = [
-        (sched(None, None, Some(&gamma)), sched(None, None, Some(&exp))),
-        (sched(None, Some(0.0), Some("fixed:t=0.7")), sched(Some(0.7), Some(0.0), None)),
+        (
+            sched(None, None, Some(&gamma)),
+            sched(None, None, Some(&exp)),
+        ),
+        (
+            sched(None, Some(0.0), Some("fixed:t=0.7")),
+            sched(Some(0.7), Some(0.0), None),
+        ),
     ];
     for (a, b) in pairs {
         let (pa, pb) = (
@@ -258,7 +267,13 @@ fn special_cases_bit_for_bit() {
         }
     }
     let (pa, pb) = (
-        full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, sched(None, None, Some(&gamma))),
+        full_reset(
+            DragLaw::Tanh,
+            0.6,
+            1.0,
+            0.0,
+            sched(None, None, Some(&gamma)),
+        ),
         full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, sched(None, None, Some(&exp))),
     );
     let vt = 0.5 * pa.v_upper();
@@ -288,7 +303,13 @@ fn sampled(p: Params, particles: u64, seed: u64) -> (f64, f64) {
 /// search time within z SE combined.
 #[test]
 fn exp_clock_matches_the_poisson_rate() {
-    let a = full_reset(DragLaw::Linear, 1.0, 0.5, 0.0, sched(None, Some(0.0), Some("exp:rate=0.8")));
+    let a = full_reset(
+        DragLaw::Linear,
+        1.0,
+        0.5,
+        0.0,
+        sched(None, Some(0.0), Some("exp:rate=0.8")),
+    );
     let b = full_reset(DragLaw::Linear, 1.0, 0.5, 0.8, sched(None, Some(0.0), None));
     let (ta, ea) = sampled(a, 40_000, 21);
     let (tb, eb) = sampled(b, 40_000, 21);
@@ -382,7 +403,13 @@ fn renewal_route_refuses_an_infinite_mean() {
 /// bracket without an interior minimum is refused naming `mean`.
 #[test]
 fn optimum_mean_matches_a_dense_scan() {
-    let p = full_reset(DragLaw::Linear, 1.0, 0.5, 0.0, sched(None, Some(0.0), Some("fixed:t=1")));
+    let p = full_reset(
+        DragLaw::Linear,
+        1.0,
+        0.5,
+        0.0,
+        sched(None, Some(0.0), Some("fixed:t=1")),
+    );
     let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     let opts = RenewalOptions {
         cells_x: 16,
@@ -396,19 +423,31 @@ fn optimum_mean_matches_a_dense_scan() {
     let scan: Vec<(f64, f64)> = (0..=40)
         .map(|i| 0.5 * (40f64).powf(i as f64 / 40.0))
         .map(|m| {
-            let w = WaitingTime::Renewal { clock: c.with_mean(m).unwrap() };
+            let w = WaitingTime::Renewal {
+                clock: c.with_mean(m).unwrap(),
+            };
             (m, renewal::solve(&problem, &w, &opts).unwrap().tau)
         })
         .collect();
-    let (m_scan, tau_scan) = scan.iter().copied().fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+    let (m_scan, tau_scan) =
+        scan.iter()
+            .copied()
+            .fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
     let spacing = (40f64).powf(1.0 / 40.0);
     assert!(
-        best.mean > m_scan / spacing - best.mean_error && best.mean < m_scan * spacing + best.mean_error,
+        best.mean > m_scan / spacing - best.mean_error
+            && best.mean < m_scan * spacing + best.mean_error,
         "optimum {} ± {} vs scan {m_scan}",
         best.mean,
         best.mean_error
     );
-    assert!(best.tau <= tau_scan + 1e-9 * tau_scan, "{} vs {tau_scan}", best.tau);
-    let e = optimize_mean(&problem, &c, (0.5, 0.6), 1e-3, &opts).unwrap_err().to_string();
+    assert!(
+        best.tau <= tau_scan + 1e-9 * tau_scan,
+        "{} vs {tau_scan}",
+        best.tau
+    );
+    let e = optimize_mean(&problem, &c, (0.5, 0.6), 1e-3, &opts)
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("invalid mean"), "{e}");
 }

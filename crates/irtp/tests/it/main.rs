@@ -3,9 +3,9 @@
 
 mod analytic;
 mod architecture;
+mod clock;
 mod common;
 mod conformance;
-mod clock;
 mod control_variate;
 mod exact_flow;
 mod exact_fp;

@@ -39,7 +39,11 @@ impl Law for ExpClock {
         -(-self.rate * t.max(0.0)).exp_m1()
     }
     fn density(&self, t: f64) -> Option<f64> {
-        Some(if t < 0.0 { 0.0 } else { self.rate * (-self.rate * t).exp() })
+        Some(if t < 0.0 {
+            0.0
+        } else {
+            self.rate * (-self.rate * t).exp()
+        })
     }
     fn mean(&self) -> f64 {
         1.0 / self.rate

@@ -143,7 +143,11 @@ impl Compiled {
         if e >= self.cum[n] {
             return self.edges[n] + (e - self.cum[n]) / self.r_end;
         }
-        let i = self.cum.partition_point(|&h| h <= e).saturating_sub(1).min(n - 1);
+        let i = self
+            .cum
+            .partition_point(|&h| h <= e)
+            .saturating_sub(1)
+            .min(n - 1);
         let (mut lo, mut hi) = (self.edges[i], self.edges[i + 1]);
         let mut t = 0.5 * (lo + hi);
         for _ in 0..200 {
@@ -186,7 +190,8 @@ fn compile(text: &str) -> Result<Compiled> {
     let plain = plain_numbers(text);
     let r = on_big_stack(
         || {
-            let r = exmex::parse::<f64>(&plain).map_err(|x| err(text, format!("parse error: {x}")))?;
+            let r =
+                exmex::parse::<f64>(&plain).map_err(|x| err(text, format!("parse error: {x}")))?;
             if r.var_names().len() > 1 || r.var_names().iter().any(|v| v != "a") {
                 return Err(err(text, "an expression in a"));
             }
@@ -260,7 +265,10 @@ fn tabulate(law: &mut Compiled) -> Result<()> {
     }
     let r_end = eval(&law.r, t);
     if !(r_end > 0.0 && r_end.is_finite()) {
-        return Err(err(&text, format!("r > 0 at a = {t} (where H reaches {H_END})")));
+        return Err(err(
+            &text,
+            format!("r > 0 at a = {t} (where H reaches {H_END})"),
+        ));
     }
     law.edges = edges;
     law.cum = cum;
@@ -291,7 +299,11 @@ impl Law for HazardClock {
         (-self.law.cumulative(t)).exp()
     }
     fn density(&self, t: f64) -> Option<f64> {
-        Some(if t < 0.0 { 0.0 } else { self.rate(t) * self.survival(t) })
+        Some(if t < 0.0 {
+            0.0
+        } else {
+            self.rate(t) * self.survival(t)
+        })
     }
     fn mean(&self) -> f64 {
         self.law.mean
@@ -310,7 +322,9 @@ impl Law for HazardClock {
         match l.panel(t.max(0.0)) {
             None => self.survival(t) / l.r_end,
             Some(i) => {
-                l.w_integral(t.max(0.0), l.edges[i + 1]) + l.w_int[i + 1..].iter().sum::<f64>() + beyond
+                l.w_integral(t.max(0.0), l.edges[i + 1])
+                    + l.w_int[i + 1..].iter().sum::<f64>()
+                    + beyond
             }
         }
     }

@@ -2,16 +2,16 @@
 //! (`--reset-clock SPEC`). One file per law behind [`Law`], one registry
 //! line in [`clock_laws!`](crate::clock_laws):
 //!
-//! - [`exp`]: `exp:rate=R`, the Poisson clock as a renewal clock;
-//! - [`gamma`]: `gamma:k=K,theta=TH`;
-//! - [`weibull`]: `weibull:k=K,scale=L`;
-//! - [`pareto`]: `pareto:alpha=A,scale=X` (Pareto I, support t ≥ X: a
-//!   power-law tail, infinite mean for A ≤ 1);
-//! - [`fixed`]: `fixed:t=T` (deterministic, sharp resetting);
-//! - [`table`]: `table:T0:W0;T1:W1;...` (a tabulated survival W(t),
-//!   linear between the points);
-//! - [`hazard`]: `hazard:EXPR` (an age-dependent rate r(a) written in the
-//!   age a since the last reset).
+//! - `exp:rate=R` ([`exp`]): the Poisson clock as a renewal clock;
+//! - `gamma:k=K,theta=TH` ([`gamma`]);
+//! - `weibull:k=K,scale=L` ([`weibull`]);
+//! - `pareto:alpha=A,scale=X` ([`pareto`]): Pareto I, support t ≥ X, a
+//!   power-law tail, infinite mean for A ≤ 1;
+//! - `fixed:t=T` ([`fixed`]): deterministic, sharp resetting;
+//! - `table:T0:W0;T1:W1;...` ([`table`]): a tabulated survival W(t),
+//!   linear between the points;
+//! - `hazard:EXPR` ([`hazard`]): an age-dependent rate r(a) written in the
+//!   age a since the last reset.
 //!
 //! The clock restarts at every reset (at the end of the refractory period
 //! when there is one): the next reset comes a drawn waiting time later
@@ -168,9 +168,13 @@ pub fn bad(spec: &str, what: impl fmt::Display, usage: &str) -> Error {
 pub fn keyed(args: &str, spec: &str, keys: &[&str], usage: &str) -> Result<Vec<f64>> {
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
     for pair in args.split(',').filter(|p| !p.trim().is_empty()) {
-        let (key, value) = pair
-            .split_once('=')
-            .ok_or_else(|| bad(spec, format!("key=value pairs, not '{}'", pair.trim()), usage))?;
+        let (key, value) = pair.split_once('=').ok_or_else(|| {
+            bad(
+                spec,
+                format!("key=value pairs, not '{}'", pair.trim()),
+                usage,
+            )
+        })?;
         let (key, value) = (key.trim(), value.trim());
         let i = keys.iter().position(|k| *k == key).ok_or_else(|| {
             bad(
@@ -180,7 +184,11 @@ pub fn keyed(args: &str, spec: &str, keys: &[&str], usage: &str) -> Result<Vec<f
             )
         })?;
         if values[i].is_some() {
-            return Err(bad(spec, format!("each key once ('{key}' repeated)"), usage));
+            return Err(bad(
+                spec,
+                format!("each key once ('{key}' repeated)"),
+                usage,
+            ));
         }
         let x: f64 = value
             .parse()
@@ -200,7 +208,11 @@ pub fn keyed(args: &str, spec: &str, keys: &[&str], usage: &str) -> Result<Vec<f
 /// `mean`.
 pub fn check_mean(mean: f64) -> Result<f64> {
     if !(mean > 0.0 && mean.is_finite()) {
-        return Err(Error::invalid("mean", mean, "a mean waiting time > 0, finite"));
+        return Err(Error::invalid(
+            "mean",
+            mean,
+            "a mean waiting time > 0, finite",
+        ));
     }
     Ok(mean)
 }

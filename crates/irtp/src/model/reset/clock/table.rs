@@ -78,7 +78,9 @@ impl TableClock {
     /// The segment i with t_i ≤ t < t_{i+1} (t inside the table).
     fn segment(&self, t: f64) -> usize {
         let ts = &self.data.t;
-        ts.partition_point(|&x| x <= t).saturating_sub(1).min(ts.len() - 2)
+        ts.partition_point(|&x| x <= t)
+            .saturating_sub(1)
+            .min(ts.len() - 2)
     }
 
     /// ∫_0^t W.
@@ -118,7 +120,11 @@ fn check(t: &[f64], w: &[f64], spec: &str) -> Result<()> {
     }
     for i in 1..n {
         if !(t[i] > t[i - 1] && t[i].is_finite()) {
-            return Err(bad(spec, format!("increasing finite times (at point {i})"), USAGE));
+            return Err(bad(
+                spec,
+                format!("increasing finite times (at point {i})"),
+                USAGE,
+            ));
         }
         if !(w[i] <= w[i - 1] && w[i] >= 0.0) {
             return Err(bad(
@@ -145,9 +151,13 @@ impl Law for TableClock {
         let (mut t, mut w) = (Vec::new(), Vec::new());
         for pair in args.split(';').filter(|p| !p.trim().is_empty()) {
             let num = |s: &str| -> Result<f64> {
-                s.trim()
-                    .parse::<f64>()
-                    .map_err(|_| bad(spec, format!("T:W pairs of numbers, not '{}'", pair.trim()), USAGE))
+                s.trim().parse::<f64>().map_err(|_| {
+                    bad(
+                        spec,
+                        format!("T:W pairs of numbers, not '{}'", pair.trim()),
+                        USAGE,
+                    )
+                })
             };
             let (a, b) = pair
                 .split_once(':')
