@@ -224,7 +224,7 @@ impl SearchProblem {
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
         let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
-        // E[R] = ∞ makes the mean search time infinite.
+        // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
         // The longest period: T, or the end of a renewal law's support.
         let longest = match (sched.periodic, sched.clock) {

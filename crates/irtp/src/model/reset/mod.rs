@@ -180,7 +180,7 @@ impl Schedule {
 
     /// An upper bound on the exact samplers' events per unit time: flips
     /// (`lambda`), resets (the Poisson `rate`, 1/T for a periodic clock,
-    /// the long-time rate 1/E[R] of a renewal clock) and, with a refractory period, the end of each one (one more
+    /// the long-time rate 1/E(R) of a renewal clock) and, with a refractory period, the end of each one (one more
     /// event per reset). For cost estimates before a run.
     pub fn event_rate_bound(&self, lambda: f64, rate: f64) -> f64 {
         let resets = rate

@@ -55,7 +55,7 @@ struct Compiled {
     w_int: Vec<f64>,
     /// r at the last edge (the rate beyond it).
     r_end: f64,
-    /// E[R].
+    /// E(R).
     mean: f64,
 }
 
@@ -308,7 +308,7 @@ impl Law for HazardClock {
     fn mean(&self) -> f64 {
         self.law.mean
     }
-    /// r_c(a) = r(a/c)/c with c = mean / E[R]: the text with every a
+    /// r_c(a) = r(a/c)/c with c = mean / E(R): the text with every a
     /// written (a/c), divided by c.
     fn with_mean(&self, mean: f64) -> Result<Self> {
         let c = check_mean(mean)? / self.law.mean;

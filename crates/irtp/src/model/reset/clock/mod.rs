@@ -64,7 +64,7 @@ pub trait Law: Copy + fmt::Debug + PartialEq + Send + Sync + Sized {
     }
     /// The density rho(t), where the law has one.
     fn density(&self, t: f64) -> Option<f64>;
-    /// E[R] (∞ for a law without a finite mean).
+    /// E(R) (∞ for a law without a finite mean).
     fn mean(&self) -> f64;
     /// The same shape with mean `mean` (a rescaling of time); refused for
     /// a law without a finite mean.
@@ -329,7 +329,7 @@ impl Clock {
     pub fn density(&self, t: f64) -> Option<f64> {
         with_law!(self, |l| l.density(t))
     }
-    /// E[R] (∞ when infinite).
+    /// E(R) (∞ when infinite).
     pub fn mean(&self) -> f64 {
         with_law!(self, |l| l.mean())
     }
