@@ -7,7 +7,8 @@
 //!
 //! The modifiers of the resetting rule run as in [`crate::sim::euler`]
 //! (one kernel per run, chosen outside the step): the periodic reset at kT
-//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing),
+//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing;
+//! a renewal clock's drawn times likewise),
 //! a refractory
 //! period as round(D/dt) held steps (no drift, Poisson resets discarded,
 //! flips on, periodic times up to its end skipped). A reset at or above

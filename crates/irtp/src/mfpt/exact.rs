@@ -6,8 +6,10 @@
 //! by [`first_passage_stats`]; the entry point is [`super::solve`] with
 //! [`super::Method::Exact`].
 //!
-//! With a periodic reset clock (resets at T, 2T, ... from t = 0) a flow
-//! segment also ends at the next periodic time; after a reset with a
+//! With a periodic reset clock (resets at T, 2T, ... from t = 0) or a
+//! renewal clock (the next reset a drawn waiting time after the last one,
+//! or after the end of its refractory period) a flow segment also ends at
+//! the next scheduled time; after a reset with a
 //! refractory period of duration D the velocity is held at the reset
 //! velocity (below v_t, or the reset itself is the passage), so the period
 //! cannot cross v_t: it advances the time by D and flips the noise state
@@ -104,8 +106,8 @@ impl<F: FlowMap> FirstPassage<F> {
         &self.flows
     }
 
-    /// (lambda, r, the resetting rule, whether a periodic or refractory
-    /// schedule runs).
+    /// (lambda, r, the resetting rule, whether a periodic, renewal or
+    /// refractory schedule runs).
     pub(super) fn rates(&self) -> (f64, f64, &ResetRule, bool) {
         let scheduled = self.schedule.scheduled_clock() || self.refractory.is_some();
         (self.lambda, self.rate, &self.reset, scheduled)
@@ -226,7 +228,7 @@ impl<F: FlowMap> FirstPassage<F> {
         Segment::Moved(flow.velocity(v, step))
     }
 
-    /// [`FirstPassage::run`] with a periodic clock and/or a refractory
+    /// [`FirstPassage::run`] with a periodic or renewal clock and/or a refractory
     /// period (module docs).
     fn run_scheduled(
         &self,

@@ -2,7 +2,7 @@
 //! [`crate::sim::exact`] run until x leaves the search region.
 //!
 //! Between events (noise flips and Poisson resets: a clock of rate
-//! lambda + r; periodic reset times; the end of a refractory period) the
+//! lambda + r; periodic or renewal reset times; the end of a refractory period) the
 //! velocity follows the exact flow dv/dt = s - g(v), and x along a flow
 //! segment is the flow's displacement v* t - ∫ (v* - v) dt (the flow
 //! potential tables of the simulation sampler). Along a segment v moves

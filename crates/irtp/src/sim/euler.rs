@@ -34,6 +34,7 @@
 //!   n = round(kT/dt) (from n·dt to (n+1)·dt), so the state recorded at kT
 //!   is the one before the reset, as in the exact sampler (a reset at t
 //!   acts just after t); it acts within dt of kT, an O(dt) timing error;
+//!   a renewal clock likewise, at the step nearest each drawn reset time;
 //! - a refractory period of duration D (drawn at the reset) holds v at the
 //!   reset velocity for round(D/dt) steps (duration error ≤ dt/2): step 3
 //!   neither drifts nor resets there (the Poisson decisions are drawn and

@@ -36,8 +36,10 @@
 //! run in a second event loop, chosen once per run (the paper's protocol
 //! keeps its own loop, bit for bit): the next event is the earliest of the
 //! exponential clock (flips at rate lambda, plus Poisson resets at rate r
-//! outside a refractory period), the next periodic reset time (resets at
-//! T, 2T, ... from t = 0) and the end of a refractory period. A reset sends
+//! outside a refractory period), the next scheduled reset time (resets at
+//! T, 2T, ... from t = 0 with a periodic clock; with a renewal clock a
+//! waiting time drawn at each reset, or at the end of its refractory
+//! period, from the clock's law) and the end of a refractory period. A reset sends
 //! x to x_r with position resetting; a refractory period is a held segment:
 //! v constant at the reset velocity, x linear in t, the occupation of the
 //! held velocity's bin and the time averages exact; the noise flips during
