@@ -72,6 +72,7 @@ class Params:
         reset_velocity: Optional[float] = None,
         reset_to: Optional[str] = None,
         reset_period: Optional[float] = None,
+        reset_clock: Optional[str] = None,
         reset_position: Optional[float] = None,
         refractory: Optional[str] = None,
         **kwargs: Any,
@@ -92,6 +93,8 @@ class Params:
     def reset_to(self) -> Optional[str]: ...
     @property
     def reset_period(self) -> Optional[float]: ...
+    @property
+    def reset_clock(self) -> Optional[str]: ...
     @property
     def reset_position(self) -> Optional[float]: ...
     @property
@@ -299,6 +302,7 @@ def simulate(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     seed: int = ...,
@@ -347,6 +351,7 @@ def fp_stationary(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     seed: int = ...,
@@ -372,6 +377,7 @@ def fp_transient(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     seed: int = ...,
@@ -402,6 +408,7 @@ def fp_msd(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     seed: int = ...,
@@ -431,6 +438,7 @@ def mfpt(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     v0: float,
@@ -467,6 +475,7 @@ def mfpt_scan(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     v0: float,
@@ -501,6 +510,7 @@ def mfpt_optimize(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     v0: float,
@@ -529,6 +539,7 @@ def mfpt_distribution(
     reset_noise: Literal["kept", "redrawn"] = ...,
     reset_to: str = ...,
     reset_period: float = ...,
+    reset_clock: str = ...,
     reset_position: float = ...,
     refractory: str = ...,
     v0: float,

@@ -167,6 +167,7 @@ _FIELDS: Tuple[Tuple[str, str], ...] = (
     ("reset_velocity", "reset_velocity"),
     ("reset_to", "reset_to"),
     ("reset_period", "reset_period"),
+    ("reset_clock", "reset_clock"),
     ("reset_position", "reset_position"),
     ("refractory", "refractory"),
 )
@@ -199,6 +200,7 @@ class Params:
         reset_velocity: Optional[float] = None,
         reset_to: Optional[str] = None,
         reset_period: Optional[float] = None,
+        reset_clock: Optional[str] = None,
         reset_position: Optional[float] = None,
         refractory: Optional[str] = None,
         **kwargs: Any,
@@ -212,7 +214,7 @@ class Params:
             raise ValueError(
                 f"unknown keyword {bad} for irtp.Params "
                 "(known: drag, sigma, lambda_, reset, rate, reset_velocity, reset_to, "
-                "reset_period, reset_position, refractory)"
+                "reset_period, reset_clock, reset_position, refractory)"
             )
         if reset is not None:
             if not isinstance(reset, Reset):
@@ -233,6 +235,8 @@ class Params:
                 values[attr] = _number(attr, given)
         if reset_to is not None:
             values["reset_to"] = str(reset_to)
+        if reset_clock is not None:
+            values["reset_clock"] = str(reset_clock)
         if refractory is not None:
             values["refractory"] = str(refractory)
         self._values = values
@@ -265,6 +269,10 @@ class Params:
     reset_period = property(
         lambda self: self._values.get("reset_period"),
         doc="Periodic resetting: the period T (then no rate), or None.",
+    )
+    reset_clock = property(
+        lambda self: self._values.get("reset_clock"),
+        doc="Renewal resetting: the waiting-time law (``gamma:k=2,theta=0.5``), or None.",
     )
     reset_position = property(
         lambda self: self._values.get("reset_position"),

@@ -1,5 +1,5 @@
-"""The resetting-rule modifiers from Python: reset_period, reset_position and
-refractory as keywords and as Params fields, recorded in the parameters,
+"""The resetting-rule modifiers from Python: reset_period, reset_clock,
+reset_position and refractory as keywords and as Params fields, recorded in the parameters,
 refused by name where a method does not run them."""
 
 from __future__ import annotations
@@ -43,3 +43,20 @@ def test_bad_modifiers_are_refused_by_name():
         irtp.fp_stationary(reset_period=1.0)
     with pytest.raises(ValueError, match="unknown keyword"):
         irtp.Params(reset_every=1.0)
+
+
+def test_renewal_clock_keyword_is_recorded_and_refused_by_name():
+    r = irtp.simulate(particles=2000, t_max=8.0, burn_in=2.0,
+                      reset_clock="gamma:k=2,theta=0.5", seed=7)
+    model = r.params["model"]
+    assert model["reset_clock"] == "gamma:k=2,theta=0.5"
+    p = irtp.Params.from_mapping(model)
+    assert p.reset_clock == "gamma:k=2,theta=0.5"
+    again = irtp.simulate(params=p, particles=2000, t_max=8.0, burn_in=2.0, seed=7)
+    assert again.summary["v2"] == r.summary["v2"]
+    with pytest.raises(ValueError, match="reset.clock"):
+        irtp.simulate(reset_clock="gamma:k=0,theta=1")
+    with pytest.raises(ValueError, match="reset.clock"):
+        irtp.simulate(reset_clock="fixed:t=1", reset_period=1.0)
+    with pytest.raises(ValueError, match="reset.clock"):
+        irtp.fp_stationary(reset_clock="exp:rate=1")

@@ -60,6 +60,15 @@ pub struct ModelArgs {
     /// --rate, or --rate 0).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub reset_period: Option<f64>,
+    /// Renewal resetting: the waiting times between resets drawn from a
+    /// law, the clock restarting at every reset (then no --rate, or --rate
+    /// 0; not with --reset-period): exp:rate=R, gamma:k=K,theta=TH,
+    /// weibull:k=K,scale=L, pareto:alpha=A,scale=X (Pareto I, t >= X),
+    /// fixed:t=T, table:0:1;T1:W1;...;Tn:0 (survival W, linear between
+    /// points) or table:file=PATH (lines 't,W'), hazard:EXPR (a rate r(a)
+    /// in the age a since the last reset).
+    #[arg(long, value_name = "SPEC")]
+    pub reset_clock: Option<String>,
     /// Position resetting: at every reset the position jumps to X with the
     /// velocity (full resetting); the position then has a stationary
     /// distribution.
@@ -140,14 +149,27 @@ impl ModelArgs {
             self.reset_period,
             self.reset_position,
             self.refractory.as_deref(),
-        )?;
+        )?
+        .with_clock(self.clock_spec()?.as_deref())?;
         self.rule_params()?.with_schedule(schedule)
     }
 
+    /// `--reset-clock`, with a `table:file=PATH` read into the inline
+    /// table spec (so the provenance holds the points themselves).
+    fn clock_spec(&self) -> irtp::Result<Option<String>> {
+        match self.reset_clock.as_deref() {
+            Some(s) => match s.trim().strip_prefix("table:file=") {
+                Some(path) => read_table(s, path).map(Some),
+                None => Ok(Some(s.to_string())),
+            },
+            None => Ok(None),
+        }
+    }
+
     /// [`Self::params`] without the schedule's modifiers (the rate
-    /// defaults to 0 with a periodic clock).
+    /// defaults to 0 with a periodic or renewal clock).
     fn rule_params(&self) -> irtp::Result<Params> {
-        let default = if self.reset_period.is_some() {
+        let default = if self.reset_period.is_some() || self.reset_clock.is_some() {
             0.0
         } else {
             DEFAULT_RATE
@@ -242,4 +264,38 @@ pub struct ForceArgs {
     /// other files are left alone (and named in a warning).
     #[arg(long)]
     pub force: bool,
+}
+
+/// The table of `table:file=PATH`: lines `t,W` (blank lines, `#` comments
+/// and a non-numeric header skipped), checked by the core
+/// ([`irtp::model::reset::clock::TableClock::new`]); its inline spec.
+fn read_table(spec: &str, path: &str) -> irtp::Result<String> {
+    let bad = |what: String| {
+        irtp::Error::invalid(
+            "reset_clock",
+            spec,
+            format!("table:file=PATH of a readable file of 't,W' lines ({what})"),
+        )
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{path}: {e}")))?;
+    let (mut t, mut w) = (Vec::new(), Vec::new());
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut cols = line.split(',').map(|c| c.trim().parse::<f64>());
+        match (cols.next(), cols.next(), cols.next()) {
+            (Some(Ok(a)), Some(Ok(b)), None) => {
+                t.push(a);
+                w.push(b);
+            }
+            _ if t.is_empty() && i == 0 => continue,
+            _ => return Err(bad(format!("line {} is not 't,W': '{line}'", i + 1))),
+        }
+    }
+    irtp::model::reset::clock::TableClock::new(t, w).map(|c| {
+        use irtp::model::reset::clock::Law;
+        c.spec()
+    })
 }

@@ -5,6 +5,7 @@ mod censoring;
 mod cli_analytic;
 mod cli_errors;
 mod cli_simulate;
+mod clock_cli;
 #[allow(dead_code)]
 mod common;
 mod counts;

@@ -22,8 +22,8 @@
 //! backward solution at each cell's midpoint. Along a flow segment the
 //! integral of J u is then a sum of (constant × time spent in a cell):
 //! prefix sums of the cells' exact flow-crossing times give it in O(1) per
-//! segment with one flow-time evaluation (exact to rounding). Periodic and
-//! refractory schedules are not Poisson clocks and are refused.
+//! segment with one flow-time evaluation (exact to rounding). Periodic,
+//! renewal and refractory schedules are not Poisson clocks and are refused.
 
 use super::backward::{self, BackwardOptions, Profile};
 use super::exact::{FirstPassage, Tally};
@@ -63,7 +63,7 @@ pub struct PassageControl {
 impl PassageControl {
     /// Tables for `fpt` (the sampler of the canonical problem on [vl, vt])
     /// with u(v, plus) = `u(v, plus)` at the midpoints of `cells` uniform
-    /// cells. Refused under a periodic or refractory schedule.
+    /// cells. Refused under a periodic, renewal or refractory schedule.
     pub fn new<F: FlowMap>(
         fpt: &FirstPassage<F>,
         vl: f64,
@@ -75,7 +75,7 @@ impl PassageControl {
         if scheduled {
             return Err(Error::invalid(
                 "reset",
-                "periodic or refractory",
+                "periodic, renewal or refractory",
                 "a Poisson reset clock for the passage-time control variate",
             ));
         }

@@ -7,7 +7,8 @@
 //!
 //! The modifiers of the resetting rule run as in [`crate::sim::euler`]
 //! (one kernel per run, chosen outside the step): the periodic reset at kT
-//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing),
+//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing;
+//! a renewal clock's drawn times likewise),
 //! a refractory
 //! period as round(D/dt) held steps (no drift, Poisson resets discarded,
 //! flips on, periodic times up to its end skipped). A reset at or above
@@ -16,7 +17,7 @@
 use super::estimator::{merge_units, FptSample, FptStats, FptSummary};
 use super::Problem;
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -92,7 +93,7 @@ impl EulerFpt {
         progress: &dyn Progress,
     ) -> Vec<FptStats> {
         let c = Chain::new(self, seed);
-        let scheduled = c.periodic.is_some() || c.refractory.is_some();
+        let scheduled = c.schedule.scheduled_clock() || c.refractory.is_some();
         crate::with_drag!(self.problem.params().drag(), |d| {
             parallel::reduce_units(
                 n,
@@ -170,7 +171,7 @@ struct Chain {
     max_steps: u64,
     reset: ResetRule,
     seed: u64,
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     refractory: Option<Refractory>,
 }
 
@@ -216,7 +217,7 @@ impl Chain {
             max_steps: (e.t_max / dt).floor() as u64,
             reset: *par.reset(),
             seed,
-            periodic: par.schedule().periodic,
+            schedule: *par.schedule(),
             refractory: par.schedule().refractory,
         }
     }
@@ -227,6 +228,7 @@ impl Chain {
         let plus = (i % 2 == 0) != self.swapped;
         let next_flip = geometric_gap(&mut rng, self.ln_flip);
         let next_reset = geometric_gap(&mut rng, self.ln_reset);
+        let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             i,
             rng,
@@ -236,7 +238,7 @@ impl Chain {
             next_reset,
             step: 0,
             hold: 0,
-            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
+            next_periodic,
         }
     }
 
@@ -315,8 +317,9 @@ impl Chain {
             if let Some(r) = self.refractory {
                 l.hold = (r.draw(&mut l.rng) / self.dt).round() as u64;
             }
-            if let Some(p) = self.periodic {
-                l.next_periodic = p.next_after(l.next_periodic + l.hold as f64 * self.dt);
+            if self.schedule.scheduled_clock() {
+                let free = l.next_periodic + l.hold as f64 * self.dt;
+                l.next_periodic = self.schedule.next_reset(free, &mut l.rng);
             }
         } else {
             l.v = euler_step(drag, l.v, l.s, self.dt);

@@ -6,8 +6,10 @@
 //! by [`super::first_passage_stats`]'s driver; the entry point is [`super::solve`] with
 //! [`super::Method::Exact`].
 //!
-//! With a periodic reset clock (resets at T, 2T, ... from t = 0) a flow
-//! segment also ends at the next periodic time; after a reset with a
+//! With a periodic reset clock (resets at T, 2T, ... from t = 0) or a
+//! renewal clock (the next reset a drawn waiting time after the last one,
+//! or after the end of its refractory period) a flow segment also ends at
+//! the next scheduled time; after a reset with a
 //! refractory period of duration D the velocity is held at the reset
 //! velocity (below v_t, or the reset itself is the passage), so the period
 //! cannot cross v_t: it advances the time by D and flips the noise state
@@ -19,7 +21,7 @@ use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -55,7 +57,7 @@ pub struct FirstPassage<F = AnyFlow> {
     /// The resetting rule (target and noise state at a reset).
     reset: ResetRule,
     /// Periodic reset clock.
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     /// Refractory period after each reset.
     refractory: Option<Refractory>,
 }
@@ -94,7 +96,7 @@ impl<F: FlowMap> FirstPassage<F> {
             rate: params.rate(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
-            periodic: params.schedule().periodic,
+            schedule: *params.schedule(),
             refractory: params.schedule().refractory,
         }
     }
@@ -104,10 +106,10 @@ impl<F: FlowMap> FirstPassage<F> {
         &self.flows
     }
 
-    /// (lambda, r, the resetting rule, whether a periodic or refractory
-    /// schedule runs).
+    /// (lambda, r, the resetting rule, whether a periodic, renewal or
+    /// refractory schedule runs).
     pub(super) fn rates(&self) -> (f64, f64, &ResetRule, bool) {
-        let scheduled = self.periodic.is_some() || self.refractory.is_some();
+        let scheduled = self.schedule.scheduled_clock() || self.refractory.is_some();
         (self.lambda, self.rate, &self.reset, scheduled)
     }
 
@@ -140,7 +142,7 @@ impl<F: FlowMap> FirstPassage<F> {
         if v0 >= vt {
             return (Some(0.0), 0);
         }
-        if self.periodic.is_some() || self.refractory.is_some() {
+        if self.schedule.scheduled_clock() || self.refractory.is_some() {
             return self.run_scheduled(v0, vt, start_plus, t_max, rng);
         }
         let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
@@ -226,7 +228,7 @@ impl<F: FlowMap> FirstPassage<F> {
         Segment::Moved(flow.velocity(v, step))
     }
 
-    /// [`FirstPassage::run`] with a periodic clock and/or a refractory
+    /// [`FirstPassage::run`] with a periodic or renewal clock and/or a refractory
     /// period (module docs).
     fn run_scheduled(
         &self,
@@ -237,7 +239,7 @@ impl<F: FlowMap> FirstPassage<F> {
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
         let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut next_periodic = self.schedule.first_reset(rng);
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
@@ -269,8 +271,8 @@ impl<F: FlowMap> FirstPassage<F> {
                 t += d;
                 events += 1;
             }
-            if let Some(p) = self.periodic {
-                next_periodic = p.next_after(t);
+            if self.schedule.scheduled_clock() {
+                next_periodic = self.schedule.next_reset(t, rng);
             }
         }
     }

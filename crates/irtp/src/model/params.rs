@@ -45,6 +45,10 @@ pub struct RawParams {
     /// Periodic resetting: the period T (absent for a Poisson clock).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reset_period: Option<f64>,
+    /// A renewal reset clock as a spec (`gamma:k=2,theta=0.5`), absent
+    /// for none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset_clock: Option<String>,
     /// Position resetting: x_r (absent when the position is kept).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reset_position: Option<f64>,
@@ -65,11 +69,10 @@ impl TryFrom<RawParams> for Params {
                 p.with_reset(target, noise.unwrap_or(NoiseAtReset::Kept))?
             }
         };
-        p.with_schedule(Schedule::parse(
-            r.reset_period,
-            r.reset_position,
-            r.refractory.as_deref(),
-        )?)
+        p.with_schedule(
+            Schedule::parse(r.reset_period, r.reset_position, r.refractory.as_deref())?
+                .with_clock(r.reset_clock.as_deref())?,
+        )
     }
 }
 
@@ -83,6 +86,7 @@ impl From<Params> for RawParams {
             reset_velocity: p.reset_velocity(),
             reset: p.reset_spec(),
             reset_period: p.schedule.periodic.map(|t| t.period),
+            reset_clock: p.schedule.clock.map(|c| c.spec()),
             reset_position: p.schedule.position.map(|x| x.x),
             refractory: p.schedule.refractory.map(|r| r.spec()),
         }
@@ -251,6 +255,14 @@ impl Params {
                     ),
                 ));
             }
+        }
+        if schedule.clock.is_some() && self.rate() != 0.0 {
+            return Err(Error::invalid(
+                "rate",
+                self.rate(),
+                "0 (or no --rate) with --reset-clock (the renewal clock replaces the Poisson \
+                 clock; its law exp is the Poisson clock as a renewal clock)",
+            ));
         }
         Ok(Params { schedule, ..*self })
     }

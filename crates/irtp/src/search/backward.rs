@@ -240,6 +240,16 @@ impl Setup {
                 ),
             ));
         }
+        if let (Some(c), false) = (s.clock, renewal) {
+            return Err(Error::invalid(
+                "reset_clock",
+                c.spec(),
+                format!(
+                    "a Poisson clock for {method}; a renewal clock is run by the exact sampler \
+                     (--method exact) and the renewal route (search::renewal)"
+                ),
+            ));
+        }
         // A random target enters through its node weights; meshes put a
         // node at its centre.
         let vr = p.reset_velocity();
@@ -250,7 +260,7 @@ impl Setup {
                 format!("a reset position (full resetting) for {method}: only full resetting renews the search"),
             ));
         }
-        let resets = renewal || p.rate() > 0.0 || s.periodic.is_some();
+        let resets = renewal || p.rate() > 0.0 || s.scheduled_clock();
         let resetting = match (resets, s.position) {
             (false, _) => Resetting::None,
             (true, Some(x)) => Resetting::Full { x: x.x, v: vr },

@@ -2,7 +2,7 @@
 //! [`crate::sim::exact`] run until x leaves the search region.
 //!
 //! Between events (noise flips and Poisson resets: a clock of rate
-//! lambda + r; periodic reset times; the end of a refractory period) the
+//! lambda + r; periodic or renewal reset times; the end of a refractory period) the
 //! velocity follows the exact flow dv/dt = s - g(v), and x along a flow
 //! segment is the flow's displacement v* t - ∫ (v* - v) dt (the flow
 //! potential tables of the simulation sampler). Along a segment v moves
@@ -27,7 +27,7 @@ use super::SearchProblem;
 use crate::error::Result;
 use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
 use crate::model::drag::{FlowMap, FlowPoint};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
@@ -50,7 +50,7 @@ pub struct SearchSampler<D: Drag> {
     lambda: f64,
     total_rate: f64,
     reset: ResetRule,
-    periodic: Option<Periodic>,
+    schedule: Schedule,
     refractory: Option<Refractory>,
     x_reset: Option<f64>,
     /// The search region lo < x < hi (an open side is ∓∞).
@@ -104,7 +104,7 @@ impl<D: Drag> SearchSampler<D> {
             lambda: params.lambda(),
             total_rate: params.lambda() + params.rate(),
             reset: *params.reset(),
-            periodic: sched.periodic,
+            schedule: *sched,
             refractory: sched.refractory,
             x_reset: sched.position.map(|p| p.x),
             lo,
@@ -130,7 +130,7 @@ impl<D: Drag> SearchSampler<D> {
             si,
             a: self.segs[si].at(v0),
         };
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        let mut next_periodic = self.schedule.first_reset(rng);
         let mut events = 0u64;
         loop {
             let gap = exp_gap(rng, self.total_rate);
@@ -156,8 +156,8 @@ impl<D: Drag> SearchSampler<D> {
             if let Some(hit) = self.reset_at(&mut w, t_max, rng, &mut events) {
                 return (hit, events);
             }
-            if let Some(p) = self.periodic {
-                next_periodic = p.next_after(w.t);
+            if self.schedule.scheduled_clock() {
+                next_periodic = self.schedule.next_reset(w.t, rng);
             }
         }
     }

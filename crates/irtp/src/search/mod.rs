@@ -5,8 +5,8 @@
 //! ([`PositionTarget::Level`], one-sided) or leaves an interval (a, b)
 //! ([`PositionTarget::Interval`]). Every resetting protocol of the model
 //! runs: velocity resetting (x kept), full resetting (`--reset-position`:
-//! x → x_r with the velocity), periodic clocks, refractory periods, random
-//! velocity targets and re-drawn noise.
+//! x → x_r with the velocity), periodic and renewal clocks, refractory
+//! periods, random velocity targets and re-drawn noise.
 //!
 //! With velocity-only resetting the position is unbounded: a one-sided
 //! level is reached with a survival that decays as a power law
@@ -19,7 +19,10 @@
 //! - [`backward`]: the 2-D backward equation for T(x, v, eta) on an upwind
 //!   mesh, Richardson-extrapolated with an error estimate.
 //! - [`renewal`]: the state-resolved renewal route for full resetting, from
-//!   the reset-free survival resolved by the final noise state.
+//!   the reset-free survival resolved by the final noise state, over any
+//!   waiting-time law of the resets.
+//! - [`clock_optimize`]: the renewal clock's best mean waiting time (its
+//!   shape fixed) by the renewal route.
 //! - [`euler`]: the Euler scheme's passage at dt and dt/2, extrapolated.
 //! - [`distribution`]: S(t) and f(t) by the time-dependent backward
 //!   equation with resets.
@@ -29,6 +32,7 @@
 //!   [`assemble`] merges into the whole run's result, bit for bit.
 
 pub mod backward;
+pub mod clock_optimize;
 pub mod distribution;
 pub mod euler;
 pub mod exact;
@@ -226,14 +230,21 @@ impl SearchProblem {
                 PositionTarget::Level(l) => self.drifts_towards(l),
             };
         };
-        let resets = p.rate() > 0.0 || sched.periodic.is_some();
+        let resets = p.rate() > 0.0 || sched.scheduled_clock();
         let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
+        // A failed period of a level search lasts the waiting time R:
+        // E(R) = ∞ makes the mean search time infinite.
+        let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
+        // The longest period: T, or the end of a renewal law's support.
+        let longest = match (sched.periodic, sched.clock) {
+            (Some(per), _) => per.period,
+            (None, Some(c)) => c.support_end(),
+            (None, None) => f64::INFINITY,
+        };
         match self.target {
-            PositionTarget::Level(_) if !(resets && turns) => false,
-            _ => match sched.periodic {
-                Some(per) => self.reachable_within(pos.x, per.period),
-                None => true,
-            },
+            PositionTarget::Level(_) if !(resets && turns) || heavy => false,
+            _ if longest.is_finite() => self.reachable_within(pos.x, longest),
+            _ => true,
         }
     }
 
@@ -245,7 +256,7 @@ impl SearchProblem {
     /// <v_r>.
     fn drifts_towards(&self, l: f64) -> bool {
         let p = &self.params;
-        let resets = p.rate() > 0.0 || p.schedule().periodic.is_some();
+        let resets = p.rate() > 0.0 || p.schedule().scheduled_clock();
         let (mean_vr, _) = p.reset().target().moments();
         resets && mean_vr != 0.0 && (l - self.x0) * mean_vr > 0.0
     }

@@ -9,8 +9,10 @@
 //!   T_s = a_s + Σ_s' B_ss' Σ_s'' mix(s', s'') T_s''(x_r, v_r),
 //!   a_s = ∫ w(t) S_s(t) dt,  B_ss' = ∫ rho(t) P(T0 > t, eta(t) = s' | s) dt,
 //!
-//! over the waiting-time law of the resets (density rho, survival w; a
-//! point mass for periodic resetting), with S and P(...) those of the
+//! over the waiting-time law of the resets (density rho, survival w: any
+//! law of [`crate::model::reset::clock`], docs/equations.md (S5')-(S7');
+//! the Poisson clock is `exp:rate=r`, periodic resetting `fixed:t=T`, a
+//! point mass), with S and P(...) those of the
 //! reset-free search started from (x_r, v_r, s) (from (x0, v0, s) for the
 //! first period). mix is the noise rule (identity when kept). A random
 //! velocity target weighs the reset-point quantities by its node weights.
@@ -22,9 +24,12 @@
 //! [`super::distribution`]; one factorisation of
 //! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
 //! second order), and on the meshes h and h/2 (first order). The integrals
-//! stop at the horizon t_max where w(t_max) is below `tail` (Poisson) or at
-//! the period; the neglected tail is bounded (S, Q ≤ 1) and reported. The
-//! integrals are product integration (exact for Q linear between steps),
+//! stop at the horizon t_max where w(t_max) is below `tail` (at the latest
+//! at the end of a bounded law's support: the period); the neglected tail
+//! is bounded by the law's ∫_{t_max}^∞ w and w(t_max) (S, Q ≤ 1) and
+//! reported, and a law whose tail integral is infinite (an infinite mean)
+//! is refused naming `reset_clock`. The integrals are product integration
+//! from the law's CDF (exact for Q linear between steps),
 //! and the escape chances P(T0 < R) = ∫ rho (1 - S) + P(R > t_max) are
 //! integrated directly: 1 - Σ B would cancel when the target is rarely
 //! reached between resets (about 2e-3 at r = 3 in the tests).
@@ -37,43 +42,77 @@ use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
 use super::SearchProblem;
 use crate::error::{Error, Result};
+use crate::model::reset::clock::{Clock, ExpClock, FixedClock};
 use crate::Params;
 use serde::{Deserialize, Serialize};
 
-/// The law of the time between resets.
+/// The clock of the resets: which [`Clock`] law the renewal integrals run
+/// over (one home for every law: [`crate::model::reset::clock`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum WaitingTime {
-    /// Poisson clock of rate r: rho = r e^{-rt}, w = e^{-rt}.
+    /// Poisson clock of rate r (`--rate`): the law `exp:rate=r`.
     Poisson {
         /// Rate r > 0.
         rate: f64,
     },
-    /// Periodic (sharp) resetting every T: rho = delta(t - T), w = 1 on [0, T).
+    /// Periodic (sharp) resetting every T (`--reset-period`): the law
+    /// `fixed:t=T`.
     Periodic {
         /// Period T > 0.
         period: f64,
     },
+    /// A renewal clock (`--reset-clock`).
+    Renewal {
+        /// The waiting-time law.
+        clock: Clock,
+    },
 }
 
 impl WaitingTime {
-    /// The clock of `p`: its period if periodic, else its Poisson rate
-    /// (refused if 0: no resets).
+    /// The clock of `p`: its period if periodic, its renewal clock, else
+    /// its Poisson rate (refused if 0: no resets).
     pub fn of(p: &Params) -> Result<Self> {
-        match p.schedule().periodic {
-            Some(t) => Ok(WaitingTime::Periodic { period: t.period }),
-            None if p.rate() > 0.0 => Ok(WaitingTime::Poisson { rate: p.rate() }),
-            None => Err(Error::invalid(
+        match (p.schedule().periodic, p.schedule().clock) {
+            (Some(t), _) => Ok(WaitingTime::Periodic { period: t.period }),
+            (None, Some(clock)) => Ok(WaitingTime::Renewal { clock }),
+            (None, None) if p.rate() > 0.0 => Ok(WaitingTime::Poisson { rate: p.rate() }),
+            (None, None) => Err(Error::invalid(
                 "rate",
                 p.rate(),
-                "rate > 0 (or a reset period)",
+                "rate > 0 (or a reset period or clock)",
             )),
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    /// The waiting-time law.
+    pub fn law(&self) -> Clock {
+        match *self {
+            WaitingTime::Poisson { rate } => Clock::Exp(ExpClock { rate }),
+            WaitingTime::Periodic { period } => Clock::Fixed(FixedClock { t: period }),
+            WaitingTime::Renewal { clock } => clock,
+        }
+    }
+
+    /// A finite, positive rate or period; a law whose neglected tail has a
+    /// finite bound at the horizon of `tail` (refused by name otherwise:
+    /// an infinite mean leaves ∫_t^∞ W unbounded).
+    fn validate(&self, tail: f64) -> Result<()> {
         let (name, x) = match *self {
             WaitingTime::Poisson { rate } => ("rate", rate),
             WaitingTime::Periodic { period } => ("reset_period", period),
+            WaitingTime::Renewal { clock } => {
+                let t = clock.horizon(tail);
+                if !(t.is_finite() && clock.tail_integral(t).is_finite()) {
+                    return Err(Error::invalid(
+                        "reset_clock",
+                        clock.spec(),
+                        "a law with a finite mean for the renewal route (the part of the \
+                         integrals beyond the horizon, bounded by the tail integral of W, is \
+                         infinite for an infinite mean; the exact sampler runs it)",
+                    ));
+                }
+                return Ok(());
+            }
         };
         if !(x > 0.0 && x.is_finite()) {
             return Err(Error::invalid(name, x, "a positive finite number"));
@@ -81,53 +120,31 @@ impl WaitingTime {
         Ok(())
     }
 
-    /// Where the integrals stop: w(t_max) ≤ `tail` (Poisson), the period.
+    /// Where the integrals stop: the smallest t with W(t) ≤ `tail`
+    /// (the period, or the end of a bounded law's support, at the latest).
     pub fn horizon(&self, tail: f64) -> f64 {
-        match *self {
-            WaitingTime::Poisson { rate } => (1.0 / tail).ln() / rate,
-            WaitingTime::Periodic { period } => period,
-        }
+        let law = self.law();
+        law.horizon(tail).min(law.support_end())
     }
 
     /// Bounds on what the integrals miss beyond `t`: (∫_t^∞ w, w(t)), the
     /// largest possible parts of a_s and of Σ_s' B_ss' (S, Q ≤ 1).
     pub fn tail(&self, t: f64) -> (f64, f64) {
-        match *self {
-            WaitingTime::Poisson { rate } => ((-rate * t).exp() / rate, (-rate * t).exp()),
-            WaitingTime::Periodic { period } if t >= period => (0.0, 0.0),
-            WaitingTime::Periodic { .. } => (f64::INFINITY, 1.0),
-        }
+        let law = self.law();
+        (law.tail_integral(t), law.survival(t))
     }
 
     /// Weights on t_n = n t_max / steps of ∫ w f dt and ∫ rho f dt for f
     /// linear between the t_n (product integration: exact for such f, so
     /// the rho weights sum to P(R ≤ t_max) exactly), and P(R > t_max).
     fn weights(&self, t_max: f64, steps: usize) -> (Vec<f64>, Vec<f64>, f64) {
-        let dt = t_max / steps as f64;
-        match *self {
-            WaitingTime::Poisson { rate } => {
-                let z = rate * dt;
-                let i0 = -(-z).exp_m1();
-                let i1 = i0 / z - (-z).exp();
-                let mut rq = vec![0.0; steps + 1];
-                for n in 0..steps {
-                    let e = (-rate * n as f64 * dt).exp();
-                    rq[n] += e * (i0 - i1);
-                    rq[n + 1] += e * i1;
-                }
-                let wq = rq.iter().map(|x| x / rate).collect();
-                (wq, rq, (-rate * t_max).exp())
-            }
-            WaitingTime::Periodic { .. } => {
-                let wq = (0..=steps)
-                    .map(|n| if n == 0 || n == steps { 0.5 * dt } else { dt })
-                    .collect();
-                let rq = (0..=steps)
-                    .map(|n| if n == steps { 1.0 } else { 0.0 })
-                    .collect();
-                (wq, rq, 0.0)
-            }
-        }
+        self.law().renewal_weights(t_max, steps)
+    }
+
+    /// Whether the law's support is unbounded (the far cut of a one-sided
+    /// level then scales with the horizon, as for a Poisson clock).
+    fn unbounded(&self) -> bool {
+        !self.law().support_end().is_finite()
     }
 }
 
@@ -282,7 +299,7 @@ pub fn estimate(
     opts: &RenewalOptions,
 ) -> Result<Cost> {
     opts.validate()?;
-    waiting.validate()?;
+    waiting.validate(opts.tail)?;
     let setup = Setup::new(problem, "the search renewal route", true)?;
     let m = meshes(&setup, waiting, opts);
     let solves = cost_of(&m, 12.0 * opts.steps as f64);
@@ -306,7 +323,7 @@ pub fn solve(
     check_budget(
         &cost,
         (opts.max_work, opts.max_memory),
-        vec!["cells_x", "cells_v", "steps", "rate", "tail"],
+        vec!["cells_x", "cells_v", "steps", "rate", "reset_clock", "tail"],
     )?;
     let setup = Setup::new(problem, "the search renewal route", true)?;
     let meshes = meshes(&setup, waiting, opts);
@@ -331,9 +348,12 @@ pub fn solve(
         // Poisson: X = v_u ln(1/tail) / r, as for the direct solve; a
         // period T: X = v_u T is beyond the reach of the reset-free
         // particle, only the mesh's numerical spreading is cut.
-        match waiting {
-            WaitingTime::Poisson { .. } => diff * truncation_factor(opts.tail),
-            WaitingTime::Periodic { .. } => diff,
+        // A renewal law: as the Poisson clock when its support is
+        // unbounded, as the period when bounded.
+        if waiting.unbounded() {
+            diff * truncation_factor(opts.tail)
+        } else {
+            diff
         }
     } else {
         0.0

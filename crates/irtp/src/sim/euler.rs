@@ -34,6 +34,7 @@
 //!   n = round(kT/dt) (from n·dt to (n+1)·dt), so the state recorded at kT
 //!   is the one before the reset, as in the exact sampler (a reset at t
 //!   acts just after t); it acts within dt of kT, an O(dt) timing error;
+//!   a renewal clock likewise, at the step nearest each drawn reset time;
 //! - a refractory period of duration D (drawn at the reset) holds v at the
 //!   reset velocity for round(D/dt) steps (duration error ≤ dt/2): step 3
 //!   neither drifts nor resets there (the Poisson decisions are drawn and
@@ -638,9 +639,8 @@ impl<D: Drag> Kernel<'_, D> {
             -self.sigma
         };
         let mut ev = E::new(&mut rng, plan);
-        let periodic = self.schedule.periodic;
-        let mut next_periodic = periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
-        // The step of the next periodic reset (∞ without a periodic clock).
+        let mut next_periodic = self.schedule.first_reset(&mut rng);
+        // The step of the next periodic or renewal reset (∞ without one).
         let mut periodic_step = (next_periodic / dt).round();
         let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
         let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
@@ -669,8 +669,9 @@ impl<D: Drag> Kernel<'_, D> {
                 if let Some(r) = self.schedule.refractory {
                     hold = (r.draw(&mut rng) / dt).round() as u64;
                 }
-                if let Some(p) = periodic {
-                    next_periodic = p.next_after(next_periodic + hold as f64 * dt);
+                if self.schedule.scheduled_clock() {
+                    let free = next_periodic + hold as f64 * dt;
+                    next_periodic = self.schedule.next_reset(free, &mut rng);
                     periodic_step = (next_periodic / dt).round();
                 }
             } else {

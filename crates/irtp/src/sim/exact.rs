@@ -36,8 +36,10 @@
 //! run in a second event loop, chosen once per run (the paper's protocol
 //! keeps its own loop, bit for bit): the next event is the earliest of the
 //! exponential clock (flips at rate lambda, plus Poisson resets at rate r
-//! outside a refractory period), the next periodic reset time (resets at
-//! T, 2T, ... from t = 0) and the end of a refractory period. A reset sends
+//! outside a refractory period), the next scheduled reset time (resets at
+//! T, 2T, ... from t = 0 with a periodic clock; with a renewal clock a
+//! waiting time drawn at each reset, or at the end of its refractory
+//! period, from the clock's law) and the end of a refractory period. A reset sends
 //! x to x_r with position resetting; a refractory period is a held segment:
 //! v constant at the reset velocity, x linear in t, the occupation of the
 //! held velocity's bin and the time averages exact; the noise flips during
@@ -48,7 +50,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule, Solver};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule, Solver};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{
     self, clenshaw, clenshaw2, Adaptive, Piece, Refine, Unresolved, NC,
@@ -396,8 +398,8 @@ struct Sampler<F> {
     plain: bool,
     /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
     inv_lambda: f64,
-    /// Periodic reset clock.
-    periodic: Option<Periodic>,
+    /// The schedule (its periodic or renewal clock).
+    schedule: Schedule,
     /// Position resetting: x_r.
     x_reset: Option<f64>,
     /// Refractory period after each reset.
@@ -486,7 +488,7 @@ impl<F: FlowMap> Sampler<F> {
         Ok(Sampler {
             plain: schedule.is_plain(),
             inv_lambda: if lambda > 0.0 { 1.0 / lambda } else { 0.0 },
-            periodic: schedule.periodic,
+            schedule: *schedule,
             x_reset: schedule.position.map(|p| p.x),
             refractory: schedule.refractory,
             vs,
@@ -546,6 +548,7 @@ impl<F: FlowMap> Sampler<F> {
     fn start(&self, i: u64) -> Lane {
         let mut rng = rng::stream(self.seed, i);
         let si = usize::from(!rng.gen::<bool>());
+        let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             rng,
             si,
@@ -560,7 +563,7 @@ impl<F: FlowMap> Sampler<F> {
             done: false,
             held: false,
             hold_until: f64::INFINITY,
-            next_periodic: self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0)),
+            next_periodic,
         }
     }
 
@@ -719,8 +722,8 @@ impl<F: FlowMap> Sampler<F> {
             p.hold_until = p.t + r.draw(&mut p.rng);
             free = p.hold_until;
         }
-        if let Some(per) = self.periodic {
-            p.next_periodic = per.next_after(free);
+        if self.schedule.scheduled_clock() {
+            p.next_periodic = self.schedule.next_reset(free, &mut p.rng);
         }
     }
 

@@ -16,6 +16,7 @@ pub mod exact;
 pub use crate::numerics::time_grid::TimeGrid;
 
 use crate::error::{finite, Error, Result};
+use crate::model::reset::{Clock, Refractory};
 use crate::model::Params;
 use crate::model::Reset;
 use crate::parallel::{self, Progress};
@@ -279,17 +280,21 @@ impl SimSpec {
 /// naming `burn_in`.
 pub(crate) fn check_period_window(params: &Params, spec: &SimSpec) -> Result<()> {
     let schedule = params.schedule();
-    let Some(periodic) = schedule.periodic else {
-        return Ok(());
+    let cycle = match (schedule.periodic, schedule.clock, schedule.refractory) {
+        (Some(periodic), _, r) => periodic.cycle(r),
+        // A fixed renewal clock is periodic too: T, plus a fixed
+        // refractory period.
+        (None, Some(Clock::Fixed(f)), None) => f.t,
+        (None, Some(Clock::Fixed(f)), Some(Refractory::Fixed { duration })) => f.t + duration,
+        _ => return Ok(()),
     };
-    let cycle = periodic.cycle(schedule.refractory);
     let n = (spec.grid.t_max() - spec.burn_in) / cycle;
     if !(n.round() >= 1.0 && (n - n.round()).abs() <= 1e-9 * n) {
         return Err(Error::invalid(
             "burn_in",
             spec.burn_in,
             format!(
-                "t_max - burn_in a whole number of periods {cycle} with --reset-period \
+                "t_max - burn_in a whole number of periods {cycle} with --reset-period or a fixed --reset-clock \
                  (the window time averages are period averages; here {n} periods)"
             ),
         ));

@@ -3,6 +3,7 @@
 
 mod analytic;
 mod architecture;
+mod clock;
 mod common;
 mod conformance;
 mod control_variate;

@@ -24,7 +24,7 @@ use irtp::fp::{stationary, StationaryOptions};
 use irtp::mfpt::{self, BackwardOptions, Method, ParticleOptions, Problem};
 use irtp::model::reset::target::{LaplaceTarget, TargetLaw};
 use irtp::model::reset::{
-    NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target,
+    Clock, NoiseAtReset, Periodic, PositionReset, Refractory, Schedule, Solver, Target,
 };
 use irtp::parallel::NoProgress;
 use irtp::sim::{simulate, Method as SimMethod, SimSpec, TimeGrid};
@@ -115,6 +115,16 @@ fn protocols() -> Vec<Protocol> {
             },
         },
         Protocol {
+            name: "renewal gamma",
+            target: point,
+            noise: NoiseAtReset::Kept,
+            // Gamma waiting times of mean 2/3 = 1/RATE.
+            schedule: || Schedule {
+                clock: Some(Clock::parse("gamma:k=2,theta=0.3333333333333333").unwrap()),
+                ..Schedule::default()
+            },
+        },
+        Protocol {
             name: "periodic",
             target: point,
             noise: NoiseAtReset::Kept,
@@ -136,7 +146,7 @@ fn cell(law: &str, sigma: f64, proto: &Protocol) -> Params {
         .with_reset((proto.target)(vu), proto.noise)
         .unwrap_or_else(|e| panic!("{law} {}: {e}", proto.name));
     let sched = (proto.schedule)();
-    if sched.periodic.is_some() {
+    if sched.scheduled_clock() {
         p.with_rate(0.0).unwrap().with_schedule(sched).unwrap()
     } else {
         p.with_schedule(sched).unwrap()

@@ -155,10 +155,13 @@ fn known_names() -> String {
     )
 }
 
-/// Every name in the text is v or a known function or constant: the first
-/// other one is an error naming it (exmex would take an unknown name for a
-/// second variable, or fail with a message about parentheses).
-fn check_names(text: &str) -> Result<()> {
+/// The error builder of an expression's checks: (text, what is wrong).
+pub(crate) type Bad<'a> = &'a dyn Fn(&str, String) -> Error;
+
+/// Every name in the text is `var` or a known function or constant: the
+/// first other one is an error naming it (exmex would take an unknown name
+/// for a second variable, or fail with a message about parentheses).
+pub(crate) fn check_names(text: &str, var: &str, bad: Bad) -> Result<()> {
     let chars: Vec<char> = text.chars().collect();
     let mut i = 0;
     while i < chars.len() {
@@ -172,11 +175,11 @@ fn check_names(text: &str) -> Result<()> {
             }
             let name: String = chars[start..i.max(start + 1)].iter().collect();
             let name = name.as_str();
-            if name != "v" && !FUNCTIONS.contains(&name) && !CONSTANTS.contains(&name) {
+            if name != var && !FUNCTIONS.contains(&name) && !CONSTANTS.contains(&name) {
                 return Err(bad(
                     text,
                     format!(
-                        "unknown name '{name}': the variable is v; functions {}",
+                        "unknown name '{name}': the variable is {var}; functions {}",
                         known_names()
                     ),
                 ));
@@ -204,7 +207,7 @@ const COMPILE_STACK: usize = 256 << 20;
 
 /// The size bounds above, before anything is parsed (the message shows
 /// the start of an expression over them).
-fn check_size(text: &str) -> Result<()> {
+pub(crate) fn check_size(text: &str, bad: Bad) -> Result<()> {
     let shown = match text.char_indices().nth(40) {
         Some((i, _)) => format!("{}...", &text[..i]),
         None => text.to_string(),
@@ -269,7 +272,7 @@ fn number_end(chars: &[char], mut i: usize) -> (usize, usize) {
 /// which exmex does not read, written out as a plain decimal of the same
 /// double (`0.001`, `25000`; Rust prints the shortest digits that round-trip
 /// and never an exponent).
-fn plain_numbers(text: &str) -> String {
+pub(crate) fn plain_numbers(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
     let mut i = 0;
@@ -291,6 +294,24 @@ fn plain_numbers(text: &str) -> String {
         }
     }
     out
+}
+
+/// `work` on a thread with a stack of [`COMPILE_STACK`] (exmex parses
+/// recursively; the caller's may be a small worker stack), or here when no
+/// thread is to be had (the size bounds still hold).
+pub(crate) fn on_big_stack<T: Send>(
+    work: impl Fn() -> Result<T> + Sync,
+    failed: impl FnOnce() -> Error,
+) -> Result<T> {
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .stack_size(COMPILE_STACK)
+            .spawn_scoped(scope, &work);
+        match spawned {
+            Ok(handle) => handle.join().unwrap_or_else(|_| Err(failed())),
+            Err(_) => work(),
+        }
+    })
 }
 
 /// g and g' parsed and differentiated by exmex, on a thread with a stack
@@ -327,8 +348,9 @@ fn compile(text: &str) -> Result<Compiled> {
     if text.is_empty() {
         return Err(bad(text, "empty"));
     }
-    check_size(text)?;
-    check_names(text)?;
+    let err = |t: &str, w: String| bad(t, w);
+    check_size(text, &err)?;
+    check_names(text, "v", &err)?;
     let (g, dg) = parse_and_differentiate(text)?;
     let chars = g.unparse().len() + dg.unparse().len();
     let law = Compiled {

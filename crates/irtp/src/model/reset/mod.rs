@@ -20,11 +20,14 @@
 //! - [`registry`]: [`ResetRule`] and the dispatch
 //!   [`with_reset!`](crate::with_reset).
 //!
-//! Three modifiers combine with any rule ([`Schedule`]): [`periodic`]
-//! (resets every T instead of at Poisson times), [`position`] (x → x_r
-//! with the velocity) and [`refractory`] (velocity held at v_r for a while
-//! after a reset). [`support`] is the table of which method runs which.
+//! Four modifiers combine with any rule ([`Schedule`]): [`periodic`]
+//! (resets every T instead of at Poisson times), [`clock`] (a renewal
+//! clock: waiting times between resets drawn from a law), [`position`]
+//! (x → x_r with the velocity) and [`refractory`] (velocity held at v_r for
+//! a while after a reset). [`support`] is the table of which method runs
+//! which.
 
+pub mod clock;
 pub mod periodic;
 pub mod poisson;
 pub mod position;
@@ -36,6 +39,7 @@ pub mod spec;
 pub mod support;
 pub mod target;
 
+pub use clock::Clock;
 pub use periodic::Periodic;
 pub use poisson::PoissonReset;
 pub use position::PositionReset;
@@ -59,6 +63,11 @@ pub struct Schedule {
     /// Resets every T (the rule's Poisson rate is then 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub periodic: Option<Periodic>,
+    /// A renewal clock: resets a drawn waiting time after the last one
+    /// (after the end of its refractory period). The rule's Poisson rate is
+    /// then 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clock: Option<Clock>,
     /// Position reset to x_r at every reset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<PositionReset>,
@@ -73,6 +82,9 @@ impl Schedule {
         let mut f = Vec::new();
         if self.periodic.is_some() {
             f.push(Feature::Periodic);
+        }
+        if self.clock.is_some() {
+            f.push(Feature::Renewal);
         }
         if self.position.is_some() {
             f.push(Feature::Position);
@@ -94,15 +106,72 @@ impl Schedule {
     ) -> crate::error::Result<Self> {
         Ok(Schedule {
             periodic: period.map(Periodic::new).transpose()?,
+            clock: None,
             position: position.map(PositionReset::new).transpose()?,
             refractory: refractory.map(str::parse).transpose()?,
         })
+    }
+
+    /// The same schedule with the renewal clock of `spec`
+    /// (`--reset-clock`), refused with a periodic clock (two clocks).
+    pub fn with_clock(self, spec: Option<&str>) -> crate::error::Result<Self> {
+        let Some(spec) = spec else {
+            return Ok(self);
+        };
+        let clock = Clock::parse(spec)?;
+        if let Some(p) = self.periodic {
+            return Err(crate::error::Error::invalid(
+                "reset_clock",
+                spec,
+                format!(
+                    "no --reset-clock with --reset-period {} (one clock: fixed:t=T is the \
+                     periodic clock as a renewal clock)",
+                    p.period
+                ),
+            ));
+        }
+        Ok(Schedule {
+            clock: Some(clock),
+            ..self
+        })
+    }
+
+    /// The first scheduled reset time of a particle starting at age 0 (∞
+    /// without a periodic or renewal clock); draws from `rng` for a random
+    /// waiting time only.
+    #[inline]
+    pub fn first_reset<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        self.next_reset(0.0, rng)
+    }
+
+    /// The next scheduled reset time when the clock restarts at `free`
+    /// (a reset, or the end of its refractory period): the first multiple
+    /// of T after it (periodic, and a fixed renewal clock without a
+    /// refractory period, whose restarts are the multiples of T: see
+    /// [`clock::fixed`]), free plus a drawn waiting time (renewal), ∞
+    /// without either.
+    #[inline]
+    pub fn next_reset<R: Rng + ?Sized>(&self, free: f64, rng: &mut R) -> f64 {
+        match (self.periodic, self.clock) {
+            (Some(p), _) => p.next_after(free),
+            (None, Some(Clock::Fixed(f))) if self.refractory.is_none() => {
+                Periodic { period: f.t }.next_after(free)
+            }
+            (None, Some(c)) => c.next_after(free, rng),
+            (None, None) => f64::INFINITY,
+        }
+    }
+
+    /// Whether resets come at scheduled times (periodic or renewal clock).
+    pub fn scheduled_clock(&self) -> bool {
+        self.periodic.is_some() || self.clock.is_some()
     }
 
     /// The value of the flag behind `feature`, for messages.
     pub fn spec_of(&self, feature: Feature) -> String {
         match feature {
             Feature::Periodic => self.periodic.map(|p| p.period.to_string()),
+            Feature::Renewal => self.clock.map(|c| c.spec()),
             Feature::Position => self.position.map(|p| p.x.to_string()),
             Feature::RefractoryExp | Feature::RefractoryFixed => self.refractory.map(|r| r.spec()),
         }
@@ -110,20 +179,25 @@ impl Schedule {
     }
 
     /// An upper bound on the exact samplers' events per unit time: flips
-    /// (`lambda`), resets (the Poisson `rate`, or 1/T for a periodic
-    /// clock) and, with a refractory period, the end of each one (one more
+    /// (`lambda`), resets (the Poisson `rate`, 1/T for a periodic clock,
+    /// the long-time rate 1/E(R) of a renewal clock) and, with a refractory period, the end of each one (one more
     /// event per reset). For cost estimates before a run.
     pub fn event_rate_bound(&self, lambda: f64, rate: f64) -> f64 {
-        let resets = rate + self.periodic.map_or(0.0, |p| 1.0 / p.period);
+        let resets = rate
+            + self.periodic.map_or(0.0, |p| 1.0 / p.period)
+            + self.clock.map_or(0.0, |c| 1.0 / c.mean());
         let per_reset = if self.refractory.is_some() { 2.0 } else { 1.0 };
         lambda + resets * per_reset
     }
 
     /// The parameters of this schedule a run's cost grows with, beyond the
-    /// Poisson `rate` (a periodic clock's `reset_period`: each period is
-    /// one more event), for the refusal of a costly run to name them.
+    /// Poisson `rate` (a periodic clock's `reset_period`, a renewal clock's
+    /// `reset_clock`: each period is one more event), for the refusal of a
+    /// costly run to name them.
     pub fn cost_drivers(&self) -> Vec<&'static str> {
-        self.periodic.map(|_| "reset_period").into_iter().collect()
+        let mut d: Vec<&'static str> = self.periodic.map(|_| "reset_period").into_iter().collect();
+        d.extend(self.clock.map(|_| "reset_clock"));
+        d
     }
 
     /// Whether it is the paper's (no modifier).

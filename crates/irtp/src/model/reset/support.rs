@@ -85,6 +85,8 @@ pub enum Feature {
     RefractoryFixed,
     /// Resets every T instead of at Poisson times (`--reset-period`).
     Periodic,
+    /// Resets at the renewal times of a waiting-time law (`--reset-clock`).
+    Renewal,
 }
 
 impl Feature {
@@ -94,6 +96,7 @@ impl Feature {
             Feature::Position => "reset_position",
             Feature::RefractoryExp | Feature::RefractoryFixed => "refractory",
             Feature::Periodic => "reset_period",
+            Feature::Renewal => "reset_clock",
         }
     }
 
@@ -104,6 +107,7 @@ impl Feature {
             Feature::RefractoryExp => "an exponential refractory period",
             Feature::RefractoryFixed => "a fixed refractory period",
             Feature::Periodic => "periodic resetting",
+            Feature::Renewal => "a renewal reset clock",
         }
     }
 }
@@ -153,6 +157,10 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
             solver,
             S::Exact | S::Euler | S::MfptExact | S::MfptEuler | S::ClosedForm | S::FpTransient
         ),
+        // A renewal clock is not Markovian in the state: the particle
+        // samplers draw its waiting times; the search's renewal route
+        // (full resetting) integrates over its law.
+        F::Renewal => matches!(solver, S::Exact | S::Euler | S::MfptExact | S::MfptEuler),
     }
 }
 
