@@ -21,11 +21,13 @@
 //! - [`renewal`]: the state-resolved renewal route for full resetting, from
 //!   the reset-free survival resolved by the final noise state.
 //! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
+//! - [`optimize`]: tau against r, x_0 or L, and the optimal reset rate.
 //! - [`solve`] with a [`SearchMethod`]: the one entry point.
 
 pub mod backward;
 pub mod exact;
 mod mesh;
+pub mod optimize;
 pub mod renewal;
 pub mod tail;
 
@@ -193,6 +195,21 @@ impl SearchProblem {
     /// Where the search ends.
     pub fn target(&self) -> PositionTarget {
         self.target
+    }
+
+    /// Same problem with another reset rate (validated).
+    pub fn with_rate(&self, rate: f64) -> Result<Self> {
+        SearchProblem::new(self.params.with_rate(rate)?, self.x0, self.v0, self.target)
+    }
+
+    /// Same problem from another start position (validated).
+    pub fn with_start(&self, x0: f64) -> Result<Self> {
+        SearchProblem::new(self.params, x0, self.v0, self.target)
+    }
+
+    /// Same problem with another target (validated).
+    pub fn with_target(&self, target: PositionTarget) -> Result<Self> {
+        SearchProblem::new(self.params, self.x0, self.v0, target)
     }
 
     /// True when the mean search time is finite: an interval target, or
