@@ -25,6 +25,7 @@ mod power_kink;
 mod search_backward;
 mod search_cross;
 mod search_exact;
+mod search_optimize;
 mod shards;
 mod sim_euler;
 mod support_matrix;
