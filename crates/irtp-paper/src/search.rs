@@ -117,10 +117,10 @@ impl Spec {
             range: RateRange {
                 r_min: 1e-2,
                 r_max: 1e2,
-                grid_points: if quick { 17 } else { 41 },
+                grid_points: if quick { 17 } else { 25 },
             },
-            cells: if quick { (32, 8) } else { (96, 24) },
-            particles: if quick { 4_000 } else { 100_000 },
+            cells: if quick { (32, 8) } else { (64, 16) },
+            particles: if quick { 4_000 } else { 40_000 },
             t_max_over_tau: 100.0,
             events_per_check: if quick { 1e7 } else { 1e9 },
             tail_rate: 1.0,
