@@ -338,6 +338,7 @@ pub(super) fn optimize_config(
         r_min: a.r_min,
         r_max: a.r_max,
         grid_points: a.grid_points,
+        ..RateRange::default()
     };
     so::check_optimizable(&problem, &range)?;
     let solves = a.grid_points as f64 + 62.0;

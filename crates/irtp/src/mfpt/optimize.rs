@@ -118,6 +118,10 @@ pub struct RateRange {
     pub r_max: f64,
     /// Points of the coarse log grid.
     pub grid_points: usize,
+    /// Relative tolerance of the golden-section refinement of r*
+    /// (1e-9: far below any solver's error; a coarse solver may stop
+    /// earlier, where its error estimate dominates anyway).
+    pub rtol: f64,
 }
 
 impl Default for RateRange {
@@ -126,6 +130,7 @@ impl Default for RateRange {
             r_min: 1e-3,
             r_max: 1e3,
             grid_points: 61,
+            rtol: 1e-9,
         }
     }
 }
@@ -302,7 +307,7 @@ pub fn optimize_rate(
 
 /// The reset rate minimising `f` over r ∈ {0} ∪ [r_min, r_max]: a coarse
 /// log grid brackets the minimum, golden-section search in log r refines it
-/// (to 1e-9 relative); r = 0 is compared directly and, where the objective
+/// (to `range.rtol`); r = 0 is compared directly and, where the objective
 /// gives it, through the sign of d tau/dr at r = 0, which decides robustly
 /// whether resetting helps at all near r = 0. A minimum at r = 0 is reported
 /// as r_opt = 0 (resetting does not help), one at r_max as `at_upper_bound`.
@@ -333,11 +338,11 @@ pub fn minimize_rate(
             (0.0, zero.tau)
         } else {
             // Minimum in (0, r_1]: refine in linear r.
-            golden(tau, 0.0, rs[1], 1e-9)?
+            golden(tau, 0.0, rs[1], range.rtol)?
         }
     } else {
         let lr = |x: f64| tau(x.exp());
-        let (x, v) = golden(lr, rs[kmin - 1].ln(), rs[kmin + 1].ln(), 1e-9)?;
+        let (x, v) = golden(lr, rs[kmin - 1].ln(), rs[kmin + 1].ln(), range.rtol)?;
         (x.exp(), v)
     };
     let (r_opt, tau_opt) = if zero.tau <= tau_opt {
@@ -394,6 +399,7 @@ impl OptimizeOptions {
             r_min: self.r_min,
             r_max: self.r_max,
             grid_points: self.grid_points,
+            rtol: RateRange::default().rtol,
         }
     }
 
@@ -428,6 +434,9 @@ impl RateRange {
                 r_max,
                 format!("r_max > r_min = {r_min}"),
             ));
+        }
+        if !(self.rtol > 0.0 && self.rtol < 1.0) {
+            return Err(Error::invalid("rtol", self.rtol, "0 < rtol < 1"));
         }
         if self.grid_points < 3 {
             return Err(Error::invalid(
@@ -546,6 +555,7 @@ mod minimize_tests {
             r_min: 1e-2,
             r_max: 1e2,
             grid_points: 21,
+            rtol: 1e-9,
         }
     }
 

@@ -30,6 +30,7 @@ fn range(points: usize) -> RateRange {
         r_min: 0.05,
         r_max: 20.0,
         grid_points: points,
+        ..RateRange::default()
     }
 }
 
