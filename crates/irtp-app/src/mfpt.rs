@@ -306,9 +306,7 @@ pub fn run(args: &MfptArgs, ctx: &Context) -> irtp::Result<Outcome> {
         None => run_direct(&args.direct, ctx),
         Some(MfptCommand::Scan(a)) if a.search.is_search() => search_scan::run_scan(a, ctx),
         Some(MfptCommand::Scan(a)) => run_scan(a, ctx),
-        Some(MfptCommand::Optimize(a)) if a.search.is_search() => {
-            search_scan::run_optimize(a, ctx)
-        }
+        Some(MfptCommand::Optimize(a)) if a.search.is_search() => search_scan::run_optimize(a, ctx),
         Some(MfptCommand::Optimize(a)) => run_optimize(a, ctx),
         Some(MfptCommand::Distribution(a)) => super::fpt::run(a, ctx),
     }
@@ -716,26 +714,27 @@ impl ScanArgs {
         })?;
         self.search.velocity_only()?;
         let values = mfpt::optimize::scan_values(self.from, self.to, self.points, self.log)?;
-        let (axis, vt) =
-            match (self.over, self.vt) {
-                (Over::X0 | Over::Xt, _) => return Err(search_scan::search_axis_refused(self.over)),
-                (Over::Vt, Some(vt)) => return Err(Error::invalid(
+        let (axis, vt) = match (self.over, self.vt) {
+            (Over::X0 | Over::Xt, _) => return Err(search_scan::search_axis_refused(self.over)),
+            (Over::Vt, Some(vt)) => {
+                return Err(Error::invalid(
                     "--vt",
                     vt,
                     "only with --over rate (with --over vt the targets run from --from to --to)",
-                )),
-                (Over::Vt, None) => (ScanAxis::Vt, values[0]),
-                (Over::Rate, vt) => (
-                    ScanAxis::Rate,
-                    vt.ok_or_else(|| {
-                        Error::invalid(
-                            "--vt",
-                            "missing",
-                            "a target velocity (required with --over rate)",
-                        )
-                    })?,
-                ),
-            };
+                ))
+            }
+            (Over::Vt, None) => (ScanAxis::Vt, values[0]),
+            (Over::Rate, vt) => (
+                ScanAxis::Rate,
+                vt.ok_or_else(|| {
+                    Error::invalid(
+                        "--vt",
+                        "missing",
+                        "a target velocity (required with --over rate)",
+                    )
+                })?,
+            ),
+        };
         let scanned = |i: usize, e: Error| blame_scan_end(e, axis, i, (self.from, self.to));
         let (base, backward) = self.problem.config(vt).map_err(|e| scanned(0, e))?;
         let problems = values

@@ -22,10 +22,10 @@ pub mod fig6;
 pub mod fig7;
 pub mod fpt;
 pub mod media;
-pub mod search;
 pub mod plot;
 pub mod quicklook;
 pub mod reproduce;
+pub mod search;
 pub mod store;
 
 use clap::{Parser, Subcommand};

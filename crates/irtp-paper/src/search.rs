@@ -24,8 +24,8 @@
 use super::fig1::Medium;
 use super::plot::{fmt_count, Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
-    curve_seed, fmt_num, grid_of_curves, to_json, z_crit, Claim, FigureOutput, Options,
-    Parameters, Verdict, Which,
+    curve_seed, fmt_num, grid_of_curves, to_json, z_crit, Claim, FigureOutput, Options, Parameters,
+    Verdict, Which,
 };
 use irtp::error::Result;
 use irtp::mfpt::optimize::RateRange;
@@ -214,28 +214,48 @@ pub struct MediumResult {
 
 /// The exact sampler against the backward equation at rate `r` (None:
 /// beyond `events_per_check`).
-fn check(spec: &Spec, base: &SearchProblem, r: f64, seed: u64, progress: &dyn Progress) -> Result<Option<Check>> {
+fn check(
+    spec: &Spec,
+    base: &SearchProblem,
+    r: f64,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<Option<Check>> {
     let pr = base.with_rate(r)?;
     let b = backward::solve(&pr, &spec.backward())?;
     let events = spec.particles as f64 * (spec.lambda + r) * b.tau;
     if !(events <= spec.events_per_check) {
         return Ok(None);
     }
-    let s = exact::stats(&pr, spec.t_max_over_tau * b.tau, spec.particles, seed, progress)?;
+    let s = exact::stats(
+        &pr,
+        spec.t_max_over_tau * b.tau,
+        spec.particles,
+        seed,
+        progress,
+    )?;
     let s = s.summary();
     let z = (s.tau - b.tau) / s.tau_err.hypot(b.error_estimate);
     Ok(Some((r, b.tau, b.error_estimate, s.tau, s.tau_err, z)))
 }
 
 /// tau(r), r* and the sampler checks of one protocol.
-fn rate_curve(spec: &Spec, m: &Medium, protocol: Protocol, seed: u64, progress: &dyn Progress) -> Result<RateCurve> {
+fn rate_curve(
+    spec: &Spec,
+    m: &Medium,
+    protocol: Protocol,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<RateCurve> {
     let base = spec.problem(m, protocol)?;
     let o = optimize::optimize_rate(&base, &spec.range, &spec.backward(), &NoProgress)?;
     let r_mid = if o.r_opt > 0.0 { o.r_opt } else { 0.25 };
     let checks = [r_mid, 2.0 * r_mid]
         .into_iter()
         .enumerate()
-        .filter_map(|(k, r)| check(spec, &base, r, seed.wrapping_add(k as u64), progress).transpose())
+        .filter_map(|(k, r)| {
+            check(spec, &base, r, seed.wrapping_add(k as u64), progress).transpose()
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(RateCurve {
         protocol,
@@ -258,13 +278,12 @@ fn tail(spec: &Spec, m: &Medium, seed: u64, progress: &dyn Progress) -> Result<T
     let pr = SearchProblem::new(p, spec.x0, spec.v0, level)?;
     let stats = exact::stats(&pr, spec.tail_t_max, spec.tail_particles, seed, progress)?;
     let c = stats.survival();
-    let survival = c
-        .t
-        .iter()
-        .zip(&c.survival)
-        .filter(|(&t, &s)| t > 0.0 && s > 0.0)
-        .map(|(&t, &s)| (t, s))
-        .collect();
+    let survival =
+        c.t.iter()
+            .zip(&c.survival)
+            .filter(|(&t, &s)| t > 0.0 && s > 0.0)
+            .map(|(&t, &s)| (t, s))
+            .collect();
     Ok(Tail {
         survival,
         fit: fit_tail(&stats),
@@ -319,7 +338,12 @@ fn kind_name(kind: i8) -> &'static str {
 
 fn title(spec: &Spec, mi: usize) -> String {
     let m = &spec.media[mi];
-    format!("{} ({}), Σ = {}", m.drag, kind_name(spec.kinds[mi]), fmt_num(m.sigma))
+    format!(
+        "{} ({}), Σ = {}",
+        m.drag,
+        kind_name(spec.kinds[mi]),
+        fmt_num(m.sigma)
+    )
 }
 
 /// Two panels per medium: tau(r) of the three protocols with sampler
@@ -337,7 +361,10 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
         2,
     );
     fig.key = vec![
-        Key::points(format!("exact sampler, {} searches per point", fmt_count(spec.particles))),
+        Key::points(format!(
+            "exact sampler, {} searches per point",
+            fmt_count(spec.particles)
+        )),
         Key::line("2-D backward equation", Color::Gray, Dash::Solid),
         Key::line("t^-1/2", Color::Gray, Dash::Dashed),
     ];
@@ -347,15 +374,21 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
         let mut tau = Panel::new(label(0), title(spec, mi), Axis::log("r"), Axis::log("τ"));
         for (ci, c) in res.curves.iter().enumerate() {
             // Drawn up to 100 times the optimum (tau grows like e^{r L/v_u} beyond).
-            let (x, y): (Vec<f64>, Vec<f64>) =
-                c.grid.iter().copied().filter(|p| p.1 <= 100.0 * c.tau_opt).unzip();
+            let (x, y): (Vec<f64>, Vec<f64>) = c
+                .grid
+                .iter()
+                .copied()
+                .filter(|p| p.1 <= 100.0 * c.tau_opt)
+                .unzip();
             let color = Color::Palette(ci);
             let name = Some(c.protocol.label().to_string());
-            tau.series.push(Series::line(name, color, Dash::Solid, "backward", x, y));
+            tau.series
+                .push(Series::line(name, color, Dash::Solid, "backward", x, y));
             let x = c.checks.iter().map(|k| k.0).collect();
             let y = c.checks.iter().map(|k| k.3).collect();
             let e = c.checks.iter().map(|k| k.4).collect();
-            tau.series.push(Series::points(None, color, "simulation", x, y, e));
+            tau.series
+                .push(Series::points(None, color, "simulation", x, y, e));
         }
         fig.panels.push(tau);
         fig.panels.push(tail_panel(spec, label(1), &res.tail));
@@ -368,7 +401,10 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
 fn tail_panel(spec: &Spec, label: String, t: &Tail) -> Panel {
     let mut p = Panel::new(
         label,
-        format!("velocity-only, level: S(t), r = {}", fmt_num(spec.tail_rate)),
+        format!(
+            "velocity-only, level: S(t), r = {}",
+            fmt_num(spec.tail_rate)
+        ),
         Axis::log("t"),
         Axis::log("S(t)"),
     );
@@ -383,7 +419,14 @@ fn tail_panel(spec: &Spec, label: String, t: &Tail) -> Panel {
     ));
     if let (Some(&tl), Some(&sl)) = (x.last(), y.last()) {
         let guide = x.iter().map(|&s| sl * (s / tl).powf(-0.5)).collect();
-        p.series.push(Series::line(None, Color::Gray, Dash::Dashed, "guide", x, guide));
+        p.series.push(Series::line(
+            None,
+            Color::Gray,
+            Dash::Dashed,
+            "guide",
+            x,
+            guide,
+        ));
     }
     p
 }
@@ -467,7 +510,10 @@ fn protocol_claim(spec: &Spec, rows: &[MediumResult], protocol: Protocol) -> Cla
         ),
     };
     Claim {
-        id: format!("search_{}", to_json(&protocol).as_str().unwrap_or("protocol")),
+        id: format!(
+            "search_{}",
+            to_json(&protocol).as_str().unwrap_or("protocol")
+        ),
         figure: "search",
         paper: paper.into(),
         ours: format!(
@@ -495,7 +541,14 @@ fn tail_claim(spec: &Spec, rows: &[MediumResult]) -> Claim {
             Some(f) => {
                 let z = (f.theta - 0.5) / f.theta_err;
                 worst = worst.max(z.abs());
-                format!("{}: θ = {:.3} ± {:.3} (z = {z:.2}, t ∈ [{}, {}])", m.drag.spec(), f.theta, f.theta_err, fmt_num(f.t_from), fmt_num(f.t_to))
+                format!(
+                    "{}: θ = {:.3} ± {:.3} (z = {z:.2}, t ∈ [{}, {}])",
+                    m.drag.spec(),
+                    f.theta,
+                    f.theta_err,
+                    fmt_num(f.t_from),
+                    fmt_num(f.t_to)
+                )
             }
             None => {
                 missing += 1;
@@ -561,7 +614,12 @@ fn conclusion_claim(spec: &Spec, rows: &[MediumResult]) -> Claim {
     for protocol in Protocol::ALL {
         let (with, without) = split(spec, rows, protocol);
         decides |= !with.is_empty() && !without.is_empty();
-        parts.push(format!("{}: helps in {} of {} media", protocol.label(), with.len(), rows.len()));
+        parts.push(format!(
+            "{}: helps in {} of {} media",
+            protocol.label(),
+            with.len(),
+            rows.len()
+        ));
     }
     Claim {
         id: "search_medium_decides".into(),

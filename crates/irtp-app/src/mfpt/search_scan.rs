@@ -207,7 +207,7 @@ pub(super) fn scan_config(a: &ScanArgs) -> irtp::Result<SearchScanConfig> {
         let c = solve_cost(p, &backward, 1.0).map_err(|e| blame(e, axis, i, (a.from, a.to)))?;
         cost = Some(cost.map_or(c.clone(), |t| t.then(c)));
     }
-    let particles = scan_particles(a, &problems)?;
+    let particles = scan_particles(a)?;
     if let Some(run) = particles {
         for p in &problems {
             let m = SearchMethod::Exact(run);
@@ -229,7 +229,7 @@ pub(super) fn scan_config(a: &ScanArgs) -> irtp::Result<SearchScanConfig> {
 
 /// The sampler's options of a scan (`--method exact`), None for
 /// `backward`; `euler` refused.
-fn scan_particles(a: &ScanArgs, _: &[SearchProblem]) -> irtp::Result<Option<ParticleOptions>> {
+fn scan_particles(a: &ScanArgs) -> irtp::Result<Option<ParticleOptions>> {
     a.sim.reject_inapplicable(&a.output)?;
     match a.sim.method {
         Method::Backward => Ok(None),
@@ -256,13 +256,19 @@ struct SearchScanParams<'a> {
 }
 
 /// The sampler at every point (same seed: common random numbers).
-fn sample(c: &SearchScanConfig, run: ParticleOptions, ctx: &Context) -> irtp::Result<Vec<FptSummary>> {
+fn sample(
+    c: &SearchScanConfig,
+    run: ParticleOptions,
+    ctx: &Context,
+) -> irtp::Result<Vec<FptSummary>> {
     let method = SearchMethod::Exact(run);
     c.problems
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let bar = ctx.reporter.stage(&format!("point {}", i + 1), run.particles);
+            let bar = ctx
+                .reporter
+                .stage(&format!("point {}", i + 1), run.particles);
             let r = search::solve(p, &method, bar.as_ref())?;
             ctx.check()?;
             match r {
@@ -279,7 +285,9 @@ pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let out = open_out("mfpt scan", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
     let points = {
-        let bar = ctx.reporter.stage("mfpt scan (search)", c.values.len() as u64);
+        let bar = ctx
+            .reporter
+            .stage("mfpt scan (search)", c.values.len() as u64);
         so::scan(&c.base, c.axis, &c.values, &c.backward, bar.as_ref())?
     };
     ctx.check()?;
@@ -305,7 +313,12 @@ pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
         t_max: c.particles.map(|r| r.t_max),
     };
     let results = Results {
-        method: if sims.is_some() { "backward-2d + exact" } else { "backward-2d" }.into(),
+        method: if sims.is_some() {
+            "backward-2d + exact"
+        } else {
+            "backward-2d"
+        }
+        .into(),
         seed: c.particles.map(|r| r.seed),
         json: to_value(&super::table_json(&table)),
         parameters: to_value(&params),
@@ -374,10 +387,16 @@ struct SearchOptimum<'a> {
 /// Run a search's rate optimisation: `optimum.json`, `rate_grid.csv`.
 pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let (problem, range, backward) = optimize_config(a)?;
-    let out = open_out("mfpt optimize", a.output.out.as_deref(), a.output.force.force)?;
+    let out = open_out(
+        "mfpt optimize",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
     let t0 = Instant::now();
     let best: Optimum = {
-        let bar = ctx.reporter.stage("mfpt optimize (search)", range.grid_points as u64);
+        let bar = ctx
+            .reporter
+            .stage("mfpt optimize (search)", range.grid_points as u64);
         so::optimize_rate(&problem, &range, &backward, bar.as_ref())?
     };
     ctx.check()?;
@@ -402,7 +421,10 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
     let grid = Table::from_rows(
         "rate_grid",
         &["rate", "tau"],
-        best.grid.iter().filter(|(_, t)| t.is_finite()).map(|&(r, t)| [r, t]),
+        best.grid
+            .iter()
+            .filter(|(_, t)| t.is_finite())
+            .map(|&(r, t)| [r, t]),
     );
     let results = Results {
         method: "backward-2d + golden-section".into(),

@@ -292,7 +292,12 @@ fn search_claims_hold(claims: &[Value]) {
         "search_velocity_level_tail",
         "search_sampler_vs_backward",
     ] {
-        assert_eq!(claim(claims, id)["verdict"], "agrees", "{id}: {}", claim(claims, id));
+        assert_eq!(
+            claim(claims, id)["verdict"],
+            "agrees",
+            "{id}: {}",
+            claim(claims, id)
+        );
     }
     let curves = |id: &str| claim(claims, id)["values"].as_array().unwrap().clone();
     for c in curves("search_full_level") {
@@ -320,7 +325,10 @@ fn reproduce_search_quick() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    eprintln!("reproduce search --quick: {:.1} s", t0.elapsed().as_secs_f64());
+    eprintln!(
+        "reproduce search --quick: {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
     let csv = std::fs::read_to_string(out.join("search.csv")).unwrap();
     assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"));
     let claims: Vec<Value> =

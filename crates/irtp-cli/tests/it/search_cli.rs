@@ -340,8 +340,22 @@ fn a_search_scan_over_rate_writes_its_table() {
     let dir = tmp.path().join("scan");
     let d = dir.to_str().unwrap();
     let scan = [
-        "mfpt", "scan", "--reset-position", "0", "--over", "rate", "--from", "0.1", "--to", "10",
-        "--points", "4", "--log", "--out", d, "--json",
+        "mfpt",
+        "scan",
+        "--reset-position",
+        "0",
+        "--over",
+        "rate",
+        "--from",
+        "0.1",
+        "--to",
+        "10",
+        "--points",
+        "4",
+        "--log",
+        "--out",
+        d,
+        "--json",
     ];
     let out = irtp(&[&scan[..2], &SEARCH[..], &scan[2..]].concat());
     let v = summary(&out);
@@ -357,9 +371,15 @@ fn a_search_scan_over_rate_writes_its_table() {
     let tau = |i: usize| rows[i]["tau"].as_f64().unwrap();
     assert!(tau(3) > tau(1), "{rows:?}");
     let csv = std::fs::read_to_string(dir.join("mfpt_scan.csv")).unwrap();
-    assert!(csv.starts_with("rate,tau,tau_plus,tau_minus,error_estimate\n"), "{csv}");
+    assert!(
+        csv.starts_with("rate,tau,tau_plus,tau_minus,error_estimate\n"),
+        "{csv}"
+    );
     let run = read_json(&dir.join("run.json")).to_string();
-    assert!(run.contains("\"over\":\"rate\"") && run.contains("\"Level\":1.0"), "{run}");
+    assert!(
+        run.contains("\"over\":\"rate\"") && run.contains("\"Level\":1.0"),
+        "{run}"
+    );
 }
 
 /// `--over x0 --method exact` on an interval with velocity-only resetting:
@@ -368,10 +388,39 @@ fn a_search_scan_over_rate_writes_its_table() {
 #[test]
 fn a_search_scan_over_x0_samples_every_point() {
     let out = irtp(&[
-        "mfpt", "scan", "--drag", "tan", "--sigma", "3", "--lambda", "1", "--rate", "1",
-        "--interval", "-1,1", "--v0", "0", "--over", "x0", "--from", "-0.5", "--to", "0.5",
-        "--points", "3", "--cells-x", "16", "--cells-v", "8", "--method", "exact",
-        "--particles", "4000", "--seed", "3", "--json",
+        "mfpt",
+        "scan",
+        "--drag",
+        "tan",
+        "--sigma",
+        "3",
+        "--lambda",
+        "1",
+        "--rate",
+        "1",
+        "--interval",
+        "-1,1",
+        "--v0",
+        "0",
+        "--over",
+        "x0",
+        "--from",
+        "-0.5",
+        "--to",
+        "0.5",
+        "--points",
+        "3",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+        "--method",
+        "exact",
+        "--particles",
+        "4000",
+        "--seed",
+        "3",
+        "--json",
     ]);
     let v = summary(&out);
     let rows = v["results"].as_array().unwrap();
@@ -393,8 +442,19 @@ fn a_search_optimum_is_found_and_written() {
     let dir = tmp.path().join("opt");
     let d = dir.to_str().unwrap();
     let opt = [
-        "mfpt", "optimize", "--reset-position", "0", "--r-min", "0.05", "--r-max", "20",
-        "--grid-points", "9", "--out", d, "--json",
+        "mfpt",
+        "optimize",
+        "--reset-position",
+        "0",
+        "--r-min",
+        "0.05",
+        "--r-max",
+        "20",
+        "--grid-points",
+        "9",
+        "--out",
+        d,
+        "--json",
     ];
     let out = irtp(&[&opt[..2], &SEARCH[..], &opt[2..]].concat());
     let v = summary(&out);
@@ -429,28 +489,61 @@ fn search_scan_and_optimize_refusals_name_the_flag() {
     let lv = ["--xt", "1", "--v0", "0", "--reset-position", "0"];
     let scan = ["--from", "0.5", "--to", "1"];
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["optimize", "--xt", "1", "--v0", "0"], "--reset-position"),
-        ([&["optimize"][..], &lv, &["--rate", "1"]].concat(), "--rate"),
-        ([&["optimize"][..], &lv, &["--cells-x", "1"]].concat(), "--cells-x"),
-        ([&["scan"][..], &lv, &["--over", "vt"], &scan].concat(), "--over"),
         (
-            [&["scan", "--interval", "-1,1", "--v0", "0", "--over", "xt"][..], &scan].concat(),
+            vec!["optimize", "--xt", "1", "--v0", "0"],
+            "--reset-position",
+        ),
+        (
+            [&["optimize"][..], &lv, &["--rate", "1"]].concat(),
+            "--rate",
+        ),
+        (
+            [&["optimize"][..], &lv, &["--cells-x", "1"]].concat(),
+            "--cells-x",
+        ),
+        (
+            [&["scan"][..], &lv, &["--over", "vt"], &scan].concat(),
             "--over",
         ),
         (
-            [&["scan"][..], &lv, &["--over", "rate", "--from", "0", "--to", "1"]].concat(),
+            [
+                &["scan", "--interval", "-1,1", "--v0", "0", "--over", "xt"][..],
+                &scan,
+            ]
+            .concat(),
+            "--over",
+        ),
+        (
+            [
+                &["scan"][..],
+                &lv,
+                &["--over", "rate", "--from", "0", "--to", "1"],
+            ]
+            .concat(),
             "--from",
         ),
         (
-            [&["scan", "--vt", "0.5", "--v0", "0", "--over", "x0"][..], &scan].concat(),
+            [
+                &["scan", "--vt", "0.5", "--v0", "0", "--over", "x0"][..],
+                &scan,
+            ]
+            .concat(),
             "--over",
         ),
         (
-            [&["scan", "--vt", "0.5", "--v0", "0", "--over", "rate", "--x0", "1"][..], &scan]
-                .concat(),
+            [
+                &[
+                    "scan", "--vt", "0.5", "--v0", "0", "--over", "rate", "--x0", "1",
+                ][..],
+                &scan,
+            ]
+            .concat(),
             "--x0",
         ),
-        (vec!["optimize", "--vt", "0.5", "--v0", "0", "--cells-v", "8"], "--cells-v"),
+        (
+            vec!["optimize", "--vt", "0.5", "--v0", "0", "--cells-v", "8"],
+            "--cells-v",
+        ),
     ];
     for (args, flag) in cases {
         let tmp = tempfile::tempdir().unwrap();

@@ -230,7 +230,8 @@ impl RateObjective for VelocityTarget<'_> {
     fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
         let p = self.base.with_rate(r)?;
         let at = profile(&p, self.backward)?.at_start();
-        let tau_err = super::backward::solve(&p, self.backward).map_or(f64::NAN, |s| s.error_estimate);
+        let tau_err =
+            super::backward::solve(&p, self.backward).map_or(f64::NAN, |s| s.error_estimate);
         Ok(AtOptimum {
             tau_plus: at.tau_plus,
             tau_minus: at.tau_minus,

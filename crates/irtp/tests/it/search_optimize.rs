@@ -45,14 +45,27 @@ fn search_optimum_is_the_minimum_of_a_dense_scan() {
     println!("{best:?}");
     assert!(best.interior && !best.at_upper_bound, "{best:?}");
     assert_eq!(best.tau_r0, f64::INFINITY);
-    let values = RateRange { grid_points: 49, ..range(13) }.grid();
+    let values = RateRange {
+        grid_points: 49,
+        ..range(13)
+    }
+    .grid();
     let dense = scan(&pr, SearchAxis::Rate, &values, &o, &NoProgress).unwrap();
     let j = (0..dense.len())
         .min_by(|&a, &b| dense[a].solution.tau.total_cmp(&dense[b].solution.tau))
         .unwrap();
     let (lo, hi) = (values[j.saturating_sub(1)], values[(j + 1).min(48)]);
-    assert!(best.r_opt >= lo && best.r_opt <= hi, "{} not in [{lo}, {hi}]", best.r_opt);
-    assert!(best.tau_opt <= dense[j].solution.tau, "{} > {}", best.tau_opt, dense[j].solution.tau);
+    assert!(
+        best.r_opt >= lo && best.r_opt <= hi,
+        "{} not in [{lo}, {hi}]",
+        best.r_opt
+    );
+    assert!(
+        best.tau_opt <= dense[j].solution.tau,
+        "{} > {}",
+        best.tau_opt,
+        dense[j].solution.tau
+    );
     // The error range holds r*, inside the searched range.
     let (a, b) = best.r_opt_range;
     assert!(a < best.r_opt && best.r_opt < b && b.is_finite(), "{a} {b}");
@@ -90,5 +103,8 @@ fn velocity_only_level_is_refused_an_interval_runs() {
     }
     let pr = problem(false, PositionTarget::Interval(-1.0, 1.0));
     let best = optimize_rate(&pr, &range(9), &o, &NoProgress).unwrap();
-    assert!(best.tau_r0.is_finite() && best.tau_opt <= best.tau_r0, "{best:?}");
+    assert!(
+        best.tau_r0.is_finite() && best.tau_opt <= best.tau_r0,
+        "{best:?}"
+    );
 }
