@@ -237,6 +237,8 @@ class MfptScanResult(Result):
     summary: List[Dict[str, Any]]
     vt: Array
     rate: Array
+    x0: Array
+    xt: Array
     tau: Array
     tau_plus: Array
     tau_minus: Array
@@ -258,6 +260,8 @@ class MfptOptimizeResult(Result):
     tau: Array
     r_opt: float
     tau_opt: float
+    tau_opt_err: float
+    r_opt_range: List[Optional[float]]
     tau_plus_opt: float
     tau_minus_opt: float
     tau_r0: float
@@ -481,7 +485,12 @@ def mfpt_scan(
     v0: float,
     cells: int = ...,
     vt: Optional[float] = ...,
-    over: Literal["vt", "rate"],
+    xt: float = ...,
+    interval: str = ...,
+    x0: float = ...,
+    cells_x: int = ...,
+    cells_v: int = ...,
+    over: Literal["vt", "rate", "x0", "xt"],
     from_: float,
     to: float,
     points: int = ...,
@@ -515,7 +524,12 @@ def mfpt_optimize(
     refractory: str = ...,
     v0: float,
     cells: int = ...,
-    vt: float,
+    vt: float = ...,
+    xt: float = ...,
+    interval: str = ...,
+    x0: float = ...,
+    cells_x: int = ...,
+    cells_v: int = ...,
     r_min: float = ...,
     r_max: float = ...,
     grid_points: int = ...,
@@ -568,7 +582,7 @@ def mfpt_distribution(
     threads: Optional[int] = ...,
 ) -> MfptDistributionResult: ...
 def reproduce(
-    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media", "all"],
+    *figures: Literal["fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media", "search", "all"],
     out: PathLike,
     force: bool = ...,
     quick: bool = ...,

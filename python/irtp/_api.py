@@ -409,9 +409,11 @@ DOCS: Dict[str, Doc] = {
         "Solves the backward equations Eqs. (26)-(27) at every point of\n"
         "from_..to (linear, or logarithmic with log=True); with method='exact'\n"
         "or 'euler' every point is also simulated (same seed at every point:\n"
-        "common random numbers).",
+        "common random numbers). With a search target (xt=, interval=) the\n"
+        "2-D backward equation (cells_x, cells_v) against over='rate', 'x0'\n"
+        "or 'xt', method='exact' adding the sampler.",
         "MfptScanResult\n"
-        "    mfpt_scan: <vt or rate>, tau, tau_plus, tau_minus, error_estimate\n"
+        "    mfpt_scan: <vt, rate, x0 or xt>, tau, tau_plus, tau_minus, error_estimate\n"
         "        [+ tau_sim, tau_sim_err, tau_plus_sim, tau_plus_sim_err,\n"
         "        tau_minus_sim, tau_minus_sim_err, censored, censored_fraction,\n"
         "        rmst_sim, rmst_sim_err with particles; tau_sim* are nan where\n"
@@ -426,9 +428,13 @@ DOCS: Dict[str, Doc] = {
         "The reset rate r minimising the mean first-passage time (Fig. 7(b)).",
         "Compares r = 0 with a coarse log grid over [r_min, r_max] and refines\n"
         "the best bracket by golden section; every tau from the backward\n"
-        "equations Eqs. (26)-(28). ``rate`` is ignored.",
+        "equations Eqs. (26)-(28); with a search target (xt=, interval=) from\n"
+        "the 2-D backward equation (velocity-only resetting with xt= is\n"
+        "refused: tau is infinite at every r). ``rate`` is refused.",
         "MfptOptimizeResult\n"
         "    rate_grid: rate, tau (the coarse grid); ``summary`` holds r_opt,\n"
+        "        tau_opt_err, r_opt_range (the rates r* lies between given the\n"
+        "        error estimates),\n"
         "        tau_opt, tau_r0, dtau_dr_r0, interior, at_upper_bound.",
         ">>> res = irtp.mfpt_optimize(v0=-0.249, vt=0.5)\n"
         ">>> res.interior\n"

@@ -43,6 +43,8 @@ SYMBOLS: Dict[str, Tuple[str, str]] = {
     "x": ("position", "x"),
     "v0": ("start velocity", "v₀"),
     "vt": ("target velocity", "v_t"),
+    "x0": ("start position", "x₀"),
+    "xt": ("target level", "L"),
     "rate": ("reset rate", "r"),
     "lambda": ("noise flip rate", "λ"),
     "sigma": ("noise amplitude", "Σ"),

@@ -54,6 +54,16 @@ CASES = [
      dict(v0=-0.249, over="vt", from_=0.1, to=0.9, points=3, method="exact",
           particles=200, cells=500)),
     ("mfpt_optimize", "mfpt optimize", dict(v0=-0.249, vt=0.5, cells=1000, grid_points=11)),
+    # The search's scan and optimum: the same keywords as the CLI flags.
+    ("mfpt_scan", "mfpt scan",
+     dict(v0=0.0, xt=0.5, reset_position=0.0, over="rate", from_=0.5, to=2.0, points=3,
+          cells_x=8, cells_v=4)),
+    ("mfpt_scan", "mfpt scan",
+     dict(v0=0.0, interval="-0.5,1", rate=1.0, over="x0", from_=-0.2, to=0.2, points=3,
+          cells_x=8, cells_v=4, method="exact", particles=200, seed=4)),
+    ("mfpt_optimize", "mfpt optimize",
+     dict(v0=0.0, xt=0.5, reset_position=0.0, cells_x=8, cells_v=4, r_min=0.05, r_max=20.0,
+          grid_points=9)),
 ]
 
 IDS = [f"{fn}-{i}" for i, (fn, _, _) in enumerate(CASES)]

@@ -5,6 +5,8 @@
 //!   search problem, first passage in position (the `search` submodule);
 //! - `irtp mfpt scan --over vt|rate --from A --to B --points K [--log]`;
 //! - `irtp mfpt optimize --vt VT [--r-min --r-max]`: optimal reset rate;
+//! - `irtp mfpt scan|optimize --xt L | --interval A,B ...`: the same for the
+//!   search (the `search_scan` submodule);
 //! - `irtp mfpt distribution --vt VT [--method backward|exact]`: the
 //!   first-passage-time distribution ([`super::fpt`]).
 //!
@@ -30,6 +32,7 @@ use std::time::Instant;
 
 pub(crate) mod parts;
 pub(crate) mod search;
+mod search_scan;
 
 /// `irtp mfpt`.
 #[derive(Args, Debug)]
@@ -208,10 +211,12 @@ pub struct DirectArgs {
 pub struct ScanArgs {
     #[command(flatten)]
     problem: ProblemArgs,
-    /// Target velocity (needed with --over rate).
+    /// Target velocity (needed with --over rate, unless a search target --xt or --interval is given).
     #[arg(long, allow_hyphen_values = true)]
     vt: Option<f64>,
-    /// Scanned quantity.
+    #[command(flatten)]
+    search: search_scan::SearchTargetArgs,
+    /// Scanned quantity (x0 and xt: a search, --xt or --interval).
     #[arg(long, value_enum)]
     over: Over,
     /// First value.
@@ -239,6 +244,10 @@ pub enum Over {
     Vt,
     /// Reset rate r.
     Rate,
+    /// Start position x_0 of a search (--xt or --interval).
+    X0,
+    /// Level L of a one-sided search (--xt; the given value is replaced).
+    Xt,
 }
 
 /// `irtp mfpt optimize`.
@@ -246,9 +255,11 @@ pub enum Over {
 pub struct OptimizeArgs {
     #[command(flatten)]
     problem: ProblemArgs,
-    /// Target velocity v_t.
-    #[arg(long, allow_hyphen_values = true)]
-    vt: f64,
+    /// Target velocity v_t (or a search target, --xt or --interval).
+    #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
+    vt: Option<f64>,
+    #[command(flatten)]
+    search: search_scan::SearchTargetArgs,
     /// Smallest positive r of the search grid (r = 0 is always compared).
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     r_min: f64,
@@ -290,7 +301,13 @@ impl MfptArgs {
         match &self.command {
             None if self.direct.is_search() => search::config(&self.direct).map(drop),
             None => self.direct.config().map(drop),
+            Some(MfptCommand::Scan(a)) if a.search.is_search() => {
+                search_scan::scan_config(a).map(drop)
+            }
             Some(MfptCommand::Scan(a)) => a.config().map(drop),
+            Some(MfptCommand::Optimize(a)) if a.search.is_search() => {
+                search_scan::optimize_config(a).map(drop)
+            }
             Some(MfptCommand::Optimize(a)) => a.config().map(drop),
             Some(MfptCommand::Distribution(a)) => a.validate(),
         }
@@ -302,7 +319,9 @@ pub fn run(args: &MfptArgs, ctx: &Context) -> irtp::Result<Outcome> {
     match &args.command {
         None if args.direct.is_search() => search::run(&args.direct, ctx),
         None => run_direct(&args.direct, ctx),
+        Some(MfptCommand::Scan(a)) if a.search.is_search() => search_scan::run_scan(a, ctx),
         Some(MfptCommand::Scan(a)) => run_scan(a, ctx),
+        Some(MfptCommand::Optimize(a)) if a.search.is_search() => search_scan::run_optimize(a, ctx),
         Some(MfptCommand::Optimize(a)) => run_optimize(a, ctx),
         Some(MfptCommand::Distribution(a)) => super::fpt::run(a, ctx),
     }
@@ -761,26 +780,29 @@ impl ScanArgs {
             memory_drivers: vec!["points", "cells"],
             ..per_point
         })?;
+        self.search.velocity_only()?;
         let values = mfpt::optimize::scan_values(self.from, self.to, self.points, self.log)?;
-        let (axis, vt) =
-            match (self.over, self.vt) {
-                (Over::Vt, Some(vt)) => return Err(Error::invalid(
+        let (axis, vt) = match (self.over, self.vt) {
+            (Over::X0 | Over::Xt, _) => return Err(search_scan::search_axis_refused(self.over)),
+            (Over::Vt, Some(vt)) => {
+                return Err(Error::invalid(
                     "--vt",
                     vt,
                     "only with --over rate (with --over vt the targets run from --from to --to)",
-                )),
-                (Over::Vt, None) => (ScanAxis::Vt, values[0]),
-                (Over::Rate, vt) => (
-                    ScanAxis::Rate,
-                    vt.ok_or_else(|| {
-                        Error::invalid(
-                            "--vt",
-                            "missing",
-                            "a target velocity (required with --over rate)",
-                        )
-                    })?,
-                ),
-            };
+                ))
+            }
+            (Over::Vt, None) => (ScanAxis::Vt, values[0]),
+            (Over::Rate, vt) => (
+                ScanAxis::Rate,
+                vt.ok_or_else(|| {
+                    Error::invalid(
+                        "--vt",
+                        "missing",
+                        "a target velocity (required with --over rate)",
+                    )
+                })?,
+            ),
+        };
         let scanned = |i: usize, e: Error| blame_scan_end(e, axis, i, (self.from, self.to));
         let (base, backward) = self.problem.config(vt).map_err(|e| scanned(0, e))?;
         let problems = values
@@ -821,7 +843,20 @@ fn blame_scan_end(e: Error, axis: ScanAxis, point: usize, (from, to): (f64, f64)
     }
 }
 
-fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSummary]>) -> Table {
+/// The rows (x, tau, tau+, tau-, error estimate) of a velocity scan.
+fn scan_rows(points: &[ScanPoint]) -> Vec<[f64; 5]> {
+    points
+        .iter()
+        .map(|p| {
+            let s = &p.solution;
+            [p.x, s.tau, s.tau_plus, s.tau_minus, s.error_estimate]
+        })
+        .collect()
+}
+
+/// `mfpt_scan.csv`: the backward rows `points` (x, tau, tau+, tau-, error
+/// estimate) and, with particles, the sampled columns.
+fn scan_table(xname: &'static str, points: &[[f64; 5]], sims: Option<&[FptSummary]>) -> Table {
     let mut header = vec![xname, "tau", "tau_plus", "tau_minus", "error_estimate"];
     if sims.is_some() {
         header.extend([
@@ -841,8 +876,7 @@ fn scan_table(xname: &'static str, points: &[ScanPoint], sims: Option<&[FptSumma
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let s = &p.solution;
-            let mut row = vec![p.x, s.tau, s.tau_plus, s.tau_minus, s.error_estimate];
+            let mut row = p.to_vec();
             if let Some(sims) = sims {
                 let m = &sims[i];
                 row.extend([
@@ -918,9 +952,9 @@ fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let wall = t0.elapsed().as_secs_f64();
     let xname = match a.over {
         Over::Vt => "vt",
-        Over::Rate => "rate",
+        _ => "rate",
     };
-    let table = scan_table(xname, &points, sims.as_deref());
+    let table = scan_table(xname, &scan_rows(&points), sims.as_deref());
     let note = sims.as_deref().map_or(String::new(), scan_note);
     let params = ScanParams {
         base: &c.base,
@@ -984,7 +1018,11 @@ impl OptimizeArgs {
             ));
         }
         self.output.no_seed("mfpt optimize")?;
-        let (problem, backward) = self.problem.config(self.vt)?;
+        self.search.velocity_only()?;
+        let vt = self
+            .vt
+            .ok_or_else(|| Error::invalid("--vt", "missing", "a target velocity"))?;
+        let (problem, backward) = self.problem.config(vt)?;
         let opts = OptimizeOptions {
             r_min: self.r_min,
             r_max: self.r_max,
@@ -1011,6 +1049,8 @@ impl OptimizeArgs {
 struct OptimizeSummary<'a> {
     r_opt: f64,
     tau_opt: f64,
+    tau_opt_err: f64,
+    r_opt_range: (f64, f64),
     tau_plus_opt: f64,
     tau_minus_opt: f64,
     tau_r0: f64,
@@ -1038,6 +1078,8 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let summary = OptimizeSummary {
         r_opt: best.r_opt,
         tau_opt: best.tau_opt,
+        tau_opt_err: best.tau_opt_err,
+        r_opt_range: best.r_opt_range,
         tau_plus_opt: best.tau_plus_opt,
         tau_minus_opt: best.tau_minus_opt,
         tau_r0: best.tau_r0,

@@ -25,6 +25,7 @@ pub mod media;
 pub mod plot;
 pub mod quicklook;
 pub mod reproduce;
+pub mod search;
 pub mod store;
 
 use clap::{Parser, Subcommand};
@@ -107,11 +108,13 @@ pub enum Which {
     Fpt,
     /// Beyond the paper: the questions of Figs. 2 and 7 in every medium.
     Media,
+    /// Beyond the paper: the search (first passage in position) in every medium.
+    Search,
 }
 
 impl Which {
     /// Every reproduced figure, in paper order.
-    pub const ALL: [Which; 8] = [
+    pub const ALL: [Which; 9] = [
         Which::Fig1,
         Which::Fig2,
         Which::Fig3,
@@ -120,6 +123,7 @@ impl Which {
         Which::Fig7,
         Which::Fpt,
         Which::Media,
+        Which::Search,
     ];
     /// File stem ("fig1", ...).
     pub fn name(self) -> &'static str {
@@ -132,6 +136,7 @@ impl Which {
             Which::Fig7 => "fig7",
             Which::Fpt => "fpt",
             Which::Media => "media",
+            Which::Search => "search",
         }
     }
 }
@@ -146,7 +151,7 @@ impl FromStr for Which {
                 Error::invalid(
                     "figure",
                     s,
-                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, all",
+                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, search, all",
                 )
             })
     }
@@ -372,6 +377,7 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
         Which::Fig7 => fig7::run(opts, progress)?,
         Which::Fpt => fpt::run(opts, progress)?,
         Which::Media => media::run(opts, progress)?,
+        Which::Search => search::run(opts, progress)?,
     };
     out.wall_time_s = t0.elapsed().as_secs_f64();
     progress.update(SCALE, SCALE);

@@ -76,7 +76,7 @@ fn figure_names(w: Which) -> Vec<String> {
 
 /// The parameter set the current code uses for figure `w`.
 fn spec(w: Which, quick: bool) -> Value {
-    use super::{fig1, fig2, fig5, fig6, fig7, fpt, media, to_json};
+    use super::{fig1, fig2, fig5, fig6, fig7, fpt, media, search, to_json};
     match w {
         Which::Fig1 => to_json(&fig1::Spec::new(quick)),
         Which::Fig2 => to_json(&fig2::Spec::new(fig2::Medium::Tan, quick)),
@@ -86,6 +86,7 @@ fn spec(w: Which, quick: bool) -> Value {
         Which::Fig7 => to_json(&fig7::Spec::new(quick)),
         Which::Fpt => to_json(&fpt::Spec::new(quick)),
         Which::Media => to_json(&media::Spec::new(quick)),
+        Which::Search => to_json(&search::Spec::new(quick)),
     }
 }
 

@@ -189,7 +189,7 @@ const PILOT_EVENTS: f64 = 1e5;
 /// afford ([`PILOT_EVENTS`]); a pilot particle still in flight there is
 /// counted as running to t_max (infinite t_max: an infinite estimate,
 /// refused).
-fn cost(problem: &SearchProblem, method: &SearchMethod) -> irtp::Result<Cost> {
+pub(super) fn cost(problem: &SearchProblem, method: &SearchMethod) -> irtp::Result<Cost> {
     let run = method.particles().expect("a particle method");
     let p = problem.params();
     let rate = p.schedule().event_rate_bound(p.lambda(), p.rate());

@@ -60,6 +60,12 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
             "backward equations / Fokker-Planck",
             "dτ/dr(0) negative",
         ],
+        "search" => &[
+            "exact sampler, ",
+            "2-D backward equation",
+            "velocity-only, interval",
+            "sampled S(t)",
+        ],
         _ => &[],
     }
 }
@@ -83,7 +89,7 @@ fn reproduce_all_quick() {
     eprintln!("reproduce all --quick: {:.1} s", t0.elapsed().as_secs_f64());
 
     for f in [
-        "fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media",
+        "fig1", "fig2", "fig3", "fig5", "fig6", "fig7", "fpt", "media", "search",
     ] {
         let csv = std::fs::read_to_string(out.join(format!("{f}.csv"))).unwrap();
         assert!(
@@ -269,6 +275,66 @@ fn reproduce_all_quick() {
         claim(&claims, "media_optimum_and_rheology")["verdict"],
         "partly"
     );
+    search_claims_hold(&claims);
+}
+
+/// The search's claims at the quick size: full resetting gives every
+/// medium an interior optimum for the level and for the asymmetric
+/// interval, velocity-only resetting none for the interval; the
+/// velocity-only level's tail exponent is 1/2; the sampler agrees with the
+/// backward equation; so the medium does not decide whether resetting
+/// helps the search.
+fn search_claims_hold(claims: &[Value]) {
+    for id in [
+        "search_full_level",
+        "search_full_interval",
+        "search_velocity_interval",
+        "search_velocity_level_tail",
+        "search_sampler_vs_backward",
+    ] {
+        assert_eq!(
+            claim(claims, id)["verdict"],
+            "agrees",
+            "{id}: {}",
+            claim(claims, id)
+        );
+    }
+    let curves = |id: &str| claim(claims, id)["values"].as_array().unwrap().clone();
+    for c in curves("search_full_level") {
+        assert!(c["tau_r0"].is_null(), "{c}");
+        let r = c["r_opt"].as_f64().unwrap();
+        assert!(c["interior"] == true && r > 0.01 && r < 100.0, "{c}");
+        assert_eq!(c["checks"].as_array().unwrap().len(), 2, "{c}");
+    }
+    for c in curves("search_velocity_interval") {
+        assert_eq!(c["r_opt"], 0.0, "{c}");
+    }
+    let medium = claim(claims, "search_medium_decides");
+    assert_eq!(medium["verdict"], "differs", "{medium}");
+}
+
+#[test]
+#[ignore = "slow tier"]
+fn reproduce_search_quick() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("search");
+    let t0 = std::time::Instant::now();
+    let o = bin()
+        .args(["reproduce", "search", "--quick", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    eprintln!(
+        "reproduce search --quick: {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
+    let csv = std::fs::read_to_string(out.join("search.csv")).unwrap();
+    assert!(csv.starts_with("panel,series,source,style,x,y,y_err\n"));
+    let claims: Vec<Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("claims.json")).unwrap()).unwrap();
+    assert_eq!(claims.len(), 6);
+    search_claims_hold(&claims);
 }
 
 #[test]

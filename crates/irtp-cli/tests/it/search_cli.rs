@@ -522,3 +522,244 @@ fn renewal_and_euler_searches_report_their_estimates() {
         f("tau_err")
     );
 }
+
+/// The search's scan and optimum on a small mesh (tan, Sigma = 3, full
+/// resetting to (0, 0), the level L = 1).
+const SEARCH: [&str; 14] = [
+    "--drag",
+    "tan",
+    "--sigma",
+    "3",
+    "--lambda",
+    "1",
+    "--xt",
+    "1",
+    "--v0",
+    "0",
+    "--cells-x",
+    "8",
+    "--cells-v",
+    "4",
+];
+
+/// `mfpt scan --xt ... --over rate`: the velocity scan's table and output
+/// contract, one backward solve per rate (with its error estimate).
+#[test]
+fn a_search_scan_over_rate_writes_its_table() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    let d = dir.to_str().unwrap();
+    let scan = [
+        "mfpt",
+        "scan",
+        "--reset-position",
+        "0",
+        "--over",
+        "rate",
+        "--from",
+        "0.1",
+        "--to",
+        "10",
+        "--points",
+        "4",
+        "--log",
+        "--out",
+        d,
+        "--json",
+    ];
+    let out = irtp(&[&scan[..2], &SEARCH[..], &scan[2..]].concat());
+    let v = summary(&out);
+    let rows = v["results"].as_array().expect("one object per row");
+    assert_eq!(rows.len(), 4);
+    for (row, r) in rows.iter().zip([0.1, 1.0, 10.0]) {
+        if (row["rate"].as_f64().unwrap() - r).abs() < 1e-9 * r {
+            assert!(row["tau"].as_f64().unwrap() >= 1.0 / 1.25, "{row}");
+        }
+        assert!(row["error_estimate"].as_f64().unwrap() >= 0.0, "{row}");
+    }
+    // tau grows like e^{r L / v_u} at large r: the last rate is the slowest.
+    let tau = |i: usize| rows[i]["tau"].as_f64().unwrap();
+    assert!(tau(3) > tau(1), "{rows:?}");
+    let csv = std::fs::read_to_string(dir.join("mfpt_scan.csv")).unwrap();
+    assert!(
+        csv.starts_with("rate,tau,tau_plus,tau_minus,error_estimate\n"),
+        "{csv}"
+    );
+    let run = read_json(&dir.join("run.json")).to_string();
+    assert!(
+        run.contains("\"over\":\"rate\"") && run.contains("\"Level\":1.0"),
+        "{run}"
+    );
+}
+
+/// `--over x0 --method exact` on an interval with velocity-only resetting:
+/// the sampler at every start agrees with the backward equation within 4
+/// standard errors (its error estimate added in quadrature).
+#[test]
+fn a_search_scan_over_x0_samples_every_point() {
+    let out = irtp(&[
+        "mfpt",
+        "scan",
+        "--drag",
+        "tan",
+        "--sigma",
+        "3",
+        "--lambda",
+        "1",
+        "--rate",
+        "1",
+        "--interval",
+        "-1,1",
+        "--v0",
+        "0",
+        "--over",
+        "x0",
+        "--from",
+        "-0.5",
+        "--to",
+        "0.5",
+        "--points",
+        "3",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+        "--method",
+        "exact",
+        "--particles",
+        "4000",
+        "--seed",
+        "3",
+        "--json",
+    ]);
+    let v = summary(&out);
+    let rows = v["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for row in rows {
+        let f = |k: &str| row[k].as_f64().unwrap_or_else(|| panic!("{k}: {row}"));
+        let z = (f("tau_sim") - f("tau")) / f("tau_sim_err").hypot(f("error_estimate"));
+        assert!(z.abs() < 4.0, "z = {z}: {row}");
+        assert_eq!(f("censored"), 0.0);
+    }
+    assert_eq!(v["provenance"]["seed"], 3);
+}
+
+/// `mfpt optimize --xt --reset-position`: r* interior (tau(0) infinite,
+/// null), inside its error range, tau* below every grid point.
+#[test]
+fn a_search_optimum_is_found_and_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("opt");
+    let d = dir.to_str().unwrap();
+    let opt = [
+        "mfpt",
+        "optimize",
+        "--reset-position",
+        "0",
+        "--r-min",
+        "0.05",
+        "--r-max",
+        "20",
+        "--grid-points",
+        "9",
+        "--out",
+        d,
+        "--json",
+    ];
+    let out = irtp(&[&opt[..2], &SEARCH[..], &opt[2..]].concat());
+    let v = summary(&out);
+    let r = &v["results"];
+    assert_eq!(r["interior"], true, "{r}");
+    assert_eq!(r["at_upper_bound"], false);
+    assert!(r["tau_r0"].is_null(), "{r}");
+    let f = |k: &str| r[k].as_f64().unwrap();
+    let (lo, hi) = (
+        r["r_opt_range"][0].as_f64().unwrap(),
+        r["r_opt_range"][1].as_f64().unwrap(),
+    );
+    assert!(lo < f("r_opt") && f("r_opt") < hi, "{r}");
+    assert!(f("tau_opt_err") > 0.0);
+    let grid = std::fs::read_to_string(dir.join("rate_grid.csv")).unwrap();
+    let taus: Vec<f64> = grid
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(taus.len(), 9);
+    assert!(taus.iter().all(|&t| t >= f("tau_opt")), "{taus:?} {r}");
+    assert!(dir.join("optimum.json").exists());
+}
+
+/// Each refusal of the search's scan and optimize names its flag (exit 2,
+/// one line, nothing written): velocity-only resetting with a level (tau
+/// infinite at every r), a given --rate, an axis of the other target, a
+/// search-only flag with --vt, a scanned rate the solver refuses.
+#[test]
+fn search_scan_and_optimize_refusals_name_the_flag() {
+    let lv = ["--xt", "1", "--v0", "0", "--reset-position", "0"];
+    let scan = ["--from", "0.5", "--to", "1"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["optimize", "--xt", "1", "--v0", "0"],
+            "--reset-position",
+        ),
+        (
+            [&["optimize"][..], &lv, &["--rate", "1"]].concat(),
+            "--rate",
+        ),
+        (
+            [&["optimize"][..], &lv, &["--cells-x", "1"]].concat(),
+            "--cells-x",
+        ),
+        (
+            [&["scan"][..], &lv, &["--over", "vt"], &scan].concat(),
+            "--over",
+        ),
+        (
+            [
+                &["scan", "--interval", "-1,1", "--v0", "0", "--over", "xt"][..],
+                &scan,
+            ]
+            .concat(),
+            "--over",
+        ),
+        (
+            [
+                &["scan"][..],
+                &lv,
+                &["--over", "rate", "--from", "0", "--to", "1"],
+            ]
+            .concat(),
+            "--from",
+        ),
+        (
+            [
+                &["scan", "--vt", "0.5", "--v0", "0", "--over", "x0"][..],
+                &scan,
+            ]
+            .concat(),
+            "--over",
+        ),
+        (
+            [
+                &[
+                    "scan", "--vt", "0.5", "--v0", "0", "--over", "rate", "--x0", "1",
+                ][..],
+                &scan,
+            ]
+            .concat(),
+            "--x0",
+        ),
+        (
+            vec!["optimize", "--vt", "0.5", "--v0", "0", "--cells-v", "8"],
+            "--cells-v",
+        ),
+    ];
+    for (args, flag) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let d = dir.to_str().unwrap();
+        let out = irtp(&[&["mfpt"][..], &args, &["--out", d]].concat());
+        assert_rejected(&out, flag, &dir);
+    }
+}

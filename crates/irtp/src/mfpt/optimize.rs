@@ -98,16 +98,45 @@ pub struct OptimizeOptions {
 
 impl Default for OptimizeOptions {
     fn default() -> Self {
+        let range = RateRange::default();
         OptimizeOptions {
-            r_min: 1e-3,
-            r_max: 1e3,
-            grid_points: 61,
+            r_min: range.r_min,
+            r_max: range.r_max,
+            grid_points: range.grid_points,
             backward: BackwardOptions::default(),
         }
     }
 }
 
-/// Result of [`optimize_rate`].
+/// The rates [`minimize_rate`] searches: r = 0 and a coarse log grid of
+/// `grid_points` rates over [r_min, r_max].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RateRange {
+    /// Smallest positive r of the coarse log grid.
+    pub r_min: f64,
+    /// Largest r.
+    pub r_max: f64,
+    /// Points of the coarse log grid.
+    pub grid_points: usize,
+    /// Relative tolerance of the golden-section refinement of r*
+    /// (1e-9: far below any solver's error; a coarse solver may stop
+    /// earlier, where its error estimate dominates anyway).
+    pub rtol: f64,
+}
+
+impl Default for RateRange {
+    fn default() -> Self {
+        RateRange {
+            r_min: 1e-3,
+            r_max: 1e3,
+            grid_points: 61,
+            rtol: 1e-9,
+        }
+    }
+}
+
+/// Result of [`minimize_rate`] (and so of [`optimize_rate`] and the
+/// search's `search::optimize::optimize_rate`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Optimum {
     /// Minimising reset rate (0 when resetting never helps).
@@ -118,9 +147,18 @@ pub struct Optimum {
     pub tau_plus_opt: f64,
     /// tau- at r_opt.
     pub tau_minus_opt: f64,
-    /// tau without resetting.
+    /// The solver's error estimate of tau at r_opt (NaN where it has none).
+    pub tau_opt_err: f64,
+    /// The rates r* may lie between given the error estimates: the grid
+    /// rates next to r_opt where tau exceeds tau_opt by more than the two
+    /// error estimates (0 below the grid where r = 0 cannot be told apart,
+    /// +∞ above it). A bound, conservative: mesh errors are smooth in r and
+    /// largely cancel between neighbouring rates.
+    pub r_opt_range: (f64, f64),
+    /// tau without resetting (+∞ where that mean is infinite).
     pub tau_r0: f64,
-    /// d tau / d r at r = 0 (negative: a little resetting helps).
+    /// d tau / d r at r = 0 (negative: a little resetting helps; NaN where
+    /// the solver does not compute it).
     pub dtau_dr_r0: f64,
     /// True when the minimum is at some r > 0 with tau_opt < tau_r0.
     pub interior: bool,
@@ -129,6 +167,77 @@ pub struct Optimum {
     pub at_upper_bound: bool,
     /// The coarse grid (r, tau) the minimum was bracketed on.
     pub grid: Vec<(f64, f64)>,
+}
+
+/// tau at r = 0, as a [`RateObjective`] knows it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AtZero {
+    /// tau without resetting (+∞ where that mean is infinite).
+    pub tau: f64,
+    /// d tau / d r at r = 0 (NaN where not computed).
+    pub slope: f64,
+}
+
+/// tau± at the optimum and the error estimate of tau there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AtOptimum {
+    /// tau+.
+    pub tau_plus: f64,
+    /// tau-.
+    pub tau_minus: f64,
+    /// Error estimate of tau (NaN where the solver has none).
+    pub tau_err: f64,
+}
+
+/// The mean first-passage time as a function of the reset rate, from a
+/// deterministic solver: what [`minimize_rate`] minimises. The velocity
+/// target ([`VelocityTarget`]) and the search
+/// (`search::optimize::SearchTarget`) implement it.
+pub trait RateObjective: Sync {
+    /// tau at rate r > 0 and its error estimate (NaN where the solver
+    /// gives none on the grid); tau = +∞ where it exceeds the f64 range.
+    fn tau(&self, r: f64) -> Result<(f64, f64)>;
+    /// tau at r = 0 and its slope there.
+    fn at_zero(&self) -> Result<AtZero>;
+    /// tau± and the error estimate of tau at rate r (r = 0 included).
+    fn at_optimum(&self, r: f64) -> Result<AtOptimum>;
+}
+
+/// The velocity target's tau(r): the 1-D backward equations.
+pub struct VelocityTarget<'a> {
+    /// The problem (its own rate is replaced).
+    pub base: &'a Problem,
+    /// Backward solver options.
+    pub backward: &'a BackwardOptions,
+}
+
+impl RateObjective for VelocityTarget<'_> {
+    /// tau at the start from the profile (no error estimate on the grid).
+    fn tau(&self, r: f64) -> Result<(f64, f64)> {
+        Ok((tau_at(self.base, r, self.backward)?, f64::NAN))
+    }
+
+    /// tau(0) and d tau/dr(0) from one solve of Eqs. (26)-(28) and its
+    /// adjoint, the r = 0 profile checked against its lower bound.
+    fn at_zero(&self) -> Result<AtZero> {
+        let (tau, slope) = rate_derivative_at_zero(self.base, self.backward)?;
+        // The r = 0 solve checked against its lower bound (a mesh too coarse fails).
+        tau_at(self.base, 0.0, self.backward)?;
+        Ok(AtZero { tau, slope })
+    }
+
+    /// tau± from the profile, the error from the Richardson solve.
+    fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
+        let p = self.base.with_rate(r)?;
+        let at = profile(&p, self.backward)?.at_start();
+        let tau_err =
+            super::backward::solve(&p, self.backward).map_or(f64::NAN, |s| s.error_estimate);
+        Ok(AtOptimum {
+            tau_plus: at.tau_plus,
+            tau_minus: at.tau_minus,
+            tau_err,
+        })
+    }
 }
 
 /// tau at rate r; +∞ where it overflows f64 (never the minimum).
@@ -180,10 +289,8 @@ fn golden<F: FnMut(f64) -> Result<f64>>(
     Ok(if fc <= fd { (c, fc) } else { (d, fd) })
 }
 
-/// The reset rate minimising tau(v_0) over r ∈ {0} ∪ [r_min, r_max]: a coarse
-/// log grid brackets the minimum, golden-section search in log r refines it;
-/// r = 0 is compared directly and through the sign of d tau/dr at r = 0,
-/// which decides robustly whether resetting helps at all near r = 0.
+/// The reset rate minimising tau(v_0) of the velocity target over
+/// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`VelocityTarget`]).
 pub fn optimize_rate(
     base: &Problem,
     opts: &OptimizeOptions,
@@ -191,66 +298,131 @@ pub fn optimize_rate(
 ) -> Result<Optimum> {
     base.params().require(Solver::MfptOptimize)?;
     opts.validate()?;
-    let (r_min, r_max) = (opts.r_min, opts.r_max);
-    base.with_rate(r_max)?;
-    let bo = &opts.backward;
-    let (tau0, d0) = rate_derivative_at_zero(base, bo)?;
-    // The r = 0 solve checked against its lower bound (a mesh too coarse fails).
-    tau_at(base, 0.0, bo)?;
-    let k = opts.grid_points;
-    let (la, lb) = (r_min.ln(), r_max.ln());
-    let rs: Vec<f64> = (0..k)
-        .map(|i| (la + (lb - la) * i as f64 / (k - 1) as f64).exp())
-        .collect();
-    let taus = parallel::map(k as u64, |i| tau_at(base, rs[i as usize], bo), progress)
+    base.with_rate(opts.r_max)?;
+    let f = VelocityTarget {
+        base,
+        backward: &opts.backward,
+    };
+    minimize_rate(&f, &opts.range(), progress)
+}
+
+/// The reset rate minimising `f` over r ∈ {0} ∪ [r_min, r_max]: a coarse
+/// log grid brackets the minimum, golden-section search in log r refines it
+/// (to `range.rtol`); r = 0 is compared directly and, where the objective
+/// gives it, through the sign of d tau/dr at r = 0, which decides robustly
+/// whether resetting helps at all near r = 0. A minimum at r = 0 is reported
+/// as r_opt = 0 (resetting does not help), one at r_max as `at_upper_bound`.
+pub fn minimize_rate(
+    f: &dyn RateObjective,
+    range: &RateRange,
+    progress: &dyn Progress,
+) -> Result<Optimum> {
+    range.validate()?;
+    let zero = f.at_zero()?;
+    let rs = range.grid();
+    let k = rs.len();
+    let evals = parallel::map(k as u64, |i| f.tau(rs[i as usize]), progress)
         .into_iter()
-        .collect::<Result<Vec<f64>>>()?;
-    let grid: Vec<(f64, f64)> = rs.iter().copied().zip(taus.iter().copied()).collect();
+        .collect::<Result<Vec<(f64, f64)>>>()?;
+    let taus: Vec<f64> = evals.iter().map(|e| e.0).collect();
     let kmin = (0..k)
         .min_by(|&i, &j| taus[i].total_cmp(&taus[j]))
         .expect("non-empty grid");
-    let mut at_upper_bound = false;
-    let (r_opt, tau_opt) = if kmin == k - 1 {
-        at_upper_bound = true;
+    let at_upper_bound = kmin == k - 1;
+    let tau = |r: f64| f.tau(r).map(|e| e.0);
+    let (r_opt, tau_opt) = if at_upper_bound {
         (rs[k - 1], taus[k - 1])
     } else if kmin == 0 {
-        if d0 >= 0.0 && tau0 <= taus[0] {
-            (0.0, tau0)
+        // A little resetting does not help where d tau/dr(0) >= 0 (or is
+        // not known) and tau(0) is the lowest.
+        if !(zero.slope < 0.0) && zero.tau <= taus[0] {
+            (0.0, zero.tau)
         } else {
             // Minimum in (0, r_1]: refine in linear r.
-            golden(|r| tau_at(base, r, bo), 0.0, rs[1], 1e-9)?
+            golden(tau, 0.0, rs[1], range.rtol)?
         }
     } else {
-        let (x, f) = golden(
-            |lr| tau_at(base, lr.exp(), bo),
-            rs[kmin - 1].ln(),
-            rs[kmin + 1].ln(),
-            1e-9,
-        )?;
-        (x.exp(), f)
+        let lr = |x: f64| tau(x.exp());
+        let (x, v) = golden(lr, rs[kmin - 1].ln(), rs[kmin + 1].ln(), range.rtol)?;
+        (x.exp(), v)
     };
-    let (r_opt, tau_opt) = if tau0 <= tau_opt {
-        (0.0, tau0)
+    let (r_opt, tau_opt) = if zero.tau <= tau_opt {
+        (0.0, zero.tau)
     } else {
         (r_opt, tau_opt)
     };
-    let at = profile(&base.with_rate(r_opt)?, bo)?.at_start();
+    let at = f.at_optimum(r_opt)?;
     Ok(Optimum {
         r_opt,
         tau_opt,
         tau_plus_opt: at.tau_plus,
         tau_minus_opt: at.tau_minus,
-        tau_r0: tau0,
-        dtau_dr_r0: d0,
-        interior: r_opt > 0.0 && tau_opt < tau0,
+        tau_opt_err: at.tau_err,
+        r_opt_range: bracket(&rs, &evals, (r_opt, tau_opt, at.tau_err)),
+        tau_r0: zero.tau,
+        dtau_dr_r0: zero.slope,
+        interior: r_opt > 0.0 && tau_opt < zero.tau,
         at_upper_bound: at_upper_bound && r_opt > 0.0,
-        grid,
+        grid: rs.into_iter().zip(taus).collect(),
     })
 }
 
+/// The rates r* may lie between ([`Optimum::r_opt_range`]): walking out
+/// from r_opt along the grid, the first rate on each side whose tau exceeds
+/// tau_opt by more than the sum of the error estimates (a grid point
+/// without one takes the optimum's); 0 off the bottom of the grid, +∞ off
+/// the top. Without an error estimate at the optimum: (NaN, NaN).
+fn bracket(rs: &[f64], evals: &[(f64, f64)], (r, tau, err): (f64, f64, f64)) -> (f64, f64) {
+    if !err.is_finite() {
+        return (f64::NAN, f64::NAN);
+    }
+    let apart = |&i: &usize| {
+        let (t, e) = evals[i];
+        t - tau > err + if e.is_finite() { e } else { err }
+    };
+    let hi = rs
+        .iter()
+        .position(|&x| x > r)
+        .and_then(|u| (u..rs.len()).find(apart))
+        .map_or(f64::INFINITY, |i| rs[i]);
+    let lo = rs
+        .iter()
+        .rposition(|&x| x < r)
+        .and_then(|d| (0..=d).rev().find(apart))
+        .map_or(0.0, |i| rs[i]);
+    (lo, hi)
+}
+
 impl OptimizeOptions {
+    /// The rates searched.
+    pub fn range(&self) -> RateRange {
+        RateRange {
+            r_min: self.r_min,
+            r_max: self.r_max,
+            grid_points: self.grid_points,
+            rtol: RateRange::default().rtol,
+        }
+    }
+
+    /// Check the search range (see [`RateRange::validate`]; the backward
+    /// options are checked where they are used).
+    pub fn validate(&self) -> Result<()> {
+        self.range().validate()
+    }
+}
+
+impl RateRange {
+    /// The coarse log grid: `grid_points` rates from r_min to r_max.
+    pub fn grid(&self) -> Vec<f64> {
+        let k = self.grid_points;
+        let (la, lb) = (self.r_min.ln(), self.r_max.ln());
+        (0..k)
+            .map(|i| (la + (lb - la) * i as f64 / (k - 1) as f64).exp())
+            .collect()
+    }
+
     /// Check the search range: finite 0 < r_min < r_max and at least 3 grid
-    /// points (the backward options are checked where they are used).
+    /// points.
     pub fn validate(&self) -> Result<()> {
         let r_min = finite("r_min", self.r_min)?;
         let r_max = finite("r_max", self.r_max)?;
@@ -263,6 +435,9 @@ impl OptimizeOptions {
                 r_max,
                 format!("r_max > r_min = {r_min}"),
             ));
+        }
+        if !(self.rtol > 0.0 && self.rtol < 1.0) {
+            return Err(Error::invalid("rtol", self.rtol, "0 < rtol < 1"));
         }
         if self.grid_points < 3 {
             return Err(Error::invalid(
@@ -342,5 +517,86 @@ mod range_tests {
         assert_eq!(bad(with(1.0, f64::INFINITY, 5)), "r_max");
         assert_eq!(bad(with(1.0, 1.0, 5)), "r_max");
         assert_eq!(bad(with(0.1, 1.0, 2)), "grid_points");
+    }
+}
+
+#[cfg(test)]
+mod minimize_tests {
+    use super::*;
+    use crate::parallel::NoProgress;
+
+    /// tau(r) in closed form, with a fixed error estimate.
+    struct Closed<F: Fn(f64) -> f64 + Sync> {
+        tau: F,
+        err: f64,
+    }
+
+    impl<F: Fn(f64) -> f64 + Sync> RateObjective for Closed<F> {
+        fn tau(&self, r: f64) -> Result<(f64, f64)> {
+            Ok(((self.tau)(r), self.err))
+        }
+        fn at_zero(&self) -> Result<AtZero> {
+            Ok(AtZero {
+                tau: (self.tau)(0.0),
+                slope: f64::NAN,
+            })
+        }
+        fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
+            let t = (self.tau)(r);
+            Ok(AtOptimum {
+                tau_plus: t,
+                tau_minus: t,
+                tau_err: self.err,
+            })
+        }
+    }
+
+    fn range() -> RateRange {
+        RateRange {
+            r_min: 1e-2,
+            r_max: 1e2,
+            grid_points: 21,
+            rtol: 1e-9,
+        }
+    }
+
+    /// An interior minimum (tau = 2 + (ln r/2)², r* = 2, infinite at r = 0)
+    /// is found to the golden tolerance and bracketed by the error range.
+    #[test]
+    fn interior_minimum() {
+        let f = Closed {
+            tau: |r: f64| 2.0 + (r / 2.0).ln().powi(2),
+            err: 0.01,
+        };
+        let o = minimize_rate(&f, &range(), &NoProgress).unwrap();
+        assert!((o.r_opt - 2.0).abs() < 1e-6, "{o:?}");
+        assert!(o.interior && !o.at_upper_bound);
+        assert_eq!(o.tau_r0, f64::INFINITY);
+        // tau - 2 > 0.02 where |ln(r/2)| > 0.141: the first grid rates
+        // beyond (grid step ln 10 / 5 = 0.46) on each side.
+        let (lo, hi) = o.r_opt_range;
+        assert!(lo < 2.0 && lo > 2.0 * (-0.141f64 - 0.47).exp(), "{lo}");
+        assert!(hi > 2.0 && hi < 2.0 * (0.141f64 + 0.47).exp(), "{hi}");
+    }
+
+    /// tau increasing in r: r* = 0 ("resetting does not help"); tau
+    /// decreasing: the top of the range, flagged.
+    #[test]
+    fn minimum_at_the_ends() {
+        let up = Closed {
+            tau: |r: f64| 1.0 + r,
+            err: 1e-3,
+        };
+        let o = minimize_rate(&up, &range(), &NoProgress).unwrap();
+        assert_eq!((o.r_opt, o.tau_opt, o.interior), (0.0, 1.0, false));
+        assert_eq!(o.r_opt_range.0, 0.0);
+        assert!(o.r_opt_range.1 > 1e-3 && o.r_opt_range.1 < 1e-1);
+        let down = Closed {
+            tau: |r: f64| 1.0 + 1.0 / (1.0 + r),
+            err: 0.0,
+        };
+        let o = minimize_rate(&down, &range(), &NoProgress).unwrap();
+        assert!(o.at_upper_bound && (o.r_opt - 100.0).abs() < 1e-9, "{o:?}");
+        assert_eq!(o.r_opt_range.1, f64::INFINITY);
     }
 }

@@ -27,6 +27,7 @@
 //! - [`distribution`]: S(t) and f(t) by the time-dependent backward
 //!   equation with resets.
 //! - [`tail`]: the power-law tail exponent of the Kaplan-Meier survival.
+//! - [`optimize`]: tau against r, x_0 or L, and the optimal reset rate.
 //! - [`solve`] with a [`SearchMethod`]: the one entry point. A particle
 //!   method's run is cut into units of particles ([`particle_units`]) that
 //!   [`assemble`] merges into the whole run's result, bit for bit.
@@ -37,6 +38,7 @@ pub mod distribution;
 pub mod euler;
 pub mod exact;
 mod mesh;
+pub mod optimize;
 pub mod renewal;
 pub mod tail;
 
@@ -206,6 +208,21 @@ impl SearchProblem {
     /// Where the search ends.
     pub fn target(&self) -> PositionTarget {
         self.target
+    }
+
+    /// Same problem with another reset rate (validated).
+    pub fn with_rate(&self, rate: f64) -> Result<Self> {
+        SearchProblem::new(self.params.with_rate(rate)?, self.x0, self.v0, self.target)
+    }
+
+    /// Same problem from another start position (validated).
+    pub fn with_start(&self, x0: f64) -> Result<Self> {
+        SearchProblem::new(self.params, x0, self.v0, self.target)
+    }
+
+    /// Same problem with another target (validated).
+    pub fn with_target(&self, target: PositionTarget) -> Result<Self> {
+        SearchProblem::new(self.params, self.x0, self.v0, target)
     }
 
     /// True when the mean search time is finite: an interval target, or

@@ -27,6 +27,7 @@ mod search_backward;
 mod search_cross;
 mod search_exact;
 mod search_methods;
+mod search_optimize;
 mod shards;
 mod sim_euler;
 mod support_matrix;

@@ -1,0 +1,440 @@
+//! `irtp mfpt scan | optimize --xt L | --interval A,B [--x0 X0] --v0 V0`:
+//! the search's mean first-passage time against the reset rate, the start
+//! or the level, and the reset rate minimising it, through
+//! [`irtp::search::optimize`] (the 2-D backward equation with its error
+//! estimate; `--method exact` adds the sampler at every scan point).
+//!
+//! With velocity-only resetting and a one-sided level the mean is infinite
+//! at every r: `optimize` refuses naming `--reset-position` (an interval has
+//! a finite mean), and a scan's points are refused by the solver.
+
+use super::super::budget::Cost;
+use super::super::common::parse_size;
+use super::super::{finish, open_out, to_value, Context, Outcome, Results};
+use super::search::{only_exact, SearchFlags};
+use super::{scan_note, scan_table, table_text, text_lines, Method, OptimizeArgs, Over, ScanArgs};
+use crate::Table;
+use clap::Args;
+use irtp::mfpt::optimize::{scan_values, Optimum, RateRange};
+use irtp::mfpt::{FptSummary, ParticleOptions};
+use irtp::search::backward::BackwardOptions;
+use irtp::search::optimize::{self as so, SearchAxis};
+use irtp::search::{self, SearchMethod, SearchProblem, SearchResult};
+use irtp::Error;
+use serde::Serialize;
+use std::time::Instant;
+
+/// The search target of `mfpt scan` and `mfpt optimize` (instead of --vt).
+#[derive(Args, Debug, Clone)]
+pub(crate) struct SearchTargetArgs {
+    /// Search target in position (instead of --vt): the first time x reaches the level L
+    /// (one-sided; with velocity-only resetting its mean is infinite: full resetting,
+    /// --reset-position, makes it finite).
+    #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
+    pub(crate) xt: Option<f64>,
+    /// Search target in position (instead of --vt): the first exit of x from the open
+    /// interval (A, B), A < x0 < B.
+    #[arg(
+        long,
+        value_name = "A,B",
+        allow_hyphen_values = true,
+        conflicts_with = "vt"
+    )]
+    pub(crate) interval: Option<String>,
+    /// Initial position x_0 of a search (--xt or --interval) [default: 0].
+    #[arg(long, value_name = "X0", allow_hyphen_values = true)]
+    pub(crate) x0: Option<f64>,
+    /// Cells in x of the coarse mesh of a search's backward equation (refined once and
+    /// extrapolated) [default: 64; --xt or --interval only].
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_size)]
+    pub(crate) cells_x: Option<usize>,
+    /// Cells in v of the coarse mesh of a search's backward equation [default: 32; --xt or
+    /// --interval only].
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_size)]
+    pub(crate) cells_v: Option<usize>,
+}
+
+impl SearchTargetArgs {
+    /// Whether a search target (--xt or --interval) was given.
+    pub(crate) fn is_search(&self) -> bool {
+        self.xt.is_some() || self.interval.is_some()
+    }
+
+    /// Refuse the search-only flags with a velocity target.
+    pub(crate) fn velocity_only(&self) -> irtp::Result<()> {
+        let given = [
+            ("--x0", self.x0.map(|x| x.to_string())),
+            ("--cells-x", self.cells_x.map(|c| c.to_string())),
+            ("--cells-v", self.cells_v.map(|c| c.to_string())),
+        ];
+        for (flag, value) in given {
+            if let Some(v) = value {
+                return Err(Error::invalid(
+                    flag,
+                    v,
+                    "only with a search target in position (--xt or --interval)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The validated search problem with `model` and the start velocity.
+    fn problem(&self, a: &super::ProblemArgs) -> irtp::Result<SearchProblem> {
+        SearchFlags {
+            model: &a.model,
+            v0: a.v0,
+            x0: self.x0,
+            xt: self.xt,
+            interval: self.interval.as_deref(),
+        }
+        .problem()
+    }
+
+    /// The backward options (the app's budget replaces the library's).
+    fn backward(&self) -> irtp::Result<BackwardOptions> {
+        let o = BackwardOptions {
+            max_work: f64::INFINITY,
+            max_memory: f64::INFINITY,
+            ..BackwardOptions::with_cells(self.cells_x.unwrap_or(64), self.cells_v.unwrap_or(32))
+        };
+        o.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                allowed,
+            } => Error::InvalidParameter {
+                name: if name == "cells_x" {
+                    "--cells-x"
+                } else {
+                    "--cells-v"
+                },
+                value,
+                allowed,
+            },
+            e => e,
+        })?;
+        Ok(o)
+    }
+}
+
+/// The refusal of `--over x0|xt` with a velocity target.
+pub(super) fn search_axis_refused(over: Over) -> Error {
+    let name = if matches!(over, Over::X0) { "x0" } else { "xt" };
+    Error::invalid(
+        "--over",
+        name,
+        "vt or rate with a target velocity (--vt); x0 and xt with a search target (--xt or --interval)",
+    )
+}
+
+/// The budget's view of `solves` backward solves of `problem`.
+fn solve_cost(problem: &SearchProblem, o: &BackwardOptions, solves: f64) -> irtp::Result<Cost> {
+    let c = search::backward::estimate(problem, o)?;
+    Ok(Cost {
+        work: c.work * solves,
+        unit: "operations",
+        drivers: vec!["cells_x", "cells_v", "rate"],
+        memory: c.memory,
+        memory_drivers: vec!["cells_x", "cells_v"],
+    })
+}
+
+/// The validated inputs of a search scan.
+pub(super) struct SearchScanConfig {
+    base: SearchProblem,
+    axis: SearchAxis,
+    values: Vec<f64>,
+    problems: Vec<SearchProblem>,
+    backward: BackwardOptions,
+    /// The sampler's options with --method exact.
+    particles: Option<ParticleOptions>,
+}
+
+/// A scanned point's error names the scanned parameter; the user typed
+/// `--from` / `--to` (the first point is `--from`, a later one lies
+/// towards `--to`).
+fn blame(e: Error, axis: SearchAxis, point: usize, (from, to): (f64, f64)) -> Error {
+    match e {
+        Error::InvalidParameter { name, allowed, .. } if name == axis.name() => {
+            let (flag, value) = if point == 0 {
+                ("--from", from)
+            } else {
+                ("--to", to)
+            };
+            Error::invalid(flag, value, allowed)
+        }
+        Error::InvalidParameter {
+            name: "over",
+            value,
+            allowed,
+        } => Error::InvalidParameter {
+            name: "--over",
+            value,
+            allowed,
+        },
+        other => other,
+    }
+}
+
+/// Flags → validated search scan: every point checked by the solver and
+/// the summed cost against the budget before anything runs.
+pub(super) fn scan_config(a: &ScanArgs) -> irtp::Result<SearchScanConfig> {
+    let axis = match a.over {
+        Over::Rate => SearchAxis::Rate,
+        Over::X0 => SearchAxis::X0,
+        Over::Xt => SearchAxis::Xt,
+        Over::Vt => {
+            return Err(Error::invalid(
+                "--over",
+                "vt",
+                "rate, x0 or xt with a search target (--xt or --interval)",
+            ))
+        }
+    };
+    let backward = a.search.backward()?;
+    let values = scan_values(a.from, a.to, a.points, a.log)?;
+    let base = a.search.problem(&a.problem)?;
+    let problems = values
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            so::scan_problem(&base, axis, x).map_err(|e| blame(e, axis, i, (a.from, a.to)))
+        })
+        .collect::<irtp::Result<Vec<_>>>()?;
+    let mut cost: Option<Cost> = None;
+    for (i, p) in problems.iter().enumerate() {
+        let c = solve_cost(p, &backward, 1.0).map_err(|e| blame(e, axis, i, (a.from, a.to)))?;
+        cost = Some(cost.map_or(c.clone(), |t| t.then(c)));
+    }
+    let particles = scan_particles(a)?;
+    if let Some(run) = particles {
+        for p in &problems {
+            let m = SearchMethod::Exact(run);
+            m.check(p)?;
+            let c = super::search::cost(p, &m)?;
+            cost = cost.map(|t| t.then(c));
+        }
+    }
+    a.output.budget.check(&cost.expect("at least two points"))?;
+    Ok(SearchScanConfig {
+        base,
+        axis,
+        values,
+        problems,
+        backward,
+        particles,
+    })
+}
+
+/// The sampler's options of a scan (`--method exact`), None for
+/// `backward`; `euler` refused.
+fn scan_particles(a: &ScanArgs) -> irtp::Result<Option<ParticleOptions>> {
+    a.sim.reject_inapplicable(&a.output)?;
+    match a.sim.method {
+        Method::Backward => Ok(None),
+        Method::Euler => Err(only_exact("euler")),
+        Method::Exact => Ok(Some(ParticleOptions {
+            particles: a.sim.particles(),
+            t_max: a.sim.t_max(),
+            seed: a.output.seed(),
+        })),
+    }
+}
+
+/// What `run.json` records of a search scan.
+#[derive(Serialize)]
+struct SearchScanParams<'a> {
+    base: &'a SearchProblem,
+    over: &'a str,
+    values: &'a [f64],
+    cells_x: usize,
+    cells_v: usize,
+    method: Method,
+    particles: Option<u64>,
+    t_max: Option<f64>,
+}
+
+/// The sampler at every point (same seed: common random numbers).
+fn sample(
+    c: &SearchScanConfig,
+    run: ParticleOptions,
+    ctx: &Context,
+) -> irtp::Result<Vec<FptSummary>> {
+    let method = SearchMethod::Exact(run);
+    c.problems
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let bar = ctx
+                .reporter
+                .stage(&format!("point {}", i + 1), run.particles);
+            let r = search::solve(p, &method, bar.as_ref())?;
+            ctx.check()?;
+            match r {
+                SearchResult::Particles(s) => Ok(s.stats.summary()),
+                _ => unreachable!("the exact method gives particle statistics"),
+            }
+        })
+        .collect()
+}
+
+/// Run a search scan: `mfpt_scan.csv` (the velocity scan's columns).
+pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
+    let c = scan_config(a)?;
+    let out = open_out("mfpt scan", a.output.out.as_deref(), a.output.force.force)?;
+    let t0 = Instant::now();
+    let points = {
+        let bar = ctx
+            .reporter
+            .stage("mfpt scan (search)", c.values.len() as u64);
+        so::scan(&c.base, c.axis, &c.values, &c.backward, bar.as_ref())?
+    };
+    ctx.check()?;
+    let sims = c.particles.map(|run| sample(&c, run, ctx)).transpose()?;
+    let wall = t0.elapsed().as_secs_f64();
+    let rows: Vec<[f64; 5]> = points
+        .iter()
+        .map(|p| {
+            let s = &p.solution;
+            [p.x, s.tau, s.tau_plus, s.tau_minus, s.error_estimate]
+        })
+        .collect();
+    let table = scan_table(c.axis.name(), &rows, sims.as_deref());
+    let note = sims.as_deref().map_or(String::new(), scan_note);
+    let params = SearchScanParams {
+        base: &c.base,
+        over: c.axis.name(),
+        values: &c.values,
+        cells_x: c.backward.cells_x,
+        cells_v: c.backward.cells_v,
+        method: a.sim.method,
+        particles: c.particles.map(|r| r.particles),
+        t_max: c.particles.map(|r| r.t_max),
+    };
+    let results = Results {
+        method: if sims.is_some() {
+            "backward-2d + exact"
+        } else {
+            "backward-2d"
+        }
+        .into(),
+        seed: c.particles.map(|r| r.seed),
+        json: to_value(&super::table_json(&table)),
+        parameters: to_value(&params),
+        text: table_text(&table) + &note,
+        tables: vec![table],
+        json_files: Vec::new(),
+        wall_time_s: wall,
+    };
+    finish("mfpt scan", results, out, ctx)
+}
+
+/// Flags → validated search, rate range and mesh; refused where the mean is
+/// infinite at every r; the cost (grid, golden section, the optimum; each
+/// at most the cost at r_min, whose truncated domain is the longest)
+/// checked against the budget.
+pub(super) fn optimize_config(
+    a: &OptimizeArgs,
+) -> irtp::Result<(SearchProblem, RateRange, BackwardOptions)> {
+    if let Some(r) = a.problem.model.rate {
+        return Err(Error::invalid(
+            "--rate",
+            r,
+            "not with mfpt optimize, which searches r over {0} ∪ [--r-min, --r-max]",
+        ));
+    }
+    a.output.no_seed("mfpt optimize")?;
+    let backward = a.search.backward()?;
+    let problem = a.search.problem(&a.problem)?;
+    let range = RateRange {
+        r_min: a.r_min,
+        r_max: a.r_max,
+        grid_points: a.grid_points,
+        ..RateRange::default()
+    };
+    so::check_optimizable(&problem, &range)?;
+    let solves = a.grid_points as f64 + 62.0;
+    let cost = solve_cost(&problem.with_rate(a.r_min)?, &backward, solves)?;
+    solve_cost(&problem.with_rate(a.r_max)?, &backward, 1.0)?;
+    a.output.budget.check(&Cost {
+        drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
+        ..cost
+    })?;
+    Ok((problem, range, backward))
+}
+
+/// What `irtp mfpt optimize --xt/--interval --json` prints.
+#[derive(Serialize)]
+struct SearchOptimum<'a> {
+    r_opt: f64,
+    tau_opt: f64,
+    tau_opt_err: f64,
+    r_opt_range: (f64, f64),
+    tau_plus_opt: f64,
+    tau_minus_opt: f64,
+    /// tau without resetting: null (infinite) for a one-sided level.
+    tau_r0: f64,
+    interior: bool,
+    at_upper_bound: bool,
+    problem: &'a SearchProblem,
+    r_min: f64,
+    r_max: f64,
+    cells_x: usize,
+    cells_v: usize,
+}
+
+/// Run a search's rate optimisation: `optimum.json`, `rate_grid.csv`.
+pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
+    let (problem, range, backward) = optimize_config(a)?;
+    let out = open_out(
+        "mfpt optimize",
+        a.output.out.as_deref(),
+        a.output.force.force,
+    )?;
+    let t0 = Instant::now();
+    let best: Optimum = {
+        let bar = ctx
+            .reporter
+            .stage("mfpt optimize (search)", range.grid_points as u64);
+        so::optimize_rate(&problem, &range, &backward, bar.as_ref())?
+    };
+    ctx.check()?;
+    let wall = t0.elapsed().as_secs_f64();
+    let summary = SearchOptimum {
+        r_opt: best.r_opt,
+        tau_opt: best.tau_opt,
+        tau_opt_err: best.tau_opt_err,
+        r_opt_range: best.r_opt_range,
+        tau_plus_opt: best.tau_plus_opt,
+        tau_minus_opt: best.tau_minus_opt,
+        tau_r0: best.tau_r0,
+        interior: best.interior,
+        at_upper_bound: best.at_upper_bound,
+        problem: &problem,
+        r_min: range.r_min,
+        r_max: range.r_max,
+        cells_x: backward.cells_x,
+        cells_v: backward.cells_v,
+    };
+    let json = to_value(&summary);
+    let grid = Table::from_rows(
+        "rate_grid",
+        &["rate", "tau"],
+        best.grid
+            .iter()
+            .filter(|(_, t)| t.is_finite())
+            .map(|&(r, t)| [r, t]),
+    );
+    let results = Results {
+        method: "backward-2d + golden-section".into(),
+        seed: None,
+        json: json.clone(),
+        parameters: json.clone(),
+        tables: vec![grid],
+        json_files: vec![("optimum.json", json.clone())],
+        text: text_lines(&json),
+        wall_time_s: wall,
+    };
+    finish("mfpt optimize", results, out, ctx)
+}
