@@ -11,14 +11,16 @@
 use super::super::budget::Cost;
 use super::super::common::parse_size;
 use super::super::{finish, open_out, to_value, Context, Outcome, Results};
-use super::search::{only_exact, SearchFlags};
+use super::search::SearchFlags;
 use super::{scan_note, scan_table, table_text, text_lines, Method, OptimizeArgs, Over, ScanArgs};
 use crate::Table;
 use clap::Args;
 use irtp::mfpt::optimize::{scan_values, Optimum, RateRange};
 use irtp::mfpt::{FptSummary, ParticleOptions};
 use irtp::search::backward::BackwardOptions;
+use irtp::search::clock_optimize::{optimize_clock, ClockOptimum};
 use irtp::search::optimize::{self as so, SearchAxis};
+use irtp::search::renewal::{RenewalOptions, WaitingTime};
 use irtp::search::{self, SearchMethod, SearchProblem, SearchResult};
 use irtp::Error;
 use serde::Serialize;
@@ -233,7 +235,15 @@ fn scan_particles(a: &ScanArgs) -> irtp::Result<Option<ParticleOptions>> {
     a.sim.reject_inapplicable(&a.output)?;
     match a.sim.method {
         Method::Backward => Ok(None),
-        Method::Euler => Err(only_exact("euler")),
+        Method::Euler | Method::Renewal => Err(Error::invalid(
+            "--method",
+            if a.sim.method == Method::Euler {
+                "euler"
+            } else {
+                "renewal"
+            },
+            "backward or exact in a search scan (--xt, --interval)",
+        )),
         Method::Exact => Ok(Some(ParticleOptions {
             particles: a.sim.particles(),
             t_max: a.sim.t_max(),
@@ -330,13 +340,23 @@ pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
     finish("mfpt scan", results, out, ctx)
 }
 
+/// The validated inputs of a search's optimisation: over the Poisson rate
+/// (the 2-D backward equation), or over the reset frequency 1/m of a
+/// renewal clock (`--reset-clock`: the renewal route, the law's shape
+/// fixed).
+pub(super) struct OptimizeConfig {
+    problem: SearchProblem,
+    range: RateRange,
+    backward: BackwardOptions,
+    /// The renewal route's options where the problem has a renewal clock.
+    renewal: Option<RenewalOptions>,
+}
+
 /// Flags → validated search, rate range and mesh; refused where the mean is
 /// infinite at every r; the cost (grid, golden section, the optimum; each
-/// at most the cost at r_min, whose truncated domain is the longest)
-/// checked against the budget.
-pub(super) fn optimize_config(
-    a: &OptimizeArgs,
-) -> irtp::Result<(SearchProblem, RateRange, BackwardOptions)> {
+/// at most the cost at r_min, whose truncated domain (or horizon) is the
+/// longest) checked against the budget.
+pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> {
     if let Some(r) = a.problem.model.rate {
         return Err(Error::invalid(
             "--rate",
@@ -353,15 +373,47 @@ pub(super) fn optimize_config(
         grid_points: a.grid_points,
         ..RateRange::default()
     };
-    so::check_optimizable(&problem, &range)?;
     let solves = a.grid_points as f64 + 62.0;
+    if let Some(clock) = problem.params().schedule().clock {
+        range.validate()?;
+        let renewal = RenewalOptions {
+            cells_x: backward.cells_x,
+            cells_v: backward.cells_v,
+            max_work: f64::INFINITY,
+            max_memory: f64::INFINITY,
+            ..RenewalOptions::default()
+        };
+        let slowest = WaitingTime::Renewal {
+            clock: clock.with_mean(1.0 / a.r_min)?,
+        };
+        let c = search::renewal::estimate(&problem, &slowest, &renewal)?;
+        a.output.budget.check(&Cost {
+            work: c.work * solves,
+            unit: "operations",
+            drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
+            memory: c.memory,
+            memory_drivers: vec!["cells_x", "cells_v"],
+        })?;
+        return Ok(OptimizeConfig {
+            problem,
+            range,
+            backward,
+            renewal: Some(renewal),
+        });
+    }
+    so::check_optimizable(&problem, &range)?;
     let cost = solve_cost(&problem.with_rate(a.r_min)?, &backward, solves)?;
     solve_cost(&problem.with_rate(a.r_max)?, &backward, 1.0)?;
     a.output.budget.check(&Cost {
         drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
         ..cost
     })?;
-    Ok((problem, range, backward))
+    Ok(OptimizeConfig {
+        problem,
+        range,
+        backward,
+        renewal: None,
+    })
 }
 
 /// What `irtp mfpt optimize --xt/--interval --json` prints.
@@ -377,6 +429,14 @@ struct SearchOptimum<'a> {
     tau_r0: f64,
     interior: bool,
     at_upper_bound: bool,
+    /// With a renewal clock: r_opt is the reset frequency 1/m; the optimal
+    /// mean waiting time, its range and the clock there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mean_opt: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mean_opt_range: Option<(f64, f64)>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reset_clock_opt: Option<String>,
     problem: &'a SearchProblem,
     r_min: f64,
     r_max: f64,
@@ -386,19 +446,28 @@ struct SearchOptimum<'a> {
 
 /// Run a search's rate optimisation: `optimum.json`, `rate_grid.csv`.
 pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
-    let (problem, range, backward) = optimize_config(a)?;
+    let c = optimize_config(a)?;
+    let (problem, range, backward) = (c.problem, c.range, c.backward);
     let out = open_out(
         "mfpt optimize",
         a.output.out.as_deref(),
         a.output.force.force,
     )?;
     let t0 = Instant::now();
-    let best: Optimum = {
-        let bar = ctx
-            .reporter
-            .stage("mfpt optimize (search)", range.grid_points as u64);
-        so::optimize_rate(&problem, &range, &backward, bar.as_ref())?
+    let bar = ctx
+        .reporter
+        .stage("mfpt optimize (search)", range.grid_points as u64);
+    let (best, by_clock): (Optimum, Option<ClockOptimum>) = match &c.renewal {
+        Some(renewal) => {
+            let o = optimize_clock(&problem, &range, renewal, bar.as_ref())?;
+            (o.optimum.clone(), Some(o))
+        }
+        None => (
+            so::optimize_rate(&problem, &range, &backward, bar.as_ref())?,
+            None,
+        ),
     };
+    drop(bar);
     ctx.check()?;
     let wall = t0.elapsed().as_secs_f64();
     let summary = SearchOptimum {
@@ -411,6 +480,11 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
         tau_r0: best.tau_r0,
         interior: best.interior,
         at_upper_bound: best.at_upper_bound,
+        mean_opt: by_clock.as_ref().map(|o| o.mean),
+        mean_opt_range: by_clock.as_ref().map(|o| o.mean_range),
+        reset_clock_opt: by_clock
+            .as_ref()
+            .and_then(|o| o.clock.map(|c| c.to_string())),
         problem: &problem,
         r_min: range.r_min,
         r_max: range.r_max,
@@ -427,7 +501,11 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
             .map(|&(r, t)| [r, t]),
     );
     let results = Results {
-        method: "backward-2d + golden-section".into(),
+        method: if by_clock.is_some() {
+            "renewal route + golden-section".into()
+        } else {
+            "backward-2d + golden-section".into()
+        },
         seed: None,
         json: json.clone(),
         parameters: json.clone(),

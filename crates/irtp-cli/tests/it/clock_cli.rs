@@ -124,3 +124,78 @@ fn bad_clocks_exit_2_naming_the_flag() {
     let err = assert_rejected(&out, "--reset-clock", &dir);
     assert!(err.contains("simulate --method exact"), "{err}");
 }
+
+/// `mfpt optimize --xt L --reset-clock SPEC`: the best mean waiting time of
+/// the clock's law (shape fixed) by the renewal route; r_opt is the reset
+/// frequency 1/m*, the clock at the optimum is recorded, and the renewal
+/// route at the optimum is below the route at a mean three times shorter
+/// and three times longer (linear drag, a fixed clock, full resetting).
+#[test]
+fn the_best_mean_waiting_time_of_a_clock() {
+    let base = [
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--lambda",
+        "0.5",
+        "--reset-position",
+        "0",
+        "--cells-x",
+        "8",
+        "--cells-v",
+        "4",
+        "--json",
+    ];
+    let opt_args = [
+        "--reset-clock",
+        "fixed:t=1",
+        "--r-min",
+        "0.1",
+        "--r-max",
+        "1",
+        "--grid-points",
+        "7",
+        "--max-work",
+        "1e13",
+    ];
+    let out = irtp(&[&["mfpt", "optimize"][..], &base, &opt_args].concat());
+    assert_success(&out);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let r = &j["results"];
+    let (f, m) = (
+        r["r_opt"].as_f64().unwrap(),
+        r["mean_opt"].as_f64().unwrap(),
+    );
+    assert!(r["interior"].as_bool().unwrap(), "{r}");
+    assert_eq!(m, 1.0 / f);
+    let spec = r["reset_clock_opt"].as_str().unwrap();
+    assert_eq!(spec, format!("fixed:t={m}"));
+    let (lo, hi) = (
+        r["mean_opt_range"][0].as_f64().unwrap(),
+        r["mean_opt_range"][1].as_f64().unwrap(),
+    );
+    assert!(lo <= m && m <= hi, "{r}");
+    let tau_at = |spec: &str| {
+        let out = irtp(
+            &[
+                &["mfpt", "--method", "renewal", "--reset-clock", spec][..],
+                &base,
+            ]
+            .concat(),
+        );
+        assert_success(&out);
+        let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        j["results"]["tau"].as_f64().unwrap()
+    };
+    let tau = r["tau_opt"].as_f64().unwrap();
+    assert!((tau_at(spec) - tau).abs() <= 1e-9 * tau);
+    for other in [m / 3.0, 3.0 * m] {
+        let t = tau_at(&format!("fixed:t={other}"));
+        assert!(tau < t, "tau({m}) = {tau} vs tau({other}) = {t}");
+    }
+}

@@ -1,130 +1,158 @@
 //! The renewal clock's best mean waiting time for a search under full
-//! resetting: tau(m) of the renewal route ([`super::renewal`]) for the
-//! clock law rescaled to mean m at fixed shape ([`Clock::with_mean`]),
-//! minimised over ln m by golden-section search on a bracket [lo, hi].
+//! resetting (docs/equations.md (S10)): tau as a function of the reset
+//! frequency f = 1/m, m the mean waiting time of the clock's law rescaled
+//! at fixed shape ([`Clock::with_mean`]), minimised by the one minimiser of
+//! the optimal reset rate ([`minimize_rate`]: a log grid brackets the
+//! minimum, golden section refines it, f = 0 (no resets) compared
+//! directly). Each point is the renewal route ([`super::renewal`]); f = 0
+//! is the reset-free search: infinite for a one-sided level, the 2-D
+//! backward equation for an interval.
 //!
-//! The minimum must be interior: tau at the best point is below tau at
-//! both ends of the bracket (else refused, naming `mean`: the minimum
-//! is at or beyond an edge, widen the bracket). The reported error of the
-//! optimal mean combines the final bracket and the flatness of tau near
-//! the minimum: where tau is within its error estimate of the minimum,
-//! m cannot be told apart (from the parabola through the last three
-//! points, δu = sqrt(2 δτ / τ''), u = ln m).
+//! With the exponential law f is the Poisson rate and the optimum is the
+//! rate optimum of the same problem (by another route); with a fixed clock
+//! it is the best reset period's inverse.
 
-use super::renewal::{self, RenewalOptions, WaitingTime};
-use super::SearchProblem;
+use super::backward::{self, BackwardOptions};
+use super::renewal::{self, RenewalOptions, RenewalSolution, WaitingTime};
+use super::{PositionTarget, SearchProblem};
 use crate::error::{Error, Result};
+use crate::mfpt::optimize::{minimize_rate, AtOptimum, AtZero, Optimum, RateObjective, RateRange};
 use crate::model::reset::Clock;
+use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
 
-/// The optimum of [`optimize_mean`].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// The optimum of [`optimize_clock`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ClockOptimum {
-    /// The clock at the optimal mean.
-    pub clock: Clock,
-    /// The optimal mean waiting time m*.
+    /// The minimiser's answer in the reset frequency f = 1/m (its r_opt is
+    /// f*, 0 where resetting does not help; its grid is (f, tau)).
+    pub optimum: Optimum,
+    /// The optimal mean waiting time m* = 1/f* (+∞: no resets).
     pub mean: f64,
-    /// Error estimate of m* (bracket and flatness, module docs).
-    pub mean_error: f64,
-    /// tau(m*) by the renewal route.
-    pub tau: f64,
-    /// The renewal route's error estimate of tau(m*).
-    pub tau_error: f64,
-    /// Renewal solves spent.
-    pub evaluations: usize,
+    /// The range m* may lie in, from the frequency range of the optimum.
+    pub mean_range: (f64, f64),
+    /// The clock at the optimum (None where resetting does not help).
+    pub clock: Option<Clock>,
 }
 
-/// tau and its error estimate at mean `m`.
-fn tau_at(
-    problem: &SearchProblem,
-    clock: &Clock,
-    m: f64,
-    opts: &RenewalOptions,
-) -> Result<(f64, f64)> {
-    let c = clock.with_mean(m)?;
-    let s = renewal::solve(problem, &WaitingTime::Renewal { clock: c }, opts)?;
-    let err = if s.error_estimate.is_finite() {
+/// tau(f) of a search whose clock is rescaled to mean 1/f.
+struct ClockTarget<'a> {
+    base: &'a SearchProblem,
+    clock: Clock,
+    renewal: &'a RenewalOptions,
+    /// For the reset-free interval search at f = 0.
+    backward: BackwardOptions,
+}
+
+impl ClockTarget<'_> {
+    fn solve(&self, f: f64) -> Result<RenewalSolution> {
+        let clock = self.clock.with_mean(1.0 / f)?;
+        renewal::solve(self.base, &WaitingTime::Renewal { clock }, self.renewal)
+    }
+
+    /// The search without resets (the clock removed, rate 0).
+    fn reset_free(&self) -> Result<backward::SearchSolution> {
+        let p = self.base.params();
+        let mut schedule = *p.schedule();
+        schedule.clock = None;
+        let params = p.with_schedule(schedule)?;
+        let problem =
+            SearchProblem::new(params, self.base.x0(), self.base.v0(), self.base.target())?;
+        backward::solve(&problem, &self.backward)
+    }
+}
+
+/// The route's error estimate, or its known parts where the mesh step has
+/// none.
+fn error_of(s: &RenewalSolution) -> f64 {
+    if s.error_estimate.is_finite() {
         s.error_estimate
     } else {
         s.time_error + s.tail_bound + s.truncation_error
-    };
-    Ok((s.tau, err))
+    }
 }
 
-/// Minimise the search's mean time over the mean waiting time of
-/// `clock`'s shape in [lo, hi] (module docs) until the bracket in ln m is
-/// below `rel_tol`. Errors: a bad bracket or tolerance (named), a law
-/// without a finite mean (`reset_clock`), a minimum at an edge (`mean`),
-/// and the renewal route's own refusals.
-pub fn optimize_mean(
-    problem: &SearchProblem,
-    clock: &Clock,
-    (lo, hi): (f64, f64),
-    rel_tol: f64,
-    opts: &RenewalOptions,
-) -> Result<ClockOptimum> {
-    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
-        return Err(Error::invalid(
-            "mean",
-            format!("[{lo}, {hi}]"),
-            "a bracket 0 < lo < hi, finite",
-        ));
+impl RateObjective for ClockTarget<'_> {
+    fn tau(&self, f: f64) -> Result<(f64, f64)> {
+        let s = self.solve(f)?;
+        Ok((s.tau, error_of(&s)))
     }
-    if !(rel_tol > 1e-12 && rel_tol < 1.0) {
-        return Err(Error::invalid("rel_tol", rel_tol, "1e-12 < rel_tol < 1"));
+
+    fn at_zero(&self) -> Result<AtZero> {
+        let tau = match self.base.target() {
+            PositionTarget::Level(_) => f64::INFINITY,
+            PositionTarget::Interval(..) => self.reset_free()?.tau,
+        };
+        Ok(AtZero {
+            tau,
+            slope: f64::NAN,
+        })
     }
-    let f = |u: f64| tau_at(problem, clock, u.exp(), opts);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut a, mut b) = (lo.ln(), hi.ln());
-    let (fa, fb) = (f(a)?.0, f(b)?.0);
-    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-    let (mut fc, mut fd) = (f(c)?, f(d)?);
-    let mut evaluations = 4;
-    while b - a > rel_tol {
-        if fc.0 < fd.0 {
-            (b, d, fd) = (d, c, fc);
-            c = b - g * (b - a);
-            fc = f(c)?;
-        } else {
-            (a, c, fc) = (c, d, fd);
-            d = a + g * (b - a);
-            fd = f(d)?;
+
+    fn at_optimum(&self, f: f64) -> Result<AtOptimum> {
+        if f == 0.0 {
+            let s = self.reset_free()?;
+            return Ok(AtOptimum {
+                tau_plus: s.tau_plus,
+                tau_minus: s.tau_minus,
+                tau_err: s.error_estimate,
+            });
         }
-        evaluations += 1;
+        let s = self.solve(f)?;
+        Ok(AtOptimum {
+            tau_plus: s.tau_plus,
+            tau_minus: s.tau_minus,
+            tau_err: error_of(&s),
+        })
     }
-    let (u, (tau, tau_error)) = if fc.0 < fd.0 { (c, fc) } else { (d, fd) };
-    if !(tau < fa && tau < fb) {
-        let edge = if fa <= fb { lo } else { hi };
-        return Err(Error::invalid(
-            "mean",
-            format!("[{lo}, {hi}]"),
-            format!(
-                "a bracket with an interior minimum of tau (tau is lowest at the edge m = \
-                 {edge}: widen the bracket past it)"
-            ),
-        ));
-    }
-    // Curvature from the parabola through c, d and their midpoint.
-    let (lo_u, hi_u) = (c.min(d), c.max(d));
-    let mid = 0.5 * (lo_u + hi_u);
-    let fm = f(mid)?.0;
-    evaluations += 1;
-    let h = 0.5 * (hi_u - lo_u);
-    let (f_lo, f_hi) = if c < d { (fc.0, fd.0) } else { (fd.0, fc.0) };
-    let curvature = (f_lo - 2.0 * fm + f_hi) / (h * h);
-    let flat = if curvature > 0.0 {
-        (2.0 * tau_error / curvature).sqrt()
-    } else {
-        f64::INFINITY
+}
+
+/// Minimise the search's mean time over the reset frequency f = 1/m of
+/// the problem's renewal clock (shape fixed) in {0} ∪ [range.r_min,
+/// range.r_max]. Errors: a problem without a renewal clock or without
+/// full resetting (named), a law without a finite mean (`reset_clock`),
+/// the range's and the renewal route's own refusals.
+pub fn optimize_clock(
+    problem: &SearchProblem,
+    range: &RateRange,
+    renewal: &RenewalOptions,
+    progress: &dyn Progress,
+) -> Result<ClockOptimum> {
+    let clock = problem.params().schedule().clock.ok_or_else(|| {
+        Error::invalid(
+            "reset_clock",
+            "none",
+            "a renewal clock (--reset-clock SPEC) to optimise",
+        )
+    })?;
+    range.validate()?;
+    clock.with_mean(1.0)?;
+    let target = ClockTarget {
+        base: problem,
+        clock,
+        renewal,
+        backward: BackwardOptions {
+            refine: renewal.refine,
+            max_work: renewal.max_work,
+            max_memory: renewal.max_memory,
+            ..BackwardOptions::with_cells(renewal.cells_x, renewal.cells_v)
+        },
     };
-    let du = (b - a).max(flat);
-    let mean = u.exp();
+    // The route's refusals (velocity-only resetting, an infinite-mean law)
+    // before the grid.
+    target.solve(range.r_max)?;
+    let optimum = minimize_rate(&target, range, progress)?;
+    let inv = |f: f64| if f > 0.0 { 1.0 / f } else { f64::INFINITY };
+    let (lo, hi) = optimum.r_opt_range;
+    let clock = if optimum.r_opt > 0.0 {
+        Some(clock.with_mean(1.0 / optimum.r_opt)?)
+    } else {
+        None
+    };
     Ok(ClockOptimum {
-        clock: clock.with_mean(mean)?,
-        mean,
-        mean_error: mean * du.exp_m1(),
-        tau,
-        tau_error,
-        evaluations,
+        mean: inv(optimum.r_opt),
+        mean_range: (inv(hi), inv(lo)),
+        clock,
+        optimum,
     })
 }

@@ -8,12 +8,13 @@
 //! sampler against the renewal route under full resetting; the optimiser
 //! of the mean waiting time against a dense scan.
 
+use irtp::mfpt::optimize::RateRange;
 use irtp::mfpt::ParticleOptions;
 use irtp::model::reset::clock::{Clock, GammaClock, TableClock};
 use irtp::model::reset::Schedule;
 use irtp::parallel::NoProgress;
 use irtp::rng;
-use irtp::search::clock_optimize::optimize_mean;
+use irtp::search::clock_optimize::optimize_clock;
 use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
 use irtp::search::{self, PositionTarget, SearchMethod, SearchProblem};
 use irtp::sim::exact::simulate;
@@ -398,9 +399,11 @@ fn renewal_route_refuses_an_infinite_mean() {
 }
 
 /// Full resetting, fixed clock, linear drag: tau(T) has an interior
-/// minimum; the optimiser's T* agrees with a dense scan of the renewal
-/// route (within the scan's spacing and the optimum's error), and a
-/// bracket without an interior minimum is refused naming `mean`.
+/// minimum; the optimiser's T* (the shared minimiser over the reset
+/// frequency 1/T) agrees with a dense scan of the renewal route (within
+/// the scan's spacing and the optimum's range); a range that stops below
+/// the optimal frequency reports the minimum at its upper bound; a
+/// problem without a clock is refused naming `reset_clock`.
 #[test]
 fn optimum_mean_matches_a_dense_scan() {
     let p = full_reset(
@@ -419,7 +422,14 @@ fn optimum_mean_matches_a_dense_scan() {
         ..Default::default()
     };
     let c = clock("fixed:t=1");
-    let best = optimize_mean(&problem, &c, (0.5, 20.0), 1e-3, &opts).unwrap();
+    let range = RateRange {
+        r_min: 0.05,
+        r_max: 2.0,
+        grid_points: 13,
+        rtol: 1e-4,
+    };
+    let best = optimize_clock(&problem, &range, &opts, &NoProgress).unwrap();
+    assert!(best.optimum.interior && !best.optimum.at_upper_bound);
     let scan: Vec<(f64, f64)> = (0..=40)
         .map(|i| 0.5 * (40f64).powf(i as f64 / 40.0))
         .map(|m| {
@@ -434,20 +444,42 @@ fn optimum_mean_matches_a_dense_scan() {
             .copied()
             .fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
     let spacing = (40f64).powf(1.0 / 40.0);
+    let (lo, hi) = best.mean_range;
     assert!(
-        best.mean > m_scan / spacing - best.mean_error
-            && best.mean < m_scan * spacing + best.mean_error,
-        "optimum {} ± {} vs scan {m_scan}",
-        best.mean,
-        best.mean_error
+        lo <= m_scan * spacing && m_scan / spacing <= hi && lo <= best.mean && best.mean <= hi,
+        "optimum {} in [{lo}, {hi}] vs scan {m_scan}",
+        best.mean
     );
     assert!(
-        best.tau <= tau_scan + 1e-9 * tau_scan,
+        (best.mean - m_scan).abs() <= m_scan * (spacing - 1.0),
+        "optimum {} vs scan {m_scan} (spacing {spacing})",
+        best.mean
+    );
+    assert!(
+        best.optimum.tau_opt <= tau_scan + 1e-9 * tau_scan,
         "{} vs {tau_scan}",
-        best.tau
+        best.optimum.tau_opt
     );
-    let e = optimize_mean(&problem, &c, (0.5, 0.6), 1e-3, &opts)
+    assert_eq!(
+        best.clock.unwrap().with_mean(1.0).unwrap(),
+        c.with_mean(1.0).unwrap()
+    );
+    let low = RateRange {
+        r_max: 0.5 / best.mean,
+        r_min: 0.05 / best.mean,
+        ..range
+    };
+    let edge = optimize_clock(&problem, &low, &opts, &NoProgress).unwrap();
+    assert!(edge.optimum.at_upper_bound, "{:?}", edge.optimum);
+    let plain = SearchProblem::new(
+        full_reset(DragLaw::Linear, 1.0, 0.5, 1.0, sched(None, Some(0.0), None)),
+        0.0,
+        0.0,
+        PositionTarget::Level(1.0),
+    )
+    .unwrap();
+    let e = optimize_clock(&plain, &range, &opts, &NoProgress)
         .unwrap_err()
         .to_string();
-    assert!(e.starts_with("invalid mean"), "{e}");
+    assert!(e.starts_with("invalid reset_clock"), "{e}");
 }
