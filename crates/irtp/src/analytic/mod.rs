@@ -6,5 +6,7 @@
 pub mod cusp;
 pub mod linear;
 pub mod linear_moments;
+pub mod linear_noise;
 pub mod r0;
 mod r0_exponent;
+pub mod telegraph_r0;
