@@ -56,7 +56,15 @@ impl Telegraph {
     }
 
     /// The paper's noise ±Sigma flipping at rate lambda (Eq. (6)).
+    /// Errors name the keys `sigma` (> 0) and `lambda` (> 0).
     pub fn symmetric(sigma: f64, lambda: f64) -> Result<Self> {
+        let s = format!(
+            "telegraph:sigma={},lambda={}",
+            spec::number(sigma),
+            spec::number(lambda)
+        );
+        spec::positive(&s, "sigma", sigma, USAGE)?;
+        spec::positive(&s, "lambda", lambda, USAGE)?;
         Self::new(sigma, sigma, lambda, lambda)
     }
 
