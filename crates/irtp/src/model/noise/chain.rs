@@ -71,12 +71,9 @@ fn unreachable_pair(q: &[Vec<f64>]) -> Option<(usize, usize)> {
         .map(|i| (0..n).map(|j| i == j || q[i][j] > 0.0).collect())
         .collect();
     for k in 0..n {
-        for i in 0..n {
-            if reach[i][k] {
-                for j in 0..n {
-                    reach[i][j] |= reach[k][j];
-                }
-            }
+        let via = reach[k].clone();
+        for row in reach.iter_mut().filter(|row| row[k]) {
+            row.iter_mut().zip(&via).for_each(|(x, y)| *x |= *y);
         }
     }
     (0..n)

@@ -44,8 +44,8 @@ impl From<NoiseModel> for RawNoiseModel {
 
 impl NoiseModel {
     /// The kind with thermal noise of temperature T: finite and ≥ 0, and
-    /// > 0 with `none` (without either noise the velocity relaxes to rest);
-    /// errors name `temperature`.
+    /// positive with `none` (without either noise the velocity relaxes to
+    /// rest); errors name `temperature`.
     pub fn new(kind: NoiseKind, temperature: f64) -> Result<Self> {
         if !(temperature >= 0.0 && temperature.is_finite()) {
             return Err(Error::invalid(
