@@ -107,7 +107,7 @@ impl NoiseModel {
     pub fn is_mirror_symmetric(&self) -> bool {
         self.kind.mirror().is_some()
     }
-    /// <a> = Σ π_s a_s, the stationary mean force of the noise.
+    /// `<a>` = Σ π_s a_s, the stationary mean force of the noise.
     pub fn mean_level(&self) -> Result<f64> {
         let pi = self.stationary()?;
         Ok(pi.iter().zip(self.levels()).map(|(p, a)| p * a).sum())
