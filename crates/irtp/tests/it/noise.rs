@@ -543,16 +543,26 @@ fn telegraph_r0_matches_the_linear_closed_forms() {
 /// The asymmetric r = 0 density solves the stationary forward equations
 /// it was derived from, d/dv(f₊p₊) = -k₊p₊ + k₋p₋ and
 /// d/dv(f₋p₋) = k₊p₊ - k₋p₋ (central differences, step 1e-5: error
-/// ~1e-9 of the terms), for a Riccati law, a generic law and a power law,
-/// on both halves of the interval.
+/// ~1e-9 of the terms), for a Riccati law, generic laws, power laws,
+/// Coulomb friction (its jump at v = 0 is the split point) and an
+/// expression, on both halves of the interval.
 #[test]
 fn telegraph_r0_solves_the_forward_equations() {
-    let laws = ["tan", "cubic", "power:n=0.5", "power:n=2,k=0.5"];
+    let laws = [
+        "tan",
+        "cubic",
+        "power:n=0.5",
+        "power:n=2,k=0.5",
+        "coulomb:mu=0.3",
+        "expr:v + 0.3*v^3",
+    ];
     for (law, (p, m, kp, km)) in laws.iter().zip([
         (3.0, 1.0, 0.5, 1.5),
         (2.0, 0.5, 1.2, 0.3),
         (1.0, 2.0, 0.7, 2.5),
         (1.5, 0.4, 3.0, 0.8),
+        (2.0, 1.0, 0.6, 1.1),
+        (1.0, 1.5, 2.0, 0.9),
     ]) {
         let drag: DragLaw = law.parse().unwrap();
         let d = TelegraphR0Density::new(drag, Telegraph::new(p, m, kp, km).unwrap()).unwrap();
