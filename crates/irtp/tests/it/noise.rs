@@ -12,6 +12,8 @@ use irtp::analytic::r0::R0Density;
 use irtp::analytic::telegraph_r0::TelegraphR0Density;
 use irtp::model::noise::{chain, NoiseKind, NoiseModel, RunPauseTumble, Telegraph};
 use irtp::{Drag, DragLaw, Error, Params};
+use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 use rand::Rng;
 use rand_distr::StandardNormal;
 
@@ -594,5 +596,85 @@ fn telegraph_r0_solves_the_forward_equations() {
             let (f0, f1) = fluxes(v);
             assert!((f0 + f1).abs() < 1e-13 * f0.abs(), "{law} zero flux at {v}");
         }
+    }
+}
+
+/// `cases` cases from a fixed seed: the same inputs on every run.
+fn fixed(cases: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases,
+        rng_seed: RngSeed::Fixed(0x0015_e0ce),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+/// A positive finite double of any magnitude (every bit pattern of the
+/// exponent range 1e-300..1e300).
+fn positive() -> impl Strategy<Value = f64> {
+    (-300.0f64..300.0, 1.0f64..10.0).prop_map(|(e, m)| m * 10f64.powf(e))
+}
+
+proptest! {
+    #![proptest_config(fixed(500))]
+
+    /// Any valid telegraph or chain spec round-trips bit for bit.
+    #[test]
+    fn random_specs_round_trip(p in positive(), m in positive(), kp in positive(), km in positive(),
+                               rates in proptest::collection::vec(0.0f64..10.0, 6)) {
+        let t = NoiseKind::Telegraph(Telegraph::new(p, m, kp, km).unwrap());
+        prop_assert_eq!(t.spec().parse::<NoiseKind>().unwrap(), t);
+        let levels = vec![p, -m, kp];
+        let q: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                let mut row: Vec<f64> = (0..3).map(|j| if i == j { 0.0 } else { rates[2 * i + j.min(1)] + 0.1 }).collect();
+                row[i] = -row.iter().sum::<f64>();
+                row
+            })
+            .collect();
+        let s = NoiseKind::States(irtp::model::noise::States::new(levels, q).unwrap());
+        prop_assert_eq!(s.spec().parse::<NoiseKind>().unwrap(), s);
+    }
+
+    /// The stationary law of a random irreducible chain (2 to 6 states,
+    /// rates spanning four decades) is a probability law with Qᵀ π = 0 to
+    /// 1e-12 of the largest rate; the chain doubled into mirror pairs
+    /// (levels ±a_k, rate 1 within a pair, half the chain's rate to each
+    /// state of another pair) has the pair swap as its mirror map, and
+    /// none once one rate is changed.
+    #[test]
+    fn random_chains_have_a_stationary_law(n in 2usize..7, logs in proptest::collection::vec(-2.0f64..2.0, 36)) {
+        let mut q: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| if i == j { 0.0 } else { 10f64.powf(logs[i * 6 + j]) }).collect()).collect();
+        for (i, row) in q.iter_mut().enumerate() {
+            row[i] = -row.iter().sum::<f64>();
+        }
+        let pi = chain::stationary(&q).unwrap();
+        let top = q.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        prop_assert!((pi.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        for i in 0..n {
+            let flux: f64 = (0..n).map(|j| q[j][i] * pi[j]).sum();
+            prop_assert!(flux.abs() <= 1e-12 * top && pi[i] >= 0.0);
+        }
+        let levels: Vec<f64> = (0..2 * n).map(|k| if k % 2 == 0 { 1.0 + k as f64 } else { -(k as f64) }).collect();
+        let mut big: Vec<Vec<f64>> = (0..2 * n)
+            .map(|a| {
+                (0..2 * n)
+                    .map(|b| match (a / 2 == b / 2, a == b) {
+                        (true, true) => 0.0,
+                        (true, false) => 1.0,
+                        _ => 0.5 * q[a / 2][b / 2],
+                    })
+                    .collect()
+            })
+            .collect();
+        for (a, row) in big.iter_mut().enumerate() {
+            row[a] = -row.iter().sum::<f64>();
+        }
+        chain::validate(&levels, &big, "s", "u").unwrap();
+        let swap: Vec<usize> = (0..2 * n).map(|k| k ^ 1).collect();
+        prop_assert_eq!(chain::mirror(&levels, &big), Some(swap));
+        big[0][2] *= 1.5;
+        big[0][0] -= 0.5 * big[0][2] / 1.5;
+        prop_assert_eq!(chain::mirror(&levels, &big), None);
     }
 }
