@@ -1,7 +1,7 @@
 //! `irtp._irtp`: the Rust side of the Python package `irtp`, a thin layer
 //! over [`irtp_app`] and [`irtp_paper`]. Python keywords become the equivalent `irtp` command
 //! line ([`irtp_app::keywords`]), which the CLI's own definitions parse; the command runs
-//! off the Python thread ([`runner`]); the [`irtp_app::Outcome`] comes back
+//! off the Python thread (module `runner`); the [`irtp_app::Outcome`] comes back
 //! as a dict whose tables are numpy arrays (each column's buffer is moved
 //! into its array, not copied). The pure-Python layer (`python/irtp/`)
 //! builds the public functions, result objects and progress bars on it.
