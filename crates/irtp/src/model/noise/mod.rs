@@ -22,6 +22,9 @@
 //!   is written in.
 //! - [`registry`]: [`NoiseKind`] (parse, serialise) and the one dispatch
 //!   [`with_noise!`](crate::with_noise).
+//! - [`support`]: which method runs which noise (every engine refuses all
+//!   but the paper's symmetric telegraph noise; `irtp analytic` runs the
+//!   closed forms (N3)-(N8)).
 //! - [`noise_model`]: [`NoiseModel`], a kind plus the temperature T of the
 //!   thermal noise sqrt(2T) dW added to it (Eq. (N1)).
 //!
@@ -35,6 +38,7 @@ pub mod registry;
 pub mod rpt;
 pub mod spec;
 pub mod states;
+pub mod support;
 pub mod telegraph;
 
 pub use noise_model::NoiseModel;

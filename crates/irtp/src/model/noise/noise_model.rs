@@ -78,6 +78,27 @@ impl NoiseModel {
         Self::new(noise.parse()?, temperature)
     }
 
+    /// This model as a `&'static` reference, one per distinct (spec,
+    /// temperature) in the process: [`crate::Params`] carries its noise so
+    /// and stays `Copy`. Each distinct model is allocated once and kept for
+    /// the life of the process (a sweep holds as many as it has distinct
+    /// noise values).
+    pub fn intern(self) -> &'static NoiseModel {
+        use std::sync::Mutex;
+        static TABLE: Mutex<Vec<&'static NoiseModel>> = Mutex::new(Vec::new());
+        let key = (self.spec(), self.temperature.to_bits());
+        let mut table = TABLE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(m) = table
+            .iter()
+            .find(|m| (m.spec(), m.temperature.to_bits()) == key)
+        {
+            return m;
+        }
+        let m: &'static NoiseModel = Box::leak(Box::new(self));
+        table.push(m);
+        m
+    }
+
     /// The kind.
     pub fn kind(&self) -> &NoiseKind {
         &self.kind

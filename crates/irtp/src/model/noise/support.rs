@@ -1,0 +1,53 @@
+//! Which method runs which noise model: the noise dimension of the support
+//! table of README.md (docs/equations.md, "Noise kinds").
+//!
+//! Every engine (the samplers, the forward and backward solvers and the
+//! symmetric closed forms) runs only the paper's symmetric telegraph noise
+//! without thermal noise, which [`crate::Params`] carries as its default.
+//! Any other noise model is refused by [`check`], called from
+//! [`crate::Params::require`], with one line naming the flag and what runs
+//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
+//! linear drag with any noise model and Poisson velocity resetting to a
+//! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
+//! at r = 0 (Eq. (N8)).
+
+use super::NoiseModel;
+use crate::error::{Error, Result};
+use crate::model::reset::Solver;
+
+/// What runs a noise model other than the paper's, for messages.
+pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+
+/// Whether `solver` runs `noise` (a model other than the paper's default):
+/// no engine does yet. The closed forms of `irtp analytic` for such models
+/// are in [`crate::analytic::noise`], which checks its own cases.
+pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
+    let _ = (solver, noise);
+    false
+}
+
+/// Refuse a noise model that `solver` does not run: an error naming
+/// `temperature` for the paper's noise with T > 0, else `noise`, the
+/// solver and [`RUNNERS`].
+pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
+    if supports(solver, noise) {
+        return Ok(());
+    }
+    let (name, value) = if noise.temperature() > 0.0 && noise.kind().symmetric_telegraph().is_some()
+    {
+        ("temperature", noise.temperature().to_string())
+    } else {
+        ("noise", noise.spec())
+    };
+    Err(Error::invalid(
+        name,
+        value,
+        format!(
+            "a noise that {solver} runs: the paper's symmetric telegraph noise (--sigma, \
+             --lambda) at --temperature 0; noise {} at temperature {} is run by: {RUNNERS}",
+            noise.spec(),
+            noise.temperature()
+        ),
+    ))
+}
