@@ -9,7 +9,7 @@
 use super::linear_noise::{LinearNoise, NoiseMoments};
 use super::telegraph_r0::TelegraphR0Density;
 use crate::error::{Error, Result};
-use crate::model::noise::{support::RUNNERS, NoiseKind, NoiseModel};
+use crate::model::noise::{support::{blamed, RUNNERS}, NoiseKind, NoiseModel};
 use crate::model::{DragLaw, Params};
 
 /// What the closed forms give for one set of parameters.
@@ -64,11 +64,12 @@ pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
         _ => None,
     };
     if moments.is_none() && density.is_none() {
+        let (name, value) = blamed(noise);
         return Err(Error::invalid(
-            "noise",
-            noise.spec(),
+            name,
+            value,
             format!(
-                "a case with a closed form, not drag {} at temperature {} and rate {}: {RUNNERS}",
+                "a case with a closed form (not drag {} at temperature {} and rate {}); run by: {RUNNERS}",
                 p.drag(),
                 noise.temperature(),
                 p.rate()

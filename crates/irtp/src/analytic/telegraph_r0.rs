@@ -262,6 +262,12 @@ impl TelegraphR0Density {
     }
 
     /// (E[h(v) 1{+}], E[h(v) 1{-}]).
+    /// The stationary mass in each state (+, -): (π₊, π₋) of Eq. (N2) to
+    /// quadrature accuracy (Eq. (N8)).
+    pub fn state_mass(&self) -> Result<(f64, f64)> {
+        self.expect_split(&|_| 1.0)
+    }
+
     fn expect_split(&self, h: &dyn Fn(f64) -> f64) -> Result<(f64, f64)> {
         let mut out = (0.0, 0.0);
         for half in [&self.lower, &self.upper] {

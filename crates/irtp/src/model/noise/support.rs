@@ -27,27 +27,37 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     false
 }
 
-/// Refuse a noise model that `solver` does not run: an error naming
-/// `temperature` for the paper's noise with T > 0, else `noise`, the
-/// solver and [`RUNNERS`].
+/// Refuse a noise model that `solver` does not run ([`refuse`]).
 pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
     if supports(solver, noise) {
         return Ok(());
     }
-    let (name, value) = if noise.temperature() > 0.0 && noise.kind().symmetric_telegraph().is_some()
-    {
-        ("temperature", noise.temperature().to_string())
-    } else {
-        ("noise", noise.spec())
-    };
+    refuse(solver.command(), noise)
+}
+
+/// The refusal of a noise model by `method` (a command, for the message):
+/// names `temperature` for the paper's noise with T > 0, else `noise`, and
+/// lists [`RUNNERS`]. Problems that no method runs with another noise (the
+/// first-passage and search problems) refuse it when built.
+pub fn refuse(method: &str, noise: &NoiseModel) -> Result<()> {
+    let (name, value) = blamed(noise);
     Err(Error::invalid(
         name,
         value,
         format!(
-            "a noise that {solver} runs: the paper's symmetric telegraph noise (--sigma, \
-             --lambda) at --temperature 0; noise {} at temperature {} is run by: {RUNNERS}",
-            noise.spec(),
-            noise.temperature()
+            "a noise that {method} runs: the paper's symmetric telegraph noise (--sigma, \
+             --lambda) at --temperature 0; this noise is run by: {RUNNERS}"
         ),
     ))
+}
+
+/// The flag a refusal of `noise` names, and its value: `temperature` for
+/// the paper's noise with T > 0 (only the temperature was asked for), else
+/// `noise` and its spec.
+pub fn blamed(noise: &NoiseModel) -> (&'static str, String) {
+    if noise.temperature() > 0.0 && noise.kind().symmetric_telegraph().is_some() {
+        ("temperature", noise.temperature().to_string())
+    } else {
+        ("noise", noise.spec())
+    }
 }
