@@ -1,7 +1,8 @@
 //! `irtp analytic` with a noise model other than the paper's
 //! (docs/equations.md, "Noise kinds"): the closed forms of
-//! [`irtp::analytic::noise`]. `summary.json` holds `moments` (linear drag:
-//! `<v>`, `<v²>`, the drift and D_eff, Eqs. (N3)-(N6)) and/or `density` (an
+//! [`irtp::analytic::noise`]. `summary.json` holds, for linear drag, `pi`,
+//! `conditional_mean`, `v_mean`, `v2`, `drift` and `d_eff` (Eqs.
+//! (N2)-(N6)) and/or `density` (an
 //! asymmetric telegraph noise at r = 0: its edges, moments and the mass in
 //! the + state, Eq. (N8)); `density.csv` (v, p, p_plus, p_minus) only with
 //! the density. What does not exist for the case is absent, never filled.
@@ -36,7 +37,8 @@ struct Report {
     temperature: f64,
     rate: f64,
     reset_velocity: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Flattened, so a sweep's table has `v_mean`, `v2`, `drift`, `d_eff`.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
     moments: Option<NoiseMoments>,
     #[serde(skip_serializing_if = "Option::is_none")]
     density: Option<DensityReport>,
@@ -112,7 +114,9 @@ pub(crate) fn run(
         points,
     };
     let method = match (&c.moments, &c.density) {
-        (Some(_), Some(_)) => "linear-drag noise moments (N3)-(N6); exact r=0 telegraph density (N8)",
+        (Some(_), Some(_)) => {
+            "linear-drag noise moments (N3)-(N6); exact r=0 telegraph density (N8)"
+        }
         (Some(_), None) => "linear-drag noise moments (N3)-(N6)",
         _ => "exact r=0 telegraph density (N8); adaptive Gauss-Kronrod normalisation",
     };

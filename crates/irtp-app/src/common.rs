@@ -1,8 +1,8 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
 use clap::Args;
-use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use irtp::model::noise::NoiseModel;
+use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use irtp::model::Drag;
 use irtp::{DragLaw, Params};
 use std::path::PathBuf;

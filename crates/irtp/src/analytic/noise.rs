@@ -9,7 +9,10 @@
 use super::linear_noise::{LinearNoise, NoiseMoments};
 use super::telegraph_r0::TelegraphR0Density;
 use crate::error::{Error, Result};
-use crate::model::noise::{support::{blamed, RUNNERS}, NoiseKind, NoiseModel};
+use crate::model::noise::{
+    support::{blamed, RUNNERS},
+    NoiseKind, NoiseModel,
+};
 use crate::model::{DragLaw, Params};
 
 /// What the closed forms give for one set of parameters.
@@ -40,7 +43,10 @@ pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
         return Err(Error::invalid(
             f.flag(),
             p.schedule().spec_of(f),
-            format!("the Poisson clock without modifiers with noise {}", noise.spec()),
+            format!(
+                "the Poisson clock without modifiers with noise {}",
+                noise.spec()
+            ),
         ));
     }
     if let Some(s) = p.reset_spec() {

@@ -271,7 +271,10 @@ impl Params {
             return Err(Error::invalid(
                 "lambda",
                 lambda,
-                format!("no lambda with noise {} (its rates are in the spec)", m.spec()),
+                format!(
+                    "no lambda with noise {} (its rates are in the spec)",
+                    m.spec()
+                ),
             ));
         }
         let base = Params::new(
@@ -294,7 +297,7 @@ impl Params {
         self.point_target("another reset velocity")?;
         self.rebuilt(self.rate(), reset_velocity)?
             .with_reset(Target::point(reset_velocity), self.reset.noise())?
-        .with_schedule(self.schedule)
+            .with_schedule(self.schedule)
     }
 
     /// Same parameters and rate with another resetting protocol: the target
