@@ -678,3 +678,116 @@ proptest! {
         prop_assert_eq!(chain::mirror(&levels, &big), None);
     }
 }
+
+/// The paper's noise written as a model (either telegraph spelling, T = 0)
+/// is the default `Params` bit for bit: no noise carried, the same JSON.
+#[test]
+fn params_with_the_papers_noise_are_the_default() {
+    let plain = Params::new(DragLaw::Tanh, 0.75, 0.625, 1.5, 0.1).unwrap();
+    for spec in [
+        "telegraph:sigma=0.75,lambda=0.625",
+        "telegraph:plus=0.75,minus=0.75,rate_plus=0.625,rate_minus=0.625",
+    ] {
+        let p = Params::with_noise(DragLaw::Tanh, model(spec, 0.0), 1.5, 0.1).unwrap();
+        assert_eq!(p, plain, "{spec}");
+        assert!(p.noise().is_none());
+        assert_eq!(
+            serde_json::to_string(&p).unwrap(),
+            serde_json::to_string(&plain).unwrap()
+        );
+    }
+    let json = serde_json::to_string(&plain).unwrap();
+    assert!(
+        !json.contains("noise") && !json.contains("temperature"),
+        "{json}"
+    );
+}
+
+/// Another noise is carried, serialised and read back, kept by the
+/// `with_*` builders, and refused by every solver, the first-passage and
+/// search problems, naming `noise` (or `temperature` for the paper's noise
+/// at T > 0).
+#[test]
+fn params_carry_another_noise_and_every_solver_refuses_it() {
+    use irtp::model::reset::Solver;
+    use irtp::search::{PositionTarget, SearchProblem};
+    let rpt = model("rpt:sigma=1,alpha=1,beta=2", 0.0);
+    let warm = model("telegraph:sigma=1,lambda=0.5", 0.25);
+    for (m, flag) in [(rpt, "noise"), (warm, "temperature")] {
+        let p = Params::with_noise(DragLaw::Linear, m.clone(), 0.5, 0.2).unwrap();
+        assert_eq!(p.noise(), Some(&m));
+        let json = serde_json::to_string(&p).unwrap();
+        assert!(
+            json.contains(&format!("\"noise\":\"{}\"", m.spec())),
+            "{json}"
+        );
+        let back: Params = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, p);
+        assert_eq!(p.with_rate(2.0).unwrap().noise(), Some(&m));
+        assert_eq!(p.with_reset_velocity(-0.1).unwrap().noise(), Some(&m));
+        assert_eq!(blamed(p.with_lambda(1.0).unwrap_err()).0, "lambda");
+        for solver in Solver::ALL {
+            let (name, msg) = blamed(p.require(solver).unwrap_err());
+            assert_eq!(name, flag, "{solver}: {msg}");
+            assert!(
+                msg.contains(solver.command()) && msg.contains("run by: analytic"),
+                "{msg}"
+            );
+        }
+        let (name, _) = blamed(irtp::mfpt::Problem::new(p, 0.0, 0.1).unwrap_err());
+        assert_eq!(name, flag);
+        let search = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Interval(-1.0, 1.0));
+        assert_eq!(blamed(search.unwrap_err()).0, flag);
+    }
+    // A level outside the drag's force range, and v_r outside the interval.
+    let e = Params::with_noise(
+        DragLaw::Tanh,
+        model("rpt:sigma=1,alpha=1,beta=1", 0.0),
+        0.0,
+        0.0,
+    );
+    assert_eq!(blamed(e.unwrap_err()).0, "noise");
+    let e = Params::with_noise(
+        DragLaw::Linear,
+        model("rpt:sigma=1,alpha=1,beta=1", 0.0),
+        1.0,
+        1.0,
+    );
+    assert_eq!(blamed(e.unwrap_err()).0, "reset_velocity");
+}
+
+/// `analytic::noise::solve`: linear drag gives [`LinearNoise`]'s moments,
+/// an asymmetric telegraph noise at r = 0 the density of Eq. (N8); both
+/// for linear drag with that noise, and then they agree; nothing else.
+#[test]
+fn closed_forms_from_params() {
+    use irtp::analytic::noise::solve;
+    let asym = model("telegraph:plus=1,minus=0.5,rate_plus=1,rate_minus=2", 0.0);
+    let p = Params::with_noise(DragLaw::Linear, asym.clone(), 0.0, 0.0).unwrap();
+    let c = solve(&p).unwrap();
+    let (m, d) = (c.moments.unwrap(), c.density.unwrap());
+    assert_eq!(m, moments(1.0, asym.clone(), 0.0, 0.0));
+    assert!((d.moment(1).unwrap() - m.v_mean).abs() < 1e-10);
+    assert!((d.moment(2).unwrap() - m.v2).abs() < 1e-10);
+    let tan = Params::with_noise(
+        DragLaw::Tan,
+        model("telegraph:plus=3,minus=2,rate_plus=1,rate_minus=2", 0.0),
+        0.0,
+        0.0,
+    )
+    .unwrap();
+    let c = solve(&tan).unwrap();
+    assert!(c.moments.is_none() && c.density.is_some());
+    let rpt = Params::with_noise(
+        DragLaw::Tan,
+        model("rpt:sigma=1,alpha=1,beta=1", 0.0),
+        0.0,
+        0.0,
+    )
+    .unwrap();
+    assert_eq!(blamed(solve(&rpt).unwrap_err()).0, "noise");
+    let reset = Params::with_noise(DragLaw::Tan, asym, 1.0, 0.0).unwrap();
+    assert_eq!(blamed(solve(&reset).unwrap_err()).0, "noise");
+    let paper = Params::new(DragLaw::Linear, 1.0, 0.5, 0.0, 0.0).unwrap();
+    assert!(solve(&paper).is_err());
+}
