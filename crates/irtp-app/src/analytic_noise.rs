@@ -51,7 +51,9 @@ struct RunParams {
     temperature: f64,
     rate: f64,
     reset_velocity: f64,
-    points: usize,
+    /// The points of `density.csv`, absent without the density.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    points: Option<usize>,
 }
 
 fn density_report(d: &TelegraphR0Density) -> irtp::Result<DensityReport> {
@@ -111,7 +113,7 @@ pub(crate) fn run(
         temperature: report.temperature,
         rate: report.rate,
         reset_velocity: report.reset_velocity,
-        points,
+        points: c.density.is_some().then_some(points),
     };
     let method = match (&c.moments, &c.density) {
         (Some(_), Some(_)) => {
