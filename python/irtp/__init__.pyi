@@ -74,6 +74,8 @@ class Params:
         reset_period: Optional[float] = None,
         reset_position: Optional[float] = None,
         refractory: Optional[str] = None,
+        noise: Optional[str] = None,
+        temperature: Optional[float] = None,
         **kwargs: Any,
     ) -> None: ...
     @classmethod
@@ -96,6 +98,10 @@ class Params:
     def reset_position(self) -> Optional[float]: ...
     @property
     def refractory(self) -> Optional[str]: ...
+    @property
+    def noise(self) -> Optional[str]: ...
+    @property
+    def temperature(self) -> Optional[float]: ...
     @property
     def reset(self) -> Optional[PoissonReset]: ...
     def options(self) -> Dict[str, Any]: ...
@@ -294,6 +300,8 @@ def simulate(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -325,7 +333,10 @@ def analytic(
     *,
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
+    reset_velocity: float = ...,
     points: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -342,6 +353,8 @@ def fp_stationary(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -367,6 +380,8 @@ def fp_transient(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -397,6 +412,8 @@ def fp_msd(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -426,6 +443,8 @@ def mfpt(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -460,6 +479,8 @@ def mfpt_scan(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -494,6 +515,8 @@ def mfpt_optimize(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -522,6 +545,8 @@ def mfpt_distribution(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,

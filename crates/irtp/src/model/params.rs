@@ -38,10 +38,12 @@ pub struct Params {
 pub struct RawParams {
     /// Drag law.
     pub drag: DragLaw,
-    /// Noise amplitude Sigma.
-    pub sigma: f64,
-    /// Flip rate lambda.
-    pub lambda: f64,
+    /// Noise amplitude Sigma (absent with `noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// Flip rate lambda (absent with `noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f64>,
     /// Reset rate r.
     pub rate: f64,
     /// Reset velocity v_r.
@@ -75,7 +77,18 @@ impl TryFrom<RawParams> for Params {
     type Error = Error;
     fn try_from(r: RawParams) -> Result<Self> {
         let p = match &r.noise {
-            None => Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)?,
+            None => {
+                let sigma = r.sigma.ok_or_else(|| missing("sigma"))?;
+                let lambda = r.lambda.ok_or_else(|| missing("lambda"))?;
+                Params::new(r.drag, sigma, lambda, r.rate, r.reset_velocity)?
+            }
+            Some(_) if r.sigma.is_some() || r.lambda.is_some() => {
+                return Err(Error::invalid(
+                    "noise",
+                    r.noise.unwrap_or_default(),
+                    "no sigma or lambda with a noise spec (its levels and rates are in it)",
+                ))
+            }
             Some(n) => {
                 let model = NoiseModel::parse(n, r.temperature.unwrap_or(0.0))?;
                 Params::with_noise(r.drag, model, r.rate, r.reset_velocity)?
@@ -96,12 +109,17 @@ impl TryFrom<RawParams> for Params {
     }
 }
 
+/// The error of a missing `sigma` or `lambda` (without `noise`).
+fn missing(name: &'static str) -> Error {
+    Error::invalid(name, "absent", format!("{name} (or a noise spec)"))
+}
+
 impl From<Params> for RawParams {
     fn from(p: Params) -> Self {
         RawParams {
             drag: p.drag,
-            sigma: p.sigma,
-            lambda: p.lambda,
+            sigma: p.noise.is_none().then_some(p.sigma),
+            lambda: p.noise.is_none().then_some(p.lambda),
             rate: p.rate(),
             reset_velocity: p.reset_velocity(),
             reset: p.reset_spec(),
