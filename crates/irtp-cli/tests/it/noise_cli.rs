@@ -450,3 +450,48 @@ fn bad_noise_input_is_refused_naming_the_flag() {
     ]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// `noise` and `temperature` are sweep plan keys: each point runs its noise
+/// and the table gets the moments.
+#[test]
+fn a_sweep_plan_sweeps_the_noise() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        r#"
+command = "analytic"
+[fixed]
+drag = "linear"
+rate = 0.5
+[axes]
+noise = ["telegraph:plus=1,minus=0.5,rate_plus=1,rate_minus=2", "rpt:sigma=1,alpha=1,beta=1"]
+temperature = [0.0, 0.25]
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = irtp(&[
+        "sweep",
+        "run",
+        plan.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_success(&o);
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    assert_eq!(rows.len(), 4);
+    for row in &rows {
+        let (spec, t) = (&row[col("noise")], row[col("temperature")].parse().unwrap());
+        let lib = LinearNoise::new(1.0, NoiseModel::parse(spec, t).unwrap(), 0.5, 0.0)
+            .unwrap()
+            .moments()
+            .unwrap();
+        let d_eff: f64 = row[col("result.d_eff")].parse().unwrap();
+        assert_eq!(d_eff, lib.d_eff, "{spec} T = {t}");
+    }
+}

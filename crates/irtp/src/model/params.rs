@@ -65,7 +65,7 @@ pub struct RawParams {
     pub refractory: Option<String>,
     /// The noise as a spec (`rpt:sigma=1,alpha=1,beta=1`), absent for the
     /// paper's symmetric telegraph noise (then `sigma` and `lambda` are
-    /// its; otherwise they are ignored on the way in).
+    /// its; with a spec they are absent, and refused on the way in).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<String>,
     /// The temperature T of the thermal noise, absent with `noise`.
@@ -433,11 +433,13 @@ impl Params {
     pub fn drag(&self) -> DragLaw {
         self.drag
     }
-    /// Noise amplitude Sigma.
+    /// Noise amplitude Sigma of the paper's noise. With another noise model
+    /// ([`Params::noise`]): its largest |level|, which no method reads.
     pub fn sigma(&self) -> f64 {
         self.sigma
     }
-    /// Flip rate lambda (eta correlation Sigma² e^{-2 lambda |t|}).
+    /// Flip rate lambda (eta correlation Sigma² e^{-2 lambda |t|}). With
+    /// another noise model ([`Params::noise`]): 0, which no method reads.
     pub fn lambda(&self) -> f64 {
         self.lambda
     }
