@@ -28,7 +28,8 @@ pub struct AnalyticArgs {
     #[arg(long, short = 'r', default_value_t = 0.0, allow_hyphen_values = true)]
     pub rate: f64,
     /// Reset velocity v_r of the Poisson resetting, only for linear drag
-    /// with --noise or --temperature [default: 0].
+    /// with --noise or --temperature (with the paper's noise only 0, as
+    /// nothing resets at r = 0) [default: 0].
     #[arg(long, allow_hyphen_values = true)]
     pub reset_velocity: Option<f64>,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).
@@ -87,13 +88,16 @@ impl AnalyticArgs {
         let params = self
             .noise
             .params(self.rate, self.reset_velocity.unwrap_or(0.0))?;
+        // At r = 0 nothing resets: v_r other than 0 would be ignored.
         if let (None, Some(v)) = (params.noise(), self.reset_velocity) {
-            return Err(Error::invalid(
-                "reset_velocity",
-                v,
-                "no --reset-velocity with the paper's noise (its closed form is at r = 0); \
-                 a reset velocity only with --noise or --temperature and linear drag",
-            ));
+            if v != 0.0 {
+                return Err(Error::invalid(
+                    "reset_velocity",
+                    v,
+                    "0 (or none) with the paper's noise (its closed form is at r = 0); \
+                     another reset velocity only with --noise or --temperature and linear drag",
+                ));
+            }
         }
         if self.points < 2 {
             return Err(Error::invalid("--points", self.points, "points >= 2"));
