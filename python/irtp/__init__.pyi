@@ -75,6 +75,8 @@ class Params:
         reset_clock: Optional[str] = None,
         reset_position: Optional[float] = None,
         refractory: Optional[str] = None,
+        noise: Optional[str] = None,
+        temperature: Optional[float] = None,
         **kwargs: Any,
     ) -> None: ...
     @classmethod
@@ -99,6 +101,10 @@ class Params:
     def reset_position(self) -> Optional[float]: ...
     @property
     def refractory(self) -> Optional[str]: ...
+    @property
+    def noise(self) -> Optional[str]: ...
+    @property
+    def temperature(self) -> Optional[float]: ...
     @property
     def reset(self) -> Optional[PoissonReset]: ...
     def options(self) -> Dict[str, Any]: ...
@@ -301,6 +307,8 @@ def simulate(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -333,7 +341,10 @@ def analytic(
     *,
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
+    reset_velocity: float = ...,
     points: int = ...,
     out: Optional[PathLike] = ...,
     force: bool = ...,
@@ -350,6 +361,8 @@ def fp_stationary(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -376,6 +389,8 @@ def fp_transient(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -407,6 +422,8 @@ def fp_msd(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -437,6 +454,8 @@ def mfpt(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -474,6 +493,8 @@ def mfpt_scan(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -514,6 +535,8 @@ def mfpt_optimize(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,
@@ -548,6 +571,8 @@ def mfpt_distribution(
     drag: Union[DragName, str, Drag] = ...,
     sigma: float = ...,
     lambda_: float = ...,
+    noise: str = ...,
+    temperature: float = ...,
     rate: float = ...,
     reset_velocity: float = ...,
     reset_noise: Literal["kept", "redrawn"] = ...,

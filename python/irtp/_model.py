@@ -163,6 +163,8 @@ _FIELDS: Tuple[Tuple[str, str], ...] = (
     ("drag", "drag"),
     ("sigma", "sigma"),
     ("lambda_", "lambda"),
+    ("noise", "noise"),
+    ("temperature", "temperature"),
     ("rate", "rate"),
     ("reset_velocity", "reset_velocity"),
     ("reset_to", "reset_to"),
@@ -203,6 +205,8 @@ class Params:
         reset_clock: Optional[str] = None,
         reset_position: Optional[float] = None,
         refractory: Optional[str] = None,
+        noise: Optional[str] = None,
+        temperature: Optional[float] = None,
         **kwargs: Any,
     ) -> None:
         if "lambda" in kwargs:
@@ -214,7 +218,7 @@ class Params:
             raise ValueError(
                 f"unknown keyword {bad} for irtp.Params "
                 "(known: drag, sigma, lambda_, reset, rate, reset_velocity, reset_to, "
-                "reset_period, reset_clock, reset_position, refractory)"
+                "reset_period, reset_clock, reset_position, refractory, noise, temperature)"
             )
         if reset is not None:
             if not isinstance(reset, Reset):
@@ -229,7 +233,7 @@ class Params:
         fields: Tuple[Tuple[str, Any], ...] = (
             ("sigma", sigma), ("lambda_", lambda_), ("rate", rate),
             ("reset_velocity", reset_velocity), ("reset_period", reset_period),
-            ("reset_position", reset_position))
+            ("reset_position", reset_position), ("temperature", temperature))
         for attr, given in fields:
             if given is not None:
                 values[attr] = _number(attr, given)
@@ -239,6 +243,8 @@ class Params:
             values["reset_clock"] = str(reset_clock)
         if refractory is not None:
             values["refractory"] = str(refractory)
+        if noise is not None:
+            values["noise"] = str(noise)
         self._values = values
 
     @classmethod
@@ -250,6 +256,10 @@ class Params:
         (``point:v=0.2,noise=redrawn``), which becomes ``reset_to`` (and
         carries the reset velocity)."""
         d = dict(m)
+        if "noise" in d:
+            # A noise spec replaces sigma and lambda (files record neither).
+            d.pop("sigma", None)
+            d.pop("lambda", None)
         if isinstance(d.get("reset"), str):
             d["reset_to"] = d.pop("reset")
             d.pop("reset_velocity", None)
@@ -277,6 +287,15 @@ class Params:
     reset_position = property(
         lambda self: self._values.get("reset_position"),
         doc="Position resetting: x_r, or None (position kept).",
+    )
+    noise = property(
+        lambda self: self._values.get("noise"),
+        doc="The noise as a spec (``rpt:sigma=1,alpha=1,beta=2``; docs/equations.md, "
+        "'Noise kinds'), or None: the paper's telegraph noise from sigma and lambda_.",
+    )
+    temperature = property(
+        lambda self: self._values.get("temperature"),
+        doc="Temperature T of the thermal noise, or None (0).",
     )
     refractory = property(
         lambda self: self._values.get("refractory"),

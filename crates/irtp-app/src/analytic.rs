@@ -1,4 +1,8 @@
-//! `irtp analytic`: exact r = 0 stationary density, its regime and moments.
+//! `irtp analytic`: exact r = 0 stationary density, its regime and moments;
+//! with `--noise`/`--temperature` the closed forms of another noise model
+//! (docs/equations.md, "Noise kinds"): linear drag's `<v>`, `<v²>`, drift
+//! and D_eff (Eqs. (N3)-(N6), any noise, r ≥ 0), and the r = 0 density of
+//! an asymmetric telegraph noise (Eq. (N8), any drag).
 
 use super::common::NoiseArgs;
 use super::format::{fmt_digits, fmt_sig};
@@ -19,9 +23,15 @@ pub struct AnalyticArgs {
     /// `--drag --sigma --lambda`.
     #[command(flatten)]
     pub noise: NoiseArgs,
-    /// Reset rate: the closed form exists only for r = 0 (any other value is rejected).
+    /// Reset rate: the closed form exists only for r = 0 (any other value is
+    /// rejected), except for linear drag with --noise or --temperature.
     #[arg(long, short = 'r', default_value_t = 0.0, allow_hyphen_values = true)]
     pub rate: f64,
+    /// Reset velocity v_r of the Poisson resetting, only for linear drag
+    /// with --noise or --temperature (with the paper's noise only 0, as
+    /// nothing resets at r = 0) [default: 0].
+    #[arg(long, allow_hyphen_values = true)]
+    pub reset_velocity: Option<f64>,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).
     #[arg(long, default_value_t = 1001, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     pub points: usize,
@@ -75,7 +85,20 @@ pub(crate) struct Config {
 impl AnalyticArgs {
     /// Flags → validated config (the closed form exists only for r = 0).
     pub(crate) fn config(&self) -> irtp::Result<Config> {
-        let params = self.noise.params(self.rate, 0.0)?;
+        let params = self
+            .noise
+            .params(self.rate, self.reset_velocity.unwrap_or(0.0))?;
+        // At r = 0 nothing resets: v_r other than 0 would be ignored.
+        if let (None, Some(v)) = (params.noise(), self.reset_velocity) {
+            if v != 0.0 {
+                return Err(Error::invalid(
+                    "reset_velocity",
+                    v,
+                    "0 (or none) with the paper's noise (its closed form is at r = 0); \
+                     another reset velocity only with --noise or --temperature and linear drag",
+                ));
+            }
+        }
         if self.points < 2 {
             return Err(Error::invalid("--points", self.points, "points >= 2"));
         }
@@ -123,6 +146,9 @@ fn report(params: &Params, d: &R0Density) -> Report {
 pub fn run(args: &AnalyticArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let t0 = Instant::now();
     let c = args.config()?;
+    if c.params.noise().is_some() {
+        return super::analytic_noise::run(args, &c.params, c.points, ctx, t0);
+    }
     let out = open_out("analytic", args.out.as_deref(), args.force.force)?;
     let d = R0Density::from_params(&c.params)?;
     let report = report(&c.params, &d);

@@ -1,13 +1,15 @@
 //! Flags shared by every subcommand (the CLI contract: add, never rename).
 
 use clap::Args;
+use irtp::model::noise::NoiseModel;
 use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use irtp::model::Drag;
 use irtp::{DragLaw, Params};
 use std::path::PathBuf;
 
-/// Medium and noise flags: `--drag --sigma --lambda` (every subcommand,
-/// including `analytic`, which has no resetting flags of its own).
+/// Medium and noise flags: `--drag --sigma --lambda --noise --temperature`
+/// (every subcommand, including `analytic`, which has no resetting flags
+/// of its own).
 #[derive(Args, Clone, Debug)]
 pub struct NoiseArgs {
     /// Drag law g(v) (help text generated from the registry by `drag_help`).
@@ -19,12 +21,39 @@ pub struct NoiseArgs {
     /// Flip rate lambda of the telegraph noise.
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub lambda: f64,
+    /// The active noise as a spec, instead of --sigma and --lambda
+    /// (docs/equations.md, "Noise kinds"): telegraph:sigma=S,lambda=L (the
+    /// paper's, the same as --sigma S --lambda L),
+    /// telegraph:plus=P,minus=M,rate_plus=KP,rate_minus=KM,
+    /// rpt:sigma=S,alpha=A,beta=B, states:levels=[..],rates=[[..],..] or
+    /// none. Only `analytic` runs a noise other than the paper's; every
+    /// other method refuses it.
+    #[arg(long, value_name = "SPEC", conflicts_with_all = ["sigma", "lambda"])]
+    pub noise: Option<String>,
+    /// Temperature T >= 0 of a thermal noise sqrt(2T) dW added to the
+    /// active noise [default: 0]. Only `analytic` runs T > 0.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub temperature: Option<f64>,
 }
 
 impl NoiseArgs {
-    /// Validate into [`Params`] with the given reset rate and velocity.
+    /// Validate into [`Params`] with the given reset rate and velocity:
+    /// `--sigma --lambda`, or the noise model of `--noise` (the paper's
+    /// telegraph noise by `--sigma --lambda` when absent) with
+    /// `--temperature`. The paper's noise at temperature 0 gives the same
+    /// value as `--sigma --lambda` ([`Params::with_noise`]).
     pub fn params(&self, rate: f64, reset_velocity: f64) -> irtp::Result<Params> {
-        Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity)
+        let kind = match &self.noise {
+            None if self.temperature.unwrap_or(0.0) == 0.0 => {
+                return Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity)
+            }
+            None => NoiseModel::telegraph(self.sigma, self.lambda)?
+                .kind()
+                .clone(),
+            Some(spec) => spec.parse()?,
+        };
+        let model = NoiseModel::new(kind, self.temperature.unwrap_or(0.0))?;
+        Params::with_noise(self.drag, model, rate, reset_velocity)
     }
 }
 

@@ -13,6 +13,7 @@
 //! figures (`irtp-paper`, which adds `reproduce`) and the front ends.
 
 pub mod analytic;
+mod analytic_noise;
 pub mod budget;
 pub mod common;
 pub mod format;

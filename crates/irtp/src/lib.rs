@@ -15,7 +15,9 @@
 //! model → numerics):
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
-//!   dispatch; resetting rules behind [`model::Reset`]; validated [`Params`]
+//!   dispatch; noise kinds behind [`model::Noise`] with the
+//!   [`model::NoiseKind`] registry and [`with_noise!`] dispatch (not yet run
+//!   by the engines); resetting rules behind [`model::Reset`]; validated [`Params`]
 //!   and velocity bounds (Eqs. (8)-(10)).
 //! - [`sim`]: particle samplers (exact event-driven sampler; the paper's
 //!   Euler scheme, Eqs. (30)-(32)) and their mergeable observables.

@@ -493,7 +493,7 @@ fn ln_q(kappa: f64, g: f64) -> f64 {
 /// w_top/n · 2^{-k}, k = 1..40, mapped to u. Mapping from w matters for tiny p
 /// (λ ≪ g'(v_u)), where all of w ≳ 1e-300 is squeezed into a sliver of width
 /// ~p next to u_top that a partition uniform in u would never sample.
-fn breakpoints(w_top: f64, n: usize, p: f64) -> Vec<f64> {
+pub(super) fn breakpoints(w_top: f64, n: usize, p: f64) -> Vec<f64> {
     let mut ws: Vec<f64> = (1..=n).map(|j| w_top * j as f64 / n as f64).collect();
     ws.extend((1..=40).map(|k| w_top / n as f64 * 0.5f64.powi(k)));
     ws.sort_by(f64::total_cmp);

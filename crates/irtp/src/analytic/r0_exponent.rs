@@ -51,6 +51,15 @@ impl EdgeIntegral {
             let d = drag.edge_drift(sigma, w);
             [1.0 / d - 1.0 / (k * w) - 1.0 / (2.0 * sigma - d)]
         };
+        Self::from_rho(&rho, lambda, vu)
+    }
+
+    /// Tabulate Q(w) = ∫₀^w ρ for w ∈ [0, `top`] for any bounded, smooth ρ
+    /// on (0, top], resolving `scale` Q to about 1e-15 per piece (the
+    /// symmetric density's ρ above with scale λ; the asymmetric
+    /// telegraph's, [`crate::analytic::telegraph_r0`], with its rates inside ρ and
+    /// scale 1). None if ρ is not finite or too rough to tabulate.
+    pub(crate) fn from_rho(rho: &dyn Fn(f64) -> [f64; 1], lambda: f64, vu: f64) -> Option<Self> {
         let w_min = 1e-9 * vu;
         // Resolved when the truncation error of λ Q over the piece is below
         // 1e-15, absolute or relative to the piece's contribution.
@@ -60,7 +69,7 @@ impl EdgeIntegral {
         };
         let range = (w_min, 0.5 * vu);
         let pieces =
-            chebyshev::fit_towards_zero(&rho, range, &[vu], &resolved, 1e-12 * vu, MAX_PIECES)
+            chebyshev::fit_towards_zero(rho, range, &[vu], &resolved, 1e-12 * vu, MAX_PIECES)
                 .ok()?;
         let slope_min = clenshaw(&pieces[0].fit.series[0], -1.0);
         let mut t = EdgeIntegral {

@@ -1,9 +1,12 @@
-//! The model: drag laws (paper Table 1), parameters and velocity bounds (Eqs. (5)-(10)).
+//! The model: drag laws (paper Table 1), noise kinds (docs/equations.md,
+//! "Noise kinds"), parameters and velocity bounds (Eqs. (5)-(10)).
 
 pub mod drag;
+pub mod noise;
 pub mod params;
 pub mod reset;
 
 pub use drag::{Drag, DragLaw, FlowMap};
+pub use noise::{Noise, NoiseKind, NoiseModel};
 pub use params::{Params, RawParams};
 pub use reset::{Reset, ResetRule};

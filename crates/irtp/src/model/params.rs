@@ -1,6 +1,7 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
+use super::noise::{support as noise_support, NoiseModel};
 use super::reset::{
     spec, support, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule,
     Schedule, Solver, Target,
@@ -13,6 +14,10 @@ use serde::{Deserialize, Serialize};
 /// and the resetting rule (today Poissonian to v_r, position and noise state
 /// kept, paper Eq. (3); see [`crate::model::reset`]).
 ///
+/// Another noise kind or thermal noise (docs/equations.md, "Noise kinds",
+/// Eq. (N1)) is carried by [`Params::with_noise`]; every method that does
+/// not run it refuses it in [`Params::require`].
+///
 /// Construct with [`Params::new`]; every field is then guaranteed admissible.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawParams", into = "RawParams")]
@@ -22,6 +27,10 @@ pub struct Params {
     lambda: f64,
     reset: ResetRule,
     schedule: Schedule,
+    /// None: the paper's symmetric telegraph noise ±sigma at rate lambda,
+    /// no thermal noise. Some: any other noise model (interned, so that
+    /// `Params` stays `Copy`; [`NoiseModel::intern`]).
+    noise: Option<&'static NoiseModel>,
 }
 
 /// Unvalidated mirror of [`Params`] used for (de)serialisation.
@@ -29,10 +38,12 @@ pub struct Params {
 pub struct RawParams {
     /// Drag law.
     pub drag: DragLaw,
-    /// Noise amplitude Sigma.
-    pub sigma: f64,
-    /// Flip rate lambda.
-    pub lambda: f64,
+    /// Noise amplitude Sigma (absent with `noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// Flip rate lambda (absent with `noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f64>,
     /// Reset rate r.
     pub rate: f64,
     /// Reset velocity v_r.
@@ -56,12 +67,37 @@ pub struct RawParams {
     /// absent for none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refractory: Option<String>,
+    /// The noise as a spec (`rpt:sigma=1,alpha=1,beta=1`), absent for the
+    /// paper's symmetric telegraph noise (then `sigma` and `lambda` are
+    /// its; with a spec they are absent, and refused on the way in).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<String>,
+    /// The temperature T of the thermal noise, absent with `noise`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature: Option<f64>,
 }
 
 impl TryFrom<RawParams> for Params {
     type Error = Error;
     fn try_from(r: RawParams) -> Result<Self> {
-        let p = Params::new(r.drag, r.sigma, r.lambda, r.rate, r.reset_velocity)?;
+        let p = match &r.noise {
+            None => {
+                let sigma = r.sigma.ok_or_else(|| missing("sigma"))?;
+                let lambda = r.lambda.ok_or_else(|| missing("lambda"))?;
+                Params::new(r.drag, sigma, lambda, r.rate, r.reset_velocity)?
+            }
+            Some(_) if r.sigma.is_some() || r.lambda.is_some() => {
+                return Err(Error::invalid(
+                    "noise",
+                    r.noise.unwrap_or_default(),
+                    "no sigma or lambda with a noise spec (its levels and rates are in it)",
+                ))
+            }
+            Some(n) => {
+                let model = NoiseModel::parse(n, r.temperature.unwrap_or(0.0))?;
+                Params::with_noise(r.drag, model, r.rate, r.reset_velocity)?
+            }
+        };
         let p = match r.reset {
             None => p,
             Some(s) => {
@@ -76,12 +112,17 @@ impl TryFrom<RawParams> for Params {
     }
 }
 
+/// The error of a missing `sigma` or `lambda` (without `noise`).
+fn missing(name: &'static str) -> Error {
+    Error::invalid(name, "absent", format!("{name} (or a noise spec)"))
+}
+
 impl From<Params> for RawParams {
     fn from(p: Params) -> Self {
         RawParams {
             drag: p.drag,
-            sigma: p.sigma,
-            lambda: p.lambda,
+            sigma: p.noise.is_none().then_some(p.sigma),
+            lambda: p.noise.is_none().then_some(p.lambda),
             rate: p.rate(),
             reset_velocity: p.reset_velocity(),
             reset: p.reset_spec(),
@@ -89,6 +130,8 @@ impl From<Params> for RawParams {
             reset_clock: p.schedule.clock.map(|c| c.spec()),
             reset_position: p.schedule.position.map(|x| x.x),
             refractory: p.schedule.refractory.map(|r| r.spec()),
+            noise: p.noise.map(|m| m.spec()),
+            temperature: p.noise.map(|m| m.temperature()),
         }
     }
 }
@@ -155,19 +198,88 @@ impl Params {
                 velocity: reset_velocity,
             }),
             schedule: Schedule::default(),
+            noise: None,
         })
+    }
+
+    /// Validate and build with a noise model (docs/equations.md, "Noise
+    /// kinds"). The paper's symmetric telegraph noise without thermal
+    /// noise normalises to [`Params::new`] (the same value bit for bit as
+    /// `sigma`/`lambda` give); any other is checked against the drag
+    /// ([`NoiseModel::check_drag`], errors naming `noise`) and carried, with
+    /// `sigma` the largest |level| and `lambda` 0 (no method reads them: each
+    /// refuses the noise in [`Params::require`] or runs it from the model),
+    /// and v_r inside the velocity interval of Eq. (N1).
+    pub fn with_noise(
+        drag: DragLaw,
+        noise: NoiseModel,
+        rate: f64,
+        reset_velocity: f64,
+    ) -> Result<Self> {
+        if noise.temperature() == 0.0 {
+            if let Some((sigma, lambda)) = noise.kind().symmetric_telegraph() {
+                return Params::new(drag, sigma, lambda, rate, reset_velocity);
+            }
+        }
+        noise.check_drag(&drag)?;
+        let rate = finite("rate", rate)?;
+        if !(rate >= 0.0) {
+            return Err(Error::invalid("rate", rate, "rate >= 0"));
+        }
+        let reset_velocity = finite("reset_velocity", reset_velocity)?;
+        let (lo, hi) = noise.velocity_interval(&drag);
+        if !(reset_velocity > lo && reset_velocity < hi) {
+            return Err(Error::invalid(
+                "reset_velocity",
+                reset_velocity,
+                format!(
+                    "{lo:.6} < v_r < {hi:.6} (the open velocity interval of noise {} with drag {drag})",
+                    noise.spec()
+                ),
+            ));
+        }
+        let sigma = noise.levels().iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        Ok(Params {
+            drag,
+            sigma,
+            lambda: 0.0,
+            reset: ResetRule::Poisson(PoissonReset {
+                rate,
+                velocity: reset_velocity,
+            }),
+            schedule: Schedule::default(),
+            noise: Some(noise.intern()),
+        })
+    }
+
+    /// The noise model other than the paper's: None for the symmetric
+    /// telegraph noise ±sigma at rate lambda without thermal noise.
+    pub fn noise(&self) -> Option<&'static NoiseModel> {
+        self.noise
+    }
+
+    /// The noise model, the paper's included.
+    pub fn noise_model(&self) -> Result<NoiseModel> {
+        match self.noise {
+            Some(m) => Ok(m.clone()),
+            None => NoiseModel::telegraph(self.sigma, self.lambda),
+        }
+    }
+
+    /// [`Params::new`] or [`Params::with_noise`] with this drag and noise,
+    /// another rate and reset velocity (the resetting rule's point target,
+    /// noise kept).
+    fn rebuilt(&self, rate: f64, reset_velocity: f64) -> Result<Self> {
+        match self.noise {
+            None => Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity),
+            Some(m) => Params::with_noise(self.drag, m.clone(), rate, reset_velocity),
+        }
     }
 
     /// Same parameters with another reset rate (validated), the rest of the
     /// resetting rule kept.
     pub fn with_rate(&self, rate: f64) -> Result<Self> {
-        let base = Params::new(
-            self.drag,
-            self.sigma,
-            self.lambda,
-            rate,
-            self.reset_velocity(),
-        )?;
+        let base = self.rebuilt(rate, self.reset_velocity())?;
         let p = Params {
             reset: self.reset.with_rate(base.rate()),
             ..base
@@ -177,6 +289,16 @@ impl Params {
 
     /// Same parameters with another flip rate (validated).
     pub fn with_lambda(&self, lambda: f64) -> Result<Self> {
+        if let Some(m) = self.noise {
+            return Err(Error::invalid(
+                "lambda",
+                lambda,
+                format!(
+                    "no lambda with noise {} (its rates are in the spec)",
+                    m.spec()
+                ),
+            ));
+        }
         let base = Params::new(
             self.drag,
             self.sigma,
@@ -195,15 +317,9 @@ impl Params {
     /// rule kept.
     pub fn with_reset_velocity(&self, reset_velocity: f64) -> Result<Self> {
         self.point_target("another reset velocity")?;
-        Params::new(
-            self.drag,
-            self.sigma,
-            self.lambda,
-            self.rate(),
-            reset_velocity,
-        )?
-        .with_reset(Target::point(reset_velocity), self.reset.noise())?
-        .with_schedule(self.schedule)
+        self.rebuilt(self.rate(), reset_velocity)?
+            .with_reset(Target::point(reset_velocity), self.reset.noise())?
+            .with_schedule(self.schedule)
     }
 
     /// Same parameters and rate with another resetting protocol: the target
@@ -215,7 +331,7 @@ impl Params {
         let written = || spec::write(&target, noise);
         let reset = match target.point_velocity() {
             Some(v) => {
-                let base = Params::new(self.drag, self.sigma, self.lambda, rate, v)?;
+                let base = self.rebuilt(rate, v)?;
                 match noise {
                     NoiseAtReset::Kept => {
                         return Ok(Params {
@@ -275,7 +391,12 @@ impl Params {
     /// Refuse what `solver` does not run: every feature of the schedule
     /// is looked up in [`support::supports`]; the first one missing is an
     /// error naming its flag, the solver and the methods that run it.
+    /// A noise other than the paper's is looked up in
+    /// [`noise_support::check`] first.
     pub fn require(&self, solver: Solver) -> Result<()> {
+        if let Some(m) = self.noise {
+            noise_support::check(solver, m)?;
+        }
         for f in self.schedule.features() {
             if !support::supports(solver, f) {
                 return Err(Error::invalid(
@@ -324,11 +445,13 @@ impl Params {
     pub fn drag(&self) -> DragLaw {
         self.drag
     }
-    /// Noise amplitude Sigma.
+    /// Noise amplitude Sigma of the paper's noise. With another noise model
+    /// ([`Params::noise`]): its largest |level|, which no method reads.
     pub fn sigma(&self) -> f64 {
         self.sigma
     }
-    /// Flip rate lambda (eta correlation Sigma² e^{-2 lambda |t|}).
+    /// Flip rate lambda (eta correlation Sigma² e^{-2 lambda |t|}). With
+    /// another noise model ([`Params::noise`]): 0, which no method reads.
     pub fn lambda(&self) -> f64 {
         self.lambda
     }
@@ -366,9 +489,18 @@ impl Params {
         }
     }
 
-    /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. (8)-(10)).
+    /// Upper velocity bound v_u = g⁻¹(Sigma) (paper Eqs. (8)-(10)). With
+    /// another noise model: the larger |edge| of its velocity interval
+    /// ([`NoiseModel::velocity_interval`], Eq. (N1); ∞ with thermal noise
+    /// and an unbounded drag).
     pub fn v_upper(&self) -> f64 {
-        self.drag.inverse(self.sigma)
+        match self.noise {
+            None => self.drag.inverse(self.sigma),
+            Some(m) => {
+                let (lo, hi) = m.velocity_interval(&self.drag);
+                lo.abs().max(hi.abs())
+            }
+        }
     }
     /// The Newtonian medium on the same velocity interval: g(v) = v with
     /// Sigma' = v_u, the flip rate, resetting rule and schedule unchanged.

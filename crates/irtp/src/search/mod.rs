@@ -167,10 +167,14 @@ fn check_reset_position(x0: f64, target: PositionTarget, xr: f64) -> Result<()> 
 }
 
 impl SearchProblem {
-    /// Validate: x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
+    /// Validate: the paper's noise (another noise model is refused, naming
+    /// `noise`: no search method runs it yet); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
     /// (v_l, v_u); a reset position strictly on the start side (the same
     /// side of L as x0, or inside (a, b)). NaN fails every check.
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
+        if let Some(m) = params.noise() {
+            crate::model::noise::support::refuse("the search (mfpt --xt/--interval)", m)?;
+        }
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;
         let (vl, vu) = params.bounds();

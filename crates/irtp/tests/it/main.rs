@@ -22,6 +22,7 @@ mod mfpt_control;
 mod mfpt_sim;
 mod models;
 mod msd_fit;
+mod noise;
 mod power_kink;
 mod search_backward;
 mod search_cross;

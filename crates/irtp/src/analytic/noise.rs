@@ -1,0 +1,90 @@
+//! The closed forms for a noise model other than the paper's, from
+//! [`Params`] (what `irtp analytic` runs; docs/equations.md, "Noise
+//! kinds"): linear drag g = v with any noise model and Poisson velocity
+//! resetting to a point ([`LinearNoise`], Eqs. (N3)-(N6)); any drag with an
+//! asymmetric telegraph noise at temperature 0 and r = 0
+//! ([`TelegraphR0Density`], Eq. (N8)). Both apply to linear drag with an
+//! asymmetric telegraph noise at r = 0. Anything else is refused by name.
+
+use super::linear_noise::{LinearNoise, NoiseMoments};
+use super::telegraph_r0::TelegraphR0Density;
+use crate::error::{Error, Result};
+use crate::model::noise::{
+    support::{blamed, RUNNERS},
+    NoiseKind, NoiseModel,
+};
+use crate::model::{DragLaw, Params};
+
+/// What the closed forms give for one set of parameters.
+#[derive(Clone, Debug)]
+pub struct NoiseClosedForm {
+    /// The noise model.
+    pub noise: NoiseModel,
+    /// Linear drag: `<v>`, `<v²>`, the drift and D_eff, Eqs. (N3)-(N6).
+    pub moments: Option<NoiseMoments>,
+    /// An asymmetric telegraph noise at r = 0: the stationary density,
+    /// Eq. (N8).
+    pub density: Option<TelegraphR0Density>,
+}
+
+/// The closed forms for `p`'s noise model (Some in [`Params::noise`]):
+/// refused with an error naming the flag when the protocol is not the
+/// paper's Poisson clock to a point with the noise kept, or when neither
+/// closed form applies.
+pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
+    let Some(noise) = p.noise() else {
+        return Err(Error::invalid(
+            "noise",
+            "telegraph (the paper's)",
+            "another noise model (the paper's runs in analytic::r0 and analytic::linear)",
+        ));
+    };
+    if let Some(f) = p.schedule().features().into_iter().next() {
+        return Err(Error::invalid(
+            f.flag(),
+            p.schedule().spec_of(f),
+            format!(
+                "the Poisson clock without modifiers with noise {}",
+                noise.spec()
+            ),
+        ));
+    }
+    if let Some(s) = p.reset_spec() {
+        return Err(Error::invalid(
+            "reset_to",
+            s,
+            format!("a point target, noise kept, with noise {}", noise.spec()),
+        ));
+    }
+    let moments = match p.drag() {
+        DragLaw::Linear => {
+            let v_r = p.point_target("the linear-drag noise moments")?;
+            Some(LinearNoise::new(1.0, noise.clone(), p.rate(), v_r)?.moments()?)
+        }
+        _ => None,
+    };
+    let density = match noise.kind() {
+        NoiseKind::Telegraph(t) if noise.temperature() == 0.0 && p.rate() == 0.0 => {
+            Some(TelegraphR0Density::new(p.drag(), *t)?)
+        }
+        _ => None,
+    };
+    if moments.is_none() && density.is_none() {
+        let (name, value) = blamed(noise);
+        return Err(Error::invalid(
+            name,
+            value,
+            format!(
+                "a case with a closed form (not drag {} at temperature {} and rate {}); run by: {RUNNERS}",
+                p.drag(),
+                noise.temperature(),
+                p.rate()
+            ),
+        ));
+    }
+    Ok(NoiseClosedForm {
+        noise: noise.clone(),
+        moments,
+        density,
+    })
+}

@@ -1,0 +1,63 @@
+//! Which method runs which noise model: the noise dimension of the support
+//! table of README.md (docs/equations.md, "Noise kinds").
+//!
+//! Every engine (the samplers, the forward and backward solvers and the
+//! symmetric closed forms) runs only the paper's symmetric telegraph noise
+//! without thermal noise, which [`crate::Params`] carries as its default.
+//! Any other noise model is refused by [`check`], called from
+//! [`crate::Params::require`], with one line naming the flag and what runs
+//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
+//! linear drag with any noise model and Poisson velocity resetting to a
+//! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
+//! at r = 0 (Eq. (N8)).
+
+use super::NoiseModel;
+use crate::error::{Error, Result};
+use crate::model::reset::Solver;
+
+/// What runs a noise model other than the paper's, for messages.
+pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+
+/// Whether `solver` runs `noise` (a model other than the paper's default):
+/// no engine does yet. The closed forms of `irtp analytic` for such models
+/// are in [`crate::analytic::noise`], which checks its own cases.
+pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
+    let _ = (solver, noise);
+    false
+}
+
+/// Refuse a noise model that `solver` does not run ([`refuse`]).
+pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
+    if supports(solver, noise) {
+        return Ok(());
+    }
+    refuse(solver.command(), noise)
+}
+
+/// The refusal of a noise model by `method` (a command, for the message):
+/// names `temperature` for the paper's noise with T > 0, else `noise`, and
+/// lists [`RUNNERS`]. Problems that no method runs with another noise (the
+/// first-passage and search problems) refuse it when built.
+pub fn refuse(method: &str, noise: &NoiseModel) -> Result<()> {
+    let (name, value) = blamed(noise);
+    Err(Error::invalid(
+        name,
+        value,
+        format!(
+            "a noise that {method} runs: the paper's symmetric telegraph noise (--sigma, \
+             --lambda) at --temperature 0; this noise is run by: {RUNNERS}"
+        ),
+    ))
+}
+
+/// The flag a refusal of `noise` names, and its value: `temperature` for
+/// the paper's noise with T > 0 (only the temperature was asked for), else
+/// `noise` and its spec.
+pub fn blamed(noise: &NoiseModel) -> (&'static str, String) {
+    if noise.temperature() > 0.0 && noise.kind().symmetric_telegraph().is_some() {
+        ("temperature", noise.temperature().to_string())
+    } else {
+        ("noise", noise.spec())
+    }
+}

@@ -1,0 +1,47 @@
+"""The noise keywords (README.md, "Noise kinds"): `noise=` and
+`temperature=` reach the CLI's validation and closed forms, and `Params`
+carries them."""
+
+from __future__ import annotations
+
+import pytest
+
+import irtp
+
+RPT = "rpt:sigma=1,alpha=1,beta=2"
+
+
+def test_analytic_runs_a_noise_model():
+    res = irtp.analytic(drag="linear", noise=RPT, temperature=0.25, rate=0.5)
+    assert res.summary["noise"] == RPT and res.summary["temperature"] == 0.25
+    # rpt at r = 0, T = 0: D_eff = <v^2> (1/gamma + 1/alpha), docs/equations.md (N6).
+    r0 = irtp.analytic(drag="linear", noise=RPT)
+    assert r0.d_eff == pytest.approx(r0.v2 * 2.0, rel=1e-12)
+
+
+def test_the_papers_noise_as_a_spec_is_the_same_numbers():
+    a = irtp.analytic(drag="tanh", sigma=0.75, lambda_=0.625, points=20)
+    b = irtp.analytic(drag="tanh", noise="telegraph:sigma=0.75,lambda=0.625", points=20)
+    assert list(a.p) == list(b.p) and a.v2 == b.v2
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"noise": RPT}, "noise"),
+    ({"temperature": 0.5}, "temperature"),
+])
+def test_other_methods_refuse_a_noise_by_name(kwargs, name):
+    with pytest.raises(ValueError) as e:
+        irtp.fp_stationary(cells=100, **kwargs)
+    assert str(e.value).startswith(f"invalid {name} = ")
+
+
+def test_params_carry_noise_and_temperature():
+    p = irtp.Params(drag="linear", noise=RPT, temperature=0.25)
+    assert (p.noise, p.temperature) == (RPT, 0.25)
+    res = irtp.analytic(params=p)
+    assert res.summary["noise"] == RPT
+    # A mapping with a noise spec drops sigma and lambda (the spec has them).
+    back = irtp.Params.from_mapping({"drag": "linear", "noise": RPT, "temperature": 0.25,
+                                     "sigma": 1.0, "lambda": 0.0, "rate": 0.0})
+    assert (back.noise, back.sigma, back.lambda_) == (RPT, None, None)
+    assert irtp.analytic(params=back).d_eff == res.d_eff
