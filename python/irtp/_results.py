@@ -35,6 +35,14 @@ _KEY_NUMBERS = {
 _SCALARS = (bool, int, float, str, type(None))
 
 
+def _plain(value: Any) -> bool:
+    """A summary value exposed as an attribute: a scalar, or a short list of
+    scalars (a range such as ``r_opt_range``)."""
+    if isinstance(value, _SCALARS):
+        return True
+    return isinstance(value, list) and len(value) <= 4 and all(isinstance(x, _SCALARS) for x in value)
+
+
 def _fmt(x: Any) -> str:
     if isinstance(x, float):
         return f"{x:.6g}"
@@ -71,7 +79,8 @@ class Result:
 
     Every table column is also an attribute (``res.t``, ``res.v2``, ...;
     when two tables share a column name the first table's wins). Top-level
-    scalars of ``summary`` are attributes too when no column or attribute
+    scalars of ``summary`` (and short lists of them, such as
+    ``r_opt_range``) are attributes too when no column or attribute
     of the same name exists (``res.d_eff``); ``res.summary[key]`` always
     works.
     """
@@ -103,7 +112,7 @@ class Result:
             raise AttributeError(name)
         columns = self.__dict__.get("_columns", {})
         summary = self.__dict__.get("summary")
-        scalar = isinstance(summary, dict) and isinstance(summary.get(name), _SCALARS)
+        scalar = isinstance(summary, dict) and _plain(summary.get(name))
         if scalar and name in summary and self._summary_first:
             return summary[name]
         if name in columns:
@@ -118,7 +127,7 @@ class Result:
     def __dir__(self) -> List[str]:
         names = set(super().__dir__()) | set(self._columns)
         if isinstance(self.summary, dict):
-            names |= {k for k, v in self.summary.items() if isinstance(v, _SCALARS)}
+            names |= {k for k, v in self.summary.items() if _plain(v)}
         return sorted(names)
 
     def _key_numbers(self) -> List[str]:
