@@ -1091,16 +1091,7 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
         r_max: opts.r_max,
     };
     let json = to_value(&summary);
-    let grid = Table::from_rows(
-        "rate_grid",
-        &["rate", "tau"],
-        // Rates where tau exceeds the f64 range (the target is practically
-        // never reached) have no number to tabulate: left out.
-        best.grid
-            .iter()
-            .filter(|(_, t)| t.is_finite())
-            .map(|&(r, t)| [r, t]),
-    );
+    let grid = rate_grid(&best.grid);
     let results = Results {
         method: "backward-box + golden-section".into(),
         seed: None,
@@ -1112,4 +1103,17 @@ fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outcome> {
         wall_time_s: wall,
     };
     finish("mfpt optimize", results, out, ctx)
+}
+
+/// `rate_grid.csv` of an optimisation: the coarse grid (r, tau). Rates
+/// where tau exceeds the f64 range (the target is practically never
+/// reached) have no number to tabulate: left out.
+pub(super) fn rate_grid(grid: &[(f64, f64)]) -> Table {
+    Table::from_rows(
+        "rate_grid",
+        &["rate", "tau"],
+        grid.iter()
+            .filter(|(_, t)| t.is_finite())
+            .map(|&(r, t)| [r, t]),
+    )
 }

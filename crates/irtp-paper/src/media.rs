@@ -299,13 +299,13 @@ fn kind_name(kind: i8) -> &'static str {
 }
 
 fn title(spec: &Spec, mi: usize) -> String {
-    let m = &spec.media[mi];
-    format!(
-        "{} ({}), Σ = {}",
-        m.drag,
-        kind_name(spec.kinds[mi]),
-        fmt_num(m.sigma)
-    )
+    medium_title(&spec.media[mi], spec.kinds[mi])
+}
+
+/// A medium's panel title: its law, its kind (`kinds`: +1 shear-thickening,
+/// 0 Newtonian, -1 shear-thinning) and Sigma (also `reproduce search`'s).
+pub(crate) fn medium_title(m: &Medium, kind: i8) -> String {
+    format!("{} ({}), Σ = {}", m.drag, kind_name(kind), fmt_num(m.sigma))
 }
 
 /// Three panels per medium: tau_r / tau_0 against r, P_s(v), and the map.

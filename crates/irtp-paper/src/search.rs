@@ -328,22 +328,8 @@ enum Part {
     Tail(Tail),
 }
 
-fn kind_name(kind: i8) -> &'static str {
-    match kind {
-        1 => "shear-thickening",
-        0 => "Newtonian",
-        _ => "shear-thinning",
-    }
-}
-
 fn title(spec: &Spec, mi: usize) -> String {
-    let m = &spec.media[mi];
-    format!(
-        "{} ({}), Σ = {}",
-        m.drag,
-        kind_name(spec.kinds[mi]),
-        fmt_num(m.sigma)
-    )
+    super::media::medium_title(&spec.media[mi], spec.kinds[mi])
 }
 
 /// Two panels per medium: tau(r) of the three protocols with sampler

@@ -13,7 +13,6 @@ use super::super::common::parse_size;
 use super::super::{finish, open_out, to_value, Context, Outcome, Results};
 use super::search::SearchFlags;
 use super::{scan_note, scan_table, table_text, text_lines, Method, OptimizeArgs, Over, ScanArgs};
-use crate::Table;
 use clap::Args;
 use irtp::mfpt::optimize::{scan_values, Optimum, RateRange};
 use irtp::mfpt::{FptSummary, ParticleOptions};
@@ -492,14 +491,7 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
         cells_v: backward.cells_v,
     };
     let json = to_value(&summary);
-    let grid = Table::from_rows(
-        "rate_grid",
-        &["rate", "tau"],
-        best.grid
-            .iter()
-            .filter(|(_, t)| t.is_finite())
-            .map(|&(r, t)| [r, t]),
-    );
+    let grid = super::rate_grid(&best.grid);
     let results = Results {
         method: if by_clock.is_some() {
             "renewal route + golden-section".into()
