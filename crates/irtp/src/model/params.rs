@@ -1,7 +1,7 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
-use super::noise::{support as noise_support, NoiseModel};
+use super::noise::{chain::Chain, support as noise_support, NoiseModel};
 use super::reset::{
     spec, support, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule,
     Schedule, Solver, Target,
@@ -543,9 +543,23 @@ impl Params {
         }
         Ok(Some(n))
     }
-    /// (v_l, v_u).
+    /// (v_l, v_u): (-g⁻¹(Sigma), g⁻¹(Sigma)) for the paper's noise; with
+    /// another noise model its velocity interval
+    /// ([`NoiseModel::velocity_interval`], Eq. (N1)): (g⁻¹(min a), g⁻¹(max a))
+    /// without thermal noise (asymmetric for an asymmetric noise), the
+    /// drag's own domain (±∞ for an unbounded law) with T > 0.
     pub fn bounds(&self) -> (f64, f64) {
-        (self.v_lower(), self.v_upper())
+        match self.noise {
+            None => (self.v_lower(), self.v_upper()),
+            Some(m) => m.velocity_interval(&self.drag),
+        }
+    }
+
+    /// The noise chain the engines run: levels, generator, exit rates,
+    /// stationary law and temperature ([`Chain`]); the paper's noise is the
+    /// two-state chain (+Sigma, -Sigma) flipping at rate lambda, T = 0.
+    pub fn chain(&self) -> Result<Chain> {
+        Chain::new(&self.noise_model()?)
     }
 
     /// Largest Euler step that keeps the velocity inside (v_l, v_u):

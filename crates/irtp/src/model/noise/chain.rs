@@ -242,3 +242,115 @@ mod tests {
         assert!(e.to_string().contains("irreducible"), "{e}");
     }
 }
+
+/// A noise model as the engines run it (Eq. (N1)): state s has level a_s,
+/// leaves at rate q_s = -Q_ss to s' with probability Q_ss'/q_s; π is the
+/// stationary law (Eq. (N2)); T the temperature of the thermal noise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    /// Levels a_s.
+    pub levels: Vec<f64>,
+    /// Generator Q (rows summing to 0).
+    pub q: Vec<Vec<f64>>,
+    /// Exit rates q_s = Σ_{s'≠s} Q_ss'.
+    pub exit: Vec<f64>,
+    /// Stationary law π.
+    pub pi: Vec<f64>,
+    /// Temperature T ≥ 0.
+    pub temperature: f64,
+}
+
+impl Chain {
+    /// The chain of a noise model (its stationary law checked).
+    pub fn new(m: &super::NoiseModel) -> Result<Self> {
+        let q = m.generator();
+        let exit = q
+            .iter()
+            .enumerate()
+            .map(|(s, row)| {
+                row.iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != s)
+                    .map(|(_, r)| r)
+                    .sum()
+            })
+            .collect();
+        Ok(Chain {
+            levels: m.levels(),
+            pi: m.stationary()?,
+            q,
+            exit,
+            temperature: m.temperature(),
+        })
+    }
+
+    /// Number of states N.
+    pub fn states(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// The state a jump from s goes to, given u uniform on [0, q_s): the
+    /// first s' ≠ s whose cumulative rate Σ_{j ≤ s', j ≠ s} Q_sj exceeds u
+    /// (the same uniform that chose a jump over a reset can be reused,
+    /// scaled). For two states it is the other state whatever u.
+    #[inline]
+    pub fn jump(&self, s: usize, u: f64) -> usize {
+        let row = &self.q[s];
+        let mut acc = 0.0;
+        let mut last = s;
+        for (j, &r) in row.iter().enumerate() {
+            if j == s || !(r > 0.0) {
+                continue;
+            }
+            acc += r;
+            last = j;
+            if u < acc {
+                return j;
+            }
+        }
+        last
+    }
+
+    /// A state drawn from π given u uniform on [0, 1).
+    #[inline]
+    pub fn draw_stationary(&self, u: f64) -> usize {
+        let mut acc = 0.0;
+        for (j, &p) in self.pi.iter().enumerate() {
+            acc += p;
+            if u < acc {
+                return j;
+            }
+        }
+        self.pi.len() - 1
+    }
+}
+
+#[cfg(test)]
+mod chain_tests {
+    use super::*;
+
+    #[test]
+    fn jumps_follow_the_rates() {
+        let m = super::super::NoiseModel::parse("rpt:sigma=1,alpha=2,beta=4", 0.0).unwrap();
+        let c = Chain::new(&m).unwrap();
+        assert_eq!(c.states(), 3);
+        // Each state's jump targets in proportion to its rates.
+        for s in 0..3 {
+            let n = 100_000;
+            let mut hits = vec![0usize; 3];
+            for k in 0..n {
+                let u = (k as f64 + 0.5) / n as f64 * c.exit[s];
+                hits[c.jump(s, u)] += 1;
+            }
+            assert_eq!(hits[s], 0);
+            for j in (0..3).filter(|&j| j != s) {
+                let want = c.q[s][j] / c.exit[s];
+                assert!((hits[j] as f64 / n as f64 - want).abs() < 1e-4, "{s}->{j}");
+            }
+        }
+        let pi_sum: f64 = c.pi.iter().sum();
+        assert!((pi_sum - 1.0).abs() < 1e-14);
+        assert_eq!(c.draw_stationary(0.0), 0);
+        assert_eq!(c.draw_stationary(1.0 - 1e-16), 2);
+    }
+}

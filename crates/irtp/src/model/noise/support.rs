@@ -23,8 +23,22 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
 /// no engine does yet. The closed forms of `irtp analytic` for such models
 /// are in [`crate::analytic::noise`], which checks its own cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
-    let _ = (solver, noise);
-    false
+    let _ = noise;
+    // One line per method: an engine that learns to run a noise model
+    // says which here (README's support table follows this match).
+    match solver {
+        Solver::Exact => false,
+        Solver::Euler => false,
+        Solver::FpStationary => false,
+        Solver::FpTransient => false,
+        Solver::FpMsd => false,
+        Solver::Backward => false,
+        Solver::FptDistribution => false,
+        Solver::MfptOptimize => false,
+        Solver::MfptExact => false,
+        Solver::MfptEuler => false,
+        Solver::ClosedForm => false,
+    }
 }
 
 /// Refuse a noise model that `solver` does not run ([`refuse`]).

@@ -226,6 +226,19 @@ impl NoiseAtReset {
         }
     }
 
+    /// The N-state form of [`NoiseAtReset::mix`]: the reset outflux `w`
+    /// of each noise state re-enters as `w` when kept and as (Σ w) π (the
+    /// noise's stationary law) when re-drawn.
+    pub fn mix_states(&self, w: &[f64], pi: &[f64]) -> Vec<f64> {
+        match self {
+            NoiseAtReset::Kept => w.to_vec(),
+            NoiseAtReset::Redrawn => {
+                let total: f64 = w.iter().sum();
+                pi.iter().map(|p| total * p).collect()
+            }
+        }
+    }
+
     /// The reset influx into the (+, -) states of the reset outflux (a, b)
     /// of the (+, -) states: (a, b) when the state is kept, both halves of
     /// a + b when it is re-drawn. Forward equations re-inject through it;
@@ -287,6 +300,21 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
         match self.noise() {
             NoiseAtReset::Kept => plus,
             NoiseAtReset::Redrawn => rng.gen::<bool>(),
+        }
+    }
+
+    /// The noise state (of N) after a reset from state `s`: kept, or
+    /// re-drawn from the stationary law of `chain` (one uniform).
+    #[inline]
+    fn draw_noise_state<R: Rng + ?Sized>(
+        &self,
+        s: usize,
+        chain: &crate::model::noise::chain::Chain,
+        rng: &mut R,
+    ) -> usize {
+        match self.noise() {
+            NoiseAtReset::Kept => s,
+            NoiseAtReset::Redrawn => chain.draw_stationary(rng.gen::<f64>()),
         }
     }
 
