@@ -10,5 +10,6 @@
 pub mod laws;
 pub mod linear_protocols;
 pub mod models;
+pub mod noises;
 pub mod spectral;
 pub mod stats;
