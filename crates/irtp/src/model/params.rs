@@ -481,10 +481,18 @@ impl Params {
     }
 
     /// Same parameters with the resetting rule mirrored under v → -v
-    /// (downward first passages run in the mirrored frame).
+    /// (downward first passages run in the mirrored frame), and a noise
+    /// model other than the paper's mirrored too
+    /// ([`NoiseModel::mirrored`]: every level negated, state for state).
     pub fn mirrored_reset(&self) -> Self {
+        let noise = self.noise.map(|m| match m.mirrored() {
+            Ok(n) => n.intern(),
+            // The mirror of a valid generator is valid.
+            Err(_) => m,
+        });
         Params {
             reset: self.reset.mirrored(),
+            noise,
             ..*self
         }
     }

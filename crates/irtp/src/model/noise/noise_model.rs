@@ -99,6 +99,24 @@ impl NoiseModel {
         m
     }
 
+    /// The noise under v → -v: the same generator with every level
+    /// negated, state for state (state s of the mirror is state s here), as
+    /// a `states` noise (`none` is its own mirror). Downward first
+    /// passages run in the mirrored frame.
+    pub fn mirrored(&self) -> Result<Self> {
+        if self.kind.levels().len() < 2 {
+            return Ok(self.clone());
+        }
+        let levels = self
+            .kind
+            .levels()
+            .iter()
+            .map(|&a| if a == 0.0 { 0.0 } else { -a })
+            .collect();
+        let kind = NoiseKind::States(super::States::new(levels, self.kind.generator())?);
+        NoiseModel::new(kind, self.temperature)
+    }
+
     /// The kind.
     pub fn kind(&self) -> &NoiseKind {
         &self.kind
