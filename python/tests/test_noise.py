@@ -45,3 +45,21 @@ def test_params_carry_noise_and_temperature():
                                      "sigma": 1.0, "lambda": 0.0, "rate": 0.0})
     assert (back.noise, back.sigma, back.lambda_) == (RPT, None, None)
     assert irtp.analytic(params=back).d_eff == res.d_eff
+
+
+def test_the_noise_class_writes_the_spec_the_cli_takes():
+    n = irtp.Noise.rpt(sigma=1, alpha=1, beta=2)
+    assert str(n) == RPT and n.kind == "rpt" and n == RPT
+    assert irtp.Noise.telegraph(1.5, 0.5).spec == "telegraph:sigma=1.5,lambda=0.5"
+    asym = irtp.Noise.telegraph(plus=1.5, minus=0.75, rate_plus=0.8, rate_minus=0.4)
+    assert asym.spec == "telegraph:plus=1.5,minus=0.75,rate_plus=0.8,rate_minus=0.4"
+    three = irtp.Noise.states([1, 0, -1], [[-1, 1, 0], [0.5, -1, 0.5], [0, 1, -1]])
+    assert three.spec == "states:levels=[1,0,-1],rates=[[-1,1,0],[0.5,-1,0.5],[0,1,-1]]"
+    assert irtp.Noise.none().spec == "none"
+    with pytest.raises(ValueError):
+        irtp.Noise.telegraph(1.0)
+    # Accepted wherever a spec is, with the same result.
+    a = irtp.analytic(drag="linear", noise=n, temperature=0.25)
+    b = irtp.analytic(drag="linear", noise=RPT, temperature=0.25)
+    assert a.v2 == b.v2
+    assert irtp.Params(drag="linear", noise=n).options()["noise"] == RPT
