@@ -4,7 +4,6 @@
 import os
 import pathlib
 from typing import (
-    Sequence,
     Any,
     Callable,
     Dict,
@@ -13,6 +12,7 @@ from typing import (
     Literal,
     Mapping,
     Optional,
+    Sequence,
     Tuple,
     Union,
     overload,
