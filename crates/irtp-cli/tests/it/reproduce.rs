@@ -66,11 +66,7 @@ fn legend_entries(fig: &str) -> &'static [&'static str] {
             "velocity-only, interval",
             "sampled S(t)",
         ],
-        "noise" => &[
-            "run-pause-tumble",
-            "telegraph + thermal",
-            "large-r limit",
-        ],
+        "noise" => &["run-pause-tumble", "telegraph + thermal", "large-r limit"],
         _ => &[],
     }
 }
