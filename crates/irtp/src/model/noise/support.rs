@@ -23,11 +23,10 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
 /// no engine does yet. The closed forms of `irtp analytic` for such models
 /// are in [`crate::analytic::noise`], which checks its own cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
-    let _ = noise;
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
-        Solver::Exact => false,
+        Solver::Exact => noise.temperature() == 0.0,
         Solver::Euler => false,
         Solver::FpStationary => false,
         Solver::FpTransient => false,
