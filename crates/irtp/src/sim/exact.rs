@@ -47,6 +47,13 @@
 //! its end skipped), and the flow resumes from the held velocity with the
 //! noise state of that moment. An event at t acts just after t: a
 //! recording time equal to a periodic reset time sees the state before it.
+//!
+//! A noise model other than the paper's (any finite-state noise at T = 0,
+//! docs/equations.md Eqs. (N10)-(N12)) runs the N-state loop of `states`
+//! through the same entry points ([`simulate`], [`simulate_units`]): per
+//! level its own segments, fixed point (possibly interior) and crossing
+//! times, events at rate q_s + r. It shares this module's segment code
+//! ([`Segments`], `flow_segment`, the occupation and crossing times).
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};

@@ -56,7 +56,7 @@ fn two_sided(drag: DragLaw) -> bool {
 /// the deficit table on [lo, hi]; else refused naming `noise`.
 fn level_segments<D: Drag>(
     drag: &D,
-    law: DragLaw,
+    (law, spec): (DragLaw, &str),
     a: f64,
     lo: f64,
     hi: f64,
@@ -75,12 +75,12 @@ fn level_segments<D: Drag>(
     }
     Err(Error::invalid(
         "noise",
-        a,
+        spec,
         format!(
-            "a level whose fixed point g⁻¹(a) = {vs:e} is the edge of the velocity interval \
-             [{lo:e}, {hi:e}] farthest from 0 for the exact sampler with drag {law} (interior or \
-             nearer fixed points are run for tan, tanh and linear drag; the Euler scheme covers \
-             the others)"
+            "levels whose fixed points g⁻¹(a) are the edges of the velocity interval, the \
+             farther from 0 for each, for the exact sampler with drag {law} (here level {a} has \
+             g⁻¹(a) = {vs:e} in [{lo:e}, {hi:e}]; interior or nearer fixed points are run for \
+             tan, tanh and linear drag)"
         ),
     ))
 }
@@ -88,7 +88,7 @@ fn level_segments<D: Drag>(
 impl<F: FlowMap> StatesSetup<F> {
     fn new<D: Drag<Flow = F>>(
         drag: &D,
-        law: DragLaw,
+        (law, spec): (DragLaw, &str),
         levels: &[f64],
         b: usize,
         bounds: (f64, f64),
@@ -112,15 +112,15 @@ impl<F: FlowMap> StatesSetup<F> {
             if !(rate >= MIN_RELAXATION_RATE && rate.is_finite()) {
                 return Err(Error::invalid(
                     "noise",
-                    a,
+                    spec,
                     format!(
                         "levels whose fixed point v* = g⁻¹(a) has a finite relaxation rate \
-                         g'(v*) >= {MIN_RELAXATION_RATE:e} for the exact sampler (here g'(v*) = \
-                         {rate:e}: a kink of the drag at v*); the Euler scheme covers it"
+                         g'(v*) >= {MIN_RELAXATION_RATE:e} for the exact sampler (here level \
+                         {a} has g'(v*) = {rate:e}: a kink of the drag at v*)"
                     ),
                 ));
             }
-            out.segs.push(level_segments(drag, law, a, lo, hi)?);
+            out.segs.push(level_segments(drag, (law, spec), a, lo, hi)?);
             out.vs.push(flow.fixed_point());
             out.inv_rate.push(1.0 / rate);
             out.tau.push(crossing_times(drag, a, &edges)?);
@@ -194,9 +194,9 @@ impl<F: FlowMap> StatesSampler<F> {
             bits.join(","),
             spec.bins
         );
-        let law = params.drag();
+        let (law, noise) = (params.drag(), params.noise_model()?.spec());
         let setup = crate::memo::shared(key, || {
-            StatesSetup::new(drag, law, &chain.levels, spec.bins, (lo, hi))
+            StatesSetup::new(drag, (law, &noise), &chain.levels, spec.bins, (lo, hi))
         })?;
         let setup = (*setup).clone();
         let reset = *params.reset();
