@@ -53,7 +53,7 @@
 //! through the same entry points ([`simulate`], [`simulate_units`]): per
 //! level its own segments, fixed point (possibly interior) and crossing
 //! times, events at rate q_s + r. It shares this module's segment code
-//! ([`Segments`], `flow_segment`, the occupation and crossing times).
+//! (`Segments`, `flow_segment`, the occupation and crossing times).
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
