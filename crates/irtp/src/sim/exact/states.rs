@@ -13,12 +13,12 @@
 //! This is a second event loop beside the paper's two-state one, on
 //! purpose: the paper's loop keeps its fixed-size per-state arrays and its
 //! random draws bit for bit (and its speed); both loops share the segment
-//! building blocks ([`Segments`], [`super::flow_segment`], the bin crossing
-//! times and occupation).
+//! building blocks ([`Segments`], `flow_segment` over the `StateTables`
+//! of either loop, the bin crossing times and occupation).
 
 use super::{
     add_crossings, close_particle, crossing_times, flow_segment, segments, DeficitTable, Lane,
-    Segments, StateFlow, MIN_RELAXATION_RATE,
+    Occupation, Segments, StateTables, MIN_RELAXATION_RATE,
 };
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint};
@@ -147,6 +147,40 @@ pub(super) struct StatesSampler<F> {
     seed: u64,
 }
 
+impl<F: FlowMap> StateTables<F> for StatesSampler<F> {
+    #[inline(always)]
+    fn seg(&self, si: usize) -> &Segments<F> {
+        &self.setup.segs[si]
+    }
+    #[inline(always)]
+    fn fixed_point(&self, si: usize) -> f64 {
+        self.setup.vs[si]
+    }
+    #[inline(always)]
+    fn inv_rate(&self, si: usize) -> f64 {
+        self.setup.inv_rate[si]
+    }
+    #[inline(always)]
+    fn phi_edges(&self, si: usize) -> &[f64] {
+        &self.setup.phi_edges[si]
+    }
+    #[inline(always)]
+    fn window(&self) -> (&[f64], f64) {
+        (&self.times, self.burn_in)
+    }
+}
+
+impl Occupation for StatesScratch {
+    #[inline(always)]
+    fn occ(&mut self) -> &mut [f64] {
+        &mut self.occ
+    }
+    #[inline(always)]
+    fn cross(&mut self, si: usize) -> &mut [i64] {
+        &mut self.cross[si]
+    }
+}
+
 /// Per-chunk scratch: occupation times and one crossing difference array
 /// per noise state.
 pub(super) struct StatesScratch {
@@ -260,14 +294,7 @@ impl<F: FlowMap> StatesSampler<F> {
             f64::INFINITY
         };
         let t_end = (p.t + gap).min(self.t_max);
-        let st = StateFlow {
-            seg: &self.setup.segs[s],
-            vs: self.setup.vs[s],
-            inv_rate: self.setup.inv_rate[s],
-            phi_edges: &self.setup.phi_edges[s],
-        };
-        let win = (&self.times[..], self.burn_in);
-        let b = flow_segment(st, win, p, obs, &mut sc.occ, &mut sc.cross[s], t_end);
+        let b = flow_segment(self, p, obs, sc, t_end);
         if t_end >= self.t_max {
             p.done = true;
             return;
