@@ -30,18 +30,9 @@ fn commands() -> Vec<Vec<&'static str>> {
         "--reset-position",
         "0",
     ];
+    // `simulate --method exact` runs a noise model at T = 0
+    // (noise_exact_cli.rs tests it and its refusals).
     let mut out: Vec<Vec<&str>> = vec![
-        vec![
-            "simulate",
-            "--method",
-            "exact",
-            "--particles",
-            "10",
-            "--t-max",
-            "1",
-            "--burn-in",
-            "0.5",
-        ],
         vec![
             "simulate",
             "--method",

@@ -9,7 +9,9 @@
 //! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
 //! linear drag with any noise model and Poisson velocity resetting to a
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
-//! at r = 0 (Eq. (N8)).
+//! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
+//! [`crate::sim::exact`]): any finite-state noise at T = 0 (Eqs.
+//! (N10)-(N12)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -17,17 +19,21 @@ use crate::model::reset::Solver;
 
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
-    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
+    --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol)";
 
-/// Whether `solver` runs `noise` (a model other than the paper's default):
-/// no engine does yet. The closed forms of `irtp analytic` for such models
-/// are in [`crate::analytic::noise`], which checks its own cases.
+/// Whether `solver` runs `noise` (a model other than the paper's default).
+/// The exact sampler runs any finite-state noise at T = 0 (its constructor
+/// refuses, naming `noise`, a level whose fixed point sits at a kink of the
+/// drag, and for a tabulated law a level whose fixed point is not the
+/// interval's farthest edge; the schedule modifiers by their flags). The
+/// closed forms of `irtp analytic` for such models are in
+/// [`crate::analytic::noise`], which checks its own cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
-    let _ = noise;
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
-        Solver::Exact => false,
+        Solver::Exact => noise.temperature() == 0.0,
         Solver::Euler => false,
         Solver::FpStationary => false,
         Solver::FpTransient => false,
