@@ -59,6 +59,8 @@ use rand::Rng as _;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 
+pub mod noise;
+
 /// How the per-step reset and flip decisions are drawn (same law, see module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -111,7 +113,13 @@ impl EulerPlan {
     pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
         params.require(Solver::Euler)?;
         super::check_period_window(params, spec)?;
-        let dt = params.check_dt(dt)?;
+        let dt = match params.noise() {
+            None => params.check_dt(dt)?,
+            Some(_) => {
+                refuse_schedule(params)?;
+                noise::check_noise_dt(params, dt)?
+            }
+        };
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
             return Err(Error::invalid(
@@ -176,6 +184,22 @@ impl EulerPlan {
             .map(|&n| n as f64 * self.dt)
             .collect()
     }
+}
+
+/// A noise model runs the paper's protocol only: a modifier of the
+/// resetting rule is refused by its flag.
+fn refuse_schedule(params: &Params) -> Result<()> {
+    if let Some(&f) = params.schedule().features().first() {
+        return Err(Error::invalid(
+            f.flag(),
+            params.schedule().spec_of(f),
+            format!(
+                "no {} with a noise model in the Euler schemes (Poisson resetting only)",
+                f.describe()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Simulate `spec.particles` particles with the Euler scheme and geometric
@@ -247,12 +271,64 @@ fn simulate_part(
 ) -> Result<Vec<Observables>> {
     let plan = EulerPlan::new(params, spec, dt)?;
     let p = &part;
+    if params.noise().is_some() {
+        return crate::with_drag!(params.drag(), |d| run_noise(
+            d, params, spec, &plan, sampling, p, progress
+        ));
+    }
     // Match the drag law and sampler once, outside the hot loop: the kernel
     // is monomorphised per (law, sampler) and has no dispatch per step.
     Ok(crate::with_drag!(params.drag(), |d| match sampling {
         EventSampling::Geometric => run::<_, Geometric>(d, params, spec, &plan, lanes, p, progress),
         EventSampling::Bernoulli => run::<_, Bernoulli>(d, params, spec, &plan, lanes, p, progress),
     }))
+}
+
+/// The N-state / thermal kernel ([`noise`]) over the particles of `part`,
+/// reduced like [`run`]; a non-finite result (a failed implicit step) is
+/// an error.
+fn run_noise<D: Drag>(
+    f: &D,
+    params: &Params,
+    spec: &SimSpec,
+    plan: &EulerPlan,
+    sampling: EventSampling,
+    part: &Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    let template = template(params, spec, plan);
+    let geometric = sampling.is_geometric();
+    let kernel = noise::NoiseKernel::new(f, params, spec, plan, &template, geometric)?;
+    let first = spec.first_particle;
+    let out = part.reduce(
+        spec.particles,
+        || template.clone(),
+        |lo, hi, obs| {
+            let mut occ = vec![0.0; spec.bins];
+            for i in lo..hi {
+                match sampling {
+                    EventSampling::Geometric => {
+                        kernel.particle::<Geometric>(first + i, obs, &mut occ)
+                    }
+                    EventSampling::Bernoulli => {
+                        kernel.particle::<Bernoulli>(first + i, obs, &mut occ)
+                    }
+                }
+            }
+        },
+        |total, part| total.merge(&part),
+        progress,
+    );
+    if out
+        .iter()
+        .any(|o| !(o.v2_time_avg.sum.is_finite() && o.v_time_avg.sum.is_finite()))
+    {
+        return Err(Error::Numerical {
+            method: "Euler scheme with a noise model",
+            reason: "a non-finite velocity (a drift-implicit step failed to converge)".into(),
+        });
+    }
+    Ok(out)
 }
 
 /// The empty observables of an Euler run: recorded at the plan's steps.

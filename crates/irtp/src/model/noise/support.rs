@@ -28,7 +28,8 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     // says which here (README's support table follows this match).
     match solver {
         Solver::Exact => false,
-        Solver::Euler => false,
+        // Any finite-state noise at any T (sim::euler::noise).
+        Solver::Euler => true,
         Solver::FpStationary => false,
         Solver::FpTransient => false,
         Solver::FpMsd => false,
