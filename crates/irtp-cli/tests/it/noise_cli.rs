@@ -42,17 +42,6 @@ fn commands() -> Vec<Vec<&'static str>> {
             "--burn-in",
             "0.5",
         ],
-        vec![
-            "simulate",
-            "--method",
-            "euler",
-            "--particles",
-            "10",
-            "--t-max",
-            "1",
-            "--burn-in",
-            "0.5",
-        ],
         vec!["fp", "stationary", "--cells", "50"],
         vec!["fp", "transient", "--cells", "128", "--t-max", "1"],
         vec!["fp", "msd", "--cells", "50", "--t-max", "0.1"],
@@ -89,7 +78,8 @@ fn commands() -> Vec<Vec<&'static str>> {
         ],
         vec!["analytic", "--drag", "tan"],
     ];
-    for m in ["backward", "exact", "euler"] {
+    // simulate and mfpt --method euler run every noise (noise_euler_cli.rs).
+    for m in ["backward", "exact"] {
         out.push([&mfpt[..], &["--method", m, "--particles", "10"][..]].concat());
     }
     for m in ["backward", "exact"] {

@@ -188,7 +188,7 @@ impl EulerPlan {
 
 /// A noise model runs the paper's protocol only: a modifier of the
 /// resetting rule is refused by its flag.
-fn refuse_schedule(params: &Params) -> Result<()> {
+pub(crate) fn refuse_schedule(params: &Params) -> Result<()> {
     if let Some(&f) = params.schedule().features().first() {
         return Err(Error::invalid(
             f.flag(),

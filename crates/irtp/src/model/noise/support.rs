@@ -17,7 +17,9 @@ use crate::model::reset::Solver;
 
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
-    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); \
+    simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
+    Poisson resetting without schedule modifiers)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default):
 /// no engine does yet. The closed forms of `irtp analytic` for such models
@@ -37,7 +39,8 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         Solver::FptDistribution => false,
         Solver::MfptOptimize => false,
         Solver::MfptExact => false,
-        Solver::MfptEuler => false,
+        // Any finite-state noise at any T (mfpt::euler's noise kernel).
+        Solver::MfptEuler => true,
         Solver::ClosedForm => false,
     }
 }
