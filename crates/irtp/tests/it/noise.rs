@@ -749,7 +749,7 @@ fn params_carry_another_noise_and_every_solver_refuses_it() {
             Solver::MfptOptimize,
         ];
         let runs = |s: &Solver| irtp::model::noise::support::supports(*s, &m);
-        match irtp::mfpt::Problem::new(p, 0.0, 0.1) {
+        match irtp::mfpt::Problem::new(p, 0.0, 0.5) {
             Ok(_) => assert!(first_passage.iter().any(runs)),
             Err(e) => assert_eq!(blamed(e).0, flag),
         }
