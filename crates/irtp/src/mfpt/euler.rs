@@ -13,6 +13,10 @@
 //! period as round(D/dt) held steps (no drift, Poisson resets discarded,
 //! flips on, periodic times up to its end skipped). A reset at or above
 //! v_t is the passage at that step.
+//!
+//! A noise model other than the paper's (any finite-state noise, thermal
+//! noise with the Brownian-bridge crossing check, Eq. (N19)) runs in the
+//! scalar kernel of the `noise` submodule, started in a state drawn from π.
 
 use super::estimator::{merge_units, FptSample, FptStats, FptSummary};
 use super::Problem;

@@ -42,6 +42,12 @@
 //!   step 4 go on;
 //! - position resetting: x ← x_r at the reset of step 3.
 //!
+//! A noise model other than the paper's (any finite-state noise, thermal
+//! noise) runs in the scalar kernel of [`noise`] (docs/equations.md,
+//! "Euler schemes with a noise model", Eqs. (N15)-(N19)), with the same
+//! plan, reset sampler and observables; the paper's noise keeps the kernel
+//! above bit for bit.
+//!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
 //! round to the same step (closer than dt, e.g. the short end of a log grid)

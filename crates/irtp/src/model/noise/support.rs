@@ -1,12 +1,13 @@
 //! Which method runs which noise model: the noise dimension of the support
 //! table of README.md (docs/equations.md, "Noise kinds").
 //!
-//! Every engine (the samplers, the forward and backward solvers and the
-//! symmetric closed forms) runs only the paper's symmetric telegraph noise
-//! without thermal noise, which [`crate::Params`] carries as its default.
-//! Any other noise model is refused by [`check`], called from
+//! Every engine runs the paper's symmetric telegraph noise without thermal
+//! noise, which [`crate::Params`] carries as its default; the Euler schemes
+//! (`simulate --method euler`, `mfpt --method euler`) run every noise model
+//! (docs/equations.md, "Euler schemes with a noise model"). Any other
+//! noise model is refused by [`check`], called from
 //! [`crate::Params::require`], with one line naming the flag and what runs
-//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
+//! it. Besides the Euler schemes, what runs it is [`crate::analytic::noise`] (`irtp analytic`):
 //! linear drag with any noise model and Poisson velocity resetting to a
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
 //! at r = 0 (Eq. (N8)).
@@ -22,7 +23,7 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     Poisson resetting without schedule modifiers)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default):
-/// no engine does yet. The closed forms of `irtp analytic` for such models
+/// the Euler schemes run every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for such models
 /// are in [`crate::analytic::noise`], which checks its own cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     let _ = noise;
