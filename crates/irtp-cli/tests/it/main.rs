@@ -23,6 +23,7 @@ mod interrupt;
 mod mfpt_cli;
 mod noise_cli;
 mod noise_exact_cli;
+mod noise_euler_cli;
 mod plot;
 mod protocol_samplers;
 mod protocol_solvers;

@@ -30,20 +30,9 @@ fn commands() -> Vec<Vec<&'static str>> {
         "--reset-position",
         "0",
     ];
-    // `simulate --method exact` runs a noise model at T = 0
-    // (noise_exact_cli.rs tests it and its refusals).
+    // `simulate` runs a noise model (exact: T = 0; euler: any; tested in
+    // noise_exact_cli.rs and noise_euler_cli.rs).
     let mut out: Vec<Vec<&str>> = vec![
-        vec![
-            "simulate",
-            "--method",
-            "euler",
-            "--particles",
-            "10",
-            "--t-max",
-            "1",
-            "--burn-in",
-            "0.5",
-        ],
         vec!["fp", "stationary", "--cells", "50"],
         vec!["fp", "transient", "--cells", "128", "--t-max", "1"],
         vec!["fp", "msd", "--cells", "50", "--t-max", "0.1"],
@@ -80,7 +69,8 @@ fn commands() -> Vec<Vec<&'static str>> {
         ],
         vec!["analytic", "--drag", "tan"],
     ];
-    for m in ["backward", "exact", "euler"] {
+    // simulate and mfpt --method euler run every noise (noise_euler_cli.rs).
+    for m in ["backward", "exact"] {
         out.push([&mfpt[..], &["--method", m, "--particles", "10"][..]].concat());
     }
     for m in ["backward", "exact"] {

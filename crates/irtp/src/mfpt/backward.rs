@@ -581,6 +581,11 @@ fn spread_correction(
 /// tau±(v) on the whole mesh, in the user's frame (a point or a random
 /// reset target).
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
+    // A noise model the backward equations do not run is refused here,
+    // for every caller (scans, default t-max estimates), by name.
+    if let Some(m) = problem.params().noise() {
+        crate::model::noise::support::check(crate::model::reset::Solver::Backward, m)?;
+    }
     opts.validate()?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;

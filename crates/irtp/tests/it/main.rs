@@ -24,6 +24,7 @@ mod models;
 mod msd_fit;
 mod noise;
 mod noise_exact;
+mod noise_euler;
 mod power_kink;
 mod search_backward;
 mod search_cross;

@@ -1,12 +1,13 @@
 //! Which method runs which noise model: the noise dimension of the support
 //! table of README.md (docs/equations.md, "Noise kinds").
 //!
-//! Every engine (the samplers, the forward and backward solvers and the
-//! symmetric closed forms) runs only the paper's symmetric telegraph noise
-//! without thermal noise, which [`crate::Params`] carries as its default.
-//! Any other noise model is refused by [`check`], called from
+//! Every engine runs the paper's symmetric telegraph noise without thermal
+//! noise, which [`crate::Params`] carries as its default; the Euler schemes
+//! (`simulate --method euler`, `mfpt --method euler`) run every noise model
+//! (docs/equations.md, "Euler schemes with a noise model"). Any other
+//! noise model is refused by [`check`], called from
 //! [`crate::Params::require`], with one line naming the flag and what runs
-//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
+//! it. Besides the Euler schemes, what runs it is [`crate::analytic::noise`] (`irtp analytic`):
 //! linear drag with any noise model and Poisson velocity resetting to a
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
 //! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
@@ -20,21 +21,27 @@ use crate::model::reset::Solver;
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
-    --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol)";
+    --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol); \
+    simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
+    Poisson resetting without schedule modifiers)";
 
-/// Whether `solver` runs `noise` (a model other than the paper's default).
-/// The exact sampler runs any finite-state noise at T = 0 (its constructor
-/// refuses, naming `noise`, a level whose fixed point sits at a kink of the
-/// drag, and for a tabulated law a level whose fixed point is not the
-/// interval's farthest edge; the schedule modifiers by their flags). The
-/// closed forms of `irtp analytic` for such models are in
-/// [`crate::analytic::noise`], which checks its own cases.
+/// Whether `solver` runs `noise` (a model other than the paper's default),
+/// one line per method (README's support table). The exact sampler runs
+/// any finite-state noise at T = 0 (its constructor refuses, naming
+/// `noise`, a level whose fixed point sits at a kink of the drag, and for a
+/// tabulated law a level whose fixed point is not the interval's farthest
+/// edge; the schedule modifiers by their flags); the Euler schemes run
+/// every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for
+/// such models are in [`crate::analytic::noise`], which checks its own
+/// cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
+        // Any finite-state noise at T = 0 (sim::exact).
         Solver::Exact => noise.temperature() == 0.0,
-        Solver::Euler => false,
+        // Any finite-state noise at any T (sim::euler::noise).
+        Solver::Euler => true,
         Solver::FpStationary => false,
         Solver::FpTransient => false,
         Solver::FpMsd => false,
@@ -42,7 +49,8 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         Solver::FptDistribution => false,
         Solver::MfptOptimize => false,
         Solver::MfptExact => false,
-        Solver::MfptEuler => false,
+        // Any finite-state noise at any T (mfpt::euler's noise kernel).
+        Solver::MfptEuler => true,
         Solver::ClosedForm => false,
     }
 }
