@@ -17,7 +17,8 @@ use crate::model::reset::Solver;
 
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
-    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); fp stationary, \
+    fp transient, fp msd (any drag, any noise and temperature, Poisson resetting to a point)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default):
 /// no engine does yet. The closed forms of `irtp analytic` for such models
@@ -29,9 +30,12 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     match solver {
         Solver::Exact => false,
         Solver::Euler => false,
-        Solver::FpStationary => false,
-        Solver::FpTransient => false,
-        Solver::FpMsd => false,
+        // The N-state forward solvers (crate::fp, Eqs. (N20)-(N29)): any
+        // finite-state noise, any T >= 0 (a truncated domain for an
+        // unbounded drag at T > 0, with its tail mass checked).
+        Solver::FpStationary => true,
+        Solver::FpTransient => true,
+        Solver::FpMsd => true,
         Solver::Backward => false,
         Solver::FptDistribution => false,
         Solver::MfptOptimize => false,
