@@ -22,6 +22,7 @@ mod hostile;
 mod interrupt;
 mod mfpt_cli;
 mod noise_cli;
+mod noise_fp_cli;
 mod plot;
 mod protocol_samplers;
 mod protocol_solvers;

@@ -207,30 +207,39 @@ fn vanishing_temperature_and_ornstein_uhlenbeck() {
     assert!(l1 <= est, "OU L1 {l1:e} vs {est:e}");
 }
 
-/// `fp transient` (linear drag, each linear case): mass 1 at all times,
-/// `<v>`(t) = V (1 - e^{-(1+r)t}) with V = (`<a>` + r v_r)/(1 + r) (the
-/// noise starts stationary, so d`<v>`/dt = `<a>` - (1 + r)`<v>` + r v_r),
-/// and `<v²>` at t = 40 the stationary value.
+/// `<v>`(t) of linear drag from v = 0 with the noise started from π:
+/// d`<v>`/dt = `<a>` - (1 + r)`<v>` + r v_r, so `<v>`(t) = V (1 - e^{-kt}),
+/// V = (`<a>` + r v_r)/k, k = 1 + r; and `<x>`(t) = V (t - (1 - e^{-kt})/k).
+fn linear_means(c: &NoiseCase, t: f64) -> (f64, f64) {
+    let mean_a = NoiseModel::parse(c.noise, c.temperature)
+        .unwrap()
+        .mean_level()
+        .unwrap();
+    let k = 1.0 + c.rate;
+    let v_inf = (mean_a + c.rate * c.reset_velocity) / k;
+    let e = (-k * t).exp();
+    (v_inf * (1.0 - e), v_inf * (t - (1.0 - e) / k))
+}
+
+fn transient_opts(cells: usize, times: &[f64], rtol: f64) -> TransientOptions {
+    TransientOptions {
+        cells,
+        t_max: *times.last().unwrap(),
+        times: times.to_vec(),
+        snapshot_times: vec![times[0]],
+        rtol,
+        atol: 1e-4 * rtol,
+        ..TransientOptions::default()
+    }
+}
+
+/// `fp transient` for every linear case: mass 1 at all times, `<v>`(t)
+/// against [`linear_means`] at short times, snapshots per state and ≥ 0.
 #[test]
-fn transient_conserves_mass_and_relaxes() {
+fn transient_conserves_mass_and_follows_the_mean() {
     for c in NOISE_CASES.iter().filter(|c| c.linear()) {
-        let p = c.params();
-        let mean_a = NoiseModel::parse(c.noise, c.temperature)
-            .unwrap()
-            .mean_level()
-            .unwrap();
-        let v_inf = (mean_a + c.rate * c.reset_velocity) / (1.0 + c.rate);
-        let times = vec![0.25, 0.5, 1.0, 2.0, 40.0];
-        let o = TransientOptions {
-            cells: 800,
-            t_max: 40.0,
-            times: times.clone(),
-            snapshot_times: vec![1.0],
-            rtol: 1e-8,
-            atol: 1e-12,
-            ..TransientOptions::default()
-        };
-        let tr = fp::transient(&p, &o).unwrap();
+        let times = [0.25, 0.5, 1.0, 2.0];
+        let tr = fp::transient(&c.params(), &transient_opts(400, &times, 1e-6)).unwrap();
         assert!(
             tr.mass_error_max < 1e-10,
             "{}: {}",
@@ -238,7 +247,7 @@ fn transient_conserves_mass_and_relaxes() {
             tr.mass_error_max
         );
         for (k, &t) in times.iter().enumerate() {
-            let want = v_inf * (1.0 - (-(1.0 + c.rate) * t).exp());
+            let want = linear_means(c, t).0;
             let err = (tr.v_mean[k] - want).abs();
             println!("{} transient <v>({t}): error {err:.2e}", c.name);
             assert!(
@@ -248,41 +257,47 @@ fn transient_conserves_mass_and_relaxes() {
                 tr.v_mean[k]
             );
         }
-        let e = closed_form(c);
-        let err = (tr.v2[4] - e.v2).abs();
-        println!(
-            "{} transient <v^2>(40): error {err:.2e} (mesh estimate {:.2e})",
-            c.name, tr.v2_mesh_error[4]
-        );
-        assert!(err < 1e-5);
         let snap = &tr.snapshots[0];
-        assert_eq!(snap.states.len(), e.pi.len());
+        assert_eq!(snap.states.len(), closed_form(c).pi.len());
         assert!(snap.p.iter().all(|&x| x >= 0.0));
     }
 }
 
-/// `fp msd`: `<x>`(t) = V (t - (1 - e^{-kt})/k), k = 1 + r (linear drag,
-/// integrating the transient mean), and Var x grows with slope 2 D_eff.
+/// `fp transient` relaxes to the stationary solution: `<v²>`(40) against
+/// the closed form (N4) for a jump noise and a thermal one.
 #[test]
-fn msd_gives_the_drift_and_the_diffusion_coefficient() {
+#[ignore = "slow tier: long transients on T = 0 graded meshes (~10 s)"]
+fn transient_relaxes_to_the_stationary_state() {
     for c in NOISE_CASES
         .iter()
-        .filter(|c| c.linear() && c.rate > 0.0)
-        .take(4)
+        .filter(|c| c.name == "linear-three" || c.name == "linear-telegraph-thermal")
     {
-        let p = c.params();
+        let tr = fp::transient(&c.params(), &transient_opts(400, &[1.0, 40.0], 1e-7)).unwrap();
         let e = closed_form(c);
-        let k = 1.0 + c.rate;
+        let err = (tr.v2[1] - e.v2).abs();
+        println!(
+            "{} transient <v^2>(40): error {err:.2e} (mesh estimate {:.2e})",
+            c.name, tr.v2_mesh_error[1]
+        );
+        assert!(err < 1e-5 && err <= tr.v2_mesh_error[1], "{}", c.name);
+    }
+}
+
+/// `fp msd`: `<x>`(t) against [`linear_means`] and Var x growing with
+/// slope 2 D_eff (Eq. (N6)) at long times, on the linear cases `cases`.
+fn msd_check(cases: &[&str]) {
+    for c in NOISE_CASES.iter().filter(|c| cases.contains(&c.name)) {
+        let e = closed_form(c);
         let o = MsdOptions {
-            cells: 200,
+            cells: 100,
             mesh: Mesh::Graded,
             levels: 3,
             times: vec![1.0, 30.0, 40.0],
             rtol: 1e-9,
         };
-        let m = fp::msd(&p, &o, &NoProgress).unwrap();
+        let m = fp::msd(&c.params(), &o, &NoProgress).unwrap();
         for (i, &t) in o.times.iter().enumerate() {
-            let want = e.v_mean * (t - (1.0 - (-k * t).exp()) / k);
+            let want = linear_means(c, t).1;
             let err = (m.x_mean[i] - want).abs();
             println!("{} msd <x>({t}): error {err:.2e}", c.name);
             assert!(err < 1e-4 * (1.0 + want.abs()), "{}: <x>({t})", c.name);
@@ -298,4 +313,15 @@ fn msd_gives_the_drift_and_the_diffusion_coefficient() {
             2.0 * e.d_eff
         );
     }
+}
+
+#[test]
+fn msd_gives_the_drift_and_the_diffusion_coefficient() {
+    msd_check(&["linear-thermal", "linear-telegraph-thermal"]);
+}
+
+#[test]
+#[ignore = "slow tier: moment chains on T = 0 graded meshes (~20 s)"]
+fn msd_gives_the_drift_and_the_diffusion_coefficient_for_jump_noises() {
+    msd_check(&["linear-asym", "linear-rpt", "linear-three"]);
 }
