@@ -33,9 +33,6 @@ fn commands() -> Vec<Vec<&'static str>> {
     // `simulate` runs a noise model (exact: T = 0; euler: any; tested in
     // noise_exact_cli.rs and noise_euler_cli.rs).
     let mut out: Vec<Vec<&str>> = vec![
-        vec!["fp", "stationary", "--cells", "50"],
-        vec!["fp", "transient", "--cells", "128", "--t-max", "1"],
-        vec!["fp", "msd", "--cells", "50", "--t-max", "0.1"],
         vec![
             "mfpt", "scan", "--v0", "0", "--vt", "0.5", "--over", "rate", "--from", "0.5", "--to",
             "1", "--points", "2",

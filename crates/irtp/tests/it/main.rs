@@ -25,6 +25,7 @@ mod msd_fit;
 mod noise;
 mod noise_exact;
 mod noise_euler;
+mod noise_fp;
 mod power_kink;
 mod search_backward;
 mod search_cross;

@@ -23,7 +23,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
     --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol); \
     simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
-    Poisson resetting without schedule modifiers)";
+    Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
+    drag, any noise and temperature, Poisson resetting to a point)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
@@ -42,9 +43,12 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         Solver::Exact => noise.temperature() == 0.0,
         // Any finite-state noise at any T (sim::euler::noise).
         Solver::Euler => true,
-        Solver::FpStationary => false,
-        Solver::FpTransient => false,
-        Solver::FpMsd => false,
+        // The N-state forward solvers (crate::fp, Eqs. (N20)-(N29)): any
+        // finite-state noise, any T >= 0 (a truncated domain for an
+        // unbounded drag at T > 0, with its tail mass checked).
+        Solver::FpStationary => true,
+        Solver::FpTransient => true,
+        Solver::FpMsd => true,
         Solver::Backward => false,
         Solver::FptDistribution => false,
         Solver::MfptOptimize => false,
