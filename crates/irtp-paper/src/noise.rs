@@ -127,6 +127,9 @@ pub struct Spec {
     pub fp_cells: usize,
     /// Rates of the D_eff panel.
     pub deff_rates: Vec<f64>,
+    /// Cells of its FP solves (the density at r = 10³ is a spike of width
+    /// ~Sigma/r at v_r: its D_eff needs a fine mesh; the solve is O(N)).
+    pub deff_cells: usize,
     /// The first passage of Fig. 7: v₀ → v_t.
     pub passage: (f64, f64),
     /// Rates searched by the optimiser.
@@ -164,8 +167,9 @@ impl Spec {
             lambda: 1.0,
             thermal_fraction: 0.05,
             density_rate: 1.0,
-            fp_cells: if quick { 400 } else { 2000 },
+            fp_cells: if quick { 2000 } else { 8000 },
             deff_rates: super::media::spaced(0.1, 1000.0, if quick { 5 } else { 13 }, true),
+            deff_cells: if quick { 8_000 } else { 40_000 },
             passage: (-0.249, 0.5),
             r_range: (1e-2, 1e2),
             grid_points: if quick { 9 } else { 25 },
@@ -272,7 +276,7 @@ fn compute_one(
         .map(|&r| {
             Ok((
                 r,
-                compute::fp_stationary(&spec.params(m, noise, r)?, spec.fp_cells)?.d_eff,
+                compute::fp_stationary(&spec.params(m, noise, r)?, spec.deff_cells)?.d_eff,
             ))
         })
         .collect::<Result<Vec<_>>>()?;
