@@ -31,7 +31,7 @@
 //! the telegraph noise.
 
 use super::fig1::Medium;
-use super::plot::{fmt_count, Axis, Color, Dash, Figure, Key, Panel, Series};
+use super::plot::{Axis, Color, Dash, Figure, Key, Panel, Series};
 use super::{
     compute, curve_seed, fmt_num, grid_of_curves, to_json, z_crit, Claim, FigureOutput, Options,
     Parameters, Verdict, Which,
@@ -342,20 +342,21 @@ pub fn plot(spec: &Spec, rows: &[Vec<NoiseResult>]) -> Figure {
             Dash::Solid,
         ),
         Key::line("large-r limit (D_a + 2T) / r²", Color::Gray, Dash::Dashed),
-        Key::points(format!(
-            "samplers' <v²> checked at r = {} ({} particles)",
-            fmt_num(spec.density_rate),
-            fmt_count(spec.particles)
-        )),
     ];
     let letters = b"abcdefghijklmnopqrstuvwxyz";
     for (mi, res) in rows.iter().enumerate() {
         let label = |k: usize| format!("({})", letters[(3 * mi + k) % 26] as char);
         let title = super::media::medium_title(&spec.media[mi], if mi == 0 { 1 } else { -1 });
-        let mut dens = Panel::new(label(0), title, Axis::linear("v"), Axis::log("P_{s}"));
+        // Thermal tails fall to 1e-30 and below: drawn down to 1e-3.
+        let mut dens = Panel::new(
+            label(0),
+            title,
+            Axis::linear("v"),
+            Axis::log("P_{s}").range(1e-3, 1e3),
+        );
         let mut deff = Panel::new(
             label(1),
-            "D_eff r²".to_string(),
+            "D_{eff} r² against r".to_string(),
             Axis::log("r"),
             Axis::log("D_{eff} r²"),
         );
@@ -368,14 +369,15 @@ pub fn plot(spec: &Spec, rows: &[Vec<NoiseResult>]) -> Figure {
         for (ni, n) in res.iter().enumerate() {
             let c = Color::Palette(ni);
             let name = Some(n.noise.label().to_string());
-            dens.series.push(Series::line(
-                name.clone(),
-                c,
-                Dash::Solid,
-                "fp",
-                n.density.0.clone(),
-                n.density.1.clone(),
-            ));
+            let (v, p): (Vec<f64>, Vec<f64>) = n
+                .density
+                .0
+                .iter()
+                .zip(&n.density.1)
+                .filter(|(_, &p)| p >= 1e-3)
+                .map(|(&v, &p)| (v, p))
+                .unzip();
+            dens.series.push(Series::line(name.clone(), c, Dash::Solid, "fp", v, p));
             let (r, d): (Vec<f64>, Vec<f64>) = n.d_eff.iter().map(|&(r, d)| (r, d * r * r)).unzip();
             let limit = vec![n.d_eff_limit; r.len()];
             deff.series.push(Series::line(
