@@ -704,9 +704,9 @@ fn params_with_the_papers_noise_are_the_default() {
 }
 
 /// Another noise is carried, serialised and read back, kept by the
-/// `with_*` builders, and refused by every solver, the first-passage and
-/// search problems, naming `noise` (or `temperature` for the paper's noise
-/// at T > 0).
+/// `with_*` builders, and refused by every solver whose line of the
+/// support table is off, the first-passage and search problems, naming
+/// `noise` (or `temperature` for the paper's noise at T > 0).
 #[test]
 fn params_carry_another_noise_and_every_solver_refuses_it() {
     use irtp::model::reset::Solver;
