@@ -21,7 +21,7 @@
 //!
 //! This is a separate, scalar kernel from the paper's SIMD kernel so the
 //! default path stays bit-identical and as fast; both share the plan
-//! ([`EulerPlan`]), the reset sampler ([`Events`]), the observables and
+//! ([`EulerPlan`]), the reset sampler (the kernel's `Events`), the observables and
 //! the drift step [`euler_step`].
 
 use super::{euler_step, geometric_gap, EulerPlan, Events};
@@ -89,7 +89,7 @@ impl StepChain {
         })
     }
 
-    /// The state a step that leaves s goes to, u uniform on [0, leave[s]).
+    /// The state a step that leaves s goes to, u uniform on [0, `leave[s]`).
     #[inline]
     pub fn dest(&self, s: usize, u: f64) -> usize {
         let c = &self.cum[s];
