@@ -101,13 +101,14 @@ pub(crate) fn mesh(p: &Params, c: &Chain, n: usize, refine: usize, graded: bool)
             } else {
                 piece.len - x0 - y1
             });
-            let last = k + 1 == pieces.len() && (x1, y1) == (piece.len, 0.0);
-            let (v, a) = if last || x1 > y1 {
+            // Each node from its nearer breakpoint (the piece's last node
+            // is the next breakpoint itself, exactly).
+            let (v, a) = if x1 > y1 {
                 (points[k + 1].v - y1, (k + 1, -y1))
             } else {
                 (piece.a + x1, (k, x1))
             };
-            edges.push(if last { points[k + 1].v } else { v });
+            edges.push(v);
             anchor.push(a);
         }
     }

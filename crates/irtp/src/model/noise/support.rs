@@ -1,15 +1,16 @@
 //! Which method runs which noise model: the noise dimension of the support
 //! table of README.md (docs/equations.md, "Noise kinds").
 //!
-//! Every engine (the samplers, the forward and backward solvers and the
-//! symmetric closed forms) runs only the paper's symmetric telegraph noise
-//! without thermal noise, which [`crate::Params`] carries as its default.
-//! Any other noise model is refused by [`check`], called from
-//! [`crate::Params::require`], with one line naming the flag and what runs
-//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
-//! linear drag with any noise model and Poisson velocity resetting to a
-//! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
-//! at r = 0 (Eq. (N8)).
+//! Every engine runs the paper's symmetric telegraph noise without thermal
+//! noise, which [`crate::Params`] carries as its default. Any other noise
+//! model is refused by [`check`], called from [`crate::Params::require`],
+//! with one line naming the flag and what runs it, unless [`supports`]
+//! says the method runs it. What runs it today: [`crate::analytic::noise`]
+//! (`irtp analytic`: linear drag with any noise model and Poisson velocity
+//! resetting to a point, Eqs. (N3)-(N6), and any drag with an asymmetric
+//! telegraph noise at r = 0, Eq. (N8)), and the Fokker-Planck solvers
+//! [`crate::fp`] (any drag, any finite-state noise, any T, Poisson
+//! resetting to a point, Eqs. (N20)-(N29)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -20,9 +21,9 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); fp stationary, \
     fp transient, fp msd (any drag, any noise and temperature, Poisson resetting to a point)";
 
-/// Whether `solver` runs `noise` (a model other than the paper's default):
-/// no engine does yet. The closed forms of `irtp analytic` for such models
-/// are in [`crate::analytic::noise`], which checks its own cases.
+/// Whether `solver` runs `noise` (a model other than the paper's default).
+/// The closed forms of `irtp analytic` for such models are in
+/// [`crate::analytic::noise`], which checks its own cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     let _ = noise;
     // One line per method: an engine that learns to run a noise model
