@@ -31,8 +31,15 @@ def test_the_papers_noise_as_a_spec_is_the_same_numbers():
 ])
 def test_other_methods_refuse_a_noise_by_name(kwargs, name):
     with pytest.raises(ValueError) as e:
-        irtp.fp_stationary(cells=100, **kwargs)
+        irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, **kwargs)
     assert str(e.value).startswith(f"invalid {name} = ")
+
+
+def test_fp_stationary_runs_a_noise_model():
+    # The N-state Fokker-Planck solver (docs/equations.md (N20)-(N29)).
+    res = irtp.fp_stationary(cells=100, noise=RPT, temperature=0.1, drag="tan")
+    assert res.summary["levels"] == [1.0, 0.0, -1.0]
+    assert 0.0 < res.v2 < 1.0
 
 
 def test_params_carry_noise_and_temperature():

@@ -367,29 +367,29 @@ fn noise_density(s: &fp::Stationary, n: &fp::NoiseSummary) -> Table {
     }
 }
 
-/// The N-state solver's additions to `summary.json`: the noise (levels,
-/// π, T), the computational domain and tail mass, the drift U = <v>, the
+/// The N-state solver's additions to `summary.json`: the noise's levels
+/// and π, the computational domain and tail mass, the drift U = <v>, the
 /// per-state means, the error estimates and observed orders.
 fn noise_summary(summary: &mut serde_json::Value, n: &fp::NoiseSummary) {
     let obj = summary.as_object_mut().expect("a JSON object");
     obj.remove("edge_exponent");
     obj.insert("drift".into(), obj["v_mean"].clone());
-    obj.insert(
-        "noise".into(),
-        json!({
-            "levels": n.levels,
-            "pi": n.pi,
-            "temperature": n.temperature,
-            "domain": [n.domain.0, n.domain.1],
-            "tail_mass": n.tail_mass,
-            "state_means": n.state_means,
-            "state_mean_errors": n.state_mean_errors,
-            "errors": n.errors.map(|e| json!({"v_mean": e[0], "v2": e[1], "d_eff": e[2]})),
-            "orders": n.orders.map(|e| json!({"v_mean": e[0], "v2": e[1], "d_eff": e[2]})),
-            "density_l1_error": n.density_l1_error,
-            "meshes": n.meshes,
-        }),
-    );
+    // Flat keys (`params` already records the noise spec and T).
+    let errs = |e: Option<[f64; 3]>| e.map(|e| json!({"v_mean": e[0], "v2": e[1], "d_eff": e[2]}));
+    for (k, v) in [
+        ("levels", json!(n.levels)),
+        ("pi", json!(n.pi)),
+        ("domain", json!([n.domain.0, n.domain.1])),
+        ("tail_mass", json!(n.tail_mass)),
+        ("state_means", json!(n.state_means)),
+        ("state_mean_errors", json!(n.state_mean_errors)),
+        ("error_estimates", json!(errs(n.errors))),
+        ("orders", json!(errs(n.orders))),
+        ("density_l1_error", json!(n.density_l1_error)),
+        ("meshes", json!(n.meshes)),
+    ] {
+        obj.insert(k.into(), v);
+    }
 }
 
 /// The N-state solver's line of the text output.

@@ -60,18 +60,14 @@ fn fp_stationary_runs_a_noise_model_and_thermal_noise() {
             header(&dir.join("density.csv")),
             format!("v,p,{},dv", cols.join(","))
         );
-        assert_eq!(
-            j["noise"]["levels"].as_array().unwrap().len(),
-            *states,
-            "{j}"
-        );
-        assert!(j["noise"]["errors"]["v2"].as_f64().unwrap() < 1e-3, "{j}");
+        assert_eq!(j["levels"].as_array().unwrap().len(), *states, "{j}");
+        assert!(j["error_estimates"]["v2"].as_f64().unwrap() < 1e-3, "{j}");
         assert_eq!(j["drift"], j["v_mean"]);
         if *t > 0.0 {
             // Ornstein-Uhlenbeck, r = 0: <v²> = T, to the error estimate.
-            let est = j["noise"]["errors"]["v2"].as_f64().unwrap();
+            let est = j["error_estimates"]["v2"].as_f64().unwrap();
             assert!((j["v2"].as_f64().unwrap() - 0.5).abs() <= est, "{j}");
-            assert!(j["noise"]["tail_mass"].as_f64().unwrap() < 1e-10, "{j}");
+            assert!(j["tail_mass"].as_f64().unwrap() < 1e-10, "{j}");
         }
     }
 }

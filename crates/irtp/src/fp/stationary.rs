@@ -305,8 +305,8 @@ fn check_invariants(params: &Params, v2: f64, d_eff: f64) -> Result<()> {
 /// Solve the stationary forward equations directly (no time stepping), in O(N).
 ///
 /// With a noise model (`params.noise()` is Some) the N-state solver runs
-/// ([`super::nstate`]): N coupled densities, thermal noise, `noise` filled
-/// in and `p_plus`, `p_minus` empty.
+/// (docs/equations.md (N20)-(N27)): N coupled densities, thermal noise,
+/// `noise` filled in and `p_plus`, `p_minus` empty.
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
     params.require(Solver::FpStationary)?;
     if params.noise().is_some() {

@@ -8,6 +8,7 @@ use irtp::analytic::linear_noise::{LinearNoise, NoiseMoments};
 use irtp::analytic::telegraph_r0::TelegraphR0Density;
 use irtp::fp::{self, Mesh, MsdOptions, Stationary, StationaryOptions, TransientOptions};
 use irtp::model::noise::{NoiseKind, NoiseModel};
+use irtp::model::reset::{NoiseAtReset, Target};
 use irtp::parallel::NoProgress;
 use irtp::{DragLaw, Params};
 use irtp_testkit::noises::{NoiseCase, NOISE_CASES};
@@ -120,7 +121,9 @@ fn asymmetric_telegraph_at_r0_matches_its_density() {
 }
 
 /// The paper's noise spelt as a generator runs the N-state path and
-/// agrees with the two-state solver to both solvers' discretisation error.
+/// agrees with the two-state solver to both solvers' discretisation error,
+/// with the paper's reset (point, noise kept) and with a uniform target
+/// and the noise re-drawn at a reset (the reset's W = π 1ᵀ).
 #[test]
 fn paper_as_states_matches_the_two_state_solver() {
     let cases = NOISE_CASES
@@ -128,40 +131,52 @@ fn paper_as_states_matches_the_two_state_solver() {
         .filter(|c| c.name.ends_with("paper-as-states"));
     let mut seen = 0;
     for c in cases {
-        seen += 1;
-        let p = c.params();
-        assert!(p.noise().is_some());
-        let s = solve(&p, 4000);
         let drag: DragLaw = c.drag.parse().unwrap();
         let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
-        let t = fp::stationary(&two, &opts(20_000)).unwrap();
-        let e = s.noise.as_ref().unwrap().errors.unwrap();
-        // The two-state solver's extrapolation error: its change from the
-        // fine-mesh value bounds it.
-        let e2 = |f: f64, x: f64| (x - f).abs();
-        within(
-            c.name,
-            "<v^2> vs 2-state",
-            s.v2,
-            t.v2,
-            e[1] + e2(t.fine.v2, t.v2),
-        );
-        within(
-            c.name,
-            "D_eff vs 2-state",
-            s.d_eff,
-            t.d_eff,
-            e[2] + e2(t.fine.d_eff, t.d_eff),
-        );
-        within(
-            c.name,
-            "<v> vs 2-state",
-            s.v_mean,
-            t.v_mean,
-            e[0] + e2(t.fine.v_mean, t.v_mean),
-        );
+        for rule in [None, Some((Target::uniform(-0.3, 0.5), NoiseAtReset::Redrawn))] {
+            seen += 1;
+            let (p, q) = match rule {
+                None => (c.params(), two),
+                Some((t, w)) => (
+                    c.params().with_reset(t, w).unwrap(),
+                    two.with_reset(t, w).unwrap(),
+                ),
+            };
+            assert!(p.noise().is_some());
+            let s = solve(&p, 4000);
+            let t = fp::stationary(&q, &opts(20_000)).unwrap();
+            let e = s.noise.as_ref().unwrap().errors.unwrap();
+            // The two-state solver's extrapolation error: its change from
+            // the fine-mesh value bounds it.
+            let e2 = |f: f64, x: f64| (x - f).abs();
+            let name = format!("{} ({})", c.name, if rule.is_some() { "uniform, redrawn" } else { "paper reset" });
+            within(&name, "<v^2> vs 2-state", s.v2, t.v2, e[1] + e2(t.fine.v2, t.v2));
+            within(&name, "D_eff vs 2-state", s.d_eff, t.d_eff, e[2] + e2(t.fine.d_eff, t.d_eff));
+            within(&name, "<v> vs 2-state", s.v_mean, t.v_mean, e[0] + e2(t.fine.v_mean, t.v_mean));
+        }
     }
-    assert_eq!(seen, 2);
+    assert_eq!(seen, 4);
+}
+
+/// A random reset target with linear drag: Eqs. (N3)-(N6) with the
+/// target's moments (`LinearNoise::with_target`), noise kept.
+#[test]
+fn a_random_target_matches_the_closed_forms() {
+    for c in NOISE_CASES.iter().filter(|c| c.name == "linear-rpt" || c.name == "linear-thermal") {
+        let target = Target::uniform(-0.4, 0.6);
+        let p = c.params().with_reset(target, NoiseAtReset::Kept).unwrap();
+        let s = solve(&p, 4000);
+        let m = NoiseModel::parse(c.noise, c.temperature).unwrap();
+        let e = LinearNoise::with_target(1.0, m, c.rate, target.moments())
+            .unwrap()
+            .moments()
+            .unwrap();
+        let est = s.noise.as_ref().unwrap().errors.unwrap();
+        let name = format!("{} uniform target", c.name);
+        within(&name, "<v>", s.v_mean, e.v_mean, est[0]);
+        within(&name, "<v^2>", s.v2, e.v2, est[1]);
+        within(&name, "D_eff", s.d_eff, e.d_eff, est[2]);
+    }
 }
 
 /// T → 0: T = 1e-6 and T = 0 agree to their estimates plus O(T); pure

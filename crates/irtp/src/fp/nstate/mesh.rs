@@ -20,6 +20,7 @@
 use super::super::grid::{piece_counts, End, Piece, LAYER, MAX_GRADING};
 use crate::error::{Error, Result};
 use crate::model::noise::chain::Chain;
+use crate::model::reset::Reset;
 use crate::model::{Drag, Params};
 
 /// Ratio ∫ (g - a_max) dv / T beyond the outermost fixed point at which
@@ -101,13 +102,14 @@ pub(crate) fn mesh(p: &Params, c: &Chain, n: usize, refine: usize, graded: bool)
             } else {
                 piece.len - x0 - y1
             });
-            let last = k + 1 == pieces.len() && (x1, y1) == (piece.len, 0.0);
-            let (v, a) = if last || x1 > y1 {
+            // Each node from its nearer breakpoint (the piece's last node
+            // is the next breakpoint itself, exactly).
+            let (v, a) = if x1 > y1 {
                 (points[k + 1].v - y1, (k + 1, -y1))
             } else {
                 (piece.a + x1, (k, x1))
             };
-            edges.push(if last { points[k + 1].v } else { v });
+            edges.push(v);
             anchor.push(a);
         }
     }
@@ -131,7 +133,10 @@ pub(crate) fn mesh(p: &Params, c: &Chain, n: usize, refine: usize, graded: bool)
             .map(|s| placement(j, &widths, drift(j, s), c.temperature))
             .collect()
     };
-    let target = place(p.reset_velocity());
+    let target = match p.reset().point() {
+        Some(v) => place(v),
+        None => spread(p, &edges, c.states())?,
+    };
     let origin = if node(0.0).is_some() {
         place(0.0)
     } else {
@@ -149,6 +154,34 @@ pub(crate) fn mesh(p: &Params, c: &Chain, n: usize, refine: usize, graded: bool)
         grading: points.iter().fold(1.0, |m, p| m.max(p.q)),
         truncated,
     })
+}
+
+/// A random reset target's cell masses on the mesh (Eq. (N20)'s δ(v - v_r)
+/// replaced by the target's law), the same for every state; refused (naming
+/// `reset_to`) where the domain holds less than 1 - 1e-10 of the law.
+fn spread(p: &Params, edges: &[f64], states: usize) -> Result<Vec<Vec<(usize, f64)>>> {
+    let t = p.reset().target();
+    let m: Vec<f64> = edges.windows(2).map(|e| t.mass(e[0], e[1])).collect();
+    let (inside, all) = (m.iter().sum::<f64>(), t.mass(f64::NEG_INFINITY, f64::INFINITY));
+    if !(inside >= (1.0 - 1e-10) * all && inside > 0.0) {
+        return Err(Error::invalid(
+            "reset_to",
+            p.reset_spec().unwrap_or_default(),
+            format!(
+                "a target law inside the computational domain [{}, {}] (it holds {:e} of it)",
+                edges[0],
+                edges[edges.len() - 1],
+                inside / all
+            ),
+        ));
+    }
+    let cells: Vec<(usize, f64)> = m
+        .iter()
+        .enumerate()
+        .filter(|(_, &x)| x > 0.0)
+        .map(|(i, &x)| (i, x / inside))
+        .collect();
+    Ok(vec![cells; states])
 }
 
 /// Cells receiving mass put at node j in a state with drift d there: at
@@ -245,14 +278,22 @@ fn points(p: &Params, c: &Chain, graded: bool) -> Result<(Vec<Point>, bool)> {
     let (lo, hi) = p.bounds();
     let vr = p.reset_velocity();
     add(vr, 1.0, None);
+    // A random target's finite support ends are nodes (its law's kinks).
+    let (s_lo, s_hi) = p.reset().target().support();
     let (lo, hi, truncated) = if lo.is_finite() && hi.is_finite() {
         (lo, hi, false)
     } else {
         let (a, b) = tails(p, c)?;
-        (a.min(vr), b.max(vr), true)
+        let fin = |x: f64| if x.is_finite() { x } else { vr };
+        (a.min(vr).min(fin(s_lo)), b.max(vr).max(fin(s_hi)), true)
     };
     if lo < 0.0 && hi > 0.0 {
         add(0.0, 1.0, None);
+    }
+    for e in [s_lo, s_hi] {
+        if e > lo && e < hi {
+            add(e, 1.0, None);
+        }
     }
     add(lo, 1.0, None);
     add(hi, 1.0, None);

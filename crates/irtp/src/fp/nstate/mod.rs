@@ -64,8 +64,7 @@ pub struct NoiseSummary {
     pub meshes: Vec<NoiseMoments>,
 }
 
-/// Options the N-state solver accepts: a point reset target, no schedule
-/// modifier, `cells` in range and a multiple of 4 when extrapolating (the
+/// Options the N-state solver accepts: no schedule modifier, `cells` in range and a multiple of 4 when extrapolating (the
 /// meshes N/4, N/2, N nest).
 fn check(p: &Params, o: &StationaryOptions) -> Result<()> {
     if !(MIN_CELLS..=MAX_CELLS).contains(&o.cells) {
@@ -85,9 +84,9 @@ fn check(p: &Params, o: &StationaryOptions) -> Result<()> {
     refuse_protocols(p, "fp")
 }
 
-/// A noise model runs with Poisson resetting to a point only.
+/// A noise model runs with Poisson resetting (any target, noise kept or
+/// re-drawn) only: the schedule modifiers are refused by flag.
 pub(crate) fn refuse_protocols(p: &Params, method: &str) -> Result<()> {
-    p.point_target(method)?;
     if let Some(f) = p.schedule().features().first() {
         return Err(Error::invalid(
             f.flag(),

@@ -1,4 +1,4 @@
-//! The N-state forward generator A = B + R on an [`NMesh`] (Eq. (N20)):
+//! The N-state forward generator A = B + R on the N-state mesh (Eq. (N20)):
 //! B moves mass between cells (Eq. (N22)), jumps the noise state with the
 //! generator Q within a cell and removes mass at the reset rate r; R
 //! re-injects the removed mass r Σ_i m_{i,s} at v_r, mixed by the reset's
@@ -165,7 +165,7 @@ impl NoiseOperator {
             return Err(fail);
         }
         if !matches!(&self.shifted, Some(f) if f.c == c) {
-            self.shifted = Some(self.factorise(c).map_err(|_| fail.clone())?);
+            self.shifted = Some(self.factorise(c).map_err(|_| fail)?);
         }
         let f = self.shifted.as_ref().expect("factorised above");
         x.copy_from_slice(b);
@@ -176,8 +176,7 @@ impl NoiseOperator {
                 .iter()
                 .map(|v| c * v)
                 .collect();
-            let u = chain::solve(&f.k, &t, "fp shifted solve (capacitance)")
-                .map_err(|_| fail.clone())?;
+            let u = chain::solve(&f.k, &t, "fp shifted solve (capacitance)").map_err(|_| fail)?;
             for (s, z) in f.z.iter().enumerate() {
                 for (xi, zi) in x.iter_mut().zip(z) {
                     *xi += zi * u[s];

@@ -31,7 +31,7 @@ impl Blocks {
             .mesh
             .centres
             .iter()
-            .flat_map(|&c| std::iter::repeat_n(c, ns))
+            .flat_map(|&c| std::iter::repeat(c).take(ns))
             .collect();
         let tmp = vec![0.0; v.len()];
         Blocks { op, blocks, v, tmp }
@@ -81,20 +81,19 @@ impl ShiftedLinear for Blocks {
         b: &[f64],
         x: &mut [f64],
     ) -> std::result::Result<(), Failure> {
+        // Block lower triangular: forward substitution, block k with the
+        // source c k v∘x_{k-1} moved to its right side.
         let d = self.v.len();
         for k in 0..self.blocks {
             self.tmp.copy_from_slice(&b[k * d..(k + 1) * d]);
+            let (prev, rest) = x.split_at_mut(k * d);
             if k > 0 {
-                for i in 0..d {
-                    self.tmp[i] += c * k as f64 * self.v[i] * x[(k - 1) * d + i];
+                let ck = c * k as f64;
+                for (i, t) in self.tmp.iter_mut().enumerate() {
+                    *t += ck * self.v[i] * prev[(k - 1) * d + i];
                 }
             }
-            let (done, rest) = x.split_at_mut(k * d);
-            let _ = done;
-            let rhs = std::mem::take(&mut self.tmp);
-            let r = self.op.solve_shifted(c, &rhs, &mut rest[..d]);
-            self.tmp = rhs;
-            r?;
+            self.op.solve_shifted(c, &self.tmp, &mut rest[..d])?;
         }
         Ok(())
     }

@@ -12,7 +12,8 @@
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
 //! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
 //! [`crate::sim::exact`]): any finite-state noise at T = 0 (Eqs.
-//! (N10)-(N12)).
+//! (N10)-(N12)), and the Fokker-Planck solvers [`crate::fp`] (any drag,
+//! any finite-state noise, any T, Eqs. (N20)-(N29)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
