@@ -21,6 +21,7 @@ mod hostile;
 #[cfg(unix)]
 mod interrupt;
 mod mfpt_cli;
+mod noise_backward_cli;
 mod noise_cli;
 mod plot;
 mod protocol_samplers;

@@ -23,6 +23,7 @@ mod mfpt_sim;
 mod models;
 mod msd_fit;
 mod noise;
+mod noise_backward;
 mod power_kink;
 mod search_backward;
 mod search_cross;

@@ -17,7 +17,9 @@ use crate::model::reset::Solver;
 
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
-    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); mfpt \
+    --method backward, mfpt scan, mfpt optimize (any noise at temperature 0; with a temperature: \
+    linear, tanh and tan (T <= 1) drags; Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default):
 /// no engine does yet. The closed forms of `irtp analytic` for such models
@@ -32,9 +34,11 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         Solver::FpStationary => false,
         Solver::FpTransient => false,
         Solver::FpMsd => false,
-        Solver::Backward => false,
+        // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
+        // the engine refusing the others by name (mfpt::nstate).
+        Solver::Backward => true,
         Solver::FptDistribution => false,
-        Solver::MfptOptimize => false,
+        Solver::MfptOptimize => true,
         Solver::MfptExact => false,
         Solver::MfptEuler => false,
         Solver::ClosedForm => false,
