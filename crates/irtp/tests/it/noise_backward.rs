@@ -68,6 +68,37 @@ fn paper_as_states_matches_the_two_state_solver() {
     }
 }
 
+/// The same with re-drawn noise at a reset and with a random (uniform)
+/// target: the reset values go through the N-state bordering with π and
+/// with node weights.
+#[test]
+fn paper_as_states_matches_with_redrawn_noise_and_a_random_target() {
+    use irtp::model::reset::{NoiseAtReset, Target};
+    let c = NOISE_CASES
+        .iter()
+        .find(|c| c.noise == PAPER_AS_STATES && c.drag == "tan")
+        .unwrap();
+    let drag: DragLaw = c.drag.parse().unwrap();
+    let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
+    for (target, rule) in [
+        (Target::point(c.reset_velocity), NoiseAtReset::Redrawn),
+        (Target::uniform(-0.3, 0.4), NoiseAtReset::Kept),
+        (Target::uniform(-0.3, 0.4), NoiseAtReset::Redrawn),
+    ] {
+        let n = Problem::new(c.params().with_reset(target, rule).unwrap(), 0.1, 0.5).unwrap();
+        let q = Problem::new(two.with_reset(target, rule).unwrap(), 0.1, 0.5).unwrap();
+        let opts = BackwardOptions::with_cells(20_000);
+        let reference = irtp::mfpt::backward::solve(&q, &opts).unwrap();
+        let got = solve(&n, 20_000);
+        let rel = (got.tau - reference.tau).abs() / reference.tau;
+        eprintln!(
+            "{target:?} {rule:?}: N-state {} two-state {} rel {rel:e}",
+            got.tau, reference.tau
+        );
+        assert!(rel < 1e-8, "{target:?} {rule:?}");
+    }
+}
+
 /// Pure OU with g = v: the Siegert formula
 /// τ = (1/T) ∫_{v0}^{vt} dy ∫_{-∞}^{y} e^{(Φ(y) - Φ(z))/T} dz, Φ = v²/2,
 /// by nested adaptive quadrature.
