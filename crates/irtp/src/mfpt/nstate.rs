@@ -500,6 +500,7 @@ fn solve_operator(set: &Setup, op: Operator, rate: f64) -> Result<Option<Vec<f64
 /// coarse mesh), the plain dense solve of the same system
 /// ([`dense_fallback`]). None where a pivot is not positive and finite (τ
 /// beyond f64).
+#[allow(clippy::needless_range_loop)] // index form mirrors the elimination
 fn m_matrix_solve(mut m: Vec<Vec<f64>>, mut s: Vec<f64>, mut f: Vec<f64>) -> Option<Vec<f64>> {
     let n = s.len();
     let off_ok = (0..n).all(|i| (0..n).all(|j| i == j || m[i][j] <= 0.0));
