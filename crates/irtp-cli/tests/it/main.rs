@@ -21,6 +21,7 @@ mod hostile;
 #[cfg(unix)]
 mod interrupt;
 mod mfpt_cli;
+mod noise_backward_cli;
 mod noise_cli;
 mod noise_exact_cli;
 mod noise_euler_cli;

@@ -34,10 +34,10 @@ fn commands() -> Vec<Vec<&'static str>> {
     // noise_exact_cli.rs and noise_euler_cli.rs).
     let mut out: Vec<Vec<&str>> = vec![
         vec![
-            "mfpt", "scan", "--v0", "0", "--vt", "0.5", "--over", "rate", "--from", "0.5", "--to",
-            "1", "--points", "2",
-        ],
-        vec!["mfpt", "optimize", "--v0", "0", "--vt", "0.5"],
+        // simulate (noise_exact_cli.rs, noise_euler_cli.rs), fp
+        // (noise_fp_cli.rs), mfpt scan / optimize and `mfpt --method
+        // backward` (noise_backward_cli.rs) and `mfpt --method euler` run
+        // noise models.
         vec![
             "mfpt",
             "distribution",
@@ -66,8 +66,7 @@ fn commands() -> Vec<Vec<&'static str>> {
         ],
         vec!["analytic", "--drag", "tan"],
     ];
-    // simulate and mfpt --method euler run every noise (noise_euler_cli.rs).
-    for m in ["backward", "exact"] {
+    for m in ["exact"] {
         out.push([&mfpt[..], &["--method", m, "--particles", "10"][..]].concat());
     }
     for m in ["backward", "exact"] {

@@ -26,6 +26,7 @@ mod noise;
 mod noise_exact;
 mod noise_euler;
 mod noise_fp;
+mod noise_backward;
 mod power_kink;
 mod search_backward;
 mod search_cross;

@@ -13,7 +13,10 @@
 //! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
 //! [`crate::sim::exact`]): any finite-state noise at T = 0 (Eqs.
 //! (N10)-(N12)), and the Fokker-Planck solvers [`crate::fp`] (any drag,
-//! any finite-state noise, any T, Eqs. (N20)-(N29)).
+//! any finite-state noise, any T, Eqs. (N20)-(N29)), and the backward
+//! equations [`crate::mfpt`] (`mfpt --method backward`, scan, optimize:
+//! any finite-state noise; with T > 0 linear, tanh and tan drags, Eqs.
+//! (N30)-(N36)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -25,7 +28,9 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol); \
     simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
     Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
-    drag, any noise and temperature, Poisson resetting to a point)";
+    drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
+    (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
+    Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
@@ -50,9 +55,11 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         Solver::FpStationary => true,
         Solver::FpTransient => true,
         Solver::FpMsd => true,
-        Solver::Backward => false,
+        // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
+        // the engine refusing the others by name (mfpt::nstate).
+        Solver::Backward => true,
         Solver::FptDistribution => false,
-        Solver::MfptOptimize => false,
+        Solver::MfptOptimize => true,
         Solver::MfptExact => false,
         // Any finite-state noise at any T (mfpt::euler's noise kernel).
         Solver::MfptEuler => true,
