@@ -30,10 +30,7 @@ fn commands() -> Vec<Vec<&'static str>> {
         "--reset-position",
         "0",
     ];
-    // `simulate` runs a noise model (exact: T = 0; euler: any; tested in
-    // noise_exact_cli.rs and noise_euler_cli.rs).
     let mut out: Vec<Vec<&str>> = vec![
-        vec![
         // simulate (noise_exact_cli.rs, noise_euler_cli.rs), fp
         // (noise_fp_cli.rs), mfpt scan / optimize and `mfpt --method
         // backward` (noise_backward_cli.rs) and `mfpt --method euler` run

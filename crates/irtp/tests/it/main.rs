@@ -27,6 +27,7 @@ mod noise_exact;
 mod noise_euler;
 mod noise_fp;
 mod noise_backward;
+mod noise_conformance;
 mod power_kink;
 mod search_backward;
 mod search_cross;

@@ -8,8 +8,9 @@
 //! (a) stationary <v> and <v²>: the particle sampler (exact without thermal
 //!     noise, Euler-Maruyama at dt and dt/2 extrapolated with it) against
 //!     the N-state Fokker-Planck solver;
-//! (b) the mean first passage v_r → v_t: the particle sampler (exact, or
-//!     Euler extrapolated with its Brownian-bridge crossing check) against
+//! (b) the mean first passage v_r → v_t: Euler particles at dt and dt/2
+//!     extrapolated (with the Brownian-bridge crossing check at T > 0; the
+//!     exact first-passage sampler runs the paper's noise only) against
 //!     the N-state backward equations.
 //!
 //! One tolerance per suite: 4 standard errors raised to the Bonferroni
@@ -58,6 +59,7 @@ fn sampled_moments(c: &NoiseCase, seed: u64) -> [Est; 2] {
 
 /// (a) Samplers vs Fokker-Planck, <v> and <v²>, every case.
 #[test]
+#[ignore = "slow tier: 14 noise models, particles against the N-state FP solver"]
 fn samplers_match_fokker_planck_for_every_noise() {
     let zmax = bonferroni_z(2 * NOISE_CASES.len());
     for (i, c) in NOISE_CASES.iter().enumerate() {
@@ -91,6 +93,7 @@ fn passage(c: &NoiseCase) -> (f64, f64) {
 
 /// (b) Particles vs backward equations, the mean first passage, every case.
 #[test]
+#[ignore = "slow tier: 14 noise models, Euler particles at two steps against the backward equations"]
 fn first_passage_samplers_match_backward_equations_for_every_noise() {
     let zmax = bonferroni_z(NOISE_CASES.len());
     for (i, c) in NOISE_CASES.iter().enumerate() {
@@ -118,13 +121,9 @@ fn first_passage_samplers_match_backward_equations_for_every_noise() {
             (s.tau, s.tau_err)
         };
         let seed = 7300 + 2 * i as u64;
-        let (got, se) = if c.thermal() {
-            let a = sampled(MfptMethod::Euler { dt: DT, run: run(seed) });
-            let b = sampled(MfptMethod::Euler { dt: DT / 2.0, run: run(seed + 1) });
-            (2.0 * b.0 - a.0, (4.0 * b.1 * b.1 + a.1 * a.1).sqrt())
-        } else {
-            sampled(MfptMethod::Exact(run(seed)))
-        };
+        let a = sampled(MfptMethod::Euler { dt: DT, run: run(seed) });
+        let b = sampled(MfptMethod::Euler { dt: DT / 2.0, run: run(seed + 1) });
+        let (got, se) = (2.0 * b.0 - a.0, (4.0 * b.1 * b.1 + a.1 * a.1).sqrt());
         let z = (got - tau) / se.hypot(err);
         eprintln!(
             "{}: tau {v0} -> {vt}: sampled {got:.4} ± {se:.4}, backward {tau:.5} ± {err:.1e}: z = {z:.2}",
