@@ -173,7 +173,7 @@ impl Spec {
             passage: (-0.249, 0.5),
             r_range: (1e-2, 1e2),
             grid_points: if quick { 9 } else { 25 },
-            mfpt_cells: if quick { 400 } else { 2000 },
+            mfpt_cells: 2000,
             particles: if quick { 200 } else { 2000 },
             t_max: if quick { 50.0 } else { 200.0 },
             burn_in: 10.0,
