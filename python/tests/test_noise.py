@@ -30,9 +30,21 @@ def test_the_papers_noise_as_a_spec_is_the_same_numbers():
     ({"temperature": 0.5}, "temperature"),
 ])
 def test_other_methods_refuse_a_noise_by_name(kwargs, name):
+    # The exact first-passage sampler runs the paper's noise only.
     with pytest.raises(ValueError) as e:
-        irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, **kwargs)
+        irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, method="exact", particles=10, **kwargs)
     assert str(e.value).startswith(f"invalid {name} = ")
+
+
+def test_backward_and_euler_first_passage_run_a_noise_model():
+    # N coupled backward equations (docs/equations.md (N30)-(N36)) against
+    # Euler particles at dt and dt/2, extrapolated: within 4 standard errors.
+    b = irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, noise=RPT, drag="tan")
+    runs = [irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, noise=RPT, drag="tan", method="euler",
+                      dt=dt, particles=4000, seed=s) for dt, s in [(2e-3, 1), (1e-3, 2)]]
+    tau = 2.0 * runs[1].tau - runs[0].tau
+    se = (4.0 * runs[1].tau_err ** 2 + runs[0].tau_err ** 2) ** 0.5
+    assert abs(tau - b.tau) < 4.0 * se
 
 
 def test_fp_stationary_runs_a_noise_model():

@@ -277,6 +277,33 @@ fn reproduce_all_quick() {
         "partly"
     );
     search_claims_hold(&claims);
+    noise_claims_hold(&claims);
+}
+
+/// The noise figure's claims at the quick size: sampler and FP agree
+/// under every noise (the verdict is computed from the standard errors),
+/// D_eff r² reaches D_a + 2T in both media, and the paper's answer on the
+/// optimal rate (tan: an interior optimum, tanh: none) holds for every
+/// noise with telegraph states; its values carry one row per noise.
+fn noise_claims_hold(claims: &[Value]) {
+    assert_eq!(claim(claims, "noise_sampler_vs_fp")["verdict"], "agrees");
+    for drag in ["tan", "tanh"] {
+        let c = claim(claims, &format!("noise_deff_r_minus_2_{drag}"));
+        assert_eq!(c["verdict"], "agrees", "{c}");
+        assert_eq!(c["values"].as_array().unwrap().len(), 5, "{c}");
+        for n in c["values"].as_array().unwrap() {
+            let (r, d) = n["d_eff"]
+                .as_array()
+                .unwrap()
+                .last()
+                .map(|x| (x[0].as_f64().unwrap(), x[1].as_f64().unwrap()))
+                .unwrap();
+            let limit = n["d_eff_limit"].as_f64().unwrap();
+            assert!((d * r * r / limit - 1.0).abs() < 0.1, "{drag}: {n}");
+        }
+        let o = claim(claims, &format!("noise_optimum_{drag}"));
+        assert_eq!(o["verdict"], "agrees", "{o}");
+    }
 }
 
 /// The search's claims at the quick size: full resetting gives every
