@@ -329,7 +329,7 @@ pub fn plot(spec: &Spec, rows: &[Vec<NoiseResult>]) -> Figure {
     let mut fig = Figure::new(
         "noise",
         format!(
-            "Other active noises: λ = {}, v_r = 0 (noise kept), T = {} vᵤ²",
+            "Other active noises: λ = {}, v_{{r}} = 0 (noise kept), T = {} vᵤ²",
             fmt_num(spec.lambda),
             fmt_num(spec.thermal_fraction)
         ),

@@ -107,7 +107,7 @@ fn reproduce_all_quick() {
             for entry in legend_entries(f) {
                 assert!(svg.contains(entry), "{f}.svg lacks legend entry {entry:?}");
             }
-            for raw in ["_{", "D_eff", "P_s", "τ_r", "v_t"] {
+            for raw in ["_{", "D_eff", "P_s", "τ_r", "v_t", "v_r"] {
                 assert!(!svg.contains(raw), "{f}.svg shows raw markup {raw:?}");
             }
         } else {
