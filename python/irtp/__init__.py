@@ -44,7 +44,7 @@ from ._irtp import NumericalError
 from ._load import load
 from ._plot import plot_sweep
 from ._sweep import collect, load_sweep
-from ._model import Drag, Params, PoissonReset, Reset, drag_laws
+from ._model import Drag, Noise, Params, PoissonReset, Reset, drag_laws
 from ._results import (
     AnalyticResult,
     FpStationaryResult,
@@ -86,6 +86,7 @@ __all__ = [
     "collect",
     "plot_sweep",
     "Drag",
+    "Noise",
     "Reset",
     "PoissonReset",
     "Params",

@@ -12,6 +12,7 @@ from typing import (
     Literal,
     Mapping,
     Optional,
+    Sequence,
     Tuple,
     Union,
     overload,
@@ -48,6 +49,32 @@ class Drag:
     def __hash__(self) -> int: ...
 
 def drag_laws() -> List[Drag]: ...
+
+class Noise:
+    def __init__(self, spec: Union[str, Noise]) -> None: ...
+    @classmethod
+    def telegraph(
+        cls,
+        sigma: Optional[float] = None,
+        lambda_: Optional[float] = None,
+        *,
+        plus: Optional[float] = None,
+        minus: Optional[float] = None,
+        rate_plus: Optional[float] = None,
+        rate_minus: Optional[float] = None,
+    ) -> Noise: ...
+    @classmethod
+    def rpt(cls, sigma: float, alpha: float, beta: float) -> Noise: ...
+    @classmethod
+    def states(cls, levels: Sequence[float], rates: Sequence[Sequence[float]]) -> Noise: ...
+    @classmethod
+    def none(cls) -> Noise: ...
+    @property
+    def spec(self) -> str: ...
+    @property
+    def kind(self) -> str: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __hash__(self) -> int: ...
 
 class Reset:
     def options(self) -> Dict[str, float]: ...

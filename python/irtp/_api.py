@@ -17,7 +17,7 @@ import re
 from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 from . import _irtp
-from ._model import Drag, Params, Reset
+from ._model import Drag, Noise, Params, Reset
 from ._progress import reporter
 from ._results import Result, wrap
 
@@ -93,6 +93,8 @@ class Option:
     def annotation(self) -> Any:
         if self.name == "drag":
             return Union[str, Drag]
+        if self.name == "noise":
+            return Optional[Union[str, Noise]]
         if self.kind == "path":
             return Optional[Union[str, os.PathLike]]
         if self.kind == "list":
@@ -110,6 +112,8 @@ class Option:
         """A Python value → what ``_irtp.run`` takes for this option."""
         if self.name == "drag":
             return Drag(value).name
+        if self.name == "noise" and isinstance(value, Noise):
+            return value.spec
         if self.kind == "float" and isinstance(value, numbers.Real) and not isinstance(value, bool):
             return float(value)
         if self.kind == "int" and not isinstance(value, bool):

@@ -7,7 +7,7 @@ that runs, with the CLI's message.
 from __future__ import annotations
 
 import numbers
-from typing import Any, Dict, Iterator, List, Mapping, Optional, Tuple
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple
 
 from . import _irtp
 
@@ -24,6 +24,118 @@ def _laws() -> Dict[str, Dict[str, Any]]:
 
 def _known_laws() -> str:
     return ", ".join(_laws())
+
+
+class Noise:
+    """An active noise eta(t) other than the paper's (docs/equations.md,
+    "Noise kinds"): a finite-state Markov noise, written as the spec
+    ``--noise`` takes. Accepted by every function as ``noise=`` (with
+    ``temperature=`` adding thermal noise sqrt(2T) dW), and by
+    :class:`Params`; a plain spec string works too. The Rust registry
+    validates it when a function runs (a bad one is a ``ValueError`` naming
+    ``noise``).
+
+    >>> str(Noise.rpt(sigma=1, alpha=1, beta=2))
+    'rpt:sigma=1,alpha=1,beta=2'
+    >>> str(Noise.telegraph(plus=1.5, minus=0.75, rate_plus=0.8, rate_minus=0.4))
+    'telegraph:plus=1.5,minus=0.75,rate_plus=0.8,rate_minus=0.4'
+    >>> str(Noise.states([1, 0, -1], [[-1, 1, 0], [0.5, -1, 0.5], [0, 1, -1]]))
+    'states:levels=[1,0,-1],rates=[[-1,1,0],[0.5,-1,0.5],[0,1,-1]]'
+
+    Attributes
+    ----------
+    spec : str
+        What ``--noise`` takes.
+    kind : str
+        The kind's name (``telegraph``, ``rpt``, ``states``, ``none``).
+    """
+
+    __slots__ = ("_spec",)
+
+    def __init__(self, spec: "str | Noise") -> None:
+        if isinstance(spec, Noise):
+            spec = spec.spec
+        if not isinstance(spec, str) or not spec.strip():
+            raise ValueError(f"a noise spec must be a non-empty string, not {spec!r}")
+        self._spec = spec
+
+    @staticmethod
+    def _num(x: float) -> str:
+        x = float(x)
+        return str(int(x)) if x.is_integer() and abs(x) < 1e15 else repr(x)
+
+    @classmethod
+    def telegraph(
+        cls,
+        sigma: "float | None" = None,
+        lambda_: "float | None" = None,
+        *,
+        plus: "float | None" = None,
+        minus: "float | None" = None,
+        rate_plus: "float | None" = None,
+        rate_minus: "float | None" = None,
+    ) -> "Noise":
+        """Two levels: ``telegraph(sigma, lambda_)`` (the paper's, ±sigma at
+        rate lambda_) or ``telegraph(plus=P, minus=M, rate_plus=KP,
+        rate_minus=KM)`` (+P and -M, leaving +P at rate KP and -M at KM)."""
+        n = cls._num
+        if sigma is not None or lambda_ is not None:
+            if None in (sigma, lambda_) or any(
+                v is not None for v in (plus, minus, rate_plus, rate_minus)
+            ):
+                raise ValueError("telegraph: give sigma and lambda_, or plus, minus, rate_plus, rate_minus")
+            return cls(f"telegraph:sigma={n(sigma)},lambda={n(lambda_)}")
+        if None in (plus, minus, rate_plus, rate_minus):
+            raise ValueError("telegraph: give sigma and lambda_, or plus, minus, rate_plus, rate_minus")
+        return cls(
+            f"telegraph:plus={n(plus)},minus={n(minus)},"
+            f"rate_plus={n(rate_plus)},rate_minus={n(rate_minus)}"
+        )
+
+    @classmethod
+    def rpt(cls, sigma: float, alpha: float, beta: float) -> "Noise":
+        """Run-pause-tumble: ±sigma → 0 at rate alpha, 0 → ±sigma at rate
+        beta/2 each."""
+        n = cls._num
+        return cls(f"rpt:sigma={n(sigma)},alpha={n(alpha)},beta={n(beta)}")
+
+    @classmethod
+    def states(cls, levels: "Sequence[float]", rates: "Sequence[Sequence[float]]") -> "Noise":
+        """Any finite-state Markov noise: the levels and the generator (rates
+        >= 0 off the diagonal, rows summing to 0)."""
+        n = cls._num
+        lv = ",".join(n(a) for a in levels)
+        q = ",".join("[" + ",".join(n(x) for x in row) + "]" for row in rates)
+        return cls(f"states:levels=[{lv}],rates=[{q}]")
+
+    @classmethod
+    def none(cls) -> "Noise":
+        """No active noise (thermal noise alone: give ``temperature=``)."""
+        return cls("none")
+
+    @property
+    def spec(self) -> str:
+        return self._spec
+
+    @property
+    def kind(self) -> str:
+        return self._spec.split(":", 1)[0]
+
+    def __str__(self) -> str:
+        return self._spec
+
+    def __repr__(self) -> str:
+        return f"Noise({self._spec!r})"
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Noise):
+            return self._spec == other._spec
+        if isinstance(other, str):
+            return self._spec == other
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self._spec)
 
 
 class Drag:
@@ -315,7 +427,11 @@ class Params:
         for attr, cli in _FIELDS:
             if attr in self._values:
                 value = self._values[attr]
-                out[cli] = value.name if isinstance(value, Drag) else value
+                if isinstance(value, Drag):
+                    value = value.name
+                elif isinstance(value, Noise):
+                    value = value.spec
+                out[cli] = value
         return out
 
     def replace(self, **changes: Any) -> "Params":

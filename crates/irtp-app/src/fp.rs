@@ -152,7 +152,13 @@ impl StationaryArgs {
         };
         // Measured: about 2.4 µs (~100 operations) and 128 bytes per cell
         // (2e6 cells: 4.8 s, 255 MB); 256 leaves room.
-        let cost = super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"]);
+        // A noise model of N states: about N² times the work and memory
+        // (band LU with N sub- and super-diagonals per cell).
+        let k = match params.noise() {
+            Some(_) => (params.chain()?.states() as f64).powi(2),
+            None => 1.0,
+        };
+        let cost = super::budget::mesh(self.cells, 100.0 * k, 256.0 * k, vec!["cells"]);
         self.output
             .budget
             .check(&cost.per_drag_evaluation(&params.drag()))?;
@@ -299,13 +305,16 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
             0.0,
         ]
     });
-    let density = Table::from_rows(
-        "density",
-        &["v", "p", "p_plus", "p_minus", "dv"],
-        (0..s.cells)
-            .map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]])
-            .chain(point),
-    );
+    let density = match &s.noise {
+        None => Table::from_rows(
+            "density",
+            &["v", "p", "p_plus", "p_minus", "dv"],
+            (0..s.cells)
+                .map(|i| [s.v[i], s.p[i], s.p_plus[i], s.p_minus[i], s.widths[i]])
+                .chain(point),
+        ),
+        Some(n) => noise_density(&s, n),
+    };
     let held = if s.refractory_mass > 0.0 {
         format!("  point mass = {}", fmt_digits(s.refractory_mass, 12))
     } else {
@@ -319,8 +328,18 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         s.mesh.name(),
         if s.extrapolated { ", extrapolated" } else { "" }
     );
+    let (text, method) = match &s.noise {
+        None => (text, format!("fv-upwind-direct-{}", s.mesh.name())),
+        Some(n) => {
+            noise_summary(&mut summary, n);
+            (
+                format!("{text}{}", noise_text(n)),
+                format!("fv-nstate-band-direct-{}", s.mesh.name()),
+            )
+        }
+    };
     let results = Results {
-        method: format!("fv-upwind-direct-{}", s.mesh.name()),
+        method,
         seed: None,
         json: summary,
         parameters: json!({"model": params, "options": opts}),
@@ -330,6 +349,66 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         wall_time_s: wall,
     };
     finish("fp stationary", results, out, ctx)
+}
+
+/// The density table of the N-state solver: v, p, one column p_s per
+/// noise state (levels in `summary.json`), dv.
+fn noise_density(s: &fp::Stationary, n: &fp::NoiseSummary) -> Table {
+    let mut header = vec!["v".to_string(), "p".to_string()];
+    header.extend((0..n.densities.len()).map(|k| format!("p_{k}")));
+    header.push("dv".into());
+    let mut columns = vec![s.v.clone(), s.p.clone()];
+    columns.extend(n.densities.iter().cloned());
+    columns.push(s.widths.clone());
+    Table {
+        name: "density",
+        header,
+        columns,
+    }
+}
+
+/// The N-state solver's additions to `summary.json`: the noise's levels
+/// and π, the computational domain and tail mass, the drift U = <v>, the
+/// per-state means, the error estimates and observed orders.
+fn noise_summary(summary: &mut serde_json::Value, n: &fp::NoiseSummary) {
+    let obj = summary.as_object_mut().expect("a JSON object");
+    obj.remove("edge_exponent");
+    obj.insert("drift".into(), obj["v_mean"].clone());
+    // Flat keys (`params` already records the noise spec and T).
+    let errs = |e: Option<[f64; 3]>| e.map(|e| json!({"v_mean": e[0], "v2": e[1], "d_eff": e[2]}));
+    for (k, v) in [
+        ("levels", json!(n.levels)),
+        ("pi", json!(n.pi)),
+        ("domain", json!([n.domain.0, n.domain.1])),
+        ("tail_mass", json!(n.tail_mass)),
+        ("state_means", json!(n.state_means)),
+        ("state_mean_errors", json!(n.state_mean_errors)),
+        ("error_estimates", json!(errs(n.errors))),
+        ("orders", json!(errs(n.orders))),
+        ("density_l1_error", json!(n.density_l1_error)),
+        ("meshes", json!(n.meshes)),
+    ] {
+        obj.insert(k.into(), v);
+    }
+}
+
+/// The N-state solver's line of the text output.
+fn noise_text(n: &fp::NoiseSummary) -> String {
+    let est = match n.errors {
+        Some(e) => format!(
+            "estimated errors: <v> {:.1e}, <v^2> {:.1e}, D_eff {:.1e}; ",
+            e[0], e[1], e[2]
+        ),
+        None => String::new(),
+    };
+    format!(
+        "{} noise states, T = {}, domain [{}, {}], {est}tail mass {:.1e}\n",
+        n.levels.len(),
+        fmt_sig(n.temperature),
+        fmt_sig(n.domain.0),
+        fmt_sig(n.domain.1),
+        n.tail_mass
+    )
 }
 
 /// Run `irtp fp transient`: `moments.csv`, `snapshots.csv`, `summary.json`,
@@ -386,14 +465,17 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
         moments.header.push("refractory_mass".into());
         moments.columns.push(tr.refractory_mass.clone());
     }
-    let snapshots = Table::from_rows(
-        "snapshots",
-        &["t", "v", "p", "p_plus", "p_minus"],
-        tr.snapshots.iter().flat_map(|s| {
-            let v = &tr.v;
-            (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
-        }),
-    );
+    let snapshots = match tr.snapshots.first().map(|s| s.states.len()) {
+        Some(ns) if ns > 0 => noise_snapshots(&tr, ns),
+        _ => Table::from_rows(
+            "snapshots",
+            &["t", "v", "p", "p_plus", "p_minus"],
+            tr.snapshots.iter().flat_map(|s| {
+                let v = &tr.v;
+                (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
+            }),
+        ),
+    };
     let steps = match tr.dt {
         Some(dt) => format!("dt = {}  ({} time steps", fmt_sig(dt), tr.steps),
         None => format!(
@@ -419,6 +501,7 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     );
     let method = match tr.scheme {
         fp::Scheme::Paper => "fv-upwind-explicit-uniform",
+        fp::Scheme::TrBdf2 if params.noise().is_some() => "fv-nstate-trbdf2-graded",
         fp::Scheme::TrBdf2 => "fv-upwind-trbdf2-graded",
     };
     let results = Results {
@@ -432,4 +515,26 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
         wall_time_s: wall,
     };
     finish("fp transient", results, out, ctx)
+}
+
+/// The snapshots of the N-state solver: t, v, p, one column p_s per state.
+fn noise_snapshots(tr: &fp::Transient, ns: usize) -> Table {
+    let mut header = vec!["t".to_string(), "v".to_string(), "p".to_string()];
+    header.extend((0..ns).map(|k| format!("p_{k}")));
+    let mut columns = vec![Vec::new(); 3 + ns];
+    for s in &tr.snapshots {
+        for (i, &v) in tr.v.iter().enumerate() {
+            columns[0].push(s.t);
+            columns[1].push(v);
+            columns[2].push(s.p[i]);
+            for k in 0..ns {
+                columns[3 + k].push(s.states[k][i]);
+            }
+        }
+    }
+    Table {
+        name: "snapshots",
+        header,
+        columns,
+    }
 }

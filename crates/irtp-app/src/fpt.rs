@@ -277,6 +277,11 @@ impl DistributionArgs {
             &super::budget::mesh(self.cells, 100.0, 256.0, vec!["cells"])
                 .per_drag_evaluation(&problem.params().drag()),
         )?;
+        // A noise model the distribution does not run is refused by name
+        // before tau (which the backward equations refuse for it) is needed.
+        if let Some(m) = problem.params().noise() {
+            irtp::model::noise::support::check(irtp::model::reset::Solver::FptDistribution, m)?;
+        }
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact
         // one without a default.

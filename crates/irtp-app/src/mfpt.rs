@@ -739,10 +739,7 @@ fn write_direct(
 
 /// `profile.csv`: tau± and their mean against the start velocity.
 fn profile_table(p: &Profile) -> Table {
-    let rows = (0..p.v.len()).map(|i| {
-        let (tp, tm) = (p.tau_plus[i], p.tau_minus[i]);
-        [p.v[i], 0.5 * (tp + tm), tp, tm]
-    });
+    let rows = (0..p.v.len()).map(|i| [p.v[i], p.tau[i], p.tau_plus[i], p.tau_minus[i]]);
     Table::from_rows("profile", &["v0", "tau", "tau_plus", "tau_minus"], rows)
 }
 

@@ -441,11 +441,17 @@ fn run_parameters<'a>(a: &SimulateArgs, c: &'a Config) -> RunParameters<'a> {
 fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> String {
     let p = &c.params;
     let rate = fmt_sig(s.steps as f64 / wall);
+    let noise = match p.noise() {
+        Some(m) => format!("noise {}, T = {}", m.spec(), fmt_sig(m.temperature())),
+        None => format!(
+            "sigma = {}, lambda = {}",
+            fmt_sig(p.sigma()),
+            fmt_sig(p.lambda())
+        ),
+    };
     let model = format!(
-        "{} drag, sigma = {}, lambda = {}, r = {}, v_r = {}",
+        "{} drag, {noise}, r = {}, v_r = {}",
         p.drag(),
-        fmt_sig(p.sigma()),
-        fmt_sig(p.lambda()),
         fmt_sig(p.rate()),
         fmt_sig(p.reset_velocity())
     ) + &p

@@ -22,6 +22,7 @@ pub mod fig6;
 pub mod fig7;
 pub mod fpt;
 pub mod media;
+pub mod noise;
 pub mod plot;
 pub mod quicklook;
 pub mod reproduce;
@@ -110,11 +111,13 @@ pub enum Which {
     Media,
     /// Beyond the paper: the search (first passage in position) in every medium.
     Search,
+    /// Beyond the paper: the questions of Figs. 2, 6 and 7 under other noises.
+    Noise,
 }
 
 impl Which {
     /// Every reproduced figure, in paper order.
-    pub const ALL: [Which; 9] = [
+    pub const ALL: [Which; 10] = [
         Which::Fig1,
         Which::Fig2,
         Which::Fig3,
@@ -124,6 +127,7 @@ impl Which {
         Which::Fpt,
         Which::Media,
         Which::Search,
+        Which::Noise,
     ];
     /// File stem ("fig1", ...).
     pub fn name(self) -> &'static str {
@@ -137,6 +141,7 @@ impl Which {
             Which::Fpt => "fpt",
             Which::Media => "media",
             Which::Search => "search",
+            Which::Noise => "noise",
         }
     }
 }
@@ -151,7 +156,7 @@ impl FromStr for Which {
                 Error::invalid(
                     "figure",
                     s,
-                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, search, all",
+                    "one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, search, noise, all",
                 )
             })
     }
@@ -378,6 +383,7 @@ pub fn run_figure(which: Which, opts: &Options, progress: &dyn Progress) -> Resu
         Which::Fpt => fpt::run(opts, progress)?,
         Which::Media => media::run(opts, progress)?,
         Which::Search => search::run(opts, progress)?,
+        Which::Noise => noise::run(opts, progress)?,
     };
     out.wall_time_s = t0.elapsed().as_secs_f64();
     progress.update(SCALE, SCALE);

@@ -73,7 +73,8 @@ fn law(spec: &str) -> DragLaw {
     spec.parse().expect("a valid built-in spec")
 }
 
-fn spaced(a: f64, b: f64, n: usize, log: bool) -> Vec<f64> {
+/// n points from a to b, evenly or log-spaced.
+pub(crate) fn spaced(a: f64, b: f64, n: usize, log: bool) -> Vec<f64> {
     let f = |x: f64| if log { x.ln() } else { x };
     let (fa, fb) = (f(a), f(b));
     (0..n)

@@ -1,4 +1,4 @@
-//! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,fpt,media,search,all} --out DIR [--quick] [--seed N]`.
+//! `irtp reproduce {fig1,fig2,fig3,fig5,fig6,fig7,fpt,media,search,noise,all} --out DIR [--quick] [--seed N]`.
 
 use crate::{self as figures, store, Options, Which, SCALE};
 use clap::Args;
@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// same command skips the figures already finished.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
-    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, fpt (first-passage-time densities, beyond the paper), media (every drag law: Figs. 2 and 7 questions, beyond the paper), search (first passage in position: tau(r) and r* in every medium, beyond the paper), or all.
+    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, fpt (first-passage-time densities, beyond the paper), media (every drag law: Figs. 2 and 7 questions, beyond the paper), search (first passage in position: tau(r) and r* in every medium, beyond the paper), noise (the questions of Figs. 2, 6 and 7 under asymmetric, run-pause-tumble and thermal noise, beyond the paper), or all.
     #[arg(required = true, value_parser = parse_figure)]
     pub figures: Vec<Selection>,
     /// Output directory.
@@ -45,7 +45,8 @@ fn parse_figure(s: &str) -> Result<Selection, String> {
         return Ok(Selection::All);
     }
     s.parse::<Which>().map(Selection::One).map_err(|_| {
-        "expected one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, search, all".to_string()
+        "expected one of fig1, fig2, fig3, fig5, fig6, fig7, fpt, media, search, noise, all"
+            .to_string()
     })
 }
 

@@ -76,7 +76,7 @@ fn figure_names(w: Which) -> Vec<String> {
 
 /// The parameter set the current code uses for figure `w`.
 fn spec(w: Which, quick: bool) -> Value {
-    use super::{fig1, fig2, fig5, fig6, fig7, fpt, media, search, to_json};
+    use super::{fig1, fig2, fig5, fig6, fig7, fpt, media, noise, search, to_json};
     match w {
         Which::Fig1 => to_json(&fig1::Spec::new(quick)),
         Which::Fig2 => to_json(&fig2::Spec::new(fig2::Medium::Tan, quick)),
@@ -87,6 +87,7 @@ fn spec(w: Which, quick: bool) -> Value {
         Which::Fpt => to_json(&fpt::Spec::new(quick)),
         Which::Media => to_json(&media::Spec::new(quick)),
         Which::Search => to_json(&search::Spec::new(quick)),
+        Which::Noise => to_json(&noise::Spec::new(quick)),
     }
 }
 

@@ -21,7 +21,11 @@ mod hostile;
 #[cfg(unix)]
 mod interrupt;
 mod mfpt_cli;
+mod noise_backward_cli;
 mod noise_cli;
+mod noise_euler_cli;
+mod noise_exact_cli;
+mod noise_fp_cli;
 mod plot;
 mod protocol_samplers;
 mod protocol_solvers;

@@ -52,7 +52,7 @@ impl Mesh {
 }
 
 /// Width of the graded edge layer as a fraction of the half interval.
-const LAYER: f64 = 0.2;
+pub(crate) const LAYER: f64 = 0.2;
 /// Largest grading exponent (a -> -1 would ask for q -> infinity).
 pub(crate) const MAX_GRADING: f64 = 40.0;
 
@@ -540,11 +540,11 @@ pub(crate) fn graded_mesh(p: &Params, n: usize, refine: usize) -> Result<Grid> {
 /// e(0) = 0): algebraic grading K d^(1/q) (edge or kink) and/or
 /// logarithmic clustering β ℓ ln(1 + d/ℓ) at v_r (see [`HalfMap`]).
 #[derive(Clone, Copy, Debug, Default)]
-struct End {
+pub(crate) struct End {
     /// (q, K) of the grading term, None for none.
-    grade: Option<(f64, f64)>,
+    pub grade: Option<(f64, f64)>,
     /// (β, ℓ) of the clustering term, None for none.
-    cluster: Option<(f64, f64)>,
+    pub cluster: Option<(f64, f64)>,
 }
 
 impl End {
@@ -568,14 +568,14 @@ impl End {
 /// s(x) = x + e_a(x) + e_b(len) - e_b(len - x) (x: distance from a; e_a,
 /// e_b: its [`End`]s at a and b = a + len).
 #[derive(Clone, Copy, Debug)]
-struct Piece {
-    a: f64,
-    len: f64,
-    ends: [End; 2],
+pub(crate) struct Piece {
+    pub a: f64,
+    pub len: f64,
+    pub ends: [End; 2],
 }
 
 impl Piece {
-    fn s_total(&self) -> f64 {
+    pub fn s_total(&self) -> f64 {
         self.len + self.ends[0].term(self.len).0 + self.ends[1].term(self.len).0
     }
 
@@ -605,7 +605,7 @@ impl Piece {
 
     /// Node distances of `m` cells at equally spaced s: (from a, from b),
     /// each node solved from its nearer end (in s).
-    fn nodes(&self, m: usize) -> Result<Vec<(f64, f64)>> {
+    pub fn nodes(&self, m: usize) -> Result<Vec<(f64, f64)>> {
         let s_tot = self.s_total();
         let mid = {
             let (e, _) = self.ends[0].term(0.5 * self.len);
@@ -673,7 +673,7 @@ fn kink_pieces(p: &Params, q: f64, q0: f64) -> Vec<Piece> {
 
 /// Cells per piece for `n` cells in all, in proportion to the pieces'
 /// mesh parameter lengths, at least one each.
-fn piece_counts(pieces: &[Piece], n: usize) -> Vec<usize> {
+pub(crate) fn piece_counts(pieces: &[Piece], n: usize) -> Vec<usize> {
     let total: f64 = pieces.iter().map(Piece::s_total).sum();
     let (mut cum, mut prev) = (0.0, 0);
     let mut out = Vec::with_capacity(pieces.len());

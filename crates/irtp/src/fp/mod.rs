@@ -26,6 +26,7 @@
 
 mod grid;
 mod moments;
+mod nstate;
 mod operator;
 mod position;
 mod refractory;
@@ -35,6 +36,7 @@ mod transient;
 
 pub use grid::Mesh;
 pub use moments::{moments as msd, MomentSeries, MsdOptions, MAX_LEVELS, MAX_MSD_CELLS};
+pub use nstate::{NoiseMoments, NoiseOperator, NoiseSummary};
 pub use operator::ForwardOperator;
 pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
 pub use transient::{

@@ -226,7 +226,7 @@ fn check(params: &Params, o: &MsdOptions) -> Result<Vec<f64>> {
     if !(1e-14..=1e-3).contains(&rtol) {
         return Err(Error::invalid("rtol", rtol, "1e-14 <= rtol <= 1e-3"));
     }
-    if !(params.lambda() > 0.0) && !(params.rate() > 0.0) {
+    if params.noise().is_none() && !(params.lambda() > 0.0) && !(params.rate() > 0.0) {
         return Err(Error::invalid(
             "lambda",
             params.lambda(),
@@ -320,7 +320,7 @@ fn one_mesh(
 
 /// Richardson extrapolation in 1/N over meshes N, 2N, 4N, ... (values
 /// coarsest first): the Neville table with ratios 2^p, p = 1, 2, ...
-fn richardson(values: &[f64]) -> f64 {
+pub(crate) fn richardson(values: &[f64]) -> f64 {
     let mut t = values.to_vec();
     for p in 1..t.len() {
         let f = (1u64 << p) as f64;
@@ -343,6 +343,11 @@ pub fn moments(
 ) -> Result<MomentSeries> {
     params.require(Solver::FpMsd)?;
     let times = check(params, opts)?;
+    if params.noise().is_some() {
+        let out = super::nstate::msd(params, opts, &times)?;
+        verify(params, &out)?;
+        return Ok(out);
+    }
     let total = (opts.levels * times.len()) as u64;
     let mut done = 0;
     let mut levels = Vec::with_capacity(opts.levels);

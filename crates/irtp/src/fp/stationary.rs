@@ -111,6 +111,10 @@ pub struct Stationary {
     pub fine: Moments,
     /// Observables on the coarse mesh (when extrapolating).
     pub coarse: Option<Moments>,
+    /// With a noise model (the N-state solver, Eqs. (N20)-(N27)): the
+    /// per-state densities, per-state means, error estimates and the
+    /// domain; None for the paper's noise.
+    pub noise: Option<super::nstate::NoiseSummary>,
 }
 
 fn check_options(p: &Params, o: &StationaryOptions) -> Result<()> {
@@ -299,8 +303,15 @@ fn check_invariants(params: &Params, v2: f64, d_eff: f64) -> Result<()> {
 }
 
 /// Solve the stationary forward equations directly (no time stepping), in O(N).
+///
+/// With a noise model (`params.noise()` is Some) the N-state solver runs
+/// (docs/equations.md (N20)-(N27)): N coupled densities, thermal noise,
+/// `noise` filled in and `p_plus`, `p_minus` empty.
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
     params.require(Solver::FpStationary)?;
+    if params.noise().is_some() {
+        return super::nstate::stationary(params, opts);
+    }
     check_options(params, opts)?;
     let g = if opts.extrapolate {
         make_grid(params, opts.mesh, opts.cells / 2, 1)?
@@ -373,6 +384,7 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         extrapolated: coarse.is_some(),
         fine,
         coarse,
+        noise: None,
     })
 }
 

@@ -152,6 +152,10 @@ pub struct Snapshot {
     pub p_plus: Vec<f64>,
     /// - state density.
     pub p_minus: Vec<f64>,
+    /// With a noise model: the density of every state (then `p_plus`,
+    /// `p_minus` are empty); empty for the paper's noise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub states: Vec<Vec<f64>>,
 }
 
 /// Result of [`transient`].
@@ -409,6 +413,11 @@ pub fn transient_with_progress(
 ) -> Result<Transient> {
     let (times, snaps) = validate(opts)?;
     params.require(Solver::FpTransient)?;
+    if params.noise().is_some() {
+        let out = super::nstate::transient(params, opts)?;
+        check_mass(&out)?;
+        return Ok(out);
+    }
     require_held(params, opts.scheme)?;
     let out = match opts.scheme {
         Scheme::Paper => paper(params, opts, &times, &snaps, progress),
@@ -863,6 +872,7 @@ impl Transient {
             p: pp.iter().zip(&pm).map(|(a, b)| a + b).collect(),
             p_plus: pp,
             p_minus: pm,
+            states: Vec::new(),
         });
     }
 }

@@ -98,9 +98,12 @@ pub struct BackwardSolution {
 pub struct Profile {
     /// Mesh nodes.
     pub v: Vec<f64>,
-    /// tau+(v).
+    /// tau(v): the mean over the initial noise state, (tau+ + tau-)/2
+    /// for the paper's noise, Σ_s π_s T_s(v) for a noise model.
+    pub tau: Vec<f64>,
+    /// tau+(v) (a noise model: the state of highest level).
     pub tau_plus: Vec<f64>,
-    /// tau-(v).
+    /// tau-(v) (a noise model: the state of lowest level).
     pub tau_minus: Vec<f64>,
     /// Index of v_0 in `v`.
     pub start: usize,
@@ -111,7 +114,7 @@ impl Profile {
     pub fn at_start(&self) -> BackwardSolution {
         let (p, m) = (self.tau_plus[self.start], self.tau_minus[self.start]);
         BackwardSolution {
-            tau: 0.5 * (p + m),
+            tau: self.tau[self.start],
             tau_plus: p,
             tau_minus: m,
             cells: self.v.len() - 1,
@@ -141,8 +144,14 @@ pub(super) struct Mesh {
 /// Mesh of [v_l, v_t] for `p` (canonical frame): a point target is a node,
 /// a random one gets node weights ([`Mesh::weights`]).
 pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
-    let vl = p.params().v_lower();
-    let vu = p.params().v_upper();
+    mesh_on(p, p.params().v_lower(), p.params().v_upper(), &[], cells)
+}
+
+/// [`mesh`] on [v_l, v_t] for the interval (v_l, v_u) of the velocity
+/// (the noise model's, or a truncation with thermal noise), with `extra`
+/// velocities inside (v_l, v_t) as nodes too (the N-state solver's fixed
+/// points, [`super::nstate`]).
+pub(super) fn mesh_on(p: &Problem, vl: f64, vu: f64, extra: &[f64], cells: usize) -> Result<Mesh> {
     let point = p.params().reset().point();
     // A random target's centre is a node too (a narrow target then weighs
     // that node alone, as the point target would).
@@ -153,6 +162,7 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
         p.v0()
     });
     let mut cuts = vec![vl, p.v0(), vr, p.vt()];
+    cuts.extend(extra.iter().filter(|&&x| x > vl && x < p.vt()));
     // A jump of g at v = 0 (Coulomb friction) sits on a node, so that every
     // cell's midpoint drift is smooth on the cell (second order kept).
     if p.params().drag().static_friction() > 0.0 && vl < 0.0 && 0.0 < p.vt() {
@@ -536,7 +546,7 @@ fn unit_response(a: &Band, n: usize) -> Vec<f64> {
 
 /// The probability that a reset of `p` (canonical frame) lands at or
 /// beyond v_t, where it is the passage: 1 - Σ_j w_j in exact arithmetic.
-fn beyond(p: &Problem) -> f64 {
+pub(super) fn beyond(p: &Problem) -> f64 {
     let target = p.params().reset().target();
     let vu = p.params().v_upper();
     target.mass(p.vt(), vu) / target.mass(-vu, vu)
@@ -581,7 +591,15 @@ fn spread_correction(
 /// tau±(v) on the whole mesh, in the user's frame (a point or a random
 /// reset target).
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
+    // A noise model the backward equations do not run is refused here,
+    // for every caller (scans, default t-max estimates), by name.
+    if let Some(m) = problem.params().noise() {
+        crate::model::noise::support::check(crate::model::reset::Solver::Backward, m)?;
+    }
     opts.validate()?;
+    if problem.params().noise().is_some() {
+        return super::nstate::profile(problem, opts.cells, super::nstate::BARRIER);
+    }
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) =
@@ -625,7 +643,12 @@ pub fn at_start_or_overflow(
     problem: &Problem,
     opts: &BackwardOptions,
 ) -> Result<Option<BackwardSolution>> {
-    match profile(problem, opts).and_then(|p| verified(problem, p.at_start())) {
+    let solved = if problem.params().noise().is_some() {
+        super::nstate::solve_on(problem, opts.cells, super::nstate::BARRIER).map(|s| s.summary())
+    } else {
+        profile(problem, opts).and_then(|p| verified(problem, p.at_start()))
+    };
+    match solved {
         Ok(s) => Ok(Some(s)),
         Err(Error::Overflow { .. }) => Ok(None),
         Err(e) => Err(e),
@@ -639,6 +662,9 @@ pub fn at_start_or_overflow(
 /// time the time since the last reset reaches T* has mean (e^{r T*} - 1)/r
 /// (T* at r = 0). +∞ when that exceeds the f64 range.
 pub fn lower_bound(problem: &Problem) -> f64 {
+    if problem.params().noise().is_some() {
+        return super::nstate::lower_bound(problem).unwrap_or(0.0);
+    }
     let (cp, _) = problem.canonical();
     let p = cp.params();
     let flow = |from: f64| p.drag().flow_time(p.sigma(), from, cp.vt());
@@ -677,9 +703,11 @@ fn verified(problem: &Problem, s: BackwardSolution) -> Result<BackwardSolution> 
 }
 
 fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
+    let tau = tp.iter().zip(&tm).map(|(p, m)| 0.5 * (p + m)).collect();
     if !swapped {
         return Profile {
             v: m.v,
+            tau,
             tau_plus: tp,
             tau_minus: tm,
             start: m.start,
@@ -688,6 +716,7 @@ fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile 
     let n = m.v.len();
     Profile {
         v: m.v.iter().rev().map(|x| -x).collect(),
+        tau: tau.into_iter().rev().collect(),
         tau_plus: tm.into_iter().rev().collect(),
         tau_minus: tp.into_iter().rev().collect(),
         start: n - 1 - m.start,
@@ -697,6 +726,9 @@ fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile 
 /// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
 /// Errors with [`Error::Overflow`] if tau overflows f64.
 pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
+    if problem.params().noise().is_some() {
+        return super::nstate::solve(problem, opts).map(|s| s.summary());
+    }
     let fine = verified(problem, profile(problem, opts)?.at_start())?;
     let half = BackwardOptions {
         cells: (opts.cells / 2).max(8),
@@ -795,6 +827,7 @@ pub(super) fn moment_nodes(
 /// [`Moments`]); [`Error::Overflow`] when E(T²) exceeds the f64 range.
 pub fn moments(problem: &Problem, opts: &BackwardOptions) -> Result<Moments> {
     opts.validate()?;
+    two_state_only(problem, "the first-passage moments")?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;
     let [(tp, tm), (qp, qm)] = moment_nodes(&cp, &m, opts.drift)?;
@@ -828,6 +861,9 @@ impl Moments {
 /// derivative: a little resetting shortens the search.
 pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Result<(f64, f64)> {
     opts.validate()?;
+    if problem.params().noise().is_some() {
+        return super::nstate::rate_derivative_at_zero(problem, opts);
+    }
     let (cp, _) = problem.canonical();
     let m = mesh(&cp, opts.cells)?;
     let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
@@ -858,6 +894,7 @@ pub fn fixed_point_upwind(
     max_sweeps: usize,
 ) -> Result<(BackwardSolution, usize)> {
     BackwardOptions::with_cells(cells).validate()?;
+    two_state_only(problem, "the fixed-point iteration")?;
     let (cp, swapped) = problem.canonical();
     let m = mesh(&cp, cells)?;
     let par = &cp.params();
@@ -906,4 +943,13 @@ pub fn fixed_point_upwind(
         residual: change,
         tolerance: tol,
     })
+}
+
+/// Refuse a noise model in a two-state-only routine `what` (the N-state
+/// solver, [`super::nstate`], runs the mean, its profile and dτ/dr at 0).
+fn two_state_only(problem: &Problem, what: &str) -> Result<()> {
+    match problem.params().noise() {
+        Some(m) => crate::model::noise::support::refuse(what, m),
+        None => Ok(()),
+    }
 }

@@ -13,6 +13,10 @@
 //! period as round(D/dt) held steps (no drift, Poisson resets discarded,
 //! flips on, periodic times up to its end skipped). A reset at or above
 //! v_t is the passage at that step.
+//!
+//! A noise model other than the paper's (any finite-state noise, thermal
+//! noise with the Brownian-bridge crossing check, Eq. (N19)) runs in the
+//! scalar kernel of the `noise` submodule, started in a state drawn from π.
 
 use super::estimator::{merge_units, FptSample, FptStats, FptSummary};
 use super::Problem;
@@ -24,6 +28,8 @@ use crate::rng::{self, Rng};
 use crate::sim::euler::{euler_step, geometric_gap};
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
+
+mod noise;
 
 /// Euler first-passage sampler (paper Eqs. (30)-(32)), step order as in
 /// [`crate::sim::euler`]: with probability r dt, v ← v_r (noise kept),
@@ -38,12 +44,28 @@ pub struct EulerFpt {
     problem: Problem,
     dt: f64,
     t_max: f64,
+    /// The Brownian-bridge crossing check between steps at T > 0 (on;
+    /// off only in tests that show the O(sqrt(dt)) bias it removes).
+    #[serde(skip, default = "bridge_on")]
+    bridge: bool,
+}
+
+fn bridge_on() -> bool {
+    true
 }
 
 impl EulerFpt {
     /// Validate dt (Euler stability limit and r dt < 1) and t_max > 0.
     pub fn new(problem: Problem, dt: f64, t_max: f64) -> Result<Self> {
-        let dt = problem.params().check_dt(dt)?;
+        let par = problem.params();
+        let dt = match par.noise() {
+            None => par.check_dt(dt)?,
+            Some(_) => {
+                par.require(crate::model::reset::Solver::MfptEuler)?;
+                crate::sim::euler::refuse_schedule(par)?;
+                crate::sim::euler::noise::check_noise_dt(par, dt)?
+            }
+        };
         if !(problem.params().rate() * dt < 1.0) {
             return Err(Error::invalid(
                 "dt",
@@ -62,12 +84,26 @@ impl EulerFpt {
                 format!("t_max >= dt = {dt}"),
             ));
         }
-        Ok(EulerFpt { problem, dt, t_max })
+        Ok(EulerFpt {
+            problem,
+            dt,
+            t_max,
+            bridge: true,
+        })
     }
 
     /// Time step.
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// The same sampler without the Brownian-bridge crossing check at
+    /// T > 0 (passages detected at the steps only: an O(sqrt(dt)) bias);
+    /// for tests that measure what the check removes.
+    #[doc(hidden)]
+    pub fn without_bridge(mut self) -> Self {
+        self.bridge = false;
+        self
     }
 
     /// Run `n` particles: particle i uses the stream (seed, i) and starts
@@ -92,6 +128,9 @@ impl EulerFpt {
         seed: u64,
         progress: &dyn Progress,
     ) -> Vec<FptStats> {
+        if self.problem.params().noise().is_some() {
+            return noise::units(self, n, units, seed, progress);
+        }
         let c = Chain::new(self, seed);
         let scheduled = c.schedule.scheduled_clock() || c.refractory.is_some();
         crate::with_drag!(self.problem.params().drag(), |d| {

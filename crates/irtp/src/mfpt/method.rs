@@ -231,6 +231,22 @@ pub fn assemble(problem: &Problem, method: &Method, units: &[FptStats]) -> Resul
     Ok(MfptResult::Particles(stats))
 }
 
+/// The largest speed |dv/dt| on (v_l, v_u): 2 Sigma for the paper's
+/// noise, a_max - a_min for another noise without thermal noise (g(v) lies
+/// between the extreme levels there), unbounded with thermal noise.
+fn max_speed(p: &crate::model::Params) -> f64 {
+    match p.noise() {
+        None => 2.0 * p.sigma(),
+        Some(m) if m.temperature() > 0.0 => f64::INFINITY,
+        Some(m) => {
+            let levels = m.levels();
+            let hi = levels.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let lo = levels.iter().copied().fold(f64::INFINITY, f64::min);
+            hi - lo
+        }
+    }
+}
+
 /// Every passage takes at least the shortest distance to the target (from
 /// v0, or from v_r after a reset) over the largest speed |dv/dt| <= 2 Sigma
 /// on (v_l, v_u): the restricted means of both starting states must respect
@@ -242,7 +258,7 @@ fn verify_particles(problem: &Problem, s: &super::FptSummary) -> Result<()> {
     if p.rate() > 0.0 {
         distance = distance.min((problem.vt() - p.reset_velocity()).abs());
     }
-    let bound = distance / (2.0 * p.sigma()) * (1.0 - 1e-12);
+    let bound = distance / max_speed(p) * (1.0 - 1e-12);
     for (name, m) in [("rmst_plus", s.rmst_plus), ("rmst_minus", s.rmst_minus)] {
         if !(m >= bound) {
             return Err(crate::Error::Numerical {

@@ -21,6 +21,8 @@
 //! all three methods behind one entry point, [`solve`] with a [`Method`].
 //!
 //! - [`backward`]: direct O(N) second-order solve of the backward equations.
+//! - [`nstate`]: the backward equations for a noise model (N states, thermal
+//!   noise), behind the same entry points of [`backward`].
 //! - [`exact`]: exact event-driven particles (the sampler of [`crate::sim::exact`]).
 //! - [`control`]: the martingale control variate of exact passages, from an
 //!   approximate backward solution.
@@ -37,6 +39,7 @@ pub mod estimator;
 pub mod euler;
 pub mod exact;
 pub mod method;
+pub mod nstate;
 pub mod optimize;
 pub mod survival;
 mod upwind;

@@ -105,6 +105,15 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<ControlledRun> {
     params.require(Solver::Exact)?;
+    if let Some(m) = params.noise() {
+        // The proxy's exact moments are those of the paper's noise.
+        return Err(Error::invalid(
+            "noise",
+            m.spec(),
+            "the paper's symmetric telegraph noise for the linear-proxy control variate (the \
+             plain exact sampler runs this noise)",
+        ));
+    }
     let proxy = params.linear_proxy();
     proxy.require(Solver::ClosedForm)?;
     if proxy_x2.len() != spec.grid.len() || !proxy_x2.iter().all(|m| m.is_finite()) {

@@ -42,6 +42,12 @@
 //!   step 4 go on;
 //! - position resetting: x ← x_r at the reset of step 3.
 //!
+//! A noise model other than the paper's (any finite-state noise, thermal
+//! noise) runs in the scalar kernel of [`noise`] (docs/equations.md,
+//! "Euler schemes with a noise model", Eqs. (N15)-(N19)), with the same
+//! plan, reset sampler and observables; the paper's noise keeps the kernel
+//! above bit for bit.
+//!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
 //! round to the same step (closer than dt, e.g. the short end of a log grid)
@@ -58,6 +64,8 @@ use crate::rng::{self, Rng};
 use rand::Rng as _;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
+
+pub mod noise;
 
 /// How the per-step reset and flip decisions are drawn (same law, see module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -111,7 +119,13 @@ impl EulerPlan {
     pub fn new(params: &Params, spec: &SimSpec, dt: f64) -> Result<Self> {
         params.require(Solver::Euler)?;
         super::check_period_window(params, spec)?;
-        let dt = params.check_dt(dt)?;
+        let dt = match params.noise() {
+            None => params.check_dt(dt)?,
+            Some(_) => {
+                refuse_schedule(params)?;
+                noise::check_noise_dt(params, dt)?
+            }
+        };
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
             return Err(Error::invalid(
@@ -176,6 +190,22 @@ impl EulerPlan {
             .map(|&n| n as f64 * self.dt)
             .collect()
     }
+}
+
+/// A noise model runs the paper's protocol only: a modifier of the
+/// resetting rule is refused by its flag.
+pub(crate) fn refuse_schedule(params: &Params) -> Result<()> {
+    if let Some(&f) = params.schedule().features().first() {
+        return Err(Error::invalid(
+            f.flag(),
+            params.schedule().spec_of(f),
+            format!(
+                "no {} with a noise model in the Euler schemes (Poisson resetting only)",
+                f.describe()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Simulate `spec.particles` particles with the Euler scheme and geometric
@@ -247,12 +277,64 @@ fn simulate_part(
 ) -> Result<Vec<Observables>> {
     let plan = EulerPlan::new(params, spec, dt)?;
     let p = &part;
+    if params.noise().is_some() {
+        return crate::with_drag!(params.drag(), |d| run_noise(
+            d, params, spec, &plan, sampling, p, progress
+        ));
+    }
     // Match the drag law and sampler once, outside the hot loop: the kernel
     // is monomorphised per (law, sampler) and has no dispatch per step.
     Ok(crate::with_drag!(params.drag(), |d| match sampling {
         EventSampling::Geometric => run::<_, Geometric>(d, params, spec, &plan, lanes, p, progress),
         EventSampling::Bernoulli => run::<_, Bernoulli>(d, params, spec, &plan, lanes, p, progress),
     }))
+}
+
+/// The N-state / thermal kernel ([`noise`]) over the particles of `part`,
+/// reduced like [`run`]; a non-finite result (a failed implicit step) is
+/// an error.
+fn run_noise<D: Drag>(
+    f: &D,
+    params: &Params,
+    spec: &SimSpec,
+    plan: &EulerPlan,
+    sampling: EventSampling,
+    part: &Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    let template = template(params, spec, plan);
+    let geometric = sampling.is_geometric();
+    let kernel = noise::NoiseKernel::new(f, params, spec, plan, &template, geometric)?;
+    let first = spec.first_particle;
+    let out = part.reduce(
+        spec.particles,
+        || template.clone(),
+        |lo, hi, obs| {
+            let mut occ = vec![0.0; spec.bins];
+            for i in lo..hi {
+                match sampling {
+                    EventSampling::Geometric => {
+                        kernel.particle::<Geometric>(first + i, obs, &mut occ)
+                    }
+                    EventSampling::Bernoulli => {
+                        kernel.particle::<Bernoulli>(first + i, obs, &mut occ)
+                    }
+                }
+            }
+        },
+        |total, part| total.merge(&part),
+        progress,
+    );
+    if out
+        .iter()
+        .any(|o| !(o.v2_time_avg.sum.is_finite() && o.v_time_avg.sum.is_finite()))
+    {
+        return Err(Error::Numerical {
+            method: "Euler scheme with a noise model",
+            reason: "a non-finite velocity (a drift-implicit step failed to converge)".into(),
+        });
+    }
+    Ok(out)
 }
 
 /// The empty observables of an Euler run: recorded at the plan's steps.

@@ -47,6 +47,13 @@
 //! its end skipped), and the flow resumes from the held velocity with the
 //! noise state of that moment. An event at t acts just after t: a
 //! recording time equal to a periodic reset time sees the state before it.
+//!
+//! A noise model other than the paper's (any finite-state noise at T = 0,
+//! docs/equations.md Eqs. (N10)-(N12)) runs the N-state loop of `states`
+//! through the same entry points ([`simulate`], [`simulate_units`]): per
+//! level its own segments, fixed point (possibly interior) and crossing
+//! times, events at rate q_s + r. It shares this module's segment code
+//! (`Segments`, `flow_segment`, the occupation and crossing times).
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
@@ -61,6 +68,8 @@ use crate::sim::control::Coupled;
 use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
 use std::ops::Range;
+
+mod states;
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on
@@ -230,7 +239,7 @@ fn kink_inside<D: Drag>(drag: &D, a: f64, b: f64) -> bool {
 /// 1 - Sigma²) the approach to v_u is so slow that the flow tables lose
 /// their precision (measured: <v²> 2.8 standard errors off the FP answer at
 /// 1 - Sigma = 1e-12, negative at 1e-14).
-const MIN_RELAXATION_RATE: f64 = 1e-10;
+pub(crate) const MIN_RELAXATION_RATE: f64 = 1e-10;
 
 pub(crate) fn check_relaxation<D: Drag>(drag: &D, sigma: f64, vu: f64) -> Result<()> {
     let rate = drag.derivative(vu);
@@ -440,8 +449,12 @@ pub(crate) fn segments<D: Drag>(drag: &D, s: f64, lo: f64, hi: f64) -> Result<Se
     })
 }
 
-/// Bin crossing times of the flow of s = ±sigma (0 where a bin is never crossed).
+/// Bin crossing times of the flow of noise value s (0 where a bin is never
+/// crossed in full): a bin below the fixed point v* = g⁻¹(s) is crossed
+/// upward, one above it downward, and the bin holding v* never in full (for
+/// s = ±Sigma, v* is the interval's edge: every bin is crossed toward it).
 fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> {
+    let vs = drag.inverse(s);
     // Crossing time of a bin: +∞ (bin not crossed) counts 0; NaN means
     // the flow-time quadrature failed.
     let fin = |t: f64, at: f64| match t {
@@ -454,10 +467,12 @@ fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> 
     };
     (0..edges.len() - 1)
         .map(|k| {
-            let (a, b) = if s > 0.0 {
+            let (a, b) = if edges[k + 1] <= vs {
                 (edges[k], edges[k + 1])
-            } else {
+            } else if edges[k] >= vs {
                 (edges[k + 1], edges[k])
+            } else {
+                return Ok(0.0);
             };
             fin(drag.flow_time(s, a, b), edges[k])
         })
@@ -506,42 +521,6 @@ impl<F: FlowMap> Sampler<F> {
             t_max: spec.grid.t_max(),
             seed: spec.seed,
         })
-    }
-
-    /// Add the occupation times of a flow segment a → b of duration dt:
-    /// partial first and last bins from flow potentials (time to an edge =
-    /// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
-    /// in full via the difference array of crossings.
-    #[inline]
-    fn occupy(
-        &self,
-        obs: &Observables,
-        sc: &mut Scratch,
-        si: usize,
-        a: &FlowPoint,
-        vb: f64,
-        dt: f64,
-    ) {
-        let (ka, kb) = (obs.bin_of(a.v), obs.bin_of(vb));
-        if ka == kb {
-            sc.occ[ka] += dt;
-            return;
-        }
-        let (pa, inv_k) = (a.phi, self.inv_rate[si]);
-        let phi = &self.phi_edges[si];
-        // Time to reach edge e (clamped into [0, dt] against rounding).
-        let to = |e: usize| ((pa - phi[e]) * inv_k).clamp(0.0, dt);
-        let (first, last, from, to_last) = if kb > ka {
-            (ka + 1, kb, to(ka + 1), to(kb))
-        } else {
-            (kb + 1, ka, to(ka), to(kb + 1))
-        };
-        sc.occ[ka] += from;
-        if last > first {
-            sc.cross[si][first] += 1;
-            sc.cross[si][last] -= 1;
-        }
-        sc.occ[kb] += dt - to_last;
     }
 
     /// A particle at t = 0 (v = 0, noise state drawn).
@@ -597,9 +576,8 @@ impl<F: FlowMap> Sampler<F> {
         }
     }
 
-    /// The flow segment of a particle from p.t to `t_end`: moments at the
-    /// grid times inside (p.t, t_end], the window integrals and occupation
-    /// times, the position; returns (and stores) the end point.
+    /// The flow segment of a particle from p.t to `t_end` under its noise
+    /// state (`flow_segment`); returns (and stores) the end point.
     #[inline(always)]
     fn flow_to(
         &self,
@@ -608,36 +586,7 @@ impl<F: FlowMap> Sampler<F> {
         sc: &mut Scratch,
         t_end: f64,
     ) -> FlowPoint {
-        let (t, si, a) = (p.t, p.si, p.a);
-        let seg = &self.segs[si];
-        let vs = self.vs[si];
-        // Moments at grid times inside (t, t_end].
-        while p.k < self.times.len() && self.times[p.k] <= t_end {
-            let dt = self.times[p.k] - t;
-            let pk = seg.advance(&a, dt);
-            let xk = p.x + vs * dt - (a.q[0] - pk.q[0]);
-            obs.record(p.k, pk.v, xk);
-            p.msd += obs.msd_term(p.k, xk);
-            p.k += 1;
-        }
-        let dt = t_end - t;
-        let b = seg.advance(&a, dt);
-        // Stationary window [burn_in, t_max].
-        if t_end > self.burn_in {
-            let (w, dw) = if t < self.burn_in {
-                (seg.advance(&a, self.burn_in - t), t_end - self.burn_in)
-            } else {
-                (a, dt)
-            };
-            let (j1, j2) = (w.q[0] - b.q[0], w.q[1] - b.q[1]);
-            p.int_v += vs * dw - j1;
-            p.int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-            self.occupy(obs, sc, si, &w, b.v, dw);
-        }
-        p.x += vs * dt - (a.q[0] - b.q[0]);
-        p.t = t_end;
-        p.a = b;
-        b
+        flow_segment(self, p, obs, sc, t_end)
     }
 
     /// The velocity after a reset (drawn for a random target) and the noise
@@ -751,25 +700,9 @@ impl<F: FlowMap> Sampler<F> {
     /// and its contribution to the observables.
     fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch) {
         for si in 0..2 {
-            let mut n = 0i64;
-            // Branch-free: n × tau adds an exact 0 where no crossing is counted.
-            for ((c, occ), tau) in sc.cross[si].iter_mut().zip(&mut sc.occ).zip(&self.tau[si]) {
-                n += *c;
-                *c = 0;
-                *occ += n as f64 * tau;
-            }
+            add_crossings(&mut sc.cross[si], &mut sc.occ, &self.tau[si]);
         }
-        let window = self.t_max - self.burn_in;
-        obs.finish_particle(
-            p.int_v / window,
-            p.int_v2 / window,
-            &mut sc.occ,
-            window,
-            p.a.v,
-            p.msd,
-        );
-        obs.record_final_position(p.x);
-        obs.steps += p.events;
+        close_particle(p, obs, &mut sc.occ, self.t_max - self.burn_in);
     }
 
     /// Particles `ids` one after the other. (Interleaving four particles
@@ -790,6 +723,138 @@ impl<F: FlowMap> Sampler<F> {
             self.finish(&p, obs, sc);
         }
     }
+}
+
+/// The per-state tables as the event loops read them, by noise state: its
+/// segments, fixed point v*, 1/g'(v*) and the flow potential at the bin
+/// edges, and the recording window. The building block the two-state
+/// sampler (fixed-size arrays) and the N-state one (vectors) share; each
+/// entry is read where the segment code needs it, as the two-state loop
+/// always did (measured: building a per-state view up front cost that loop
+/// 3 % CPU time).
+trait StateTables<F> {
+    fn seg(&self, si: usize) -> &Segments<F>;
+    fn fixed_point(&self, si: usize) -> f64;
+    fn inv_rate(&self, si: usize) -> f64;
+    fn phi_edges(&self, si: usize) -> &[f64];
+    /// (grid times, burn-in).
+    fn window(&self) -> (&[f64], f64);
+}
+
+/// Occupation times and per-state crossing difference arrays of a chunk.
+trait Occupation {
+    fn occ(&mut self) -> &mut [f64];
+    fn cross(&mut self, si: usize) -> &mut [i64];
+}
+
+/// The flow segment of a particle from p.t to `t_end` under its noise
+/// state: moments at the grid times inside (p.t, t_end], the window
+/// integrals and occupation times, the position; returns (and stores) the
+/// end point.
+#[inline(always)]
+fn flow_segment<F: FlowMap, T: StateTables<F>, S: Occupation>(
+    tab: &T,
+    p: &mut Lane,
+    obs: &mut Observables,
+    sc: &mut S,
+    t_end: f64,
+) -> FlowPoint {
+    let (t, si, a) = (p.t, p.si, p.a);
+    let seg = tab.seg(si);
+    let vs = tab.fixed_point(si);
+    let (times, burn_in) = tab.window();
+    // Moments at grid times inside (t, t_end].
+    while p.k < times.len() && times[p.k] <= t_end {
+        let dt = times[p.k] - t;
+        let pk = seg.advance(&a, dt);
+        let xk = p.x + vs * dt - (a.q[0] - pk.q[0]);
+        obs.record(p.k, pk.v, xk);
+        p.msd += obs.msd_term(p.k, xk);
+        p.k += 1;
+    }
+    let dt = t_end - t;
+    let b = seg.advance(&a, dt);
+    // Stationary window [burn_in, t_max].
+    if t_end > burn_in {
+        let (w, dw) = if t < burn_in {
+            (seg.advance(&a, burn_in - t), t_end - burn_in)
+        } else {
+            (a, dt)
+        };
+        let (j1, j2) = (w.q[0] - b.q[0], w.q[1] - b.q[1]);
+        p.int_v += vs * dw - j1;
+        p.int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
+        occupy(tab, obs, sc, si, &w, b.v, dw);
+    }
+    p.x += vs * dt - (a.q[0] - b.q[0]);
+    p.t = t_end;
+    p.a = b;
+    b
+}
+
+/// Add the occupation times of a flow segment a → b of duration dt:
+/// partial first and last bins from flow potentials (time to an edge =
+/// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
+/// in full via the difference array of crossings.
+#[inline]
+fn occupy<F, T: StateTables<F>, S: Occupation>(
+    tab: &T,
+    obs: &Observables,
+    sc: &mut S,
+    si: usize,
+    a: &FlowPoint,
+    vb: f64,
+    dt: f64,
+) {
+    let (ka, kb) = (obs.bin_of(a.v), obs.bin_of(vb));
+    if ka == kb {
+        sc.occ()[ka] += dt;
+        return;
+    }
+    let (pa, inv_k) = (a.phi, tab.inv_rate(si));
+    let phi = tab.phi_edges(si);
+    // Time to reach edge e (clamped into [0, dt] against rounding).
+    let to = |e: usize| ((pa - phi[e]) * inv_k).clamp(0.0, dt);
+    let (first, last, from, to_last) = if kb > ka {
+        (ka + 1, kb, to(ka + 1), to(kb))
+    } else {
+        (kb + 1, ka, to(ka), to(kb + 1))
+    };
+    sc.occ()[ka] += from;
+    if last > first {
+        let cross = sc.cross(si);
+        cross[first] += 1;
+        cross[last] -= 1;
+    }
+    sc.occ()[kb] += dt - to_last;
+}
+
+/// Add the full bin crossings of one noise state to the occupation times
+/// (occupation += crossings × tau) and clear its difference array.
+#[inline]
+fn add_crossings(cross: &mut [i64], occ: &mut [f64], tau: &[f64]) {
+    let mut n = 0i64;
+    // Branch-free: n × tau adds an exact 0 where no crossing is counted.
+    for ((c, o), tau) in cross.iter_mut().zip(occ.iter_mut()).zip(tau) {
+        n += *c;
+        *c = 0;
+        *o += n as f64 * tau;
+    }
+}
+
+/// A particle's contribution to the observables, its crossings already in
+/// `occ`; `window` = t_max - burn_in.
+fn close_particle(p: &Lane, obs: &mut Observables, occ: &mut [f64], window: f64) {
+    obs.finish_particle(
+        p.int_v / window,
+        p.int_v2 / window,
+        occ,
+        window,
+        p.a.v,
+        p.msd,
+    );
+    obs.record_final_position(p.x);
+    obs.steps += p.events;
 }
 
 /// One particle in flight.
@@ -813,6 +878,40 @@ struct Lane {
     hold_until: f64,
     /// The next periodic reset time (∞ without a periodic clock).
     next_periodic: f64,
+}
+
+impl<F: FlowMap> StateTables<F> for Sampler<F> {
+    #[inline(always)]
+    fn seg(&self, si: usize) -> &Segments<F> {
+        &self.segs[si]
+    }
+    #[inline(always)]
+    fn fixed_point(&self, si: usize) -> f64 {
+        self.vs[si]
+    }
+    #[inline(always)]
+    fn inv_rate(&self, si: usize) -> f64 {
+        self.inv_rate[si]
+    }
+    #[inline(always)]
+    fn phi_edges(&self, si: usize) -> &[f64] {
+        &self.phi_edges[si]
+    }
+    #[inline(always)]
+    fn window(&self) -> (&[f64], f64) {
+        (&self.times, self.burn_in)
+    }
+}
+
+impl Occupation for Scratch {
+    #[inline(always)]
+    fn occ(&mut self) -> &mut [f64] {
+        &mut self.occ
+    }
+    #[inline(always)]
+    fn cross(&mut self, si: usize) -> &mut [i64] {
+        &mut self.cross[si]
+    }
 }
 
 /// Exp(rate) waiting time (∞ for rate 0), by the ziggurat sampler of
@@ -865,6 +964,9 @@ fn simulate_drag<D: Drag>(
     part: Part,
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
+    if params.noise().is_some() {
+        return simulate_states(drag, params, spec, part, progress);
+    }
     let sampler = Sampler::new(drag, params, spec)?;
     let template = Observables::new(spec, params);
     let b = spec.bins;
@@ -880,6 +982,30 @@ fn simulate_drag<D: Drag>(
                 },
             )
         },
+        |lo, hi, (obs, sc)| sampler.particles(first + lo..first + hi, obs, sc),
+        |a, b| a.0.merge(&b.0),
+        progress,
+    );
+    Ok(totals.into_iter().map(|(obs, _)| obs).collect())
+}
+
+/// [`simulate_drag`] with a noise model other than the paper's
+/// ([`states`]): the same reduction over particles.
+fn simulate_states<D: Drag>(
+    drag: &D,
+    params: &Params,
+    spec: &SimSpec,
+    part: Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    params.require(Solver::Exact)?;
+    super::check_period_window(params, spec)?;
+    let sampler = states::StatesSampler::new(drag, params, spec)?;
+    let template = Observables::new(spec, params);
+    let first = spec.first_particle;
+    let totals = part.reduce(
+        spec.particles,
+        || (template.clone(), sampler.scratch(spec.bins)),
         |lo, hi, (obs, sc)| sampler.particles(first + lo..first + hi, obs, sc),
         |a, b| a.0.merge(&b.0),
         progress,

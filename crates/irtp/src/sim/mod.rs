@@ -312,7 +312,9 @@ pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> V
     let inside = |t: f64| t >= burn_in;
     let n = times.iter().filter(|&&t| inside(t)).count();
     let stationary_x = params.schedule().position.is_some();
-    if n < 2 || params.reset().target().moments().0 != 0.0 || stationary_x {
+    // A noise without the mirror symmetry drifts (<a> ≠ 0 in general).
+    let asymmetric = params.noise().is_some_and(|m| !m.is_mirror_symmetric());
+    if n < 2 || params.reset().target().moments().0 != 0.0 || stationary_x || asymmetric {
         return vec![0.0; times.len()];
     }
     let mean = times.iter().filter(|&&t| inside(t)).sum::<f64>() / n as f64;
@@ -331,6 +333,37 @@ pub(crate) fn msd_fit_weights(times: &[f64], burn_in: f64, params: &Params) -> V
             }
         })
         .collect()
+}
+
+/// The velocity histogram's range: the velocity interval
+/// ([`Params::bounds`]) where it is finite; an unbounded side (thermal
+/// noise with a law defined on the whole line) is cut at
+/// g⁻¹(a) ∓ 10 sqrt(T / g'(g⁻¹(a))) for a the smallest (largest) level:
+/// ten standard deviations of the Gaussian approximation around the
+/// outermost fixed point. Velocities beyond it fall in the end bins.
+pub fn histogram_range(params: &Params) -> (f64, f64) {
+    let (lo, hi) = params.bounds();
+    if lo.is_finite() && hi.is_finite() {
+        return (lo, hi);
+    }
+    use crate::model::Drag;
+    let Some(m) = params.noise() else {
+        return (lo, hi);
+    };
+    let d = params.drag();
+    let levels = m.levels();
+    let a_lo = levels.iter().copied().fold(f64::INFINITY, f64::min);
+    let a_hi = levels.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let width = |a: f64| {
+        let v = d.inverse(a);
+        (v, 10.0 * (m.temperature() / d.derivative(v)).sqrt())
+    };
+    let (v_lo, w_lo) = width(a_lo);
+    let (v_hi, w_hi) = width(a_hi);
+    (
+        if lo.is_finite() { lo } else { v_lo - w_lo },
+        if hi.is_finite() { hi } else { v_hi + w_hi },
+    )
 }
 
 /// Mergeable accumulator of everything a simulation measures.
@@ -399,7 +432,7 @@ pub struct PositionHistogram {
 impl PositionHistogram {
     fn new(params: &Params, spec: &SimSpec) -> Option<Self> {
         let reset = params.schedule().position?;
-        let (v_lo, v_hi) = params.bounds();
+        let (v_lo, v_hi) = histogram_range(params);
         let v_max = v_lo.abs().max(v_hi.abs());
         let (lo, hi) = reset.range(v_max, params.rate(), params.schedule(), spec.grid.t_max());
         Some(PositionHistogram {
@@ -457,7 +490,7 @@ impl PositionHistogram {
 impl Observables {
     /// Empty accumulator for a spec and a model (histogram on (v_l, v_u)).
     pub fn new(spec: &SimSpec, params: &Params) -> Self {
-        let (v_lo, v_hi) = params.bounds();
+        let (v_lo, v_hi) = histogram_range(params);
         let k = spec.grid.len();
         Observables {
             times: spec.grid.times().to_vec(),

@@ -337,7 +337,7 @@ mod chain_tests {
         // Each state's jump targets in proportion to its rates.
         for s in 0..3 {
             let n = 100_000;
-            let mut hits = vec![0usize; 3];
+            let mut hits = [0usize; 3];
             for k in 0..n {
                 let u = (k as f64 + 0.5) / n as f64 * c.exit[s];
                 hits[c.jump(s, u)] += 1;

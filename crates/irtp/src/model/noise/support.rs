@@ -1,15 +1,22 @@
 //! Which method runs which noise model: the noise dimension of the support
 //! table of README.md (docs/equations.md, "Noise kinds").
 //!
-//! Every engine (the samplers, the forward and backward solvers and the
-//! symmetric closed forms) runs only the paper's symmetric telegraph noise
-//! without thermal noise, which [`crate::Params`] carries as its default.
-//! Any other noise model is refused by [`check`], called from
+//! Every engine runs the paper's symmetric telegraph noise without thermal
+//! noise, which [`crate::Params`] carries as its default; the Euler schemes
+//! (`simulate --method euler`, `mfpt --method euler`) run every noise model
+//! (docs/equations.md, "Euler schemes with a noise model"). Any other
+//! noise model is refused by [`check`], called from
 //! [`crate::Params::require`], with one line naming the flag and what runs
-//! it. What runs it today is [`crate::analytic::noise`] (`irtp analytic`):
+//! it. Besides the Euler schemes, what runs it is [`crate::analytic::noise`] (`irtp analytic`):
 //! linear drag with any noise model and Poisson velocity resetting to a
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
-//! at r = 0 (Eq. (N8)).
+//! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
+//! [`crate::sim::exact`]): any finite-state noise at T = 0 (Eqs.
+//! (N10)-(N12)), and the Fokker-Planck solvers [`crate::fp`] (any drag,
+//! any finite-state noise, any T, Eqs. (N20)-(N29)), and the backward
+//! equations [`crate::mfpt`] (`mfpt --method backward`, scan, optimize:
+//! any finite-state noise; with T > 0 linear, tanh and tan drags, Eqs.
+//! (N30)-(N36)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -17,26 +24,45 @@ use crate::model::reset::Solver;
 
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
-    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0)";
+    to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
+    --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol); \
+    simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
+    Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
+    drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
+    (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
+    Poisson resetting)";
 
-/// Whether `solver` runs `noise` (a model other than the paper's default):
-/// no engine does yet. The closed forms of `irtp analytic` for such models
-/// are in [`crate::analytic::noise`], which checks its own cases.
+/// Whether `solver` runs `noise` (a model other than the paper's default),
+/// one line per method (README's support table). The exact sampler runs
+/// any finite-state noise at T = 0 (its constructor refuses, naming
+/// `noise`, a level whose fixed point sits at a kink of the drag, and for a
+/// tabulated law a level whose fixed point is not the interval's farthest
+/// edge; the schedule modifiers by their flags); the Euler schemes run
+/// every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for
+/// such models are in [`crate::analytic::noise`], which checks its own
+/// cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
-    let _ = noise;
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
-        Solver::Exact => false,
-        Solver::Euler => false,
-        Solver::FpStationary => false,
-        Solver::FpTransient => false,
-        Solver::FpMsd => false,
-        Solver::Backward => false,
+        // Any finite-state noise at T = 0 (sim::exact).
+        Solver::Exact => noise.temperature() == 0.0,
+        // Any finite-state noise at any T (sim::euler::noise).
+        Solver::Euler => true,
+        // The N-state forward solvers (crate::fp, Eqs. (N20)-(N29)): any
+        // finite-state noise, any T >= 0 (a truncated domain for an
+        // unbounded drag at T > 0, with its tail mass checked).
+        Solver::FpStationary => true,
+        Solver::FpTransient => true,
+        Solver::FpMsd => true,
+        // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
+        // the engine refusing the others by name (mfpt::nstate).
+        Solver::Backward => true,
         Solver::FptDistribution => false,
-        Solver::MfptOptimize => false,
+        Solver::MfptOptimize => true,
         Solver::MfptExact => false,
-        Solver::MfptEuler => false,
+        // Any finite-state noise at any T (mfpt::euler's noise kernel).
+        Solver::MfptEuler => true,
         Solver::ClosedForm => false,
     }
 }

@@ -1,0 +1,146 @@
+//! `mfpt --method backward`, `mfpt scan` and `mfpt optimize` with a noise
+//! model (`irtp::mfpt::nstate`, docs/equations.md Eqs. (N30)-(N36)): runs
+//! write their outputs with the noise and temperature in the parameters and
+//! give the library's numbers; bad input is refused naming the flag.
+
+use super::common::*;
+use irtp::mfpt::{nstate, BackwardOptions, Problem};
+use irtp::model::noise::NoiseModel;
+use irtp::{DragLaw, Params};
+
+const RPT: &str = "rpt:sigma=1,alpha=1,beta=1";
+
+fn problem(drag: DragLaw, spec: &str, t: f64, rate: f64, vr: f64, v0: f64, vt: f64) -> Problem {
+    let noise = NoiseModel::parse(spec, t).unwrap();
+    Problem::new(Params::with_noise(drag, noise, rate, vr).unwrap(), v0, vt).unwrap()
+}
+
+/// A run-pause-tumble and a thermal case: the outputs are written, the
+/// parameters name the noise (and temperature), and τ is the library's.
+#[test]
+fn backward_runs_a_noise_model_and_writes_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = [
+        ("tan", RPT, 0.0, ["--v0", "0", "--vt", "0.5", "--rate", "1"]),
+        (
+            "linear",
+            "none",
+            0.5,
+            ["--v0", "0", "--vt", "1", "--rate", "0.5"],
+        ),
+    ];
+    for (i, (drag, spec, t, args)) in cases.into_iter().enumerate() {
+        let dir = tmp.path().join(format!("o{i}"));
+        let ts = t.to_string();
+        let base = [
+            "mfpt",
+            "--method",
+            "backward",
+            "--cells",
+            "4000",
+            "--drag",
+            drag,
+            "--noise",
+            spec,
+            "--temperature",
+            &ts,
+            "--json",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        let out = irtp(&[&base[..], &args[..]].concat());
+        let s = summary(&out);
+        let v0: f64 = args[1].parse().unwrap();
+        let vt: f64 = args[3].parse().unwrap();
+        let rate: f64 = args[5].parse().unwrap();
+        let lib = nstate::solve(
+            &problem(drag.parse().unwrap(), spec, t, rate, 0.0, v0, vt),
+            &BackwardOptions::with_cells(4000),
+        )
+        .unwrap();
+        assert_eq!(s["results"]["tau"].as_f64(), Some(lib.tau), "{s}");
+        let params = s["params"].to_string();
+        assert!(
+            params.contains("noise") && params.contains(spec),
+            "{params}"
+        );
+        let run = read_json(&dir.join("run.json"));
+        let text = run["parameters"].to_string();
+        assert!(text.contains(spec), "{text}");
+        if t > 0.0 {
+            assert!(text.contains("temperature"), "{text}");
+        }
+        let profile = std::fs::read_to_string(dir.join("profile.csv")).unwrap();
+        assert!(profile.lines().count() > 100);
+    }
+}
+
+/// scan over the rate and optimize run a noise model.
+#[test]
+fn scan_and_optimize_run_a_noise_model() {
+    let noise = ["--drag", "tan", "--noise", RPT, "--cells", "2000", "--json"];
+    let scan = [
+        "mfpt", "scan", "--v0", "0", "--vt", "0.5", "--over", "rate", "--from", "0.5", "--to", "1",
+        "--points", "2",
+    ];
+    summary(&irtp(&[&scan[..], &noise[..]].concat()));
+    let opt = ["mfpt", "optimize", "--v0", "0", "--vt", "0.5"];
+    let j = json(&irtp(&[&opt[..], &noise[..]].concat()));
+    assert!(j.to_string().contains("rate"), "{j}");
+}
+
+/// A target outside the noise's interval, a negative temperature, and tan
+/// with T > 1: exit 2, one line naming the flag, nothing written.
+#[test]
+fn bad_noise_backward_input_names_the_flag() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases: [(Vec<&str>, &str); 3] = [
+        (
+            vec!["--drag", "tan", "--noise", RPT, "--v0", "0", "--vt", "0.8"],
+            "--vt",
+        ),
+        (
+            vec![
+                "--drag",
+                "linear",
+                "--noise",
+                "none",
+                "--temperature",
+                "-1",
+                "--v0",
+                "0",
+                "--vt",
+                "1",
+            ],
+            "--temperature",
+        ),
+        (
+            vec![
+                "--drag",
+                "tan",
+                "--noise",
+                "none",
+                "--temperature",
+                "2",
+                "--v0",
+                "0",
+                "--vt",
+                "1",
+            ],
+            "--temperature",
+        ),
+    ];
+    for (i, (args, flag)) in cases.into_iter().enumerate() {
+        let dir = tmp.path().join(format!("b{i}")).join("out");
+        std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
+        let base = [
+            "mfpt",
+            "--method",
+            "backward",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        let out = irtp(&[&base[..], &args[..]].concat());
+        assert_rejected(&out, flag, &dir);
+    }
+}

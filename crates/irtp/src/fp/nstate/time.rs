@@ -1,0 +1,323 @@
+//! Time-dependent N-state solutions (Eqs. (N28)-(N29)): the densities from
+//! v = 0 with the noise state drawn from π, and the position-moment chain
+//! dM_0/dt = A M_0, dM_k/dt = A M_k + k v∘M_{k-1} (k = 1, 2; a reset keeps
+//! x, so every block has the same A), by the shared TR-BDF2 on the
+//! operator's shifted solve.
+
+use super::super::moments::{MomentSeries, MsdOptions};
+use super::super::stationary::MIN_CELLS;
+use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions};
+use super::super::Mesh;
+use super::operator::NoiseOperator;
+use super::stationary::{operator, richardson};
+use crate::error::{Error, Result};
+use crate::model::Params;
+use crate::numerics::trbdf2::{integrate, ShiftedLinear, Tolerances};
+use crate::numerics::Failure;
+
+/// `blocks` copies of the operator coupled by the moment chain.
+pub(crate) struct Blocks {
+    pub op: NoiseOperator,
+    pub blocks: usize,
+    /// The velocity of every unknown (its cell centre).
+    pub v: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl Blocks {
+    pub(crate) fn new(op: NoiseOperator, blocks: usize) -> Self {
+        let ns = op.mesh.states;
+        let v: Vec<f64> = op
+            .mesh
+            .centres
+            .iter()
+            .flat_map(|&c| std::iter::repeat(c).take(ns))
+            .collect();
+        let tmp = vec![0.0; v.len()];
+        Blocks { op, blocks, v, tmp }
+    }
+
+    /// Mass at v = 0 in the states drawn from π (Eq. (N28)), later blocks 0.
+    pub(crate) fn initial(&self) -> Result<Vec<f64>> {
+        let m = &self.op.mesh;
+        if m.origin.is_empty() {
+            return Err(Error::invalid(
+                "noise",
+                format!("levels {:?}", self.op.chain.levels),
+                "a velocity interval containing v = 0 (the initial velocity of fp transient and fp msd)",
+            ));
+        }
+        let mut u = vec![0.0; self.blocks * self.v.len()];
+        for (s, cells) in m.origin.iter().enumerate() {
+            for &(i, w) in cells {
+                u[i * m.states + s] += w * self.op.chain.pi[s];
+            }
+        }
+        Ok(u)
+    }
+}
+
+impl ShiftedLinear for Blocks {
+    fn dim(&self) -> usize {
+        self.blocks * self.v.len()
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        let d = self.v.len();
+        for k in 0..self.blocks {
+            self.op
+                .apply(&u[k * d..(k + 1) * d], &mut out[k * d..(k + 1) * d]);
+            if k > 0 {
+                for i in 0..d {
+                    out[k * d + i] += k as f64 * self.v[i] * u[(k - 1) * d + i];
+                }
+            }
+        }
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        // Block lower triangular: forward substitution, block k with the
+        // source c k v∘x_{k-1} moved to its right side.
+        let d = self.v.len();
+        for k in 0..self.blocks {
+            self.tmp.copy_from_slice(&b[k * d..(k + 1) * d]);
+            let (prev, rest) = x.split_at_mut(k * d);
+            if k > 0 {
+                let ck = c * k as f64;
+                for (i, t) in self.tmp.iter_mut().enumerate() {
+                    *t += ck * self.v[i] * prev[(k - 1) * d + i];
+                }
+            }
+            self.op.solve_shifted(c, &self.tmp, &mut rest[..d])?;
+        }
+        Ok(())
+    }
+}
+
+/// Observables at one time of `blocks` blocks with unknown velocities
+/// `v`: mass, `<v>`, `<v²>`, then `<x>`, `<x v>`, `<x²>` (3 blocks).
+pub(crate) fn observe(v: &[f64], blocks: usize, u: &[f64]) -> [f64; 6] {
+    let d = v.len();
+    let sum = |k: usize, pow: i32| -> f64 {
+        u[k * d..(k + 1) * d]
+            .iter()
+            .zip(v)
+            .map(|(x, v)| x * v.powi(pow))
+            .sum()
+    };
+    let mut o = [sum(0, 0), sum(0, 1), sum(0, 2), 0.0, 0.0, 0.0];
+    if blocks == 3 {
+        o[3] = sum(1, 0);
+        o[4] = sum(1, 1);
+        o[5] = sum(2, 0);
+    }
+    o
+}
+
+/// Integrate `blocks` blocks of the operator of `p` on the mesh of
+/// `n << refine` cells to every time of `times` (sorted), calling
+/// `each(k, v, u)` at times[k] (v: the unknowns' velocities); returns the
+/// accepted steps and the operator.
+pub(crate) fn run(
+    p: &Params,
+    n: usize,
+    refine: usize,
+    blocks: usize,
+    times: &[f64],
+    tol: &Tolerances,
+    mut each: impl FnMut(usize, &[f64], &[f64]) -> Result<()>,
+) -> Result<(usize, NoiseOperator)> {
+    let mut b = Blocks::new(operator(p, n, refine, true)?, blocks);
+    let mut u = b.initial()?;
+    let v = b.v.clone();
+    let stats = integrate(&mut b, &mut u, times, tol, |k, _, u| each(k, &v, u))?;
+    Ok((stats.steps, b.op))
+}
+
+/// The sorted, de-duplicated union of the recording and snapshot times.
+fn all_times(a: &[f64], b: &[f64]) -> Vec<f64> {
+    let mut t: Vec<f64> = a.iter().chain(b).copied().collect();
+    t.sort_by(f64::total_cmp);
+    t.dedup();
+    t
+}
+
+/// [`crate::fp::transient`] for a noise model: TR-BDF2 on the meshes of
+/// cells/4, cells/2, cells cells, `<v>` and `<v²>` extrapolated with
+/// their observed order (Eq. (N27)), snapshots of the fine mesh.
+pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
+    if o.scheme != Scheme::TrBdf2 {
+        return Err(Error::invalid(
+            "scheme",
+            o.scheme.name(),
+            "trbdf2 with a noise model (the paper's explicit scheme runs the paper's noise only)",
+        ));
+    }
+    if !(o.cells % 4 == 0 && o.cells >= MIN_CELLS) {
+        return Err(Error::invalid(
+            "cells",
+            o.cells,
+            format!("a multiple of 4, at least {MIN_CELLS}, with a noise model"),
+        ));
+    }
+    super::refuse_protocols(p, "fp transient")?;
+    let rec = if o.times.is_empty() {
+        vec![o.t_max]
+    } else {
+        o.times.clone()
+    };
+    let times = all_times(&rec, &o.snapshot_times);
+    let tol = Tolerances {
+        rtol: o.rtol,
+        atol: o.atol,
+        ..Tolerances::default()
+    };
+    let mut obs = Vec::new();
+    let (mut steps, mut snapshots, mut mass_err) = (0u64, Vec::new(), 0.0f64);
+    let mut last = None;
+    for refine in 0..3 {
+        let fine = refine == 2;
+        let mut rows = vec![[0.0; 6]; times.len()];
+        let (s, op) = run(p, o.cells / 4, refine, 1, &times, &tol, |k, v, u| {
+            rows[k] = observe(v, 1, u);
+            if fine && o.snapshot_times.contains(&times[k]) {
+                snapshots.push((times[k], u.to_vec()));
+            }
+            Ok(())
+        })?;
+        mass_err = rows.iter().fold(mass_err, |m, r| m.max((r[0] - 1.0).abs()));
+        steps += s as u64;
+        obs.push(rows);
+        last = Some(op);
+    }
+    let op = last.expect("three meshes");
+    let pick = |k: usize, j: usize| richardson(obs[0][k][j], obs[1][k][j], obs[2][k][j]);
+    let idx: Vec<usize> = rec
+        .iter()
+        .map(|t| times.iter().position(|x| x == t).expect("a recording time"))
+        .collect();
+    let snaps = snapshots
+        .into_iter()
+        .map(|(t, u)| snapshot(&op, t, &u))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Transient {
+        params: *p,
+        scheme: o.scheme,
+        mesh: Mesh::Graded,
+        cells: o.cells,
+        dt: None,
+        steps,
+        rejected: 0,
+        extrapolated: true,
+        v: op.mesh.centres.clone(),
+        times: rec,
+        v_mean: idx.iter().map(|&k| pick(k, 1).0).collect(),
+        v2: idx.iter().map(|&k| pick(k, 2).0).collect(),
+        v2_mesh_error: idx.iter().map(|&k| pick(k, 2).1).collect(),
+        mass: idx.iter().map(|&k| obs[2][k][0]).collect(),
+        refractory_mass: vec![0.0; idx.len()],
+        mass_error_max: mass_err,
+        snapshots: snaps,
+    })
+}
+
+/// The fine mesh's densities at time t, per state (round-off negatives
+/// down to 1e-9 of the largest density set to 0; a larger one refused).
+fn snapshot(op: &NoiseOperator, t: f64, u: &[f64]) -> Result<Snapshot> {
+    let (ns, w) = (op.mesh.states, &op.mesh.widths);
+    let scale = u
+        .iter()
+        .enumerate()
+        .fold(0.0f64, |m, (k, x)| m.max(x.abs() / w[k / ns]));
+    let mut states: Vec<Vec<f64>> = vec![Vec::with_capacity(w.len()); ns];
+    for (k, &x) in u.iter().enumerate() {
+        let d = x / w[k / ns];
+        if !(d >= -1e-9 * scale) {
+            return Err(Error::Numerical {
+                method: "fp transient",
+                reason: format!("a density of {d:e} at t = {t} (largest {scale:e}): the time integration lost positivity; raise --cells or lower --rtol"),
+            });
+        }
+        states[k % ns].push(d.max(0.0));
+    }
+    let p = (0..w.len())
+        .map(|i| states.iter().map(|s| s[i]).sum())
+        .collect();
+    Ok(Snapshot {
+        t,
+        p,
+        p_plus: Vec::new(),
+        p_minus: Vec::new(),
+        states,
+    })
+}
+
+/// [`crate::fp::msd`] for a noise model: the moment chain on `levels`
+/// nested meshes, Richardson-extrapolated in 1/N as the two-state chain.
+pub(crate) fn msd(p: &Params, o: &MsdOptions, times: &[f64]) -> Result<MomentSeries> {
+    super::refuse_protocols(p, "fp msd")?;
+    let tol = Tolerances {
+        rtol: o.rtol,
+        atol: o.rtol,
+        ..Tolerances::default()
+    };
+    let mut levels = Vec::with_capacity(o.levels);
+    let mut steps = 0;
+    for refine in 0..o.levels {
+        let mut rows = vec![[0.0; 6]; times.len()];
+        let (s, _) = run(p, o.cells, refine, 3, times, &tol, |k, v, u| {
+            rows[k] = observe(v, 3, u);
+            Ok(())
+        })?;
+        steps += s;
+        levels.push(rows);
+    }
+    let col = |k: usize, j: usize| {
+        super::super::moments::richardson(&levels.iter().map(|r| r[k][j]).collect::<Vec<_>>())
+    };
+    let mut out = MomentSeries {
+        t: times.to_vec(),
+        mass: Vec::new(),
+        v_mean: Vec::new(),
+        v2: Vec::new(),
+        x_mean: Vec::new(),
+        xv: Vec::new(),
+        x2: Vec::new(),
+        x2_err: Vec::new(),
+        alpha: Vec::new(),
+        cells_finest: o.cells << (o.levels - 1),
+        steps,
+    };
+    for (k, &t) in times.iter().enumerate() {
+        let at0 = t == 0.0;
+        let c = |j: usize| {
+            if at0 {
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0][j]
+            } else {
+                col(k, j)
+            }
+        };
+        out.mass.push(c(0));
+        out.v_mean.push(c(1));
+        out.v2.push(c(2));
+        out.x_mean.push(c(3));
+        out.xv.push(c(4));
+        out.x2.push(c(5));
+        out.x2_err.push(match levels.len() {
+            _ if at0 => 0.0,
+            1 => f64::INFINITY,
+            n => {
+                let coarser: Vec<f64> = levels[..n - 1].iter().map(|r| r[k][5]).collect();
+                (c(5) - super::super::moments::richardson(&coarser)).abs()
+            }
+        });
+        out.alpha
+            .push(if at0 { 4.0 } else { 2.0 * t * c(4) / c(5) });
+    }
+    Ok(out)
+}
