@@ -26,7 +26,7 @@
 //! thermal part is independent across resets: C(t) = (2T/r) e^{-r t},
 //! ∫ C = 2T/r². The active part keeps its state across a reset: for t
 //! spanning resets, C(t) ≈ C_a(t)/r² with C_a the force's autocorrelation,
-//! ∫ C_a dt = D_a = <(a - <a>) β>, Q β = -(a - <a>) (Eq. (N7)). So
+//! ∫ C_a dt = D_a = `<(a - <a>) β>`, `Q β = -(a - <a>)` (Eq. (N7)). So
 //! D_eff r² → D_a + 2T, whatever g: the paper's Sigma²/(2 lambda) is D_a of
 //! the telegraph noise.
 
@@ -207,7 +207,7 @@ pub struct NoiseResult {
     pub temperature: f64,
     /// P_s(v) at `density_rate`: (v, P).
     pub density: (Vec<f64>, Vec<f64>),
-    /// <v> and <v²> of that density.
+    /// `<v>` and `<v²>` of that density.
     pub moments: (f64, f64),
     /// The sampler's <v²> and its SE (extrapolated in dt with thermal
     /// noise), and z against the FP value.
@@ -224,7 +224,7 @@ pub struct NoiseResult {
     pub optimum: (f64, f64, bool),
 }
 
-/// ∫ C_a dt = <(a - <a>) β>, Q β = -(a - <a>) (Eq. (N7)), plus 2T: the
+/// ∫ C_a dt = `<(a - <a>) β>`, `Q β = -(a - <a>)` (Eq. (N7)), plus 2T: the
 /// limit of D_eff r² at large r (module docs).
 pub fn large_rate_limit(p: &Params) -> Result<f64> {
     let c = p.chain()?;

@@ -34,7 +34,7 @@
 //! This is a separate path from the two-state solver of
 //! [`super::backward`]: the paper's default noise keeps its bit-identical,
 //! faster path there (two interleaved states, 2×2 bordering with its
-//! cancellation-free determinant); both share the mesh ([`mesh_on`]), the
+//! cancellation-free determinant); both share the mesh (`backward::mesh_on`), the
 //! band solver and the verification of the answer.
 
 use super::backward::{beyond, mesh_on, BackwardOptions, BackwardSolution, Mesh, Profile};
