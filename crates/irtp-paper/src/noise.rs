@@ -377,7 +377,8 @@ pub fn plot(spec: &Spec, rows: &[Vec<NoiseResult>]) -> Figure {
                 .filter(|(_, &p)| p >= 1e-3)
                 .map(|(&v, &p)| (v, p))
                 .unzip();
-            dens.series.push(Series::line(name.clone(), c, Dash::Solid, "fp", v, p));
+            dens.series
+                .push(Series::line(name.clone(), c, Dash::Solid, "fp", v, p));
             let (r, d): (Vec<f64>, Vec<f64>) = n.d_eff.iter().map(|&(r, d)| (r, d * r * r)).unzip();
             let limit = vec![n.d_eff_limit; r.len()];
             deff.series.push(Series::line(

@@ -38,8 +38,8 @@ fn sampled_moments(c: &NoiseCase, seed: u64) -> [Est; 2] {
     let grid = TimeGrid::from_times(vec![0.0, 60.0]).unwrap();
     let run = |m: Method, seed: u64| {
         let spec = SimSpec::new(2000, grid.clone(), 10.0, 20, seed).unwrap();
-        let o = sim::simulate(&p, &spec, m, &NoProgress)
-            .unwrap_or_else(|e| panic!("{}: {e}", c.name));
+        let o =
+            sim::simulate(&p, &spec, m, &NoProgress).unwrap_or_else(|e| panic!("{}: {e}", c.name));
         [
             (o.v_time_avg.mean(), o.v_time_avg.sem()),
             (o.v2_time_avg.mean(), o.v2_time_avg.sem()),
@@ -48,7 +48,10 @@ fn sampled_moments(c: &NoiseCase, seed: u64) -> [Est; 2] {
     if !c.thermal() {
         return run(Method::Exact, seed);
     }
-    let (a, b) = (run(Method::euler(DT), seed), run(Method::euler(DT / 2.0), seed + 1));
+    let (a, b) = (
+        run(Method::euler(DT), seed),
+        run(Method::euler(DT / 2.0), seed + 1),
+    );
     [0, 1].map(|k| {
         (
             2.0 * b[k].0 - a[k].0,
@@ -76,7 +79,10 @@ fn samplers_match_fokker_planck_for_every_noise() {
         {
             let (got, se) = s[k];
             let z = (got - want) / se.hypot(err);
-            eprintln!("{}: {name} sampled {got:.5} ± {se:.5}, FP {want:.5} ± {err:.1e}: z = {z:.2}", c.name);
+            eprintln!(
+                "{}: {name} sampled {got:.5} ± {se:.5}, FP {want:.5} ± {err:.1e}: z = {z:.2}",
+                c.name
+            );
             assert!(z.abs() < zmax, "{}: {name} z = {z} (bound {zmax})", c.name);
         }
     }
@@ -99,8 +105,12 @@ fn first_passage_samplers_match_backward_equations_for_every_noise() {
     for (i, c) in NOISE_CASES.iter().enumerate() {
         let (v0, vt) = passage(c);
         let prob = Problem::new(c.params(), v0, vt).unwrap_or_else(|e| panic!("{}: {e}", c.name));
-        let ode = mfpt::solve(&prob, &MfptMethod::Backward(BackwardOptions::default()), &NoProgress)
-            .unwrap_or_else(|e| panic!("{}: backward: {e}", c.name));
+        let ode = mfpt::solve(
+            &prob,
+            &MfptMethod::Backward(BackwardOptions::default()),
+            &NoProgress,
+        )
+        .unwrap_or_else(|e| panic!("{}: backward: {e}", c.name));
         let tau = ode.tau();
         let err = ode
             .backward()
@@ -121,8 +131,14 @@ fn first_passage_samplers_match_backward_equations_for_every_noise() {
             (s.tau, s.tau_err)
         };
         let seed = 7300 + 2 * i as u64;
-        let a = sampled(MfptMethod::Euler { dt: DT, run: run(seed) });
-        let b = sampled(MfptMethod::Euler { dt: DT / 2.0, run: run(seed + 1) });
+        let a = sampled(MfptMethod::Euler {
+            dt: DT,
+            run: run(seed),
+        });
+        let b = sampled(MfptMethod::Euler {
+            dt: DT / 2.0,
+            run: run(seed + 1),
+        });
         let (got, se) = (2.0 * b.0 - a.0, (4.0 * b.1 * b.1 + a.1 * a.1).sqrt());
         let z = (got - tau) / se.hypot(err);
         eprintln!(

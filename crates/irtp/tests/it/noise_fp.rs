@@ -133,7 +133,10 @@ fn paper_as_states_matches_the_two_state_solver() {
     for c in cases {
         let drag: DragLaw = c.drag.parse().unwrap();
         let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
-        for rule in [None, Some((Target::uniform(-0.3, 0.5), NoiseAtReset::Redrawn))] {
+        for rule in [
+            None,
+            Some((Target::uniform(-0.3, 0.5), NoiseAtReset::Redrawn)),
+        ] {
             seen += 1;
             let (p, q) = match rule {
                 None => (c.params(), two),
@@ -149,10 +152,36 @@ fn paper_as_states_matches_the_two_state_solver() {
             // The two-state solver's extrapolation error: its change from
             // the fine-mesh value bounds it.
             let e2 = |f: f64, x: f64| (x - f).abs();
-            let name = format!("{} ({})", c.name, if rule.is_some() { "uniform, redrawn" } else { "paper reset" });
-            within(&name, "<v^2> vs 2-state", s.v2, t.v2, e[1] + e2(t.fine.v2, t.v2));
-            within(&name, "D_eff vs 2-state", s.d_eff, t.d_eff, e[2] + e2(t.fine.d_eff, t.d_eff));
-            within(&name, "<v> vs 2-state", s.v_mean, t.v_mean, e[0] + e2(t.fine.v_mean, t.v_mean));
+            let name = format!(
+                "{} ({})",
+                c.name,
+                if rule.is_some() {
+                    "uniform, redrawn"
+                } else {
+                    "paper reset"
+                }
+            );
+            within(
+                &name,
+                "<v^2> vs 2-state",
+                s.v2,
+                t.v2,
+                e[1] + e2(t.fine.v2, t.v2),
+            );
+            within(
+                &name,
+                "D_eff vs 2-state",
+                s.d_eff,
+                t.d_eff,
+                e[2] + e2(t.fine.d_eff, t.d_eff),
+            );
+            within(
+                &name,
+                "<v> vs 2-state",
+                s.v_mean,
+                t.v_mean,
+                e[0] + e2(t.fine.v_mean, t.v_mean),
+            );
         }
     }
     assert_eq!(seen, 4);
@@ -162,7 +191,10 @@ fn paper_as_states_matches_the_two_state_solver() {
 /// target's moments (`LinearNoise::with_target`), noise kept.
 #[test]
 fn a_random_target_matches_the_closed_forms() {
-    for c in NOISE_CASES.iter().filter(|c| c.name == "linear-rpt" || c.name == "linear-thermal") {
+    for c in NOISE_CASES
+        .iter()
+        .filter(|c| c.name == "linear-rpt" || c.name == "linear-thermal")
+    {
         let target = Target::uniform(-0.4, 0.6);
         let p = c.params().with_reset(target, NoiseAtReset::Kept).unwrap();
         let s = solve(&p, 4000);

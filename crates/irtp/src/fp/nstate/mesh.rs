@@ -162,7 +162,10 @@ pub(crate) fn mesh(p: &Params, c: &Chain, n: usize, refine: usize, graded: bool)
 fn spread(p: &Params, edges: &[f64], states: usize) -> Result<Vec<Vec<(usize, f64)>>> {
     let t = p.reset().target();
     let m: Vec<f64> = edges.windows(2).map(|e| t.mass(e[0], e[1])).collect();
-    let (inside, all) = (m.iter().sum::<f64>(), t.mass(f64::NEG_INFINITY, f64::INFINITY));
+    let (inside, all) = (
+        m.iter().sum::<f64>(),
+        t.mass(f64::NEG_INFINITY, f64::INFINITY),
+    );
     if !(inside >= (1.0 - 1e-10) * all && inside > 0.0) {
         return Err(Error::invalid(
             "reset_to",

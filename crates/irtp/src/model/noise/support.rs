@@ -58,7 +58,9 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
         // the engine refusing the others by name (mfpt::nstate).
         Solver::Backward => true,
-        Solver::FptDistribution => false,
+        // N coupled survival equations at T = 0, the atoms split off
+        // (mfpt::ndist); thermal noise refused there by `temperature`.
+        Solver::FptDistribution => true,
         Solver::MfptOptimize => true,
         Solver::MfptExact => false,
         // Any finite-state noise at any T (mfpt::euler's noise kernel).
