@@ -281,6 +281,9 @@ impl DistributionArgs {
         // before tau (which the backward equations refuse for it) is needed.
         if let Some(m) = problem.params().noise() {
             irtp::model::noise::support::check(irtp::model::reset::Solver::FptDistribution, m)?;
+            if self.method == DistMethod::Backward {
+                mfpt::distribution::check_problem(&problem)?;
+            }
         }
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact

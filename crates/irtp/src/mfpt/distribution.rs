@@ -447,6 +447,18 @@ fn extrapolate(fine: f64, coarse: f64) -> f64 {
     2.0 * fine - coarse
 }
 
+/// What [`distribution`] refuses in the problem itself, before any solve
+/// (for a caller to refuse early): a noise the method does not run, and
+/// with a noise model thermal noise (naming `temperature`) and what the
+/// N-state backward equations refuse.
+pub fn check_problem(problem: &Problem) -> Result<()> {
+    problem.params().require(Solver::FptDistribution)?;
+    if problem.params().noise().is_some() {
+        super::ndist::admissible(problem)?;
+    }
+    Ok(())
+}
+
 /// The first-passage-time distribution of `problem` at the output `times`
 /// (see the module doc). Errors: invalid options or times; the paper's
 /// printed drift (only the simulated process has a distribution);

@@ -609,7 +609,7 @@ fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
 
 /// Refuse thermal noise (the survival equations are first order here) and
 /// what the backward equations of a noise model refuse.
-fn admissible(problem: &Problem) -> Result<Chain> {
+pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
     let chain = problem.params().chain()?;
     if chain.temperature > 0.0 {
         return Err(Error::invalid(
