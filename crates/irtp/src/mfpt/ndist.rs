@@ -171,18 +171,14 @@ impl Survival {
         let nodes = m.v.len();
         let n = ns * nodes;
         let redrawn = par.reset().noise() == NoiseAtReset::Redrawn;
-        let absorbed: Vec<bool> = chain
-            .levels
-            .iter()
-            .map(|&a| a - g.force(cp.vt()) > 0.0)
-            .collect();
+        let absorbed = absorbed(cp, chain);
         let mut band = Band::new(n, ns, ns);
         let mut border = vec![vec![0.0; n]; ns];
         let mut algebraic = vec![false; n];
         for i in 0..nodes {
-            for s in 0..ns {
+            for (s, &absorbed) in absorbed.iter().enumerate() {
                 let row = ns * i + s;
-                if i + 1 == nodes && absorbed[s] {
+                if i + 1 == nodes && absorbed {
                     band.set(row, row, -1.0);
                     algebraic[row] = true;
                     continue;
@@ -607,6 +603,32 @@ fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
     Ok((coarse, fine))
 }
 
+/// The runs on the finer mesh (to the tail) and on the coarser one (to the
+/// same end), and the finer mesh.
+fn both_runs(
+    cp: &Problem,
+    chain: &Chain,
+    times: &[f64],
+    opts: &DistributionOptions,
+    moments: &Moments,
+) -> Result<(Mesh, Run, Run)> {
+    let (coarse, fine_mesh) = meshes(cp, chain, opts.backward.cells)?;
+    let tol = Tolerances {
+        rtol: opts.rtol,
+        atol: opts.atol,
+        ..Tolerances::default()
+    };
+    let scales = (moments.tau, moments.second);
+    let stop = Stop::Tail {
+        tail: opts.tail,
+        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
+    };
+    let fine = run(cp, &fine_mesh, chain, times, &tol, stop, scales)?;
+    let end = Stop::At(fine.t_end);
+    let rough = run(cp, &coarse, chain, times, &tol, end, scales)?;
+    Ok((fine_mesh, fine, rough))
+}
+
 /// Refuse thermal noise (the survival equations are first order here) and
 /// what the backward equations of a noise model refuse.
 pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
@@ -622,6 +644,38 @@ pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
     let (cp, _) = problem.canonical();
     super::nstate::admissible(&cp, &cp.params().chain()?)?;
     Ok(chain)
+}
+
+/// Whether each state's flow crosses v_t (a_s > g(v_t)): absorbed there,
+/// and carrying an atom (Eqs. (N31), (N38)).
+fn absorbed(cp: &Problem, chain: &Chain) -> Vec<bool> {
+    let g = cp.params().drag();
+    chain
+        .levels
+        .iter()
+        .map(|&a| a - g.force(cp.vt()) > 0.0)
+        .collect()
+}
+
+/// The atoms on mesh `m` (their spreads the mesh's), levels and weights
+/// from the user's chain (the same state order).
+fn atom_list(cp: &Problem, m: &Mesh, chain: &Chain, user: &Chain) -> Vec<Atom> {
+    let rate = cp.params().rate();
+    let absorbed = absorbed(cp, chain);
+    (0..chain.states())
+        .filter(|&s| absorbed[s])
+        .map(|s| {
+            let a = atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate);
+            Atom {
+                state: s,
+                level: user.levels[s],
+                time: a.time,
+                mass: (-a.kill * a.time).exp(),
+                weight: user.pi[s],
+                spread: a.spread,
+            }
+        })
+        .collect()
 }
 
 /// Per output time, the π-mixture and the states `hi`, `lo` of a per-state
@@ -661,27 +715,7 @@ pub(super) fn distribution(
     let moments = box_moments(problem, opts.backward.cells, &user.pi, hi, lo)?;
     let (cp, _) = problem.canonical();
     let chain = cp.params().chain()?;
-    let (coarse, fine_mesh) = meshes(&cp, &chain, opts.backward.cells)?;
-    let tol = Tolerances {
-        rtol: opts.rtol,
-        atol: opts.atol,
-        ..Tolerances::default()
-    };
-    let scales = (moments.tau, moments.second);
-    let stop = Stop::Tail {
-        tail: opts.tail,
-        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
-    };
-    let fine = run(&cp, &fine_mesh, &chain, times, &tol, stop, scales)?;
-    let rough = run(
-        &cp,
-        &coarse,
-        &chain,
-        times,
-        &tol,
-        Stop::At(fine.t_end),
-        scales,
-    )?;
+    let (fine_mesh, fine, rough) = both_runs(&cp, &chain, times, opts, &moments)?;
     let ex =
         |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect() };
     let s: Vec<Vec<f64>> = fine.s.iter().zip(&rough.s).map(|(a, b)| ex(a, b)).collect();
@@ -689,18 +723,7 @@ pub(super) fn distribution(
     let [density, density_plus, density_minus] = columns(&fine.f, &user.pi, hi, lo);
     let (mean, second) = (ex(&fine.mean, &rough.mean), ex(&fine.second, &rough.second));
     let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
-    let atoms: Vec<Atom> = Survival::new(&cp, &fine_mesh, &chain, scales)
-        .atoms
-        .iter()
-        .map(|a| Atom {
-            state: a.s,
-            level: user.levels[a.s],
-            time: a.time,
-            mass: (-a.kill * a.time).exp(),
-            weight: user.pi[a.s],
-            spread: a.spread,
-        })
-        .collect();
+    let atoms = atom_list(&cp, &fine_mesh, &chain, &user);
     let smeared = |i: usize| {
         let t = times[i];
         atoms
