@@ -6,9 +6,11 @@
 //!     integrate to 1 - S(t_last), and E(T) agrees with the N-state
 //!     backward equations' tau within the two error estimates;
 //! (2) the paper's noise spelt as a generator gives the two-state solver's
-//!     S(t) to their discretisation errors;
+//!     S(t) to their discretisation errors (also with the noise re-drawn at
+//!     a reset, a random reset target and a downward target);
 //! (3) Euler particles (dt and dt/2 extrapolated) against S(t) at three
-//!     times, for a run-pause-tumble and an asymmetric case.
+//!     times, for a run-pause-tumble and an asymmetric case;
+//! and thermal noise is refused naming `temperature`.
 
 use crate::common::noises::{self, NoiseCase, NOISE_CASES, PAPER_AS_STATES};
 use crate::common::stats::bonferroni_z;
@@ -267,5 +269,49 @@ fn noise_distribution_refuses_thermal_noise_by_name() {
                 e => panic!("{}: {e}", c.name),
             }
         }
+    }
+}
+
+/// (2) with the noise re-drawn at a reset, a random reset target, and a
+/// downward target: the paper's noise as a generator against the
+/// two-state solver.
+#[test]
+fn noise_distribution_paper_as_states_matches_with_redrawn_noise_random_target_downward() {
+    use irtp::model::reset::{NoiseAtReset, Target};
+    let c = NOISE_CASES
+        .iter()
+        .find(|c| c.noise == PAPER_AS_STATES && c.drag == "tan")
+        .unwrap();
+    let drag: DragLaw = c.drag.parse().unwrap();
+    let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
+    let times = grid(4.0, 40);
+    for (target, rule, (v0, vt)) in [
+        (Target::point(0.2), NoiseAtReset::Redrawn, (0.1, 0.5)),
+        (Target::uniform(-0.3, 0.4), NoiseAtReset::Kept, (0.1, 0.5)),
+        (
+            Target::uniform(-0.3, 0.4),
+            NoiseAtReset::Redrawn,
+            (0.1, 0.5),
+        ),
+        (Target::point(0.2), NoiseAtReset::Kept, (0.1, -0.4)),
+    ] {
+        let n = Problem::new(c.params().with_reset(target, rule).unwrap(), v0, vt).unwrap();
+        let q = Problem::new(two.with_reset(target, rule).unwrap(), v0, vt).unwrap();
+        let a = distribution(&q, &times, &options(2000)).unwrap();
+        let b = distribution(&n, &times, &options(2000)).unwrap();
+        let tol = a.mesh_error + b.mesh_error + 20.0 * DistributionOptions::default().rtol;
+        let worst = (0..times.len())
+            .map(|i| (a.survival[i] - b.survival[i]).abs())
+            .fold(0.0, f64::max);
+        eprintln!("{target:?} {rule:?} {v0} -> {vt}: max |ΔS| = {worst:.1e} (tolerance {tol:.1e})");
+        assert!(
+            worst <= tol,
+            "{target:?} {rule:?} {v0} -> {vt}: {worst} > {tol}"
+        );
+        assert!(
+            (a.atom_mass - b.atom_mass).abs() < 1e-12,
+            "{target:?} {rule:?}"
+        );
+        assert!((a.mean - b.mean).abs() <= a.mean_error + b.mean_error + 1e-3 * a.mean);
     }
 }
