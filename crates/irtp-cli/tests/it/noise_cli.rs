@@ -52,9 +52,7 @@ fn commands() -> Vec<Vec<&'static str>> {
         ],
         vec!["analytic", "--drag", "tan"],
     ];
-    for m in ["exact"] {
-        out.push([&mfpt[..], &["--method", m, "--particles", "10"][..]].concat());
-    }
+    out.push([&mfpt[..], &["--method", "exact", "--particles", "10"][..]].concat());
     for m in ["backward", "exact"] {
         out.push([&search[..], &["--method", m, "--particles", "10"][..]].concat());
         let interval = [
