@@ -460,6 +460,11 @@ struct BackwardPart {
     atom_spread: f64,
     steps: usize,
     rejected_steps: usize,
+    /// With a noise model: one atom per state whose flow reaches v_t
+    /// (`atom_time` is the earliest, `atom_mass` their π-weighted sum);
+    /// absent for the paper's noise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    atoms: Vec<irtp::mfpt::Atom>,
 }
 
 #[derive(Serialize)]
@@ -666,6 +671,7 @@ fn backward_report<'a>(c: &'a Config, opts: &DistributionOptions, d: &Distributi
             atom_spread: d.atom_spread,
             steps: d.steps,
             rejected_steps: d.rejected,
+            atoms: d.atoms.clone(),
         }),
         exact: None,
     }

@@ -181,6 +181,11 @@ fn distribution_runs_a_noise_model_and_writes_it() {
     assert!((mean - tau).abs() < 1e-3 * tau, "{s}");
     let atom = r["atom_mass"].as_f64().unwrap();
     assert!(atom > 0.0 && atom < 1.0, "{s}");
+    // run-pause-tumble to v_t = 0.5 < g⁻¹(1): only the +1 state's flow
+    // reaches it.
+    let atoms = r["atoms"].as_array().expect("atoms");
+    assert_eq!(atoms.len(), 1, "{s}");
+    assert_eq!(atoms[0]["level"].as_f64(), Some(1.0), "{s}");
     assert!(s["params"].to_string().contains(RPT), "{s}");
     let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
     assert_eq!(csv.lines().count(), 52, "{csv}");

@@ -31,7 +31,14 @@
 //! follow from the time integration (the atoms' shares in closed form).
 //! As the two-state code, it runs on a mesh of cells / 2 cells and on its
 //! midpoint refinement and extrapolates S and the moments (first order);
-//! f is the finer mesh's.
+//! f is the finer mesh's. [`Distribution::mean`] and
+//! [`Distribution::mean_time_integral`] are here the same number (the
+//! time integration's, which misses about `tail_mass` times the decay
+//! time), [`Distribution::mean_error`] its mesh error; it is checked
+//! against the box scheme's τ of Eq. (N30) ([`Distribution::moments`]).
+//! `survival_plus` / `survival_minus` are the states of highest / lowest
+//! level, `atom_time` the earliest atom and `atom_mass` the π-weighted sum
+//! of [`Distribution::atoms`].
 
 use super::backward::{mesh_on, Mesh, Moments};
 use super::distribution::{refine, Atom, Distribution, DistributionOptions};
