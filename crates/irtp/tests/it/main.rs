@@ -25,6 +25,7 @@ mod msd_fit;
 mod noise;
 mod noise_backward;
 mod noise_conformance;
+mod noise_distribution;
 mod noise_euler;
 mod noise_exact;
 mod noise_fp;

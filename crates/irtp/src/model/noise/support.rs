@@ -16,7 +16,10 @@
 //! any finite-state noise, any T, Eqs. (N20)-(N29)), and the backward
 //! equations [`crate::mfpt`] (`mfpt --method backward`, scan, optimize:
 //! any finite-state noise; with T > 0 linear, tanh and tan drags, Eqs.
-//! (N30)-(N36)).
+//! (N30)-(N36)), and the first-passage-time distribution
+//! [`crate::mfpt::distribution()`] (`mfpt distribution --method backward`:
+//! any finite-state noise at T = 0, Eqs. (N37)-(N39); thermal noise refused
+//! naming `temperature`).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -30,7 +33,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
-    Poisson resetting)";
+    Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
+    temperature 0, Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
@@ -58,7 +62,9 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
         // the engine refusing the others by name (mfpt::nstate).
         Solver::Backward => true,
-        Solver::FptDistribution => false,
+        // N coupled survival equations at T = 0, the atoms split off
+        // (mfpt::ndist); thermal noise refused there by `temperature`.
+        Solver::FptDistribution => true,
         Solver::MfptOptimize => true,
         Solver::MfptExact => false,
         // Any finite-state noise at any T (mfpt::euler's noise kernel).
