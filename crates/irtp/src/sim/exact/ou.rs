@@ -34,7 +34,8 @@ use std::ops::Range;
 /// The purpose key of the particles' second stream (the Gaussian draws).
 const GAUSS_STREAM: u64 = 0x4f55_5f67_6175_7373;
 
-/// Strata per panel of the randomised quadrature of Eq. (N44).
+/// Strata per unit time of the randomised quadrature of Eq. (N44), and
+/// the most per panel.
 const STRATA: usize = 16;
 
 /// Half-width of the Gaussian kept per quadrature node, in standard
@@ -141,7 +142,7 @@ impl OuSampler {
     /// The sampler of `params` (a noise model at T > 0): refuses a drag
     /// other than linear naming `temperature`, and the schedule's modifiers
     /// naming their flags.
-    pub(super) fn new(params: &Params, spec: &SimSpec, hist: (f64, f64)) -> Result<Self> {
+    pub(super) fn new(params: &Params, spec: &SimSpec) -> Result<Self> {
         let chain = params.chain()?;
         let t = chain.temperature;
         if !matches!(params.drag(), DragLaw::Linear) {
@@ -163,7 +164,8 @@ impl OuSampler {
                  the paper's (a schedule modifier with such a noise is not run)",
             ));
         }
-        let (lo, hi) = hist;
+        // The histogram's range, as Observables::new has it.
+        let (lo, hi) = crate::sim::histogram_range(params);
         let b = spec.bins;
         let mut edges: Vec<f64> = (0..=b)
             .map(|k| lo + (hi - lo) * k as f64 / b as f64)
@@ -215,19 +217,21 @@ impl OuSampler {
 
     /// An unbiased estimate of E[time in each bin over (0, h)] for a
     /// particle at v = a_s + u0 in state s, added to `occ` (Eq. (N44)):
-    /// the exact bin probabilities of v(t) at [`STRATA`] stratified random
-    /// times in (0, h₁), h₁ = min(h, 1), and as many in (h₁, h), each
-    /// weighted by its stratum's length (so the bin times sum to h).
+    /// the exact bin probabilities of v(t) at stratified random times, K
+    /// = ceil([`STRATA`] h₁) strata on (0, h₁), h₁ = min(h, 1), and
+    /// [`STRATA`] on (h₁, h), each weighted by its stratum's length (so the
+    /// bin times sum to h).
     pub(crate) fn occupy(&self, si: usize, u0: f64, h: f64, occ: &mut [f64], rng: &mut Rng) {
         let (a, t) = (self.chain.levels[si], self.temperature);
         let h1 = h.min(1.0);
-        let k = STRATA as f64;
         for (start, len) in [(0.0, h1), (h1, h - h1)] {
             if !(len > 0.0) {
                 continue;
             }
+            let strata = ((STRATA as f64 * len).ceil() as usize).clamp(1, STRATA);
+            let k = strata as f64;
             let wt = len / k;
-            for j in 0..STRATA {
+            for j in 0..strata {
                 let tt = start + len * (j as f64 + rng.gen::<f64>()) / k;
                 // A point mass at v0 where tt = 0 (probability 2^-53).
                 let sd = (t * -(-2.0 * tt).exp_m1()).sqrt().max(f64::MIN_POSITIVE);
@@ -362,8 +366,8 @@ pub(super) fn simulate(
 ) -> Result<Vec<Observables>> {
     params.require(crate::model::reset::Solver::Exact)?;
     super::super::check_period_window(params, spec)?;
+    let sampler = OuSampler::new(params, spec)?;
     let template = Observables::new(spec, params);
-    let sampler = OuSampler::new(params, spec, (template.v_lo, template.v_hi))?;
     let first = spec.first_particle;
     let totals = part.reduce(
         spec.particles,
@@ -407,8 +411,7 @@ mod tests {
         let noise = NoiseModel::parse("rpt:sigma=1.2,alpha=1,beta=1", t).unwrap();
         let p = Params::with_noise(DragLaw::Linear, noise, 0.5, 0.0).unwrap();
         let spec = SimSpec::new(10, TimeGrid::linear(10.0, 2).unwrap(), 1.0, bins, 1).unwrap();
-        let o = Observables::new(&spec, &p);
-        OuSampler::new(&p, &spec, (o.v_lo, o.v_hi)).unwrap()
+        OuSampler::new(&p, &spec).unwrap()
     }
 
     /// The reference of Eq. (N44): the midpoint rule in t on n points.
