@@ -217,10 +217,10 @@ impl OuSampler {
 
     /// An unbiased estimate of E[time in each bin over (0, h)] for a
     /// particle at v = a_s + u0 in state s, added to `occ` (Eq. (N44)):
-    /// the exact bin probabilities of v(t) at stratified random times, K
-    /// = ceil([`STRATA`] h₁) strata on (0, h₁), h₁ = min(h, 1), and
-    /// [`STRATA`] on (h₁, h), each weighted by its stratum's length (so the
-    /// bin times sum to h).
+    /// the exact bin probabilities of v(t) at stratified random times,
+    /// ceil([`STRATA`] len) strata (at most [`STRATA`]) on each of (0, h₁),
+    /// h₁ = min(h, 1), and (h₁, h) of length len, each time weighted by its
+    /// stratum's length (so the bin times sum to h).
     pub(crate) fn occupy(&self, si: usize, u0: f64, h: f64, occ: &mut [f64], rng: &mut Rng) {
         let (a, t) = (self.chain.levels[si], self.temperature);
         let h1 = h.min(1.0);
