@@ -28,6 +28,7 @@ mod noise_conformance;
 mod noise_distribution;
 mod noise_euler;
 mod noise_exact;
+mod noise_exact_ou;
 mod noise_fp;
 mod power_kink;
 mod search_backward;
