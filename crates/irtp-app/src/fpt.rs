@@ -281,6 +281,9 @@ impl DistributionArgs {
         // before tau (which the backward equations refuse for it) is needed.
         if let Some(m) = problem.params().noise() {
             irtp::model::noise::support::check(irtp::model::reset::Solver::FptDistribution, m)?;
+            if self.method == DistMethod::Backward {
+                mfpt::distribution::check_problem(&problem)?;
+            }
         }
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact
@@ -371,12 +374,19 @@ impl DistributionArgs {
         let cells = backward.cells as f64;
         let steps = 800.0 * (1e-4 / opts.rtol).cbrt()
             + 1e3 * (1.0 + (t_max / tau.max(1e-300)).ln().max(0.0));
+        // A noise model of N states: N unknowns per node, bandwidth N
+        // (1 for the paper's two states).
+        let states = match problem.params().noise() {
+            Some(_) => problem.params().chain()?.states() as f64,
+            None => 2.0,
+        };
+        let per_node = (0.5 * states).max(1.0);
         self.output.budget.check(
             &super::budget::Cost {
-                work: steps * cells * 400.0,
+                work: steps * cells * 400.0 * per_node * per_node,
                 unit: "cell updates",
                 drivers: vec!["cells", "t_max", "rtol"],
-                memory: 2.0 * cells * 8.0 * 40.0 + 64.0 * points as f64,
+                memory: 2.0 * cells * 8.0 * 40.0 * per_node + 64.0 * points as f64,
                 memory_drivers: vec!["cells", "points"],
             }
             .per_drag_evaluation(&problem.params().drag()),
@@ -457,6 +467,11 @@ struct BackwardPart {
     atom_spread: f64,
     steps: usize,
     rejected_steps: usize,
+    /// With a noise model: one atom per state whose flow reaches v_t
+    /// (`atom_time` is the earliest, `atom_mass` their π-weighted sum);
+    /// absent for the paper's noise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    atoms: Vec<irtp::mfpt::Atom>,
 }
 
 #[derive(Serialize)]
@@ -663,6 +678,7 @@ fn backward_report<'a>(c: &'a Config, opts: &DistributionOptions, d: &Distributi
             atom_spread: d.atom_spread,
             steps: d.steps,
             rejected_steps: d.rejected,
+            atoms: d.atoms.clone(),
         }),
         exact: None,
     }

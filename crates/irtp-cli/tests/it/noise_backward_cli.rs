@@ -144,3 +144,59 @@ fn bad_noise_backward_input_names_the_flag() {
         assert_rejected(&out, flag, &dir);
     }
 }
+
+/// `mfpt distribution --method backward` runs a noise model at temperature
+/// 0 and writes its files (the mean that of the library's backward tau);
+/// with thermal noise it is refused naming `--temperature`, nothing
+/// written.
+#[test]
+fn distribution_runs_a_noise_model_and_writes_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let base = [
+        "mfpt",
+        "distribution",
+        "--v0",
+        "0",
+        "--vt",
+        "0.5",
+        "--rate",
+        "1",
+        "--method",
+        "backward",
+        "--noise",
+        RPT,
+        "--cells",
+        "2000",
+        "--points",
+        "51",
+    ];
+    let d = dir.to_str().unwrap();
+    let s = summary(&irtp(&[&base[..], &["--json", "--out", d][..]].concat()));
+    let r = &s["results"];
+    let (mean, tau) = (
+        r["distribution_mean"].as_f64().unwrap(),
+        r["tau"].as_f64().unwrap(),
+    );
+    assert!((mean - tau).abs() < 1e-3 * tau, "{s}");
+    let atom = r["atom_mass"].as_f64().unwrap();
+    assert!(atom > 0.0 && atom < 1.0, "{s}");
+    // run-pause-tumble to v_t = 0.5 < g⁻¹(1): only the +1 state's flow
+    // reaches it.
+    let atoms = r["atoms"].as_array().expect("atoms");
+    assert_eq!(atoms.len(), 1, "{s}");
+    assert_eq!(atoms[0]["level"].as_f64(), Some(1.0), "{s}");
+    assert!(s["params"].to_string().contains(RPT), "{s}");
+    let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 52, "{csv}");
+    assert!(dir.join("run.json").exists());
+    let refused = tmp.path().join("t").join("out");
+    std::fs::create_dir_all(refused.parent().unwrap()).unwrap();
+    let args = [
+        &base[..],
+        &["--temperature", "0.5", "--out", refused.to_str().unwrap()][..],
+    ]
+    .concat();
+    let err = assert_rejected(&irtp(&args), "--temperature", &refused);
+    assert!(err.contains("temperature 0"), "{err}");
+}

@@ -32,21 +32,10 @@ fn commands() -> Vec<Vec<&'static str>> {
     ];
     let mut out: Vec<Vec<&str>> = vec![
         // simulate (noise_exact_cli.rs, noise_euler_cli.rs), fp
-        // (noise_fp_cli.rs), mfpt scan / optimize and `mfpt --method
-        // backward` (noise_backward_cli.rs) and `mfpt --method euler` run
-        // noise models.
-        vec![
-            "mfpt",
-            "distribution",
-            "--v0",
-            "0",
-            "--vt",
-            "0.5",
-            "--rate",
-            "1",
-            "--method",
-            "backward",
-        ],
+        // (noise_fp_cli.rs), mfpt scan / optimize, `mfpt --method
+        // backward` and `mfpt distribution --method backward`
+        // (noise_backward_cli.rs) and `mfpt --method euler` run noise
+        // models.
         vec![
             "mfpt",
             "distribution",

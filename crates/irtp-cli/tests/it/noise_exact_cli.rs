@@ -1,8 +1,9 @@
 //! `irtp simulate --method exact` with a noise model (docs/equations.md,
 //! Eqs. (N10)-(N12)): a run-pause-tumble noise runs and records its noise
-//! in the provenance; a noise or temperature it does not run, and a level
-//! a drag cannot reach, are refused naming the flag (exit 2, nothing
-//! written).
+//! in the provenance; thermal noise with linear drag runs (Eqs.
+//! (N40)-(N45)) and its stationary <v²> is the closed form's; a noise or
+//! temperature it does not run, and a level a drag cannot reach, are
+//! refused naming the flag (exit 2, nothing written).
 
 use super::common::*;
 
@@ -77,7 +78,8 @@ fn simulate_exact_refuses_what_it_does_not_run() {
             ],
             "--noise",
         ),
-        // Thermal noise with tan drag (the exact sampler runs T = 0).
+        // Thermal noise with tan drag (the exact sampler runs T > 0 with
+        // linear drag only).
         (
             vec!["--drag", "tan", "--temperature", "0.5"],
             "--temperature",
@@ -91,7 +93,7 @@ fn simulate_exact_refuses_what_it_does_not_run() {
                 "--temperature",
                 "0.5",
             ],
-            "--noise",
+            "--temperature",
         ),
         // The pause level 0 at the kink of the power law (g'(0) = ∞).
         (
@@ -111,4 +113,51 @@ fn simulate_exact_refuses_what_it_does_not_run() {
         let err = assert_rejected(&irtp(&args), flag, &dir);
         eprintln!("{err}");
     }
+}
+
+/// Pure Ornstein-Uhlenbeck with resetting to 0 at rate r = 1 (the
+/// default method, exact): the stationary <v²> of summary.json within 4
+/// standard errors of Eq. (N4), `<v²>` = 2T/(2 + r) (`m` = 0: one level
+/// at 0), computed by the library's closed form.
+#[test]
+fn simulate_exact_runs_thermal_noise_with_linear_drag() {
+    use irtp::analytic::linear_noise::LinearNoise;
+    use irtp::model::noise::NoiseModel;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("ou");
+    let args = [
+        "simulate",
+        "--drag",
+        "linear",
+        "--noise",
+        "none",
+        "--temperature",
+        "0.5",
+        "--rate",
+        "1",
+        "--particles",
+        "2000",
+        "--bins",
+        "20",
+        "--seed",
+        "8",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    assert_success(&irtp(&args));
+    let s = read_json(&dir.join("summary.json"));
+    let r = &s["results"];
+    let (v2, se) = (r["v2"].as_f64().unwrap(), r["v2_err"].as_f64().unwrap());
+    let noise = NoiseModel::parse("none", 0.5).unwrap();
+    let exact = LinearNoise::new(1.0, noise, 1.0, 0.0)
+        .unwrap()
+        .moments()
+        .unwrap()
+        .v2;
+    assert!((exact - 2.0 * 0.5 / 3.0).abs() < 1e-12, "{exact}");
+    eprintln!(
+        "<v²> = {v2} ± {se} vs {exact} ({:.2} SE)",
+        (v2 - exact) / se
+    );
+    assert!(se > 0.0 && (v2 - exact).abs() <= 4.0 * se, "{s}");
 }

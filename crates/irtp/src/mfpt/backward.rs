@@ -125,6 +125,7 @@ impl Profile {
 
 /// Mesh of [v_l, v_t] (canonical, upward frame) with v_0 and v_r as nodes:
 /// uniform per segment, except the last one when v_t is close to v_u.
+#[derive(Clone)]
 pub(super) struct Mesh {
     /// Nodes, increasing.
     pub(super) v: Vec<f64>,

@@ -155,13 +155,50 @@ pub struct Distribution {
     pub mean_time_integral: f64,
     /// 2 ∫_0^t_end t S dt from the time integration.
     pub second_time_integral: f64,
+    /// |E(T)_fine - E(T)_coarse| of the two meshes: the discretisation
+    /// error of the finer one, an upper estimate of the extrapolated
+    /// [`Distribution::mean`]'s.
+    #[serde(default)]
+    pub mean_error: f64,
+    /// With a noise model (`mfpt::ndist`): one atom per state whose flow
+    /// reaches v_t, each at its own flow time. Empty for the paper's noise,
+    /// whose one atom is [`Distribution::atom_time`],
+    /// [`Distribution::atom_mass`].
+    #[serde(default)]
+    pub atoms: Vec<Atom>,
+}
+
+/// A point mass of the first-passage time with a noise model: started in
+/// `state`, the particle arrives at its deterministic flow time with
+/// probability `mass` (no jump and no reset before); its share of the
+/// mixture is `weight` · `mass`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Atom {
+    /// The noise state (in the noise's order).
+    pub state: usize,
+    /// Its level a_s (user's frame).
+    pub level: f64,
+    /// T_f,s = ∫_{v_0}^{v_t} dv / (a_s - g): where the atom sits.
+    pub time: f64,
+    /// e^{-(q_s + r) T_f,s}: its mass starting in the state.
+    pub mass: f64,
+    /// π_s: the probability of starting in the state.
+    pub weight: f64,
+    /// The scheme's spread of this arrival in time (as
+    /// [`Distribution::atom_spread`]).
+    pub spread: f64,
 }
 
 impl Distribution {
     /// Whether f at time t lies in the window around the atom's flow time
     /// where the scheme smears it ([`Distribution::atom_spread`]).
     pub fn smeared(&self, t: f64) -> bool {
-        (t - self.atom_time).abs() < ATOM_WINDOW * self.atom_spread
+        if self.atoms.is_empty() {
+            return (t - self.atom_time).abs() < ATOM_WINDOW * self.atom_spread;
+        }
+        self.atoms
+            .iter()
+            .any(|a| (t - a.time).abs() < ATOM_WINDOW * a.spread)
     }
 }
 
@@ -184,7 +221,7 @@ fn check_times(times: &[f64]) -> Result<()> {
 
 /// The midpoint refinement of a mesh of `cp` (v_0, v_r stay nodes; a
 /// random target's weights are recomputed on it).
-fn refine(cp: &Problem, m: &Mesh) -> Mesh {
+pub(super) fn refine(cp: &Problem, m: &Mesh) -> Mesh {
     let mut v = Vec::with_capacity(2 * m.v.len() - 1);
     for w in m.v.windows(2) {
         v.extend([w[0], 0.5 * (w[0] + w[1])]);
@@ -410,6 +447,18 @@ fn extrapolate(fine: f64, coarse: f64) -> f64 {
     2.0 * fine - coarse
 }
 
+/// What [`distribution`] refuses in the problem itself, before any solve
+/// (for a caller to refuse early): a noise the method does not run, and
+/// with a noise model thermal noise (naming `temperature`) and what the
+/// N-state backward equations refuse.
+pub fn check_problem(problem: &Problem) -> Result<()> {
+    problem.params().require(Solver::FptDistribution)?;
+    if problem.params().noise().is_some() {
+        super::ndist::admissible(problem)?;
+    }
+    Ok(())
+}
+
 /// The first-passage-time distribution of `problem` at the output `times`
 /// (see the module doc). Errors: invalid options or times; the paper's
 /// printed drift (only the simulated process has a distribution);
@@ -429,6 +478,9 @@ pub fn distribution(
             "paper-printed",
             "the simulated drift",
         ));
+    }
+    if problem.params().noise().is_some() {
+        return super::ndist::distribution(problem, times, opts);
     }
     let moments = backward::moments(problem, &opts.backward)?;
     let (cp, swapped) = problem.canonical();
@@ -504,8 +556,13 @@ pub fn distribution(
         atom_spread: fine.spread,
         mean_time_integral: 0.5 * (mean_t.0 + mean_t.1),
         second_time_integral: 0.5 * (second_t.0 + second_t.1),
+        mean_error: 0.5
+            * ((fine.exact_mean.0 + fine.exact_mean.1) - (rough.exact_mean.0 + rough.exact_mean.1))
+                .abs(),
+        atoms: Vec::new(),
     };
-    verify(&d, opts.rtol)?;
+    let tol = 1e-3 * d.moments.tau;
+    verify(&d, opts.rtol, tol)?;
     Ok(d)
 }
 
@@ -513,8 +570,10 @@ pub fn distribution(
 /// 0 <= S <= 1 and S non-increasing (each within 10 rtol + mesh_error),
 /// f >= 0 outside the smeared window around the atom's flow time (within
 /// 10 rtol max f + mesh_error_density), and the mean within
-/// 1e-3 of the box scheme's tau (an independent discretisation).
-fn verify(d: &Distribution, rtol: f64) -> Result<()> {
+/// `mean_tol` of the box scheme's tau (an independent discretisation;
+/// 1e-3 tau for the paper's noise). The π-mixture is checked as the
+/// states are.
+pub(super) fn verify(d: &Distribution, rtol: f64, mean_tol: f64) -> Result<()> {
     let slack = 10.0 * rtol + d.mesh_error;
     let fmax = d
         .density
@@ -527,7 +586,7 @@ fn verify(d: &Distribution, rtol: f64) -> Result<()> {
             reason,
         })
     };
-    for s in [&d.survival_plus, &d.survival_minus] {
+    for s in [&d.survival_plus, &d.survival_minus, &d.survival] {
         if let Some(i) = (0..s.len()).find(|&i| !(s[i] >= -slack && s[i] <= 1.0 + slack)) {
             return fail(format!(
                 "S = {} at t = {} is not a probability",
@@ -538,13 +597,13 @@ fn verify(d: &Distribution, rtol: f64) -> Result<()> {
             return fail(format!("S increases at t = {}", d.t[i]));
         }
     }
-    for f in [&d.density_plus, &d.density_minus] {
+    for f in [&d.density_plus, &d.density_minus, &d.density] {
         if let Some(i) = (0..f.len()).find(|&i| !(d.smeared(d.t[i]) || f[i] >= -fslack)) {
             return fail(format!("f = {} < 0 at t = {}", f[i], d.t[i]));
         }
     }
     let tau = d.moments.tau;
-    if !((d.mean - tau).abs() <= 1e-3 * tau) {
+    if !((d.mean - tau).abs() <= mean_tol) {
         return fail(format!(
             "E(T) = {} disagrees with the stationary tau = {tau}",
             d.mean

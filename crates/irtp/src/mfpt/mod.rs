@@ -39,6 +39,7 @@ pub mod estimator;
 pub mod euler;
 pub mod exact;
 pub mod method;
+mod ndist;
 pub mod nstate;
 pub mod optimize;
 pub mod survival;
@@ -50,7 +51,7 @@ use crate::model::Params;
 use serde::{Deserialize, Serialize};
 
 pub use backward::{BackwardOptions, BackwardSolution, DriftSign, Moments};
-pub use distribution::{distribution, Distribution, DistributionOptions};
+pub use distribution::{distribution, Atom, Distribution, DistributionOptions};
 pub use estimator::{first_passage_stats, FptSample, FptStats, FptSummary};
 pub use euler::EulerFpt;
 pub use exact::FirstPassage;

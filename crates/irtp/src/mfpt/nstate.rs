@@ -90,7 +90,7 @@ impl NoiseSolution {
 }
 
 /// Indices of the highest and lowest level (first of equals).
-fn extreme_states(levels: &[f64]) -> (usize, usize) {
+pub(super) fn extreme_states(levels: &[f64]) -> (usize, usize) {
     let mut hi = 0;
     let mut lo = 0;
     for (s, &a) in levels.iter().enumerate() {
@@ -129,7 +129,7 @@ enum Cond {
 /// Refuse what the N-state solver does not run: schedule modifiers, and
 /// with T > 0 a drag other than linear, tanh and tan (tan: T ≤ 1, the
 /// bound ±π/2 being unreachable only then).
-fn admissible(p: &Problem, chain: &Chain) -> Result<()> {
+pub(super) fn admissible(p: &Problem, chain: &Chain) -> Result<()> {
     let par = p.params();
     if let Some(f) = par.schedule().features().first() {
         return Err(Error::invalid(
@@ -713,6 +713,26 @@ pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Res
     };
     let d = set.solve_source(0.0, &|k, s| mix[s] - x[ns * k + s])?;
     Ok((set.at_start(&x).0, set.at_start(&d).0))
+}
+
+/// The first two moments of the first-passage time per state at v_0 on
+/// `cells` cells: T1_s from Eq. (N30) and T2_s from the same operator with
+/// the source 2 T1_s (L T2 = -2 T1), and the cells used. An independent
+/// discretisation (the box scheme) for the distribution of
+/// `mfpt::distribution` with a noise model to agree with.
+pub(super) fn moments_at_start(
+    problem: &Problem,
+    cells: usize,
+) -> Result<(Vec<f64>, Vec<f64>, usize)> {
+    BackwardOptions::with_cells(cells).validate()?;
+    let set = setup(problem, cells, BARRIER)?;
+    let rate = set.p.params().rate();
+    let ns = set.states();
+    let x = set.solve_source(rate, &|_, _| 1.0)?;
+    non_negative(&x)?;
+    let y = set.solve_source(rate, &|k, s| 2.0 * x[ns * k + s])?;
+    non_negative(&y)?;
+    Ok((set.at_start(&x).1, set.at_start(&y).1, set.mesh.v.len() - 1))
 }
 
 /// T_s(v) on the whole mesh in the user's frame, as a [`Profile`]: tau the

@@ -54,6 +54,10 @@
 //! level its own segments, fixed point (possibly interior) and crossing
 //! times, events at rate q_s + r. It shares this module's segment code
 //! (`Segments`, `flow_segment`, the occupation and crossing times).
+//! With thermal noise (T > 0) and linear drag a third loop, `ou`, runs the
+//! same event clock with exact Ornstein-Uhlenbeck segments in between
+//! (Eqs. (N40)-(N45)); any other drag at T > 0 is refused naming
+//! `temperature`.
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
@@ -69,6 +73,7 @@ use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
 use std::ops::Range;
 
+mod ou;
 mod states;
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
@@ -950,6 +955,11 @@ fn simulate_part(
     part: Part,
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
+    // Thermal noise: the Ornstein-Uhlenbeck segments of linear drag (the
+    // constructor refuses any other drag, naming `temperature`).
+    if params.noise().is_some_and(|m| m.temperature() > 0.0) {
+        return ou::simulate(params, spec, part, progress);
+    }
     crate::with_drag!(params.drag(), |d| simulate_drag(
         d, params, spec, part, progress
     ))

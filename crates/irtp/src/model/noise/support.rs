@@ -12,11 +12,14 @@
 //! point (Eqs. (N3)-(N6)), and any drag with an asymmetric telegraph noise
 //! at r = 0 (Eq. (N8)), and the exact sampler (`simulate --method exact`,
 //! [`crate::sim::exact`]): any finite-state noise at T = 0 (Eqs.
-//! (N10)-(N12)), and the Fokker-Planck solvers [`crate::fp`] (any drag,
+//! (N10)-(N12)) and with linear drag at any T (Eqs. (N40)-(N45)), and the Fokker-Planck solvers [`crate::fp`] (any drag,
 //! any finite-state noise, any T, Eqs. (N20)-(N29)), and the backward
 //! equations [`crate::mfpt`] (`mfpt --method backward`, scan, optimize:
 //! any finite-state noise; with T > 0 linear, tanh and tan drags, Eqs.
-//! (N30)-(N36)).
+//! (N30)-(N36)), and the first-passage-time distribution
+//! [`crate::mfpt::distribution()`] (`mfpt distribution --method backward`:
+//! any finite-state noise at T = 0, Eqs. (N37)-(N39); thermal noise refused
+//! naming `temperature`).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -25,28 +28,33 @@ use crate::model::reset::Solver;
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
-    --method exact (any finite-state noise at temperature 0, the paper's Poisson protocol); \
+    --method exact (any finite-state noise at temperature 0; linear drag at any temperature; the \
+    paper's Poisson protocol); \
     simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
     Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
-    Poisson resetting)";
+    Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
+    temperature 0, Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
-/// any finite-state noise at T = 0 (its constructor refuses, naming
+/// any finite-state noise at T = 0, and at T > 0 with linear drag (its
+/// constructor refuses another drag at T > 0 naming `temperature`, and, naming
 /// `noise`, a level whose fixed point sits at a kink of the drag, and for a
 /// tabulated law a level whose fixed point is not the interval's farthest
 /// edge; the schedule modifiers by their flags); the Euler schemes run
 /// every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for
 /// such models are in [`crate::analytic::noise`], which checks its own
 /// cases.
-pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
+pub fn supports(solver: Solver, _noise: &NoiseModel) -> bool {
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
-        // Any finite-state noise at T = 0 (sim::exact).
-        Solver::Exact => noise.temperature() == 0.0,
+        // Any finite-state noise at T = 0 (sim::exact); with T > 0 linear
+        // drag (exact Ornstein-Uhlenbeck segments), the engine refusing the
+        // other drags by name (sim::exact::ou).
+        Solver::Exact => true,
         // Any finite-state noise at any T (sim::euler::noise).
         Solver::Euler => true,
         // The N-state forward solvers (crate::fp, Eqs. (N20)-(N29)): any
@@ -58,7 +66,9 @@ pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
         // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
         // the engine refusing the others by name (mfpt::nstate).
         Solver::Backward => true,
-        Solver::FptDistribution => false,
+        // N coupled survival equations at T = 0, the atoms split off
+        // (mfpt::ndist); thermal noise refused there by `temperature`.
+        Solver::FptDistribution => true,
         Solver::MfptOptimize => true,
         Solver::MfptExact => false,
         // Any finite-state noise at any T (mfpt::euler's noise kernel).

@@ -1,0 +1,782 @@
+//! The first-passage-time distribution of a noise model at temperature 0
+//! (docs/equations.md, "Backward equations for a noise model", Eqs.
+//! (N37)-(N39)).
+//!
+//! The survival probabilities S_s(v, t) = P(T > t | v(0) = v, eta(0) = a_s)
+//! obey the N coupled equations (N37)
+//! dS_s/dt = (a_s - g) ∂_v S_s + Σ_s' Q_ss' (S_s' - S_s) - r S_s + r R_s,
+//! R_s = S_s(v_r) (noise kept at a reset) or Σ_s' π_s' S_s'(v_r) (re-drawn;
+//! a random target: the reset values weighted over its nodes), with
+//! S_s(v_t, t) = 0 in the states whose flow crosses v_t (a_s > g(v_t), the
+//! absorbed states of Eq. (N31)) and S(v, 0) = 1 below v_t. The reported
+//! survival is S = Σ_s π_s S_s(v_0, t), f = -dS/dt.
+//!
+//! Atoms (Eq. (N38)): a particle started in an absorbed state s reaches
+//! v_t at exactly its flow time T_f,s = ∫_{v_0}^{v_t} dv / (a_s - g) with
+//! probability m_s = e^{-(q_s + r) T_f,s} (no jump, no reset before). With
+//! A_s(v, t) = e^{-(q_s + r) t} H(T_f,s(v) - t) split off (exactly:
+//! (∂_t - b_s ∂_v) A_s = -(q_s + r) A_s), the rest C = S - A obeys the same
+//! equations with the bounded forcing (N39)
+//! F_s = Σ_{s' ≠ s} Q_ss' A_s' + r R_s(A) and C_s(v, 0) = 1 - A_s(v, 0).
+//! On the mesh each H(T_f,s'(v_i) - t) is averaged over node i's dual cell
+//! (a linear ramp in t), so F is continuous in time.
+//!
+//! C is discretised by the monotone upwind scheme of the two-state code
+//! (`mfpt/upwind.rs`): each state's row differences towards where its
+//! drift b_s(v_i) = a_s - g(v_i) comes from (at a node where g jumps, the
+//! side the state moves to), so S stays a probability; integrated in time
+//! by the adaptive TR-BDF2 of [`crate::numerics::trbdf2`] (the reset values
+//! by an N×N bordering, as Eq. (N35)). 2N extra unknowns carry
+//! I_s = ∫_0^t C_s(v_0) ds and J_s = ∫_0^t I_s ds, so E(T_s) and E(T_s²)
+//! follow from the time integration (the atoms' shares in closed form).
+//! As the two-state code, it runs on a mesh of cells / 2 cells and on its
+//! midpoint refinement and extrapolates S and the moments (first order);
+//! f is the finer mesh's. [`Distribution::mean`] and
+//! [`Distribution::mean_time_integral`] are here the same number (the
+//! time integration's, which misses about `tail_mass` times the decay
+//! time), [`Distribution::mean_error`] its mesh error; it is checked
+//! against the box scheme's τ of Eq. (N30) ([`Distribution::moments`]).
+//! `survival_plus` / `survival_minus` are the states of highest / lowest
+//! level, `atom_time` the earliest atom and `atom_mass` the π-weighted sum
+//! of [`Distribution::atoms`].
+
+use super::backward::{mesh_on, Mesh, Moments};
+use super::distribution::{refine, Atom, Distribution, DistributionOptions};
+use super::upwind::exp_moments;
+use super::Problem;
+use crate::error::{Error, Result};
+use crate::model::noise::chain::{self, Chain};
+use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::Drag;
+use crate::numerics::band::Band;
+use crate::numerics::trbdf2::{self, ShiftedLinear, Stats, Tolerances};
+use crate::numerics::Failure;
+
+const METHOD: &str = "first-passage distribution (noise model)";
+
+/// One absorbed state's atom on a mesh: its decay q_s + r, its flow time
+/// from v_0 and, per node, the times (up, lo) between which the dual
+/// cell's average of H(T_f,s(v) - t) falls from 1 to 0.
+struct AtomState {
+    s: usize,
+    kill: f64,
+    time: f64,
+    ramps: Vec<(f64, f64)>,
+    /// The scheme's spread of the arrival from v_0 (standard deviation of
+    /// the discrete transport's hypoexponential flow time).
+    spread: f64,
+}
+
+impl AtomState {
+    /// The dual-cell average of H(T_f(v_i) - t), linear between its ends.
+    fn ramp(&self, i: usize, t: f64) -> f64 {
+        let (up, lo) = self.ramps[i];
+        if t <= up {
+            1.0
+        } else if t >= lo {
+            0.0
+        } else {
+            (lo - t) / (lo - up)
+        }
+    }
+}
+
+/// The drift of level `a` at node v: a - g(v), except at a jump of g at
+/// v = 0, where a state moving up sees g(0+) and one moving down g(0-)
+/// (and one held by static friction none).
+fn node_drift<D: Drag>(g: D, a: f64, v: f64) -> f64 {
+    let jump = g.static_friction();
+    if jump > 0.0 && v == 0.0 {
+        if a - jump > 0.0 {
+            a - jump
+        } else if a + jump < 0.0 {
+            a + jump
+        } else {
+            0.0
+        }
+    } else {
+        a - g.force(v)
+    }
+}
+
+/// ∫_x^y dv / (a - g(v)) by the 3-point Gauss-Legendre rule (a short piece
+/// of a dual cell, where a - g > 0 and smooth).
+fn piece_time<D: Drag>(g: D, a: f64, x: f64, y: f64) -> f64 {
+    let (m, h) = (0.5 * (x + y), 0.5 * (y - x));
+    let d = h * (0.6f64).sqrt();
+    h * (5.0 / (a - g.force(m - d)) + 8.0 / (a - g.force(m)) + 5.0 / (a - g.force(m + d))) / 9.0
+}
+
+/// The atom of absorbed state s (level a) on mesh `m` of the canonical
+/// problem `cp`, with decay `kill` = q_s + r.
+fn atom_state(cp: &Problem, m: &Mesh, s: usize, a: f64, kill: f64) -> AtomState {
+    let g = cp.params().drag();
+    let v = &m.v;
+    let n = v.len();
+    // tm[i]: flow time from the midpoint below node i + 1; tn[i]: from node i.
+    let (mut tn, mut tm) = (vec![0.0; n], vec![0.0; n]);
+    for i in (0..n - 1).rev() {
+        let mid = 0.5 * (v[i] + v[i + 1]);
+        tm[i] = tn[i + 1] + piece_time(g, a, mid, v[i + 1]);
+        tn[i] = tm[i] + piece_time(g, a, v[i], mid);
+    }
+    let ramps = (0..n)
+        .map(|i| {
+            let up = if i + 1 < n { tm[i] } else { 0.0 };
+            let lo = if i > 0 { tm[i - 1] } else { tn[0] };
+            (up, lo)
+        })
+        .collect();
+    let spread = (m.start..n - 1)
+        .map(|i| ((v[i + 1] - v[i]) / node_drift(g, a, v[i])).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    AtomState {
+        s,
+        kill,
+        time: g.flow_time(a, cp.v0(), cp.vt()),
+        ramps,
+        spread,
+    }
+}
+
+/// The semi-discrete survival equations M C' = A C + U ℓ(C) + F(t) of one
+/// mesh (state-interleaved unknowns ns i + s), with the 2N integrals.
+struct Survival {
+    ns: usize,
+    n: usize,
+    mesh: Mesh,
+    band: Band,
+    /// Column j: the coefficient of the reset value ℓ_j(C) in each row.
+    border: Vec<Vec<f64>>,
+    algebraic: Vec<bool>,
+    chain: Chain,
+    rate: f64,
+    redrawn: bool,
+    atoms: Vec<AtomState>,
+    reported: Vec<usize>,
+    scales: (f64, f64),
+    /// The absolute time at which the current integration started.
+    t0: f64,
+    cache: Option<Factored>,
+}
+
+/// M - cA factored, with B⁻¹(-c U_j) and the capacitance matrix I + E.
+struct Factored {
+    c: f64,
+    band: Band,
+    z: Vec<Vec<f64>>,
+    cap: Vec<Vec<f64>>,
+}
+
+impl Survival {
+    /// Assemble the upwind rows (Eq. (N37)) on mesh `m`.
+    fn new(cp: &Problem, m: &Mesh, chain: &Chain, scales: (f64, f64)) -> Self {
+        let par = cp.params();
+        let (g, rate) = (par.drag(), par.rate());
+        let ns = chain.states();
+        let nodes = m.v.len();
+        let n = ns * nodes;
+        let redrawn = par.reset().noise() == NoiseAtReset::Redrawn;
+        let absorbed = absorbed(cp, chain);
+        let mut band = Band::new(n, ns, ns);
+        let mut border = vec![vec![0.0; n]; ns];
+        let mut algebraic = vec![false; n];
+        for i in 0..nodes {
+            for (s, &absorbed) in absorbed.iter().enumerate() {
+                let row = ns * i + s;
+                if i + 1 == nodes && absorbed {
+                    band.set(row, row, -1.0);
+                    algebraic[row] = true;
+                    continue;
+                }
+                let b = node_drift(g, chain.levels[s], m.v[i]);
+                let w = if b > 0.0 && i + 1 < nodes {
+                    let w = b / (m.v[i + 1] - m.v[i]);
+                    band.set(row, row + ns, w);
+                    w
+                } else if b < 0.0 && i > 0 {
+                    let w = -b / (m.v[i] - m.v[i - 1]);
+                    band.set(row, row - ns, w);
+                    w
+                } else {
+                    0.0
+                };
+                for (j, &q) in chain.q[s].iter().enumerate() {
+                    if j != s && q != 0.0 {
+                        band.set(row, ns * i + j, q);
+                    }
+                }
+                band.set(row, row, -w - chain.exit[s] - rate);
+                for (j, col) in border.iter_mut().enumerate() {
+                    col[row] = match (redrawn, j == s) {
+                        (true, _) => rate * chain.pi[j],
+                        (false, true) => rate,
+                        (false, false) => 0.0,
+                    };
+                }
+            }
+        }
+        let atoms = (0..ns)
+            .filter(|&s| absorbed[s])
+            .map(|s| atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate))
+            .collect();
+        Survival {
+            ns,
+            n,
+            mesh: m.clone(),
+            band,
+            border,
+            algebraic,
+            chain: chain.clone(),
+            rate,
+            redrawn,
+            atoms,
+            reported: (0..ns).map(|s| ns * m.start + s).collect(),
+            scales,
+            t0: 0.0,
+            cache: None,
+        }
+    }
+
+    /// The initial state: C_s = 1 - A_s(v, 0) (0 in the absorbed states,
+    /// 1 in the others), the integrals 0.
+    fn initial(&self) -> Vec<f64> {
+        let mut u = vec![0.0; self.n + 2 * self.ns];
+        let atom: Vec<bool> = (0..self.ns)
+            .map(|s| self.atoms.iter().any(|a| a.s == s))
+            .collect();
+        for (k, x) in u.iter_mut().take(self.n).enumerate() {
+            if !atom[k % self.ns] {
+                *x = 1.0;
+            }
+        }
+        u
+    }
+
+    /// The reset value ℓ_j of state j of the nodal vector x.
+    fn reset_value(&self, x: &[f64], j: usize) -> f64 {
+        self.mesh.reset_value(|k| x[self.ns * k + j])
+    }
+
+    /// out = A C + U ℓ(C) on the mesh unknowns.
+    fn apply_mesh(&self, u: &[f64], out: &mut [f64]) {
+        let ell: Vec<f64> = (0..self.ns).map(|j| self.reset_value(u, j)).collect();
+        for (i, o) in out.iter_mut().enumerate().take(self.n) {
+            let mut x = 0.0;
+            for j in self.band.row_range(i) {
+                x += self.band.get(i, j) * u[j];
+            }
+            for (col, l) in self.border.iter().zip(&ell) {
+                x += col[i] * l;
+            }
+            *o = x;
+        }
+    }
+
+    /// The forcing (Eq. (N39)) of the mesh rows at absolute time t.
+    fn forcing_at(&self, t: f64, out: &mut [f64]) {
+        let ns = self.ns;
+        // Per atom: e^{-k t} and its reset value ℓ(A_s).
+        let decay: Vec<f64> = self.atoms.iter().map(|a| (-a.kill * t).exp()).collect();
+        let ell: Vec<f64> = self
+            .atoms
+            .iter()
+            .zip(&decay)
+            .map(|(a, d)| d * self.mesh.reset_value(|k| a.ramp(k, t)))
+            .collect();
+        let mut reset = vec![0.0; ns];
+        for (a, l) in self.atoms.iter().zip(&ell) {
+            if self.redrawn {
+                reset.iter_mut().for_each(|x| *x += self.chain.pi[a.s] * l);
+            } else {
+                reset[a.s] += l;
+            }
+        }
+        for (row, o) in out.iter_mut().enumerate().take(self.n) {
+            if self.algebraic[row] {
+                *o = 0.0;
+                continue;
+            }
+            let (i, s) = (row / ns, row % ns);
+            let mut x = self.rate * reset[s];
+            for (a, d) in self.atoms.iter().zip(&decay) {
+                if a.s != s {
+                    x += self.chain.q[s][a.s] * d * a.ramp(i, t);
+                }
+            }
+            *o = x;
+        }
+    }
+
+    /// dC_s/dt at v_0 per state, at absolute time t.
+    fn rate_at_start(&self, u: &[f64], t: f64) -> Vec<f64> {
+        let mut a = vec![0.0; self.n];
+        let mut f = vec![0.0; self.n];
+        self.apply_mesh(u, &mut a);
+        self.forcing_at(t, &mut f);
+        self.reported.iter().map(|&r| a[r] + f[r]).collect()
+    }
+
+    /// Per state: S_s(v_0, t) (atom included) and f_s(v_0, t) (the atom's
+    /// continuous part smeared over the start node's dual cell).
+    fn observe(&self, u: &[f64], t: f64) -> (Vec<f64>, Vec<f64>) {
+        let mut s: Vec<f64> = self.reported.iter().map(|&r| u[r]).collect();
+        let mut f: Vec<f64> = self.rate_at_start(u, t).iter().map(|d| -d).collect();
+        for a in &self.atoms {
+            let d = (-a.kill * t).exp();
+            s[a.s] += if t < a.time { d } else { 0.0 };
+            f[a.s] += a.kill * d * a.ramp(self.mesh.start, t);
+        }
+        (s, f)
+    }
+
+    /// Factor M - cA and the bordering for shift c.
+    fn factor(&self, c: f64) -> std::result::Result<Factored, Failure> {
+        let n = self.n;
+        let mut b = Band::new(n, self.ns, self.ns);
+        for i in 0..n {
+            for j in self.band.row_range(i) {
+                b.set(i, j, -c * self.band.get(i, j));
+            }
+            if !self.algebraic[i] {
+                b.set(i, i, 1.0 + b.get(i, i));
+            }
+        }
+        let bad = || Failure::NonFinite {
+            method: METHOD,
+            at: c,
+        };
+        b.factor().map_err(|_| bad())?;
+        let (mut z, mut cap) = (Vec::new(), Vec::new());
+        if self.rate > 0.0 {
+            z = self
+                .border
+                .iter()
+                .map(|col| {
+                    let mut y: Vec<f64> = col.iter().map(|x| -c * x).collect();
+                    b.solve(&mut y);
+                    y
+                })
+                .collect();
+            cap = (0..self.ns)
+                .map(|i| {
+                    (0..self.ns)
+                        .map(|j| f64::from(u8::from(i == j)) + self.reset_value(&z[j], i))
+                        .collect()
+                })
+                .collect();
+        }
+        Ok(Factored { c, band: b, z, cap })
+    }
+}
+
+impl ShiftedLinear for Survival {
+    fn dim(&self) -> usize {
+        self.n + 2 * self.ns
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        self.apply_mesh(u, out);
+        let (n, ns) = (self.n, self.ns);
+        for s in 0..ns {
+            out[n + s] = u[self.reported[s]];
+            out[n + ns + s] = u[n + s];
+        }
+    }
+
+    fn apply_mass(&self, u: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(u);
+        for (o, &alg) in out.iter_mut().zip(&self.algebraic) {
+            if alg {
+                *o = 0.0;
+            }
+        }
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        if self
+            .cache
+            .as_ref()
+            .map_or(true, |f| f.c.to_bits() != c.to_bits())
+        {
+            self.cache = Some(self.factor(c)?);
+        }
+        let fac = self.cache.as_ref().expect("factored above");
+        let (n, ns) = (self.n, self.ns);
+        x[..n].copy_from_slice(&b[..n]);
+        fac.band.solve(&mut x[..n]);
+        if self.rate > 0.0 {
+            let ell: Vec<f64> = (0..ns).map(|j| self.reset_value(&x[..n], j)).collect();
+            let r = chain::solve(&fac.cap, &ell, METHOD).map_err(|_| Failure::NonFinite {
+                method: METHOD,
+                at: c,
+            })?;
+            for (zj, rj) in fac.z.iter().zip(&r) {
+                x[..n]
+                    .iter_mut()
+                    .zip(zj)
+                    .for_each(|(xi, zi)| *xi -= rj * zi);
+            }
+        }
+        for s in 0..ns {
+            x[n + s] = b[n + s] + c * x[self.reported[s]];
+            x[n + ns + s] = b[n + ns + s] + c * x[n + s];
+        }
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::NonFinite {
+                method: METHOD,
+                at: c,
+            });
+        }
+        Ok(())
+    }
+
+    fn atol(&self, i: usize, atol: f64) -> f64 {
+        match i.checked_sub(self.n) {
+            None => atol,
+            Some(k) if k < self.ns => atol * self.scales.0,
+            Some(_) => atol * self.scales.1,
+        }
+    }
+
+    fn rms_norm_with_max_over(&self) -> Option<&[usize]> {
+        Some(&self.reported)
+    }
+
+    fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
+        self.forcing_at(self.t0 + t, out);
+        out[self.n..].fill(0.0);
+        true
+    }
+}
+
+/// Where a run stops: past the grid until every S_s(v_0) is below `tail`
+/// (or at `t_stop`), or at a given time.
+#[derive(Clone, Copy)]
+enum Stop {
+    Tail { tail: f64, t_stop: f64 },
+    At(f64),
+}
+
+/// One mesh's run: per output time and state, S_s(v_0) (atoms included)
+/// and f_s(v_0); per state the moments of the time integration.
+struct Run {
+    s: Vec<Vec<f64>>,
+    f: Vec<Vec<f64>>,
+    mean: Vec<f64>,
+    second: Vec<f64>,
+    t_end: f64,
+    tail: Vec<f64>,
+    stats: Stats,
+    /// Per absorbed state: its atom's spread on this mesh.
+    spreads: Vec<f64>,
+}
+
+/// Hidden landing points of the time stepping across [0, 2 max T_f,s].
+const HIDDEN: usize = 64;
+
+/// The output times merged with the hidden points (flagged false).
+fn landing_points(times: &[f64], tf: f64) -> Vec<(f64, bool)> {
+    let last = times.last().copied().unwrap_or(0.0);
+    let mut all: Vec<(f64, bool)> = times.iter().map(|&t| (t, true)).collect();
+    all.extend(
+        (1..=HIDDEN)
+            .map(|j| 2.0 * tf * j as f64 / HIDDEN as f64)
+            .filter(|&t| t < last && times.binary_search_by(|x| x.total_cmp(&t)).is_err())
+            .map(|t| (t, false)),
+    );
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    all.dedup_by(|a, b| a.0 == b.0);
+    all
+}
+
+/// Integrate `op` from absolute time t to `next` (no observation).
+fn advance(op: &mut Survival, u: &mut [f64], t: f64, next: f64, tol: &Tolerances) -> Result<Stats> {
+    op.t0 = t;
+    trbdf2::integrate(op, u, &[next - t], tol, |_, _, _| Ok(()))
+}
+
+/// The survival equations on one mesh (see the module doc).
+fn run(
+    cp: &Problem,
+    m: &Mesh,
+    chain: &Chain,
+    times: &[f64],
+    tol: &Tolerances,
+    stop: Stop,
+    scales: (f64, f64),
+) -> Result<Run> {
+    let mut op = Survival::new(cp, m, chain, scales);
+    let view = Survival::new(cp, m, chain, scales);
+    let mut u = op.initial();
+    let tf = op.atoms.iter().map(|a| a.time).fold(0.0, f64::max);
+    let all = landing_points(times, tf);
+    let targets: Vec<f64> = all.iter().map(|a| a.0).collect();
+    let (mut s, mut f) = (Vec::new(), Vec::new());
+    let mut stats = trbdf2::integrate(&mut op, &mut u, &targets, tol, |k, t, x| {
+        if all[k].1 {
+            let (a, b) = view.observe(x, t);
+            s.push(a);
+            f.push(b);
+        }
+        Ok(())
+    })?;
+    let mut t = targets.last().copied().unwrap_or(0.0);
+    match stop {
+        Stop::Tail { tail, t_stop } => {
+            let t_stop = t_stop.max(t);
+            while view.observe(&u, t).0.iter().any(|&x| x >= tail) && t < t_stop {
+                let next = (2.0 * t)
+                    .max(tf.min(t_stop))
+                    .min(t_stop)
+                    .max(t + f64::EPSILON * t);
+                stats += advance(&mut op, &mut u, t, next, tol)?;
+                t = next;
+            }
+        }
+        Stop::At(end) if end > t => {
+            stats += advance(&mut op, &mut u, t, end, tol)?;
+            t = end;
+        }
+        Stop::At(_) => {}
+    }
+    let (n, ns) = (op.n, op.ns);
+    let (mut mean, mut second): (Vec<f64>, Vec<f64>) = (0..ns)
+        .map(|s| (u[n + s], 2.0 * (t * u[n + s] - u[n + ns + s])))
+        .unzip();
+    for a in &op.atoms {
+        let (i, j) = exp_moments(a.kill, a.time.min(t));
+        mean[a.s] += i;
+        second[a.s] += 2.0 * j;
+    }
+    Ok(Run {
+        s,
+        f,
+        mean,
+        second,
+        t_end: t,
+        tail: view.observe(&u, t).0,
+        stats,
+        spreads: op.atoms.iter().map(|a| a.spread).collect(),
+    })
+}
+
+/// The box scheme's moments (`mfpt::nstate`) as [`Moments`]: the mixture
+/// over π, `tau_plus` / `tau_minus` the states `hi` / `lo`.
+fn box_moments(
+    problem: &Problem,
+    cells: usize,
+    pi: &[f64],
+    hi: usize,
+    lo: usize,
+) -> Result<Moments> {
+    let (t1, t2, cells) = super::nstate::moments_at_start(problem, cells)?;
+    let mix = |x: &[f64]| -> f64 { x.iter().zip(pi).map(|(a, b)| a * b).sum() };
+    let (tau, second) = (mix(&t1), mix(&t2));
+    let var = |m2: f64, m: f64| m2 - m * m;
+    let (variance, variance_plus, variance_minus) =
+        (var(second, tau), var(t2[hi], t1[hi]), var(t2[lo], t1[lo]));
+    Ok(Moments {
+        tau,
+        tau_plus: t1[hi],
+        tau_minus: t1[lo],
+        second,
+        second_plus: t2[hi],
+        second_minus: t2[lo],
+        variance,
+        variance_plus,
+        variance_minus,
+        cv: variance.sqrt() / tau,
+        cv_plus: variance_plus.sqrt() / t1[hi],
+        cv_minus: variance_minus.sqrt() / t1[lo],
+        cells,
+    })
+}
+
+/// The coarse mesh (cells / 2, every fixed point inside a node) and its
+/// midpoint refinement, for the canonical problem `cp`.
+fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
+    let g = cp.params().drag();
+    let (vl, vu) = cp.params().bounds();
+    let stars: Vec<f64> = chain.levels.iter().map(|&a| g.inverse(a)).collect();
+    let coarse = mesh_on(cp, vl, vu, &stars, (cells / 2).max(8))?;
+    let fine = refine(cp, &coarse);
+    Ok((coarse, fine))
+}
+
+/// The runs on the finer mesh (to the tail) and on the coarser one (to the
+/// same end), and the finer mesh.
+fn both_runs(
+    cp: &Problem,
+    chain: &Chain,
+    times: &[f64],
+    opts: &DistributionOptions,
+    moments: &Moments,
+) -> Result<(Mesh, Run, Run)> {
+    let (coarse, fine_mesh) = meshes(cp, chain, opts.backward.cells)?;
+    let tol = Tolerances {
+        rtol: opts.rtol,
+        atol: opts.atol,
+        ..Tolerances::default()
+    };
+    let scales = (moments.tau, moments.second);
+    let stop = Stop::Tail {
+        tail: opts.tail,
+        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
+    };
+    let fine = run(cp, &fine_mesh, chain, times, &tol, stop, scales)?;
+    let end = Stop::At(fine.t_end);
+    let rough = run(cp, &coarse, chain, times, &tol, end, scales)?;
+    Ok((fine_mesh, fine, rough))
+}
+
+/// Refuse thermal noise (the survival equations are first order here) and
+/// what the backward equations of a noise model refuse.
+pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
+    let chain = problem.params().chain()?;
+    if chain.temperature > 0.0 {
+        return Err(Error::invalid(
+            "temperature",
+            chain.temperature,
+            "temperature 0 for mfpt distribution with a noise model (the N-state survival \
+             equations are solved without thermal noise)",
+        ));
+    }
+    let (cp, _) = problem.canonical();
+    super::nstate::admissible(&cp, &cp.params().chain()?)?;
+    Ok(chain)
+}
+
+/// Whether each state's flow crosses v_t (a_s > g(v_t)): absorbed there,
+/// and carrying an atom (Eqs. (N31), (N38)).
+fn absorbed(cp: &Problem, chain: &Chain) -> Vec<bool> {
+    let g = cp.params().drag();
+    chain
+        .levels
+        .iter()
+        .map(|&a| a - g.force(cp.vt()) > 0.0)
+        .collect()
+}
+
+/// The atoms on mesh `m` (their spreads the mesh's), levels and weights
+/// from the user's chain (the same state order).
+fn atom_list(cp: &Problem, m: &Mesh, chain: &Chain, user: &Chain) -> Vec<Atom> {
+    let rate = cp.params().rate();
+    let absorbed = absorbed(cp, chain);
+    (0..chain.states())
+        .filter(|&s| absorbed[s])
+        .map(|s| {
+            let a = atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate);
+            Atom {
+                state: s,
+                level: user.levels[s],
+                time: a.time,
+                mass: (-a.kill * a.time).exp(),
+                weight: user.pi[s],
+                spread: a.spread,
+            }
+        })
+        .collect()
+}
+
+/// Per output time, the π-mixture and the states `hi`, `lo` of a per-state
+/// table.
+fn columns(rows: &[Vec<f64>], pi: &[f64], hi: usize, lo: usize) -> [Vec<f64>; 3] {
+    let mix = rows
+        .iter()
+        .map(|r| r.iter().zip(pi).map(|(a, b)| a * b).sum())
+        .collect();
+    [
+        mix,
+        rows.iter().map(|r| r[hi]).collect(),
+        rows.iter().map(|r| r[lo]).collect(),
+    ]
+}
+
+/// max over rows and states of |a - b|, over the rows `keep` admits.
+fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>], keep: impl Fn(usize) -> bool) -> f64 {
+    (0..a.len())
+        .filter(|&i| keep(i))
+        .flat_map(|i| a[i].iter().zip(&b[i]).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// The first-passage-time distribution of `problem` (a noise model at
+/// T = 0) at the output `times` (see the module doc); options and times
+/// validated by the caller ([`super::distribution()`]). Errors: thermal
+/// noise (naming `temperature`), what [`super::nstate`] refuses, a
+/// numerical failure of the time integration or of the checks.
+pub(super) fn distribution(
+    problem: &Problem,
+    times: &[f64],
+    opts: &DistributionOptions,
+) -> Result<Distribution> {
+    let user = admissible(problem)?;
+    let (hi, lo) = super::nstate::extreme_states(&user.levels);
+    let moments = box_moments(problem, opts.backward.cells, &user.pi, hi, lo)?;
+    let (cp, _) = problem.canonical();
+    let chain = cp.params().chain()?;
+    let (fine_mesh, fine, rough) = both_runs(&cp, &chain, times, opts, &moments)?;
+    let ex =
+        |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect() };
+    let s: Vec<Vec<f64>> = fine.s.iter().zip(&rough.s).map(|(a, b)| ex(a, b)).collect();
+    let [survival, survival_plus, survival_minus] = columns(&s, &user.pi, hi, lo);
+    let [density, density_plus, density_minus] = columns(&fine.f, &user.pi, hi, lo);
+    let (mean, second) = (ex(&fine.mean, &rough.mean), ex(&fine.second, &rough.second));
+    let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
+    let atoms = atom_list(&cp, &fine_mesh, &chain, &user);
+    let smeared = |i: usize| {
+        let t = times[i];
+        atoms
+            .iter()
+            .zip(&rough.spreads)
+            .any(|(a, w)| (t - a.time).abs() < super::distribution::ATOM_WINDOW * w)
+    };
+    let mass_of = |s: usize| atoms.iter().find(|a| a.state == s).map_or(0.0, |a| a.mass);
+    let first = atoms
+        .iter()
+        .min_by(|a, b| a.time.total_cmp(&b.time))
+        .cloned()
+        .ok_or_else(|| Error::Numerical {
+            method: METHOD,
+            reason: "no state's flow reaches the target".into(),
+        })?;
+    let mean_error = (mix(&fine.mean) - mix(&rough.mean)).abs();
+    let d = Distribution {
+        t: times.to_vec(),
+        survival,
+        survival_plus,
+        survival_minus,
+        density,
+        density_plus,
+        density_minus,
+        mean: mix(&mean),
+        mean_plus: mean[hi],
+        mean_minus: mean[lo],
+        second: mix(&second),
+        t_end: fine.t_end,
+        tail_mass: mix(&fine.tail),
+        atom_time: first.time,
+        atom_mass: atoms.iter().map(|a| a.weight * a.mass).sum(),
+        atom_mass_plus: mass_of(hi),
+        atom_mass_minus: mass_of(lo),
+        steps: fine.stats.steps + rough.stats.steps,
+        rejected: fine.stats.rejected + rough.stats.rejected,
+        mesh_error: max_diff(&fine.s, &rough.s, |_| true),
+        mesh_error_density: max_diff(&fine.f, &rough.f, |i| !smeared(i)),
+        atom_spread: first.spread,
+        mean_time_integral: mix(&mean),
+        second_time_integral: mix(&second),
+        mean_error,
+        moments,
+        atoms,
+    };
+    super::distribution::verify(&d, opts.rtol, 1e-3 * d.moments.tau + mean_error)?;
+    Ok(d)
+}
