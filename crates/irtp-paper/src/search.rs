@@ -338,7 +338,7 @@ pub fn plot(spec: &Spec, rows: &[MediumResult]) -> Figure {
     let mut fig = Figure::new(
         "search",
         format!(
-            "The search: (x₀, v₀) = (0, 0), level L = {} ℓ, interval ({} ℓ, {} ℓ), ℓ = vᵤ/λ, λ = {}, v_r = 0",
+            "The search: (x₀, v₀) = (0, 0), level L = {} ℓ, interval ({} ℓ, {} ℓ), ℓ = vᵤ/λ, λ = {}, v_{{r}} = 0",
             fmt_num(spec.level),
             fmt_num(spec.interval.0),
             fmt_num(spec.interval.1),
