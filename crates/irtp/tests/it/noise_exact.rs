@@ -18,12 +18,13 @@ use irtp::{DragLaw, Params};
 use irtp_testkit::noises::{athermal, NoiseCase, NOISE_CASES};
 use irtp_testkit::stats::bonferroni_z;
 
-fn run(p: &Params, spec: &SimSpec) -> Observables {
+/// An exact-sampler run (shared with `noise_exact_ou`).
+pub(crate) fn run(p: &Params, spec: &SimSpec) -> Observables {
     sim::simulate(p, spec, Method::Exact, &NoProgress).unwrap()
 }
 
 /// Mean and standard error of batch values.
-fn batch_mean(xs: &[f64]) -> (f64, f64) {
+pub(crate) fn batch_mean(xs: &[f64]) -> (f64, f64) {
     let n = xs.len() as f64;
     let m = xs.iter().sum::<f64>() / n;
     let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
@@ -31,7 +32,7 @@ fn batch_mean(xs: &[f64]) -> (f64, f64) {
 }
 
 /// Sample variance of x at grid index k of one batch.
-fn var_x(o: &Observables, k: usize) -> f64 {
+pub(crate) fn var_x(o: &Observables, k: usize) -> f64 {
     let n = o.x[k].n as f64;
     (o.x2[k].mean() - o.x[k].mean().powi(2)) * n / (n - 1.0)
 }

@@ -17,23 +17,7 @@ use irtp::{DragLaw, Error, Params};
 use irtp_testkit::noises::{NoiseCase, NOISE_CASES};
 use irtp_testkit::stats::bonferroni_z;
 
-fn run(p: &Params, spec: &SimSpec) -> Observables {
-    sim::simulate(p, spec, Method::Exact, &NoProgress).unwrap()
-}
-
-/// Mean and standard error of batch values.
-fn batch_mean(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
-}
-
-/// Sample variance of x at grid index k of one batch.
-fn var_x(o: &Observables, k: usize) -> f64 {
-    let n = o.x[k].n as f64;
-    (o.x2[k].mean() - o.x[k].mean().powi(2)) * n / (n - 1.0)
-}
+use crate::noise_exact::{batch_mean, run, var_x};
 
 /// The standard normal distribution function.
 fn normal_cdf(z: f64) -> f64 {
