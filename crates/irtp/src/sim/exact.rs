@@ -300,6 +300,10 @@ fn check_cancellation(params: &Params) -> Result<()> {
 #[derive(Clone)]
 pub(crate) enum Segments<F> {
     Table(PotentialTable<F>),
+    /// A fixed point inside the velocity interval (or a side longer than
+    /// the paper's 2 |v*|): one table per side of v*, the one below it
+    /// first ([`PotentialTable::side`]); a flow never crosses v*.
+    Sides(Box<[PotentialTable<F>; 2]>, f64),
     Solve(F, DeficitTable),
 }
 
@@ -309,6 +313,7 @@ impl<F: FlowMap> Segments<F> {
     pub(crate) fn at(&self, v: f64) -> FlowPoint {
         match self {
             Segments::Table(t) => t.at(v),
+            Segments::Sides(t, vs) => t[usize::from(v > *vs)].at(v),
             Segments::Solve(f, d) => {
                 let psi = d.psi(v);
                 FlowPoint {
@@ -325,6 +330,7 @@ impl<F: FlowMap> Segments<F> {
     pub(crate) fn advance(&self, p: &FlowPoint, dt: f64) -> FlowPoint {
         match self {
             Segments::Table(t) => t.advance(p, dt),
+            Segments::Sides(t, vs) => t[usize::from(p.v > *vs)].advance(p, dt),
             Segments::Solve(f, d) => {
                 if !(dt > 0.0) {
                     return *p;
@@ -361,7 +367,7 @@ impl<F: FlowMap> LawSetup<F> {
         let plus = segments(drag, sigma, lo, hi)?;
         let minus = match &plus {
             Segments::Table(t) => Segments::Table(t.mirrored()),
-            Segments::Solve(..) => segments(drag, -sigma, lo, hi)?,
+            _ => segments(drag, -sigma, lo, hi)?,
         };
         let mut edges: Vec<f64> = (0..=b)
             .map(|k| lo + (hi - lo) * k as f64 / b as f64)

@@ -25,6 +25,12 @@
 //! halved until every series is resolved to the rounding noise of its
 //! values: the lookups agree with the iterative flow to rounding (relative
 //! error about ε |Φ| in u, a time error of ε |Φ| / k).
+//!
+//! The same tables serve a fixed point inside the velocity interval (a
+//! noise level other than the paper's ±Sigma, the pause's v* = 0):
+//! [`PotentialTable::side`] tabulates the distance on either side of v*,
+//! up to any length (the far side, v beyond v*, with the law's potential
+//! and drift at a negative distance).
 
 use super::{Drag, FlowMap};
 use crate::numerics::chebyshev::{self, power_sum, to_power, Adaptive, Piece, Refine};
@@ -98,6 +104,9 @@ struct Inner<F> {
 pub struct PotentialTable<F> {
     /// +1, or -1 for s < 0 (the canonical tables mirrored).
     refl: f64,
+    /// +1: the side of v* toward -v* (canonical u = v* - v > 0, the
+    /// paper's); -1: the far side (canonical v > v*, u = v - v*).
+    dir: f64,
     inner: Arc<Inner<F>>,
 }
 
@@ -106,16 +115,51 @@ impl<F: FlowMap> PotentialTable<F> {
     /// admissible interval [-|v*|, |v*|]. None when the flow does not fit in
     /// 4096 pieces (or a node fails): use the iterative solve.
     pub fn new<D: Drag<Flow = F>>(drag: &D, s: f64) -> Option<Self> {
+        let vs = drag.flow(s.abs()).fixed_point();
+        if !(vs > 0.0) {
+            return None;
+        }
+        Self::build(drag, s, 1.0, 2.0 * vs, 0.25 * f64::EPSILON * vs)
+    }
+
+    /// Tabulate the flow of `drag` with noise value `s` (any sign, 0
+    /// included: the pause's v* = 0) on one side of its fixed point v*:
+    /// velocities in [v* - w_max, v*] (`below`) or [v*, v* + w_max]. The
+    /// far side (away from -v*) and distances past 2 |v*| need the law's
+    /// potential and drift at signed distance ([`FlowMap::potential_at_distance`]
+    /// and [`Drag::drift_at_distance`] of a negative u), which the
+    /// closed-form laws give; the caller asks only those. None as
+    /// [`PotentialTable::new`].
+    pub fn side<D: Drag<Flow = F>>(drag: &D, s: f64, below: bool, w_max: f64) -> Option<Self> {
+        if drag.static_friction() > 0.0 || !drag.derivative(0.0).is_finite() {
+            // A kink of the potential at v = 0 is laid out for the paper's
+            // side only.
+            return None;
+        }
+        let refl = if s < 0.0 { -1.0 } else { 1.0 };
+        let dir = if below { refl } else { -refl };
+        let vs = drag.flow(s.abs()).fixed_point();
+        // Below u_lo, v* ± u rounds to v* (v* = 0: the exponential approach
+        // is exact to O(u_lo²) relative there).
+        let u_lo = 0.25 * f64::EPSILON * if vs > 0.0 { vs } else { w_max };
+        Self::build(drag, s, dir, w_max, u_lo)
+    }
+
+    /// The tables of noise value s on the side `dir` of v*, distances
+    /// (u_lo, w_max] (module docs).
+    fn build<D: Drag<Flow = F>>(drag: &D, s: f64, dir: f64, w_max: f64, u_lo: f64) -> Option<Self> {
         let a = s.abs();
         let flow = drag.flow(a);
         let (vs, k) = (flow.fixed_point(), flow.rate());
-        if !(vs > 0.0 && vs.is_finite() && k > 0.0 && k.is_finite()) {
+        if !(vs >= 0.0 && vs.is_finite() && k > 0.0 && k.is_finite()) {
             return None;
         }
-        let u_lo = 0.25 * f64::EPSILON * vs;
-        let phi_lo = flow.potential_at_distance(u_lo);
-        let phi_top = flow.potential_at_distance(2.0 * vs);
-        let (n, range, phi_top, u_top, kink) = layout(drag, &flow, vs, phi_lo, phi_top)?;
+        if !(u_lo > 0.0 && w_max > u_lo && w_max.is_finite()) {
+            return None;
+        }
+        let phi_lo = flow.potential_at_distance(dir * u_lo);
+        let phi_top = flow.potential_at_distance(dir * w_max);
+        let (n, range, phi_top, u_top, kink) = layout(drag, &flow, (vs, w_max), phi_lo, phi_top)?;
         let most = max_pieces(drag);
         if n > most {
             return None;
@@ -124,6 +168,7 @@ impl<F: FlowMap> PotentialTable<F> {
             drag,
             flow: &flow,
             s: a,
+            dir,
             bracket: (u_lo.ln() - 2.0, u_top.ln()),
             guess: u_lo.ln(),
             acc: [u_lo / k, 0.5 * u_lo * u_lo / k],
@@ -169,6 +214,7 @@ impl<F: FlowMap> PotentialTable<F> {
         };
         Some(PotentialTable {
             refl: if s < 0.0 { -1.0 } else { 1.0 },
+            dir,
             inner: Arc::new(inner),
         })
     }
@@ -177,6 +223,7 @@ impl<F: FlowMap> PotentialTable<F> {
     pub fn mirrored(&self) -> Self {
         PotentialTable {
             refl: -self.refl,
+            dir: self.dir,
             inner: Arc::clone(&self.inner),
         }
     }
@@ -196,8 +243,9 @@ impl<F: FlowMap> PotentialTable<F> {
         self.inner.k
     }
 
-    /// The point at velocity v (|v| ≤ |v*|): its potential from the law's
-    /// closed form (or table), the antiderivatives from the table.
+    /// The point at velocity v (on the table's side of v*, within its
+    /// range): its potential from the law's closed form (or table), the
+    /// antiderivatives from the table.
     #[inline]
     pub fn at(&self, v: f64) -> FlowPoint {
         let t = &*self.inner;
@@ -206,7 +254,7 @@ impl<F: FlowMap> PotentialTable<F> {
         FlowPoint {
             v,
             phi,
-            q: [self.refl * q[0], q[1]],
+            q: [self.refl * self.dir * q[0], q[1]],
         }
     }
 
@@ -222,16 +270,16 @@ impl<F: FlowMap> PotentialTable<F> {
         let (lnu, q) = t.series(phi);
         let u = if phi >= t.phi_lo { lnu.exp() } else { lnu };
         FlowPoint {
-            v: self.refl * (t.vs - u),
+            v: self.refl * (t.vs - self.dir * u),
             phi,
-            q: [self.refl * q[0], q[1]],
+            q: [self.refl * self.dir * q[0], q[1]],
         }
     }
 }
 
 /// The uniform cells of the table: (number n, range in Φ, Φ and u at the
 /// top, the cell above a kink tabulated in t or usize::MAX). Normally
-/// n = ⌈range⌉ (at least 8) cells up to u = 2 v*. Where the force jumps at
+/// n = ⌈range⌉ (at least 8) cells up to u = w_max. Where the force jumps at
 /// v = 0 ([`Drag::static_friction`], Coulomb friction) or g'(0) = ∞ the
 /// potential has a kink at u = v*: it is made a cell boundary (at least 8
 /// cells of equal width h <= 1 below it), and the table extends upwards to
@@ -242,7 +290,7 @@ impl<F: FlowMap> PotentialTable<F> {
 fn layout<D: Drag, F: FlowMap>(
     drag: &D,
     flow: &F,
-    vs: f64,
+    (vs, w_max): (f64, f64),
     phi_lo: f64,
     phi_top: f64,
 ) -> Option<(usize, f64, f64, f64, usize)> {
@@ -253,7 +301,7 @@ fn layout<D: Drag, F: FlowMap>(
     let jump = drag.static_friction() > 0.0;
     if !jump && drag.derivative(0.0).is_finite() {
         let n = (range.ceil() as usize).max(8);
-        return Some((n, range, phi_top, 2.0 * vs, usize::MAX));
+        return Some((n, range, phi_top, w_max, usize::MAX));
     }
     let below = flow.potential_at_distance(vs) - phi_lo;
     if !(below > 0.0 && below < range) {
@@ -263,7 +311,7 @@ fn layout<D: Drag, F: FlowMap>(
     let h = below / kc;
     let n = ((range / h).ceil() as usize).max(kc as usize + 1);
     let top = phi_lo + h * n as f64;
-    let mut u = 2.0 * vs;
+    let mut u = w_max;
     while !(flow.potential_at_distance(u) >= top) {
         u *= 2.0;
         if !u.is_finite() {
@@ -334,12 +382,12 @@ impl<F> Inner<F> {
     }
 }
 
-/// ln u at potential `target` (canonical), by safeguarded Newton in
-/// w = ln u from `guess` inside [lo, hi].
+/// ln u at potential `target` (canonical, distance u on the side `dir`),
+/// by safeguarded Newton in w = ln u from `guess` inside [lo, hi].
 fn solve_node<D: Drag, F: FlowMap>(
     drag: &D,
     flow: &F,
-    s: f64,
+    (s, dir): (f64, f64),
     target: f64,
     (lo, hi): (f64, f64),
     guess: f64,
@@ -347,8 +395,8 @@ fn solve_node<D: Drag, F: FlowMap>(
     let k = flow.rate();
     let g = |w: f64| {
         let u = w.exp();
-        let slope = u * k / drag.drift_at_distance(s, u);
-        (flow.potential_at_distance(u) - target, slope, 0.0)
+        let slope = u * k / (dir * drag.drift_at_distance(s, dir * u));
+        (flow.potential_at_distance(dir * u) - target, slope, 0.0)
     };
     root::solve_increasing(&g, lo, hi, guess, 0.0, 1e-10).ok()
 }
@@ -358,6 +406,8 @@ struct Builder<'a, D, F> {
     drag: &'a D,
     flow: &'a F,
     s: f64,
+    /// The table's side of v* (`PotentialTable::dir`).
+    dir: f64,
     /// Bracket of ln u for the node solves.
     bracket: (f64, f64),
     /// Newton start: ln u at the last piece's right end.
@@ -379,7 +429,14 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
     fn integrands(&self, t: f64) -> [f64; 3] {
         let k = self.flow.rate();
         let (phi, dphi) = self.var.map(t);
-        match solve_node(self.drag, self.flow, self.s, phi, self.bracket, self.guess) {
+        match solve_node(
+            self.drag,
+            self.flow,
+            (self.s, self.dir),
+            phi,
+            self.bracket,
+            self.guess,
+        ) {
             Some(lnu) => {
                 let u = lnu.exp();
                 [lnu, u / k * dphi, u * u / k * dphi]
@@ -427,7 +484,7 @@ impl<D: Drag, F: FlowMap> Builder<'_, D, F> {
             .iter()
             .map(|&z| {
                 let u = chebyshev::clenshaw(lnu, z).exp();
-                (self.drag.drift_at_distance(self.s, u) / (k * u)).abs()
+                (self.drag.drift_at_distance(self.s, self.dir * u) / (k * u)).abs()
             })
             .fold(0.0, f64::max)
             * 2.0
@@ -521,5 +578,58 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Tables on either side of v*, v* = 0 (the pause) and interior fixed
+    /// points, against the closed-form flow and the deficit quadrature.
+    /// Tolerance as above, on v in units of 1 + w_max (measured below).
+    #[test]
+    fn side_tables_match_closed_flow() {
+        let mut worst = 0.0f64;
+        for (d, s, lo, hi) in [
+            (DragLaw::Tan, 0.0, -1.2, 1.2),
+            (DragLaw::Tan, -1.5, -1.25, 1.4),
+            (DragLaw::Tan, 0.5, -1.2, 1.5),
+            (DragLaw::Tanh, 0.0, -2.0, 2.0),
+            (DragLaw::Tanh, 0.3, -1.0, 2.5),
+            (DragLaw::Linear, 0.0, -1.0, 1.0),
+            (DragLaw::Linear, -0.5, -3.0, 1.0),
+        ] {
+            let flow = d.flow(s);
+            let vs = flow.fixed_point();
+            for below in [true, false] {
+                let w = if below { vs - lo } else { hi - vs };
+                let tab = PotentialTable::side(&d, s, below, w)
+                    .unwrap_or_else(|| panic!("{d} {s} {below} not tabulated"));
+                for i in 0..=20 {
+                    let off = w * i as f64 / 20.0;
+                    let v0 = if below { vs - off } else { vs + off };
+                    let p = tab.at(v0);
+                    for t in [1e-9, 1e-4, 0.01, 0.3, 1.0, 5.0, 40.0] {
+                        let b = tab.advance(&p, t);
+                        let vb = flow.velocity(v0, t);
+                        // A potential rounds at ε |Φ|: v moves by that times
+                        // |dv/dΦ| = |s - g(v)| / g'(v*) (up to 8 near tan's
+                        // pole at 1.5).
+                        let slope = d.drift(s, vb).abs() / tab.rate();
+                        let err = (b.v - vb).abs() / ((1.0 + w) * (1.0 + slope));
+                        worst = worst.max(err);
+                        assert!(
+                            err <= 1e-14,
+                            "{d} s={s} below={below} v0={v0} t={t}: {} vs {vb}",
+                            b.v
+                        );
+                        let (i1, i2) = d.flow_deficits(s, v0, b.v);
+                        let (j1, j2) = (p.q[0] - b.q[0], p.q[1] - b.q[1]);
+                        let scale = 1e-13 * (1.0 + p.q[0].abs() + p.q[1].abs());
+                        assert!(
+                            (i1 - j1).abs() <= scale && (i2 - j2).abs() <= scale,
+                            "{d} s={s} below={below} v0={v0} t={t}: {j1} {i1} / {j2} {i2}"
+                        );
+                    }
+                }
+            }
+        }
+        eprintln!("worst scaled velocity error {worst:e}");
     }
 }
