@@ -842,7 +842,8 @@ pub(super) fn distribution(
         t_end: fine.t_end,
         tail_mass: mix(&fine.tail),
         atom_time,
-        atom_mass: atoms.iter().map(|a| a.weight * a.mass).sum(),
+        // A fold from +0 (an empty f64 sum is -0): 0 where there is no atom.
+        atom_mass: atoms.iter().fold(0.0, |m, a| m + a.weight * a.mass),
         atom_mass_plus: mass_of(hi),
         atom_mass_minus: mass_of(lo),
         steps: fine.stats.steps + rough.stats.steps,
