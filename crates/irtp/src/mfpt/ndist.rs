@@ -41,11 +41,11 @@
 //! of [`Distribution::atoms`].
 //!
 //! With thermal noise (T > 0, Eq. (N46)) the same time loop runs the
-//! second-order equations
-//! dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s + Σ_s' Q_ss' (S_s' - S_s)
-//! - r S_s + r R_s, absorbed at v_t in every state (diffusion reaches the
-//! target continuously: no atoms, no forcing) and reflecting at the
-//! truncation of the mean solver (Eq. (N33)). The rows are the mean
+//! second-order equations dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s +
+//! Σ_s' Q_ss' (S_s' - S_s) - r S_s + r R_s, absorbed at v_t in every
+//! state (diffusion reaches the target continuously: no atoms, no
+//! forcing) and reflecting at the truncation of the mean solver (Eq.
+//! (N33)). The rows are the mean
 //! solver's exponentially fitted generator (`nstate::thermal_generator`,
 //! Eq. (N34)) on its mesh of cells / 2 (`nstate::thermal_mesh`) and the
 //! midpoint refinement; the v_t rows are algebraic (S_s = 0). On each mesh

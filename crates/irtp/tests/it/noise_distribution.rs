@@ -340,7 +340,7 @@ fn noise_distribution_thermal_mean_and_mass() {
             "{}: atoms",
             c.name
         );
-        assert!(d.smeared(d.atom_time) == false, "{}: smeared", c.name);
+        assert!(!d.smeared(d.atom_time), "{}: smeared", c.name);
         let tol = 2.0 * (d.mean_error + err) + 1e-4 * tau;
         let last = *d.survival.last().unwrap();
         let mass = trapezoid(&times, &d.density);
