@@ -147,8 +147,8 @@ fn bad_noise_backward_input_names_the_flag() {
 
 /// `mfpt distribution --method backward` runs a noise model at temperature
 /// 0 and writes its files (the mean that of the library's backward tau);
-/// with thermal noise it is refused naming `--temperature`, nothing
-/// written.
+/// with thermal noise and a drag the thermal backward equations do not run
+/// it is refused naming `--drag`, nothing written.
 #[test]
 fn distribution_runs_a_noise_model_and_writes_it() {
     let tmp = tempfile::tempdir().unwrap();
@@ -194,9 +194,80 @@ fn distribution_runs_a_noise_model_and_writes_it() {
     std::fs::create_dir_all(refused.parent().unwrap()).unwrap();
     let args = [
         &base[..],
-        &["--temperature", "0.5", "--out", refused.to_str().unwrap()][..],
+        &[
+            "--temperature",
+            "0.5",
+            "--drag",
+            "cubic",
+            "--out",
+            refused.to_str().unwrap(),
+        ][..],
     ]
     .concat();
-    let err = assert_rejected(&irtp(&args), "--temperature", &refused);
-    assert!(err.contains("temperature 0"), "{err}");
+    let err = assert_rejected(&irtp(&args), "--drag", &refused);
+    assert!(err.contains("linear, tanh or tan"), "{err}");
+}
+
+/// `mfpt distribution` with thermal noise (Eq. (N46)): the paper's noise
+/// with a temperature and tanh drag runs, records the temperature and its
+/// provenance, and its survival starts at 1 and falls; E(T) agrees with
+/// the thermal backward tau printed beside it.
+#[test]
+fn distribution_runs_with_thermal_noise() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    let args = [
+        "mfpt",
+        "distribution",
+        "--drag",
+        "tanh",
+        "--sigma",
+        "0.5",
+        "--lambda",
+        "1",
+        "--temperature",
+        "0.1",
+        "--v0",
+        "0",
+        "--vt",
+        "0.3",
+        "--rate",
+        "1",
+        "--json",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    let s = summary(&irtp(&args));
+    let r = &s["results"];
+    let (mean, tau) = (
+        r["distribution_mean"].as_f64().unwrap(),
+        r["tau"].as_f64().unwrap(),
+    );
+    assert!((mean - tau).abs() < 1e-2 * tau, "{s}");
+    // No atoms with thermal noise: +0 (not -0).
+    assert_eq!(r["atom_mass"].to_string(), "0.0", "{s}");
+    assert!(s["params"].to_string().contains("temperature"), "{s}");
+    // The provenance file: who wrote it, from what, with which parameters.
+    let run = std::fs::read_to_string(dir.join("run.json")).unwrap();
+    let run: serde_json::Value = serde_json::from_str(&run).unwrap();
+    for k in ["software", "version", "git_revision", "argv", "checksums"] {
+        assert!(run.get(k).is_some(), "no {k} in {run}");
+    }
+    assert!(
+        run["parameters"].to_string().contains("temperature"),
+        "{run}"
+    );
+    let csv = std::fs::read_to_string(dir.join("distribution.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = head
+        .iter()
+        .position(|&h| h == "survival")
+        .expect("survival");
+    let surv: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    assert!((surv[0] - 1.0).abs() < 1e-12, "{csv}");
+    assert!(surv.windows(2).all(|w| w[1] <= w[0] + 1e-6), "{csv}");
+    assert!(*surv.last().unwrap() < 0.5, "{csv}");
 }

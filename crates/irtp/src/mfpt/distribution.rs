@@ -449,8 +449,9 @@ fn extrapolate(fine: f64, coarse: f64) -> f64 {
 
 /// What [`distribution`] refuses in the problem itself, before any solve
 /// (for a caller to refuse early): a noise the method does not run, and
-/// with a noise model thermal noise (naming `temperature`) and what the
-/// N-state backward equations refuse.
+/// with a noise model what the N-state backward equations refuse (with
+/// thermal noise a drag other than linear, tanh and tan, naming `drag`,
+/// and tan above T = 1, naming `temperature`).
 pub fn check_problem(problem: &Problem) -> Result<()> {
     problem.params().require(Solver::FptDistribution)?;
     if problem.params().noise().is_some() {

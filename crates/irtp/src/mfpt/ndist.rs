@@ -1,6 +1,6 @@
-//! The first-passage-time distribution of a noise model at temperature 0
-//! (docs/equations.md, "Backward equations for a noise model", Eqs.
-//! (N37)-(N39)).
+//! The first-passage-time distribution of a noise model, at temperature 0
+//! and with thermal noise (docs/equations.md, "Backward equations for a
+//! noise model", Eqs. (N37)-(N39) and (N46)-(N48)).
 //!
 //! The survival probabilities S_s(v, t) = P(T > t | v(0) = v, eta(0) = a_s)
 //! obey the N coupled equations (N37)
@@ -39,6 +39,20 @@
 //! `survival_plus` / `survival_minus` are the states of highest / lowest
 //! level, `atom_time` the earliest atom and `atom_mass` the π-weighted sum
 //! of [`Distribution::atoms`].
+//!
+//! With thermal noise (T > 0, Eq. (N46)) the same time loop runs the
+//! second-order equations dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s +
+//! Σ_s' Q_ss' (S_s' - S_s) - r S_s + r R_s, absorbed at v_t in every
+//! state (diffusion reaches the target continuously: no atoms, no
+//! forcing) and reflecting at the truncation of the mean solver (Eq.
+//! (N33)). The rows are the mean
+//! solver's exponentially fitted generator (`nstate::thermal_generator`,
+//! Eq. (N34)) on its mesh of cells / 2 (`nstate::thermal_mesh`) and the
+//! midpoint refinement; the v_t rows are algebraic (S_s = 0). On each mesh
+//! the semi-discrete E(T) is the mean solver's τ on that mesh (Eq. (N47));
+//! the extrapolated E(T) is checked against τ on `cells` cells within
+//! 1e-3 τ + 2 `mean_error`. `atoms` is empty and `atom_time`, `atom_mass`
+//! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
 
 use super::backward::{mesh_on, Mesh, Moments};
 use super::distribution::{refine, Atom, Distribution, DistributionOptions};
@@ -169,54 +183,98 @@ struct Factored {
     cap: Vec<Vec<f64>>,
 }
 
-impl Survival {
-    /// Assemble the upwind rows (Eq. (N37)) on mesh `m`.
-    fn new(cp: &Problem, m: &Mesh, chain: &Chain, scales: (f64, f64)) -> Self {
-        let par = cp.params();
-        let (g, rate) = (par.drag(), par.rate());
-        let ns = chain.states();
-        let nodes = m.v.len();
-        let n = ns * nodes;
-        let redrawn = par.reset().noise() == NoiseAtReset::Redrawn;
-        let absorbed = absorbed(cp, chain);
-        let mut band = Band::new(n, ns, ns);
-        let mut border = vec![vec![0.0; n]; ns];
-        let mut algebraic = vec![false; n];
-        for i in 0..nodes {
-            for (s, &absorbed) in absorbed.iter().enumerate() {
-                let row = ns * i + s;
-                if i + 1 == nodes && absorbed {
-                    band.set(row, row, -1.0);
-                    algebraic[row] = true;
-                    continue;
-                }
-                let b = node_drift(g, chain.levels[s], m.v[i]);
-                let w = if b > 0.0 && i + 1 < nodes {
-                    let w = b / (m.v[i + 1] - m.v[i]);
-                    band.set(row, row + ns, w);
-                    w
-                } else if b < 0.0 && i > 0 {
-                    let w = -b / (m.v[i] - m.v[i - 1]);
-                    band.set(row, row - ns, w);
-                    w
-                } else {
-                    0.0
-                };
-                for (j, &q) in chain.q[s].iter().enumerate() {
-                    if j != s && q != 0.0 {
-                        band.set(row, ns * i + j, q);
-                    }
-                }
-                band.set(row, row, -w - chain.exit[s] - rate);
-                for (j, col) in border.iter_mut().enumerate() {
-                    col[row] = match (redrawn, j == s) {
-                        (true, _) => rate * chain.pi[j],
-                        (false, true) => rate,
-                        (false, false) => 0.0,
-                    };
+/// The rows of one mesh: band (bandwidth N each side), border columns
+/// (the coefficient of the reset value ℓ_j in each row) and the algebraic
+/// (absorbed) rows.
+type Rows = (Band, Vec<Vec<f64>>, Vec<bool>);
+
+/// The monotone upwind rows of Eq. (N37) at T = 0 on mesh `m`; the states
+/// `absorbed` at v_t take S_s(v_t) = 0 there (band entry -1).
+fn upwind_rows(cp: &Problem, m: &Mesh, chain: &Chain, absorbed: &[bool]) -> Rows {
+    let par = cp.params();
+    let (g, rate) = (par.drag(), par.rate());
+    let ns = chain.states();
+    let nodes = m.v.len();
+    let n = ns * nodes;
+    let redrawn = par.reset().noise() == NoiseAtReset::Redrawn;
+    let mut band = Band::new(n, ns, ns);
+    let mut border = vec![vec![0.0; n]; ns];
+    let mut algebraic = vec![false; n];
+    for i in 0..nodes {
+        for (s, &absorbed) in absorbed.iter().enumerate() {
+            let row = ns * i + s;
+            if i + 1 == nodes && absorbed {
+                band.set(row, row, -1.0);
+                algebraic[row] = true;
+                continue;
+            }
+            let b = node_drift(g, chain.levels[s], m.v[i]);
+            let w = if b > 0.0 && i + 1 < nodes {
+                let w = b / (m.v[i + 1] - m.v[i]);
+                band.set(row, row + ns, w);
+                w
+            } else if b < 0.0 && i > 0 {
+                let w = -b / (m.v[i] - m.v[i - 1]);
+                band.set(row, row - ns, w);
+                w
+            } else {
+                0.0
+            };
+            for (j, &q) in chain.q[s].iter().enumerate() {
+                if j != s && q != 0.0 {
+                    band.set(row, ns * i + j, q);
                 }
             }
+            band.set(row, row, -w - chain.exit[s] - rate);
+            for (j, col) in border.iter_mut().enumerate() {
+                col[row] = match (redrawn, j == s) {
+                    (true, _) => rate * chain.pi[j],
+                    (false, true) => rate,
+                    (false, false) => 0.0,
+                };
+            }
         }
+    }
+    (band, border, algebraic)
+}
+
+/// The thermal rows (Eq. (N46)) on mesh `m`: the fitted generator of
+/// `mfpt::nstate` (Eqs. (N32)-(N34), one code with the mean solver), its
+/// band copied into bandwidth N (its stencil couples node i to i ± 1 and
+/// the states of node i only).
+fn thermal_rows(cp: &Problem, m: &Mesh, chain: &Chain) -> Rows {
+    let gen = super::nstate::thermal_generator(cp, chain, m);
+    let ns = chain.states();
+    let n = gen.band.dim();
+    let mut band = Band::new(n, ns, ns);
+    for i in 0..n {
+        for j in gen.band.row_range(i) {
+            let x = gen.band.get(i, j);
+            if x != 0.0 {
+                debug_assert!(i.abs_diff(j) <= ns, "thermal stencil wider than N");
+                band.set(i, j, x);
+            }
+        }
+    }
+    (band, gen.border, gen.absorbed)
+}
+
+impl Survival {
+    /// Assemble the rows on mesh `m`: the upwind rows of Eq. (N37) at
+    /// T = 0, the fitted thermal generator of `mfpt::nstate` with T > 0
+    /// (Eq. (N46)).
+    fn new(cp: &Problem, m: &Mesh, chain: &Chain, scales: (f64, f64)) -> Self {
+        let par = cp.params();
+        let rate = par.rate();
+        let ns = chain.states();
+        let n = ns * m.v.len();
+        let redrawn = par.reset().noise() == NoiseAtReset::Redrawn;
+        let absorbed = absorbed(cp, chain);
+        let (band, border, algebraic) = if chain.temperature > 0.0 {
+            thermal_rows(cp, m, chain)
+        } else {
+            upwind_rows(cp, m, chain, &absorbed)
+        };
         let atoms = (0..ns)
             .filter(|&s| absorbed[s])
             .map(|s| atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate))
@@ -240,14 +298,14 @@ impl Survival {
     }
 
     /// The initial state: C_s = 1 - A_s(v, 0) (0 in the absorbed states,
-    /// 1 in the others), the integrals 0.
+    /// 1 in the others; with T > 0 S_s = 1 but at v_t), the integrals 0.
     fn initial(&self) -> Vec<f64> {
         let mut u = vec![0.0; self.n + 2 * self.ns];
         let atom: Vec<bool> = (0..self.ns)
             .map(|s| self.atoms.iter().any(|a| a.s == s))
             .collect();
         for (k, x) in u.iter_mut().take(self.n).enumerate() {
-            if !atom[k % self.ns] {
+            if !atom[k % self.ns] && !self.algebraic[k] {
                 *x = 1.0;
             }
         }
@@ -450,6 +508,10 @@ impl ShiftedLinear for Survival {
     }
 
     fn forcing(&self, t: f64, out: &mut [f64]) -> bool {
+        if self.atoms.is_empty() {
+            // No atom (T > 0): the survival equations are homogeneous.
+            return false;
+        }
         self.forcing_at(self.t0 + t, out);
         out[self.n..].fill(0.0);
         true
@@ -481,14 +543,17 @@ struct Run {
 /// Hidden landing points of the time stepping across [0, 2 max T_f,s].
 const HIDDEN: usize = 64;
 
-/// The output times merged with the hidden points (flagged false).
+/// The output times merged with the hidden points (flagged false; none
+/// without atoms, `tf` = 0).
 fn landing_points(times: &[f64], tf: f64) -> Vec<(f64, bool)> {
     let last = times.last().copied().unwrap_or(0.0);
     let mut all: Vec<(f64, bool)> = times.iter().map(|&t| (t, true)).collect();
     all.extend(
         (1..=HIDDEN)
             .map(|j| 2.0 * tf * j as f64 / HIDDEN as f64)
-            .filter(|&t| t < last && times.binary_search_by(|x| x.total_cmp(&t)).is_err())
+            .filter(|&t| {
+                t > 0.0 && t < last && times.binary_search_by(|x| x.total_cmp(&t)).is_err()
+            })
             .map(|t| (t, false)),
     );
     all.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -517,6 +582,8 @@ fn run(
     let mut u = op.initial();
     let tf = op.atoms.iter().map(|a| a.time).fold(0.0, f64::max);
     let all = landing_points(times, tf);
+    // The first window past the grid: the latest atom, or τ without atoms.
+    let horizon = if tf > 0.0 { tf } else { scales.0 };
     let targets: Vec<f64> = all.iter().map(|a| a.0).collect();
     let (mut s, mut f) = (Vec::new(), Vec::new());
     let mut stats = trbdf2::integrate(&mut op, &mut u, &targets, tol, |k, t, x| {
@@ -533,7 +600,7 @@ fn run(
             let t_stop = t_stop.max(t);
             while view.observe(&u, t).0.iter().any(|&x| x >= tail) && t < t_stop {
                 let next = (2.0 * t)
-                    .max(tf.min(t_stop))
+                    .max(horizon.min(t_stop))
                     .min(t_stop)
                     .max(t + f64::EPSILON * t);
                 stats += advance(&mut op, &mut u, t, next, tol)?;
@@ -599,9 +666,15 @@ fn box_moments(
     })
 }
 
-/// The coarse mesh (cells / 2, every fixed point inside a node) and its
-/// midpoint refinement, for the canonical problem `cp`.
+/// The coarse mesh (cells / 2, every fixed point inside a node; with
+/// T > 0 the mean solver's, truncated as Eq. (N33)) and its midpoint
+/// refinement, for the canonical problem `cp`.
 fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
+    if chain.temperature > 0.0 {
+        let coarse = super::nstate::thermal_mesh(cp, (cells / 2).max(8))?;
+        let fine = refine(cp, &coarse);
+        return Ok((coarse, fine));
+    }
     let g = cp.params().drag();
     let (vl, vu) = cp.params().bounds();
     let stars: Vec<f64> = chain.levels.iter().map(|&a| g.inverse(a)).collect();
@@ -636,26 +709,23 @@ fn both_runs(
     Ok((fine_mesh, fine, rough))
 }
 
-/// Refuse thermal noise (the survival equations are first order here) and
-/// what the backward equations of a noise model refuse.
+/// What the backward equations of a noise model refuse (with T > 0: a
+/// drag other than linear, tanh, tan, and tan with T > 1, by name).
 pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
     let chain = problem.params().chain()?;
-    if chain.temperature > 0.0 {
-        return Err(Error::invalid(
-            "temperature",
-            chain.temperature,
-            "temperature 0 for mfpt distribution with a noise model (the N-state survival \
-             equations are solved without thermal noise)",
-        ));
-    }
     let (cp, _) = problem.canonical();
     super::nstate::admissible(&cp, &cp.params().chain()?)?;
     Ok(chain)
 }
 
 /// Whether each state's flow crosses v_t (a_s > g(v_t)): absorbed there,
-/// and carrying an atom (Eqs. (N31), (N38)).
+/// and carrying an atom (Eqs. (N31), (N38)). None with T > 0: diffusion
+/// reaches v_t continuously (every state is absorbed there, Eq. (N46),
+/// and none carries an atom).
 fn absorbed(cp: &Problem, chain: &Chain) -> Vec<bool> {
+    if chain.temperature > 0.0 {
+        return vec![false; chain.states()];
+    }
     let g = cp.params().drag();
     chain
         .levels
@@ -707,10 +777,25 @@ fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>], keep: impl Fn(usize) -> bool) -> f64
         .fold(0.0, f64::max)
 }
 
-/// The first-passage-time distribution of `problem` (a noise model at
-/// T = 0) at the output `times` (see the module doc); options and times
-/// validated by the caller ([`super::distribution()`]). Errors: thermal
-/// noise (naming `temperature`), what [`super::nstate`] refuses, a
+/// The earliest atom's (time, spread): (0, 0) with T > 0, where there is
+/// none (as [`Distribution::smeared`] then flags no time); at T = 0 an
+/// error where no state's flow reaches the target.
+fn earliest_atom(atoms: &[Atom], thermal: bool) -> Result<(f64, f64)> {
+    match atoms.iter().min_by(|a, b| a.time.total_cmp(&b.time)) {
+        Some(a) => Ok((a.time, a.spread)),
+        None if thermal => Ok((0.0, 0.0)),
+        None => Err(Error::Numerical {
+            method: METHOD,
+            reason: "no state's flow reaches the target".into(),
+        }),
+    }
+}
+
+/// The first-passage-time distribution of `problem` (a noise model, at
+/// T = 0 or with thermal noise) at the output `times` (see the module
+/// doc); options and times validated by the caller
+/// ([`super::distribution()`]). Errors: what [`super::nstate`] refuses
+/// (with T > 0 a drag other than linear, tanh, tan, naming `drag`), a
 /// numerical failure of the time integration or of the checks.
 pub(super) fn distribution(
     problem: &Problem,
@@ -722,6 +807,7 @@ pub(super) fn distribution(
     let moments = box_moments(problem, opts.backward.cells, &user.pi, hi, lo)?;
     let (cp, _) = problem.canonical();
     let chain = cp.params().chain()?;
+    let thermal = chain.temperature > 0.0;
     let (fine_mesh, fine, rough) = both_runs(&cp, &chain, times, opts, &moments)?;
     let ex =
         |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect() };
@@ -739,14 +825,7 @@ pub(super) fn distribution(
             .any(|(a, w)| (t - a.time).abs() < super::distribution::ATOM_WINDOW * w)
     };
     let mass_of = |s: usize| atoms.iter().find(|a| a.state == s).map_or(0.0, |a| a.mass);
-    let first = atoms
-        .iter()
-        .min_by(|a, b| a.time.total_cmp(&b.time))
-        .cloned()
-        .ok_or_else(|| Error::Numerical {
-            method: METHOD,
-            reason: "no state's flow reaches the target".into(),
-        })?;
+    let (atom_time, atom_spread) = earliest_atom(&atoms, thermal)?;
     let mean_error = (mix(&fine.mean) - mix(&rough.mean)).abs();
     let d = Distribution {
         t: times.to_vec(),
@@ -762,21 +841,33 @@ pub(super) fn distribution(
         second: mix(&second),
         t_end: fine.t_end,
         tail_mass: mix(&fine.tail),
-        atom_time: first.time,
-        atom_mass: atoms.iter().map(|a| a.weight * a.mass).sum(),
+        atom_time,
+        // A fold from +0 (an empty f64 sum is -0): 0 where there is no atom.
+        atom_mass: atoms.iter().fold(0.0, |m, a| m + a.weight * a.mass),
         atom_mass_plus: mass_of(hi),
         atom_mass_minus: mass_of(lo),
         steps: fine.stats.steps + rough.stats.steps,
         rejected: fine.stats.rejected + rough.stats.rejected,
         mesh_error: max_diff(&fine.s, &rough.s, |_| true),
         mesh_error_density: max_diff(&fine.f, &rough.f, |i| !smeared(i)),
-        atom_spread: first.spread,
+        atom_spread,
         mean_time_integral: mix(&mean),
         second_time_integral: mix(&second),
         mean_error,
         moments,
         atoms,
     };
-    super::distribution::verify(&d, opts.rtol, 1e-3 * d.moments.tau + mean_error)?;
+    super::distribution::verify(&d, opts.rtol, mean_tolerance(&d, thermal))?;
     Ok(d)
+}
+
+/// How far E(T) may lie from the box scheme's τ: 1e-3 τ plus the mesh
+/// error of E(T) at T = 0 (the box scheme is second order, its τ nearer
+/// the limit than the extrapolated E(T)); with T > 0 twice that error (the
+/// fitted scheme is between first and second order in the mesh, so both
+/// the extrapolated E(T) and τ on `cells` cells are within `mean_error`
+/// of the limit).
+fn mean_tolerance(d: &Distribution, thermal: bool) -> f64 {
+    let k = if thermal { 2.0 } else { 1.0 };
+    1e-3 * d.moments.tau + k * d.mean_error
 }

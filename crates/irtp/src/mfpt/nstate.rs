@@ -395,6 +395,52 @@ impl Setup {
     }
 }
 
+/// The thermal generator on one mesh, for the survival equations of
+/// `mfpt::ndist` (Eq. (N46)): the band and border of the fitted operator
+/// of Eqs. (N32)-(N34) (source 0), and per unknown whether it is absorbed
+/// (S_s(v_t) = 0, an algebraic row whose band entry is 1).
+pub(super) struct Generator {
+    pub(super) band: Band,
+    pub(super) border: Vec<Vec<f64>>,
+    pub(super) absorbed: Vec<bool>,
+}
+
+/// The mesh of a thermal problem on `cells` cells, truncated at the
+/// barrier [`BARRIER`] (Eq. (N33)), in the canonical frame, as the mean
+/// solver builds it.
+pub(super) fn thermal_mesh(problem: &Problem, cells: usize) -> Result<Mesh> {
+    let set = setup(problem, cells, BARRIER)?;
+    if !(set.chain.temperature > 0.0) {
+        return Err(Error::invalid(
+            "temperature",
+            set.chain.temperature,
+            "temperature > 0 for the thermal backward operator",
+        ));
+    }
+    Ok(set.mesh)
+}
+
+/// The thermal generator (Eqs. (N32)-(N34)) of the canonical problem `cp`
+/// with its chain on `mesh` (node 0 the truncation, the last v_t; from
+/// [`thermal_mesh`] or its refinement).
+pub(super) fn thermal_generator(cp: &Problem, chain: &Chain, mesh: &Mesh) -> Generator {
+    let set = Setup {
+        p: *cp,
+        swapped: false,
+        chain: chain.clone(),
+        lower: mesh.v[0],
+        mesh: mesh.clone(),
+        cond: vec![Cond::Absorbed; chain.states()],
+    };
+    let op = set.thermal(cp.params().rate(), &|_, _| 0.0);
+    let absorbed = (0..op.band.dim()).map(|r| set.absorbed_row(r)).collect();
+    Generator {
+        band: op.band,
+        border: op.border,
+        absorbed,
+    }
+}
+
 /// The weights (α-, α+) of x_{i-1}, x_{i+1} (α_0 = -(α- + α+)) of the
 /// fitted stencil of T x'' + b x' at a node with spacings h- and h+
 /// (Eq. (N34)): exact for 1, v and e^{-b v / T}, i.e.

@@ -18,8 +18,8 @@
 //! any finite-state noise; with T > 0 linear, tanh and tan drags, Eqs.
 //! (N30)-(N36)), and the first-passage-time distribution
 //! [`crate::mfpt::distribution()`] (`mfpt distribution --method backward`:
-//! any finite-state noise at T = 0, Eqs. (N37)-(N39); thermal noise refused
-//! naming `temperature`).
+//! any finite-state noise at T = 0, Eqs. (N37)-(N39); with T > 0 linear,
+//! tanh and tan drags as the backward equations, Eq. (N46)).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -35,7 +35,7 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
     Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
-    temperature 0, Poisson resetting)";
+    temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
@@ -66,8 +66,9 @@ pub fn supports(solver: Solver, _noise: &NoiseModel) -> bool {
         // N coupled equations; thermal: linear, tanh, tan (T <= 1) drags,
         // the engine refusing the others by name (mfpt::nstate).
         Solver::Backward => true,
-        // N coupled survival equations at T = 0, the atoms split off
-        // (mfpt::ndist); thermal noise refused there by `temperature`.
+        // N coupled survival equations, the atoms split off at T = 0;
+        // thermal: the backward equations' drags (linear, tanh, tan with
+        // T <= 1), the engine refusing the others by name (mfpt::ndist).
         Solver::FptDistribution => true,
         Solver::MfptOptimize => true,
         Solver::MfptExact => false,
