@@ -124,9 +124,12 @@ pub struct Distribution {
     /// S(v_0, t_end): probability not resolved by the time integration
     /// (the mean misses about tail_mass times the decay time).
     pub tail_mass: f64,
-    /// The deterministic flow time T_f from v_0 to v_t, where the atom sits.
+    /// The deterministic flow time T_f from v_0 to v_t, where the atom sits
+    /// (with a noise model the earliest of [`Distribution::atoms`]; 0 with
+    /// thermal noise, which leaves no atom).
     pub atom_time: f64,
-    /// Its mass in the mixture: half the mass of the driving start state.
+    /// Its mass in the mixture: half the mass of the driving start state
+    /// (with a noise model the π-weighted sum over the atoms; 0 at T > 0).
     pub atom_mass: f64,
     /// Its mass starting in +Sigma (e^{-(lambda + r) T_f} for an upward
     /// target, 0 for a downward one).
