@@ -208,52 +208,49 @@ fn particle_curve(prob: &Problem, dt: f64, seed: u64) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-/// (3) Euler particles (dt and dt/2 extrapolated, 2 S(dt/2) - S(dt))
-/// against S(t) at the grid times of the Kaplan-Meier curve nearest
-/// tau / 2, tau and 2 tau.
+/// Euler particles (dt and dt/2 extrapolated, 2 S(dt/2) - S(dt)) against
+/// S(t) at the grid times of the Kaplan-Meier curve nearest tau / 2, tau
+/// and 2 tau, |z| within `zmax`; `seed` and `seed + 1` for the two steps.
+fn survival_matches_euler(c: &NoiseCase, seed: u64, zmax: f64) {
+    const DT: f64 = 0.01;
+    let (v0, vt) = passage(c);
+    let prob = Problem::new(c.params(), v0, vt).unwrap();
+    let (a, b) = (
+        particle_curve(&prob, DT, seed),
+        particle_curve(&prob, DT / 2.0, seed + 1),
+    );
+    let (tau, _) = backward_tau(&prob, c.name);
+    let times: Vec<f64> = [0.5, 1.0, 2.0]
+        .iter()
+        .map(|x| {
+            let near = |p: &&(f64, f64, f64)| (p.0 - x * tau).abs();
+            a.iter()
+                .min_by(|p, q| near(p).total_cmp(&near(q)))
+                .unwrap()
+                .0
+        })
+        .collect();
+    let (_, d) = solve(c, &times, 4000);
+    for (i, &t) in times.iter().enumerate() {
+        let at = |curve: &[(f64, f64, f64)]| *curve.iter().find(|p| p.0 == t).unwrap();
+        let (pa, pb) = (at(&a), at(&b));
+        let (s, se) = (2.0 * pb.1 - pa.1, (4.0 * pb.2 * pb.2 + pa.2 * pa.2).sqrt());
+        let z = (s - d.survival[i]) / se.hypot(d.mesh_error);
+        eprintln!(
+            "{}: t = {t}: particles {s:.4} ± {se:.4}, S = {:.4}, z = {z:.2} (bound {zmax:.2})",
+            c.name, d.survival[i]
+        );
+        assert!(z.abs() <= zmax, "{}: t = {t}: z = {z}", c.name);
+    }
+}
+
+/// (3) [`survival_matches_euler`] at temperature 0.
 #[test]
 fn noise_distribution_survival_matches_euler_particles() {
-    const DT: f64 = 0.01;
     let names = ["linear-rpt", "tan-asym"];
     let zmax = bonferroni_z(3 * names.len());
     for (k, name) in names.iter().enumerate() {
-        let c = NOISE_CASES.iter().find(|c| c.name == *name).unwrap();
-        let (v0, vt) = passage(c);
-        let prob = Problem::new(c.params(), v0, vt).unwrap();
-        let seed = 9100 + 2 * k as u64;
-        let (a, b) = (
-            particle_curve(&prob, DT, seed),
-            particle_curve(&prob, DT / 2.0, seed + 1),
-        );
-        let tau = mfpt::solve(
-            &prob,
-            &Method::Backward(BackwardOptions::default()),
-            &NoProgress,
-        )
-        .unwrap()
-        .tau();
-        let times: Vec<f64> = [0.5, 1.0, 2.0]
-            .iter()
-            .map(|x| {
-                let near = |p: &&(f64, f64, f64)| (p.0 - x * tau).abs();
-                a.iter()
-                    .min_by(|p, q| near(p).total_cmp(&near(q)))
-                    .unwrap()
-                    .0
-            })
-            .collect();
-        let (_, d) = solve(c, &times, 4000);
-        for (i, &t) in times.iter().enumerate() {
-            let at = |curve: &[(f64, f64, f64)]| *curve.iter().find(|p| p.0 == t).unwrap();
-            let (pa, pb) = (at(&a), at(&b));
-            let (s, se) = (2.0 * pb.1 - pa.1, (4.0 * pb.2 * pb.2 + pa.2 * pa.2).sqrt());
-            let z = (s - d.survival[i]) / se.hypot(d.mesh_error);
-            eprintln!(
-                "{}: t = {t}: particles {s:.4} ± {se:.4}, S = {:.4}, z = {z:.2}",
-                c.name, d.survival[i]
-            );
-            assert!(z.abs() <= zmax, "{}: t = {t}: z = {z}", c.name);
-        }
+        survival_matches_euler(case(name), 9100 + 2 * k as u64, zmax);
     }
 }
 
@@ -431,46 +428,15 @@ fn noise_distribution_thermal_refuses_by_name() {
     }
 }
 
-/// (4) Euler particles (dt = 0.01 and 0.005 extrapolated, the
-/// Brownian-bridge crossing check) against S(t) at the Kaplan-Meier times
-/// nearest tau / 2, tau and 2 tau, for tan and tanh with telegraph +
-/// thermal noise; 4-sigma family rate over the six comparisons.
+/// (4) [`survival_matches_euler`] (the Brownian-bridge crossing check of
+/// the Euler particles) for tan and tanh with telegraph + thermal noise;
+/// 4-sigma family rate over the six comparisons.
 #[test]
 #[ignore = "slow tier: 4 x 8000 Euler particles with thermal noise (~5 s)"]
 fn noise_distribution_thermal_survival_matches_euler_particles() {
-    const DT: f64 = 0.01;
     let cases = [*case("tan-telegraph-thermal"), TANH_TELEGRAPH_THERMAL];
     let zmax = bonferroni_z(3 * cases.len());
     for (k, c) in cases.iter().enumerate() {
-        let (v0, vt) = passage(c);
-        let prob = Problem::new(c.params(), v0, vt).unwrap();
-        let seed = 9200 + 2 * k as u64;
-        let (a, b) = (
-            particle_curve(&prob, DT, seed),
-            particle_curve(&prob, DT / 2.0, seed + 1),
-        );
-        let (tau, _) = backward_tau(&prob, c.name);
-        let times: Vec<f64> = [0.5, 1.0, 2.0]
-            .iter()
-            .map(|x| {
-                let near = |p: &&(f64, f64, f64)| (p.0 - x * tau).abs();
-                a.iter()
-                    .min_by(|p, q| near(p).total_cmp(&near(q)))
-                    .unwrap()
-                    .0
-            })
-            .collect();
-        let (_, d) = solve(c, &times, 4000);
-        for (i, &t) in times.iter().enumerate() {
-            let at = |curve: &[(f64, f64, f64)]| *curve.iter().find(|p| p.0 == t).unwrap();
-            let (pa, pb) = (at(&a), at(&b));
-            let (s, se) = (2.0 * pb.1 - pa.1, (4.0 * pb.2 * pb.2 + pa.2 * pa.2).sqrt());
-            let z = (s - d.survival[i]) / se.hypot(d.mesh_error);
-            eprintln!(
-                "{}: t = {t}: particles {s:.4} ± {se:.4}, S = {:.4}, z = {z:.2} (bound {zmax:.2})",
-                c.name, d.survival[i]
-            );
-            assert!(z.abs() <= zmax, "{}: t = {t}: z = {z}", c.name);
-        }
+        survival_matches_euler(c, 9200 + 2 * k as u64, zmax);
     }
 }
