@@ -320,6 +320,9 @@ pub(super) fn check_problem(problem: &Problem) -> Result<()> {
     if problem.params().noise().is_none() {
         return Ok(());
     }
+    problem
+        .params()
+        .require(crate::model::reset::Solver::MfptExact)?;
     let (cp, _) = problem.canonical();
     crate::with_drag!(cp.params().drag(), |d| {
         states::StatesPassage::new(d, cp.params(), cp.vt()).map(|_| ())
