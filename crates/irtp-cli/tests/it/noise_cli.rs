@@ -16,7 +16,6 @@ const RPT: &str = "rpt:sigma=1,alpha=1,beta=1";
 /// without the noise flags (checked by hand when this list was written:
 /// `irtp <command>` for each).
 fn commands() -> Vec<Vec<&'static str>> {
-    let mfpt = ["mfpt", "--v0", "0", "--vt", "0.5", "--rate", "1"];
     let search = [
         "mfpt",
         "--v0",

@@ -42,7 +42,10 @@ fn exact_passage_with_a_noise_model_matches_backward() {
     let reference = back["tau"].as_f64().unwrap();
     let z = (tau - reference) / se;
     eprintln!("exact {tau} ± {se}, backward {reference}: z = {z:.2}");
-    assert!(z.abs() < 4.0, "z = {z}: exact {tau} ± {se}, backward {reference}");
+    assert!(
+        z.abs() < 4.0,
+        "z = {z}: exact {tau} ± {se}, backward {reference}"
+    );
     // The same bits for any thread count.
     let small = [&base("exact")[..], &["--particles", "3000", "--json"]].concat();
     let results = |threads: &str| {

@@ -157,7 +157,8 @@ fn paper_as_states_has_the_two_state_samplers_law() {
     }
 }
 
-/// Bit-identical for 1 and 2 threads and for a split into shards.
+/// Bit-identical for 1 and 2 threads and for a split into shards (3
+/// units of particles, cut 1 + 2).
 #[test]
 fn exact_passage_with_noise_is_identical_across_threads_and_shards() {
     let pool = |threads| {
@@ -168,15 +169,21 @@ fn exact_passage_with_noise_is_identical_across_threads_and_shards() {
     };
     for c in [case("tan-three"), case("tanh-rpt")] {
         for p in problems(c) {
-            let m = exact(3000, 17);
+            let m = exact(10_000, 17);
             let go = |t| pool(t).install(|| mfpt::solve(&p, &m, &NoProgress).unwrap());
             let (a, b) = (go(1), go(2));
             assert_eq!(a, b, "{}", c.name);
             let all = m.unit_count().unwrap();
+            assert!(all >= 2, "{all} units");
             let cut = all / 2;
             let mut units = mfpt::particle_units(&p, &m, 0..cut, &NoProgress).unwrap();
             units.extend(mfpt::particle_units(&p, &m, cut..all, &NoProgress).unwrap());
-            assert_eq!(mfpt::assemble(&p, &m, &units).unwrap(), a, "{} shards", c.name);
+            assert_eq!(
+                mfpt::assemble(&p, &m, &units).unwrap(),
+                a,
+                "{} shards",
+                c.name
+            );
         }
     }
 }

@@ -199,5 +199,4 @@ impl<F: FlowMap> StatesPassage<F> {
             }
         }
     }
-
 }
