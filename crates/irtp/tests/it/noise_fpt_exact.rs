@@ -197,8 +197,9 @@ fn refused_name(p: &Params, v0: f64, vt: f64) -> &'static str {
 }
 
 /// Thermal noise is refused naming `temperature` (no exact flow), a
-/// schedule modifier naming its flag, a level whose fixed point is
-/// interior for a law without a closed-form flow naming `noise`.
+/// schedule modifier naming its flag, a level at a kink of a law without
+/// a closed-form flow naming `noise`, as is the passage-time control
+/// variate with a noise model.
 #[test]
 fn refusals_name_their_flag() {
     for c in NOISE_CASES.iter().filter(|c| c.thermal()) {
@@ -220,6 +221,13 @@ fn refusals_name_their_flag() {
         .unwrap();
     assert_eq!(refused_name(&p, 0.0, 0.3), "reset_period");
     let power: DragLaw = "power:n=0.5".parse().unwrap();
-    let p = Params::with_noise(power, rpt, 0.5, 0.0).unwrap();
+    let p = Params::with_noise(power, rpt.clone(), 0.5, 0.0).unwrap();
     assert_eq!(refused_name(&p, 0.0, 0.3), "noise");
+    // The passage-time control variate is the two-state flips' martingale.
+    let p = Params::with_noise(DragLaw::Tan, rpt, 0.5, 0.0).unwrap();
+    let pr = Problem::new(p, 0.0, 0.3).unwrap();
+    match mfpt::control::run(&pr, (10, 1, f64::INFINITY), 64, 400, &NoProgress) {
+        Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "noise"),
+        other => panic!("control variate with a noise model: {other:?}"),
+    }
 }
