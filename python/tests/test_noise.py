@@ -26,14 +26,25 @@ def test_the_papers_noise_as_a_spec_is_the_same_numbers():
 
 
 @pytest.mark.parametrize("kwargs, name", [
-    ({"noise": RPT}, "noise"),
+    ({"noise": RPT, "temperature": 0.5}, "temperature"),
     ({"temperature": 0.5}, "temperature"),
 ])
 def test_other_methods_refuse_a_noise_by_name(kwargs, name):
-    # The exact first-passage sampler runs the paper's noise only.
+    # The exact first-passage sampler runs any finite-state noise at
+    # temperature 0 only (no exact flow with thermal noise).
     with pytest.raises(ValueError) as e:
         irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, method="exact", particles=10, **kwargs)
     assert str(e.value).startswith(f"invalid {name} = ")
+
+
+def test_exact_first_passage_runs_a_noise_model():
+    # Exact particles started in a state drawn from the noise's stationary
+    # law (docs/equations.md (N46)-(N48)) against the backward equations'
+    # pi-averaged tau: within 4 standard errors.
+    b = irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, noise=RPT, drag="tan")
+    e = irtp.mfpt(v0=0.0, vt=0.5, rate=1.0, noise=RPT, drag="tan", method="exact",
+                  particles=20000, seed=3)
+    assert abs(e.tau - b.tau) < 4.0 * e.tau_err
 
 
 def test_backward_and_euler_first_passage_run_a_noise_model():

@@ -400,10 +400,15 @@ impl DistributionArgs {
             t_max,
             seed: self.output.seed(),
         };
+        // The histogram's halves are the ±Sigma starts: the paper's noise
+        // only (`mfpt --method exact` runs the others).
+        if let Some(m) = problem.params().noise() {
+            irtp::model::noise::support::refuse("mfpt distribution --method exact", m)?;
+        }
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();
-        let per = p.schedule().event_rate_bound(p.lambda(), p.rate()) * tau.min(t_max) + 2.0;
+        let per = mfpt::exact::event_rate(p) * tau.min(t_max) + 2.0;
         let mut drivers = vec!["particles", "lambda", "rate", "t_max"];
         drivers.extend(p.schedule().cost_drivers());
         let cost = super::budget::particles(run.particles, per, "particle events", drivers, 0, 0);

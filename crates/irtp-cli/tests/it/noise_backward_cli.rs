@@ -208,7 +208,7 @@ fn distribution_runs_a_noise_model_and_writes_it() {
     assert!(err.contains("linear, tanh or tan"), "{err}");
 }
 
-/// `mfpt distribution` with thermal noise (Eq. (N46)): the paper's noise
+/// `mfpt distribution` with thermal noise (Eq. (N49)): the paper's noise
 /// with a temperature and tanh drag runs, records the temperature and its
 /// provenance, and its survival starts at 1 and falls; E(T) agrees with
 /// the thermal backward tau printed beside it.

@@ -16,7 +16,6 @@ const RPT: &str = "rpt:sigma=1,alpha=1,beta=1";
 /// without the noise flags (checked by hand when this list was written:
 /// `irtp <command>` for each).
 fn commands() -> Vec<Vec<&'static str>> {
-    let mfpt = ["mfpt", "--v0", "0", "--vt", "0.5", "--rate", "1"];
     let search = [
         "mfpt",
         "--v0",
@@ -34,8 +33,9 @@ fn commands() -> Vec<Vec<&'static str>> {
         // simulate (noise_exact_cli.rs, noise_euler_cli.rs), fp
         // (noise_fp_cli.rs), mfpt scan / optimize, `mfpt --method
         // backward` and `mfpt distribution --method backward`
-        // (noise_backward_cli.rs) and `mfpt --method euler` run noise
-        // models.
+        // (noise_backward_cli.rs), `mfpt --method euler` and `mfpt
+        // --method exact` at temperature 0 (noise_fpt_exact_cli.rs) run
+        // noise models.
         vec![
             "mfpt",
             "distribution",
@@ -52,7 +52,6 @@ fn commands() -> Vec<Vec<&'static str>> {
         ],
         vec!["analytic", "--drag", "tan"],
     ];
-    out.push([&mfpt[..], &["--method", "exact", "--particles", "10"][..]].concat());
     for m in ["backward", "exact"] {
         out.push([&search[..], &["--method", m, "--particles", "10"][..]].concat());
         let interval = [
@@ -92,10 +91,19 @@ fn fit(cmd: &[&'static str]) -> Vec<&'static str> {
     out
 }
 
+/// `mfpt --method exact` runs every finite-state noise at temperature 0
+/// but no thermal noise: refused with `--temperature` only.
+fn thermal_refused() -> Vec<Vec<&'static str>> {
+    let mfpt = ["mfpt", "--v0", "0", "--vt", "0.5", "--rate", "1"];
+    vec![[&mfpt[..], &["--method", "exact", "--particles", "10"][..]].concat()]
+}
+
 #[test]
 fn every_command_refuses_a_noise_it_does_not_run() {
     let tmp = tempfile::tempdir().unwrap();
-    for (i, cmd) in commands().iter().enumerate() {
+    let both = commands().into_iter().map(|c| (c, true));
+    let thermal = thermal_refused().into_iter().map(|c| (c, false));
+    for (i, (cmd, with_noise)) in both.chain(thermal).enumerate() {
         let dir = tmp.path().join(format!("o{i}")).join("out");
         std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
         let d = dir.to_str().unwrap();
@@ -103,7 +111,10 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             (vec!["--noise", RPT], "--noise"),
             (vec!["--temperature", "0.5"], "--temperature"),
         ] {
-            let args = [&fit(cmd)[..], &extra[..], &["--out", d][..]].concat();
+            if flag == "--noise" && !with_noise {
+                continue;
+            }
+            let args = [&fit(&cmd)[..], &extra[..], &["--out", d][..]].concat();
             let out = irtp(&args);
             let err = assert_rejected(&out, flag, &dir);
             assert!(err.contains("run by: analytic"), "{args:?}: {err}");

@@ -364,6 +364,17 @@ pub fn run(
     backward_cells: usize,
     progress: &dyn Progress,
 ) -> Result<ControlledStats> {
+    // The martingale is that of the two-state flips; a noise model's
+    // passages run in the N-state sampler, which has no control.
+    if let Some(m) = problem.params().noise() {
+        return Err(Error::invalid(
+            "noise",
+            m.spec(),
+            "the paper's symmetric telegraph noise for the passage-time control variate (its \
+             martingale is that of the two-state flips; mfpt --method exact runs a noise model \
+             without it)",
+        ));
+    }
     let profile = backward::profile(problem, &BackwardOptions::with_cells(backward_cells))?;
     let (cp, swapped) = problem.canonical();
     let (vl, _) = cp.params().bounds();

@@ -16,6 +16,10 @@
 //! with the probability of an odd number of flips, ½(1 - e^{-2 lambda D});
 //! Poisson resets are off during it and the periodic times inside it or at
 //! its end are skipped.
+//!
+//! A noise model other than the paper's (any finite-state noise at T = 0)
+//! runs in the N-state loop of the `states` submodule beside this one
+//! (Eqs. (N46)-(N48)), its particles started in a state drawn from π.
 
 use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;
@@ -27,6 +31,8 @@ use crate::parallel::Progress;
 use crate::rng::Rng;
 use crate::sim::exact::exp_gap;
 use rand::Rng as _;
+
+mod states;
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
 /// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
@@ -306,13 +312,48 @@ pub fn check_t_max(t_max: f64) -> Result<f64> {
     Ok(t_max)
 }
 
+/// Refuse what the exact first-passage sampler does not run for `problem`,
+/// beyond [`check_t_max`] and the support table: with a noise model other
+/// than the paper's, the schedule modifiers (their flags), thermal noise
+/// (`temperature`) and the levels a law's flows do not run (`noise`).
+pub(super) fn check_problem(problem: &Problem) -> Result<()> {
+    if problem.params().noise().is_none() {
+        return Ok(());
+    }
+    problem
+        .params()
+        .require(crate::model::reset::Solver::MfptExact)?;
+    let (cp, _) = problem.canonical();
+    crate::with_drag!(cp.params().drag(), |d| {
+        states::StatesPassage::new(d, cp.params(), cp.vt()).map(|_| ())
+    })
+}
+
+/// The largest event rate of the exact sampler under `params`, for cost
+/// estimates: max_s q_s + r with a noise model other than the paper's
+/// (Eq. (N46)), else the schedule's bound on lambda + r
+/// (`Schedule::event_rate_bound`).
+pub fn event_rate(params: &Params) -> f64 {
+    match params.chain() {
+        Ok(c) if params.noise().is_some() => {
+            c.exit.iter().copied().fold(0.0, f64::max) + params.rate()
+        }
+        _ => params
+            .schedule()
+            .event_rate_bound(params.lambda(), params.rate()),
+    }
+}
+
 /// The unit totals of units `units` of the first-passage run of `problem`
 /// (either direction) by the exact sampler over `particles` particles,
 /// through the method-agnostic driver
 /// ([`super::estimator::first_passage_units`]: particle i has the stream
-/// (seed, i), start state +Sigma for even i). Downward problems run in the
-/// mirrored upward frame ([`Problem::canonical`]), where the noise states
-/// swap. Inputs are checked by [`super::Method::check`].
+/// (seed, i), start state +Sigma for even i; with a noise model other than
+/// the paper's a state drawn from π, the even and odd particles two halves
+/// of one law). Downward problems run in the mirrored upward frame
+/// ([`Problem::canonical`]), where the noise states swap (a noise model's
+/// levels are negated state for state). Inputs are checked by
+/// [`super::Method::check`].
 pub(super) fn units(
     problem: &Problem,
     t_max: f64,
@@ -322,6 +363,23 @@ pub(super) fn units(
     progress: &dyn Progress,
 ) -> Vec<FptStats> {
     let (cp, swapped) = problem.canonical();
+    if cp.params().noise().is_some() {
+        return crate::with_drag!(cp.params().drag(), |d| {
+            let fpt = states::StatesPassage::new(d, cp.params(), cp.vt())
+                .expect("checked by Method::check");
+            first_passage_units(
+                particles,
+                units.clone(),
+                seed,
+                t_max,
+                progress,
+                |_, rng, _| {
+                    let (time, work) = fpt.run(cp.v0(), t_max, rng);
+                    FptSample { time, work }
+                },
+            )
+        });
+    }
     crate::with_drag!(cp.params().drag(), |d| {
         let fpt = FirstPassage::for_drag(d, cp.params(), true);
         first_passage_units(

@@ -68,7 +68,8 @@ impl Method {
 
     /// Validate the method for `problem` before anything runs: the backward
     /// mesh; for particles `particles >= 4` (two per starting state), then the method's own limits
-    /// (Euler: step and time cap; exact: time cap).
+    /// (Euler: step and time cap; exact: time cap, and with a noise model
+    /// its protocol and levels).
     pub fn check(&self, problem: &Problem) -> Result<()> {
         if let Some(run) = self.particles() {
             // Two per starting state (±Sigma), for a standard error.
@@ -78,7 +79,10 @@ impl Method {
         }
         match *self {
             Method::Backward(opts) => opts.validate(),
-            Method::Exact(run) => exact::check_t_max(run.t_max).map(|_| ()),
+            Method::Exact(run) => {
+                exact::check_t_max(run.t_max)?;
+                exact::check_problem(problem)
+            }
             Method::Euler { dt, run } => EulerFpt::new(*problem, dt, run.t_max).map(|_| ()),
         }
     }

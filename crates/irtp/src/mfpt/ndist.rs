@@ -1,6 +1,6 @@
 //! The first-passage-time distribution of a noise model, at temperature 0
 //! and with thermal noise (docs/equations.md, "Backward equations for a
-//! noise model", Eqs. (N37)-(N39) and (N46)-(N48)).
+//! noise model", Eqs. (N37)-(N39) and (N49)-(N51)).
 //!
 //! The survival probabilities S_s(v, t) = P(T > t | v(0) = v, eta(0) = a_s)
 //! obey the N coupled equations (N37)
@@ -40,7 +40,7 @@
 //! level, `atom_time` the earliest atom and `atom_mass` the π-weighted sum
 //! of [`Distribution::atoms`].
 //!
-//! With thermal noise (T > 0, Eq. (N46)) the same time loop runs the
+//! With thermal noise (T > 0, Eq. (N49)) the same time loop runs the
 //! second-order equations dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s +
 //! Σ_s' Q_ss' (S_s' - S_s) - r S_s + r R_s, absorbed at v_t in every
 //! state (diffusion reaches the target continuously: no atoms, no
@@ -49,7 +49,7 @@
 //! solver's exponentially fitted generator (`nstate::thermal_generator`,
 //! Eq. (N34)) on its mesh of cells / 2 (`nstate::thermal_mesh`) and the
 //! midpoint refinement; the v_t rows are algebraic (S_s = 0). On each mesh
-//! the semi-discrete E(T) is the mean solver's τ on that mesh (Eq. (N47));
+//! the semi-discrete E(T) is the mean solver's τ on that mesh (Eq. (N50));
 //! the extrapolated E(T) is checked against τ on `cells` cells within
 //! 1e-3 τ + 2 `mean_error`. `atoms` is empty and `atom_time`, `atom_mass`
 //! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
@@ -238,7 +238,7 @@ fn upwind_rows(cp: &Problem, m: &Mesh, chain: &Chain, absorbed: &[bool]) -> Rows
     (band, border, algebraic)
 }
 
-/// The thermal rows (Eq. (N46)) on mesh `m`: the fitted generator of
+/// The thermal rows (Eq. (N49)) on mesh `m`: the fitted generator of
 /// `mfpt::nstate` (Eqs. (N32)-(N34), one code with the mean solver), its
 /// band copied into bandwidth N (its stencil couples node i to i ± 1 and
 /// the states of node i only).
@@ -262,7 +262,7 @@ fn thermal_rows(cp: &Problem, m: &Mesh, chain: &Chain) -> Rows {
 impl Survival {
     /// Assemble the rows on mesh `m`: the upwind rows of Eq. (N37) at
     /// T = 0, the fitted thermal generator of `mfpt::nstate` with T > 0
-    /// (Eq. (N46)).
+    /// (Eq. (N49)).
     fn new(cp: &Problem, m: &Mesh, chain: &Chain, scales: (f64, f64)) -> Self {
         let par = cp.params();
         let rate = par.rate();
@@ -720,7 +720,7 @@ pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
 
 /// Whether each state's flow crosses v_t (a_s > g(v_t)): absorbed there,
 /// and carrying an atom (Eqs. (N31), (N38)). None with T > 0: diffusion
-/// reaches v_t continuously (every state is absorbed there, Eq. (N46),
+/// reaches v_t continuously (every state is absorbed there, Eq. (N49),
 /// and none carries an atom).
 fn absorbed(cp: &Problem, chain: &Chain) -> Vec<bool> {
     if chain.temperature > 0.0 {

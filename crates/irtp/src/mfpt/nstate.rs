@@ -396,7 +396,7 @@ impl Setup {
 }
 
 /// The thermal generator on one mesh, for the survival equations of
-/// `mfpt::ndist` (Eq. (N46)): the band and border of the fitted operator
+/// `mfpt::ndist` (Eq. (N49)): the band and border of the fitted operator
 /// of Eqs. (N32)-(N34) (source 0), and per unknown whether it is absorbed
 /// (S_s(v_t) = 0, an algebraic row whose band entry is 1).
 pub(super) struct Generator {

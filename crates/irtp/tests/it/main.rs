@@ -30,6 +30,7 @@ mod noise_euler;
 mod noise_exact;
 mod noise_exact_ou;
 mod noise_fp;
+mod noise_fpt_exact;
 mod power_kink;
 mod search_backward;
 mod search_cross;

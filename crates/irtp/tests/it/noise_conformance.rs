@@ -9,9 +9,9 @@
 //!     noise, Euler-Maruyama at dt and dt/2 extrapolated with it) against
 //!     the N-state Fokker-Planck solver;
 //! (b) the mean first passage v_r → v_t: Euler particles at dt and dt/2
-//!     extrapolated (with the Brownian-bridge crossing check at T > 0; the
-//!     exact first-passage sampler runs the paper's noise only) against
-//!     the N-state backward equations.
+//!     extrapolated (with the Brownian-bridge crossing check at T > 0)
+//!     against the N-state backward equations (the exact first-passage
+//!     sampler's own comparison, at T = 0: noise_fpt_exact.rs).
 //!
 //! One tolerance per suite: 4 standard errors raised to the Bonferroni
 //! bound over every comparison of the suite, the deterministic solver's

@@ -10,7 +10,7 @@
 //!     a reset, a random reset target and a downward target);
 //! (3) Euler particles (dt and dt/2 extrapolated) against S(t) at three
 //!     times, for a run-pause-tumble and an asymmetric case;
-//! (4) with thermal noise (Eq. (N46)): E(T) against the thermal backward
+//! (4) with thermal noise (Eq. (N49)): E(T) against the thermal backward
 //!     tau and the mass identity for Ornstein-Uhlenbeck velocities with
 //!     resetting, continuity at T -> 0 against the T = 0 survival, Euler
 //!     particles for tan and tanh with telegraph + thermal noise (slow

@@ -19,7 +19,10 @@
 //! (N30)-(N36)), and the first-passage-time distribution
 //! [`crate::mfpt::distribution()`] (`mfpt distribution --method backward`:
 //! any finite-state noise at T = 0, Eqs. (N37)-(N39); with T > 0 linear,
-//! tanh and tan drags as the backward equations, Eq. (N46)).
+//! tanh and tan drags as the backward equations, Eq. (N49)), and the exact
+//! first-passage sampler (`mfpt --method exact`, [`crate::mfpt::exact`]):
+//! any finite-state noise at T = 0 (Eqs. (N46)-(N48)); T > 0 refused naming
+//! `temperature` (no exact flow with thermal noise).
 
 use super::NoiseModel;
 use crate::error::{Error, Result};
@@ -35,7 +38,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
     Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
-    temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting)";
+    temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting); \
+    mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
@@ -47,7 +51,7 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
 /// every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for
 /// such models are in [`crate::analytic::noise`], which checks its own
 /// cases.
-pub fn supports(solver: Solver, _noise: &NoiseModel) -> bool {
+pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     // One line per method: an engine that learns to run a noise model
     // says which here (README's support table follows this match).
     match solver {
@@ -71,17 +75,33 @@ pub fn supports(solver: Solver, _noise: &NoiseModel) -> bool {
         // T <= 1), the engine refusing the others by name (mfpt::ndist).
         Solver::FptDistribution => true,
         Solver::MfptOptimize => true,
-        Solver::MfptExact => false,
+        // Any finite-state noise at T = 0 (mfpt::exact's N-state loop);
+        // with T > 0 there is no exact flow: refused naming `temperature`
+        // ([`check`]).
+        Solver::MfptExact => noise.temperature() == 0.0,
         // Any finite-state noise at any T (mfpt::euler's noise kernel).
         Solver::MfptEuler => true,
         Solver::ClosedForm => false,
     }
 }
 
-/// Refuse a noise model that `solver` does not run ([`refuse`]).
+/// Refuse a noise model that `solver` does not run ([`refuse`]); the exact
+/// first-passage sampler refuses thermal noise naming `temperature` (it
+/// runs every finite-state noise at T = 0).
 pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
     if supports(solver, noise) {
         return Ok(());
+    }
+    if solver == Solver::MfptExact && noise.temperature() > 0.0 {
+        return Err(Error::invalid(
+            "temperature",
+            noise.temperature(),
+            format!(
+                "temperature 0 for {} (no exact flow with thermal noise; any finite-state noise \
+                 runs at temperature 0); this noise is run by: {RUNNERS}",
+                solver.command()
+            ),
+        ));
     }
     refuse(solver.command(), noise)
 }

@@ -1,0 +1,202 @@
+//! Exact first passage with a finite-state Markov noise (levels a_s,
+//! generator Q) at temperature 0: docs/equations.md, "Exact first passage
+//! with a finite-state noise", Eqs. (N46)-(N48).
+//!
+//! Events come at rate q_s + r in state s; one uniform u on [0, q_s + r)
+//! picks a jump of the noise (u < q_s, its target by [`Chain::jump`] from
+//! the same u) or a reset (velocity by the rule, noise kept or re-drawn
+//! from π), as in the N-state simulation loop of [`crate::sim::exact`]
+//! (Eq. (N10)). Between events the velocity follows the exact flow
+//! dv/dt = a_s - g(v) toward v*_s = g⁻¹(a_s) (Eq. (N11)), which may be
+//! interior (the pause of run-pause-tumble) and approached from either
+//! side. In the canonical (upward) frame the walk stays below v_t, so a
+//! segment crosses v_t iff v*_s > v_t, at the exact flow time
+//! [`FlowMap::time`] from the segment's start, compared with the gap: no
+//! time step, no overshoot (Eq. (N46)). A reset to v_r ≥ v_t is the
+//! passage at the reset instant.
+//!
+//! A particle starts at v_0 in a state drawn from π (one uniform, the first
+//! of its stream), so τ is the π-averaged mean passage time
+//! Σ_s π_s T_s(v_0) of the backward equations (Eq. (N47)); the even and
+//! odd particles (the `plus` and `minus` halves of
+//! [`super::super::FptStats`]) are two independent halves of the same law,
+//! as for the Euler particles with a noise model.
+//!
+//! This is a second loop beside the paper's two-state [`super::FirstPassage`],
+//! which keeps its stratified ±Sigma start and its draws bit for bit; the
+//! flows are those of the simulation (closed-form flows of tan, tanh and
+//! linear drag on either side of a fixed point; for the other laws only
+//! levels whose fixed point is the interval's edge farther from 0, where
+//! their tabulated flows are exact), and the estimator and driver
+//! ([`super::super::estimator`]) are shared.
+
+use crate::error::{Error, Result};
+use crate::model::drag::FlowMap;
+use crate::model::noise::chain::Chain;
+use crate::model::reset::{Reset, ResetRule};
+use crate::model::{Drag, DragLaw, Params};
+use crate::rng::Rng;
+use crate::sim::exact::{exp_gap, MIN_RELAXATION_RATE};
+use rand::Rng as _;
+
+/// Whether the law's flow map is in closed form on the whole velocity line
+/// (a fixed point approached from either side, at any distance).
+fn two_sided(law: DragLaw) -> bool {
+    matches!(law, DragLaw::Tan | DragLaw::Tanh | DragLaw::Linear)
+}
+
+/// The exact first-passage sampler of one upward (canonical) problem with
+/// a noise model at T = 0.
+#[derive(Clone, Debug)]
+pub(crate) struct StatesPassage<F> {
+    /// The flow of each level.
+    flows: Vec<F>,
+    /// Per state: its fixed point lies beyond v_t (its flow crosses v_t).
+    crosses: Vec<bool>,
+    chain: Chain,
+    /// Per state: q_s + r.
+    total: Vec<f64>,
+    reset: ResetRule,
+    vt: f64,
+}
+
+/// The flows of `levels` on the velocity interval `(lo, hi)`: accelerated
+/// where the level's fixed point is the interval's edge farther from 0
+/// (the paper's case), plain closed forms for the other levels of tan,
+/// tanh and linear drag; refused naming `noise` otherwise, or at a kink of
+/// the drag (g'(v*) = 0 or ∞).
+fn level_flows<D: Drag>(
+    drag: &D,
+    (law, spec): (DragLaw, &str),
+    levels: &[f64],
+    (lo, hi): (f64, f64),
+) -> Result<Vec<D::Flow>> {
+    levels
+        .iter()
+        .map(|&a| {
+            let flow = drag.flow(a);
+            let rate = flow.rate();
+            if !(rate >= MIN_RELAXATION_RATE && rate.is_finite()) {
+                return Err(Error::invalid(
+                    "noise",
+                    spec,
+                    format!(
+                        "levels whose fixed point v* = g⁻¹(a) has a finite relaxation rate \
+                         g'(v*) >= {MIN_RELAXATION_RATE:e} for mfpt --method exact (here level \
+                         {a} has g'(v*) = {rate:e}: a kink of the drag at v*)"
+                    ),
+                ));
+            }
+            let vs = drag.inverse(a);
+            let edge = (a > 0.0 && vs == hi && lo >= -vs) || (a < 0.0 && vs == lo && hi <= -vs);
+            if edge {
+                Ok(flow.accelerated())
+            } else if two_sided(law) {
+                Ok(flow)
+            } else {
+                Err(Error::invalid(
+                    "noise",
+                    spec,
+                    format!(
+                        "levels whose fixed points g⁻¹(a) are the edges of the velocity \
+                         interval, the farther from 0 for each, for mfpt --method exact with \
+                         drag {law} (here level {a} has g⁻¹(a) = {vs:e} in [{lo:e}, {hi:e}]; \
+                         interior or nearer fixed points are run for tan, tanh and linear drag)"
+                    ),
+                ))
+            }
+        })
+        .collect()
+}
+
+impl<F: FlowMap> StatesPassage<F> {
+    /// The sampler of the upward problem to `vt` under `params` (a noise
+    /// model at T = 0, its support checked by the caller): the schedule
+    /// modifiers refused naming their flag, the flows as
+    /// [`level_flows`] (memoised per law, levels and interval).
+    pub(crate) fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, vt: f64) -> Result<Self> {
+        if let Some(f) = params.schedule().features().into_iter().next() {
+            return Err(Error::invalid(
+                f.flag(),
+                params.schedule().spec_of(f),
+                "the paper's Poisson protocol for mfpt --method exact with a noise model other \
+                 than the paper's (a schedule modifier with such a noise is not run)",
+            ));
+        }
+        let model = params.noise_model()?;
+        let chain = params.chain()?;
+        if chain.temperature > 0.0 {
+            return Err(Error::invalid(
+                "temperature",
+                chain.temperature,
+                "temperature 0 for mfpt --method exact (no exact flow with thermal noise; \
+                 mfpt --method euler runs it)",
+            ));
+        }
+        let bounds = params.bounds();
+        let bits: Vec<String> = chain
+            .levels
+            .iter()
+            .chain([&bounds.0, &bounds.1])
+            .map(|a| format!("{:x}", a.to_bits()))
+            .collect();
+        let key = format!("first passage states {drag:?} {}", bits.join(","));
+        let spec = model.spec();
+        let flows = crate::memo::shared(key, || {
+            level_flows(drag, (params.drag(), &spec), &chain.levels, bounds)
+        })?;
+        let flows = (*flows).clone();
+        let crosses = chain.levels.iter().map(|&a| drag.inverse(a) > vt).collect();
+        let reset = *params.reset();
+        let total = chain.exit.iter().map(|q| q + reset.rate()).collect();
+        Ok(StatesPassage {
+            flows,
+            crosses,
+            chain,
+            total,
+            reset,
+            vt,
+        })
+    }
+
+    /// One upward first passage from `v0` < v_t, the start state drawn
+    /// from π with the stream's first uniform: (passage time, or None if
+    /// not reached by `t_max`; number of events).
+    pub(crate) fn run(&self, v0: f64, t_max: f64, rng: &mut Rng) -> (Option<f64>, u64) {
+        let vt = self.vt;
+        let mut s = self.chain.draw_stationary(rng.gen::<f64>());
+        if v0 >= vt {
+            return (Some(0.0), 0);
+        }
+        let (mut t, mut v, mut events) = (0.0f64, v0, 0u64);
+        loop {
+            let total = self.total[s];
+            let gap = exp_gap(rng, total);
+            let flow = &self.flows[s];
+            if self.crosses[s] {
+                let tau = flow.time(v, vt);
+                if tau <= gap {
+                    let hit = t + tau;
+                    return ((hit <= t_max).then_some(hit), events);
+                }
+            }
+            if t + gap >= t_max {
+                return (None, events);
+            }
+            v = flow.velocity(v, gap);
+            t += gap;
+            events += 1;
+            let u = rng.gen::<f64>() * total;
+            if u < self.chain.exit[s] {
+                s = self.chain.jump(s, u);
+            } else {
+                let w = self.reset.draw_velocity(rng);
+                s = self.reset.draw_noise_state(s, &self.chain, rng);
+                if w >= vt {
+                    return (Some(t), events);
+                }
+                v = w;
+            }
+        }
+    }
+}
