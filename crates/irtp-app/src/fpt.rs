@@ -408,7 +408,7 @@ impl DistributionArgs {
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();
-        let per = mfpt::exact::event_rate(p) * tau.min(t_max) + 2.0;
+        let per = p.event_rate_bound() * tau.min(t_max) + 2.0;
         let mut drivers = vec!["particles", "lambda", "rate", "t_max"];
         drivers.extend(p.schedule().cost_drivers());
         let cost = super::budget::particles(run.particles, per, "particle events", drivers, 0, 0);

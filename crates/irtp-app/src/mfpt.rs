@@ -438,7 +438,7 @@ impl SimArgs {
 /// equations on a coarse mesh, or t_max where they fail), at most t_max;
 /// exact events come at rate lambda + r (with a periodic clock or a
 /// refractory period, their bound `Schedule::event_rate_bound`; with a
-/// noise model at most max_s q_s + r: `mfpt::exact::event_rate`), Euler
+/// noise model at most max_s q_s + r: `Params::event_rate_bound`), Euler
 /// steps every dt.
 fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budget::Cost {
     let backward = super::budget::mesh(cells, 100.0, 256.0, vec!["cells"]);
@@ -455,7 +455,7 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
             vec!["particles", "t_max", "dt"],
         ),
         _ => (
-            mfpt::exact::event_rate(params) * t + 2.0,
+            params.event_rate_bound() * t + 2.0,
             "particle events",
             vec!["particles", "lambda", "rate", "t_max"],
         ),

@@ -199,7 +199,8 @@ impl SimulateArgs {
 
     /// Work and memory, from the flags before anything is allocated: Euler
     /// steps, or exact-sampler events (flips, resets and the ends of
-    /// refractory periods, [`irtp::model::reset::Schedule::event_rate_bound`],
+    /// refractory periods, [`Params::event_rate_bound`]: a noise model's
+    /// fastest state,
     /// plus one flow evaluation per recording time).
     fn cost(&self, p: &Params) -> irtp::Result<super::budget::Cost> {
         let t_max = irtp::error::finite("t_max", self.t_max)?;
@@ -213,9 +214,20 @@ impl SimulateArgs {
                 vec!["particles", "t_max", "dt", "bins"],
             ),
             MethodArg::Exact => (
-                p.schedule().event_rate_bound(p.lambda(), p.rate()) * t_max + samples + bins + 1.0,
+                p.event_rate_bound() * t_max + samples + bins + 1.0,
                 "particle events",
-                vec!["particles", "lambda", "rate", "t_max", "samples", "bins"],
+                vec![
+                    "particles",
+                    if p.noise().is_some() {
+                        "noise"
+                    } else {
+                        "lambda"
+                    },
+                    "rate",
+                    "t_max",
+                    "samples",
+                    "bins",
+                ],
             ),
         };
         // A step refused by validation (dt <= 0, NaN) gives a meaningless

@@ -196,3 +196,35 @@ fn periodic_and_refractory_events_count_against_max_work() {
         );
     }
 }
+
+/// With a noise model the exact sampler's cost estimate counts the events
+/// of its fastest state (here left at rate 10⁷: 10 particles to t = 1 are
+/// ≥ 10⁸ events against a budget of 10⁶), refused before any work and
+/// naming `--noise` among the flags that set it.
+#[test]
+fn a_noise_models_event_rate_counts_against_max_work() {
+    let args = [
+        "simulate",
+        "--drag",
+        "tan",
+        "--noise",
+        "rpt:sigma=1,alpha=1e7,beta=1",
+        "--particles",
+        "10",
+        "--t-max",
+        "1",
+        "--max-work",
+        "1e6",
+    ];
+    let start = std::time::Instant::now();
+    let err = one_line_error(&args);
+    assert!(
+        err.contains("too costly") && err.contains("--max-work") && err.contains("--noise"),
+        "{err}"
+    );
+    assert!(
+        start.elapsed().as_secs_f64() < 10.0,
+        "{:?}",
+        start.elapsed()
+    );
+}

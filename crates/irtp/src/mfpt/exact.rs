@@ -329,21 +329,6 @@ pub(super) fn check_problem(problem: &Problem) -> Result<()> {
     })
 }
 
-/// The largest event rate of the exact sampler under `params`, for cost
-/// estimates: max_s q_s + r with a noise model other than the paper's
-/// (Eq. (N46)), else the schedule's bound on lambda + r
-/// (`Schedule::event_rate_bound`).
-pub fn event_rate(params: &Params) -> f64 {
-    match params.chain() {
-        Ok(c) if params.noise().is_some() => {
-            c.exit.iter().copied().fold(0.0, f64::max) + params.rate()
-        }
-        _ => params
-            .schedule()
-            .event_rate_bound(params.lambda(), params.rate()),
-    }
-}
-
 /// The unit totals of units `units` of the first-passage run of `problem`
 /// (either direction) by the exact sampler over `particles` particles,
 /// through the method-agnostic driver

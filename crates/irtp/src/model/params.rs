@@ -570,6 +570,19 @@ impl Params {
         Chain::new(&self.noise_model()?)
     }
 
+    /// The largest event rate of an event-driven sampler, for cost
+    /// estimates: max_s q_s + r with a noise model other than the paper's
+    /// (Eq. (N10)), else the schedule's bound on lambda + r
+    /// ([`crate::model::reset::Schedule::event_rate_bound`]).
+    pub fn event_rate_bound(&self) -> f64 {
+        match self.chain() {
+            Ok(c) if self.noise().is_some() => {
+                c.exit.iter().copied().fold(0.0, f64::max) + self.rate()
+            }
+            _ => self.schedule().event_rate_bound(self.lambda(), self.rate()),
+        }
+    }
+
     /// Largest Euler step that keeps the velocity inside (v_l, v_u):
     /// dt < 1 / [`Drag::euler_slope`], the largest secant slope
     /// (Sigma - g(v)) / (v_u - v) on the interval, so that
