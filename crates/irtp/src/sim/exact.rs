@@ -76,6 +76,8 @@ use std::ops::Range;
 mod ou;
 mod states;
 
+pub(crate) use states::{level_kind, LevelKind};
+
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on
 /// adaptively refined pieces (refined until the last coefficients of the

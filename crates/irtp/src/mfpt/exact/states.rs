@@ -36,14 +36,8 @@ use crate::model::noise::chain::Chain;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, DragLaw, Params};
 use crate::rng::Rng;
-use crate::sim::exact::{exp_gap, MIN_RELAXATION_RATE};
+use crate::sim::exact::{exp_gap, level_kind, LevelKind};
 use rand::Rng as _;
-
-/// Whether the law's flow map is in closed form on the whole velocity line
-/// (a fixed point approached from either side, at any distance).
-fn two_sided(law: DragLaw) -> bool {
-    matches!(law, DragLaw::Tan | DragLaw::Tanh | DragLaw::Linear)
-}
 
 /// The exact first-passage sampler of one upward (canonical) problem with
 /// a noise model at T = 0.
@@ -64,47 +58,23 @@ pub(crate) struct StatesPassage<F> {
 /// where the level's fixed point is the interval's edge farther from 0
 /// (the paper's case), plain closed forms for the other levels of tan,
 /// tanh and linear drag; refused naming `noise` otherwise, or at a kink of
-/// the drag (g'(v*) = 0 or ∞).
+/// the drag ([`level_kind`]).
 fn level_flows<D: Drag>(
     drag: &D,
     (law, spec): (DragLaw, &str),
     levels: &[f64],
-    (lo, hi): (f64, f64),
+    bounds: (f64, f64),
 ) -> Result<Vec<D::Flow>> {
     levels
         .iter()
         .map(|&a| {
             let flow = drag.flow(a);
-            let rate = flow.rate();
-            if !(rate >= MIN_RELAXATION_RATE && rate.is_finite()) {
-                return Err(Error::invalid(
-                    "noise",
-                    spec,
-                    format!(
-                        "levels whose fixed point v* = g⁻¹(a) has a finite relaxation rate \
-                         g'(v*) >= {MIN_RELAXATION_RATE:e} for mfpt --method exact (here level \
-                         {a} has g'(v*) = {rate:e}: a kink of the drag at v*)"
-                    ),
-                ));
-            }
-            let vs = drag.inverse(a);
-            let edge = (a > 0.0 && vs == hi && lo >= -vs) || (a < 0.0 && vs == lo && hi <= -vs);
-            if edge {
-                Ok(flow.accelerated())
-            } else if two_sided(law) {
-                Ok(flow)
-            } else {
-                Err(Error::invalid(
-                    "noise",
-                    spec,
-                    format!(
-                        "levels whose fixed points g⁻¹(a) are the edges of the velocity \
-                         interval, the farther from 0 for each, for mfpt --method exact with \
-                         drag {law} (here level {a} has g⁻¹(a) = {vs:e} in [{lo:e}, {hi:e}]; \
-                         interior or nearer fixed points are run for tan, tanh and linear drag)"
-                    ),
-                ))
-            }
+            Ok(
+                match level_kind(drag, (law, spec), a, bounds, "mfpt --method exact")? {
+                    LevelKind::Edge => flow.accelerated(),
+                    LevelKind::Interior => flow,
+                },
+            )
         })
         .collect()
 }

@@ -54,12 +54,63 @@ fn two_sided(drag: DragLaw) -> bool {
     matches!(drag, DragLaw::Tan | DragLaw::Tanh | DragLaw::Linear)
 }
 
-/// The segments of level `a` on [lo, hi]: the paper's tables where the
-/// level's fixed point is the interval's edge and the interval fits in
-/// them; else, for a two-sided law, a potential table on each side of v*
+/// Where a level's fixed point v* = g⁻¹(a) sits in the velocity interval.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LevelKind {
+    /// The interval's edge, the farther from 0 (the paper's ±Sigma).
+    Edge,
+    /// Inside it, or the nearer edge (a law with closed-form flows).
+    Interior,
+}
+
+/// The kind of level `a` on [lo, hi] for an exact event-driven method
+/// (`method`, for the messages), refused naming `noise` where its fixed
+/// point is at a kink of the drag (g'(v*) not finite, or below
+/// [`MIN_RELAXATION_RATE`]) or, for a law without closed-form flows, not
+/// an edge.
+pub(crate) fn level_kind<D: Drag>(
+    drag: &D,
+    (law, spec): (DragLaw, &str),
+    a: f64,
+    (lo, hi): (f64, f64),
+    method: &str,
+) -> Result<LevelKind> {
+    let rate = drag.flow(a).rate();
+    if !(rate >= MIN_RELAXATION_RATE && rate.is_finite()) {
+        return Err(Error::invalid(
+            "noise",
+            spec,
+            format!(
+                "levels whose fixed point v* = g⁻¹(a) has a finite relaxation rate g'(v*) >= \
+                 {MIN_RELAXATION_RATE:e} for {method} (here level {a} has g'(v*) = {rate:e}: a \
+                 kink of the drag at v*)"
+            ),
+        ));
+    }
+    let vs = drag.inverse(a);
+    if (a > 0.0 && vs == hi && lo >= -vs) || (a < 0.0 && vs == lo && hi <= -vs) {
+        return Ok(LevelKind::Edge);
+    }
+    if two_sided(law) {
+        return Ok(LevelKind::Interior);
+    }
+    Err(Error::invalid(
+        "noise",
+        spec,
+        format!(
+            "levels whose fixed points g⁻¹(a) are the edges of the velocity interval, the \
+             farther from 0 for each, for {method} with drag {law} (here level {a} has g⁻¹(a) \
+             = {vs:e} in [{lo:e}, {hi:e}]; interior or nearer fixed points are run for tan, tanh \
+             and linear drag)"
+        ),
+    ))
+}
+
+/// The segments of level `a` on [lo, hi] ([`level_kind`]): the paper's
+/// tables at an edge; else a potential table on each side of v*
 /// (distances up to the interval's ends), or where a side does not fit in
 /// its tables the iterative closed-form flow with the deficit table on
-/// [lo, hi]; else refused naming `noise`.
+/// [lo, hi].
 fn level_segments<D: Drag>(
     drag: &D,
     (law, spec): (DragLaw, &str),
@@ -67,30 +118,17 @@ fn level_segments<D: Drag>(
     lo: f64,
     hi: f64,
 ) -> Result<Segments<D::Flow>> {
-    let vs = drag.inverse(a);
-    let edge = (a > 0.0 && vs == hi && lo >= -vs) || (a < 0.0 && vs == lo && hi <= -vs);
-    if edge {
+    if level_kind(drag, (law, spec), a, (lo, hi), "the exact sampler")? == LevelKind::Edge {
         return segments(drag, a, lo, hi);
     }
-    if two_sided(law) {
-        if let Some(sides) = side_tables(drag, a, vs, lo, hi) {
-            return Ok(Segments::Sides(Box::new(sides), vs));
-        }
-        // No acceleration: its guide covers only the paper's side of v*.
-        return Ok(Segments::Solve(
-            drag.flow(a),
-            DeficitTable::new(drag, a, lo, hi)?,
-        ));
+    let vs = drag.inverse(a);
+    if let Some(sides) = side_tables(drag, a, vs, lo, hi) {
+        return Ok(Segments::Sides(Box::new(sides), vs));
     }
-    Err(Error::invalid(
-        "noise",
-        spec,
-        format!(
-            "levels whose fixed points g⁻¹(a) are the edges of the velocity interval, the \
-             farther from 0 for each, for the exact sampler with drag {law} (here level {a} has \
-             g⁻¹(a) = {vs:e} in [{lo:e}, {hi:e}]; interior or nearer fixed points are run for \
-             tan, tanh and linear drag)"
-        ),
+    // No acceleration: its guide covers only the paper's side of v*.
+    Ok(Segments::Solve(
+        drag.flow(a),
+        DeficitTable::new(drag, a, lo, hi)?,
     ))
 }
 
@@ -139,17 +177,6 @@ impl<F: FlowMap> StatesSetup<F> {
         for &a in levels {
             let flow = drag.flow(a);
             let rate = flow.rate();
-            if !(rate >= MIN_RELAXATION_RATE && rate.is_finite()) {
-                return Err(Error::invalid(
-                    "noise",
-                    spec,
-                    format!(
-                        "levels whose fixed point v* = g⁻¹(a) has a finite relaxation rate \
-                         g'(v*) >= {MIN_RELAXATION_RATE:e} for the exact sampler (here level \
-                         {a} has g'(v*) = {rate:e}: a kink of the drag at v*)"
-                    ),
-                ));
-            }
             out.segs.push(level_segments(drag, (law, spec), a, lo, hi)?);
             out.vs.push(flow.fixed_point());
             out.inv_rate.push(1.0 / rate);
