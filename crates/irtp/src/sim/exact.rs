@@ -986,25 +986,47 @@ fn simulate_drag<D: Drag>(
         return simulate_states(drag, params, spec, part, progress);
     }
     let sampler = Sampler::new(drag, params, spec)?;
-    let template = Observables::new(spec, params);
     let b = spec.bins;
+    let scratch = || Scratch {
+        occ: vec![0.0; b],
+        cross: [vec![0; b], vec![0; b]],
+    };
+    let run = |ids, obs: &mut Observables, sc: &mut Scratch| sampler.particles(ids, obs, sc);
+    Ok(reduce_particles(
+        (params, spec),
+        part,
+        progress,
+        scratch,
+        run,
+    ))
+}
+
+/// The observables of the run's particles (`spec.first_particle` on, in
+/// `part`'s units), each chunk with its own observables and the sampler's
+/// scratch from `scratch`, `run` simulating a range of particle indices;
+/// merged from sums (the reduction every exact loop shares).
+pub(super) fn reduce_particles<Sc, I, R>(
+    (params, spec): (&Params, &SimSpec),
+    part: Part,
+    progress: &dyn Progress,
+    scratch: I,
+    run: R,
+) -> Vec<Observables>
+where
+    Sc: Send,
+    I: Fn() -> Sc + Sync,
+    R: Fn(Range<u64>, &mut Observables, &mut Sc) + Sync,
+{
+    let template = Observables::new(spec, params);
     let first = spec.first_particle;
     let totals = part.reduce(
         spec.particles,
-        || {
-            (
-                template.clone(),
-                Scratch {
-                    occ: vec![0.0; b],
-                    cross: [vec![0; b], vec![0; b]],
-                },
-            )
-        },
-        |lo, hi, (obs, sc)| sampler.particles(first + lo..first + hi, obs, sc),
+        || (template.clone(), scratch()),
+        |lo, hi, (obs, sc)| run(first + lo..first + hi, obs, sc),
         |a, b| a.0.merge(&b.0),
         progress,
     );
-    Ok(totals.into_iter().map(|(obs, _)| obs).collect())
+    totals.into_iter().map(|(obs, _)| obs).collect()
 }
 
 /// [`simulate_drag`] with a noise model other than the paper's
@@ -1019,16 +1041,13 @@ fn simulate_states<D: Drag>(
     params.require(Solver::Exact)?;
     super::check_period_window(params, spec)?;
     let sampler = states::StatesSampler::new(drag, params, spec)?;
-    let template = Observables::new(spec, params);
-    let first = spec.first_particle;
-    let totals = part.reduce(
-        spec.particles,
-        || (template.clone(), sampler.scratch(spec.bins)),
-        |lo, hi, (obs, sc)| sampler.particles(first + lo..first + hi, obs, sc),
-        |a, b| a.0.merge(&b.0),
+    Ok(reduce_particles(
+        (params, spec),
+        part,
         progress,
-    );
-    Ok(totals.into_iter().map(|(obs, _)| obs).collect())
+        || sampler.scratch(spec.bins),
+        |ids, obs, sc| sampler.particles(ids, obs, sc),
+    ))
 }
 
 /// [`crate::sim::control::coupled`]: every particle of the run twice, with

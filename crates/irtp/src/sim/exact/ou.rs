@@ -367,16 +367,13 @@ pub(super) fn simulate(
     params.require(crate::model::reset::Solver::Exact)?;
     super::super::check_period_window(params, spec)?;
     let sampler = OuSampler::new(params, spec)?;
-    let template = Observables::new(spec, params);
-    let first = spec.first_particle;
-    let totals = part.reduce(
-        spec.particles,
-        || (template.clone(), sampler.scratch(spec.bins)),
-        |lo, hi, (obs, occ)| sampler.particles(first + lo..first + hi, obs, occ),
-        |a, b| a.0.merge(&b.0),
+    Ok(super::reduce_particles(
+        (params, spec),
+        part,
         progress,
-    );
-    Ok(totals.into_iter().map(|(obs, _)| obs).collect())
+        || sampler.scratch(spec.bins),
+        |ids, obs, occ| sampler.particles(ids, obs, occ),
+    ))
 }
 
 #[cfg(test)]
