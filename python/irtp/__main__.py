@@ -5,7 +5,11 @@ h5netcdf and zarr).
 
 Exit codes as ``irtp sweep merge``: 0 when every point is finished, 3 when
 points are missing, failed or damaged (the file is written all the same,
-with NaN there and the points listed in its attributes), 2 for bad input.
+with NaN there and the points listed in its attributes), 2 for bad input
+(one line; nothing written): a directory that is not a sweep, or an
+``--out`` that is not new nor an earlier export of this format, that lies
+in a sweep directory or contains this one, or whose directory is missing or
+not writable (``irtp.collect``'s rules).
 """
 
 from __future__ import annotations
@@ -14,7 +18,7 @@ import argparse
 import sys
 from typing import List, Optional
 
-from ._sweep import FORMATS, load_sweep, write
+from ._sweep import FORMATS, OutError, load_sweep, write
 
 
 def parser() -> argparse.ArgumentParser:
@@ -34,15 +38,22 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def fail(message: str) -> int:
+    """Print a refusal as one line; the exit code of bad input (2)."""
+    print(f"python -m irtp: error: {message}", file=sys.stderr)
+    return 2
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     """Run the command line; returns the exit code."""
     args = parser().parse_args(argv)
     try:
         ds = load_sweep(args.dir)
-    except (FileNotFoundError, ValueError) as e:
-        print(f"python -m irtp: error: {e}", file=sys.stderr)
-        return 2
-    written = write(ds, args.out, args.format, args.engine)
+        written = write(ds, args.out, args.format, args.engine, sweep=args.dir)
+    except OutError as e:
+        return fail(e.cli())
+    except (OSError, ValueError) as e:
+        return fail(str(e).replace("\n", " "))
     print(f"wrote {written} ({ds.attrs['points']} points)")
     unfinished = {k: ds.attrs[f"{k}_count"] for k in ("missing", "failed", "damaged")}
     if any(unfinished.values()):

@@ -32,7 +32,9 @@ import hashlib
 import itertools
 import json
 import math
+import os
 import pathlib
+import shutil
 import warnings
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
@@ -305,10 +307,14 @@ def load_sweep(path: PathLike) -> Any:
     """
     xr = require_xarray()
     d = pathlib.Path(path)
+    if not d.is_dir():
+        raise FileNotFoundError(f"{d}: no such directory (a sweep directory holds sweep.json, "
+                                "plan.toml and workspace/: irtp sweep run PLAN --out DIR)")
     sweep = read_json(d / "sweep.json") if (d / "sweep.json").is_file() else None
     if sweep is None:
-        raise FileNotFoundError(f"{d}/sweep.json not found: not a sweep directory "
-                                "(irtp sweep run PLAN --out DIR writes it)")
+        raise ValueError(f"{d} is not a sweep directory: it has no sweep.json (a sweep "
+                         "directory holds sweep.json, plan.toml and workspace/, as "
+                         "irtp sweep run PLAN --out DIR writes them)")
     plan = toml_loads(sweep.get("plan") or (d / "plan.toml").read_text())
     grid = Grid(plan)
     points = scan(d / "workspace", grid, plan)
@@ -337,10 +343,11 @@ def netcdf_engine() -> str:
 
 
 def write_csv(ds: Any, out: pathlib.Path, axes: Sequence[str]) -> None:
-    """``ds`` as CSV files in the directory ``out``: ``scalars.csv`` (the
-    variables over the axes alone, one row per point), one ``<dims>.csv``
-    per further set of dimensions (long format), and ``attrs.json``."""
-    out.mkdir(parents=True, exist_ok=True)
+    """``ds`` as CSV files in the new directory ``out``: ``scalars.csv``
+    (the variables over the axes alone, one row per point), one
+    ``<dims>.csv`` per further set of dimensions (long format), and
+    ``attrs.json``."""
+    out.mkdir()
     groups: Dict[Tuple[str, ...], List[str]] = {}
     for name, var in ds.data_vars.items():
         groups.setdefault(tuple(str(d) for d in var.dims), []).append(str(name))
@@ -352,6 +359,90 @@ def write_csv(ds: Any, out: pathlib.Path, axes: Sequence[str]) -> None:
     (out / "attrs.json").write_text(json.dumps(attrs, indent=1) + "\n")
 
 
+class OutError(ValueError):
+    """A refused output path (``out=``; ``--out`` on the command line):
+    nothing was written and nothing removed."""
+
+    def __init__(self, path: PathLike, allowed: str) -> None:
+        self.path, self.allowed = str(path), allowed
+        super().__init__(f"invalid out = {self.path!r}: allowed {allowed}")
+
+    def cli(self) -> str:
+        """The message as the command line names the flag."""
+        return f"invalid --out {self.path!r}: allowed {self.allowed}"
+
+
+def is_sweep_dir(d: pathlib.Path) -> bool:
+    """Whether ``d`` is (or is being made into) an irtp sweep directory."""
+    return (d / "sweep.json").is_file() or (
+        (d / "plan.toml").is_file() and (d / "workspace").is_dir())
+
+
+def ours_attrs(attrs: Any) -> bool:
+    """Whether dataset attributes are those :func:`load_sweep` writes."""
+    return (isinstance(attrs, dict) and str(attrs.get("title", "")).startswith("irtp sweep: ")
+            and "plan" in attrs and "missing_points" in attrs)
+
+
+def written_here(target: pathlib.Path, format: str) -> bool:
+    """Whether the existing ``target`` is a ``format`` export this module
+    wrote, holding nothing else (so replacing it loses nothing of the user's)."""
+    try:
+        if format == "netcdf":
+            if not target.is_file():
+                return False
+            xr = require_xarray()
+            with xr.open_dataset(target, engine=netcdf_engine()) as ds:
+                return ours_attrs(dict(ds.attrs))
+        if not target.is_dir() or any(p.is_symlink() for p in target.rglob("*")):
+            return False
+        if format == "csv":
+            names = [p.name for p in target.iterdir()]
+            plain = all(p.is_file() for p in target.iterdir())
+            return (plain and "attrs.json" in names and all(
+                n == "attrs.json" or n.endswith(".csv") for n in names)
+                and ours_attrs(json.loads((target / "attrs.json").read_text())))
+        xr = require_xarray()
+        with xr.open_zarr(target) as ds:
+            known = {*map(str, ds.variables), "zarr.json", ".zgroup", ".zattrs", ".zmetadata"}
+            return ours_attrs(dict(ds.attrs)) and all(
+                p.name in known for p in target.iterdir())
+    except Exception:  # unreadable: not an export of this module
+        return False
+
+
+def check_out(sweep: Optional[PathLike], out: PathLike, format: str) -> bool:
+    """Refuse (:class:`OutError`) an output path that would touch a sweep
+    directory or the user's files: one inside or equal to a sweep directory
+    or any of its parts, one containing the sweep, one in a missing or
+    unwritable directory, an existing file or directory this module did not
+    write. Returns whether ``out`` exists (an earlier export, to replace)."""
+    target = pathlib.Path(out)
+    text = str(out)
+    if not text or any(ord(c) < 32 or ord(c) == 127 for c in text):
+        raise OutError(out, "a path without control characters (newline, tab, ...)")
+    real = target.resolve()
+    root = pathlib.Path(sweep).resolve() if sweep is not None else None
+    for d in (real, *real.parents):
+        if d == root or is_sweep_dir(d):
+            raise OutError(out, f"a path outside the sweep directory {d} (collect never "
+                                "writes into a sweep or any of its parts)")
+    if root is not None and real in root.parents:
+        raise OutError(out, f"a path that does not contain the sweep directory {root}")
+    parent = real.parent
+    if not parent.is_dir():
+        raise OutError(out, f"a path in an existing directory ({parent} does not exist)")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutError(out, f"a path in a writable directory ({parent} is not)")
+    if not os.path.lexists(target):
+        return False
+    kind = "file" if format == "netcdf" else "directory"
+    if target.is_symlink() or not written_here(target, format):
+        raise OutError(out, f"a new path, or a {format} {kind} irtp collect wrote (this one "
+                            "holds other data; nothing was written: choose another path)")
+    return True
+
+
 def collect(path: PathLike, out: PathLike, format: str = "netcdf",
             engine: Optional[str] = None) -> pathlib.Path:
     """Write :func:`load_sweep`'s Dataset of the sweep directory ``path``:
@@ -359,15 +450,20 @@ def collect(path: PathLike, out: PathLike, format: str = "netcdf",
     netcdf4), ``"zarr"`` (a zarr store directory) or ``"csv"`` (a directory:
     scalars.csv, one CSV per set of per-point dimensions, attrs.json).
     Returns ``out`` as a Path. Reopen with ``xarray.open_dataset`` /
-    ``xarray.open_zarr``."""
+    ``xarray.open_zarr``.
+
+    ``out`` must be new, or an earlier export of this format (replaced
+    whole); it may not lie in a sweep directory (this one or another) nor
+    contain this one, and its directory must exist: otherwise
+    :class:`OutError` (a ValueError), nothing written or removed."""
     if format not in FORMATS:
         raise ValueError(f"invalid format = {format!r}: allowed {', '.join(FORMATS)}")
-    return write(load_sweep(path), out, format, engine)
+    check_out(path, out, format)
+    return write(load_sweep(path), out, format, engine, sweep=path)
 
 
-def write(ds: Any, out: PathLike, format: str, engine: Optional[str] = None) -> pathlib.Path:
-    """``ds`` (a :func:`load_sweep` Dataset) written as ``format``."""
-    target = pathlib.Path(out)
+def write_new(ds: Any, target: pathlib.Path, format: str, engine: Optional[str]) -> None:
+    """``ds`` written as ``format`` to the path ``target``, which is free."""
     if format == "netcdf":
         ds.to_netcdf(target, engine=engine or netcdf_engine())
     elif format == "zarr":
@@ -375,9 +471,45 @@ def write(ds: Any, out: PathLike, format: str, engine: Optional[str] = None) -> 
             # zarr 3 notes that consolidated metadata is not in its format 3
             # spec; xarray writes it for fast opening and reads either way.
             warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
-            ds.to_zarr(target, mode="w")
-    elif format == "csv":
-        write_csv(ds, target, [str(d) for d in ds["point"].dims])
+            ds.to_zarr(target, mode="w-")
     else:
+        write_csv(ds, target, [str(d) for d in ds["point"].dims])
+
+
+def remove(path: pathlib.Path) -> None:
+    """Remove a file or directory tree, if there."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    elif os.path.lexists(path):
+        path.unlink()
+
+
+def write(ds: Any, out: PathLike, format: str, engine: Optional[str] = None,
+          sweep: Optional[PathLike] = None) -> pathlib.Path:
+    """``ds`` (a :func:`load_sweep` Dataset of the directory ``sweep``)
+    written as ``format`` to ``out``, checked by :func:`check_out`: staged
+    beside it (``.NAME.partial-PID``) and renamed into place, an earlier
+    export moved aside first and removed only once the new one is there. A
+    failure leaves ``out`` as it was."""
+    if format not in FORMATS:
         raise ValueError(f"invalid format = {format!r}: allowed {', '.join(FORMATS)}")
+    target = pathlib.Path(out)
+    exists = check_out(sweep, target, format)
+    pid = os.getpid()
+    staging = target.with_name(f".{target.name}.partial-{pid}")
+    old = target.with_name(f".{target.name}.old-{pid}")
+    remove(staging)
+    try:
+        write_new(ds, staging, format, engine)
+        if exists:
+            os.rename(target, old)
+        try:
+            os.rename(staging, target)
+        except OSError:
+            if exists:
+                os.rename(old, target)
+            raise
+    finally:
+        remove(staging)
+    remove(old)
     return target

@@ -63,14 +63,56 @@ pub enum Picture {
 /// Check the flags, draw the picture of `args.dir` and write it; the path
 /// written.
 pub fn run(args: &PlotArgs) -> Result<PathBuf> {
+    if !args.dir.is_dir() {
+        return Err(not_irtp(&args.dir));
+    }
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| args.dir.join(irtp_app::io::PLOT_FILE));
-    let svg = image_kind(&out)?;
     let picture = picture(&args.dir, args.var.as_deref())?;
+    let svg = image_kind(&out)?;
+    check_place(&out)?;
     write(&picture, &out, svg)?;
     Ok(out)
+}
+
+/// The mark every image `irtp plot` draws carries (a PNG `tEXt` chunk, an
+/// SVG comment): an existing `--out` file is replaced only when it has it.
+const MARK: &str = "irtp plot";
+
+/// Refuse an `--out` that would touch what irtp or the user keeps: a file
+/// there that is not an image `irtp plot` drew (a symbolic link
+/// included), or a place inside a sweep directory other than its top (where
+/// the sweep keeps the user's plain files) and its point directories
+/// (whose checksums name only their own files).
+fn check_place(out: &Path) -> Result<()> {
+    let refuse = |why: &str| Error::invalid("out", out.display(), why);
+    if let Ok(m) = fs::symlink_metadata(out) {
+        let marked = |b: &[u8]| b.windows(MARK.len()).any(|w| w == MARK.as_bytes());
+        if m.file_type().is_symlink() || !fs::read(out).is_ok_and(|b| marked(&b)) {
+            return Err(refuse(
+                "a new file, or an image irtp plot drew (this file is not one; nothing written)",
+            ));
+        }
+    }
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let parent = parent.canonicalize().map_err(|e| refuse(&e.to_string()))?;
+    let point = parent.join("signac_statepoint.json").is_file();
+    for up in parent.ancestors().skip(1) {
+        let sweep = up.join("plan.toml").is_file() && up.join("workspace").is_dir();
+        let in_point = point && parent.parent() == Some(&up.join("workspace"));
+        if sweep && !in_point {
+            return Err(refuse(&format!(
+                "a file outside the parts of the sweep {} (its top directory or a point's are allowed)",
+                up.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Whether `out` names an SVG (else a PNG) file in an existing directory;
@@ -686,7 +728,46 @@ fn write(picture: &Picture, out: &Path, svg: bool) -> Result<()> {
         (Picture::Heat(h), true) => h.render_svg(&tmp),
     };
     drawn.map_err(|e| refused(e.to_string()))?;
+    mark(&tmp, svg).map_err(|e| refused(e.to_string()))?;
     fs::rename(&tmp, out).map_err(|e| refused(e.to_string()))
+}
+
+/// Put [`MARK`] into the image at `path`: a `tEXt` chunk `Software` after
+/// a PNG's header chunk, a comment after an SVG's opening tag.
+#[cfg(feature = "plot")]
+fn mark(path: &Path, svg: bool) -> std::io::Result<()> {
+    let mut bytes = fs::read(path)?;
+    if svg {
+        let open = String::from_utf8_lossy(&bytes).find("<svg").unwrap_or(0);
+        let end = bytes[open..].iter().position(|&b| b == b'>');
+        let at = end.map_or(0, |e| open + e + 1);
+        bytes.splice(at..at, format!("\n<!-- {MARK} -->").into_bytes());
+        return fs::write(path, bytes);
+    }
+    // After the PNG signature (8 bytes) and IHDR (length, type, 13 bytes, CRC).
+    let at = 8 + 25;
+    if bytes.len() < at || &bytes[12..16] != b"IHDR" {
+        return Err(std::io::Error::other("not a PNG image"));
+    }
+    let body: Vec<u8> = format!("tEXtSoftware\0{MARK}").into_bytes();
+    let mut chunk = ((body.len() - 4) as u32).to_be_bytes().to_vec();
+    chunk.extend(&body);
+    chunk.extend(crc32(&body).to_be_bytes());
+    bytes.splice(at..at, chunk);
+    fs::write(path, bytes)
+}
+
+/// The CRC-32 of PNG chunks (ISO 3309, reflected polynomial 0xEDB88320).
+#[cfg(any(feature = "plot", test))]
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 == 1 { (c >> 1) ^ 0xEDB8_8320 } else { c >> 1 };
+        }
+    }
+    !c
 }
 
 /// Without the `plot` feature there is nothing to draw with: refused after
@@ -717,7 +798,7 @@ fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
         ));
     }
     let (header, records) = read_results(dir)?;
-    let var = choose_var(&header, var)?;
+    let var = choose_var(&header, &records, var)?;
     let (ys, xs) = (&crossed[0], &crossed[1]);
     let mut h = HeatMap {
         title: format!("irtp sweep: {}", dir_name(dir)),
@@ -807,29 +888,51 @@ fn digits(p: usize, crossed: &[(Vec<String>, usize)]) -> Option<Vec<usize>> {
     (rest == 0).then_some(out)
 }
 
-/// The `results.csv` column `var` names (`result.` may be left out), or
-/// the first `result.*` column; an unknown one is refused listing them.
-fn choose_var(header: &[String], var: Option<&str>) -> Result<String> {
-    let results: Vec<&String> = header.iter().filter(|h| h.starts_with("result.")).collect();
+/// Whether column `j` of `records` holds numbers: every cell empty (a
+/// failed point) or a number, and one finite.
+fn numeric(records: &[csv::StringRecord], j: usize) -> bool {
+    let cells = || records.iter().filter_map(|r| r.get(j)).map(str::trim);
+    cells().all(|c| c.is_empty() || c.parse::<f64>().is_ok())
+        && cells().any(|c| c.parse::<f64>().is_ok_and(f64::is_finite))
+}
+
+/// The numeric `results.csv` column `var` names (`result.` may be left
+/// out), or the first numeric `result.*` column; an unknown or
+/// non-numeric one is refused listing the numeric `result.*` columns.
+fn choose_var(
+    header: &[String],
+    records: &[csv::StringRecord],
+    var: Option<&str>,
+) -> Result<String> {
+    let usable = |j: usize| numeric(records, j);
+    let results: Vec<&String> = (0..header.len())
+        .filter(|&j| header[j].starts_with("result.") && usable(j))
+        .map(|j| &header[j])
+        .collect();
     let Some(v) = var else {
         return results.first().map(|s| s.to_string()).ok_or_else(|| {
             Error::invalid(
                 "var",
                 "(default)",
-                "a result.* column of results.csv; it has none",
+                "a numeric result.* column of results.csv; it has none",
             )
         });
     };
     let full = format!("result.{v}");
-    if let Some(h) = header.iter().find(|h| *h == v || **h == full) {
-        return Ok(h.clone());
+    let found = header.iter().position(|h| *h == v || *h == full);
+    if let Some(j) = found.filter(|&j| usable(j)) {
+        return Ok(header[j].clone());
     }
-    let list: Vec<&str> = results.iter().take(12).map(|s| s.as_str()).collect();
-    let more = if results.len() > 12 { ", ..." } else { "" };
+    let list: Vec<&str> = results.iter().take(8).map(|s| s.as_str()).collect();
+    let more = if results.len() > 8 { ", ..." } else { "" };
+    let what = match found {
+        Some(_) => "a numeric column of results.csv (this one is not)",
+        None => "a numeric column of results.csv",
+    };
     Err(Error::invalid(
         "var",
         v,
-        format!("a column of results.csv: {}{more}", list.join(", ")),
+        format!("{what}: {}{more}", list.join(", ")),
     ))
 }
 
@@ -856,15 +959,29 @@ mod tests {
         let h: Vec<String> = ["point", "sigma", "status", "result.v2", "result.d_eff"]
             .map(String::from)
             .to_vec();
-        assert_eq!(choose_var(&h, None).unwrap(), "result.v2");
-        assert_eq!(choose_var(&h, Some("d_eff")).unwrap(), "result.d_eff");
+        let r = vec![
+            csv::StringRecord::from(vec!["0", "1.0", "ok", "0.5", "2.0"]),
+            csv::StringRecord::from(vec!["1", "2.0", "failed", "", ""]),
+        ];
+        assert_eq!(choose_var(&h, &r, None).unwrap(), "result.v2");
+        assert_eq!(choose_var(&h, &r, Some("d_eff")).unwrap(), "result.d_eff");
         assert_eq!(
-            choose_var(&h, Some("result.d_eff")).unwrap(),
+            choose_var(&h, &r, Some("result.d_eff")).unwrap(),
             "result.d_eff"
         );
-        let err = choose_var(&h, Some("tau")).unwrap_err().to_string();
+        assert_eq!(choose_var(&h, &r, Some("sigma")).unwrap(), "sigma");
+        let err = choose_var(&h, &r, Some("tau")).unwrap_err().to_string();
         assert!(err.contains("result.v2, result.d_eff"), "{err}");
-        assert!(choose_var(&h[..3], None).is_err());
+        let err = choose_var(&h, &r, Some("status")).unwrap_err().to_string();
+        assert!(err.contains("not") && err.contains("result.v2"), "{err}");
+        assert!(choose_var(&h[..3], &r, None).is_err());
+    }
+
+    #[test]
+    fn crc32_of_png_chunks() {
+        // The IEND chunk's CRC, as every PNG ends with it.
+        assert_eq!(crc32(b"IEND"), 0xAE42_6082);
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
     }
 
     #[test]

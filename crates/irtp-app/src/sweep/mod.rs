@@ -484,15 +484,22 @@ pub struct Status {
     pub moved_aside: Vec<String>,
     /// Leftovers of killed runs (staging directories, temporary files).
     pub leftovers: Vec<String>,
+    /// What `run` and `merge` refuse in the directory (an entry the sweep
+    /// does not know about, a point of another plan): their refusal.
+    pub foreign: Option<String>,
     /// The sweep was submitted to SLURM (`slurm/layout.json`): the command
     /// that finishes it resubmits the tasks of the missing points.
     pub slurm: bool,
 }
 
 impl Status {
-    /// Whether every point is finished, verified and successful.
+    /// Whether every point is finished, verified and successful, and the
+    /// directory holds nothing that `run` and `merge` refuse.
     pub fn complete(&self) -> bool {
-        self.missing.is_empty() && self.failed.is_empty() && self.damaged.is_empty()
+        self.missing.is_empty()
+            && self.failed.is_empty()
+            && self.damaged.is_empty()
+            && self.foreign.is_none()
     }
 }
 
@@ -514,6 +521,7 @@ pub fn status(plan: &Plan, root: &Path) -> Result<Status> {
         running: Vec::new(),
         moved_aside: Vec::new(),
         leftovers: Vec::new(),
+        foreign: foreign_in(&store, plan),
         slurm: root.join("slurm").join("layout.json").is_file(),
     };
     for (p, state) in points.iter().zip(states) {
@@ -549,6 +557,18 @@ pub fn status(plan: &Plan, root: &Path) -> Result<Status> {
     s.moved_aside.sort();
     s.leftovers.sort();
     Ok(s)
+}
+
+/// The refusal `run` and `merge` give the directory of `store`, if any (a
+/// missing workspace is no refusal: a run creates it).
+fn foreign_in(store: &Store, plan: &Plan) -> Option<String> {
+    if !store.workspace().is_dir() {
+        return None;
+    }
+    store
+        .foreign(plan)
+        .err()
+        .map(|e| e.message_with(|n| format!("--{n}")))
 }
 
 impl std::fmt::Display for Status {
@@ -588,6 +608,12 @@ impl std::fmt::Display for Status {
         }
         if !self.leftovers.is_empty() {
             writeln!(f, "{} leftovers of interrupted runs in {d}/workspace (ignored; safe to delete when no run is active)", self.leftovers.len())?;
+        }
+        if let Some(why) = &self.foreign {
+            writeln!(f, "not complete: sweep run and sweep merge refuse {d}: {why}")?;
+            if self.missing.is_empty() && self.damaged.is_empty() && self.failed.is_empty() {
+                return Ok(());
+            }
         }
         let (what, retry) = match (
             self.missing.is_empty() && self.damaged.is_empty(),

@@ -254,6 +254,30 @@ impl Store {
     /// are the user's in a sweep of this plan), and point directories
     /// whose statepoint is not the plan's.
     fn check(&self, plan: &Plan) -> Result<()> {
+        let points: std::collections::HashMap<String, Point> =
+            plan.points().map(|p| (p.id.clone(), p)).collect();
+        self.rename_legacy(plan, &points)?;
+        // A legacy name left after renaming has its new name taken: reported.
+        self.foreign_entry(plan, &points, &Default::default())
+    }
+
+    /// The refusal of a sweep directory holding what `run` and `merge`
+    /// refuse (an entry the sweep does not know about, a point directory
+    /// not of the plan), if it holds one; `sweep status` reports the same.
+    /// Nothing is changed.
+    pub fn foreign(&self, plan: &Plan) -> Result<()> {
+        let points: std::collections::HashMap<String, Point> =
+            plan.points().map(|p| (p.id.clone(), p)).collect();
+        let legacy = self.legacy_ids(plan, &points);
+        self.foreign_entry(plan, &points, &legacy)
+    }
+
+    fn foreign_entry(
+        &self,
+        plan: &Plan,
+        points: &std::collections::HashMap<String, Point>,
+        legacy: &std::collections::HashMap<String, &Point>,
+    ) -> Result<()> {
         const OWN: [&str; 6] = [
             "plan.toml",
             "sweep.json",
@@ -279,9 +303,6 @@ impl Store {
                 ));
             }
         }
-        let points: std::collections::HashMap<String, Point> =
-            plan.points().map(|p| (p.id.clone(), p)).collect();
-        self.rename_legacy(plan, &points)?;
         for entry in read_dir(&self.workspace())? {
             let name = entry.file_name().to_string_lossy().into_owned();
             if name.starts_with('.') {
@@ -289,6 +310,9 @@ impl Store {
             }
             let path = entry.path();
             let Some(p) = points.get(&name) else {
+                if legacy.get(&name).is_some_and(|p| !self.dir(p).exists()) {
+                    continue; // an older irtp's name, which the next run renames
+                }
                 return Err(foreign(
                     &path,
                     "is not a point of this plan (another plan's sweep directory?)",
@@ -327,15 +351,7 @@ impl Store {
         if names.is_empty() {
             return Ok(());
         }
-        let legacy: std::collections::HashMap<String, &Point> = points
-            .values()
-            .map(|p| {
-                (
-                    super::plan::legacy_id(&statepoint(&plan.command, &p.params, p.seed)),
-                    p,
-                )
-            })
-            .collect();
+        let legacy = self.legacy_ids(plan, points);
         for name in names {
             if let Some(p) = legacy.get(&name) {
                 let (from, to) = (self.workspace().join(&name), self.dir(p));
@@ -345,6 +361,25 @@ impl Store {
             }
         }
         Ok(())
+    }
+}
+
+impl Store {
+    /// The points by the ids an older irtp gave them.
+    fn legacy_ids<'a>(
+        &self,
+        plan: &Plan,
+        points: &'a std::collections::HashMap<String, Point>,
+    ) -> std::collections::HashMap<String, &'a Point> {
+        points
+            .values()
+            .map(|p| {
+                (
+                    super::plan::legacy_id(&statepoint(&plan.command, &p.params, p.seed)),
+                    p,
+                )
+            })
+            .collect()
     }
 }
 
