@@ -64,6 +64,59 @@ pub(crate) fn check_out_path(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Whether `dir` is an irtp sweep directory: it holds `sweep.json`, or
+/// `plan.toml` beside `workspace/` (a sweep being started).
+pub fn is_sweep_dir(dir: &Path) -> bool {
+    dir.join("sweep.json").is_file()
+        || (dir.join("plan.toml").is_file() && dir.join("workspace").is_dir())
+}
+
+/// `path` with its deepest existing ancestor resolved (symbolic links
+/// followed) and the rest appended as written.
+pub fn real_path(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut rest = Vec::new();
+    let mut at = abs.as_path();
+    loop {
+        if let Ok(real) = at.canonicalize() {
+            return rest.iter().rev().fold(real, |p, c| p.join(c));
+        }
+        match (at.parent(), at.file_name()) {
+            (Some(up), Some(name)) => {
+                rest.push(name.to_os_string());
+                at = up;
+            }
+            _ => return abs,
+        }
+    }
+}
+
+/// Refuse (naming `--out`) an output directory inside a sweep directory
+/// or equal to one: with `sweep_root` (the target is a sweep's own
+/// directory) one inside another sweep; else any but a point directory
+/// (`workspace/ID` holding `signac_statepoint.json`), where the sweep runs
+/// its points. irtp never writes into the parts of a sweep otherwise.
+pub fn check_not_in_sweep(target: &Path, sweep_root: bool) -> Result<()> {
+    let real = real_path(target);
+    let point = !sweep_root && real.join("signac_statepoint.json").is_file();
+    for up in real.ancestors() {
+        let own = sweep_root && up == real;
+        let in_point = point && real.parent() == Some(&up.join("workspace"));
+        if is_sweep_dir(up) && !own && !in_point {
+            return Err(Error::invalid(
+                "out",
+                target.display(),
+                format!(
+                    "a directory outside the sweep directory {} (irtp writes into a sweep only \
+                     through irtp sweep)",
+                    up.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// This machine's host name.
 pub(crate) fn host_name() -> String {
     gethostname::gethostname().to_string_lossy().into_owned()
@@ -119,6 +172,7 @@ impl OutputDir {
     pub fn new(target: impl AsRef<Path>) -> Result<Self> {
         let target = target.as_ref();
         check_out_path(target)?;
+        check_not_in_sweep(target, false)?;
         ensure_parent(target)?;
         let lock = Arc::new(OutLock::acquire(target)?);
         Self::with_lock(target, lock)

@@ -145,6 +145,7 @@ impl Store {
     /// parameters, and no foreign file may sit in it.
     pub fn open(root: &Path, plan: &Plan) -> Result<Store> {
         crate::io::check_out_path(root)?;
+        crate::io::check_not_in_sweep(root, true)?;
         let store = Store {
             root: root.to_path_buf(),
         };
