@@ -410,11 +410,19 @@ pub fn pending_items(plan: &Plan, root: &Path, retry_failed: bool) -> Result<Vec
         .collect())
 }
 
-/// Read the plan a sweep directory holds.
+/// Read the plan a sweep directory holds; a directory without one (or no
+/// directory) is bad input naming `DIR`.
 pub fn plan_of(root: &Path) -> Result<Plan> {
     let path = root.join("plan.toml");
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| crate::io::io_err(&path, format!("{e} (not a sweep directory?)")))?;
+    let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory => Error::invalid(
+            "dir",
+            root.display(),
+            "a sweep directory: one holding plan.toml, sweep.json and workspace/ \
+             (irtp sweep run PLAN --out DIR writes them)",
+        ),
+        _ => crate::io::io_err(&path, e),
+    })?;
     Plan::parse(&text)
 }
 
