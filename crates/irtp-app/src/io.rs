@@ -91,14 +91,24 @@ pub fn real_path(path: &Path) -> PathBuf {
     }
 }
 
+/// Whether `dir` is a sweep point directory `workspace/ID` whose claim
+/// (`workspace/.ID.claim`) this process holds: the sweep computing it.
+fn point_claimed_here(dir: &Path) -> bool {
+    let (Some(ws), Some(id)) = (dir.parent(), dir.file_name()) else {
+        return false;
+    };
+    let claim = ws.join(format!(".{}.claim", id.to_string_lossy()));
+    crate::lock::FileLock::held_here(&claim)
+}
+
 /// Refuse (naming `--out`) an output directory inside a sweep directory
 /// or equal to one: with `sweep_root` (the target is a sweep's own
 /// directory) one inside another sweep; else any but a point directory
-/// (`workspace/ID` holding `signac_statepoint.json`), where the sweep runs
-/// its points. irtp never writes into the parts of a sweep otherwise.
+/// (`workspace/ID`) whose claim this process holds, where the sweep runs
+/// that point. irtp never writes into the parts of a sweep otherwise.
 pub fn check_not_in_sweep(target: &Path, sweep_root: bool) -> Result<()> {
     let real = real_path(target);
-    let point = !sweep_root && real.join("signac_statepoint.json").is_file();
+    let point = !sweep_root && point_claimed_here(&real);
     for up in real.ancestors() {
         let own = sweep_root && up == real;
         let in_point = point && real.parent() == Some(&up.join("workspace"));

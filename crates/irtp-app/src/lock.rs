@@ -182,6 +182,16 @@ impl FileLock {
         }
     }
 
+    /// Whether this very process holds the lock at `path`.
+    pub fn held_here(path: &Path) -> bool {
+        let me = format!(
+            "pid {} on host {}",
+            std::process::id(),
+            crate::io::host_name()
+        );
+        Self::holder_of(path) == Some(me)
+    }
+
     /// Take the lock at `path`, waiting for its holder to release it.
     pub fn acquire_waiting(path: &Path) -> Result<FileLock> {
         loop {

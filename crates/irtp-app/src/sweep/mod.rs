@@ -618,7 +618,10 @@ impl std::fmt::Display for Status {
             writeln!(f, "{} leftovers of interrupted runs in {d}/workspace (ignored; safe to delete when no run is active)", self.leftovers.len())?;
         }
         if let Some(why) = &self.foreign {
-            writeln!(f, "not complete: sweep run and sweep merge refuse {d}: {why}")?;
+            writeln!(
+                f,
+                "not complete: sweep run and sweep merge refuse {d}: {why}"
+            )?;
             if self.missing.is_empty() && self.damaged.is_empty() && self.failed.is_empty() {
                 return Ok(());
             }

@@ -309,3 +309,122 @@ fn edited_truncated_and_deleted_point_files_are_reported_everywhere() {
         text(&status)
     );
 }
+
+/// Every entry under `dir` with its content (files) or kind.
+fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.strip_prefix(dir).unwrap().display().to_string();
+            if p.is_dir() {
+                stack.push(p.clone());
+                out.push((name, b"dir".to_vec()));
+            } else {
+                out.push((name, fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// No command writes into a sweep but `irtp sweep` (and a plot beside it
+/// or in a point): an --out equal to the sweep or inside any of its parts
+/// is one line naming --out, exit 2, the sweep untouched; a directory
+/// that is no sweep given to a sweep command is refused naming DIR.
+#[test]
+fn no_writer_touches_a_sweep() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = tmp.path().join("plan.toml");
+    let plan_text = "command = \"analytic\"\n[fixed]\npoints = 20\n[axes]\nsigma = [2.0, 3.0]\n";
+    fs::write(&plan, plan_text).unwrap();
+    let sw = tmp.path().join("sw");
+    let plan_s = plan.to_str().unwrap();
+    let o = irtp(&["sweep", "run", plan_s, "--out", sw.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let point = fs::read_dir(sw.join("workspace"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.'))
+        .unwrap();
+    let before = tree(tmp.path());
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let inside = [
+        sw.clone(),
+        sw.join("workspace"),
+        sw.join("workspace/new"),
+        point.clone(),
+        sw.join("runs/x"),
+        sw.join(".signac"),
+    ];
+    let mut cases: Vec<Vec<String>> = Vec::new();
+    for o in &inside {
+        cases.push(vec![
+            "analytic".into(),
+            "--points".into(),
+            "20".into(),
+            "--force".into(),
+        ]);
+        cases.last_mut().unwrap().extend(["--out".into(), s(o)]);
+        if *o != sw {
+            // (into the sweep itself, `sweep run` resumes it)
+            cases.push(vec![
+                "sweep".into(),
+                "run".into(),
+                plan_s.into(),
+                "--out".into(),
+                s(o),
+            ]);
+        }
+        cases.push(vec![
+            "sweep".into(),
+            "merge".into(),
+            s(&o.join("m")),
+            s(&sw),
+        ]);
+    }
+    cases.push(vec![
+        "plot".into(),
+        s(&point),
+        "--out".into(),
+        s(&sw.join("workspace/x.png")),
+    ]);
+    cases.push(vec![
+        "plot".into(),
+        s(&point),
+        "--out".into(),
+        s(&sw.join("runs/x.png")),
+    ]);
+    for args in &cases {
+        let o = bin().args(args).output().unwrap();
+        let err = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains("invalid --out"), "{args:?}: {err}");
+    }
+    // Not a sweep: named as the DIR argument.
+    let user = tmp.path().join("user");
+    fs::create_dir(&user).unwrap();
+    for sub in ["status", "merge", "collect"] {
+        let mut args = vec!["sweep", sub, user.to_str().unwrap()];
+        if sub == "collect" {
+            args.extend(["--out", "x.nc"]);
+        }
+        let o = irtp(&args);
+        let err = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{sub}: {err}");
+        assert!(
+            err.contains("invalid DIR") && err.contains("plan.toml"),
+            "{err}"
+        );
+    }
+    fs::remove_dir(&user).unwrap();
+    assert!(
+        tree(tmp.path()) == before,
+        "a refused command changed the tree"
+    );
+    let o = irtp(&["sweep", "status", sw.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}

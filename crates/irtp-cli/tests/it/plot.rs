@@ -176,6 +176,9 @@ fn a_sweep_is_a_heat_map_and_its_points_stay_sound() {
     let (size, drawn) = decode(&dir.join("plot.png"));
     assert_eq!(size, HEAT_MAP);
     assert!(drawn > 100_000, "{drawn} pixels drawn");
+    // The image carries irtp's mark, so drawing it again replaces it.
+    assert_success(&irtp(&["plot", d]));
+    assert_eq!(decode(&dir.join("plot.png")).0, HEAT_MAP);
     for var in ["d_eff", "result.v2"] {
         let out = tmp.path().join(format!("{var}.png"));
         assert_success(&irtp(&[
@@ -291,6 +294,25 @@ fn bad_input_is_one_line_exit_2_nothing_written() {
     let o = irtp(&["plot", sw.to_str().unwrap(), "--var", "nope"]);
     let err = assert_rejected(&o, "--var", &sw.join("plot.png"));
     assert!(err.contains("result.d_eff"), "{err}");
+    // A column that holds no numbers: refused listing those that do.
+    let o = irtp(&["plot", sw.to_str().unwrap(), "--var", "status"]);
+    let err = assert_rejected(&o, "--var", &sw.join("plot.png"));
+    assert!(err.contains("not") && err.contains("result.d_eff"), "{err}");
+    // A missing input directory is the input's fault, not --out's.
+    let missing = tmp.path().join("missing");
+    assert_rejected(&irtp(&["plot", missing.to_str().unwrap()]), "DIR", &missing);
+    // An existing file irtp plot did not draw is not replaced.
+    let mine = out.path().join("mine.png");
+    std::fs::write(&mine, "the user's").unwrap();
+    let o = irtp(&["plot", r, "--out", mine.to_str().unwrap()]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "the user's");
+    std::fs::remove_file(&mine).unwrap();
     let one = tmp.path().join("one");
     sweep(&one, "sigma = [2.0, 3.0]\n");
     let err = assert_rejected(

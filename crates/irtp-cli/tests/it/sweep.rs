@@ -494,3 +494,47 @@ fn collect_without_the_python_module_is_refused() {
     );
     assert!(!nc.exists());
 }
+
+/// `sweep status`, `sweep merge` and `sweep run` apply one rule to a
+/// directory holding what the sweep does not know about: merge and run
+/// refuse it, status reports it as not complete (exit 3) with that refusal.
+#[test]
+fn status_merge_and_run_agree_on_a_foreign_entry() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = write_plan(
+        tmp.path(),
+        "command = \"analytic\"\n[fixed]\npoints = 20\n[axes]\nsigma = [2.0, 3.0]\n",
+    );
+    let out = tmp.path().join("sw");
+    let o_s = out.to_str().unwrap();
+    ok(&["sweep", "run", &plan, "--out", o_s]);
+    for foreign in [out.join("workspace/notes.txt"), out.join("mine/a.txt")] {
+        std::fs::create_dir_all(foreign.parent().unwrap()).unwrap();
+        std::fs::write(&foreign, "the user's").unwrap();
+        let name = foreign.strip_prefix(&out).unwrap().components().next();
+        let name = name.unwrap().as_os_str().to_string_lossy().into_owned();
+        let status = irtp(&["sweep", "status", o_s]);
+        let text = String::from_utf8_lossy(&status.stdout).into_owned();
+        assert_eq!(status.status.code(), Some(3), "{text}");
+        assert!(
+            text.contains("not complete")
+                && text.contains(&name)
+                && !text.lines().any(|l| l.starts_with("complete:")),
+            "{text}"
+        );
+        for args in [
+            vec!["sweep", "merge", o_s],
+            vec!["sweep", "run", &plan, "--out", o_s],
+        ] {
+            let o = irtp(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+            assert!(err.contains(&name), "{err}");
+        }
+        assert_eq!(std::fs::read_to_string(&foreign).unwrap(), "the user's");
+        std::fs::remove_dir_all(out.join("mine")).ok();
+        std::fs::remove_file(out.join("workspace/notes.txt")).ok();
+    }
+    let status = irtp(&["sweep", "status", o_s]);
+    assert_eq!(status.status.code(), Some(0));
+}
