@@ -149,8 +149,18 @@ impl Store {
         let store = Store {
             root: root.to_path_buf(),
         };
+        if root.exists() && !root.is_dir() {
+            return Err(Error::invalid(
+                "out",
+                root.display(),
+                "a directory path (it exists and is a file)",
+            ));
+        }
+        // Checked before anything is created: a refused directory is left as it was.
+        if root.exists() {
+            store.check(plan)?;
+        }
         fs::create_dir_all(store.workspace()).map_err(|e| io(root, e))?;
-        store.check(plan)?;
         write_atomic(&root.join("plan.toml"), plan.text.as_bytes())?;
         let config = root.join(super::signac::CONFIG);
         if !config.exists() {
@@ -304,7 +314,7 @@ impl Store {
                 ));
             }
         }
-        for entry in read_dir(&self.workspace())? {
+        for entry in read_workspace(&self.workspace())? {
             let name = entry.file_name().to_string_lossy().into_owned();
             if name.starts_with('.') {
                 continue; // a run's staging directory or temporary file
@@ -344,7 +354,7 @@ impl Store {
         plan: &Plan,
         points: &std::collections::HashMap<String, Point>,
     ) -> Result<()> {
-        let names: Vec<String> = read_dir(&self.workspace())?
+        let names: Vec<String> = read_workspace(&self.workspace())?
             .iter()
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .filter(|n| !n.starts_with('.') && !points.contains_key(n))
@@ -381,6 +391,14 @@ impl Store {
                 )
             })
             .collect()
+    }
+}
+
+/// The entries of a workspace (none when it does not exist yet).
+fn read_workspace(dir: &Path) -> Result<Vec<fs::DirEntry>> {
+    match dir.is_dir() {
+        true => read_dir(dir),
+        false => Ok(Vec::new()),
     }
 }
 

@@ -428,3 +428,178 @@ fn no_writer_touches_a_sweep() {
     let o = irtp(&["sweep", "status", sw.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
 }
+
+/// A fixed-seed generator (SplitMix64) for the fuzz test.
+struct Draw(u64);
+
+impl Draw {
+    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        &items[((z ^ (z >> 31)) % items.len() as u64) as usize]
+    }
+}
+
+/// Whether every file `dir/run.json` lists verifies against its checksum.
+fn run_verifies(dir: &Path) -> bool {
+    use sha2::Digest as _;
+    let Ok(text) = fs::read_to_string(dir.join("run.json")) else {
+        return false;
+    };
+    let run: serde_json::Value = serde_json::from_str(&text).unwrap();
+    run["checksums"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .all(|(f, sum)| {
+            let bytes = fs::read(dir.join(f)).unwrap_or_default();
+            let hex: String = sha2::Sha256::digest(&bytes)
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            sum.as_str() == Some(&format!("sha256:{hex}"))
+        })
+}
+
+/// Fuzz (fixed seed) of the writers and readers of the binary over input
+/// directories and output paths (the sweep, its parts, the user's files and
+/// directories, missing parents, non-sweep directories, new paths): each
+/// answer is verified output (only the output path changed) or one line,
+/// exit 2, with the whole tree unchanged. `sweep collect` through Python is
+/// fuzzed by python/tests/test_out_safety.py.
+#[test]
+#[ignore = "slow tier: 400 commands"]
+fn fuzz_writers_never_touch_what_they_did_not_write() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    let plan = root.join("plan.toml");
+    let plan_text =
+        "command = \"analytic\"\n[fixed]\npoints = 20\n[axes]\nsigma = [2.0, 3.0]\nrate = [0.0]\n";
+    fs::write(&plan, plan_text).unwrap();
+    let sw = root.join("sw");
+    assert!(irtp(&[
+        "sweep",
+        "run",
+        plan.to_str().unwrap(),
+        "--out",
+        sw.to_str().unwrap()
+    ])
+    .status
+    .success());
+    fs::create_dir_all(root.join("user/sub")).unwrap();
+    fs::write(root.join("user/a.txt"), "the user's").unwrap();
+    fs::write(root.join("user.png"), "not an image of irtp").unwrap();
+    fs::create_dir(root.join("empty")).unwrap();
+    let point = fs::read_dir(sw.join("workspace"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.'))
+        .unwrap();
+    let inputs = [
+        sw.clone(),
+        point.clone(),
+        root.join("user"),
+        root.join("missing"),
+    ];
+    let mut draw = Draw(20_261_206);
+    let t0 = std::time::Instant::now();
+    let mut answered: std::collections::BTreeMap<(String, Option<i32>), u32> = Default::default();
+    for case in 0..400 {
+        let fresh = root.join(format!("new{case}"));
+        let outs = [
+            sw.clone(),
+            sw.join("workspace"),
+            point.clone(),
+            sw.join("runs/x"),
+            sw.join("x.png"),
+            sw.join("workspace/x.png"),
+            root.join("user"),
+            root.join("user/a.txt"),
+            root.join("user.png"),
+            root.join("empty"),
+            root.join("missing/dir/x"),
+            root.to_path_buf(),
+            fresh.clone(),
+            fresh.with_extension("png"),
+            fresh.with_extension("svg"),
+        ];
+        let src = draw.pick(&inputs).to_str().unwrap().to_string();
+        let out = draw.pick(&outs).clone();
+        let o_s = out.to_str().unwrap().to_string();
+        let plan_s = plan.to_str().unwrap().to_string();
+        let args: Vec<String> = match *draw.pick(&[0, 1, 2, 3, 4]) {
+            0 => vec!["analytic", "--points", "20", "--out", &o_s]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            1 => vec!["plot".into(), src.clone(), "--out".into(), o_s.clone()],
+            2 => vec!["sweep".into(), "merge".into(), o_s.clone(), src.clone()],
+            3 => vec![
+                "sweep".into(),
+                "run".into(),
+                plan_s,
+                "--out".into(),
+                o_s.clone(),
+            ],
+            _ => vec!["sweep".into(), "status".into(), src.clone()],
+        };
+        let before = tree(root);
+        let o = bin().args(&args).output().unwrap();
+        let after = tree(root);
+        let msg = text(&o);
+        let code = o.status.code();
+        assert!(
+            !after.iter().any(|(f, _)| f.contains(".partial-")),
+            "{args:?}"
+        );
+        match (args[0].as_str(), args.get(1).map(String::as_str)) {
+            ("sweep", Some("status")) => {
+                assert!(matches!(code, Some(0 | 2 | 3)), "{args:?}: {msg}");
+                assert!(after == before, "{args:?} changed the tree");
+                continue;
+            }
+            _ if code != Some(0) => {
+                assert_eq!(code, Some(2), "{args:?}: {msg}");
+                assert_eq!(msg.trim().lines().count(), 1, "{args:?}: {msg}");
+                assert!(
+                    msg.contains("invalid --out") || msg.contains("invalid DIR"),
+                    "{msg}"
+                );
+                assert!(after == before, "{args:?} was refused but changed the tree");
+                continue;
+            }
+            _ => {}
+        }
+        // Verified answers, and nothing changed but the output (and, for
+        // `sweep run` into the sweep itself, its run record).
+        let rel = out.strip_prefix(root).unwrap().display().to_string();
+        let changed: Vec<&String> = before
+            .iter()
+            .chain(after.iter())
+            .map(|(f, _)| f)
+            .filter(|f| before.iter().find(|e| &e.0 == *f) != after.iter().find(|e| &e.0 == *f))
+            .collect();
+        // (a run creates the missing directories above its --out)
+        let mine = |f: &&String| {
+            *f == &rel || f.starts_with(&format!("{rel}/")) || rel.starts_with(&format!("{f}/"))
+        };
+        assert!(changed.iter().all(mine), "{args:?}: {changed:?}");
+        match args[0].as_str() {
+            "analytic" => assert!(run_verifies(&out), "{args:?}"),
+            "plot" => assert!(fs::read(&out)
+                .unwrap()
+                .windows(9)
+                .any(|w| w == b"irtp plot")),
+            _ => assert!(out.join("results.csv").is_file(), "{args:?}"),
+        }
+    }
+    let o = irtp(&["sweep", "status", sw.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(
+        fs::read_to_string(root.join("user/a.txt")).unwrap(),
+        "the user's"
+    );
+    assert!(t0.elapsed().as_secs() < 60);
+}
