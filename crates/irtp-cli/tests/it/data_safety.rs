@@ -530,7 +530,7 @@ fn fuzz_writers_never_touch_what_they_did_not_write() {
         let o_s = out.to_str().unwrap().to_string();
         let plan_s = plan.to_str().unwrap().to_string();
         let args: Vec<String> = match *draw.pick(&[0, 1, 2, 3, 4]) {
-            0 => vec!["analytic", "--points", "20", "--out", &o_s]
+            0 => ["analytic", "--points", "20", "--out", &o_s]
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
@@ -550,6 +550,7 @@ fn fuzz_writers_never_touch_what_they_did_not_write() {
         let after = tree(root);
         let msg = text(&o);
         let code = o.status.code();
+        *answered.entry((args[0].clone(), code)).or_insert(0) += 1;
         assert!(
             !after.iter().any(|(f, _)| f.contains(".partial-")),
             "{args:?}"
@@ -601,5 +602,11 @@ fn fuzz_writers_never_touch_what_they_did_not_write() {
         fs::read_to_string(root.join("user/a.txt")).unwrap(),
         "the user's"
     );
+    // The draw reaches both answers of every writer.
+    for w in ["analytic", "plot", "sweep"] {
+        for c in [Some(0), Some(2)] {
+            assert!(answered.contains_key(&(w.to_string(), c)), "{answered:?}");
+        }
+    }
     assert!(t0.elapsed().as_secs() < 60);
 }
