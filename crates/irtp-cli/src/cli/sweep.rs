@@ -293,13 +293,10 @@ fn slurm_scripts(a: SlurmArgs) -> anyhow::Result<u8> {
         }
         return Ok(0);
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| irtp::Error::Io {
-        path: a.out.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    // The directory is checked (a sweep of this plan, or new: nothing
+    // inside another sweep), created, and holds the plan before any task starts.
+    sweep::Store::open(&a.out, &plan)?;
     let root = a.out.canonicalize()?;
-    // The directory holds the plan before any task starts.
-    sweep::Store::open(&root, &plan)?;
     let files = slurm::render(&plan, &root, &o, &layout, &specs);
     let s = slurm::write_scripts(&files, &layout, &specs, &root)?;
     println!("{summary}: {}", s.submit.display());

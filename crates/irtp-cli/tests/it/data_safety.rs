@@ -377,6 +377,15 @@ fn no_writer_touches_a_sweep() {
                 "--out".into(),
                 s(o),
             ]);
+            cases.push(vec![
+                "sweep".into(),
+                "slurm".into(),
+                plan_s.into(),
+                "--max-array".into(),
+                "100".into(),
+                "--out".into(),
+                s(o),
+            ]);
         }
         cases.push(vec![
             "sweep".into(),
