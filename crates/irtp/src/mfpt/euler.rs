@@ -193,6 +193,63 @@ pub fn extrapolate(coarse: &FptSummary, fine: &FptSummary) -> Extrapolated {
     }
 }
 
+/// A correction 2 T(dt/2) - T(dt) - T(dt/2) larger than this fraction of
+/// the extrapolated value (beyond 4 standard errors of the two runs) means
+/// dt is not small against the passage time: the expansion c·dt + O(dt²)
+/// behind [`extrapolate`] does not hold there.
+pub const MAX_STEP_CORRECTION: f64 = 0.5;
+
+/// Verify an extrapolation from `coarse` (dt) and `fine` (dt/2) for tau and
+/// both starting states (censored runs, NaN, are skipped): each
+/// 2 T(dt/2) - T(dt) must be at least `least` (a lower bound of the mean
+/// passage time, 0 or more) and its correction |T(dt/2) - T(dt)| within
+/// [`MAX_STEP_CORRECTION`] of it, or the answer is refused
+/// ([`Error::Numerical`], naming `--dt`): a target within a few steps gave
+/// a negative mean time.
+pub fn verify_extrapolation(coarse: &FptSummary, fine: &FptSummary, least: f64) -> Result<()> {
+    let rows = [
+        ("tau", coarse.tau, coarse.tau_err, fine.tau, fine.tau_err),
+        (
+            "tau_plus",
+            coarse.tau_plus,
+            coarse.tau_plus_err,
+            fine.tau_plus,
+            fine.tau_plus_err,
+        ),
+        (
+            "tau_minus",
+            coarse.tau_minus,
+            coarse.tau_minus_err,
+            fine.tau_minus,
+            fine.tau_minus_err,
+        ),
+    ];
+    let refuse = |reason: String| Error::Numerical {
+        method: "Euler extrapolation to dt -> 0",
+        reason: format!("{reason}; reduce --dt or use --method exact"),
+    };
+    for (name, c, c_err, f, f_err) in rows {
+        if !(c.is_finite() && f.is_finite()) {
+            continue;
+        }
+        let ex = 2.0 * f - c;
+        if !(ex >= least.max(0.0)) {
+            return Err(refuse(format!(
+                "{name} = 2 T(dt/2) - T(dt) = {ex:.3e} is below the least time {:.3e}",
+                least.max(0.0)
+            )));
+        }
+        let change = (f - c).abs() - 4.0 * (c_err + f_err);
+        if change > MAX_STEP_CORRECTION * ex {
+            return Err(refuse(format!(
+                "{name} changes by {:.2e} from dt to dt/2, over half of its extrapolated {ex:.2e}",
+                (f - c).abs()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Particles in flight per thread.
 const LANES: usize = 4;
 
@@ -379,7 +436,13 @@ impl Chain {
             lanes.push(self.start(next));
             next += 1;
         }
+        let mut rounds = 0u64;
         while !lanes.is_empty() {
+            rounds += 1;
+            // A stopped chunk is discarded by the cancelled reduction.
+            if parallel::stop_due(rounds) {
+                return;
+            }
             let mut k = 0;
             while k < lanes.len() {
                 if let Some(sample) = self.advance::<D, S>(drag, &mut lanes[k]) {
