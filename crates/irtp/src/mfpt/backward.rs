@@ -602,7 +602,9 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
         return super::nstate::profile(problem, opts.cells, super::nstate::BARRIER);
     }
     let (cp, swapped) = problem.canonical();
+    crate::parallel::check_stop()?;
     let m = mesh(&cp, opts.cells)?;
+    crate::parallel::check_stop()?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     non_negative(&m.v, &tp, &tm)?;
@@ -731,6 +733,7 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
         return super::nstate::solve(problem, opts).map(|s| s.summary());
     }
     let fine = verified(problem, profile(problem, opts)?.at_start())?;
+    crate::parallel::check_stop()?;
     let half = BackwardOptions {
         cells: (opts.cells / 2).max(8),
         ..*opts
