@@ -473,6 +473,52 @@ mod tests {
     use crate::model::{DragLaw, Params};
     use crate::parallel::NoProgress;
 
+    /// A summary with the same mean and standard error for both states.
+    fn summary(tau: f64, err: f64) -> FptSummary {
+        let mut s = EulerFpt::new(
+            Problem::new(
+                Params::new(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0).unwrap(),
+                0.0,
+                0.5,
+            )
+            .unwrap(),
+            0.01,
+            10.0,
+        )
+        .unwrap()
+        .stats(2, 1, &NoProgress)
+        .summary();
+        (s.tau, s.tau_plus, s.tau_minus) = (tau, tau, tau);
+        (s.tau_err, s.tau_plus_err, s.tau_minus_err) = (err, err, err);
+        s
+    }
+
+    /// The extrapolation is refused below its bound (a negative mean: a
+    /// target within a step) and where its correction is over half the
+    /// value beyond the noise; accepted in the asymptotic regime and where
+    /// the change is within the noise.
+    #[test]
+    fn extrapolation_is_verified() {
+        let ok = |c: f64, f: f64, err: f64, least: f64| {
+            verify_extrapolation(&summary(c, err), &summary(f, err), least)
+        };
+        let refused = |r: Result<()>| match r {
+            Err(Error::Numerical { reason, .. }) => assert!(reason.contains("--dt"), "{reason}"),
+            r => panic!("{r:?}"),
+        };
+        // T(dt) = 2 dt, T(dt/2) = dt: 0, then below 0.
+        refused(ok(0.02, 0.01, 0.0, 1e-12));
+        refused(ok(0.02, 0.0099, 1e-5, 0.0));
+        // Above the bound, but the correction 0.5 is over half of 0.6.
+        refused(ok(1.6, 1.1, 0.01, 0.1));
+        // Asymptotic: bias 0.01 on 3.
+        ok(3.02, 3.01, 0.01, 0.4).unwrap();
+        // A change of 0.5 within 4 standard errors of noise (0.1 each).
+        ok(1.6, 1.1, 0.1, 0.1).unwrap();
+        // Censored runs (NaN) are not verified.
+        ok(f64::NAN, 1.0, 0.0, 0.5).unwrap();
+    }
+
     /// Without flips and resets the passage is the deterministic chain of
     /// the shared [`euler_step`]: same step count, for every law.
     #[test]
