@@ -433,6 +433,7 @@ fn solve_mesh(
         mut cp,
         mut cm,
     } = assemble(p, m, rate, sign);
+    crate::parallel::check_stop()?;
     let mut b = rhs(m, &src);
     if rate > 0.0 {
         refractory(p, m, &src, &mut cp, &mut cm, &mut b)?;
@@ -441,7 +442,9 @@ fn solve_mesh(
         method: "mfpt backward solve",
         reason: e.to_string(),
     })?;
+    crate::parallel::check_stop()?;
     a.solve(&mut b);
+    crate::parallel::check_stop()?;
     let mut x = b;
     if rate > 0.0 {
         let corrected = match &m.weights {

@@ -26,6 +26,10 @@ pub struct Singular {
 /// per block, against kl·(kl + ku) flops a row.
 pub const STOP_POLL_ROWS: usize = 256;
 
+/// Rows substituted between two polls of the stop request in
+/// [`Band::solve`] (a few flops a row).
+pub const STOP_POLL_SOLVE_ROWS: usize = 1 << 14;
+
 /// An n×n band matrix with `kl` sub- and `ku` super-diagonals, stored by
 /// rows with room for the `kl` extra super-diagonals that pivoting fills
 /// in; [`Band::factor`] overwrites it with its LU factors.
@@ -139,11 +143,16 @@ impl Band {
         }
     }
 
-    /// Solve A x = b in place with the factors of [`Band::factor`].
+    /// Solve A x = b in place with the factors of [`Band::factor`]. A stop
+    /// request (polled every [`STOP_POLL_SOLVE_ROWS`] rows) ends it early
+    /// with `b` unfinished, for the caller that asked to stop to discard.
     #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
     pub fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+                return;
+            }
             b.swap(k, self.piv[k]);
             let bk = b[k];
             for i in k + 1..=(k + kl).min(n - 1) {
@@ -151,6 +160,9 @@ impl Band {
             }
         }
         for k in (0..n).rev() {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+                return;
+            }
             let mut s = b[k];
             for j in k + 1..=(k + ku + kl).min(n - 1) {
                 s -= self.a[self.idx(k, j)] * b[j];
