@@ -49,6 +49,9 @@ pub struct OutputDir {
 /// The file in a staging directory naming the host of the process that owns it.
 const HOST_FILE: &str = ".irtp-host";
 
+/// CSV rows written between two polls of the stop request.
+const STOP_POLL_ROWS: usize = 4096;
+
 /// An output directory's path must be printable: no control characters
 /// (a newline or tab in `--out` would break the provenance files, the
 /// SLURM scripts and every listing that names it).
@@ -287,6 +290,10 @@ impl OutputDir {
     }
 
     /// Write a CSV file from a header and rows of numbers (full precision).
+    /// A stop request ([`irtp::parallel::check_stop`], polled every
+    /// [`STOP_POLL_ROWS`] rows) ends it with [`irtp::Error::Interrupted`]:
+    /// a table of millions of rows takes seconds, and the staged files are
+    /// then removed uncommitted.
     pub fn write_csv<R: AsRef<[f64]>>(
         &mut self,
         name: &str,
@@ -296,7 +303,10 @@ impl OutputDir {
         let p = self.path(name)?;
         let mut w = csv::Writer::from_path(&p).map_err(|e| io_err(&p, e))?;
         w.write_record(header).map_err(|e| io_err(&p, e))?;
-        for row in rows {
+        for (i, row) in rows.into_iter().enumerate() {
+            if i % STOP_POLL_ROWS == 0 {
+                irtp::parallel::check_stop()?;
+            }
             let row = row.as_ref();
             debug_assert_eq!(row.len(), header.len());
             w.write_record(row.iter().map(|x| format_float(*x)))

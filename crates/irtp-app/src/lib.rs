@@ -527,6 +527,8 @@ pub(crate) fn finish(
                 o.write_json(name, v)?;
             }
             o.write_json("summary.json", &summary)?;
+            // A stop asked for while the files were staged: nothing is committed.
+            ctx.check()?;
             let target = o.target().to_path_buf();
             let (prov, files) = o.commit_with_provenance_value(prov)?;
             (prov, Some((target, files)))

@@ -426,7 +426,9 @@ fn compute_curve(
 ) -> Result<Curve> {
     let (lambda, vu, r) = (p0.lambda(), p0.v_upper(), spec.rates[ri]);
     let params = p0.with_rate(r)?;
+    irtp::parallel::check_stop()?;
     let fp = compute::fp_stationary(&params, spec.fp_cells)?;
+    irtp::parallel::check_stop()?;
     let var_v2 = stationary_var_v2(&fp);
     let (obs, particles) = simulate_sized(spec, which, &params, var_v2, k, seed, progress)?;
     let sim = compute::density_bins(&obs);
@@ -579,6 +581,7 @@ fn edge_max_scan(medium: Medium, spec: &Spec) -> Result<Option<EdgeMaxScan>> {
     let vu = p_first.v_upper();
     let mut with_maxima = Vec::new();
     for &r in &rates {
+        irtp::parallel::check_stop()?;
         let fp = compute::fp_stationary(&p_first.with_rate(r)?, 20_000)?;
         if local_maxima(&fp.v, &fp.p, vu)
             .iter()

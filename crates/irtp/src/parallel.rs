@@ -18,7 +18,46 @@
 
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+/// The process-wide stop request. A front end sets it (the binary registers
+/// it as the flag of its SIGINT and SIGTERM handlers, [`stop_flag`]); the
+/// library's long loops poll it through [`check_stop`] once per time step,
+/// linear solve, mesh, point or chunk, and [`Progress::cancelled`] answers it
+/// by default. Never cleared: a process asked to stop stays stopped.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// The flag behind [`stop_requested`], for a signal handler to set.
+pub fn stop_flag() -> &'static AtomicBool {
+    &STOP
+}
+
+/// Whether this process was asked to stop (one relaxed atomic load).
+pub fn stop_requested() -> bool {
+    STOP.load(Ordering::Relaxed)
+}
+
+/// Steps of a particle's loop between two polls of the stop request (a
+/// step is tens of nanoseconds: a poll every few milliseconds).
+pub const STOP_POLL_STEPS: u64 = 1 << 16;
+
+/// Whether a particle loop at step `step` must stop: polls the stop request
+/// every [`STOP_POLL_STEPS`] steps, so a long particle (many steps to t_max)
+/// ends promptly; the caller then discards its chunk.
+#[inline]
+pub fn stop_due(step: u64) -> bool {
+    step % STOP_POLL_STEPS == 0 && stop_requested()
+}
+
+/// [`crate::Error::Interrupted`] once this process was asked to stop: the
+/// poll of a long loop, whose partial result is then never returned.
+pub fn check_stop() -> crate::Result<()> {
+    if stop_requested() {
+        Err(crate::Error::Interrupted)
+    } else {
+        Ok(())
+    }
+}
 
 /// Number of samples per chunk. Part of the value-stability contract:
 /// changing it changes the last bits of every pinned result.
@@ -46,8 +85,9 @@ pub trait Progress: Sync {
     /// below then skip their remaining chunks, so a long run ends within one
     /// chunk's work; its (partial) result must be discarded by whoever asked,
     /// as `irtp_app` does by returning [`crate::Error::Interrupted`].
+    /// By default: the process-wide [`stop_requested`].
     fn cancelled(&self) -> bool {
-        false
+        stop_requested()
     }
 }
 
@@ -79,6 +119,10 @@ where
         &init,
         |lo, hi, acc| {
             for i in lo..hi {
+                // A cancelled chunk is discarded: stop within one sample.
+                if progress.cancelled() {
+                    return;
+                }
                 sample(i, acc);
             }
         },
@@ -126,7 +170,8 @@ pub fn unit_count(n: u64) -> u64 {
 /// `init()` gives [`reduce_chunks`]'s result bit for bit, however the unit
 /// range was split into calls (shards on separate processes or machines).
 /// Progress counts the samples of these units. If the progress is cancelled,
-/// the result is partial (missing units are `init()`) and must be discarded.
+/// the result is partial (the units not finished are left out: padding
+/// millions of them would delay the stop) and must be discarded.
 ///
 /// Panics if `units` reaches past [`unit_count`]`(n)`.
 pub fn reduce_units<A, I, C, M>(
@@ -148,7 +193,9 @@ where
     for_each_unit(n, units, &init, &chunk, &merge, progress, |unit| {
         totals.push(unit)
     });
-    totals.resize_with(len, &init);
+    if !progress.cancelled() {
+        totals.resize_with(len, &init);
+    }
     totals
 }
 
@@ -217,16 +264,21 @@ fn for_each_unit<A, I, C, M>(
     }
 }
 
-/// Map every index to a value in parallel, keeping index order.
-pub fn map<T, F>(n: u64, f: F, progress: &dyn Progress) -> Vec<T>
+/// Map every index to a value in parallel, keeping index order. Once the
+/// progress is cancelled the items not started are skipped as
+/// [`crate::Error::Interrupted`].
+pub fn map<T, F>(n: u64, f: F, progress: &dyn Progress) -> Vec<crate::Result<T>>
 where
     T: Send,
-    F: Fn(u64) -> T + Sync,
+    F: Fn(u64) -> crate::Result<T> + Sync,
 {
     let done = AtomicU64::new(0);
     (0..n)
         .into_par_iter()
         .map(|i| {
+            if progress.cancelled() {
+                return Err(crate::Error::Interrupted);
+            }
             let v = f(i);
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.update(d, n);

@@ -141,6 +141,43 @@ fn solve_cost(problem: &SearchProblem, o: &BackwardOptions, solves: f64) -> irtp
     })
 }
 
+/// Bytes held per scan point besides the solver's: its value, its problem,
+/// its result row and its cost estimate (the velocity-target scan counts
+/// 256 bytes a point).
+fn point_bytes() -> f64 {
+    (8 + std::mem::size_of::<SearchProblem>() + 256) as f64
+}
+
+/// The cost of `--points` solves, each at most the dearer of the two ends'
+/// (the scanned rate, start or target runs monotonically between them), and
+/// the points' memory: checked before the point list is allocated, so a huge
+/// `--points` is refused at once, naming it.
+fn points_cost(
+    base: &SearchProblem,
+    axis: SearchAxis,
+    a: &ScanArgs,
+    o: &BackwardOptions,
+) -> irtp::Result<Cost> {
+    let mut per = None::<Cost>;
+    for (i, x) in [(0, a.from), (1, a.to)] {
+        let p = so::scan_problem(base, axis, x).map_err(|e| blame(e, axis, i, (a.from, a.to)))?;
+        let c = solve_cost(&p, o, 1.0).map_err(|e| blame(e, axis, i, (a.from, a.to)))?;
+        per = Some(match per {
+            Some(q) if q.work >= c.work => q,
+            _ => c,
+        });
+    }
+    let per = per.expect("two ends");
+    let points = a.points as f64;
+    Ok(Cost {
+        work: per.work * points,
+        drivers: [vec!["points"], per.drivers].concat(),
+        memory: per.memory + point_bytes() * points,
+        memory_drivers: [vec!["points"], per.memory_drivers].concat(),
+        ..per
+    })
+}
+
 /// The validated inputs of a search scan.
 pub(super) struct SearchScanConfig {
     base: SearchProblem,
@@ -194,8 +231,11 @@ pub(super) fn scan_config(a: &ScanArgs) -> irtp::Result<SearchScanConfig> {
         }
     };
     let backward = a.search.backward()?;
-    let values = scan_values(a.from, a.to, a.points, a.log)?;
     let base = a.search.problem(&a.problem)?;
+    a.output
+        .budget
+        .check(&points_cost(&base, axis, a, &backward)?)?;
+    let values = scan_values(a.from, a.to, a.points, a.log)?;
     let problems = values
         .iter()
         .enumerate()

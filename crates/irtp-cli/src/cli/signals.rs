@@ -5,10 +5,7 @@
 //! second signal exits at once, with the same code (the next run into the
 //! same place removes the staging directory left behind).
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-
-/// Set by the first SIGINT or SIGTERM.
-static STOP: AtomicBool = AtomicBool::new(false);
+use std::sync::atomic::{AtomicUsize, Ordering};
 /// The number of the last signal received (0: none).
 static SIGNAL: AtomicUsize = AtomicUsize::new(0);
 
@@ -17,10 +14,13 @@ static SIGNAL: AtomicUsize = AtomicUsize::new(0);
 pub fn install() -> std::io::Result<()> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     use signal_hook::flag;
+    // The library's process-wide stop request, which its long loops poll:
+    // set by the first SIGINT or SIGTERM.
+    let stop = irtp::parallel::stop_flag();
     for sig in [SIGINT, SIGTERM] {
         // Order matters: the shutdown fires only when a signal came before.
-        flag::register_conditional_shutdown(sig, 128 + sig, &STOP)?;
-        flag::register(sig, &STOP)?;
+        flag::register_conditional_shutdown(sig, 128 + sig, stop)?;
+        flag::register(sig, stop)?;
         flag::register_usize(sig, &SIGNAL, sig as usize)?;
     }
     Ok(())
@@ -33,7 +33,7 @@ pub fn install() -> std::io::Result<()> {
 
 /// Whether a stop was asked for.
 pub fn stop_requested() -> bool {
-    STOP.load(Ordering::SeqCst)
+    irtp::parallel::stop_requested()
 }
 
 /// The exit code and name of the signal that stopped the run, if any.

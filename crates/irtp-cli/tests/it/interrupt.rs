@@ -318,3 +318,116 @@ fn reproduce_over_another_seed_is_refused_unless_force() {
         serde_json::from_str(&fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
     assert_eq!(run["seed"], 4);
 }
+
+/// How long a command may take to exit after SIGTERM: well inside a batch
+/// system's grace period and a user's patience with Ctrl-C. The commands
+/// poll the stop request every time step, linear-solve row block, mesh,
+/// point and particle chunk, so they stop in milliseconds; the margin is
+/// for a loaded test machine.
+const STOP_WITHIN: Duration = Duration::from_secs(1);
+
+/// Run `irtp ARGS --out DIR/res`, let it work 1.5 s, send SIGTERM and
+/// measure the time to exit. Asserts it was still running at the signal,
+/// then the documented exit (143, "interrupted" on stderr) and that
+/// nothing is left beside it: no `res`, no staging directory, no lock.
+fn sigterm_latency(args: &[&str]) -> Duration {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("res");
+    let mut child = bin()
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "{args:?} ended before the signal: make it longer"
+    );
+    let t0 = Instant::now();
+    signal(&child, libc::SIGTERM);
+    let o = child.wait_with_output().unwrap();
+    let latency = t0.elapsed();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(143), "{args:?}: {stderr}");
+    assert!(
+        stderr.contains("interrupted by SIGTERM"),
+        "{args:?}: {stderr}"
+    );
+    assert_eq!(entries(tmp.path()), Vec::<String>::new(), "{args:?}");
+    latency
+}
+
+/// Every command line of `cases` stops within [`STOP_WITHIN`] of SIGTERM;
+/// all are measured before the verdict, which lists each latency.
+fn assert_prompt_stops(cases: &[&str]) {
+    let measured: Vec<(&str, Duration)> = cases
+        .iter()
+        .map(|line| {
+            let args: Vec<&str> = line.split_whitespace().collect();
+            (*line, sigterm_latency(&args))
+        })
+        .collect();
+    let report: Vec<String> = measured
+        .iter()
+        .map(|(cmd, d)| format!("irtp {cmd}: {:.3} s", d.as_secs_f64()))
+        .collect();
+    eprintln!("{}", report.join("\n"));
+    assert!(
+        measured.iter().all(|(_, d)| *d < STOP_WITHIN),
+        "slow to stop after SIGTERM:\n{}",
+        report.join("\n")
+    );
+}
+
+/// The fast tier: a time-stepping solver (TR-BDF2), the 2-D search
+/// solver (a band factorisation of tens of seconds) and a search Euler
+/// sampler.
+#[test]
+fn sigterm_stops_long_solvers_within_a_second() {
+    assert_prompt_stops(&[
+        "fp transient --t-max 200 --cells 20000 --max-work 1e13",
+        "mfpt --v0 0 --xt 1 --reset-position 0 --cells-x 200 --cells-v 60 --max-work 1e16",
+        "mfpt --v0 0 --xt 1 --reset-position 0 --method euler --dt 1e-3 --particles 1e6 \
+         --max-work 1e14",
+    ]);
+}
+
+/// Every other long command: particles (exact, Euler), the Fokker-Planck
+/// solvers, the velocity and search targets' backward, distribution,
+/// scan, optimize and renewal routes, and figures. Each runs for many
+/// seconds uninterrupted.
+#[test]
+#[ignore = "slow tier: 21 commands of about 2 s each"]
+fn sigterm_stops_every_long_command_within_a_second() {
+    assert_prompt_stops(&[
+        "simulate --particles 1e8",
+        "simulate --method euler --particles 1e6 --dt 1e-3",
+        "fp stationary --cells 2000000",
+        "fp msd --cells 50000",
+        "mfpt --v0 0 --vt 1 --cells 2000000",
+        "mfpt --v0 0 --vt 1 --method exact --particles 1e9",
+        "mfpt --v0 0 --vt 1 --method euler --dt 1e-4 --particles 1e6",
+        "mfpt distribution --v0 0 --vt 1 --cells 50000",
+        "mfpt distribution --v0 0 --vt 1 --method exact --particles 1e9",
+        "mfpt scan --v0 0 --vt 1 --over rate --from 0.1 --to 10 --points 200 --cells 2000000",
+        "mfpt optimize --v0 0 --vt 1 --cells 2000000",
+        "mfpt --v0 0 --xt 1 --reset-position 0 --method exact --particles 1e8",
+        "mfpt --v0 0 --xt 1 --reset-position 0 --method renewal --reset-clock gamma:k=2,theta=0.5 \
+         --rate 0 --cells-x 60 --cells-v 60 --max-work 1e16",
+        "mfpt distribution --v0 0 --xt 1 --reset-position 0 --cells-x 100 --cells-v 60 \
+         --max-work 1e16",
+        "mfpt distribution --v0 0 --xt 1 --reset-position 0 --method exact --particles 1e8",
+        "mfpt scan --v0 0 --xt 1 --reset-position 0 --over rate --from 0.5 --to 5 --points 20 \
+         --cells-x 100 --cells-v 60 --max-work 1e16",
+        "mfpt optimize --v0 0 --xt 1 --reset-position 0 --r-min 0.5 --cells-x 60 --cells-v 60 \
+         --max-work 1e16",
+        "mfpt scan --interval=-1,1 --v0 0 --over rate --from 0.5 --to 5 --points 20 \
+         --cells-x 100 --cells-v 60 --max-work 1e16",
+        "reproduce fig2",
+        "reproduce fig6 --quick",
+        "reproduce fig7 --quick",
+    ]);
+}

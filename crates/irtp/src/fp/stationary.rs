@@ -319,8 +319,11 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         make_grid(params, opts.mesh, opts.cells, 0)?
     };
     let held = Held::new(&g, params);
+    crate::parallel::check_stop()?;
     let (m, q) = stationary_masses(&g, params, held.as_ref())?;
+    crate::parallel::check_stop()?;
     let fine = moments(&g, params, held.as_ref(), &m, q);
+    crate::parallel::check_stop()?;
     let coarse = if opts.extrapolate {
         let gc = make_grid(params, opts.mesh, opts.cells / 2, 0)?;
         let hc = Held::new(&gc, params);

@@ -433,6 +433,7 @@ fn solve_mesh(
         mut cp,
         mut cm,
     } = assemble(p, m, rate, sign);
+    crate::parallel::check_stop()?;
     let mut b = rhs(m, &src);
     if rate > 0.0 {
         refractory(p, m, &src, &mut cp, &mut cm, &mut b)?;
@@ -441,7 +442,9 @@ fn solve_mesh(
         method: "mfpt backward solve",
         reason: e.to_string(),
     })?;
+    crate::parallel::check_stop()?;
     a.solve(&mut b);
+    crate::parallel::check_stop()?;
     let mut x = b;
     if rate > 0.0 {
         let corrected = match &m.weights {
@@ -602,7 +605,9 @@ pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
         return super::nstate::profile(problem, opts.cells, super::nstate::BARRIER);
     }
     let (cp, swapped) = problem.canonical();
+    crate::parallel::check_stop()?;
     let m = mesh(&cp, opts.cells)?;
+    crate::parallel::check_stop()?;
     let (tp, tm) =
         solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
     non_negative(&m.v, &tp, &tm)?;
@@ -731,6 +736,7 @@ pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSoluti
         return super::nstate::solve(problem, opts).map(|s| s.summary());
     }
     let fine = verified(problem, profile(problem, opts)?.at_start())?;
+    crate::parallel::check_stop()?;
     let half = BackwardOptions {
         cells: (opts.cells / 2).max(8),
         ..*opts

@@ -258,6 +258,10 @@ where
         || FptStats::new(t_max),
         |lo, hi, acc| {
             for i in lo..hi {
+                // A cancelled chunk is discarded: stop within one particle.
+                if progress.cancelled() {
+                    return;
+                }
                 let mut rng = rng::stream(seed, i);
                 let plus = i % 2 == 0;
                 acc.push(plus, sample(i, &mut rng, plus));

@@ -193,6 +193,63 @@ pub fn extrapolate(coarse: &FptSummary, fine: &FptSummary) -> Extrapolated {
     }
 }
 
+/// A correction 2 T(dt/2) - T(dt) - T(dt/2) larger than this fraction of
+/// the extrapolated value (beyond 4 standard errors of the two runs) means
+/// dt is not small against the passage time: the expansion c·dt + O(dt²)
+/// behind [`extrapolate`] does not hold there.
+pub const MAX_STEP_CORRECTION: f64 = 0.5;
+
+/// Verify an extrapolation from `coarse` (dt) and `fine` (dt/2) for tau and
+/// both starting states (censored runs, NaN, are skipped): each
+/// 2 T(dt/2) - T(dt) must be at least `least` (a lower bound of the mean
+/// passage time, 0 or more) and its correction |T(dt/2) - T(dt)| within
+/// [`MAX_STEP_CORRECTION`] of it, or the answer is refused
+/// ([`Error::Numerical`], naming `--dt`): a target within a few steps gave
+/// a negative mean time.
+pub fn verify_extrapolation(coarse: &FptSummary, fine: &FptSummary, least: f64) -> Result<()> {
+    let rows = [
+        ("tau", coarse.tau, coarse.tau_err, fine.tau, fine.tau_err),
+        (
+            "tau_plus",
+            coarse.tau_plus,
+            coarse.tau_plus_err,
+            fine.tau_plus,
+            fine.tau_plus_err,
+        ),
+        (
+            "tau_minus",
+            coarse.tau_minus,
+            coarse.tau_minus_err,
+            fine.tau_minus,
+            fine.tau_minus_err,
+        ),
+    ];
+    let refuse = |reason: String| Error::Numerical {
+        method: "Euler extrapolation to dt -> 0",
+        reason: format!("{reason}; reduce --dt or use --method exact"),
+    };
+    for (name, c, c_err, f, f_err) in rows {
+        if !(c.is_finite() && f.is_finite()) {
+            continue;
+        }
+        let ex = 2.0 * f - c;
+        if !(ex >= least.max(0.0)) {
+            return Err(refuse(format!(
+                "{name} = 2 T(dt/2) - T(dt) = {ex:.3e} is below the least time {:.3e}",
+                least.max(0.0)
+            )));
+        }
+        let change = (f - c).abs() - 4.0 * (c_err + f_err);
+        if change > MAX_STEP_CORRECTION * ex {
+            return Err(refuse(format!(
+                "{name} changes by {:.2e} from dt to dt/2, over half of its extrapolated {ex:.2e}",
+                (f - c).abs()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Particles in flight per thread.
 const LANES: usize = 4;
 
@@ -379,7 +436,13 @@ impl Chain {
             lanes.push(self.start(next));
             next += 1;
         }
+        let mut rounds = 0u64;
         while !lanes.is_empty() {
+            rounds += 1;
+            // A stopped chunk is discarded by the cancelled reduction.
+            if parallel::stop_due(rounds) {
+                return;
+            }
             let mut k = 0;
             while k < lanes.len() {
                 if let Some(sample) = self.advance::<D, S>(drag, &mut lanes[k]) {
@@ -409,6 +472,52 @@ mod tests {
     use super::*;
     use crate::model::{DragLaw, Params};
     use crate::parallel::NoProgress;
+
+    /// A summary with the same mean and standard error for both states.
+    fn summary(tau: f64, err: f64) -> FptSummary {
+        let mut s = EulerFpt::new(
+            Problem::new(
+                Params::new(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0).unwrap(),
+                0.0,
+                0.5,
+            )
+            .unwrap(),
+            0.01,
+            10.0,
+        )
+        .unwrap()
+        .stats(2, 1, &NoProgress)
+        .summary();
+        (s.tau, s.tau_plus, s.tau_minus) = (tau, tau, tau);
+        (s.tau_err, s.tau_plus_err, s.tau_minus_err) = (err, err, err);
+        s
+    }
+
+    /// The extrapolation is refused below its bound (a negative mean: a
+    /// target within a step) and where its correction is over half the
+    /// value beyond the noise; accepted in the asymptotic regime and where
+    /// the change is within the noise.
+    #[test]
+    fn extrapolation_is_verified() {
+        let ok = |c: f64, f: f64, err: f64, least: f64| {
+            verify_extrapolation(&summary(c, err), &summary(f, err), least)
+        };
+        let refused = |r: Result<()>| match r {
+            Err(Error::Numerical { reason, .. }) => assert!(reason.contains("--dt"), "{reason}"),
+            r => panic!("{r:?}"),
+        };
+        // T(dt) = 2 dt, T(dt/2) = dt: 0, then below 0.
+        refused(ok(0.02, 0.01, 0.0, 1e-12));
+        refused(ok(0.02, 0.0099, 1e-5, 0.0));
+        // Above the bound, but the correction 0.5 is over half of 0.6.
+        refused(ok(1.6, 1.1, 0.01, 0.1));
+        // Asymptotic: bias 0.01 on 3.
+        ok(3.02, 3.01, 0.01, 0.4).unwrap();
+        // A change of 0.5 within 4 standard errors of noise (0.1 each).
+        ok(1.6, 1.1, 0.1, 0.1).unwrap();
+        // Censored runs (NaN) are not verified.
+        ok(f64::NAN, 1.0, 0.0, 0.5).unwrap();
+    }
 
     /// Without flips and resets the passage is the deterministic chain of
     /// the shared [`euler_step`]: same step count, for every law.

@@ -263,6 +263,7 @@ fn golden<F: FnMut(f64) -> Result<f64>>(
     let (mut fc, mut fd) = (f(c)?, f(d)?);
     let mut steps = 0;
     while (b - a).abs() > tol * (1.0 + c.abs()) {
+        crate::parallel::check_stop()?;
         if steps == STEPS {
             return Err(Error::NotConverged {
                 method: "golden-section search for the optimal reset rate",

@@ -22,6 +22,14 @@ pub struct Singular {
     pub row: usize,
 }
 
+/// Rows eliminated between two polls of the stop request: one relaxed load
+/// per block, against kl·(kl + ku) flops a row.
+pub const STOP_POLL_ROWS: usize = 256;
+
+/// Rows substituted between two polls of the stop request in
+/// [`Band::solve`] (a few flops a row).
+pub const STOP_POLL_SOLVE_ROWS: usize = 1 << 14;
+
 /// An n×n band matrix with `kl` sub- and `ku` super-diagonals, stored by
 /// rows with room for the `kl` extra super-diagonals that pivoting fills
 /// in; [`Band::factor`] overwrites it with its LU factors.
@@ -80,9 +88,16 @@ impl Band {
 
     /// LU-factor in place (Gaussian elimination with partial pivoting
     /// within the band); [`Singular`] at the first zero or non-finite pivot.
+    /// A stop request ([`crate::parallel::stop_requested`], polled every
+    /// [`STOP_POLL_ROWS`] rows) ends it early with [`Singular`] at the row
+    /// reached: the factors are then unusable, and the caller that asked
+    /// to stop discards the run.
     pub fn factor(&mut self) -> Result<(), Singular> {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
+            if k % STOP_POLL_ROWS == 0 && crate::parallel::stop_requested() {
+                return Err(Singular { row: k });
+            }
             let last = (k + kl).min(n - 1);
             let mut p = k;
             let mut best = self.a[self.idx(k, k)].abs();
@@ -128,11 +143,16 @@ impl Band {
         }
     }
 
-    /// Solve A x = b in place with the factors of [`Band::factor`].
+    /// Solve A x = b in place with the factors of [`Band::factor`]. A stop
+    /// request (polled every [`STOP_POLL_SOLVE_ROWS`] rows) ends it early
+    /// with `b` unfinished, for the caller that asked to stop to discard.
     #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
     pub fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+                return;
+            }
             b.swap(k, self.piv[k]);
             let bk = b[k];
             for i in k + 1..=(k + kl).min(n - 1) {
@@ -140,6 +160,9 @@ impl Band {
             }
         }
         for k in (0..n).rev() {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+                return;
+            }
             let mut s = b[k];
             for j in k + 1..=(k + ku + kl).min(n - 1) {
                 s -= self.a[self.idx(k, j)] * b[j];

@@ -163,7 +163,9 @@ impl Work {
 /// on each, where `observe(k, times[k], u)` is called (at t = 0 too when
 /// `times[0] == 0`). Fails with [`Failure::NotConverged`] when `max_steps`
 /// is spent or the step underflows, and [`Failure::NonFinite`] on a
-/// non-finite state; an error from `observe` stops the integration.
+/// non-finite state; an error from `observe` stops the integration, and
+/// so does a stop request ([`crate::parallel::check_stop`], polled every
+/// step).
 pub fn integrate<O: ShiftedLinear>(
     op: &mut O,
     u: &mut [f64],
@@ -178,6 +180,8 @@ pub fn integrate<O: ShiftedLinear>(
     let mut h = f64::NAN;
     for (k, &t_out) in times.iter().enumerate() {
         while t < t_out {
+            // One relaxed load a step: a stop request ends the run here.
+            crate::parallel::check_stop()?;
             if h.is_nan() {
                 h = first_step(op, u, t_out, tol, &mut w);
             }

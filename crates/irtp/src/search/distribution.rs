@@ -369,6 +369,7 @@ fn record_run(
         f: Vec::with_capacity(steps + 1),
     };
     for step in 0..=steps {
+        crate::parallel::check_stop()?;
         if step > 0 {
             stepper.step(&mut u, (&mut au, &mut star), |x, y| op.apply(x, y), &solve);
         }

@@ -19,7 +19,10 @@
 //! (the flux of crossings vanishes linearly in the speed); the scheme's
 //! weak error is O(dt). The bias is c·dt + o(dt): the extrapolation
 //! 2 T(dt/2) - T(dt) removes the leading term, and |T(dt/2) - T(dt)| is
-//! reported as the measured step bias. Refractory periods are refused
+//! reported as the measured step bias. Where the step is not small against
+//! the passage time the expansion fails (a target within a few steps gave
+//! a negative mean): the extrapolated means are verified
+//! ([`crate::mfpt::euler::verify_extrapolation`]) and refused. Refractory periods are refused
 //! (the exact sampler runs them).
 
 use super::SearchProblem;
@@ -159,6 +162,11 @@ impl Chain {
         let mut step = 0u64;
         while step < self.max_steps {
             step += 1;
+            // Stopped: reported as censored, in a chunk the cancelled
+            // reduction discards.
+            if crate::parallel::stop_due(step) {
+                break;
+            }
             let poisson = step == next_reset;
             if poisson {
                 next_reset = step.saturating_add(geometric_gap(rng, self.ln_reset));

@@ -44,7 +44,7 @@ pub mod tail;
 
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{merge_units, FptStats};
-use crate::mfpt::euler::{extrapolate, Extrapolated};
+use crate::mfpt::euler::{extrapolate, verify_extrapolation, Extrapolated};
 use crate::mfpt::ParticleOptions;
 use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::{Drag, Params};
@@ -597,15 +597,20 @@ pub fn assemble(
         }
     };
     verify_particles(problem, &result)?;
+    // An infinite mean has no extrapolation to verify (tau is not reported).
+    match &result {
+        SearchResult::Euler(e) if e.mean_is_finite => {
+            verify_extrapolation(&e.coarse.summary(), &e.fine.summary(), least_time(problem))?
+        }
+        _ => {}
+    }
     Ok(result)
 }
 
-/// Every passage covers the distance to the target from the start (or
-/// from x_r after a full reset) at a speed of at most max |v|: the
-/// restricted means of both starting states must respect it (on the
-/// Euler grid as well: x moves at most max |v| dt per step), or the
-/// sampler lost precision and the answer is refused.
-fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()> {
+/// The least search time: the distance to the target from the start (or
+/// from x_r after a full reset) at the largest speed max |v|, slightly
+/// lowered against rounding.
+fn least_time(problem: &SearchProblem) -> f64 {
     let (lo, hi) = problem.target().bounds(problem.x0());
     let gap = |x: f64| (x - lo).min(hi - x);
     let p = problem.params();
@@ -614,7 +619,16 @@ fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()
         distance = distance.min(gap(pos.x));
     }
     let (vl, vu) = p.bounds();
-    let bound = distance / vl.abs().max(vu.abs()) * (1.0 - 1e-12);
+    distance / vl.abs().max(vu.abs()) * (1.0 - 1e-12)
+}
+
+/// Every passage covers the distance to the target from the start (or
+/// from x_r after a full reset) at a speed of at most max |v|: the
+/// restricted means of both starting states must respect it (on the
+/// Euler grid as well: x moves at most max |v| dt per step), or the
+/// sampler lost precision and the answer is refused.
+fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()> {
+    let bound = least_time(problem);
     let runs: Vec<&FptStats> = match result {
         SearchResult::Particles(r) => vec![&r.stats],
         SearchResult::Euler(e) => vec![&e.coarse, &e.fine],

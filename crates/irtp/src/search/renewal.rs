@@ -494,6 +494,7 @@ fn survival_series(
     record(0, &q);
     let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
     for step in 1..=steps {
+        crate::parallel::check_stop()?;
         for u in q.iter_mut() {
             stepper.step(
                 u,

@@ -633,6 +633,10 @@ impl<D: Drag> Kernel<'_, D> {
         let mut next_rec = plan.record_steps[0];
         let mut n = 0;
         while n < plan.steps {
+            // Stopped: the cancelled reduction discards this chunk.
+            if crate::parallel::stop_requested() {
+                return;
+            }
             // Quiet steps (no record, no event in any lane, the same side of
             // the window start) run branch-free; the same operations in the
             // same order as the full step below, so bit-identical.
@@ -727,6 +731,10 @@ impl<D: Drag> Kernel<'_, D> {
         let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
         let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
         for n in 0..plan.steps {
+            // Stopped: the cancelled reduction discards this chunk.
+            if crate::parallel::stop_due(n) {
+                return;
+            }
             if plan.record_steps.get(k) == Some(&n) {
                 obs.record(k, v, x);
                 msd += obs.msd_term(k, x);

@@ -116,7 +116,9 @@ impl<D: Drag> Run<'_, D> {
             work: step,
         };
         loop {
-            if step >= self.max_steps {
+            // Stopped (polled every few thousand steps): censored, in a
+            // chunk the cancelled reduction discards.
+            if step >= self.max_steps || crate::parallel::stop_due(step + 1) {
                 return FptSample {
                     time: None,
                     work: step,
