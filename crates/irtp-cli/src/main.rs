@@ -113,10 +113,24 @@ fn one_line(rendered: &str) -> String {
     msg
 }
 
+/// Parse the command line: clap's checks, then the flags that do not
+/// apply to the chosen method or target ([`irtp_app::applies`]).
+fn parse() -> Result<Cli, ExitCode> {
+    use clap::{CommandFactory, FromArgMatches};
+    let mut command = Cli::command();
+    let matches = command.try_get_matches_from_mut(std::env::args_os());
+    let matches = matches.map_err(usage_error)?;
+    if let Err(e) = irtp_app::applies::check(&matches) {
+        eprintln!("irtp: error: {}", e.message_with(cli::flag_for));
+        return Err(ExitCode::from(2));
+    }
+    Cli::from_arg_matches(&matches).map_err(|e| usage_error(e.format(&mut command)))
+}
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match parse() {
         Ok(c) => c,
-        Err(e) => return usage_error(e),
+        Err(code) => return code,
     };
     match run(cli) {
         Ok(code) => ExitCode::from(code),
