@@ -569,7 +569,7 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
         if !g.is_finite() || g1.is_nan() {
             return Err(bad(
                 d.text(),
-                format!("g(v) = {g}, g'(v) = {g1} at v = {v:.6} inside the velocity interval of sigma = {sigma}"),
+                format!("g(v) = {g}, g'(v) = {g1} at v = {v} inside the velocity interval of sigma = {sigma}"),
             ));
         }
         // Strictly increasing: g' >= 0 everywhere and g rising from sample
@@ -578,13 +578,13 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
         if !(g1 >= 0.0) {
             return Err(bad(
                 d.text(),
-                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' < 0 at v = {v:.6} (g' = {g1:e})"),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' < 0 at v = {v} (g' = {g1:e})"),
             ));
         }
         if i > 0 && !(g > g_prev) {
             return Err(bad(
                 d.text(),
-                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g does not rise from v = {:.6} to {v:.6}", vu * (i - 1) as f64 / N as f64),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g does not rise from v = {} to {v}", vu * (i - 1) as f64 / N as f64),
             ));
         }
         g_prev = g;
@@ -593,7 +593,7 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
     if !((g_vu - sigma).abs() <= 1e-9 * sigma) {
         return Err(bad(
             d.text(),
-            format!("g stops short of sigma = {sigma} at v = {vu:.6} (g = {g_vu}): it jumps or stops increasing there"),
+            format!("g stops short of sigma = {sigma} at v = {vu} (g = {g_vu}): it jumps or stops increasing there"),
         ));
     }
     Ok(())
