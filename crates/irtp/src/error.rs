@@ -304,7 +304,9 @@ pub fn short_numbers(text: &str) -> String {
         let tail = &from[end..];
         if let Some(exp) = tail.strip_prefix(['e', 'E']) {
             let unsigned = exp.strip_prefix(['-', '+']).unwrap_or(exp);
-            let digits = unsigned.find(|c: char| !c.is_ascii_digit()).unwrap_or(unsigned.len());
+            let digits = unsigned
+                .find(|c: char| !c.is_ascii_digit())
+                .unwrap_or(unsigned.len());
             if digits > 0 {
                 end += 1 + (exp.len() - unsigned.len()) + digits;
             }
@@ -321,7 +323,13 @@ pub fn short_numbers(text: &str) -> String {
     out.push_str(rest);
     let words: Vec<String> = out
         .split(' ')
-        .map(|w| if w.chars().count() > 80 { echo(w) } else { w.to_string() })
+        .map(|w| {
+            if w.chars().count() > 80 {
+                echo(w)
+            } else {
+                w.to_string()
+            }
+        })
         .collect();
     words.join(" ")
 }
@@ -358,7 +366,10 @@ mod tests {
             assert_eq!(short(x), s);
         }
         let long = format!("T = {} and t = {}, 12 and 1e-3", 1e300, 1e-300);
-        assert_eq!(short_numbers(&long), "T = 1e300 and t = 1e-300, 12 and 1e-3");
+        assert_eq!(
+            short_numbers(&long),
+            "T = 1e300 and t = 1e-300, 12 and 1e-3"
+        );
     }
 
     #[test]
@@ -387,8 +398,15 @@ mod tests {
             tolerance: 1e-9,
         };
         assert_eq!(n.message_with(|_| unreachable!()), n.to_string());
-        let e = Error::invalid("sigma", 1e-300, format!("sigma < {} or {}", 1e300, "x".repeat(99)));
-        assert_eq!(e.to_string().len(), "invalid sigma = 1e-300: allowed sigma < 1e300 or ".len() + 43);
+        let e = Error::invalid(
+            "sigma",
+            1e-300,
+            format!("sigma < {} or {}", 1e300, "x".repeat(99)),
+        );
+        assert_eq!(
+            e.to_string().len(),
+            "invalid sigma = 1e-300: allowed sigma < 1e300 or ".len() + 43
+        );
         assert!(e.to_string().contains("sigma < 1e300 or xxxx"));
         assert_eq!(echo(&"y".repeat(1000)), format!("{}…", "y".repeat(40)));
         assert!(!n.is_input_error() && e.is_input_error());

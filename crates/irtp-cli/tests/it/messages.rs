@@ -69,7 +69,11 @@ pub fn assert_one_line(args: &[&str], flag: &str, dir: &std::path::Path) -> Stri
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(matches!(out.status.code(), Some(2 | 4)), "{args:?}: {err}");
     assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
-    assert!(err.chars().count() < 200, "{args:?}: {} chars: {err}", err.len());
+    assert!(
+        err.chars().count() < 200,
+        "{args:?}: {} chars: {err}",
+        err.len()
+    );
     assert!(err.contains(flag), "{args:?} does not name {flag}: {err}");
     let longest = err
         .split(|c: char| !c.is_ascii_digit())
@@ -104,7 +108,13 @@ fn a_huge_clock_table_is_not_echoed_whole() {
     std::fs::write(&table, text).unwrap();
     let spec = format!("table:file={}", table.display());
     let dir = tmp.path().join("out");
-    let args = ["simulate", "--reset-clock", &spec, "--out", dir.to_str().unwrap()];
+    let args = [
+        "simulate",
+        "--reset-clock",
+        &spec,
+        "--out",
+        dir.to_str().unwrap(),
+    ];
     assert_one_line(&args, "--reset-clock", &dir);
 }
 
@@ -138,8 +148,23 @@ impl Rng {
 /// items, huge numbers, NaN, inf and unicode.
 fn spec(rng: &mut Rng, kinds: &[&str], keys: &[&str]) -> String {
     let values = [
-        "1", "0.5", "-1", "0", "1e300", "-1e300", "1e-300", "NaN", "inf", "-inf", "", "x",
-        "[1,2]", "[[0,1],[1,0]]", "ü", "1,", "9".repeat(400).leak(),
+        "1",
+        "0.5",
+        "-1",
+        "0",
+        "1e300",
+        "-1e300",
+        "1e-300",
+        "NaN",
+        "inf",
+        "-inf",
+        "",
+        "x",
+        "[1,2]",
+        "[[0,1],[1,0]]",
+        "ü",
+        "1,",
+        "9".repeat(400).leak(),
     ];
     let mut s = rng.pick(kinds).to_string();
     let items = rng.next() % 5;
@@ -157,14 +182,34 @@ fn spec(rng: &mut Rng, kinds: &[&str], keys: &[&str]) -> String {
 #[test]
 #[ignore = "slow tier: spec fuzz through the binary (~30 s)"]
 fn spec_fuzz_answers_or_refuses_in_one_line() {
-    let noise = (["telegraph", "rpt", "states", "none", "bogus", ""], [
-        "sigma", "lambda", "plus", "minus", "rate_plus", "rate_minus", "alpha", "beta",
-        "levels", "rates", "x",
-    ]);
-    let clock = (["exp", "gamma", "weibull", "pareto", "fixed", "hazard", "table"], [
-        "rate", "k", "theta", "scale", "alpha", "t", "file", "0", "q",
-    ]);
-    let drag = (["power", "linear", "tan", "tanh", "expr", "bogus"], ["n", "k", "q"]);
+    let noise = (
+        ["telegraph", "rpt", "states", "none", "bogus", ""],
+        [
+            "sigma",
+            "lambda",
+            "plus",
+            "minus",
+            "rate_plus",
+            "rate_minus",
+            "alpha",
+            "beta",
+            "levels",
+            "rates",
+            "x",
+        ],
+    );
+    let clock = (
+        [
+            "exp", "gamma", "weibull", "pareto", "fixed", "hazard", "table",
+        ],
+        [
+            "rate", "k", "theta", "scale", "alpha", "t", "file", "0", "q",
+        ],
+    );
+    let drag = (
+        ["power", "linear", "tan", "tanh", "expr", "bogus"],
+        ["n", "k", "q"],
+    );
     let mut rng = Rng(0x5EED_1234_ABCD_0001);
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
@@ -172,9 +217,21 @@ fn spec_fuzz_answers_or_refuses_in_one_line() {
     let start = std::time::Instant::now();
     for i in 0..300 {
         let (flag, value, base): (&str, String, &[&str]) = match i % 3 {
-            0 => ("--noise", spec(&mut rng, &noise.0, &noise.1), &["fp", "stationary", "--cells", "200"]),
-            1 => ("--reset-clock", spec(&mut rng, &clock.0, &clock.1), &["simulate", "--particles", "20", "--t-max", "1"]),
-            _ => ("--drag", spec(&mut rng, &drag.0, &drag.1), &["analytic", "--points", "5"]),
+            0 => (
+                "--noise",
+                spec(&mut rng, &noise.0, &noise.1),
+                &["fp", "stationary", "--cells", "200"],
+            ),
+            1 => (
+                "--reset-clock",
+                spec(&mut rng, &clock.0, &clock.1),
+                &["simulate", "--particles", "20", "--t-max", "1"],
+            ),
+            _ => (
+                "--drag",
+                spec(&mut rng, &drag.0, &drag.1),
+                &["analytic", "--points", "5"],
+            ),
         };
         if value.contains('\u{0}') {
             continue; // not passable as an argument

@@ -733,11 +733,7 @@ fn search_scan_and_optimize_refusals_name_the_flag() {
             "--from",
         ),
         (
-            [
-                &["scan", "--v0", "0", "--over", "x0"][..],
-                &scan,
-            ]
-            .concat(),
+            [&["scan", "--v0", "0", "--over", "x0"][..], &scan].concat(),
             "--over",
         ),
         (

@@ -56,8 +56,8 @@ pub fn pairs<'a>(args: &'a str, keys: &[&str]) -> Result<Vec<Option<&'a str>>, S
 /// with the spec echoed; else a pointer to `--help` of the flag.
 pub fn reason(flag: &str, spec: &str, what: &str, usage: &str) -> String {
     let full = format!("{what}, in {usage}");
-    // "irtp: error: invalid --flag = SPEC: allowed " around it.
-    let around = 34 + flag.len() + crate::error::echo(spec).chars().count();
+    // "irtp: error: invalid --flag = SPEC: allowed " around it, and a margin.
+    let around = 40 + flag.len() + crate::error::echo(spec).chars().count();
     if around + full.chars().count() < 200 {
         full
     } else {
@@ -78,7 +78,11 @@ mod tests {
         for bad in ["n=0.5,,k=1", "n=0.5,", ",n=0.5", "n=1,n=2", "m=1", "n"] {
             assert!(pairs(bad, &keys).is_err(), "{bad}");
         }
-        assert!(pairs("n=1,n=2", &keys).unwrap_err().contains("'n' repeated"));
-        assert!(pairs("n=0.5,,k=1", &keys).unwrap_err().contains("empty item"));
+        assert!(pairs("n=1,n=2", &keys)
+            .unwrap_err()
+            .contains("'n' repeated"));
+        assert!(pairs("n=0.5,,k=1", &keys)
+            .unwrap_err()
+            .contains("empty item"));
     }
 }

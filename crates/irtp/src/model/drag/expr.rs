@@ -132,7 +132,7 @@ fn bad(text: &str, what: impl fmt::Display) -> Error {
     Error::invalid(
         "drag",
         format!("{NAME}:{text}"),
-        format!("an odd, increasing expression in v ({what})"),
+        format!("an odd, increasing g(v) ({what})"),
     )
 }
 
@@ -153,6 +153,14 @@ fn known_names() -> String {
         FUNCTIONS.join(", "),
         CONSTANTS.join(", ")
     )
+}
+
+/// A parse error of exmex in a message: its first clause, cut as an echo
+/// is ([`crate::error::echo`]), so the message stays one short line.
+pub(crate) fn parse_error(e: &impl std::fmt::Display) -> String {
+    let text = e.to_string();
+    let first = text.split([',', ';']).next().unwrap_or_default();
+    format!("parse error: {}", crate::error::echo(first.trim()))
 }
 
 /// The error builder of an expression's checks: (text, what is wrong).
@@ -178,10 +186,7 @@ pub(crate) fn check_names(text: &str, var: &str, bad: Bad) -> Result<()> {
             if name != var && !FUNCTIONS.contains(&name) && !CONSTANTS.contains(&name) {
                 return Err(bad(
                     text,
-                    format!(
-                        "unknown name '{name}': the variable is {var}; functions {}",
-                        known_names()
-                    ),
+                    format!("unknown name '{name}' (the variable is {var}; functions: --help)"),
                 ));
             }
             i = i.max(start + 1);
@@ -319,7 +324,7 @@ pub(crate) fn on_big_stack<T: Send>(
 fn parse_and_differentiate(text: &str) -> Result<(FlatEx<f64>, FlatEx<f64>)> {
     let plain = plain_numbers(text);
     let work = || -> Result<(FlatEx<f64>, FlatEx<f64>)> {
-        let g = exmex::parse::<f64>(&plain).map_err(|e| bad(text, format!("parse error: {e}")))?;
+        let g = exmex::parse::<f64>(&plain).map_err(|e| bad(text, parse_error(&e)))?;
         if g.var_names() != ["v".to_string()] {
             return Err(bad(text, "it must depend on v"));
         }

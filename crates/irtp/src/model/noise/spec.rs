@@ -25,7 +25,11 @@ pub fn list(xs: &[f64]) -> String {
 /// and what is allowed.
 pub fn bad(spec: &str, what: impl std::fmt::Display, usage: &str) -> Error {
     let what = what.to_string();
-    Error::invalid("noise", spec, crate::model::keys::reason("--noise", spec, &what, usage))
+    Error::invalid(
+        "noise",
+        spec,
+        crate::model::keys::reason("--noise", spec, &what, usage),
+    )
 }
 
 /// The comma-separated parts of `text` outside brackets, none empty.

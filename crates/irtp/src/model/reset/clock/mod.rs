@@ -161,14 +161,17 @@ pub fn horizon_by_bisection(w: impl Fn(f64) -> f64, tail: f64) -> f64 {
 /// in `usage`.
 pub fn bad(spec: &str, what: impl fmt::Display, usage: &str) -> Error {
     let what = what.to_string();
-    Error::invalid(FLAG, spec, crate::model::keys::reason("--reset-clock", spec, &what, usage))
+    Error::invalid(
+        FLAG,
+        spec,
+        crate::model::keys::reason("--reset-clock", spec, &what, usage),
+    )
 }
 
 /// The values of `keys` in `args` (`k=2,theta=0.5`, any order, each once),
 /// each a finite number; errors name [`FLAG`].
 pub fn keyed(args: &str, spec: &str, keys: &[&str], usage: &str) -> Result<Vec<f64>> {
-    let texts =
-        crate::model::keys::pairs(args, keys).map_err(|what| bad(spec, what, usage))?;
+    let texts = crate::model::keys::pairs(args, keys).map_err(|what| bad(spec, what, usage))?;
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
     for (i, text) in texts.into_iter().enumerate() {
         let Some(value) = text else { continue };
