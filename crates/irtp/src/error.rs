@@ -353,7 +353,7 @@ mod tests {
     #[test]
     fn short_prints_at_most_six_significant_digits() {
         let cases = [
-            (0.7853981633974483, "0.785398"),
+            (std::f64::consts::FRAC_PI_4, "0.785398"),
             (1250.0, "1250"),
             (-0.25, "-0.25"),
             (1e-300, "1e-300"),
