@@ -88,14 +88,16 @@ impl AnalyticArgs {
         let params = self
             .noise
             .params(self.rate, self.reset_velocity.unwrap_or(0.0))?;
-        // At r = 0 nothing resets: v_r other than 0 would be ignored.
-        if let (None, Some(v)) = (params.noise(), self.reset_velocity) {
+        // The paper's noise with another drag has its closed form at r = 0
+        // only, where nothing resets: v_r other than 0 would be ignored.
+        let linear = matches!(params.drag(), DragLaw::Linear);
+        if let (None, Some(v), false) = (params.noise(), self.reset_velocity, linear) {
             if v != 0.0 {
                 return Err(Error::invalid(
                     "reset_velocity",
                     v,
-                    "0 (or none) with the paper's noise (its closed form is at r = 0); \
-                     another reset velocity only with --noise or --temperature and linear drag",
+                    "0 (or none) with the paper's noise and this drag (its closed form is at \
+                     r = 0); another reset velocity with linear drag",
                 ));
             }
         }
@@ -146,7 +148,11 @@ fn report(params: &Params, d: &R0Density) -> Report {
 pub fn run(args: &AnalyticArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let t0 = Instant::now();
     let c = args.config()?;
-    if c.params.noise().is_some() {
+    // Linear drag with resetting: the closed forms of any noise (N3)-(N6),
+    // the paper's included.
+    let linear_reset = matches!(c.params.drag(), DragLaw::Linear)
+        && (c.params.rate() != 0.0 || args.reset_velocity.is_some_and(|v| v != 0.0));
+    if c.params.noise().is_some() || linear_reset {
         return super::analytic_noise::run(args, &c.params, c.points, ctx, t0);
     }
     let out = open_out("analytic", args.out.as_deref(), args.force.force)?;

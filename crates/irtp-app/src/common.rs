@@ -26,12 +26,18 @@ pub struct NoiseArgs {
     /// paper's, the same as --sigma S --lambda L),
     /// telegraph:plus=P,minus=M,rate_plus=KP,rate_minus=KM,
     /// rpt:sigma=S,alpha=A,beta=B, states:levels=[..],rates=[[..],..] or
-    /// none. Only `analytic` runs a noise other than the paper's; every
-    /// other method refuses it.
+    /// none. Every noise runs in simulate, fp stationary/transient/msd and
+    /// mfpt (--method backward, euler, exact; scan, optimize,
+    /// distribution); analytic: linear drag, or an asymmetric telegraph at
+    /// r = 0; a search (--xt, --interval): the paper's only.
     #[arg(long, value_name = "SPEC", conflicts_with_all = ["sigma", "lambda"])]
     pub noise: Option<String>,
     /// Temperature T >= 0 of a thermal noise sqrt(2T) dW added to the
-    /// active noise [default: 0]. Only `analytic` runs T > 0.
+    /// active noise [default: 0]. T > 0 runs in simulate --method euler, fp
+    /// and mfpt --method euler with any drag; in analytic and simulate
+    /// --method exact with linear drag; in mfpt --method backward (scan,
+    /// optimize, distribution) with linear, tanh, tan drags; not in mfpt
+    /// --method exact.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub temperature: Option<f64>,
 }

@@ -191,8 +191,22 @@ fn push(argv: &mut Vec<String>, arg: &Arg, name: &str, value: Value) -> Result<(
 pub fn parse<C: Vocabulary + 'static>(path: &str, argv: &[String]) -> Result<C, String> {
     let parsed = with_root::<C, _>(|root| {
         let mut m = root.try_get_matches_from_mut(argv)?;
-        C::from_arg_matches_mut(&mut m).map_err(|e| e.format(root))
+        // A flag that does not apply is refused as the binary refuses it.
+        if let Err(e) = crate::applies::check(&m) {
+            return Ok(Err(e));
+        }
+        C::from_arg_matches_mut(&mut m)
+            .map(Ok)
+            .map_err(|e| e.format(root))
     });
+    let parsed = match parsed {
+        Ok(Err(e)) => {
+            let msg = e.message_with(|n| format!("--{}", n.replace('_', "-")));
+            return Err(flags_to_keywords::<C>(path, &msg));
+        }
+        Ok(Ok(c)) => Ok(c),
+        Err(e) => Err(e),
+    };
     parsed.map_err(|e| {
         // The message up to clap's usage line, on one line.
         let rendered = e.render().to_string();

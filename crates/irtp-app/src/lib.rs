@@ -14,6 +14,7 @@
 
 pub mod analytic;
 mod analytic_noise;
+pub mod applies;
 pub mod budget;
 pub mod common;
 pub mod format;

@@ -71,16 +71,19 @@ fn usage_error(e: clap::Error) -> ExitCode {
         let _ = e.print();
         return ExitCode::from(2);
     }
-    eprintln!(
-        "irtp: error: {} (see --help)",
-        shorten_value(&one_line(&e.render().to_string()))
-    );
+    let msg = shorten_value(&one_line(&e.render().to_string()));
+    let see = if msg.contains("--help") {
+        ""
+    } else {
+        " (see --help)"
+    };
+    eprintln!("irtp: error: {msg}{see}");
     ExitCode::from(2)
 }
 
-/// The value clap quotes in `invalid value '...' for '--flag'`, cut to its
-/// first 40 characters when it is long (a huge expression is not printed
-/// back whole).
+/// The value clap quotes in `invalid value '...' for '--flag'`, cut as
+/// every echoed value is ([`irtp::error::echo`]: a huge expression is not
+/// printed back whole).
 fn shorten_value(msg: &str) -> String {
     const PREFIX: &str = "invalid value '";
     let Some(start) = msg.find(PREFIX).map(|i| i + PREFIX.len()) else {
@@ -89,12 +92,8 @@ fn shorten_value(msg: &str) -> String {
     let Some(len) = msg[start..].find("' for '") else {
         return msg.to_string();
     };
-    let value = &msg[start..start + len];
-    if value.chars().count() <= 80 {
-        return msg.to_string();
-    }
-    let cut: String = value.chars().take(40).collect();
-    format!("{}{cut}...{}", &msg[..start], &msg[start + len..])
+    let value = irtp::error::echo(&msg[start..start + len]);
+    format!("{}{value}{}", &msg[..start], &msg[start + len..])
 }
 
 /// clap's message in one line: its first line, continued by the indented
@@ -113,10 +112,24 @@ fn one_line(rendered: &str) -> String {
     msg
 }
 
+/// Parse the command line: clap's checks, then the flags that do not
+/// apply to the chosen method or target ([`irtp_app::applies`]).
+fn parse() -> Result<Cli, ExitCode> {
+    use clap::{CommandFactory, FromArgMatches};
+    let mut command = Cli::command();
+    let matches = command.try_get_matches_from_mut(std::env::args_os());
+    let matches = matches.map_err(usage_error)?;
+    if let Err(e) = irtp_app::applies::check(&matches) {
+        eprintln!("irtp: error: {}", e.message_with(cli::flag_for));
+        return Err(ExitCode::from(2));
+    }
+    Cli::from_arg_matches(&matches).map_err(|e| usage_error(e.format(&mut command)))
+}
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match parse() {
         Ok(c) => c,
-        Err(e) => return usage_error(e),
+        Err(code) => return code,
     };
     match run(cli) {
         Ok(code) => ExitCode::from(code),

@@ -106,8 +106,8 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             name,
-            value: short_number(value.to_string()),
-            allowed: allowed.into(),
+            value: echo(&short_number(value.to_string())),
+            allowed: short_numbers(&allowed.into()),
         }
     }
 
@@ -160,7 +160,7 @@ impl Error {
                     names.join(", ")
                 )
             }
-            other => other.to_string(),
+            other => short_numbers(&other.to_string()),
         }
     }
 }
@@ -173,6 +173,8 @@ pub const PARAMETER_NAMES: &[&str] = &[
     "bins",
     "burn_in",
     "cells",
+    "cells_v",
+    "cells_x",
     "cfl",
     "control_cells",
     "cpus_per_task",
@@ -206,7 +208,8 @@ pub const PARAMETER_NAMES: &[&str] = &[
 /// `text` with every name of [`PARAMETER_NAMES`] that stands next to a
 /// comparison (`<`, `>`, `=`, `≤`, `≥`, `≠`, spaces between allowed)
 /// replaced by `rename(name)`; every other word unchanged (`mean < 1` in a
-/// reset spec's range is a key, not a parameter).
+/// reset spec's range is a key, not a parameter, and so is `sigma=S`, a
+/// key of a spec's syntax).
 fn rename_parameters(text: &str, rename: &impl Fn(&str) -> String) -> String {
     let is_word = |c: char| c.is_ascii_alphanumeric() || c == '_';
     let is_cmp = |c: Option<char>| matches!(c, Some('<' | '>' | '=' | '≤' | '≥' | '≠'));
@@ -223,7 +226,9 @@ fn rename_parameters(text: &str, rename: &impl Fn(&str) -> String) -> String {
             .find(|c| *c != ' ');
         let next = after.chars().find(|c| *c != ' ');
         out.push_str(before);
-        if PARAMETER_NAMES.contains(&word) && (is_cmp(prev) || is_cmp(next)) {
+        // `sigma=S` in a spec's syntax is a key, not a flag.
+        let key = after.starts_with('=') && !after[1..].starts_with([' ', '=']);
+        if PARAMETER_NAMES.contains(&word) && !key && (is_cmp(prev) || is_cmp(next)) {
             out.push_str(&rename(word));
         } else {
             out.push_str(word);
@@ -243,6 +248,92 @@ fn short_number(s: String) -> String {
     }
 }
 
+/// `x` in at most 6 significant digits: plain from 1e-4 to 1e6
+/// (`0.785398`, `1250`), else in scientific notation (`1e-300`,
+/// `1.23457e300`); the form every message prints a number in.
+pub fn short(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let a = x.abs();
+    if (1e-4..1e6).contains(&a) {
+        let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{x:.decimals$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            &s
+        };
+        return s.to_string();
+    }
+    let s = format!("{x:.5e}");
+    let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+    let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+    format!("{mantissa}e{exponent}")
+}
+
+/// Longest echo of a user's value in a message (then cut to [`ECHO_CUT`]
+/// characters and `…`).
+const ECHO_MAX: usize = 48;
+/// Characters of a long echoed value kept.
+const ECHO_CUT: usize = 40;
+
+/// A value as a message echoes it: its first [`ECHO_CUT`] characters and
+/// `…` when it is longer than [`ECHO_MAX`] (a table or an expression of
+/// megabytes is not printed back whole).
+pub fn echo(value: &str) -> String {
+    if value.chars().count() <= ECHO_MAX {
+        return value.to_string();
+    }
+    let cut: String = value.chars().take(ECHO_CUT).collect();
+    format!("{cut}…")
+}
+
+/// `text` with every number of more than 12 digits (`Display` of an f64
+/// such as 1e300 or 1e-300 in full) printed by [`short`], and every word
+/// (a run without spaces) longer than 80 characters cut as [`echo`] cuts
+/// it: a message stays one short line whatever it quotes.
+pub fn short_numbers(text: &str) -> String {
+    let is_num = |c: char| c.is_ascii_digit() || c == '.';
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        let (before, from) = rest.split_at(start);
+        let mut end = from.find(|c: char| !is_num(c)).unwrap_or(from.len());
+        // An exponent: e, an optional sign, digits.
+        let tail = &from[end..];
+        if let Some(exp) = tail.strip_prefix(['e', 'E']) {
+            let unsigned = exp.strip_prefix(['-', '+']).unwrap_or(exp);
+            let digits = unsigned
+                .find(|c: char| !c.is_ascii_digit())
+                .unwrap_or(unsigned.len());
+            if digits > 0 {
+                end += 1 + (exp.len() - unsigned.len()) + digits;
+            }
+        }
+        let (token, after) = from.split_at(end);
+        out.push_str(before);
+        let digits = token.chars().filter(char::is_ascii_digit).count();
+        match token.parse::<f64>() {
+            Ok(x) if digits > 12 && x.is_finite() => out.push_str(&short(x)),
+            _ => out.push_str(token),
+        }
+        rest = after;
+    }
+    out.push_str(rest);
+    let words: Vec<String> = out
+        .split(' ')
+        .map(|w| {
+            if w.chars().count() > 80 {
+                echo(w)
+            } else {
+                w.to_string()
+            }
+        })
+        .collect();
+    words.join(" ")
+}
+
 /// Library result alias.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -260,6 +351,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn short_prints_at_most_six_significant_digits() {
+        let cases = [
+            (std::f64::consts::FRAC_PI_4, "0.785398"),
+            (1250.0, "1250"),
+            (-0.25, "-0.25"),
+            (1e-300, "1e-300"),
+            (1.234567891e300, "1.23457e300"),
+            (123456789.0, "1.23457e8"),
+            (0.0, "0"),
+            (f64::INFINITY, "inf"),
+        ];
+        for (x, s) in cases {
+            assert_eq!(short(x), s);
+        }
+        let long = format!("T = {} and t = {}, 12 and 1e-3", 1e300, 1e-300);
+        assert_eq!(
+            short_numbers(&long),
+            "T = 1e300 and t = 1e-300, 12 and 1e-3"
+        );
+    }
+
+    #[test]
     fn message_with_renames_only_the_parameter() {
         let e = Error::invalid("t_max", -1, "t_max > 0");
         assert_eq!(e.to_string(), "invalid t_max = -1: allowed t_max > 0");
@@ -273,6 +386,11 @@ mod tests {
             e.message_with(|n| format!("--{}", n.replace('_', "-"))),
             "invalid --t-max = -1: allowed --t-max >= --dt = 0.001, mean < 1, the rate"
         );
+        let e = Error::invalid("noise", "x", "telegraph:sigma=S,lambda=L (sigma > 0)");
+        assert_eq!(
+            e.message_with(|n| format!("--{n}")),
+            "invalid --noise = x: allowed telegraph:sigma=S,lambda=L (--sigma > 0)"
+        );
         let n = Error::NotConverged {
             method: "m",
             iterations: 3,
@@ -280,6 +398,17 @@ mod tests {
             tolerance: 1e-9,
         };
         assert_eq!(n.message_with(|_| unreachable!()), n.to_string());
+        let e = Error::invalid(
+            "sigma",
+            1e-300,
+            format!("sigma < {} or {}", 1e300, "x".repeat(99)),
+        );
+        assert_eq!(
+            e.to_string().len(),
+            "invalid sigma = 1e-300: allowed sigma < 1e300 or ".len() + 43
+        );
+        assert!(e.to_string().contains("sigma < 1e300 or xxxx"));
+        assert_eq!(echo(&"y".repeat(1000)), format!("{}…", "y".repeat(40)));
         assert!(!n.is_input_error() && e.is_input_error());
     }
 }

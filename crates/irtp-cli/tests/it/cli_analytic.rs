@@ -116,3 +116,33 @@ fn bad_input_one_line_exit_2_nothing_written() {
     ]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The paper's noise with linear drag and resetting takes the closed forms
+/// of any noise (N3)-(N6): `--sigma --lambda` and the same process as a
+/// `states:` generator give the same moments.
+#[test]
+fn linear_drag_with_resetting_answers_for_both_spellings_of_the_paper_noise() {
+    for (rate, vr) in [("1", "0"), ("0.3", "0.7"), ("5", "-1.2")] {
+        let paper = [
+            "analytic", "--drag", "linear", "--rate", rate, "--sigma", "3",
+        ];
+        let paper = [
+            &paper[..],
+            &["--lambda", "0.5", "--reset-velocity", vr, "--json"],
+        ]
+        .concat();
+        let states = "states:levels=[3,-3],rates=[[-0.5,0.5],[0.5,-0.5]]";
+        let other = [
+            "analytic", "--drag", "linear", "--rate", rate, "--noise", states,
+        ];
+        let other = [&other[..], &["--reset-velocity", vr, "--json"]].concat();
+        let (a, b) = (json(&irtp(&paper)), json(&irtp(&other)));
+        for key in ["v_mean", "v2", "drift", "d_eff"] {
+            let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+            assert!(
+                (x - y).abs() <= 1e-12 * y.abs().max(1.0),
+                "{key}: {x} vs {y}"
+            );
+        }
+    }
+}

@@ -20,6 +20,7 @@ mod fpt_distribution;
 mod hostile;
 #[cfg(unix)]
 mod interrupt;
+mod messages;
 mod mfpt_cli;
 mod noise_backward_cli;
 mod noise_cli;

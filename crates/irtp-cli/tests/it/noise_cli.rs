@@ -117,7 +117,10 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             let args = [&fit(&cmd)[..], &extra[..], &["--out", d][..]].concat();
             let out = irtp(&args);
             let err = assert_rejected(&out, flag, &dir);
-            assert!(err.contains("run by: analytic"), "{args:?}: {err}");
+            assert!(
+                err.contains("simulate and fp run any noise"),
+                "{args:?}: {err}"
+            );
         }
     }
 }

@@ -733,12 +733,17 @@ fn search_scan_and_optimize_refusals_name_the_flag() {
             "--from",
         ),
         (
+            [&["scan", "--v0", "0", "--over", "x0"][..], &scan].concat(),
+            "--over",
+        ),
+        (
+            // --vt applies to --over rate only (the table's rule).
             [
                 &["scan", "--vt", "0.5", "--v0", "0", "--over", "x0"][..],
                 &scan,
             ]
             .concat(),
-            "--over",
+            "--vt",
         ),
         (
             [

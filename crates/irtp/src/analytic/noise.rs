@@ -10,7 +10,7 @@ use super::linear_noise::{LinearNoise, NoiseMoments};
 use super::telegraph_r0::TelegraphR0Density;
 use crate::error::{Error, Result};
 use crate::model::noise::{
-    support::{blamed, RUNNERS},
+    support::{blamed, RUNS_IT},
     NoiseKind, NoiseModel,
 };
 use crate::model::{DragLaw, Params};
@@ -27,17 +27,19 @@ pub struct NoiseClosedForm {
     pub density: Option<TelegraphR0Density>,
 }
 
-/// The closed forms for `p`'s noise model (Some in [`Params::noise`]):
-/// refused with an error naming the flag when the protocol is not the
-/// paper's Poisson clock to a point with the noise kept, or when neither
-/// closed form applies.
+/// The closed forms for `p`'s noise model ([`Params::noise`]; the paper's
+/// symmetric telegraph noise of `sigma`, `lambda` when None, so that both
+/// spellings of one process take one route): refused with an error naming
+/// the flag when the protocol is not the paper's Poisson clock to a point
+/// with the noise kept, or when neither closed form applies.
 pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
-    let Some(noise) = p.noise() else {
-        return Err(Error::invalid(
-            "noise",
-            "telegraph (the paper's)",
-            "another noise model (the paper's runs in analytic::r0 and analytic::linear)",
-        ));
+    let paper;
+    let noise = match p.noise() {
+        Some(n) => n,
+        None => {
+            paper = crate::model::noise::NoiseModel::telegraph(p.sigma(), p.lambda())?;
+            &paper
+        }
     };
     if let Some(f) = p.schedule().features().into_iter().next() {
         return Err(Error::invalid(
@@ -75,7 +77,7 @@ pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
             name,
             value,
             format!(
-                "a case with a closed form (not drag {} at temperature {} and rate {}); run by: {RUNNERS}",
+                "a closed form (not drag {} at T = {}, r = {}); {RUNS_IT}",
                 p.drag(),
                 noise.temperature(),
                 p.rate()

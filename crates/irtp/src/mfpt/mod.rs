@@ -164,7 +164,7 @@ impl Problem {
                 "vt",
                 vt,
                 format!(
-                    "{vl:.6} < vt < {vu:.6}: the +Sigma state approaches v_u = g^-1(Sigma) = {vu:.6} only asymptotically (drift Sigma - g(v) -> 0), so a target at or beyond v_u (or v_l) is never reached"
+                    "{vl} < vt < {vu} (the velocity interval's edges are approached only asymptotically, never reached)"
                 ),
             ));
         }
@@ -174,7 +174,7 @@ impl Problem {
             return Err(Error::invalid(
                 "v0",
                 v0,
-                format!("{vl:.6} < v0 < {vu:.6} and v0 != vt"),
+                format!("{vl} < v0 < {vu} and v0 != vt"),
             ));
         }
         // A random target may land beyond v_t: that reset is the passage

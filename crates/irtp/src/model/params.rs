@@ -186,7 +186,7 @@ impl Params {
             return Err(Error::invalid(
                 "reset_velocity",
                 reset_velocity,
-                format!("-{vu:.6} < v_r < {vu:.6} (the open velocity interval for {drag} drag, sigma = {sigma})"),
+                format!("-{vu} < v_r < {vu} (the open velocity interval for {drag} drag, sigma = {sigma})"),
             ));
         }
         Ok(Params {
@@ -228,12 +228,20 @@ impl Params {
         }
         let reset_velocity = finite("reset_velocity", reset_velocity)?;
         let (lo, hi) = noise.velocity_interval(&drag);
+        if !(lo < hi) {
+            // Equal levels: no interval for any v_r, the noise's fault.
+            return Err(Error::invalid(
+                "noise",
+                noise.spec(),
+                "a noise with two different levels (equal levels leave no velocity interval)",
+            ));
+        }
         if !(reset_velocity > lo && reset_velocity < hi) {
             return Err(Error::invalid(
                 "reset_velocity",
                 reset_velocity,
                 format!(
-                    "{lo:.6} < v_r < {hi:.6} (the open velocity interval of noise {} with drag {drag})",
+                    "{lo} < v_r < {hi} (the open velocity interval of noise {} with drag {drag})",
                     noise.spec()
                 ),
             ));
@@ -403,7 +411,7 @@ impl Params {
                     f.flag(),
                     self.schedule.spec_of(f),
                     format!(
-                        "a protocol that {solver} runs ({} is run by: {})",
+                        "a protocol that {solver} runs ({} runs in: {})",
                         f.describe(),
                         support::runners(f)
                     ),
@@ -602,7 +610,7 @@ impl Params {
             return Err(Error::invalid(
                 "dt",
                 dt,
-                format!("0 < dt < {max:.6} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded or g jumps, so an Euler step cannot leave it)"),
+                format!("0 < dt < {max} (= 1/max g'(v) on the velocity interval, or the steepest secant to its edge where g' is unbounded or g jumps, so an Euler step cannot leave it)"),
             ));
         }
         Ok(dt)

@@ -111,7 +111,7 @@ impl BackwardOptions {
     pub fn validate(&self) -> Result<()> {
         for (name, c) in [("cells_x", self.cells_x), ("cells_v", self.cells_v)] {
             if !(2..=100_000).contains(&c) {
-                return Err(Error::invalid(name, c, "2 <= cells <= 100000"));
+                return Err(Error::invalid(name, c, format!("2 <= {name} <= 100000")));
             }
         }
         if !(self.truncation > 0.0 && self.truncation < 1.0) {

@@ -188,7 +188,7 @@ impl RenewalOptions {
     pub fn validate(&self) -> Result<()> {
         for (name, c) in [("cells_x", self.cells_x), ("cells_v", self.cells_v)] {
             if !(2..=100_000).contains(&c) {
-                return Err(Error::invalid(name, c, "2 <= cells <= 100000"));
+                return Err(Error::invalid(name, c, format!("2 <= {name} <= 100000")));
             }
         }
         if !(4..=1_000_000).contains(&self.steps) {

@@ -734,7 +734,7 @@ fn params_carry_another_noise_and_every_solver_refuses_it() {
             let (name, msg) = blamed(p.require(solver).unwrap_err());
             assert_eq!(name, flag, "{solver}: {msg}");
             assert!(
-                msg.contains(solver.command()) && msg.contains("run by: analytic"),
+                msg.contains(solver.command()) && msg.contains("simulate and fp run any noise"),
                 "{msg}"
             );
         }
@@ -792,6 +792,18 @@ fn closed_forms_from_params() {
     assert_eq!(blamed(solve(&rpt).unwrap_err()).0, "noise");
     let reset = Params::with_noise(DragLaw::Tan, asym, 1.0, 0.0).unwrap();
     assert_eq!(blamed(solve(&reset).unwrap_err()).0, "noise");
-    let paper = Params::new(DragLaw::Linear, 1.0, 0.5, 0.0, 0.0).unwrap();
-    assert!(solve(&paper).is_err());
+    // The paper's noise takes the route of its `states:` spelling.
+    let paper = Params::new(DragLaw::Linear, 1.0, 0.5, 0.7, 0.2).unwrap();
+    let spelt = model("states:levels=[1,-1],rates=[[-0.5,0.5],[0.5,-0.5]]", 0.0);
+    let spelt = Params::with_noise(DragLaw::Linear, spelt, 0.7, 0.2).unwrap();
+    let a = solve(&paper).unwrap().moments.unwrap();
+    let b = solve(&spelt).unwrap().moments.unwrap();
+    for (x, y) in [
+        (a.v_mean, b.v_mean),
+        (a.v2, b.v2),
+        (a.drift, b.drift),
+        (a.d_eff, b.d_eff),
+    ] {
+        assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "{x} vs {y}");
+    }
 }

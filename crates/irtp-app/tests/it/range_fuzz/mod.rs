@@ -422,6 +422,11 @@ fn analytic(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
     no_nulls(json, &[])?;
     finite_tables(o, &[])?;
     in_v2_range("v2", num(json, "v2")?, vu)?;
+    if json.get("d_eff").is_some() {
+        // Linear drag with resetting: the noise moments (N3)-(N6), no density.
+        let d = num(json, "d_eff")?;
+        return ensure(d >= 0.0 && d.is_finite(), || format!("d_eff = {d}"));
+    }
     let v4 = num(json, "v4")?;
     ensure(v4 >= 0.0 && v4 <= vu.powi(4) * (1.0 + 1e-12), || {
         format!("v4 = {v4}")
@@ -721,7 +726,7 @@ fn mfpt_optimize(case: &Case, json: &Value, o: &Outcome) -> Result<(), String> {
 
 #[test]
 fn analytic_range() {
-    // The closed form exists for r = 0 only: mostly r = 0.
+    // The density exists for r = 0 only (linear drag: moments at any r): mostly r = 0.
     let s = (model(false), count(), prop::bool::weighted(0.8)).prop_map(|(mut m, points, r0)| {
         if r0 {
             m.rate = 0.0;

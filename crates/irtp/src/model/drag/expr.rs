@@ -132,7 +132,7 @@ fn bad(text: &str, what: impl fmt::Display) -> Error {
     Error::invalid(
         "drag",
         format!("{NAME}:{text}"),
-        format!("an odd, increasing expression in v ({what})"),
+        format!("an odd, increasing g(v) ({what})"),
     )
 }
 
@@ -153,6 +153,14 @@ fn known_names() -> String {
         FUNCTIONS.join(", "),
         CONSTANTS.join(", ")
     )
+}
+
+/// A parse error of exmex in a message: its first clause, cut as an echo
+/// is ([`crate::error::echo`]), so the message stays one short line.
+pub(crate) fn parse_error(e: &impl std::fmt::Display) -> String {
+    let text = e.to_string();
+    let first = text.split([',', ';']).next().unwrap_or_default();
+    format!("parse error: {}", crate::error::echo(first.trim()))
 }
 
 /// The error builder of an expression's checks: (text, what is wrong).
@@ -178,10 +186,7 @@ pub(crate) fn check_names(text: &str, var: &str, bad: Bad) -> Result<()> {
             if name != var && !FUNCTIONS.contains(&name) && !CONSTANTS.contains(&name) {
                 return Err(bad(
                     text,
-                    format!(
-                        "unknown name '{name}': the variable is {var}; functions {}",
-                        known_names()
-                    ),
+                    format!("unknown name '{name}' (the variable is {var}; functions: --help)"),
                 ));
             }
             i = i.max(start + 1);
@@ -319,7 +324,7 @@ pub(crate) fn on_big_stack<T: Send>(
 fn parse_and_differentiate(text: &str) -> Result<(FlatEx<f64>, FlatEx<f64>)> {
     let plain = plain_numbers(text);
     let work = || -> Result<(FlatEx<f64>, FlatEx<f64>)> {
-        let g = exmex::parse::<f64>(&plain).map_err(|e| bad(text, format!("parse error: {e}")))?;
+        let g = exmex::parse::<f64>(&plain).map_err(|e| bad(text, parse_error(&e)))?;
         if g.var_names() != ["v".to_string()] {
             return Err(bad(text, "it must depend on v"));
         }
@@ -569,7 +574,7 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
         if !g.is_finite() || g1.is_nan() {
             return Err(bad(
                 d.text(),
-                format!("g(v) = {g}, g'(v) = {g1} at v = {v:.6} inside the velocity interval of sigma = {sigma}"),
+                format!("g(v) = {g}, g'(v) = {g1} at v = {v} inside the velocity interval of sigma = {sigma}"),
             ));
         }
         // Strictly increasing: g' >= 0 everywhere and g rising from sample
@@ -578,13 +583,13 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
         if !(g1 >= 0.0) {
             return Err(bad(
                 d.text(),
-                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' < 0 at v = {v:.6} (g' = {g1:e})"),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g' < 0 at v = {v} (g' = {g1:e})"),
             ));
         }
         if i > 0 && !(g > g_prev) {
             return Err(bad(
                 d.text(),
-                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g does not rise from v = {:.6} to {v:.6}", vu * (i - 1) as f64 / N as f64),
+                format!("g must increase strictly from 0 up to g(v_u) = sigma = {sigma}: g does not rise from v = {} to {v}", vu * (i - 1) as f64 / N as f64),
             ));
         }
         g_prev = g;
@@ -593,7 +598,7 @@ fn check_interval(d: &Expr, sigma: f64) -> Result<()> {
     if !((g_vu - sigma).abs() <= 1e-9 * sigma) {
         return Err(bad(
             d.text(),
-            format!("g stops short of sigma = {sigma} at v = {vu:.6} (g = {g_vu}): it jumps or stops increasing there"),
+            format!("g stops short of sigma = {sigma} at v = {vu} (g = {g_vu}): it jumps or stops increasing there"),
         ));
     }
     Ok(())

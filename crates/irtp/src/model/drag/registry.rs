@@ -102,11 +102,17 @@ macro_rules! __drag_registry {
                 out
             }
 
-            /// How each law is written, for messages:
-            /// `tan, ..., power:n=N[,k=K], ...`.
+            /// The laws by name, for messages: `tan, ..., power, ...`
+            /// (their keys are in `--help` of `--drag`).
             pub fn names() -> String {
                 let mut names: Vec<String> = vec![$(super::$uty.name().to_string()),*];
-                $(names.push(<super::$pty as SpecLaw>::usage());)*
+                $(names.push(
+                    <super::$pty as SpecLaw>::usage()
+                        .split(':')
+                        .next()
+                        .unwrap_or_default()
+                        .to_string(),
+                );)*
                 names.join(", ")
             }
 

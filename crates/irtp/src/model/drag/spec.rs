@@ -123,26 +123,13 @@ pub fn keys_help<L: ParamLaw>() -> String {
 /// Parse the part after `name:` of a spec (`args`; None when the spec has
 /// no `:`). `spec` is the whole spec, for messages.
 pub fn parse<L: ParamLaw>(spec: &str, args: Option<&str>) -> Result<L> {
+    let names: Vec<&str> = L::KEYS.iter().map(|k| k.name).collect();
+    let texts = crate::model::keys::pairs(args.unwrap_or(""), &names)
+        .map_err(|what| bad::<L>(spec, what))?;
     let mut values: Vec<Option<f64>> = vec![None; L::KEYS.len()];
-    for pair in args
-        .unwrap_or("")
-        .split(',')
-        .filter(|p| !p.trim().is_empty())
-    {
-        let (key, value) = pair
-            .split_once('=')
-            .ok_or_else(|| bad::<L>(spec, format!("key=value pairs, not '{}'", pair.trim())))?;
-        let (key, value) = (key.trim(), value.trim());
-        let i = L::KEYS.iter().position(|k| k.name == key).ok_or_else(|| {
-            let known: Vec<&str> = L::KEYS.iter().map(|k| k.name).collect();
-            bad::<L>(
-                spec,
-                format!("the keys {} (unknown key '{key}')", known.join(", ")),
-            )
-        })?;
-        if values[i].is_some() {
-            return Err(bad::<L>(spec, format!("each key once ('{key}' repeated)")));
-        }
+    for (i, text) in texts.into_iter().enumerate() {
+        let Some(value) = text else { continue };
+        let key = L::KEYS[i].name;
         let x: f64 = value.parse().map_err(|_| {
             bad::<L>(
                 spec,
@@ -168,7 +155,8 @@ pub fn parse<L: ParamLaw>(spec: &str, args: Option<&str>) -> Result<L> {
 
 /// The error of a malformed spec: names `drag`, the spec and how to write it.
 fn bad<L: ParamLaw>(spec: &str, what: String) -> Error {
-    Error::invalid("drag", spec, format!("{what}, in {}", usage::<L>()))
+    let reason = crate::model::keys::reason("--drag", spec, &what, &usage::<L>());
+    Error::invalid("drag", spec, reason)
 }
 
 /// Validate one parameter: finite and > 0, else an error naming it

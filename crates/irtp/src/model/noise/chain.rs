@@ -51,7 +51,8 @@ pub fn validate(levels: &[f64], q: &[Vec<f64>], spec: &str, usage: &str) -> Resu
         );
         if !(sum.abs() <= ROW_SUM_TOL * size) {
             return Err(bad(format!(
-                "rows of the generator summing to 0 within {ROW_SUM_TOL:e} of their absolute sum (row {i} sums to {sum:e})"
+                "generator rows summing to 0 (row {i} sums to {})",
+                crate::error::short(sum)
             )));
         }
     }

@@ -72,10 +72,14 @@ macro_rules! __noise_registry {
                 vec![$(NoiseKind::$v(<super::$ty as Noise>::example()),)*]
             }
 
-            /// How each kind is written, for messages.
+            /// The kinds by name, for messages (their syntax is in
+            /// `--help` of `--noise`).
             pub fn names() -> String {
-                let names: Vec<&str> = vec![$(<super::$ty as Noise>::usage(),)*];
-                names.join("; ")
+                let names: Vec<&str> = vec![$(<super::$ty as Noise>::usage()
+                    .split([':', ' '])
+                    .next()
+                    .unwrap_or_default(),)*];
+                names.join(", ")
             }
         }
 

@@ -24,59 +24,32 @@ pub fn list(xs: &[f64]) -> String {
 /// The error of a malformed or out-of-range spec: names `noise`, the spec
 /// and what is allowed.
 pub fn bad(spec: &str, what: impl std::fmt::Display, usage: &str) -> Error {
-    Error::invalid("noise", spec, format!("{what}, in {usage}"))
+    let what = what.to_string();
+    Error::invalid(
+        "noise",
+        spec,
+        crate::model::keys::reason("--noise", spec, &what, usage),
+    )
 }
 
-/// The comma-separated parts of `text` outside brackets.
+/// The comma-separated parts of `text` outside brackets, none empty.
 fn split_top(text: &str) -> Vec<&str> {
-    let (mut depth, mut start, mut out) = (0i32, 0, Vec::new());
-    for (i, c) in text.char_indices() {
-        match c {
-            '[' => depth += 1,
-            ']' => depth -= 1,
-            ',' if depth == 0 => {
-                out.push(&text[start..i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
-    }
-    out.push(&text[start..]);
-    out.into_iter().filter(|p| !p.trim().is_empty()).collect()
+    crate::model::keys::split_top(text)
+        .into_iter()
+        .filter(|p| !p.trim().is_empty())
+        .collect()
 }
 
 /// The values of `keys` in a spec's arguments (None for a key not given):
-/// every pair `key=value`, each key known and at most once.
+/// every pair `key=value`, each key known and at most once, no empty item
+/// ([`crate::model::keys::pairs`]).
 pub fn pairs<'a>(
     spec: &str,
     args: Option<&'a str>,
     keys: &[&str],
     usage: &str,
 ) -> Result<Vec<Option<&'a str>>> {
-    let mut values = vec![None; keys.len()];
-    for pair in split_top(args.unwrap_or("")) {
-        let (key, value) = pair.split_once('=').ok_or_else(|| {
-            bad(
-                spec,
-                format!("key=value pairs, not '{}'", pair.trim()),
-                usage,
-            )
-        })?;
-        let key = key.trim();
-        let i = keys.iter().position(|k| *k == key).ok_or_else(|| {
-            let what = format!("the keys {} (unknown key '{key}')", keys.join(", "));
-            bad(spec, what, usage)
-        })?;
-        if values[i].is_some() {
-            return Err(bad(
-                spec,
-                format!("each key once ('{key}' repeated)"),
-                usage,
-            ));
-        }
-        values[i] = Some(value.trim());
-    }
-    Ok(values)
+    crate::model::keys::pairs(args.unwrap_or(""), keys).map_err(|what| bad(spec, what, usage))
 }
 
 /// A finite number for `key`.

@@ -20,7 +20,8 @@ pub struct States {
     rates: Vec<Vec<f64>>,
 }
 
-const USAGE: &str = "states:levels=[A1,...,AN],rates=[[Q11,...,Q1N],...,[QN1,...,QNN]] (a generator: rates >= 0 off the diagonal, rows summing to 0, 2 <= N <= 32, irreducible)";
+const USAGE: &str =
+    "states:levels=[A1,..,AN],rates=[[Q11,..,Q1N],..,[QN1,..,QNN]] (a generator, 2 <= N <= 32)";
 const KEYS: [&str; 2] = ["levels", "rates"];
 
 impl States {

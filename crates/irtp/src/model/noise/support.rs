@@ -41,6 +41,10 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting); \
     mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting)";
 
+/// What a refusal of a noise model says runs it (one line; [`RUNNERS`],
+/// the full list, is in `--help` of `--noise` and README's support table).
+pub const RUNS_IT: &str = "simulate and fp run any noise (see --help of --noise)";
+
 /// Whether `solver` runs `noise` (a model other than the paper's default),
 /// one line per method (README's support table). The exact sampler runs
 /// any finite-state noise at T = 0, and at T > 0 with linear drag (its
@@ -97,8 +101,7 @@ pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
             "temperature",
             noise.temperature(),
             format!(
-                "temperature 0 for {} (no exact flow with thermal noise; any finite-state noise \
-                 runs at temperature 0); this noise is run by: {RUNNERS}",
+                "temperature 0 for {} (no exact flow with thermal noise); {RUNS_IT}",
                 solver.command()
             ),
         ));
@@ -109,16 +112,14 @@ pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
 /// The refusal of a noise model by `method` (a command, for the message):
 /// names `temperature` for the paper's noise with T > 0, else `noise`, and
 /// lists [`RUNNERS`]. Problems that no method runs with another noise (the
-/// first-passage and search problems) refuse it when built.
+/// first-passage and search problems) refuse it when built. The message
+/// says what runs it in one line ([`RUNS_IT`]).
 pub fn refuse(method: &str, noise: &NoiseModel) -> Result<()> {
     let (name, value) = blamed(noise);
     Err(Error::invalid(
         name,
         value,
-        format!(
-            "a noise that {method} runs: the paper's symmetric telegraph noise (--sigma, \
-             --lambda) at --temperature 0; this noise is run by: {RUNNERS}"
-        ),
+        format!("the paper's noise at temperature 0 for {method}; {RUNS_IT}"),
     ))
 }
 

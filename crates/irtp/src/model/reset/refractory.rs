@@ -65,19 +65,21 @@ impl Refractory {
 impl std::str::FromStr for Refractory {
     type Err = Error;
     fn from_str(spec: &str) -> Result<Self> {
-        let bad = |what: String| Error::invalid("refractory", spec, format!("{what}, in {USAGE}"));
+        let bad = |what: String| {
+            let reason = crate::model::keys::reason("--refractory", spec, &what, USAGE);
+            Error::invalid("refractory", spec, reason)
+        };
         let (kind, arg) = spec.trim().split_once(':').unwrap_or((spec.trim(), ""));
         let key = match kind {
             "exp" => "mean",
             "fixed" => "t",
             _ => return Err(bad(format!("a kind exp or fixed (not '{kind}')"))),
         };
-        let (k, v) = arg
-            .split_once('=')
+        let v = crate::model::keys::pairs(arg, &[key])
+            .map_err(bad)?
+            .pop()
+            .flatten()
             .ok_or_else(|| bad(format!("{key}=VALUE")))?;
-        if k.trim() != key || v.contains(',') {
-            return Err(bad(format!("the one key {key} (not '{}')", arg.trim())));
-        }
         let x: f64 = v
             .trim()
             .parse()

@@ -36,38 +36,31 @@ pub fn parse(spec: &str) -> Result<(Target, Option<NoiseAtReset>)> {
         Error::invalid(
             "reset_to",
             spec,
-            format!("{what}, in {}[,noise=kept|redrawn]", Target::usage()),
+            crate::model::keys::reason(
+                "--reset-to",
+                spec,
+                &what,
+                &format!("{}[,noise=kept|redrawn]", Target::usage()),
+            ),
         )
     };
     let (kind, args) = spec.trim().split_once(':').unwrap_or((spec.trim(), ""));
     let keys = Target::parse_kind(kind).map_err(bad)?;
+    let mut names = keys.to_vec();
+    names.push("noise");
+    let mut texts = crate::model::keys::pairs(args, &names).map_err(bad)?;
+    let noise = match texts.pop().flatten() {
+        Some(value) => Some(
+            value
+                .parse::<NoiseAtReset>()
+                .map_err(|_| bad(format!("noise=kept or noise=redrawn, not '{value}'")))?,
+        ),
+        None => None,
+    };
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
-    let mut noise = None;
-    for pair in args.split(',').filter(|p| !p.trim().is_empty()) {
-        let (key, value) = pair
-            .split_once('=')
-            .ok_or_else(|| bad(format!("key=value pairs, not '{}'", pair.trim())))?;
-        let (key, value) = (key.trim(), value.trim());
-        if key == "noise" {
-            if noise.is_some() {
-                return Err(bad("each key once ('noise' repeated)".into()));
-            }
-            noise = Some(
-                value
-                    .parse::<NoiseAtReset>()
-                    .map_err(|_| bad(format!("noise=kept or noise=redrawn, not '{value}'")))?,
-            );
-            continue;
-        }
-        let i = keys.iter().position(|k| *k == key).ok_or_else(|| {
-            bad(format!(
-                "the keys {} (unknown key '{key}')",
-                keys.join(", ")
-            ))
-        })?;
-        if values[i].is_some() {
-            return Err(bad(format!("each key once ('{key}' repeated)")));
-        }
+    for (i, text) in texts.into_iter().enumerate() {
+        let Some(value) = text else { continue };
+        let key = keys[i];
         let x: f64 = value
             .parse()
             .map_err(|_| bad(format!("a number for {key}, not '{value}'")))?;

@@ -164,12 +164,28 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
     }
 }
 
-/// The solvers that run `feature`, for messages.
+/// The solvers that run `feature`, for messages, the methods of one
+/// command together: `simulate (exact, euler), fp transient, mfpt (exact,
+/// euler)`.
 pub fn runners(feature: Feature) -> String {
-    let list: Vec<&str> = Solver::ALL
+    let mut groups: Vec<(&str, Vec<&str>)> = Vec::new();
+    for s in Solver::ALL.iter().filter(|s| supports(**s, feature)) {
+        let command = s.command().trim_end_matches(" and the linear closed forms");
+        let (name, method) = match command.split_once(" --method ") {
+            Some((name, method)) => (name, Some(method)),
+            None => (command, None),
+        };
+        match groups.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, methods)) => methods.extend(method),
+            None => groups.push((name, method.into_iter().collect())),
+        }
+    }
+    let list: Vec<String> = groups
         .iter()
-        .filter(|s| supports(**s, feature))
-        .map(|s| s.command())
+        .map(|(name, methods)| match methods.is_empty() {
+            true => name.to_string(),
+            false => format!("{name} ({})", methods.join(", ")),
+        })
         .collect();
     if list.is_empty() {
         "no method yet".into()

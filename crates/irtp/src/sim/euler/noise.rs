@@ -235,7 +235,7 @@ pub fn check_noise_dt(params: &Params, dt: f64) -> Result<f64> {
             "dt",
             dt,
             format!(
-                "0 < dt < {max:.6} (the Euler step bound of noise {}: an explicit step must not \
+                "0 < dt < {max} (the Euler step bound of noise {}: an explicit step must not \
                  leave the velocity interval)",
                 params.noise().map(|m| m.spec()).unwrap_or_default()
             ),

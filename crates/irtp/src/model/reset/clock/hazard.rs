@@ -190,8 +190,8 @@ fn compile(text: &str) -> Result<Compiled> {
     let plain = plain_numbers(text);
     let r = on_big_stack(
         || {
-            let r =
-                exmex::parse::<f64>(&plain).map_err(|x| err(text, format!("parse error: {x}")))?;
+            let r = exmex::parse::<f64>(&plain)
+                .map_err(|x| err(text, crate::model::drag::expr::parse_error(&x)))?;
             if r.var_names().len() > 1 || r.var_names().iter().any(|v| v != "a") {
                 return Err(err(text, "an expression in a"));
             }

@@ -160,36 +160,22 @@ pub fn horizon_by_bisection(w: impl Fn(f64) -> f64, tail: f64) -> f64 {
 /// The error of a bad spec: names [`FLAG`], the spec and `what` is wrong
 /// in `usage`.
 pub fn bad(spec: &str, what: impl fmt::Display, usage: &str) -> Error {
-    Error::invalid(FLAG, spec, format!("{what}, in {usage}"))
+    let what = what.to_string();
+    Error::invalid(
+        FLAG,
+        spec,
+        crate::model::keys::reason("--reset-clock", spec, &what, usage),
+    )
 }
 
 /// The values of `keys` in `args` (`k=2,theta=0.5`, any order, each once),
 /// each a finite number; errors name [`FLAG`].
 pub fn keyed(args: &str, spec: &str, keys: &[&str], usage: &str) -> Result<Vec<f64>> {
+    let texts = crate::model::keys::pairs(args, keys).map_err(|what| bad(spec, what, usage))?;
     let mut values: Vec<Option<f64>> = vec![None; keys.len()];
-    for pair in args.split(',').filter(|p| !p.trim().is_empty()) {
-        let (key, value) = pair.split_once('=').ok_or_else(|| {
-            bad(
-                spec,
-                format!("key=value pairs, not '{}'", pair.trim()),
-                usage,
-            )
-        })?;
-        let (key, value) = (key.trim(), value.trim());
-        let i = keys.iter().position(|k| *k == key).ok_or_else(|| {
-            bad(
-                spec,
-                format!("the keys {} (unknown key '{key}')", keys.join(", ")),
-                usage,
-            )
-        })?;
-        if values[i].is_some() {
-            return Err(bad(
-                spec,
-                format!("each key once ('{key}' repeated)"),
-                usage,
-            ));
-        }
+    for (i, text) in texts.into_iter().enumerate() {
+        let Some(value) = text else { continue };
+        let key = keys[i];
         let x: f64 = value
             .parse()
             .map_err(|_| bad(spec, format!("a number for {key}, not '{value}'"), usage))?;

@@ -34,7 +34,7 @@ pub(crate) fn check_location_scale(
 ) -> Result<(), String> {
     if !(mean > -vu && mean < vu) {
         return Err(format!(
-            "-{vu:.6} < mean < {vu:.6} (the open velocity interval, where the law is truncated)"
+            "-{vu} < mean < {vu} (the open velocity interval, where the law is truncated)"
         ));
     }
     if !(width > 0.0 && width.is_finite()) {

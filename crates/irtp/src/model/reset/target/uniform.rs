@@ -30,7 +30,7 @@ impl TargetLaw for UniformTarget {
         let (a, b) = (self.a, self.b);
         if !(a > -vu && a < b && b < vu) {
             return Err(format!(
-                "-{vu:.6} < a < b < {vu:.6} (inside the open velocity interval)"
+                "-{vu} < a < b < {vu} (inside the open velocity interval)"
             ));
         }
         Ok(*self)
