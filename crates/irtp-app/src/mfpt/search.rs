@@ -108,9 +108,11 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
         }
         Method::Exact => particle_method(&problem, SearchMethod::Exact(run), budget)?,
         Method::Backward => {
+            // The budget also bounds the finer meshes a sequence that is
+            // not yet asymptotic needs (checked before each one).
             let opts = search::backward::BackwardOptions {
-                max_work: f64::INFINITY,
-                max_memory: f64::INFINITY,
+                max_work: budget.max_work,
+                max_memory: budget.max_memory,
                 ..search::backward::BackwardOptions::with_cells(a.cells_x, a.cells_v)
             };
             mesh_method(&problem, SearchMethod::Backward(opts), budget)?
@@ -122,8 +124,8 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
                 cells_v: a.cells_v,
                 steps: a.time_steps.unwrap_or(defaults.steps),
                 tail: a.horizon_tail.unwrap_or(defaults.tail),
-                max_work: f64::INFINITY,
-                max_memory: f64::INFINITY,
+                max_work: budget.max_work,
+                max_memory: budget.max_memory,
                 ..defaults
             };
             mesh_method(&problem, SearchMethod::Renewal(opts), budget)?

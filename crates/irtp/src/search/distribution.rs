@@ -31,7 +31,8 @@
 //! the exact sampler gives S(t) and its tail).
 
 use super::backward::{
-    build, check_budget, cost_of, factor, mesh_drivers, mesh_info, meshes, BackwardOptions,
+    build, check_budget, check_plan, cost_of, factor, mesh_drivers, mesh_info, meshes,
+    BackwardOptions, Ladder,
 };
 use super::backward::{truncation_factor, Cost, MeshInfo, Resetting, Setup};
 use super::mesh::{Generator, LocalReset, Mesh};
@@ -144,7 +145,11 @@ pub struct SearchDistribution {
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
     let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
-    let c = cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0);
+    let mut plans = meshes(&setup, &opts.mesh);
+    if opts.mesh.refine {
+        plans.push(check_plan(&setup, &plans[0].0));
+    }
+    let c = cost_of(&plans, 6.0 * opts.steps as f64 + 4.0);
     // The curves kept: S, f and their errors, on the steps and half steps.
     let curves = 8.0 * 12.0 * (2.0 * opts.steps as f64 + 1.0);
     Ok(Cost {
@@ -163,7 +168,8 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         mesh_drivers(problem, &["steps"]),
     )?;
     let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
-    let meshes = build(&meshes(&setup, &opts.mesh));
+    let plans = meshes(&setup, &opts.mesh);
+    let meshes = build(&plans);
     let n = opts.steps;
     let in_time = |m: &Mesh| -> Result<(Curve, Vec<f64>, Curve)> {
         let (c1, c2) = (
@@ -176,11 +182,43 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
     };
     let (coarse, coarse_time, coarse_raw) = in_time(&meshes[0])?;
     let (best, mesh_err, time_err, finest) = if opts.mesh.refine {
-        let (fine, fine_time, _) = in_time(&meshes[1])?;
-        let e: Vec<f64> = (0..=n).map(|i| (fine.s[i] - coarse.s[i]).abs()).collect();
-        (fine.combine(2.0, &coarse, -1.0), e, fine_time, &meshes[1])
+        let check = check_plan(&setup, &plans[0].0);
+        let rungs = vec![
+            in_time(&Mesh::build(&check.0, 0))?,
+            (coarse, coarse_time, coarse_raw.clone()),
+            in_time(&meshes[1])?,
+        ];
+        let ladder = Ladder {
+            layout: &plans[0].0,
+            budget: (opts.mesh.max_work, opts.mesh.max_memory),
+            spent: cost.work,
+            method: "mfpt distribution --xt",
+        };
+        // The ladder follows ∫ S dt (the restricted mean), resolved down
+        // to its time error.
+        let dt = opts.t_max / n as f64;
+        let (rungs, finest) = ladder.climb(
+            rungs,
+            meshes[1].clone(),
+            &in_time,
+            |(c, time, _)| {
+                (
+                    c.integral(dt),
+                    3.0 * opts.t_max * time.iter().fold(0.0f64, |a, &b| a.max(b)),
+                )
+            },
+            |p| cost_of(std::slice::from_ref(p), 6.0 * n as f64 + 4.0),
+        )?;
+        let ((c, _, _), (f, fine_time, _)) = (&rungs[rungs.len() - 2], &rungs[rungs.len() - 1]);
+        let e: Vec<f64> = (0..=n).map(|i| (f.s[i] - c.s[i]).abs()).collect();
+        (f.combine(2.0, c, -1.0), e, fine_time.clone(), finest)
     } else {
-        (coarse, vec![f64::NAN; n + 1], coarse_time, &meshes[0])
+        (
+            coarse,
+            vec![f64::NAN; n + 1],
+            coarse_time,
+            meshes[0].clone(),
+        )
     };
     let trunc: Vec<f64> = if setup.truncated() {
         let wide = run(&setup, &meshes[meshes.len() - 1], opts.t_max, n)?;
@@ -196,7 +234,7 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         .collect();
     check_curve(&best.s, &err, "mfpt distribution --xt (extrapolated)")?;
     let dt = opts.t_max / n as f64;
-    let restricted_mean = dt * (best.s.iter().sum::<f64>() - 0.5 * (best.s[0] + best.s[n]));
+    let restricted_mean = best.integral(dt);
     let max = |v: &[f64]| v.iter().copied().fold(0.0f64, f64::max);
     Ok(SearchDistribution {
         t: (0..=n).map(|i| dt * i as f64).collect(),
@@ -211,7 +249,7 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         time_error: max(&time_err),
         truncation_error: max(&trunc),
         restricted_mean,
-        mesh: mesh_info(finest),
+        mesh: mesh_info(&finest),
     })
 }
 
@@ -223,6 +261,12 @@ struct Curve {
 }
 
 impl Curve {
+    /// ∫ S dt by the trapezoid rule on steps `dt`.
+    fn integral(&self, dt: f64) -> f64 {
+        let n = self.s.len() - 1;
+        dt * (self.s.iter().sum::<f64>() - 0.5 * (self.s[0] + self.s[n]))
+    }
+
     /// The values at the even steps (the run at dt/2 on the times of dt).
     fn every_other(&self) -> Curve {
         Curve {
