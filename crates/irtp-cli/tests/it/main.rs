@@ -34,6 +34,7 @@ mod random_target_fpt;
 mod reproduce;
 mod reset_protocols;
 mod search_cli;
+mod search_hostile;
 mod sweep;
 mod value_stability;
 mod verified;

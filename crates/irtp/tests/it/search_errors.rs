@@ -1,0 +1,134 @@
+//! The search solvers' error estimates bound their error (docs/equations.md,
+//! "Search: the 2-D backward equation and the renewal route", Richardson
+//! over three meshes), and the mirror image of a symmetric problem.
+
+use irtp::model::reset::Schedule;
+use irtp::search::backward::{self, BackwardOptions};
+use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
+use irtp::search::{PositionTarget, SearchProblem};
+use irtp::{DragLaw, Params};
+
+/// Full resetting to x_r = 0 at `rate` from (0, v0).
+fn problem(
+    drag: DragLaw,
+    sigma: f64,
+    lambda: f64,
+    rate: f64,
+    v0: f64,
+    t: PositionTarget,
+) -> SearchProblem {
+    let sched = Schedule::parse(None, Some(0.0), None).unwrap();
+    let p = Params::new(drag, sigma, lambda, rate, 0.0)
+        .unwrap()
+        .with_schedule(sched)
+        .unwrap();
+    SearchProblem::new(p, 0.0, v0, t).unwrap()
+}
+
+/// The reported error of a coarse solve (16 x 8) covers its distance to a
+/// solve on meshes four times finer (with its own estimate), or the coarse
+/// sequence is refused as not asymptotic (exit 4): never an estimate that
+/// understates the error.
+#[test]
+fn reported_errors_bound_a_finer_solve() {
+    let cases = [
+        problem(
+            DragLaw::Linear,
+            1.0,
+            0.5,
+            1.0,
+            0.0,
+            PositionTarget::Level(1.0),
+        ),
+        problem(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0, PositionTarget::Level(1.0)),
+        problem(
+            DragLaw::Tan,
+            3.0,
+            0.5,
+            1.0,
+            0.3,
+            PositionTarget::Interval(-1.0, 2.0),
+        ),
+        problem(
+            DragLaw::Linear,
+            1.0,
+            2.0,
+            0.3,
+            0.0,
+            PositionTarget::Level(-1.5),
+        ),
+    ];
+    for pr in cases {
+        let fine = backward::solve(&pr, &BackwardOptions::with_cells(64, 32)).unwrap();
+        match backward::solve(&pr, &BackwardOptions::with_cells(16, 8)) {
+            Ok(coarse) => {
+                let gap = (coarse.tau - fine.tau).abs();
+                assert!(
+                    gap <= coarse.error_estimate + fine.error_estimate,
+                    "{pr:?}: {} vs {}: gap {gap:e}, estimates {:e} + {:e}",
+                    coarse.tau,
+                    fine.tau,
+                    coarse.error_estimate,
+                    fine.error_estimate
+                );
+            }
+            Err(e) => assert!(e.is_numerical(), "{e}"),
+        }
+    }
+}
+
+/// The case (tanh drag, an interval, the renewal route on 16 x 8
+/// with 50 steps): the meshes 679 -> 1345 -> 1948 are not asymptotic, the
+/// exact sampler gives tau >= 2409 +- 16. Either refused (exit 4, naming
+/// the mesh flags) or an interval that reaches 2409 - 4 x 16.
+#[test]
+fn a_non_asymptotic_sequence_is_refined_or_refused() {
+    let pr = problem(
+        DragLaw::Tanh,
+        0.8213,
+        1.8046,
+        2.1034,
+        -0.0321,
+        PositionTarget::Interval(-1.7507, 1.4297),
+    );
+    let opts = RenewalOptions {
+        cells_x: 16,
+        cells_v: 8,
+        steps: 50,
+        max_work: 2e10,
+        ..Default::default()
+    };
+    match renewal::solve(&pr, &WaitingTime::of(pr.params()).unwrap(), &opts) {
+        Ok(r) => assert!(r.tau + r.error_estimate >= 2409.0 - 64.0, "{r:?}"),
+        Err(e) => {
+            assert!(e.is_numerical(), "{e}");
+            let msg = e.to_string();
+            assert!(msg.contains("--cells-x") && msg.len() < 200, "{msg}");
+        }
+    }
+}
+
+/// x -> -x, v -> -v, eta -> -eta maps the search for x_t = 1 onto the one
+/// for x_t = -1 (odd drag, symmetric noise, x_r = v_r = v0 = 0) and the
+/// mesh onto its mirror image: the same tau to round-off, tau+ and tau-
+/// exchanged; no round-off sign refusal on either side.
+#[test]
+fn mirror_targets_give_the_same_tau() {
+    let opts = BackwardOptions::default();
+    let up = problem(DragLaw::Tan, 3.0, 0.5, 1.0, 0.0, PositionTarget::Level(1.0));
+    let down = problem(
+        DragLaw::Tan,
+        3.0,
+        0.5,
+        1.0,
+        0.0,
+        PositionTarget::Level(-1.0),
+    );
+    let (a, b) = (
+        backward::solve(&up, &opts).unwrap(),
+        backward::solve(&down, &opts).unwrap(),
+    );
+    let tol = 1e-9 * a.tau;
+    assert!((a.tau - b.tau).abs() <= tol, "{} vs {}", a.tau, b.tau);
+    assert!((a.tau_plus - b.tau_minus).abs() <= tol, "{a:?} {b:?}");
+}
