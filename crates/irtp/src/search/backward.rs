@@ -555,7 +555,7 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
                 spent: cost.work,
                 method: "the backward solver (--method backward)",
             };
-            let (rungs, finest) = ladder.climb(
+            let (rungs, finest, factor) = ladder.climb(
                 rungs,
                 meshes[1].clone(),
                 |m| solve_on(&setup, m),
@@ -571,7 +571,7 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
                     .zip(f.reset)
                     .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
             };
-            (best, (f.mean() - c.mean()).abs(), finest)
+            (best, factor * (f.mean() - c.mean()).abs(), finest)
         }
         None => (coarse.clone(), f64::NAN, meshes[0].clone()),
     };
@@ -606,12 +606,18 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
     })
 }
 
-/// The observed ratios (T_h - T_2h) / (T_h/2 - T_h) of successive mesh
-/// differences accepted as the first-order upwind scheme's asymptotic
-/// range (2 ideally; a smooth higher-order part moves it towards 4). From
-/// 1.5 up, |T_h/2 - T_h| bounds the error of 2 T_h/2 - T_h in the model
-/// T_h = T + c h^p (the error is |d| |2 - ρ| / (ρ - 1) ≤ |d|).
-pub(crate) const ASYMPTOTIC_RATIO: (f64, f64) = (1.5, 4.5);
+/// The least observed ratio ρ = (T_h - T_2h) / (T_h/2 - T_h) of successive
+/// mesh differences taken as converging (first-order upwind: ρ ≈ 2). In
+/// the model T_h = T + c h^p (ρ = 2^p) the error of 2 T_h/2 - T_h is
+/// d (2 - ρ) / (ρ - 1), d = T_h/2 - T_h: at most |d| from ρ = 1.5 up, and
+/// [`error_factor`] times |d| below (at most 4 at ρ = 1.2).
+pub(crate) const LEAST_RATIO: f64 = 1.2;
+
+/// The bound on the error of 2 T_h/2 - T_h in units of |T_h/2 - T_h| at
+/// the observed ratio `ratio` ≥ [`LEAST_RATIO`] (see there): at least 1.
+pub(crate) fn error_factor(ratio: f64) -> f64 {
+    ((2.0 - ratio) / (ratio - 1.0)).max(1.0)
+}
 
 /// The mesh that checks the observed order: the layout of half the cells
 /// (at least 2 each way), so that h runs 2h, h, h/2 with the two meshes
@@ -622,17 +628,19 @@ pub(crate) fn check_plan(setup: &Setup, layout: &Layout) -> Plan {
     (setup.layout((cells(&layout.xc), cells(&layout.vc)), x), 0)
 }
 
-/// Whether the last three means (coarsest first) are in the asymptotic
-/// range ([`ASYMPTOTIC_RATIO`]), or converged to `floor` (differences below
-/// what the mesh can resolve: the time error of the renewal route, √ε |T|
-/// for round-off); else the two differences and their ratio.
-pub(crate) fn asymptotic(m: [f64; 3], floor: f64) -> std::result::Result<(), (f64, f64, f64)> {
+/// The error factor ([`error_factor`]) of the last three means (coarsest
+/// first) where they converge (ratio ≥ [`LEAST_RATIO`], the differences
+/// of one sign), 1 where the last difference is below what the mesh can
+/// resolve (`floor`: the time error of the renewal route; √ε |T| for
+/// round-off); else the two differences and their ratio.
+pub(crate) fn asymptotic(m: [f64; 3], floor: f64) -> std::result::Result<f64, (f64, f64, f64)> {
     let (d1, d2) = (m[1] - m[0], m[2] - m[1]);
     let ratio = d1 / d2;
     let floor = floor.max(f64::EPSILON.sqrt() * m[2].abs());
-    let (lo, hi) = ASYMPTOTIC_RATIO;
-    if d2.abs() <= floor || (ratio >= lo && ratio <= hi) {
-        Ok(())
+    if d2.abs() <= floor {
+        Ok(1.0)
+    } else if ratio >= LEAST_RATIO {
+        Ok(error_factor(ratio))
     } else {
         Err((d1, d2, ratio))
     }
@@ -653,7 +661,8 @@ impl Ladder<'_> {
     /// layout) and the finest mesh so far: more levels until
     /// [`asymptotic`] (`mean` gives an answer's mean and its floor), each
     /// one's `cost` checked first; refused (exit 4, naming the mesh flags)
-    /// when the budget ends first.
+    /// when the budget ends first. Returns the answers, the finest mesh and
+    /// the error factor of the last difference.
     pub fn climb<A>(
         mut self,
         mut rungs: Vec<A>,
@@ -661,7 +670,7 @@ impl Ladder<'_> {
         solve: impl Fn(&Mesh) -> Result<A>,
         mean: impl Fn(&A) -> (f64, f64),
         cost: impl Fn(&Plan) -> Cost,
-    ) -> Result<(Vec<A>, Mesh)> {
+    ) -> Result<(Vec<A>, Mesh, f64)> {
         let mut level = 1;
         loop {
             let n = rungs.len();
@@ -669,8 +678,9 @@ impl Ladder<'_> {
                 [0, 1, 2].map(|k| mean(&rungs[n - 3 + k]).0),
                 mean(&rungs[n - 1]).1,
             );
-            let Err((d1, d2, ratio)) = asymptotic(m, floor) else {
-                return Ok((rungs, finest));
+            let (d1, d2, ratio) = match asymptotic(m, floor) {
+                Ok(factor) => return Ok((rungs, finest, factor)),
+                Err(e) => e,
             };
             level += 1;
             let plan = (self.layout.clone(), level);
@@ -680,7 +690,7 @@ impl Ladder<'_> {
                 return Err(Error::Numerical {
                     method: self.method,
                     reason: format!(
-                        "meshes not asymptotic (ratio of differences {ratio:.2}, not 1.5-4.5: \
+                        "meshes not converging (ratio of differences {ratio:.2} < {LEAST_RATIO}: \
                          {d1:.1e}, {d2:.1e}) within --max-work; raise --cells-x/--cells-v"
                     ),
                 });

@@ -427,7 +427,7 @@ pub fn solve(
             method: METHOD,
         };
         // The mesh differences are resolved down to the time errors.
-        let (rungs, finest) = ladder.climb(
+        let (rungs, finest, factor) = ladder.climb(
             rungs,
             meshes[1].clone(),
             &in_time,
@@ -441,7 +441,7 @@ pub fn solve(
             },
         )?;
         let ((c, _), (f, fine_time)) = (&rungs[rungs.len() - 2], &rungs[rungs.len() - 1]);
-        let e = (f.mean() - c.mean()).abs();
+        let e = factor * (f.mean() - c.mean()).abs();
         (f.combine(2.0, c, -1.0), e, *fine_time, finest)
     } else {
         (coarse, f64::NAN, coarse_time, meshes[0].clone())
