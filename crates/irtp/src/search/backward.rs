@@ -531,49 +531,33 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         return Ok(SearchSolution::infinite());
     }
     let plans = meshes(&setup, opts);
-    let check = opts.refine.then(|| check_plan(&setup, &plans[0].0));
-    let all: Vec<Plan> = plans.iter().cloned().chain(check.clone()).collect();
-    let cost = cost_of(&all, 3.0);
-    let budget = (opts.max_work, opts.max_memory);
-    check_budget(&cost, budget, mesh_drivers(problem, &["truncation"]))?;
+    check_budget(
+        &cost_of(&plans, 3.0),
+        (opts.max_work, opts.max_memory),
+        mesh_drivers(problem, &["truncation"]),
+    )?;
     let meshes = build(&plans);
     let answers = meshes
         .iter()
         .map(|m| solve_on(&setup, m))
         .collect::<Result<Vec<_>>>()?;
     let coarse = &answers[0];
-    let (best, mesh_error, finest) = match check {
-        Some(check) => {
-            let rungs = vec![
-                solve_on(&setup, &Mesh::build(&check.0, 0))?,
-                coarse.clone(),
-                answers[1].clone(),
-            ];
-            let ladder = Ladder {
-                layout: &plans[0].0,
-                budget,
-                spent: cost.work,
-                method: "the backward solver (--method backward)",
-            };
-            let (rungs, finest, factor) = ladder.climb(
-                rungs,
-                meshes[1].clone(),
-                |m| solve_on(&setup, m),
-                |a| (a.mean(), 0.0),
-                |p| cost_of(std::slice::from_ref(p), 3.0),
-            )?;
-            let (c, f) = (&rungs[rungs.len() - 2], &rungs[rungs.len() - 1]);
-            let ex = |c: f64, f: f64| 2.0 * f - c;
-            let best = NodeAnswer {
-                tau: [ex(c.tau[0], f.tau[0]), ex(c.tau[1], f.tau[1])],
-                reset: c
-                    .reset
-                    .zip(f.reset)
-                    .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
-            };
-            (best, factor * (f.mean() - c.mean()).abs(), finest)
-        }
-        None => (coarse.clone(), f64::NAN, meshes[0].clone()),
+    let (best, mesh_error, finest) = if opts.refine {
+        let fine = &answers[1];
+        let ex = |c: f64, f: f64| 2.0 * f - c;
+        let best = NodeAnswer {
+            tau: [
+                ex(coarse.tau[0], fine.tau[0]),
+                ex(coarse.tau[1], fine.tau[1]),
+            ],
+            reset: coarse
+                .reset
+                .zip(fine.reset)
+                .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
+        };
+        (best, (fine.mean() - coarse.mean()).abs(), &meshes[1])
+    } else {
+        (coarse.clone(), f64::NAN, &meshes[0])
     };
     // The extrapolated values pass the same checks as each mesh's.
     verify(
@@ -601,104 +585,9 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         mesh_error,
         truncation_error,
         reset_values: best.reset,
-        mesh: mesh_info(&finest),
+        mesh: mesh_info(finest),
         infinite_mean: false,
     })
-}
-
-/// The least observed ratio ρ = (T_h - T_2h) / (T_h/2 - T_h) of successive
-/// mesh differences taken as converging (first-order upwind: ρ ≈ 2). In
-/// the model T_h = T + c h^p (ρ = 2^p) the error of 2 T_h/2 - T_h is
-/// d (2 - ρ) / (ρ - 1), d = T_h/2 - T_h: at most |d| from ρ = 1.5 up, and
-/// [`error_factor`] times |d| below (at most 4 at ρ = 1.2).
-pub(crate) const LEAST_RATIO: f64 = 1.2;
-
-/// The bound on the error of 2 T_h/2 - T_h in units of |T_h/2 - T_h| at
-/// the observed ratio `ratio` ≥ [`LEAST_RATIO`] (see there): at least 1.
-pub(crate) fn error_factor(ratio: f64) -> f64 {
-    ((2.0 - ratio) / (ratio - 1.0)).max(1.0)
-}
-
-/// The mesh that checks the observed order: the layout of half the cells
-/// (at least 2 each way), so that h runs 2h, h, h/2 with the two meshes
-/// solved already.
-pub(crate) fn check_plan(setup: &Setup, layout: &Layout) -> Plan {
-    let cells = |c: &[usize]| (c.iter().sum::<usize>() / 2).max(2);
-    let x = layout.far.map_or(0.0, |f| f.length);
-    (setup.layout((cells(&layout.xc), cells(&layout.vc)), x), 0)
-}
-
-/// The error factor ([`error_factor`]) of the last three means (coarsest
-/// first) where they converge (ratio ≥ [`LEAST_RATIO`], the differences
-/// of one sign), 1 where the last difference is below what the mesh can
-/// resolve (`floor`: the time error of the renewal route; √ε |T| for
-/// round-off); else the two differences and their ratio.
-pub(crate) fn asymptotic(m: [f64; 3], floor: f64) -> std::result::Result<f64, (f64, f64, f64)> {
-    let (d1, d2) = (m[1] - m[0], m[2] - m[1]);
-    let ratio = d1 / d2;
-    let floor = floor.max(f64::EPSILON.sqrt() * m[2].abs());
-    if d2.abs() <= floor {
-        Ok(1.0)
-    } else if ratio >= LEAST_RATIO {
-        Ok(error_factor(ratio))
-    } else {
-        Err((d1, d2, ratio))
-    }
-}
-
-/// The Richardson ladder of a mesh method: meshes of `layout` refined one
-/// level at a time while the last three answers are not asymptotic and
-/// the next one fits the budget (work `spent` so far).
-pub(crate) struct Ladder<'a> {
-    pub layout: &'a Layout,
-    pub budget: (f64, f64),
-    pub spent: f64,
-    pub method: &'static str,
-}
-
-impl Ladder<'_> {
-    /// From `rungs` (answers on the check mesh, levels 0 and 1 of the
-    /// layout) and the finest mesh so far: more levels until
-    /// [`asymptotic`] (`mean` gives an answer's mean and its floor), each
-    /// one's `cost` checked first; refused (exit 4, naming the mesh flags)
-    /// when the budget ends first. Returns the answers, the finest mesh and
-    /// the error factor of the last difference.
-    pub fn climb<A>(
-        mut self,
-        mut rungs: Vec<A>,
-        mut finest: Mesh,
-        solve: impl Fn(&Mesh) -> Result<A>,
-        mean: impl Fn(&A) -> (f64, f64),
-        cost: impl Fn(&Plan) -> Cost,
-    ) -> Result<(Vec<A>, Mesh, f64)> {
-        let mut level = 1;
-        loop {
-            let n = rungs.len();
-            let (m, floor) = (
-                [0, 1, 2].map(|k| mean(&rungs[n - 3 + k]).0),
-                mean(&rungs[n - 1]).1,
-            );
-            let (d1, d2, ratio) = match asymptotic(m, floor) {
-                Ok(factor) => return Ok((rungs, finest, factor)),
-                Err(e) => e,
-            };
-            level += 1;
-            let plan = (self.layout.clone(), level);
-            let c = cost(&plan);
-            self.spent += c.work;
-            if !(self.spent <= self.budget.0 && c.memory <= self.budget.1) || level > 12 {
-                return Err(Error::Numerical {
-                    method: self.method,
-                    reason: format!(
-                        "meshes not converging (ratio of differences {ratio:.2} < {LEAST_RATIO}: \
-                         {d1:.1e}, {d2:.1e}) within --max-work; raise --cells-x/--cells-v"
-                    ),
-                });
-            }
-            finest = Mesh::build(&plan.0, level);
-            rungs.push(solve(&finest)?);
-        }
-    }
 }
 
 /// From |T_{1.5X} - T_X| to a bound on the error of T_X when

@@ -35,8 +35,8 @@
 //! reached between resets (about 2e-3 at r = 3 in the tests).
 
 use super::backward::{
-    build, capacitance, check_budget, check_plan, cost_of, factor, mesh_drivers, mesh_info,
-    truncation_factor, verify, Cost, Ladder, MeshInfo, Plan, Resetting, Setup,
+    build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info, truncation_factor,
+    verify, Cost, MeshInfo, Plan, Resetting, Setup,
 };
 use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
@@ -370,10 +370,7 @@ pub fn estimate(
         return Ok(Cost::NOTHING);
     }
     waiting.validate(opts.tail)?;
-    let mut m = meshes(&setup, waiting, opts);
-    if opts.refine {
-        m.push(check_plan(&setup, &m[0].0));
-    }
+    let m = meshes(&setup, waiting, opts);
     let solves = cost_of(&m, 12.0 * opts.steps as f64);
     // The clock's product-integration weights: two series of 2 steps + 1.
     let weights = 2.0 * 8.0 * (2.0 * opts.steps as f64 + 1.0);
@@ -403,8 +400,7 @@ pub fn solve(
         return Ok(RenewalSolution::infinite());
     }
     let setup = Setup::new(problem, "--method renewal", true)?;
-    let plans = meshes(&setup, waiting, opts);
-    let meshes = build(&plans);
+    let meshes = build(&meshes(&setup, waiting, opts));
     let t_max = waiting.horizon(opts.tail);
     let on = |m: &Mesh, steps: usize| answer(&setup, m, waiting, t_max, steps);
     let in_time = |m: &Mesh| -> Result<(Answer, f64)> {
@@ -414,37 +410,11 @@ pub fn solve(
     };
     let (coarse, coarse_time) = in_time(&meshes[0])?;
     let (best, mesh_error, time_error, finest) = if opts.refine {
-        let check = check_plan(&setup, &plans[0].0);
-        let rungs = vec![
-            in_time(&Mesh::build(&check.0, 0))?,
-            (coarse, coarse_time),
-            in_time(&meshes[1])?,
-        ];
-        let ladder = Ladder {
-            layout: &plans[0].0,
-            budget: (opts.max_work, opts.max_memory),
-            spent: cost.work,
-            method: METHOD,
-        };
-        // The mesh differences are resolved down to the time errors.
-        let (rungs, finest, factor) = ladder.climb(
-            rungs,
-            meshes[1].clone(),
-            &in_time,
-            |(a, time)| (a.mean(), 3.0 * time),
-            |p| {
-                let c = cost_of(std::slice::from_ref(p), 12.0 * opts.steps as f64);
-                Cost {
-                    work: c.work + cost_of(std::slice::from_ref(p), 0.0).work,
-                    memory: c.memory,
-                }
-            },
-        )?;
-        let ((c, _), (f, fine_time)) = (&rungs[rungs.len() - 2], &rungs[rungs.len() - 1]);
-        let e = factor * (f.mean() - c.mean()).abs();
-        (f.combine(2.0, c, -1.0), e, *fine_time, finest)
+        let (fine, fine_time) = in_time(&meshes[1])?;
+        let e = (fine.mean() - coarse.mean()).abs();
+        (fine.combine(2.0, &coarse, -1.0), e, fine_time, &meshes[1])
     } else {
-        (coarse, f64::NAN, coarse_time, meshes[0].clone())
+        (coarse, f64::NAN, coarse_time, &meshes[0])
     };
     let truncation_error = if setup.truncated() {
         let wide = on(&meshes[meshes.len() - 1], opts.steps)?;
@@ -485,7 +455,7 @@ pub fn solve(
         truncation_error,
         tail_bound: best.tail,
         textbook: best.textbook,
-        mesh: mesh_info(&finest),
+        mesh: mesh_info(finest),
         infinite_mean: false,
     })
 }
@@ -539,12 +509,10 @@ fn answer(
     renew(setup, &p, waiting.tail(t_max))
 }
 
-/// The route's name in its refusals.
-const METHOD: &str = "the renewal route (--method renewal)";
-
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
+    const METHOD: &str = "the renewal route (--method renewal)";
     let mix = setup.mix;
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
