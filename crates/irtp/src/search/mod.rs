@@ -678,7 +678,7 @@ pub fn assemble(
             })
         }
     };
-    verify_particles(problem, &result)?;
+    verify_particles(problem, &result, run.t_max)?;
     Ok(result)
 }
 
@@ -686,8 +686,9 @@ pub fn assemble(
 /// from x_r after a full reset) at a speed of at most max |v|: the
 /// restricted means of both starting states must respect it (on the
 /// Euler grid as well: x moves at most max |v| dt per step), or the
-/// sampler lost precision and the answer is refused.
-fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()> {
+/// sampler lost precision and the answer is refused. The restricted means
+/// are E[min(T, t_max)]: the bound is min(distance / max |v|, t_max).
+fn verify_particles(problem: &SearchProblem, result: &SearchResult, t_max: f64) -> Result<()> {
     let (lo, hi) = problem.target().bounds(problem.x0());
     let gap = |x: f64| (x - lo).min(hi - x);
     let p = problem.params();
@@ -696,7 +697,7 @@ fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()
         distance = distance.min(gap(pos.x));
     }
     let (vl, vu) = p.bounds();
-    let bound = distance / vl.abs().max(vu.abs()) * (1.0 - 1e-12);
+    let bound = (distance / vl.abs().max(vu.abs())).min(t_max) * (1.0 - 1e-12);
     let runs: Vec<&FptStats> = match result {
         SearchResult::Particles(r) => vec![&r.stats],
         SearchResult::Euler(e) => vec![&e.coarse, &e.fine],
@@ -709,7 +710,7 @@ fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()
                     method: "the search sampler (--method exact or euler)",
                     reason: format!(
                         "{name} = {m:e} is below the least search time {bound:e} (distance / \
-                         max |v|): the sampler lost precision for these parameters; refused"
+                         max |v|, at most t_max): the sampler lost precision; refused"
                     ),
                 });
             }
