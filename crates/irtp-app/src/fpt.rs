@@ -241,9 +241,11 @@ impl DistributionArgs {
             }
         };
         let opts = SearchDistOptions {
+            // The budget also bounds the finer meshes of a mesh sequence
+            // that is not yet asymptotic (checked before each one).
             mesh: irtp::search::backward::BackwardOptions {
-                max_work: f64::INFINITY,
-                max_memory: f64::INFINITY,
+                max_work: self.output.budget.max_work,
+                max_memory: self.output.budget.max_memory,
                 ..irtp::search::backward::BackwardOptions::with_cells(
                     self.cells_x.unwrap_or(32),
                     self.cells_v.unwrap_or(16),
@@ -256,9 +258,9 @@ impl DistributionArgs {
         self.output.budget.check(&super::budget::Cost {
             work: cost.work,
             unit: "operations",
-            drivers: vec!["cells_x", "cells_v", "points", "rate"],
+            drivers: vec!["cells_x", "cells_v", "points", "xt", "rate"],
             memory: cost.memory,
-            memory_drivers: vec!["cells_x", "cells_v"],
+            memory_drivers: vec!["cells_x", "cells_v", "xt"],
         })?;
         Ok(SearchBackward { problem, opts })
     }

@@ -108,9 +108,11 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
         }
         Method::Exact => particle_method(&problem, SearchMethod::Exact(run), budget)?,
         Method::Backward => {
+            // The budget also bounds the finer meshes a sequence that is
+            // not yet asymptotic needs (checked before each one).
             let opts = search::backward::BackwardOptions {
-                max_work: f64::INFINITY,
-                max_memory: f64::INFINITY,
+                max_work: budget.max_work,
+                max_memory: budget.max_memory,
                 ..search::backward::BackwardOptions::with_cells(a.cells_x, a.cells_v)
             };
             mesh_method(&problem, SearchMethod::Backward(opts), budget)?
@@ -122,8 +124,8 @@ pub(super) fn config(a: &DirectArgs) -> irtp::Result<SearchConfig> {
                 cells_v: a.cells_v,
                 steps: a.time_steps.unwrap_or(defaults.steps),
                 tail: a.horizon_tail.unwrap_or(defaults.tail),
-                max_work: f64::INFINITY,
-                max_memory: f64::INFINITY,
+                max_work: budget.max_work,
+                max_memory: budget.max_memory,
                 ..defaults
             };
             mesh_method(&problem, SearchMethod::Renewal(opts), budget)?
@@ -164,16 +166,24 @@ fn mesh_method(
         e => e,
     };
     let cost = method.cost(problem).map_err(named)?.expect("a mesh method");
-    let mut drivers = vec!["cells_x", "cells_v", "rate"];
+    // The mesh grows with its cells, the target's distance (the cell size
+    // of the far stretch) and the clock (the length of the far stretch).
+    let mut drivers = vec!["cells_x", "cells_v"];
+    drivers.push(match problem.target() {
+        PositionTarget::Level(_) => "xt",
+        PositionTarget::Interval(..) => "interval",
+    });
+    drivers.push("rate");
+    drivers.extend(problem.params().schedule().cost_drivers());
     if let SearchMethod::Renewal(_) = method {
         drivers.extend(["time_steps", "horizon_tail"]);
     }
     budget.check(&Cost {
         work: cost.work,
         unit: "operations",
+        memory_drivers: drivers.clone(),
         drivers,
         memory: cost.memory,
-        memory_drivers: vec!["cells_x", "cells_v"],
     })?;
     Ok(method)
 }
@@ -258,7 +268,7 @@ impl SearchReport {
             tau_plus: mean(s.tau_plus),
             tau_minus: mean(s.tau_minus),
             infinite_mean: !finite,
-            infinite_mean_reason: (!finite).then_some(INFINITE_MEAN_REASON),
+            infinite_mean_reason: (!finite).then(|| reason_of(&c.problem)),
             tail_exponent: tail,
             tau_err: mean(s.tau_err),
             tau_plus_err: mean(s.tau_plus_err),
@@ -290,7 +300,8 @@ pub(crate) fn note(r: &SearchReport) -> String {
                 )
             },
         );
-        return format!("INFINITE MEAN: tau is not reported: {INFINITE_MEAN_REASON}.\n{tail}\n");
+        let why = r.infinite_mean_reason.unwrap_or(INFINITE_MEAN_REASON);
+        return format!("INFINITE MEAN: tau is not reported: {why}.\n{tail}\n");
     }
     if r.censored == 0 {
         return String::new();
@@ -303,6 +314,22 @@ pub(crate) fn note(r: &SearchReport) -> String {
         super::super::format::fmt_sig(r.t_max),
         super::super::format::fmt_pm(r.rmst, r.rmst_err)
     )
+}
+
+/// Why the mean search time of `problem` is infinite (its own cause).
+fn reason_of(problem: &SearchProblem) -> &'static str {
+    problem
+        .infinite_mean_reason()
+        .unwrap_or(INFINITE_MEAN_REASON)
+}
+
+/// The text note of a mesh method's answer: an infinite mean leads it.
+fn mesh_note(problem: &SearchProblem, infinite: bool) -> String {
+    if infinite {
+        format!("INFINITE MEAN (tau = inf): {}.\n", reason_of(problem))
+    } else {
+        String::new()
+    }
 }
 
 /// Solve a validated search with a progress stage (particles only: the
@@ -328,6 +355,8 @@ pub(crate) fn solve(c: &SearchConfig, ctx: &Context) -> irtp::Result<(FptStats, 
 struct BackwardReport {
     method: &'static str,
     problem: SearchProblem,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    infinite_mean_reason: Option<&'static str>,
     #[serde(flatten)]
     solution: search::backward::SearchSolution,
 }
@@ -339,6 +368,8 @@ struct RenewalReport {
     method: &'static str,
     problem: SearchProblem,
     options: search::renewal::RenewalOptions,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    infinite_mean_reason: Option<&'static str>,
     #[serde(flatten)]
     solution: search::renewal::RenewalSolution,
 }
@@ -391,7 +422,7 @@ fn euler_report(c: &SearchConfig, e: search::EulerSearch) -> (EulerReport, Table
         tau_minus_err: m(x.tau_minus_err),
         step_bias: m(x.step_bias),
         infinite_mean: !e.mean_is_finite,
-        infinite_mean_reason: (!e.mean_is_finite).then_some(INFINITE_MEAN_REASON),
+        infinite_mean_reason: (!e.mean_is_finite).then(|| reason_of(&c.problem)),
         tail_exponent: e.tail,
         dt: e.dt,
         particles: run.particles,
@@ -430,24 +461,28 @@ pub(crate) fn report_of(
             (to_value(&report), Some(report.seed), vec![table], text)
         }
         SearchResult::Backward(solution) => {
+            let inf = solution.infinite_mean;
             let report = BackwardReport {
                 method,
                 problem,
+                infinite_mean_reason: inf.then(|| reason_of(&problem)),
                 solution,
             };
-            (to_value(&report), None, vec![], String::new())
+            (to_value(&report), None, vec![], mesh_note(&problem, inf))
         }
         SearchResult::Renewal(solution) => {
             let SearchMethod::Renewal(options) = c.method else {
                 unreachable!("the renewal route gives a renewal solution")
             };
+            let inf = solution.infinite_mean;
             let report = RenewalReport {
                 method,
                 problem,
                 options,
+                infinite_mean_reason: inf.then(|| reason_of(&problem)),
                 solution,
             };
-            (to_value(&report), None, vec![], String::new())
+            (to_value(&report), None, vec![], mesh_note(&problem, inf))
         }
     }
 }

@@ -36,6 +36,7 @@ mod reproduce;
 mod reset_protocols;
 mod search_cli;
 mod search_guards;
+mod search_hostile;
 mod sweep;
 mod value_stability;
 mod verified;

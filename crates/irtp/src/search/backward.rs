@@ -169,6 +169,42 @@ pub struct SearchSolution {
     pub reset_values: Option<[f64; 2]>,
     /// The finest mesh.
     pub mesh: MeshInfo,
+    /// The mean search time is infinite
+    /// ([`SearchProblem::infinite_mean_reason`]): tau = +∞, nothing solved.
+    #[serde(default)]
+    pub infinite_mean: bool,
+}
+
+impl MeshInfo {
+    /// No mesh: nothing was solved (an infinite mean).
+    pub fn none() -> Self {
+        MeshInfo {
+            nodes_x: 0,
+            nodes_v: 0,
+            unknowns: 0,
+            band: 0,
+            x_min: f64::NAN,
+            x_max: f64::NAN,
+        }
+    }
+}
+
+impl SearchSolution {
+    /// The answer of a problem whose mean is infinite: tau = +∞, errors NaN.
+    fn infinite() -> Self {
+        let inf = f64::INFINITY;
+        SearchSolution {
+            tau: inf,
+            tau_plus: inf,
+            tau_minus: inf,
+            error_estimate: f64::NAN,
+            mesh_error: f64::NAN,
+            truncation_error: f64::NAN,
+            reset_values: Some([inf; 2]),
+            mesh: MeshInfo::none(),
+            infinite_mean: true,
+        }
+    }
 }
 
 /// The work and memory a solve is estimated to need.
@@ -178,6 +214,14 @@ pub struct Cost {
     pub work: f64,
     /// Bytes at the peak (the finest band matrix and its vectors).
     pub memory: f64,
+}
+
+impl Cost {
+    /// Nothing to solve (an infinite mean is reported without a solve).
+    pub const NOTHING: Cost = Cost {
+        work: 0.0,
+        memory: 0.0,
+    };
 }
 
 /// How resets act on the search, from the parameters.
@@ -235,8 +279,8 @@ impl Setup {
                 "reset_period",
                 t.period,
                 format!(
-                    "a Poisson clock for {method}; periodic resetting is run by the renewal \
-                     route (search::renewal)"
+                    "a Poisson clock for {method}; periodic resetting is run by \
+                     --method renewal and --method exact"
                 ),
             ));
         }
@@ -245,8 +289,8 @@ impl Setup {
                 "reset_clock",
                 c.spec(),
                 format!(
-                    "a Poisson clock for {method}; a renewal clock is run by the exact sampler \
-                     (--method exact) and the renewal route (search::renewal)"
+                    "a Poisson clock for {method}; a renewal clock is run by --method exact \
+                     and --method renewal"
                 ),
             ));
         }
@@ -379,22 +423,52 @@ fn extent(p: &Params, tol: f64) -> f64 {
 /// memory of the finest band matrix (n (3 kl + 1) values) and six vectors.
 pub fn estimate(problem: &SearchProblem, opts: &BackwardOptions) -> Result<Cost> {
     opts.validate()?;
-    let setup = Setup::new(problem, "the search backward solver", false)?;
+    let setup = Setup::new(problem, "--method backward", false)?;
+    if !problem.mean_is_finite() {
+        return Ok(Cost::NOTHING);
+    }
     Ok(cost_of(&meshes(&setup, opts), 3.0))
 }
 
-/// Cost of factorising each of `meshes` and `solves` solves with each.
-pub(crate) fn cost_of(meshes: &[Mesh], solves: f64) -> Cost {
+/// A mesh before it is built: its layout and refinement level. Costs are
+/// estimated from plans ([`cost_of`]), so a mesh too large for the budget
+/// (or for memory) is refused before anything is allocated.
+pub(crate) type Plan = (Layout, u32);
+
+/// Build the meshes of `plans` (after [`check_budget`] passed on their cost).
+pub(crate) fn build(plans: &[Plan]) -> Vec<Mesh> {
+    plans.iter().map(|(l, k)| Mesh::build(l, *k)).collect()
+}
+
+/// Cost of factorising each mesh of `plans` and `solves` solves with each,
+/// in f64 from the node counts ([`Layout::nodes`]): 2 n_x n_v unknowns,
+/// 2 n_v sub- and super-diagonals.
+pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
     let mut c = Cost {
         work: 0.0,
         memory: 0.0,
     };
-    for m in meshes {
-        let (n, kl) = (m.unknowns() as f64, m.band() as f64);
+    for (layout, k) in plans {
+        let (nx, nv) = layout.nodes(*k);
+        let (n, kl) = (2.0 * nx * nv, 2.0 * nv);
         c.work += n * kl * 3.0 * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
         c.memory = c.memory.max(8.0 * n * (3.0 * kl + 7.0));
     }
     c
+}
+
+/// What the size of a search mesh grows with, by the library's names: the
+/// mesh options, the target (its distance sets the cell size), the clock.
+pub(crate) fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'static str> {
+    let mut d = vec!["cells_x", "cells_v"];
+    d.push(match problem.target() {
+        PositionTarget::Level(_) => "xt",
+        PositionTarget::Interval(..) => "interval",
+    });
+    d.push("rate");
+    d.extend(problem.params().schedule().cost_drivers());
+    d.extend_from_slice(extra);
+    d
 }
 
 /// Refuse `cost` above the budgets (`max_work`, `max_memory`), naming
@@ -427,19 +501,19 @@ pub(crate) fn check_budget(
 
 /// The meshes [`solve`] uses: coarse, halved (if refining), and the coarse
 /// one widened to 1.5 X (if truncated).
-pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
+pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Plan> {
     let x = if setup.truncated() {
         extent(&setup.params, opts.truncation)
     } else {
         0.0
     };
     let layout = setup.layout((opts.cells_x, opts.cells_v), x);
-    let mut out = vec![Mesh::build(&layout, 0)];
+    let mut out = vec![(layout.clone(), 0)];
     if opts.refine {
-        out.push(Mesh::build(&layout, 1));
+        out.push((layout.clone(), 1));
     }
     if setup.truncated() {
-        out.push(Mesh::build(&layout.widened(1.5), 0));
+        out.push((layout.widened(1.5), 0));
     }
     out
 }
@@ -452,13 +526,17 @@ pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Mesh> {
 /// above the budgets of `opts` ([`estimate`]).
 pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSolution> {
     opts.validate()?;
-    let setup = Setup::new(problem, "the search backward solver", false)?;
-    let meshes = meshes(&setup, opts);
+    let setup = Setup::new(problem, "--method backward", false)?;
+    if !problem.mean_is_finite() {
+        return Ok(SearchSolution::infinite());
+    }
+    let plans = meshes(&setup, opts);
     check_budget(
-        &cost_of(&meshes, 3.0),
+        &cost_of(&plans, 3.0),
         (opts.max_work, opts.max_memory),
-        vec!["cells_x", "cells_v", "rate", "truncation"],
+        mesh_drivers(problem, &["truncation"]),
     )?;
+    let meshes = build(&plans);
     let answers = meshes
         .iter()
         .map(|m| solve_on(&setup, m))
@@ -486,7 +564,7 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         &best.tau,
         best.tau,
         &setup,
-        "search backward solve (extrapolated)",
+        "the backward solver (--method backward, extrapolated)",
     )?;
     let truncation_error = if setup.truncated() {
         let diff = (answers[answers.len() - 1].mean() - coarse.mean()).abs();
@@ -508,6 +586,7 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         truncation_error,
         reset_values: best.reset,
         mesh: mesh_info(finest),
+        infinite_mean: false,
     })
 }
 
@@ -570,7 +649,7 @@ pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str)
 /// e_s = Σ_j w_j h(x_r, v_j, s) from the hitting chance h solved for
 /// directly (no cancellation when it is small).
 fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
-    const METHOD: &str = "search backward solve";
+    const METHOD: &str = "the backward solver (--method backward)";
     let p = &setup.params;
     let local = match setup.resetting {
         Resetting::Velocity { .. } => Some(LocalReset {
@@ -640,7 +719,8 @@ pub(crate) fn capacitance(
         return Err(Error::Numerical {
             method,
             reason: format!(
-                "the target is not reached between resets (chance of reaching it first from                  x_r: {:e}, {:e})",
+                "the target is not reached between resets (chance of reaching it first \
+                 from x_r: {:e}, {:e})",
                 e[0], e[1]
             ),
         });
@@ -650,9 +730,14 @@ pub(crate) fn capacitance(
     Ok(Capacitance::inverted(s, det))
 }
 
-/// Verified or refused: T finite and ≥ 0 everywhere (round-off allowed),
-/// T at the start at least distance / v_u (the mean speed bound, exact on
-/// the mesh).
+/// Verified or refused: T finite and ≥ 0 everywhere up to the round-off
+/// of the solve, T at the start at least distance / v_u (the mean speed
+/// bound, exact on the mesh). The round-off allowed is n ε max |T| for n
+/// values: the forward error of an elimination (and of the superposition
+/// that adds the reset responses, values of size max |T|) grows at most
+/// linearly with the unknowns (Wilkinson's bound, no pivot growth in an
+/// M-matrix), so a value of T ≈ 0 next to the target may come out
+/// slightly negative.
 pub(crate) fn verify(t: &[f64], tau: [f64; 2], setup: &Setup, method: &'static str) -> Result<()> {
     let max = t.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
     if !max.is_finite() {
@@ -661,10 +746,14 @@ pub(crate) fn verify(t: &[f64], tau: [f64; 2], setup: &Setup, method: &'static s
             at: setup.x0,
         });
     }
-    if let Some(bad) = t.iter().find(|&&x| x < -1e-12 * max) {
+    let round_off = t.len().max(16) as f64 * f64::EPSILON * max;
+    if let Some(bad) = t.iter().find(|&&x| x < -round_off) {
         return Err(Error::Numerical {
             method,
-            reason: format!("negative mean first-passage time {bad:e} on the mesh"),
+            reason: format!(
+                "negative mean first-passage time {bad:e} on the mesh (beyond the \
+                 round-off {round_off:.1e})"
+            ),
         });
     }
     let bound = setup.distance / setup.params.v_upper();

@@ -30,7 +30,9 @@
 //! truncates it only because resets to x_r bound the distance travelled;
 //! the exact sampler gives S(t) and its tail).
 
-use super::backward::{check_budget, cost_of, factor, mesh_info, meshes, BackwardOptions};
+use super::backward::{
+    build, check_budget, cost_of, factor, mesh_drivers, mesh_info, meshes, BackwardOptions,
+};
 use super::backward::{truncation_factor, Cost, MeshInfo, Resetting, Setup};
 use super::mesh::{Generator, LocalReset, Mesh};
 use super::SearchProblem;
@@ -141,11 +143,14 @@ pub struct SearchDistribution {
 /// responses) band solves per step on dt and dt/2.
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
-    let setup = Setup::new(problem, "the search distribution", false)?;
-    Ok(cost_of(
-        &meshes(&setup, &opts.mesh),
-        6.0 * opts.steps as f64 + 4.0,
-    ))
+    let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    let c = cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0);
+    // The curves kept: S, f and their errors, on the steps and half steps.
+    let curves = 8.0 * 12.0 * (2.0 * opts.steps as f64 + 1.0);
+    Ok(Cost {
+        work: c.work,
+        memory: c.memory + curves,
+    })
 }
 
 /// The survival and density of the search (module docs), refused (typed)
@@ -155,10 +160,10 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
     check_budget(
         &cost,
         (opts.mesh.max_work, opts.mesh.max_memory),
-        vec!["cells_x", "cells_v", "steps", "rate"],
+        mesh_drivers(problem, &["steps"]),
     )?;
-    let setup = Setup::new(problem, "the search distribution", false)?;
-    let meshes = meshes(&setup, &opts.mesh);
+    let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    let meshes = build(&meshes(&setup, &opts.mesh));
     let n = opts.steps;
     let in_time = |m: &Mesh| -> Result<(Curve, Vec<f64>, Curve)> {
         let (c1, c2) = (
@@ -189,7 +194,7 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
     let err: Vec<f64> = (0..=n)
         .map(|i| mesh_err[i] + time_err[i] + trunc[i])
         .collect();
-    check_curve(&best.s, &err, "search distribution (extrapolated)")?;
+    check_curve(&best.s, &err, "mfpt distribution --xt (extrapolated)")?;
     let dt = opts.t_max / n as f64;
     let restricted_mean = dt * (best.s.iter().sum::<f64>() - 0.5 * (best.s[0] + best.s[n]));
     let max = |v: &[f64]| v.iter().copied().fold(0.0f64, f64::max);
@@ -304,7 +309,7 @@ impl Operator<'_> {
 
 /// One run on `mesh` with `steps` steps to `t_max`.
 fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
-    const METHOD: &str = "search distribution";
+    const METHOD: &str = "mfpt distribution --xt";
     let p = &setup.params;
     let local = match setup.resetting {
         Resetting::Velocity { .. } => Some(LocalReset {
@@ -356,7 +361,7 @@ fn record_run(
     steps: usize,
     solve: impl Fn(&mut [f64]),
 ) -> Result<Curve> {
-    const METHOD: &str = "search distribution";
+    const METHOD: &str = "mfpt distribution --xt";
     let n = op.g.dim();
     let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
     let start = [mesh.idx(i0, j0, 0), mesh.idx(i0, j0, 1)];

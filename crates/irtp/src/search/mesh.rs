@@ -128,6 +128,16 @@ impl Layout {
         }
     }
 
+    /// Node counts (n_x, n_v) of the mesh [`Mesh::build`] makes at
+    /// refinement `refine`, in f64: a layout too large for memory (or for
+    /// usize) is sized here and refused by its cost, never built.
+    pub fn nodes(&self, refine: u32) -> (f64, f64) {
+        let k = 2f64.powi(refine as i32);
+        let sum = |c: &[usize]| c.iter().map(|&n| n as f64).sum::<f64>();
+        let far = self.far.map_or(0.0, |f| f.cells as f64 + f.extra as f64);
+        ((sum(&self.xc) + far) * k + 1.0, sum(&self.vc) * k + 1.0)
+    }
+
     /// The same layout with the far stretch continued (same mapping, same
     /// cells per unit of its parameter) to at least `factor` times its
     /// length: the mesh at X is part of the wider one, so the difference of
@@ -238,7 +248,7 @@ impl Mesh {
         match (find(&self.x, x), find(&self.v, v)) {
             (Some(i), Some(j)) => Ok((i, j)),
             _ => Err(Error::Numerical {
-                method: "search mesh",
+                method: "the search mesh (--cells-x, --cells-v)",
                 reason: format!("no mesh node at (x, v) = ({x}, {v})"),
             }),
         }
@@ -268,7 +278,7 @@ impl Mesh {
         if let Some(v) = reset.point() {
             let j = self.v.iter().position(|&z| z == v);
             return j.map(|j| vec![(j, 1.0)]).ok_or_else(|| Error::Numerical {
-                method: "search mesh",
+                method: "the search mesh (--cells-x, --cells-v)",
                 reason: format!("no mesh node at v_r = {v}"),
             });
         }

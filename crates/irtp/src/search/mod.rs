@@ -229,26 +229,35 @@ impl SearchProblem {
         SearchProblem::new(self.params, self.x0, self.v0, target)
     }
 
-    /// True when the mean search time is finite: an interval target, or
-    /// full resetting (params.schedule().position is Some) with a reset
-    /// rate/period. Refinements, each a case where the particle can never
-    /// arrive with positive probability: a level with the noise kept at
-    /// resets needs lambda > 0 (else a particle in the state pointing away
-    /// never turns); a periodic clock with position resetting needs the
-    /// target within reach of one period from x_r (the + or - flow from the
-    /// extreme reset velocity, or v_max times the cycle with a fixed
-    /// refractory period), else the walk restarts before it can get there, forever.
+    /// True when the mean search time is finite: see
+    /// [`SearchProblem::infinite_mean_reason`], None exactly when finite.
+    pub fn mean_is_finite(&self) -> bool {
+        self.infinite_mean_reason().is_none()
+    }
+
+    /// Why the mean search time is infinite, in one line (None when it is
+    /// finite). Finite: an interval target, or full resetting
+    /// (params.schedule().position is Some) with a reset rate/period/clock.
+    /// Refinements, each a case where the particle can never arrive with
+    /// positive probability: a level with the noise kept at resets needs
+    /// lambda > 0 (else a particle in the state pointing away never turns);
+    /// a clock of bounded support (a period, or a bounded law, Poisson
+    /// resets added or not) needs the target within reach of its longest
+    /// period from x_r ([`SearchProblem::reachable_within`]), else the walk
+    /// restarts before it can get there, forever (unless every path from
+    /// the start arrives before the first reset: `arrives_surely`); a
+    /// level with a clock of infinite mean waiting time is infinite.
     /// With velocity-only resetting and a level, S(t) decays as a power law
     /// (or tends to a constant): infinite, unless the resets give the
     /// velocity a stationary mean towards the level (`drifts_towards`):
     /// then x moves ballistically on average and the mean is finite.
-    pub fn mean_is_finite(&self) -> bool {
+    pub fn infinite_mean_reason(&self) -> Option<&'static str> {
         let p = &self.params;
         let sched = p.schedule();
         let Some(pos) = sched.position else {
             return match self.target {
-                PositionTarget::Interval(..) => true,
-                PositionTarget::Level(l) => self.drifts_towards(l),
+                PositionTarget::Level(l) if !self.drifts_towards(l) => Some(INFINITE_MEAN_REASON),
+                _ => None,
             };
         };
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
@@ -256,17 +265,69 @@ impl SearchProblem {
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
-        // The longest period: T, or the end of a renewal law's support.
-        let longest = match (sched.periodic, sched.clock) {
-            (Some(per), _) => per.period,
-            (None, Some(c)) => c.support_end(),
-            (None, None) => f64::INFINITY,
-        };
-        match self.target {
-            PositionTarget::Level(_) if !(resets && turns) || heavy => false,
-            _ if longest.is_finite() => self.reachable_within(pos.x, longest),
-            _ => true,
+        let level = matches!(self.target, PositionTarget::Level(_));
+        if level && !resets {
+            return Some(NO_RESETS_REASON);
         }
+        if level && !turns {
+            return Some(NO_TURNS_REASON);
+        }
+        if level && heavy {
+            return Some(HEAVY_CLOCK_REASON);
+        }
+        let longest = self.longest_period();
+        if longest.is_finite() && !self.reachable_within(pos.x, longest) && !self.arrives_surely() {
+            return Some(OUT_OF_REACH_REASON);
+        }
+        None
+    }
+
+    /// The longest time the particle can move freely between two position
+    /// resets: the period T (with a fixed refractory period, the whole
+    /// cycle), the end of a renewal law's support (plus a fixed refractory
+    /// period: the clock restarts at its end), ∞ for a Poisson clock alone
+    /// or an exponential refractory period.
+    fn longest_period(&self) -> f64 {
+        let sched = self.params.schedule();
+        let hold = match sched.refractory {
+            Some(Refractory::Exp { .. }) => return f64::INFINITY,
+            Some(Refractory::Fixed { duration }) => duration,
+            None => 0.0,
+        };
+        match (sched.periodic, sched.clock) {
+            (Some(per), _) => per.cycle(sched.refractory),
+            (None, Some(c)) => c.support_end() + hold,
+            (None, None) => f64::INFINITY,
+        }
+    }
+
+    /// Whether every path from the start leaves through the target before
+    /// the first reset of a periodic clock alone (no Poisson resets: they
+    /// may come at any time): the slowest path towards an end (the flow in
+    /// the state pointing away, never flipping: every path lies between the
+    /// two flows, the flow being monotone in eta) reaches it within T. The
+    /// flows' extremes are sampled at 64 times, a lower bound of the reach.
+    fn arrives_surely(&self) -> bool {
+        let p = &self.params;
+        let Some(per) = p.schedule().periodic else {
+            return false;
+        };
+        if p.rate() > 0.0 {
+            return false;
+        }
+        let (lo, hi) = self.target.bounds(self.x0);
+        let s = p.sigma();
+        let (mut low_max, mut high_min) = (f64::NEG_INFINITY, f64::INFINITY);
+        for k in 1..=64 {
+            let t = per.period * k as f64 / 64.0;
+            let (down, up) = crate::with_drag!(p.drag(), |d| (
+                d.flow_displacement(-s, self.v0, t),
+                d.flow_displacement(s, self.v0, t)
+            ));
+            low_max = low_max.max(down);
+            high_min = high_min.min(up);
+        }
+        self.x0 + low_max >= hi || self.x0 + high_min <= lo
     }
 
     /// Whether resets (Poisson or periodic) to a target whose mean <v_r>
@@ -282,11 +343,13 @@ impl SearchProblem {
         resets && mean_vr != 0.0 && (l - self.x0) * mean_vr > 0.0
     }
 
-    /// Whether a particle reset to `xr` can reach the target within one
-    /// period `period` of a periodic clock (the farthest displacement: the
-    /// ± flow from the extreme reset velocity, no flip; with a fixed
-    /// refractory period, v_max over the whole cycle; an exponential one is
-    /// taken as reaching).
+    /// Whether a particle reset to `xr` can reach the target within the
+    /// free time `period` between position resets ([`Self::longest_period`]):
+    /// an upper bound of the reach, the farthest displacement being the ±
+    /// flow from the extreme reset velocity with no flip (every path lies
+    /// between the two flows; re-drawn noise changes nothing); with a
+    /// refractory period, v_max over the whole time (the hold's velocity
+    /// is inside the bounds); an exponential one is taken as reaching.
     fn reachable_within(&self, xr: f64, period: f64) -> bool {
         let p = &self.params;
         let (lo, hi) = self.target.bounds(self.x0);
@@ -294,9 +357,8 @@ impl SearchProblem {
             // An exponential hold is unbounded: held at a nonzero velocity
             // the particle reaches any level.
             Some(Refractory::Exp { .. }) => return true,
-            Some(r) => {
-                let per = crate::model::reset::Periodic { period };
-                let reach = p.v_upper() * per.cycle(Some(r));
+            Some(_) => {
+                let reach = p.v_upper().max(-p.v_lower()) * period;
                 (reach, -reach)
             }
             None => {
@@ -401,8 +463,8 @@ impl SearchMethod {
                         "t_max",
                         run.t_max,
                         "a finite t_max: the mean search time of this problem is infinite \
-                         (velocity-only resetting with a one-sided level, or a target out of \
-                         reach), so some particles would never stop",
+                         (see infinite_mean_reason in the report of a finite t_max), so some \
+                         particles would never stop",
                     ));
                 }
                 Ok(())
@@ -488,11 +550,31 @@ impl ParticleSearch {
     }
 }
 
-/// Why tau is not reported for a problem with an infinite mean, in one line.
+/// Why tau is not reported for a problem with an infinite mean, in one
+/// line: velocity-only resetting and a one-sided level (the other causes:
+/// [`SearchProblem::infinite_mean_reason`]).
 pub const INFINITE_MEAN_REASON: &str = "the mean search time is infinite: with velocity-only \
      resetting (no position reset) x is unbounded and a one-sided level is reached with a \
      power-law survival S(t) ~ t^-theta (theta = 1/2 with zero mean velocity) or, out of reach, \
      never; the tail exponent is reported instead";
+
+/// Full resetting without any reset (no rate, period or clock).
+const NO_RESETS_REASON: &str = "the mean search time is infinite: the position is never reset \
+     (no --rate, --reset-period or --reset-clock), so x is unbounded and a one-sided level is \
+     reached with a power-law survival or never";
+
+/// A level with lambda = 0 and the noise kept at resets.
+const NO_TURNS_REASON: &str = "the mean search time is infinite: with lambda = 0 and the noise \
+     kept at resets a particle in the state pointing away from the level never reaches it";
+
+/// A level with a clock of infinite mean waiting time.
+const HEAVY_CLOCK_REASON: &str = "the mean search time is infinite: the reset clock's mean \
+     waiting time is infinite, and a failed period lasts one waiting time";
+
+/// A bounded clock whose longest period is too short to reach the target.
+const OUT_OF_REACH_REASON: &str = "the mean search time is infinite: the target is out of reach \
+     between resets (the fastest path from the reset point cannot get there within the longest \
+     period of the clock), so the search restarts forever";
 
 /// Solve `problem` by `method`, validated first ([`SearchMethod::check`]).
 /// The exact sampler runs every resetting protocol and drag law. Particle
@@ -596,7 +678,7 @@ pub fn assemble(
             })
         }
     };
-    verify_particles(problem, &result)?;
+    verify_particles(problem, &result, run.t_max)?;
     // An infinite mean has no extrapolation to verify (tau is not reported).
     match &result {
         SearchResult::Euler(e) if e.mean_is_finite => {
@@ -626,9 +708,10 @@ fn least_time(problem: &SearchProblem) -> f64 {
 /// from x_r after a full reset) at a speed of at most max |v|: the
 /// restricted means of both starting states must respect it (on the
 /// Euler grid as well: x moves at most max |v| dt per step), or the
-/// sampler lost precision and the answer is refused.
-fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()> {
-    let bound = least_time(problem);
+/// sampler lost precision and the answer is refused. The restricted means
+/// are E[min(T, t_max)]: the bound is min(distance / max |v|, t_max).
+fn verify_particles(problem: &SearchProblem, result: &SearchResult, t_max: f64) -> Result<()> {
+    let bound = least_time(problem).min(t_max * (1.0 - 1e-12));
     let runs: Vec<&FptStats> = match result {
         SearchResult::Particles(r) => vec![&r.stats],
         SearchResult::Euler(e) => vec![&e.coarse, &e.fine],
@@ -638,10 +721,10 @@ fn verify_particles(problem: &SearchProblem, result: &SearchResult) -> Result<()
         for (name, m) in [("rmst_plus", s.rmst_plus), ("rmst_minus", s.rmst_minus)] {
             if !(m >= bound) {
                 return Err(Error::Numerical {
-                    method: "search sampler",
+                    method: "the search sampler (--method exact or euler)",
                     reason: format!(
                         "{name} = {m:e} is below the least search time {bound:e} (distance / \
-                         max |v|): the sampler lost precision for these parameters; refused"
+                         max |v|, at most t_max): the sampler lost precision; refused"
                     ),
                 });
             }

@@ -35,14 +35,15 @@
 //! reached between resets (about 2e-3 at r = 3 in the tests).
 
 use super::backward::{
-    capacitance, check_budget, cost_of, factor, mesh_info, truncation_factor, verify, Cost,
-    MeshInfo, Resetting, Setup,
+    build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info, truncation_factor,
+    verify, Cost, MeshInfo, Plan, Resetting, Setup,
 };
 use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
 use super::SearchProblem;
 use crate::error::{Error, Result};
 use crate::model::reset::clock::{Clock, ExpClock, FixedClock};
+use crate::model::reset::{Periodic, Schedule};
 use crate::Params;
 use serde::{Deserialize, Serialize};
 
@@ -234,6 +235,31 @@ pub struct RenewalSolution {
     pub textbook: f64,
     /// The finest mesh.
     pub mesh: MeshInfo,
+    /// The mean search time is infinite
+    /// ([`SearchProblem::infinite_mean_reason`]): tau = +∞, nothing solved.
+    #[serde(default)]
+    pub infinite_mean: bool,
+}
+
+impl RenewalSolution {
+    /// The answer of a problem whose mean is infinite: tau = +∞, errors NaN.
+    fn infinite() -> Self {
+        let (inf, nan) = (f64::INFINITY, f64::NAN);
+        RenewalSolution {
+            tau: inf,
+            tau_plus: inf,
+            tau_minus: inf,
+            reset_values: [inf; 2],
+            error_estimate: nan,
+            mesh_error: nan,
+            time_error: nan,
+            truncation_error: nan,
+            tail_bound: nan,
+            textbook: nan,
+            mesh: MeshInfo::none(),
+            infinite_mean: true,
+        }
+    }
 }
 
 /// The renewal quantities at (x_r, v_r) and at (x0, v0) on one mesh and
@@ -278,17 +304,57 @@ impl Answer {
 }
 
 /// The meshes of [`solve`] and the truncation distance.
-fn meshes(setup: &Setup, waiting: &WaitingTime, opts: &RenewalOptions) -> Vec<Mesh> {
+fn meshes(setup: &Setup, waiting: &WaitingTime, opts: &RenewalOptions) -> Vec<Plan> {
     let x = setup.params.v_upper() * waiting.horizon(opts.tail);
     let layout = setup.layout((opts.cells_x, opts.cells_v), x);
-    let mut out = vec![Mesh::build(&layout, 0)];
+    let mut out = vec![(layout.clone(), 0)];
     if opts.refine {
-        out.push(Mesh::build(&layout, 1));
+        out.push((layout.clone(), 1));
     }
     if setup.truncated() {
-        out.push(Mesh::build(&layout.widened(1.5), 0));
+        out.push((layout.widened(1.5), 0));
     }
     out
+}
+
+/// Whether the mean search time is finite with the resets at the renewal
+/// times of `waiting` ([`SearchProblem::infinite_mean_reason`] of the
+/// problem with that clock): the verdict of the exact sampler.
+fn finite_under(problem: &SearchProblem, waiting: &WaitingTime) -> bool {
+    if WaitingTime::of(problem.params()).ok() == Some(*waiting) {
+        return problem.mean_is_finite();
+    }
+    let p = problem.params();
+    let bare = Schedule {
+        periodic: None,
+        clock: None,
+        ..*p.schedule()
+    };
+    let (rate, clocked) = match *waiting {
+        WaitingTime::Poisson { rate } => (rate, bare),
+        WaitingTime::Periodic { period } => (
+            0.0,
+            Schedule {
+                periodic: Some(Periodic { period }),
+                ..bare
+            },
+        ),
+        WaitingTime::Renewal { clock } => (
+            0.0,
+            Schedule {
+                clock: Some(clock),
+                ..bare
+            },
+        ),
+    };
+    let q = p
+        .with_schedule(bare)
+        .and_then(|q| q.with_rate(rate))
+        .and_then(|q| q.with_schedule(clocked));
+    match q.and_then(|q| SearchProblem::new(q, problem.x0(), problem.v0(), problem.target())) {
+        Ok(other) => other.mean_is_finite(),
+        Err(_) => problem.mean_is_finite(),
+    }
 }
 
 /// Estimated cost of [`solve`]: per mesh two factorisations (steps dt and
@@ -299,13 +365,18 @@ pub fn estimate(
     opts: &RenewalOptions,
 ) -> Result<Cost> {
     opts.validate()?;
+    let setup = Setup::new(problem, "--method renewal", true)?;
+    if !finite_under(problem, waiting) {
+        return Ok(Cost::NOTHING);
+    }
     waiting.validate(opts.tail)?;
-    let setup = Setup::new(problem, "the search renewal route", true)?;
     let m = meshes(&setup, waiting, opts);
     let solves = cost_of(&m, 12.0 * opts.steps as f64);
+    // The clock's product-integration weights: two series of 2 steps + 1.
+    let weights = 2.0 * 8.0 * (2.0 * opts.steps as f64 + 1.0);
     Ok(Cost {
         work: solves.work + cost_of(&m, 0.0).work,
-        memory: solves.memory,
+        memory: solves.memory + weights,
     })
 }
 
@@ -323,10 +394,13 @@ pub fn solve(
     check_budget(
         &cost,
         (opts.max_work, opts.max_memory),
-        vec!["cells_x", "cells_v", "steps", "rate", "reset_clock", "tail"],
+        mesh_drivers(problem, &["steps", "tail"]),
     )?;
-    let setup = Setup::new(problem, "the search renewal route", true)?;
-    let meshes = meshes(&setup, waiting, opts);
+    if !finite_under(problem, waiting) {
+        return Ok(RenewalSolution::infinite());
+    }
+    let setup = Setup::new(problem, "--method renewal", true)?;
+    let meshes = build(&meshes(&setup, waiting, opts));
     let t_max = waiting.horizon(opts.tail);
     let on = |m: &Mesh, steps: usize| answer(&setup, m, waiting, t_max, steps);
     let in_time = |m: &Mesh| -> Result<(Answer, f64)> {
@@ -363,7 +437,7 @@ pub fn solve(
         &best.tau,
         best.tau,
         &setup,
-        "search renewal route (extrapolated)",
+        "the renewal route (--method renewal, extrapolated)",
     )?;
     let error_estimate = mesh_error + time_error + truncation_error + best.tail;
     Ok(RenewalSolution {
@@ -382,6 +456,7 @@ pub fn solve(
         tail_bound: best.tail,
         textbook: best.textbook,
         mesh: mesh_info(finest),
+        infinite_mean: false,
     })
 }
 
@@ -437,7 +512,7 @@ fn answer(
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
-    const METHOD: &str = "search renewal route";
+    const METHOD: &str = "the renewal route (--method renewal)";
     let mix = setup.mix;
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
@@ -475,7 +550,7 @@ fn survival_series(
     steps: usize,
     mut record: impl FnMut(usize, &[Vec<f64>; 2]),
 ) -> Result<()> {
-    const METHOD: &str = "search renewal route (reset-free survival)";
+    const METHOD: &str = "the renewal route (--method renewal, reset-free survival)";
     let dt = t_max / steps as f64;
     let stepper = Stepper::new(dt);
     let band = factor(g, 1.0, stepper.d(), METHOD)?;
