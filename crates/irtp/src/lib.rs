@@ -52,6 +52,7 @@ pub mod rng;
 pub mod search;
 pub mod sim;
 pub mod stats;
+pub mod stop;
 
 pub use error::{Error, Result};
 pub use model::{Drag, DragLaw, Params};

@@ -18,46 +18,9 @@
 
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The process-wide stop request. A front end sets it (the binary registers
-/// it as the flag of its SIGINT and SIGTERM handlers, [`stop_flag`]); the
-/// library's long loops poll it through [`check_stop`] once per time step,
-/// linear solve, mesh, point or chunk, and [`Progress::cancelled`] answers it
-/// by default. Never cleared: a process asked to stop stays stopped.
-static STOP: AtomicBool = AtomicBool::new(false);
-
-/// The flag behind [`stop_requested`], for a signal handler to set.
-pub fn stop_flag() -> &'static AtomicBool {
-    &STOP
-}
-
-/// Whether this process was asked to stop (one relaxed atomic load).
-pub fn stop_requested() -> bool {
-    STOP.load(Ordering::Relaxed)
-}
-
-/// Steps of a particle's loop between two polls of the stop request (a
-/// step is tens of nanoseconds: a poll every few milliseconds).
-pub const STOP_POLL_STEPS: u64 = 1 << 16;
-
-/// Whether a particle loop at step `step` must stop: polls the stop request
-/// every [`STOP_POLL_STEPS`] steps, so a long particle (many steps to t_max)
-/// ends promptly; the caller then discards its chunk.
-#[inline]
-pub fn stop_due(step: u64) -> bool {
-    step % STOP_POLL_STEPS == 0 && stop_requested()
-}
-
-/// [`crate::Error::Interrupted`] once this process was asked to stop: the
-/// poll of a long loop, whose partial result is then never returned.
-pub fn check_stop() -> crate::Result<()> {
-    if stop_requested() {
-        Err(crate::Error::Interrupted)
-    } else {
-        Ok(())
-    }
-}
+pub use crate::stop::{check_stop, stop_due, stop_flag, stop_requested, STOP_POLL_STEPS};
 
 /// Number of samples per chunk. Part of the value-stability contract:
 /// changing it changes the last bits of every pinned result.

@@ -88,14 +88,14 @@ impl Band {
 
     /// LU-factor in place (Gaussian elimination with partial pivoting
     /// within the band); [`Singular`] at the first zero or non-finite pivot.
-    /// A stop request ([`crate::parallel::stop_requested`], polled every
+    /// A stop request ([`crate::stop::stop_requested`], polled every
     /// [`STOP_POLL_ROWS`] rows) ends it early with [`Singular`] at the row
     /// reached: the factors are then unusable, and the caller that asked
     /// to stop discards the run.
     pub fn factor(&mut self) -> Result<(), Singular> {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
-            if k % STOP_POLL_ROWS == 0 && crate::parallel::stop_requested() {
+            if k % STOP_POLL_ROWS == 0 && crate::stop::stop_requested() {
                 return Err(Singular { row: k });
             }
             let last = (k + kl).min(n - 1);
@@ -150,7 +150,7 @@ impl Band {
     pub fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
         for k in 0..n {
-            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::stop::stop_requested() {
                 return;
             }
             b.swap(k, self.piv[k]);
@@ -160,7 +160,7 @@ impl Band {
             }
         }
         for k in (0..n).rev() {
-            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::parallel::stop_requested() {
+            if k % STOP_POLL_SOLVE_ROWS == 0 && crate::stop::stop_requested() {
                 return;
             }
             let mut s = b[k];

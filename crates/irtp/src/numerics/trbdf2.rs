@@ -164,7 +164,7 @@ impl Work {
 /// `times[0] == 0`). Fails with [`Failure::NotConverged`] when `max_steps`
 /// is spent or the step underflows, and [`Failure::NonFinite`] on a
 /// non-finite state; an error from `observe` stops the integration, and
-/// so does a stop request ([`crate::parallel::check_stop`], polled every
+/// so does a stop request ([`crate::stop::check_stop`], polled every
 /// step).
 pub fn integrate<O: ShiftedLinear>(
     op: &mut O,
@@ -181,7 +181,7 @@ pub fn integrate<O: ShiftedLinear>(
     for (k, &t_out) in times.iter().enumerate() {
         while t < t_out {
             // One relaxed load a step: a stop request ends the run here.
-            crate::parallel::check_stop()?;
+            crate::stop::check_stop()?;
             if h.is_nan() {
                 h = first_step(op, u, t_out, tol, &mut w);
             }

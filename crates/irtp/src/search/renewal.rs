@@ -27,8 +27,10 @@
 //! stop at the horizon t_max where w(t_max) is below `tail` (at the latest
 //! at the end of a bounded law's support: the period); the neglected tail
 //! is bounded by the law's ∫_{t_max}^∞ w and w(t_max) (S, Q ≤ 1) and
-//! reported, and a law whose tail integral is infinite (an infinite mean)
-//! is refused naming `reset_clock`. The integrals are product integration
+//! reported. A level under a law of infinite mean is reported infinite
+//! (the exact sampler's verdict, [`SearchProblem::infinite_mean_reason`]);
+//! an interval under such a law is refused naming `reset_clock` (the
+//! neglected tail has no finite bound). The integrals are product integration
 //! from the law's CDF (exact for Q linear between steps),
 //! and the escape chances P(T0 < R) = ∫ rho (1 - S) + P(R > t_max) are
 //! integrated directly: 1 - Σ B would cancel when the target is rarely

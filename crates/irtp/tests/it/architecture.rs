@@ -5,8 +5,9 @@
 //! are checked here: {`search`, `mfpt`, `fp`, `sim`, `analytic`} → `model`
 //! → `numerics`. A module may import from its own layer's allowed siblings
 //! ([`SIBLINGS`]) and from any layer below it. `error`, `rng`, `parallel`,
-//! `stats`, `memo` are utilities: importable from `model` and above, and
-//! importing only each other; `numerics` may import only `error`. In
+//! `stats`, `memo`, `stop` are utilities: importable from `model` and above, and
+//! importing only each other; `numerics` may import only `error` and `stop`
+//! (the stop request its long loops poll). In
 //! particular `sim` (the samplers) never imports `mfpt` (first passage,
 //! which uses the samplers), and `search` (first passage in position) may
 //! import both, never the reverse.
@@ -29,13 +30,13 @@ const LAYERS: &[&[&str]] = &[
 ];
 
 /// Utilities: importable from `model` and above (and from each other).
-const UTILITIES: &[&str] = &["error", "rng", "parallel", "stats", "memo"];
+const UTILITIES: &[&str] = &["error", "rng", "parallel", "stats", "memo", "stop"];
 
 /// The allowed imports within one layer, (from, to).
 const SIBLINGS: &[(&str, &str)] = &[("mfpt", "sim"), ("search", "mfpt"), ("search", "sim")];
 
 /// Utilities `numerics` may import.
-const NUMERICS_UTILITIES: &[&str] = &["error"];
+const NUMERICS_UTILITIES: &[&str] = &["error", "stop"];
 
 /// Layer index of a module (0 = highest), `None` for a utility.
 fn layer(m: &str) -> Option<usize> {

@@ -380,9 +380,13 @@ fn search_sampler_matches_the_renewal_route_every_law() {
     sampler_vs_renewal(&SLOW_CASES, 100_000, SLOW_CASES.len());
 }
 
-/// An infinite-mean law is refused by the renewal route by name.
+/// An infinite-mean law: a level is never reached in finite mean time (a
+/// failed period lasts the waiting time), and the renewal route reports it
+/// as the exact sampler's verdict (tau = +inf); an interval's mean is finite
+/// (every period ends at the exit or a reset) but the route's horizon cannot
+/// bound the neglected tail, so it is refused by name.
 #[test]
-fn renewal_route_refuses_an_infinite_mean() {
+fn renewal_route_on_an_infinite_mean_law() {
     let p = full_reset(
         DragLaw::Linear,
         1.0,
@@ -390,12 +394,17 @@ fn renewal_route_refuses_an_infinite_mean() {
         0.0,
         sched(None, Some(0.0), Some("pareto:alpha=0.8,scale=0.5")),
     );
+    let waiting = WaitingTime::of(&p).unwrap();
     let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
-    let e = renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &Default::default())
+    let s = renewal::solve(&problem, &waiting, &Default::default()).unwrap();
+    assert!(s.infinite_mean && s.tau == f64::INFINITY, "{s:?}");
+    assert!(!problem.mean_is_finite());
+    let interval = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Interval(-1.0, 1.0)).unwrap();
+    assert!(interval.mean_is_finite());
+    let e = renewal::solve(&interval, &waiting, &Default::default())
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("invalid reset_clock"), "{e}");
-    assert!(!problem.mean_is_finite());
 }
 
 /// Full resetting, fixed clock, linear drag: tau(T) has an interior
