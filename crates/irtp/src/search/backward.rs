@@ -390,11 +390,9 @@ fn refuse_infinite(problem: &SearchProblem, resetting: Resetting) -> Result<()> 
                     "reset_position",
                     "none",
                     format!(
-                        "a reset position (full resetting) for the level {l}: with \
-                         velocity-only resetting x is unbounded and the mean first-passage \
-                         time to a one-sided level is infinite (or, with a reset velocity \
-                         driving x towards the level, finite but not on a bounded mesh: \
-                         --method exact samples both)"
+                        "a reset position for the level {}: with velocity-only resetting \
+                         the mean is infinite or x unbounded (--method exact samples it)",
+                        crate::error::short(l)
                     ),
                 ))
             }
@@ -403,8 +401,9 @@ fn refuse_infinite(problem: &SearchProblem, resetting: Resetting) -> Result<()> 
                     "rate",
                     problem.params().rate(),
                     format!(
-                        "rate > 0 with a reset position for the level {l}: without resets \
-                         the mean first-passage time to a one-sided level is infinite"
+                        "rate > 0 with a reset position for the level {}: without resets \
+                         the mean first-passage time to a one-sided level is infinite",
+                        crate::error::short(l)
                     ),
                 ))
             }
