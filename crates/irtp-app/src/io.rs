@@ -291,7 +291,7 @@ impl OutputDir {
 
     /// Write a CSV file from a header and rows of numbers (full precision).
     /// A stop request ([`irtp::parallel::check_stop`], polled every
-    /// [`STOP_POLL_ROWS`] rows) ends it with [`irtp::Error::Interrupted`]:
+    /// `STOP_POLL_ROWS` rows) ends it with [`irtp::Error::Interrupted`]:
     /// a table of millions of rows takes seconds, and the staged files are
     /// then removed uncommitted.
     pub fn write_csv<R: AsRef<[f64]>>(

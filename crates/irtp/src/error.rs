@@ -278,8 +278,8 @@ const ECHO_MAX: usize = 48;
 /// Characters of a long echoed value kept.
 const ECHO_CUT: usize = 40;
 
-/// A value as a message echoes it: its first [`ECHO_CUT`] characters and
-/// `…` when it is longer than [`ECHO_MAX`] (a table or an expression of
+/// A value as a message echoes it: its first `ECHO_CUT` characters and
+/// `…` when it is longer than `ECHO_MAX` (a table or an expression of
 /// megabytes is not printed back whole).
 pub fn echo(value: &str) -> String {
     if value.chars().count() <= ECHO_MAX {

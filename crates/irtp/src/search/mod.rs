@@ -243,7 +243,7 @@ impl SearchProblem {
     /// lambda > 0 (else a particle in the state pointing away never turns);
     /// a clock of bounded support (a period, or a bounded law, Poisson
     /// resets added or not) needs the target within reach of its longest
-    /// period from x_r ([`SearchProblem::reachable_within`]), else the walk
+    /// period from x_r (`reachable_within`), else the walk
     /// restarts before it can get there, forever (unless every path from
     /// the start arrives before the first reset: `arrives_surely`); a
     /// level with a clock of infinite mean waiting time is infinite.
