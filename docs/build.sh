@@ -46,7 +46,7 @@ for t in "${TUTORIALS[@]}"; do
   echo "docs: tutorial $t ($(( SECONDS - s )) s)"
 done
 
-"$venv/bin/mkdocs" build --strict --quiet
+"$venv/bin/mkdocs" build --strict 2>&1 | { grep -v "^INFO    -  \(Cleaning\|Building\|Documentation built\)" || true; }
 echo "docs: site built in target/docs/site ($(( SECONDS - t0 )) s in all)"
 
 if [ "${1:-}" = "--check" ]; then

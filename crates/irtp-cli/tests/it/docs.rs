@@ -10,7 +10,9 @@
 //! shard of [`LONG_PLAN_SHARDS`] (`--shard 1/N`: every N-th point, through
 //! the same plan parsing, point seeds and store). A non-zero exit fails,
 //! naming the file and line. Every repository path a doc names in
-//! backquotes exists.
+//! backquotes exists, and so does every file a Markdown link points to
+//! (or docs/build.sh generates it: the command reference, the Python API,
+//! the reproduction report, a tutorial's figure from its script).
 
 use super::common::BIN;
 use std::collections::HashMap;
@@ -31,21 +33,36 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// The documentation files, relative to the repository root.
+/// The documentation files, relative to the repository root: the top-level
+/// ones and every page under docs/ (the site's tutorials, how-to guides,
+/// reference and explanation), but for `docs/figures`, which `irtp
+/// reproduce` writes.
 fn doc_files() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = ["README.md", "REPRODUCTION.md", "bench/README.md"]
         .iter()
         .map(PathBuf::from)
         .collect();
-    let mut docs: Vec<PathBuf> = std::fs::read_dir(root().join("docs"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "md"))
-        .map(|p| PathBuf::from("docs").join(p.file_name().unwrap()))
-        .collect();
+    let mut docs = Vec::new();
+    markdown_under(Path::new("docs"), &mut docs);
     docs.sort();
     files.extend(docs);
     files
+}
+
+/// The `.md` files under `dir` (relative to the root), recursively, but for
+/// `docs/figures`.
+fn markdown_under(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(root().join(dir)).unwrap() {
+        let name = e.unwrap().file_name();
+        let rel = dir.join(&name);
+        if root().join(&rel).is_dir() {
+            if rel != Path::new("docs/figures") {
+                markdown_under(&rel, out);
+            }
+        } else if rel.extension().is_some_and(|x| x == "md") {
+            out.push(rel);
+        }
+    }
 }
 
 /// (line, arguments after `irtp`) of every command in the shell blocks of
@@ -332,6 +349,89 @@ fn every_path_the_docs_name_exists() {
     assert!(
         missing.is_empty(),
         "paths the docs name but the tree lacks:\n{}",
+        missing.join("\n")
+    );
+}
+
+/// The targets of the relative Markdown links `](target)` of `text`, without
+/// their `#anchor`.
+fn link_targets(text: &str) -> Vec<String> {
+    text.split("](")
+        .skip(1)
+        .filter_map(|rest| rest.split_once(')').map(|(t, _)| t))
+        .filter(|t| !t.contains("://") && !t.starts_with('#') && !t.starts_with('<'))
+        .map(|t| t.split_once('#').map_or(t, |(f, _)| f).to_string())
+        .collect()
+}
+
+/// Whether docs/build.sh writes `path` (relative to the root) into the
+/// staged site: the generated pages, and `docs/tutorials/figures/NAME.png`
+/// drawn by `docs/tutorials/NAME.py`, which build.sh runs.
+fn generated_by_the_docs_build(path: &Path) -> bool {
+    let build = std::fs::read_to_string(root().join("docs/build.sh")).unwrap();
+    let p = path.to_string_lossy();
+    let generated = [
+        "docs/reference/cli.md",
+        "docs/reference/python-api.md",
+        "docs/reproduction.md",
+    ];
+    if generated.contains(&p.as_ref()) {
+        let name = path
+            .strip_prefix("docs")
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        return build.contains(&name);
+    }
+    let figure = p.strip_prefix("docs/tutorials/figures/");
+    let tutorials: Vec<&str> = build
+        .lines()
+        .find_map(|l| l.strip_prefix("TUTORIALS=("))
+        .and_then(|l| l.strip_suffix(')'))
+        .expect("docs/build.sh lists its TUTORIALS")
+        .split_whitespace()
+        .collect();
+    figure
+        .and_then(|f| f.strip_suffix(".png"))
+        .is_some_and(|name| {
+            tutorials.contains(&name) && root().join(format!("docs/tutorials/{name}.py")).exists()
+        })
+}
+
+/// `a/b/../c` as `a/c` (the link targets are relative, without symlinks).
+fn normalise(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[test]
+fn every_file_the_docs_link_exists() {
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for file in doc_files() {
+        let text = std::fs::read_to_string(root().join(&file)).unwrap();
+        let dir = file.parent().unwrap_or(Path::new(""));
+        for t in link_targets(&text) {
+            let target = normalise(&dir.join(&t));
+            checked += 1;
+            if !root().join(&target).exists() && !generated_by_the_docs_build(&target) {
+                missing.push(format!("{}: {t}", file.display()));
+            }
+        }
+    }
+    assert!(checked >= 50, "only {checked} links found");
+    assert!(
+        missing.is_empty(),
+        "links the docs make to files neither the tree nor docs/build.sh has:\n{}",
         missing.join("\n")
     );
 }
