@@ -1,4 +1,4 @@
-"""The noise keywords (README.md, "Noise kinds"): `noise=` and
+"""The noise keywords (docs/explanation/noise.md): `noise=` and
 `temperature=` reach the CLI's validation and closed forms, and `Params`
 carries them."""
 

@@ -1,7 +1,7 @@
 //! Error type shared by the whole library. The binary maps every variant to a
 //! one-line message and an exit code: 2 for bad input (a parameter out of
 //! range, a run over its work or memory budget), 4 for a numerical failure,
-//! 1 for i/o (see README, "Exit codes").
+//! 1 for i/o (see docs/output-formats.md, "Exit codes").
 //!
 //! Parameters are named as the library names them (`sigma`, `t_max`,
 //! `reset_velocity`); the binary translates those names to its flags.

@@ -1,7 +1,7 @@
 //! Docs that run: every `irtp …` command printed in a shell block of
 //! README.md, REPRODUCTION.md, bench/README.md and docs/*.md (and README's
 //! `cargo run --release -- …` line) is run as printed, in the repository
-//! root, with the changes README's "Examples" states: each `--out` (and a
+//! root, with the changes docs/reference/conventions.md states: each `--out` (and a
 //! later argument naming the same directory) goes to a temporary directory,
 //! `--particles` is at most [`MAX_PARTICLES`], `reproduce` runs `--quick`
 //! and `--submit` is left out (the SLURM test submits); documented commands

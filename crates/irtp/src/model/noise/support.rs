@@ -1,5 +1,5 @@
 //! Which method runs which noise model: the noise dimension of the support
-//! table of README.md (docs/equations.md, "Noise kinds").
+//! table of docs/reference/support.md (docs/equations.md, "Noise kinds").
 //!
 //! Every engine runs the paper's symmetric telegraph noise without thermal
 //! noise, which [`crate::Params`] carries as its default; the Euler schemes
@@ -42,11 +42,11 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting)";
 
 /// What a refusal of a noise model says runs it (one line; [`RUNNERS`],
-/// the full list, is in `--help` of `--noise` and README's support table).
+/// the full list, is in `--help` of `--noise` and docs/reference/support.md).
 pub const RUNS_IT: &str = "simulate and fp run any noise (see --help of --noise)";
 
 /// Whether `solver` runs `noise` (a model other than the paper's default),
-/// one line per method (README's support table). The exact sampler runs
+/// one line per method (docs/reference/support.md). The exact sampler runs
 /// any finite-state noise at T = 0, and at T > 0 with linear drag (its
 /// constructor refuses another drag at T > 0 naming `temperature`, and, naming
 /// `noise`, a level whose fixed point sits at a kink of the drag, and for a
@@ -57,7 +57,7 @@ pub const RUNS_IT: &str = "simulate and fp run any noise (see --help of --noise)
 /// cases.
 pub fn supports(solver: Solver, noise: &NoiseModel) -> bool {
     // One line per method: an engine that learns to run a noise model
-    // says which here (README's support table follows this match).
+    // says which here (docs/reference/support.md follows this match).
     match solver {
         // Any finite-state noise at T = 0 (sim::exact); with T > 0 linear
         // drag (exact Ornstein-Uhlenbeck segments), the engine refusing the

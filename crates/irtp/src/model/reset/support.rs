@@ -1,5 +1,5 @@
 //! Which method runs which resetting protocol: the one table behind the
-//! support table of README.md. A method calls
+//! support table of docs/reference/support.md. A method calls
 //! [`crate::Params::require`] with its [`Solver`] before any work; a
 //! protocol feature the method does not run is refused there with one line
 //! naming the flag and the methods that do run it, never approximated.
@@ -113,7 +113,7 @@ impl Feature {
 }
 
 /// Whether `solver` runs `feature` (exactly, or with its stated
-/// discretisation error). The one table; README.md's support table says
+/// discretisation error). The one table; docs/reference/support.md says
 /// the same.
 pub fn supports(solver: Solver, feature: Feature) -> bool {
     use Feature as F;
