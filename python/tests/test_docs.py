@@ -1,7 +1,8 @@
-"""Docs that run: every ```python block of README.md and docs/*.md is executed
-as printed, each file's blocks in order in one namespace (a later block may use
-an earlier one's names), in a temporary working directory, with the changes
-README states for the documented CLI commands: at most 4000 particles and
+"""Docs that run: every ```python block of README.md and of the pages under
+docs/ is executed as printed, each file's blocks in order in one namespace (a
+later block may use an earlier one's names), in a temporary working directory
+where examples/ is the repository's, with the changes
+docs/reference/conventions.md states for the documented CLI commands: at most 4000 particles and
 `reproduce` with `quick=True` (the module's functions are wrapped for the
 test, so `import irtp` in a block sees them). A file whose blocks run the
 CLI (`subprocess.run(["irtp", ...])`) finds the CLI under test ($IRTP_BIN) as
@@ -21,7 +22,11 @@ import pytest
 MAX_PARTICLES = 4000
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+# README.md and every page under docs/ but for docs/figures (reproduce's output).
+DOCS = [
+    ROOT / "README.md",
+    *sorted(p for p in (ROOT / "docs").rglob("*.md") if "figures" not in p.parts),
+]
 BLOCK = re.compile(r"^```python\n(.*?)^```", re.S | re.M)
 
 
@@ -75,6 +80,8 @@ def test_python_blocks_run(doc, tmp_path, monkeypatch, request):
     if any('"irtp"' in code for code in blocks(doc)):
         cli_on_path(request, tmp_path, monkeypatch)
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    # The repository's example plans at their documented paths.
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
     monkeypatch.chdir(tmp_path)
     reduce_sizes(monkeypatch)
     namespace: dict = {"__name__": "__docs__"}
