@@ -229,10 +229,14 @@ fn layout<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Layou
             fit_range(&p.x, h.x_edges.iter().copied()),
             (fit_range(&p.y, h.y_edges.iter().copied()), false),
         ),
-        None => (
-            fit_range(&p.x, p.series.iter().flat_map(|s| s.x.iter().copied())),
-            fit_y(p),
-        ),
+        None => {
+            // Only where a value can be drawn (an empty bin on a log axis cannot).
+            let xs = p.series.iter().flat_map(|s| {
+                let drawn = s.y.iter().map(|&y| p.y.tr(y).is_some());
+                s.x.iter().zip(drawn).filter(|q| q.1).map(|q| *q.0)
+            });
+            (fit_range(&p.x, xs), fit_y(p))
+        }
     };
     let mut entries = legend_entries(p);
     if clipped {
