@@ -4,17 +4,19 @@
 //!
 //! The command of the directory (its `run.json`) picks the figure:
 //! densities with their standard errors (`simulate`'s P_s(v), `analytic`
-//! and `fp stationary`'s p(v) with p₊ and p₋), moments in time on log axes
-//! (`simulate`'s ⟨v²⟩(t), ⟨x²⟩(t) with their errors; `fp msd`'s ⟨x²⟩(t)
-//! and its exponent α(t)), the snapshots of `fp transient`, survival
-//! curves S(t) (`mfpt` with a particle method, `mfpt distribution`), τ(v₀)
-//! of `mfpt` with the backward equations, and τ against the scanned axis
-//! (`mfpt scan`, `mfpt optimize`). A sweep directory (one with
-//! `plan.toml`) gives a heat map of one scalar column of `results.csv`
-//! (`--var`, default the first `result.*` column) over the plan's first
-//! two crossed axes (a `[[zip]]` group is one axis); further crossed axes
-//! stay at their first value, which the title names; a plan crossing one
-//! axis is refused.
+//! and `fp stationary`'s P_s(v) with its part per noise state, named as
+//! the noise model names its states), moments in time on log axes
+//! (`simulate`'s ⟨v²⟩(t), ⟨x²⟩(t) with their errors, thinned to even steps
+//! in log t; `fp msd`'s ⟨x²⟩(t) and its exponent α(t)) beside their power
+//! laws, the snapshots of `fp transient`, survival curves S(t) (`mfpt`
+//! with a particle method, `mfpt distribution`), τ(v₀) of `mfpt` with the
+//! backward equations, and τ against the scanned axis with its optimum
+//! marked (`mfpt scan`, `mfpt optimize`). The title names the run's
+//! parameters in symbols ([`symbols`]); vertical ranges are robust
+//! ([`crate::plot::fit_y`]). A sweep directory (one with `plan.toml`)
+//! gives one scalar column of `results.csv` (`--var`, default the first
+//! `result.*` column) over the plan's crossed axes (module `sweep`): a
+//! line for one axis, a heat map for two, small multiples for more.
 //!
 //! The image goes to `DIR/plot.png` unless `--out` names another file. No
 //! checksum of irtp covers that name: `run.json` lists the files a run
