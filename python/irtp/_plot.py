@@ -294,6 +294,22 @@ def state_names(res: Any, n: int) -> List[str]:
     return names
 
 
+def _exact_r0(ax: Any, res: Any) -> None:
+    """The exact density without resetting (``irtp.analytic``) of the run's
+    telegraph noise and drag, a grey guide beside a density at r > 0; not
+    for another noise, a thermal noise, a drag without it, or r = 0."""
+    m = _model(res.params) or {}
+    if m.get("noise") or m.get("temperature") or not m.get("rate") or "sigma" not in m:
+        return
+    from . import analytic
+    try:
+        exact = analytic(drag=m["drag"], sigma=m["sigma"], lambda_=m["lambda"], points=400)
+    except Exception:  # a drag or parameters without the closed form: no guide
+        return
+    d = exact.tables["density"]
+    ax.plot(d["v"], d["p"], ":", color="0.4", gid="guide", label="exact at r = 0")
+
+
 def _density(res: Any, parts: bool) -> List[Drawer]:
     t = res.tables["density"]
 
@@ -309,6 +325,7 @@ def _density(res: Any, parts: bool) -> List[Drawer]:
                 names = state_names(res, len(cols))
             for k, (c, name) in enumerate(zip(cols, names)):
                 ax.plot(t["v"], t[c], ("--", ":")[k % 2], color=f"C{k}", label=name)
+            _exact_r0(ax, res)
         ax.set(xlabel="v", ylabel="$P_s(v)$", title="stationary velocity density")
         _fit_y(ax)
     return [draw]

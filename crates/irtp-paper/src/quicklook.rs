@@ -323,7 +323,10 @@ fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
                     Color::Palette(1),
                     Dash::Dashed,
                 ),
-            ],
+            ]
+            .into_iter()
+            .chain(exact_r0(dir))
+            .collect(),
         ),
         moments,
     ];
@@ -473,6 +476,7 @@ fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
             k += 1;
         }
     }
+    series.extend(exact_r0(dir));
     let mut p = panel(
         "",
         "stationary velocity density",
@@ -480,8 +484,33 @@ fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
         Axis::linear("P_{s}(v)"),
         series,
     );
-    p.legend_title = Some("noise state".into());
     Ok(p)
+}
+
+/// The exact density without resetting (docs/equations.md (34)-(35),
+/// `R0Density`) of the run's telegraph noise and drag, as a grey
+/// guide beside a density at r > 0: what resetting changed. `None` for
+/// another noise, a thermal noise, a drag without it, or a run at r = 0
+/// (whose density it is).
+fn exact_r0(dir: &Path) -> Option<Series> {
+    let run = irtp_app::io::read_provenance(&dir.join("run.json"))?;
+    let m = symbols::model(&run["parameters"])?;
+    let rate = m["rate"].as_f64().unwrap_or(0.0);
+    let thermal = m["temperature"].as_f64().unwrap_or(0.0) != 0.0;
+    if !m["noise"].is_null() || thermal || rate == 0.0 {
+        return None;
+    }
+    let drag: irtp::model::drag::DragLaw = m["drag"].as_str()?.parse().ok()?;
+    let (sigma, lambda) = (m["sigma"].as_f64()?, m["lambda"].as_f64()?);
+    let d = irtp::analytic::r0::R0Density::new(drag, sigma, lambda).ok()?;
+    let (lo, hi) = d.bounds();
+    let n = 400;
+    let v: Vec<f64> = (1..n)
+        .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+        .collect();
+    let p = v.iter().map(|&v| d.pdf(v)).collect();
+    let label = Some("exact at r = 0".to_string());
+    Some(Series::line(label, Color::Gray, Dash::Dotted, GUIDE, v, p))
 }
 
 /// The noise levels of `summary.json` (`results.levels`; empty when

@@ -212,7 +212,7 @@ fn readme_fp_stationary_is_not_a_flat_line() {
     );
     let legend = fig.panels[0].legend_lines().join("; ");
     assert!(
-        legend.contains("η = +Σ") && legend.contains("η = −Σ"),
+        legend.contains("η = +Σ") && legend.contains("η = −Σ") && legend.contains("exact at r = 0"),
         "{legend}"
     );
     assert!(
