@@ -477,14 +477,13 @@ fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
         }
     }
     series.extend(exact_r0(dir));
-    let mut p = panel(
+    Ok(panel(
         "",
         "stationary velocity density",
         Axis::linear("v"),
         Axis::linear("P_{s}(v)"),
         series,
-    );
-    Ok(p)
+    ))
 }
 
 /// The exact density without resetting (docs/equations.md (34)-(35),
@@ -591,7 +590,7 @@ fn fp_transient_panels(dir: &Path) -> Result<Vec<Panel>> {
             "(b)",
             "moments",
             Axis::linear("t"),
-            Axis::linear("moment"),
+            Axis::linear("⟨v²⟩, ⟨v⟩"),
             moments,
         ),
     ])
