@@ -126,8 +126,8 @@ def title_parameters(params: Dict[str, Any], scanned: Sequence[str] = ()) -> str
     return ", ".join(out)
 
 
-def _robust_ylim(values: Sequence[Tuple[np.ndarray, np.ndarray]], log: bool
-                 ) -> Optional[Tuple[float, float]]:
+def _robust_ylim(values: Sequence[Tuple[np.ndarray, np.ndarray]], log: bool,
+                 xlog: bool = False) -> Optional[Tuple[float, float]]:
     """The vertical range cutting extreme values, or None when the data's
     own range is fine: (x, y) arrays of the drawn data, each weighing one,
     a value weighted by the share of the horizontal extent it covers; an end
@@ -140,6 +140,11 @@ def _robust_ylim(values: Sequence[Tuple[np.ndarray, np.ndarray]], log: bool
         if y.size == 0:
             continue
         u = np.log10(y) if log else y
+        if xlog:
+            keep = x > 0
+            x, u = np.log10(x[keep]), u[keep]
+            if u.size == 0:
+                continue
         w = np.gradient(x) if x.size > 2 else np.ones_like(x)
         w = np.abs(w)
         w = w / w.sum() if w.sum() > 0 else np.full_like(u, 1.0 / u.size)
@@ -149,17 +154,51 @@ def _robust_ylim(values: Sequence[Tuple[np.ndarray, np.ndarray]], log: bool
         return None
     u, w = np.concatenate(us), np.concatenate(ws)
     order = np.argsort(u)
-    u, cum = u[order], np.cumsum(w[order]) / w.sum()
+    u, w = u[order], w[order]
+    a, b = _main_cluster(u, w)
+    full = (u[0], u[-1])
+    u, w = u[a:b + 1], w[a:b + 1]
+    cum = np.cumsum(w) / w.sum()
     qlo, qhi = u[np.searchsorted(cum, 0.01)], u[min(np.searchsorted(cum, 0.99), u.size - 1)]
     span = max(qhi - qlo, 1e-9 * (1 + abs(qhi)))
-    cut_lo, cut_hi = qlo - u[0] > 2 * span, u[-1] - qhi > 2 * span
+    cut_lo, cut_hi = qlo - full[0] > 2 * span, full[1] - qhi > 2 * span
     if not (cut_lo or cut_hi):
         return None
-    lo = qlo - 0.15 * span if cut_lo else u[0]
-    hi = qhi + 0.15 * span if cut_hi else u[-1]
+    lo = qlo - 0.15 * span if cut_lo else full[0]
+    hi = qhi + 0.15 * span if cut_hi else full[1]
     m = 0.04 * (hi - lo)
     lo, hi = lo - m, hi + m
     return (10 ** lo, 10 ** hi) if log else (lo, hi)
+
+
+def _main_cluster(u: np.ndarray, w: np.ndarray) -> Tuple[int, int]:
+    """Sorted values ``u`` (weights ``w``) without outlying groups at the
+    ends: a group of at most 30 % of the weight cut off by a gap more than
+    ten times the (non-zero) extent of the rest, repeatedly (a τ(r) running
+    away to 10⁷⁹ on a sparse grid, an atom); the first and last index kept."""
+    total, a, b = w.sum(), 0, u.size - 1
+    while True:
+        a0, b0 = a, b
+        above = 0.0
+        for j in range(b - 1, a - 1, -1):
+            above += w[j + 1]
+            if above > 0.3 * total:
+                break
+            rest = u[j] - u[a]
+            if rest > 0 and u[j + 1] - u[j] > 10 * rest:
+                b = j
+                break
+        below = 0.0
+        for j in range(a + 1, b + 1):
+            below += w[j - 1]
+            if below > 0.3 * total:
+                break
+            rest = u[b] - u[j]
+            if rest > 0 and u[j] - u[j - 1] > 10 * rest:
+                a = j
+                break
+        if (a, b) == (a0, b0):
+            return a, b
 
 
 def _fit_y(ax: Any) -> None:
@@ -173,7 +212,7 @@ def _fit_y(ax: Any) -> None:
             continue
         x, y = line.get_xdata(), line.get_ydata()
         data.append((np.asarray(x, float), np.asarray(y, float), line.get_color()))
-    lim = _robust_ylim([(x, y) for x, y, _ in data], log)
+    lim = _robust_ylim([(x, y) for x, y, _ in data], log, ax.get_xscale() == "log")
     if lim is None:
         return
     ax.set_ylim(*lim)

@@ -150,6 +150,18 @@ def test_readme_density_is_not_a_flat_line(tmp_path):
     assert not any("₊" in s or "p_" in s for s in labels), labels
 
 
+def test_a_runaway_tau_does_not_hide_the_optimum():
+    """τ(r) on a sparse grid reaches 10⁷⁹ at r = 1000: cut and marked, the
+    optimum in view."""
+    res = irtp.mfpt_optimize(v0=-0.249, vt=0.5, cells=1000, grid_points=7)
+    ax = res.plot()
+    lo, hi = ax.get_ylim()
+    assert lo < res.summary["tau_opt"] < hi < 3 * res.summary["tau_opt"], (lo, hi)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(s.startswith("beyond the axis") for s in labels), labels
+    assert any(s.startswith("optimum: τ = ") for s in labels), labels
+
+
 def test_moments_on_log_axes_are_log_spaced_with_guides():
     res = irtp.simulate(particles=200, t_max=10.0, burn_in=3.0)
     ax = res.plot(panel=1)

@@ -613,7 +613,8 @@ pub fn fit_y(p: &Panel) -> ((f64, f64), bool) {
 /// The 1 % and 99 % quantiles (layout units) of a panel's drawn values,
 /// guides left out, each series weighing one: a line's values weighted by
 /// the share of its horizontal extent each covers (what the eye sees), a
-/// series of points' equally. `None` without values.
+/// series of points' equally; outlying groups at the ends left out first
+/// (`main_cluster`). `None` without values.
 pub fn robust_range(p: &Panel) -> Option<(f64, f64)> {
     let mut wv: Vec<(f64, f64)> = Vec::new();
     for s in p.series.iter().filter(|s| s.source != GUIDE) {
@@ -640,10 +641,12 @@ pub fn robust_range(p: &Panel) -> Option<(f64, f64)> {
         return None;
     }
     wv.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (a, b) = main_cluster(&wv);
+    let wv = &wv[a..=b];
     let all: f64 = wv.iter().map(|q| q.1).sum();
     let quantile = |f: f64| {
         let mut acc = 0.0;
-        for &(v, w) in &wv {
+        for &(v, w) in wv {
             acc += w;
             if acc >= f * all {
                 return v;
@@ -652,6 +655,46 @@ pub fn robust_range(p: &Panel) -> Option<(f64, f64)> {
         wv.last().expect("values").0
     };
     Some((quantile(0.01), quantile(0.99)))
+}
+
+/// The sorted weighted values `wv` without outlying groups at either end:
+/// a group of at most 30 % of the weight cut off by a gap more than ten
+/// times the (non-zero) extent of the rest (a τ(r) that runs away to 10⁷⁹
+/// on a sparse grid, an atom drawn as a tall cell), repeatedly; the first
+/// and last index kept.
+fn main_cluster(wv: &[(f64, f64)]) -> (usize, usize) {
+    let all: f64 = wv.iter().map(|q| q.1).sum();
+    let (mut a, mut b) = (0, wv.len() - 1);
+    loop {
+        let (a0, b0) = (a, b);
+        let mut above = 0.0;
+        for j in (a..b).rev() {
+            above += wv[j + 1].1;
+            if above > 0.3 * all {
+                break;
+            }
+            let rest = wv[j].0 - wv[a].0;
+            if rest > 0.0 && wv[j + 1].0 - wv[j].0 > 10.0 * rest {
+                b = j;
+                break;
+            }
+        }
+        let mut below = 0.0;
+        for j in a + 1..=b {
+            below += wv[j - 1].1;
+            if below > 0.3 * all {
+                break;
+            }
+            let rest = wv[b].0 - wv[j].0;
+            if rest > 0.0 && wv[j].0 - wv[j - 1].0 > 10.0 * rest {
+                a = j;
+                break;
+            }
+        }
+        if (a, b) == (a0, b0) {
+            return (a, b);
+        }
+    }
 }
 
 /// Labels of `vals` rounded to the fewest significant digits (at least
@@ -1250,6 +1293,38 @@ mod tests {
         let e = legend_entries(&p);
         assert_eq!(e.len(), 1);
         assert!(e[0].marker && e[0].dash == Some(Dash::Solid));
+    }
+
+    #[test]
+    fn outlying_groups_do_not_set_the_range() {
+        // τ(r) on a sparse grid running away to 10⁷⁹: the minimum stays visible.
+        let mut p = Panel::new("", "", Axis::log("r"), Axis::linear("τ"));
+        let r = vec![1e-3, 1e-2, 0.1, 1.0, 10.0, 100.0, 1000.0];
+        let tau = vec![1.86, 1.86, 1.85, 1.77, 2.24, 1.98e6, 6.66e79];
+        p.series.push(Series::line(
+            None,
+            Color::Palette(0),
+            Dash::Solid,
+            "tau",
+            r,
+            tau,
+        ));
+        let ((lo, hi), clipped) = fit_y(&p);
+        assert!(clipped && lo < 1.77 && hi > 2.24 && hi < 3.0, "{lo} {hi}");
+        // A flat line with one step is no outlier.
+        let mut q = Panel::new("", "", Axis::linear("t"), Axis::linear("S"));
+        let t: Vec<f64> = (0..10).map(f64::from).collect();
+        let s = vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.5];
+        q.series.push(Series::line(
+            None,
+            Color::Palette(0),
+            Dash::Solid,
+            "s",
+            t,
+            s,
+        ));
+        let ((_, hi), clipped) = fit_y(&q);
+        assert!(!clipped && hi > 1.5, "{hi}");
     }
 
     #[test]

@@ -353,7 +353,13 @@ fn mfpt_scan_marks_its_optimum() {
         "--grid-points",
         "7",
     ];
-    gallery("mfpt-optimize", &a);
+    // τ(r) reaches 10⁷⁹ at r = 1000 on this grid: cut, the optimum in view.
+    let (_, drawn) = gallery("mfpt-optimize", &a);
+    assert!(
+        drawn[0].clipped >= 1 && drawn[0].y_range.1 < 5.0,
+        "{:?}",
+        drawn[0].y_range
+    );
 }
 
 /// A plan of `fp stationary` over `axes` (TOML lines).
