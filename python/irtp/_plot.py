@@ -655,6 +655,32 @@ def plot_sweep(ds: Any, var: Optional[str] = None, ax: Any = None) -> Any:
     return _sweep_heat(ds, dims, name, ax, plt)
 
 
+SWEEP_TITLE_KEYS = ("drag", "noise", "sigma", "lambda", "rate", "reset_velocity", "reset_period",
+                    "temperature", "v0", "vt", "xt", "reset_position")
+
+
+def sweep_title(ds: Any, name: str) -> str:
+    """``D_eff over a sweep of fp stationary: tan drag, Σ = 3`` from the
+    Dataset's attributes (the plan's command and fixed parameters)."""
+    head = f"{result_symbol(name)} over a sweep"
+    command = ds.attrs.get("command")
+    if command:
+        head += f" of {command}"
+    fixed = []
+    for k in SWEEP_TITLE_KEYS:
+        v = ds.attrs.get(f"fixed.{k}")
+        if v is None:
+            continue
+        try:
+            v = float(v)
+        except ValueError:
+            pass
+        a = _assignment(k, v)
+        if a:
+            fixed.append(a)
+    return head + (f": {', '.join(fixed)}" if fixed else "")
+
+
 def _sweep_line(ds: Any, dim: str, name: str, ax: Any) -> Any:
     import matplotlib.pyplot as plt
 
@@ -682,7 +708,7 @@ def _sweep_line(ds: Any, dim: str, name: str, ax: Any) -> Any:
         ax.plot([pos[i]], [y[i]], "o", color="C3",
                 label=f"smallest: {_num(y[i])} at {_dim_label(ds, dim)} = {labels[i]}")
     ax.legend(fontsize="small")
-    ax.set_title(f"{result_symbol(name)} over a sweep")
+    ax.set_title(sweep_title(ds, name))
     ax.figure.tight_layout()
     return ax
 
@@ -723,8 +749,8 @@ def _sweep_heat(ds: Any, dims: List[str], name: str, ax: Any, plt: Any) -> Any:
         for d, i in sel.items():
             _, labels, _, _ = _axis_values(ds, d)
             at.append(labels[i] if "=" in labels[i] else f"{_dim_label(ds, d)} = {labels[i]}")
-        a.set_title(", ".join(at) if at else f"{result_symbol(name)} over a sweep")
+        a.set_title(", ".join(at) if at else sweep_title(ds, name))
     if len(axes) > 1:
-        axes[0].figure.suptitle(f"{result_symbol(name)} over a sweep")
+        axes[0].figure.suptitle(sweep_title(ds, name))
     axes[0].figure.tight_layout()
     return axes[0]

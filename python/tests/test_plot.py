@@ -222,6 +222,7 @@ def test_plot_sweep_of_one_axis_is_a_line_with_the_r_minus_two_law(cli, tmp_path
     assert (ax.get_xscale(), ax.get_yscale()) == ("log", "log")
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("r", "$D_{eff}$")
     assert any(t.get_text() == "∝ $r^{-2}$" for t in ax.texts)
+    assert ax.get_title() == "$D_{eff}$ over a sweep of fp stationary"
     assert_no_overlap(ax.figure)
     assert_drawn(ax, tmp_path / "line.png")
 
