@@ -430,8 +430,7 @@ fn tick_texts<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let (l, t, _, b) = plot_box(area, chart);
-    let _ = t;
+    let (l, _, _, b) = plot_box(area, chart);
     let font = || (FAMILY, TICK_FONT_PX).into_font();
     let mut out = Vec::new();
     for (x, s) in xlab {
@@ -553,8 +552,7 @@ where
     let (mut chart, mut labels) = chart(p, area, &l)?;
     if let Some(h) = &p.heat {
         heatmap::draw_cells(&mut chart, h)?;
-        let (pl, pt, pr, pb) = plot_box(area, &chart);
-        let _ = pl;
+        let (_, pt, pr, pb) = plot_box(area, &chart);
         labels.extend(heatmap::draw_bar(area, h, (pr + 12, pt, pb))?);
     }
     // Lines first, points on top.
@@ -572,8 +570,7 @@ where
     if l.entries.is_empty() {
         return Ok(drawn);
     }
-    let (ox, oy, br0, _) = plot_box(area, &chart);
-    let (_, _, _, br1) = plot_box(area, &chart);
+    let (ox, oy, br0, br1) = plot_box(area, &chart);
     let (w, h) = (br0 - ox, br1 - oy);
     let (ax, ay) = area.get_base_pixel();
     let corner = match l.place {
@@ -605,7 +602,7 @@ where
     if !l.clipped {
         return Ok(0);
     }
-    let (ax, ay) = area.get_base_pixel();
+    let ax = area.get_base_pixel().0;
     let (_, top, _, bottom) = plot_box(area, chart);
     let mut count = 0;
     for s in p.series.iter().filter(|s| s.source != GUIDE) {
@@ -637,7 +634,6 @@ where
             } else {
                 (bottom, bottom - 9)
             };
-            let _ = ay;
             area.draw(&Polygon::new(
                 vec![(x, tip), (x - 5, base), (x + 5, base)],
                 style,
