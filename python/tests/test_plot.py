@@ -93,6 +93,95 @@ sigma = [2.0, 3.0, 4.0]
 """
 
 
+def tick_boxes(ax):
+    """Window extents of the visible, non-empty tick labels of ``ax``'s x and
+    y axes (after drawing), per axis."""
+    out = []
+    for labels in (ax.get_xticklabels(), ax.get_yticklabels()):
+        out.append([t.get_window_extent() for t in labels
+                    if t.get_visible() and t.get_text() and ax.get_window_extent().width > 0
+                    and _shown(ax, t)])
+    return out
+
+
+def _shown(ax, label):
+    """Whether a tick label lies within its axis (matplotlib keeps some outside, not drawn)."""
+    x, y = label.get_position()
+    lo, hi = sorted(ax.get_xlim() if label in ax.get_xticklabels() else ax.get_ylim())
+    v = x if label in ax.get_xticklabels() else y
+    return lo - 1e-9 * abs(hi - lo) <= v <= hi + 1e-9 * abs(hi - lo)
+
+
+def assert_no_overlap(fig):
+    """No two tick labels of an axis overlap (window extents after drawing),
+    in every Axes of ``fig`` (colour bars included)."""
+    fig.canvas.draw()
+    for ax in fig.axes:
+        for boxes in tick_boxes(ax):
+            for i, a in enumerate(boxes):
+                for b in boxes[i + 1:]:
+                    assert not a.overlaps(b), (ax.get_title(), a, b)
+
+
+@pytest.mark.parametrize("function,command,kwargs,panels", KINDS, ids=IDS)
+def test_tick_labels_never_overlap(function, command, kwargs, panels):
+    ax = getattr(irtp, function)(**kwargs).plot()
+    assert_no_overlap(ax.figure)
+    plt.close(ax.figure)
+
+
+def test_readme_density_is_not_a_flat_line(tmp_path):
+    """The edge cells (p up to 530) are cut and marked, not the range: the
+    central 98 % of the density spans more than a quarter of the y axis;
+    states named as the noise names them; parameters in the title."""
+    res = irtp.fp_stationary(drag="tan", sigma=3.0, lambda_=0.9, rate=2.0, cells=400)
+    ax = res.plot()
+    lo, hi = ax.get_ylim()
+    q = np.quantile(res.tables["density"]["p"], [0.01, 0.9])
+    assert hi < 5 < res.tables["density"]["p"].max()
+    assert q[1] - q[0] > 0.25 * (hi - lo)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "η = +Σ" in labels and any(s.startswith("beyond the axis") for s in labels), labels
+    assert ax.figure._suptitle.get_text() == "irtp fp stationary: tan drag, Σ = 3, λ = 0.9, r = 2"
+    assert_drawn(ax, tmp_path / "fp.png")
+    rpt = irtp.fp_stationary(noise="rpt:sigma=1,alpha=1,beta=1", drag="tan", rate=2.0, cells=200)
+    labels = [t.get_text() for t in rpt.plot().get_legend().get_texts()]
+    assert "pause (η = 0)" in labels and "run (η = −1)" in labels, labels
+    assert not any("₊" in s or "p_" in s for s in labels), labels
+
+
+def test_a_runaway_tau_does_not_hide_the_optimum():
+    """τ(r) on a sparse grid reaches 10⁷⁹ at r = 1000: cut and marked, the
+    optimum in view."""
+    res = irtp.mfpt_optimize(v0=-0.249, vt=0.5, cells=1000, grid_points=7)
+    ax = res.plot()
+    lo, hi = ax.get_ylim()
+    assert lo < res.summary["tau_opt"] < hi < 3 * res.summary["tau_opt"], (lo, hi)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(s.startswith("beyond the axis") for s in labels), labels
+    assert any(s.startswith("optimum: τ = ") for s in labels), labels
+
+
+def test_moments_on_log_axes_are_log_spaced_with_guides():
+    res = irtp.simulate(particles=200, t_max=10.0, burn_in=3.0)
+    ax = res.plot(panel=1)
+    t = ax.get_lines()[0].get_xdata()
+    late = np.sum(t > t[-1] / 10)
+    assert late <= 40 / np.log10(t[-1] / t[0]) + 2, (late, len(t))
+    notes = [a.get_text() for a in ax.texts]
+    assert "∝ t" in notes and any(n in notes for n in ("∝ t²", "∝ t³", "∝ t⁴")), notes
+
+
+SWEEP = """\
+command = "fp stationary"
+
+[fixed]
+cells = 40
+
+[axes]
+"""
+
+
 def test_plot_sweep_is_a_heat_map(cli, tmp_path):
     pytest.importorskip("xarray")
     (tmp_path / "plan.toml").write_text(PLAN)
@@ -100,23 +189,53 @@ def test_plot_sweep_is_a_heat_map(cli, tmp_path):
     ds = irtp.load_sweep(tmp_path / "sw")
     ax = irtp.plot_sweep(ds)
     assert [t.get_text() for t in ax.get_xticklabels()] == ["2", "3", "4"]
+    assert_no_overlap(ax.figure)
     assert_drawn(ax, tmp_path / "heat.png")
-    assert_drawn(irtp.plot_sweep(ds, var="result.d_eff"), tmp_path / "d_eff.png")
+    ax = irtp.plot_sweep(ds, var="result.d_eff")
+    assert ax.figure.axes[1].get_ylabel() == "$D_{eff}$"
+    assert_drawn(ax, tmp_path / "d_eff.png")
     with pytest.raises(ValueError, match="var='nope'"):
         irtp.plot_sweep(ds, var="nope")
 
 
-def test_plot_sweep_of_three_axes_fixes_the_third(cli, tmp_path):
+def test_plot_sweep_cells_follow_a_log_spaced_plan(cli, tmp_path):
+    pytest.importorskip("xarray")
+    rate = "rate = { from = 0.1, to = 10.0, points = 5, spacing = \"log\" }\n"
+    plan = SWEEP + "sigma = [1.0, 2.0]\n" + rate
+    (tmp_path / "plan.toml").write_text(plan)
+    cli.run(["sweep", "run", str(tmp_path / "plan.toml"), "--out", str(tmp_path / "sw")])
+    ax = irtp.plot_sweep(irtp.load_sweep(tmp_path / "sw"), var="d_eff")
+    assert ax.get_xscale() == "log"
+    mesh = ax.collections[0]
+    xe = np.unique(np.asarray(mesh.get_coordinates())[..., 0])
+    assert np.allclose(np.log10(xe), np.arange(-1.25, 1.26, 0.5)), xe
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["0.1", "0.32", "1", "3.2", "10"]
+    assert_no_overlap(ax.figure)
+
+
+def test_plot_sweep_of_one_axis_is_a_line_with_the_r_minus_two_law(cli, tmp_path):
+    pytest.importorskip("xarray")
+    plan = SWEEP + "rate = { from = 0.1, to = 30.0, points = 7, spacing = \"log\" }\n"
+    (tmp_path / "plan.toml").write_text(plan)
+    cli.run(["sweep", "run", str(tmp_path / "plan.toml"), "--out", str(tmp_path / "sw")])
+    ax = irtp.plot_sweep(irtp.load_sweep(tmp_path / "sw"), var="d_eff")
+    assert (ax.get_xscale(), ax.get_yscale()) == ("log", "log")
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("r", "$D_{eff}$")
+    assert any(t.get_text() == "∝ $r^{-2}$" for t in ax.texts)
+    assert ax.get_title() == "$D_{eff}$ over a sweep of fp stationary"
+    assert_no_overlap(ax.figure)
+    assert_drawn(ax, tmp_path / "line.png")
+
+
+def test_plot_sweep_of_three_axes_is_small_multiples(cli, tmp_path):
     pytest.importorskip("xarray")
     plan = PLAN + "lambda = [0.5, 5.0]\n"
     (tmp_path / "plan.toml").write_text(plan)
     cli.run(["sweep", "run", str(tmp_path / "plan.toml"), "--out", str(tmp_path / "sw")])
     ds = irtp.load_sweep(tmp_path / "sw")
     ax = irtp.plot_sweep(ds, var="v2")
-    assert ax.get_title() == "sweep: v2 at lambda = 0.5"
+    heat = [a for a in ax.figure.axes if a.get_label() != "<colorbar>"]
+    assert [a.get_title() for a in heat] == ["λ = 0.5", "λ = 5"]
+    assert heat[0].collections[0].norm.vmax == heat[1].collections[0].norm.vmax
+    assert_no_overlap(ax.figure)
     assert_drawn(ax, tmp_path / "three.png")
-    one = "command = \"fp stationary\"\n[fixed]\ncells = 40\n[axes]\nrate = [0.5, 2.0]\n"
-    (tmp_path / "one.toml").write_text(one)
-    cli.run(["sweep", "run", str(tmp_path / "one.toml"), "--out", str(tmp_path / "one")])
-    with pytest.raises(ValueError, match="at least two axes"):
-        irtp.plot_sweep(irtp.load_sweep(tmp_path / "one"))

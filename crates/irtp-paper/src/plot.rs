@@ -51,8 +51,12 @@ pub struct Axis {
     pub label: String,
     /// Scale.
     pub scale: Scale,
-    /// Fixed range in data units; `None` fits the data (with a margin).
+    /// Fixed range in data units; `None` fits the data (with a margin; on
+    /// the vertical axis a robust range, see [`robust_range`]).
     pub range: Option<(f64, f64)>,
+    /// Ticks at given data positions with given labels (a heat map's cell
+    /// centres); `None`: nice ticks chosen from the range.
+    pub ticks: Option<Vec<(f64, String)>>,
 }
 
 impl Axis {
@@ -62,6 +66,7 @@ impl Axis {
             label: label.into(),
             scale: Scale::Linear,
             range: None,
+            ticks: None,
         }
     }
     /// Log axis fitted to the data.
@@ -70,6 +75,7 @@ impl Axis {
             label: label.into(),
             scale: Scale::Log,
             range: None,
+            ticks: None,
         }
     }
     /// Fix the range.
@@ -77,16 +83,21 @@ impl Axis {
         self.range = Some((lo, hi));
         self
     }
+    /// Ticks at data positions `at` labelled `labels`.
+    pub fn ticks_at(mut self, ticks: Vec<(f64, String)>) -> Self {
+        self.ticks = Some(ticks);
+        self
+    }
     /// Data value to the axis' linear layout units (log10 on a log axis);
     /// `None` where the value cannot be drawn.
-    fn tr(&self, v: f64) -> Option<f64> {
+    pub fn tr(&self, v: f64) -> Option<f64> {
         match self.scale {
             Scale::Linear => v.is_finite().then_some(v),
             Scale::Log => (v > 0.0 && v.is_finite()).then(|| v.log10()),
         }
     }
     /// Inverse of [`Axis::tr`].
-    fn inv(&self, u: f64) -> f64 {
+    pub fn inv(&self, u: f64) -> f64 {
         match self.scale {
             Scale::Linear => u,
             Scale::Log => 10f64.powf(u),
@@ -244,6 +255,9 @@ pub struct Panel {
     /// Legend entries after the series' ones saying what each kind of mark
     /// is (e.g. grey points: "exact sampler, 4000 particles").
     pub key: Vec<Key>,
+    /// A heat map filling the plotting area (cells on the axes' data
+    /// positions) with its colour bar right of it.
+    pub heat: Option<heatmap::Heat>,
 }
 
 /// A legend entry of its own, not tied to a series: what a marker or line
@@ -293,6 +307,7 @@ impl Panel {
             notes: Vec::new(),
             legend_title: None,
             key: Vec::new(),
+            heat: None,
         }
     }
 
@@ -305,6 +320,82 @@ impl Panel {
             .chain(entries.iter().map(|e| &e.label))
             .map(|t| plain_text(t))
             .collect()
+    }
+}
+
+/// A text drawn, as a box in figure pixels (from the backend's text-size
+/// estimate, as the layout placed it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextBox {
+    /// The text.
+    pub text: String,
+    /// Left edge.
+    pub x0: i32,
+    /// Top edge.
+    pub y0: i32,
+    /// Right edge.
+    pub x1: i32,
+    /// Bottom edge.
+    pub y1: i32,
+}
+
+impl TextBox {
+    /// The box of `text` at (x, y) (top left), `w` × `h` pixels.
+    pub fn new(text: &str, x: i32, y: i32, w: i32, h: i32) -> Self {
+        TextBox {
+            text: text.to_string(),
+            x0: x,
+            y0: y,
+            x1: x + w,
+            y1: y + h,
+        }
+    }
+    /// Whether the two boxes share pixels (touching edges do not count).
+    pub fn overlaps(&self, o: &TextBox) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+}
+
+/// What rendering made of one panel: its ranges in data units, how many
+/// values lie beyond the vertical range (marked), and the boxes of its
+/// tick labels, axis labels and colour-bar texts in figure pixels.
+#[derive(Clone, Debug)]
+pub struct PanelDrawn {
+    /// Horizontal range drawn.
+    pub x_range: (f64, f64),
+    /// Vertical range drawn.
+    pub y_range: (f64, f64),
+    /// Values beyond the vertical range (each run marked by a triangle).
+    pub clipped: usize,
+    /// Texts drawn: tick labels, axis labels, colour bar ticks and label.
+    pub labels: Vec<TextBox>,
+    /// The plotting area: left, top, right, bottom (figure pixels).
+    pub plot_box: (i32, i32, i32, i32),
+}
+
+impl PanelDrawn {
+    /// Move every box by (dx, dy) (area pixels to figure pixels).
+    pub fn shift(&mut self, dx: i32, dy: i32) {
+        for b in &mut self.labels {
+            b.x0 += dx;
+            b.x1 += dx;
+            b.y0 += dy;
+            b.y1 += dy;
+        }
+        let (l, t, r, b) = self.plot_box;
+        self.plot_box = (l + dx, t + dy, r + dx, b + dy);
+    }
+    /// Pairs of texts that overlap.
+    pub fn overlaps(&self) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        for (i, a) in self.labels.iter().enumerate() {
+            for b in &self.labels[i + 1..] {
+                if a.overlaps(b) {
+                    out.push((a.text.clone(), b.text.clone()));
+                }
+            }
+        }
+        out
     }
 }
 
@@ -376,13 +467,20 @@ impl Figure {
     /// Render to a PNG file.
     #[cfg(feature = "plot")]
     pub fn render_png(&self, path: &std::path::Path) -> Result<()> {
-        render::png(self, path)
+        render::png(self, path).map(|_| ())
     }
 
     /// Render to an SVG file.
     #[cfg(feature = "plot")]
     pub fn render_svg(&self, path: &std::path::Path) -> Result<()> {
-        render::svg(self, path)
+        render::svg(self, path).map(|_| ())
+    }
+
+    /// Render to a PNG file and say where each panel put its ranges and
+    /// texts (what the gallery test checks).
+    #[cfg(feature = "plot")]
+    pub fn render_png_drawn(&self, path: &std::path::Path) -> Result<Vec<PanelDrawn>> {
+        render::png(self, path)
     }
 
     /// All plotted data in long format:
@@ -467,8 +565,193 @@ fn fit_range(axis: &Axis, vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - m, hi + m)
 }
 
+/// Source name of guide lines (power laws, reference levels): they never
+/// set an axis range.
+pub const GUIDE: &str = "guide";
+
+/// The vertical range of a panel in layout units, and whether it clips
+/// data. Fitted to the data (error bars included, guides not) with a
+/// margin, unless a few extreme values would squeeze the rest into a line
+/// (an integrable singularity at the edge of the velocity range, an atom
+/// drawn as a tall cell): an end further than twice the spread of the
+/// central 98 % ([`robust_range`]) from it is cut there.
+pub fn fit_y(p: &Panel) -> ((f64, f64), bool) {
+    let data = || p.series.iter().filter(|s| s.source != GUIDE);
+    let vals: Vec<f64> = data()
+        .flat_map(|s| {
+            let e = s.y_err.clone();
+            s.y.iter().enumerate().flat_map(move |(i, &y)| {
+                let d = e
+                    .as_ref()
+                    .map_or(0.0, |e| if e[i].is_finite() { e[i] } else { 0.0 });
+                [y - d, y, y + d]
+            })
+        })
+        .collect();
+    let full = fit_range(&p.y, vals.iter().copied());
+    if p.y.range.is_some() {
+        return (full, false);
+    }
+    let Some((qlo, qhi)) = robust_range(p) else {
+        return (full, false);
+    };
+    let u: Vec<f64> = vals.iter().filter_map(|&v| p.y.tr(v)).collect();
+    let lo = u.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = u.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let span = (qhi - qlo).max(1e-9 * (1.0 + qhi.abs()));
+    let cut_lo = qlo - lo > 2.0 * span;
+    let cut_hi = hi - qhi > 2.0 * span;
+    if !(cut_lo || cut_hi) {
+        return (full, false);
+    }
+    let a = if cut_lo { qlo - 0.15 * span } else { lo };
+    let b = if cut_hi { qhi + 0.15 * span } else { hi };
+    let m = 0.04 * (b - a);
+    ((a - m, b + m), true)
+}
+
+/// The 1 % and 99 % quantiles (layout units) of a panel's drawn values,
+/// guides left out, each series weighing one: a line's values weighted by
+/// the share of its horizontal extent each covers (what the eye sees), a
+/// series of points' equally; outlying groups at the ends left out first
+/// (`main_cluster`). `None` without values.
+pub fn robust_range(p: &Panel) -> Option<(f64, f64)> {
+    let mut wv: Vec<(f64, f64)> = Vec::new();
+    for s in p.series.iter().filter(|s| s.source != GUIDE) {
+        let pts: Vec<(f64, f64)> =
+            s.x.iter()
+                .zip(&s.y)
+                .filter_map(|(&x, &y)| Some((p.x.tr(x)?, p.y.tr(y)?)))
+                .collect();
+        let n = pts.len();
+        if n == 0 {
+            continue;
+        }
+        let w: Vec<f64> = match s.style {
+            Style::Line(_) if n > 2 => (0..n)
+                .map(|i| 0.5 * (pts[(i + 1).min(n - 1)].0 - pts[i.saturating_sub(1)].0).abs())
+                .collect(),
+            _ => vec![1.0; n],
+        };
+        let total: f64 = w.iter().sum();
+        let total = if total > 0.0 { total } else { n as f64 };
+        wv.extend(pts.iter().zip(&w).map(|(q, w)| (q.1, w / total)));
+    }
+    if wv.is_empty() {
+        return None;
+    }
+    wv.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (a, b) = main_cluster(&wv);
+    let wv = &wv[a..=b];
+    let all: f64 = wv.iter().map(|q| q.1).sum();
+    let quantile = |f: f64| {
+        let mut acc = 0.0;
+        for &(v, w) in wv {
+            acc += w;
+            if acc >= f * all {
+                return v;
+            }
+        }
+        wv.last().expect("values").0
+    };
+    Some((quantile(0.01), quantile(0.99)))
+}
+
+/// The sorted weighted values `wv` without outlying groups at either end:
+/// a group of at most 30 % of the weight cut off by a gap more than ten
+/// times the (non-zero) extent of the rest (a τ(r) that runs away to 10⁷⁹
+/// on a sparse grid, an atom drawn as a tall cell), repeatedly; the first
+/// and last index kept.
+fn main_cluster(wv: &[(f64, f64)]) -> (usize, usize) {
+    let all: f64 = wv.iter().map(|q| q.1).sum();
+    let (mut a, mut b) = (0, wv.len() - 1);
+    loop {
+        let (a0, b0) = (a, b);
+        let mut above = 0.0;
+        for j in (a..b).rev() {
+            above += wv[j + 1].1;
+            if above > 0.3 * all {
+                break;
+            }
+            let rest = wv[j].0 - wv[a].0;
+            if rest > 0.0 && wv[j + 1].0 - wv[j].0 > 10.0 * rest {
+                b = j;
+                break;
+            }
+        }
+        let mut below = 0.0;
+        for j in a + 1..=b {
+            below += wv[j - 1].1;
+            if below > 0.3 * all {
+                break;
+            }
+            let rest = wv[b].0 - wv[j].0;
+            if rest > 0.0 && wv[j].0 - wv[j - 1].0 > 10.0 * rest {
+                a = j;
+                break;
+            }
+        }
+        if (a, b) == (a0, b0) {
+            return (a, b);
+        }
+    }
+}
+
+/// Labels of `vals` rounded to the fewest significant digits (at least
+/// one) that keep them distinct and within 5 % of the values:
+/// 0.31622776601683794 reads 0.32 beside 0.1 and 1.
+pub fn distinct_labels(vals: &[f64]) -> Vec<String> {
+    for d in 1..=8 {
+        let labels: Vec<String> = vals.iter().map(|&v| fmt_sig(v, d)).collect();
+        let close = vals.iter().zip(&labels).all(|(&v, l)| {
+            match l.replace('\u{2212}', "-").parse::<f64>() {
+                Ok(x) => (x - v).abs() <= 0.05 * v.abs(),
+                Err(_) => true,
+            }
+        });
+        let mut sorted = labels.clone();
+        sorted.sort();
+        sorted.dedup();
+        if close && sorted.len() == labels.len() {
+            return labels;
+        }
+    }
+    vals.iter().map(|&v| fmt_sig(v, 9)).collect()
+}
+
+/// `v` to `d` significant digits, trailing zeros dropped; plain decimals
+/// for 10⁻³ ≤ |v| < 10⁵, else `m×10ᵏ`.
+pub fn fmt_sig(v: f64, d: usize) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { v.to_string() };
+    }
+    let e = v.abs().log10().floor() as i32;
+    let r: f64 = format!("{:.*e}", d.saturating_sub(1), v)
+        .parse()
+        .unwrap_or(v);
+    if !(1e-3..1e5).contains(&r.abs()) {
+        let e = r.abs().log10().floor() as i32;
+        let m = trim_zeros(&format!("{:.*}", d.saturating_sub(1), r / 10f64.powi(e)));
+        return match m.as_str() {
+            "1" => format!("10{}", superscript(&e.to_string())),
+            "-1" => format!("-10{}", superscript(&e.to_string())),
+            _ => format!("{m}×10{}", superscript(&e.to_string())),
+        };
+    }
+    let dec = (d as i32 - 1 - e).max(0) as usize;
+    trim_zeros(&format!("{r:.dec$}"))
+}
+
+/// "2.50" → "2.5", "3.00" → "3".
+fn trim_zeros(s: &str) -> String {
+    if !s.contains('.') {
+        return s.to_string();
+    }
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// "Nice" linear tick positions covering [lo, hi] (about `n` of them).
-fn nice_ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+pub(crate) fn nice_ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     let span = hi - lo;
     let raw = span / n.max(1) as f64;
     let mag = 10f64.powf(raw.log10().floor());
@@ -483,7 +766,7 @@ fn nice_ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
 }
 
 /// Decades (and 2, 5 subdivisions for short ranges) in log10 units.
-fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     let (a, b) = (lo.ceil() as i64, hi.floor() as i64);
     let mut major: Vec<f64> = (a..=b).map(|k| k as f64).collect();
     let mut minor = Vec::new();
@@ -560,7 +843,7 @@ fn fmt_sci(v: f64, dec: usize) -> String {
 /// log axis), all in one format: decades of a log axis as 10ᵏ; otherwise
 /// plain numbers with one number of decimals, or all in scientific notation
 /// when some tick is below 10⁻³ or at least 10⁵ in magnitude.
-fn tick_labels(axis: &Axis, ticks: &[f64], step: f64) -> Vec<String> {
+pub(crate) fn tick_labels(axis: &Axis, ticks: &[f64], step: f64) -> Vec<String> {
     if axis.scale == Scale::Log && ticks.iter().all(|u| (u - u.round()).abs() < 1e-9) {
         return ticks
             .iter()
@@ -591,16 +874,6 @@ fn tick_labels(axis: &Axis, ticks: &[f64], step: f64) -> Vec<String> {
         Scale::Log => vals.iter().map(|&v| decimals(v)).max().unwrap_or(0),
     };
     vals.iter().map(|v| format!("{v:.dec$}")).collect()
-}
-
-/// The label of the tick nearest to `u` (layout units) among `ticks`.
-fn label_at(ticks: &[f64], labels: &[String], u: f64) -> String {
-    ticks
-        .iter()
-        .zip(labels)
-        .min_by(|a, b| (a.0 - u).abs().total_cmp(&(b.0 - u).abs()))
-        .map(|(_, l)| l.clone())
-        .unwrap_or_default()
 }
 
 /// A count with thin spaces between groups of three digits: "1 000 000".
@@ -959,7 +1232,6 @@ mod tests {
             tick_labels(&log, &[-4.0, 2f64.log10() - 4.0], 1.0),
             ["1×10⁻⁴", "2×10⁻⁴"]
         );
-        assert_eq!(label_at(&[0.0, 1.0], &["a".into(), "b".into()], 0.9), "b");
     }
 
     #[test]
@@ -1021,6 +1293,38 @@ mod tests {
         let e = legend_entries(&p);
         assert_eq!(e.len(), 1);
         assert!(e[0].marker && e[0].dash == Some(Dash::Solid));
+    }
+
+    #[test]
+    fn outlying_groups_do_not_set_the_range() {
+        // τ(r) on a sparse grid running away to 10⁷⁹: the minimum stays visible.
+        let mut p = Panel::new("", "", Axis::log("r"), Axis::linear("τ"));
+        let r = vec![1e-3, 1e-2, 0.1, 1.0, 10.0, 100.0, 1000.0];
+        let tau = vec![1.86, 1.86, 1.85, 1.77, 2.24, 1.98e6, 6.66e79];
+        p.series.push(Series::line(
+            None,
+            Color::Palette(0),
+            Dash::Solid,
+            "tau",
+            r,
+            tau,
+        ));
+        let ((lo, hi), clipped) = fit_y(&p);
+        assert!(clipped && lo < 1.77 && hi > 2.24 && hi < 3.0, "{lo} {hi}");
+        // A flat line with one step is no outlier.
+        let mut q = Panel::new("", "", Axis::linear("t"), Axis::linear("S"));
+        let t: Vec<f64> = (0..10).map(f64::from).collect();
+        let s = vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.5];
+        q.series.push(Series::line(
+            None,
+            Color::Palette(0),
+            Dash::Solid,
+            "s",
+            t,
+            s,
+        ));
+        let ((_, hi), clipped) = fit_y(&q);
+        assert!(!clipped && hi > 1.5, "{hi}");
     }
 
     #[test]

@@ -4,17 +4,19 @@
 //!
 //! The command of the directory (its `run.json`) picks the figure:
 //! densities with their standard errors (`simulate`'s P_s(v), `analytic`
-//! and `fp stationary`'s p(v) with p₊ and p₋), moments in time on log axes
-//! (`simulate`'s ⟨v²⟩(t), ⟨x²⟩(t) with their errors; `fp msd`'s ⟨x²⟩(t)
-//! and its exponent α(t)), the snapshots of `fp transient`, survival
-//! curves S(t) (`mfpt` with a particle method, `mfpt distribution`), τ(v₀)
-//! of `mfpt` with the backward equations, and τ against the scanned axis
-//! (`mfpt scan`, `mfpt optimize`). A sweep directory (one with
-//! `plan.toml`) gives a heat map of one scalar column of `results.csv`
-//! (`--var`, default the first `result.*` column) over the plan's first
-//! two crossed axes (a `[[zip]]` group is one axis); further crossed axes
-//! stay at their first value, which the title names; a plan crossing one
-//! axis is refused.
+//! and `fp stationary`'s P_s(v) with its part per noise state, named as
+//! the noise model names its states), moments in time on log axes
+//! (`simulate`'s ⟨v²⟩(t), ⟨x²⟩(t) with their errors, thinned to even steps
+//! in log t; `fp msd`'s ⟨x²⟩(t) and its exponent α(t)) beside their power
+//! laws, the snapshots of `fp transient`, survival curves S(t) (`mfpt`
+//! with a particle method, `mfpt distribution`), τ(v₀) of `mfpt` with the
+//! backward equations, and τ against the scanned axis with its optimum
+//! marked (`mfpt scan`, `mfpt optimize`). The title names the run's
+//! parameters in symbols ([`symbols`]); vertical ranges are robust
+//! ([`crate::plot::fit_y`]). A sweep directory (one with `plan.toml`)
+//! gives one scalar column of `results.csv` (`--var`, default the first
+//! `result.*` column) over the plan's crossed axes (module `sweep`): a
+//! line for one axis, a heat map for two, small multiples for more.
 //!
 //! The image goes to `DIR/plot.png` unless `--out` names another file. No
 //! checksum of irtp covers that name: `run.json` lists the files a run
@@ -30,13 +32,14 @@
 //! Drawing needs the cargo feature `plot`; without it the command checks
 //! its input and then refuses.
 
-use crate::plot::heatmap::HeatMap;
-use crate::plot::{Axis, Color, Dash, Figure, Panel, Series};
+use crate::plot::{Axis, Color, Dash, Figure, Note, Panel, Series, GUIDE};
 use clap::Args;
 use irtp::error::{Error, Result};
-use irtp_app::sweep::Plan;
 use std::fs;
 use std::path::{Path, PathBuf};
+
+mod sweep;
+pub mod symbols;
 
 /// Draw the natural figure of an irtp output directory (a run or a sweep) as PNG or SVG.
 #[derive(Args, Debug, Clone)]
@@ -49,15 +52,6 @@ pub struct PlotArgs {
     /// Sweep directories: the results.csv column to colour the heat map by (`result.d_eff` or `d_eff`) [default: the first result.* column].
     #[arg(long)]
     pub var: Option<String>,
-}
-
-/// What `irtp plot` draws: a figure of panels or a heat map.
-#[derive(Clone, Debug)]
-pub enum Picture {
-    /// Curves and points (one run's tables).
-    Figure(Figure),
-    /// One scalar over a sweep's two crossed axes.
-    Heat(HeatMap),
 }
 
 /// Check the flags, draw the picture of `args.dir` and write it; the path
@@ -153,11 +147,11 @@ fn image_kind(out: &Path) -> Result<bool> {
     Ok(svg)
 }
 
-/// The picture of `dir`: a heat map of a sweep, else the figure of the
-/// command its `run.json` names.
-pub fn picture(dir: &Path, var: Option<&str>) -> Result<Picture> {
+/// The picture of `dir`: the figure of a sweep (module `sweep`), else the
+/// figure of the command its `run.json` names.
+pub fn picture(dir: &Path, var: Option<&str>) -> Result<Figure> {
     if dir.join("plan.toml").is_file() {
-        return sweep_heat_map(dir, var).map(Picture::Heat);
+        return sweep::figure(dir, var);
     }
     let Some(run) = irtp_app::io::read_provenance(&dir.join("run.json")) else {
         return Err(not_irtp(dir));
@@ -170,7 +164,19 @@ pub fn picture(dir: &Path, var: Option<&str>) -> Result<Picture> {
         ));
     }
     let command = run["command"].as_str().unwrap_or_default();
-    run_figure(dir, command).map(Picture::Figure)
+    let mut fig = run_figure(dir, command)?;
+    let over = run["parameters"]["over"].as_str().unwrap_or_default();
+    let scanned = match command {
+        "mfpt optimize" => vec!["rate"],
+        "mfpt scan" => vec![over],
+        _ => Vec::new(),
+    };
+    let params = symbols::title_parameters(&run["parameters"], &scanned);
+    fig.title = match params.is_empty() {
+        true => format!("irtp {command}"),
+        false => format!("irtp {command}: {params}"),
+    };
+    Ok(fig)
 }
 
 /// The refusal of a directory irtp did not write.
@@ -184,8 +190,7 @@ fn not_irtp(dir: &Path) -> Error {
 
 /// The figure of one run of `command` in `dir`.
 fn run_figure(dir: &Path, command: &str) -> Result<Figure> {
-    let title = format!("irtp {command}: {}", dir_name(dir));
-    let mut fig = Figure::new("plot", title, 2);
+    let mut fig = Figure::new("plot", format!("irtp {command}"), 2);
     fig.panels = match command {
         "simulate" => simulate_panels(dir)?,
         "analytic" => vec![analytic_panel(dir)?],
@@ -207,13 +212,6 @@ fn run_figure(dir: &Path, command: &str) -> Result<Figure> {
     };
     fig.cols = fig.panels.len().min(2);
     Ok(fig)
-}
-
-/// The last component of `dir` (the whole path when it has none).
-fn dir_name(dir: &Path) -> String {
-    dir.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| dir.display().to_string())
 }
 
 /// A CSV table of numbers read whole (`nan`, `inf` included; a cell that
@@ -291,10 +289,24 @@ fn panel(label: &str, title: &str, x: Axis, y: Axis, series: Vec<Series>) -> Pan
 }
 
 /// `simulate`: the stationary density with its errors, the moments in
-/// time on log axes, and P(x) with `--reset-position`.
+/// time on log axes (points thinned to even steps in log t, the t² and t
+/// laws beside ⟨x²⟩), and P(x) with `--reset-position`.
 fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
     let d = Table::read(dir, "density.csv")?;
     let m = Table::read(dir, "moments.csv")?;
+    let keep = log_thin(&m.col("t"), LOG_POINTS);
+    let thin = |s: Series| thinned(s, &keep);
+    let mut moments = panel(
+        "(b)",
+        "moments",
+        Axis::log("t"),
+        Axis::log("⟨v²⟩, ⟨x²⟩"),
+        vec![
+            thin(points(&m, "t", "v2", "v2_err", "⟨v²⟩", Color::Palette(0))),
+            thin(points(&m, "t", "x2", "x2_err", "⟨x²⟩", Color::Palette(3))),
+        ],
+    );
+    let _ = power_law_guides(&mut moments, &m.col("t"), &m.col("x2"));
     let mut panels = vec![
         panel(
             "(a)",
@@ -311,18 +323,12 @@ fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
                     Color::Palette(1),
                     Dash::Dashed,
                 ),
-            ],
+            ]
+            .into_iter()
+            .chain(exact_r0(dir))
+            .collect(),
         ),
-        panel(
-            "(b)",
-            "moments",
-            Axis::log("t"),
-            Axis::log("moment"),
-            vec![
-                points(&m, "t", "v2", "v2_err", "⟨v²⟩", Color::Palette(0)),
-                points(&m, "t", "x2", "x2_err", "⟨x²⟩", Color::Palette(3)),
-            ],
-        ),
+        moments,
     ];
     if dir.join("position.csv").is_file() {
         let x = Table::read(dir, "position.csv")?;
@@ -336,6 +342,86 @@ fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
         ));
     }
     Ok(panels)
+}
+
+/// About how many points a moment curve on a log time axis shows.
+const LOG_POINTS: usize = 40;
+
+/// Rows of positive times `t` (increasing) about evenly spaced in log t:
+/// for each of `n` targets from the first positive time to the last, the
+/// first row at or after it (each row once), so a linear time grid does
+/// not crowd its points into the last decade.
+fn log_thin(t: &[f64], n: usize) -> Vec<usize> {
+    let pos: Vec<usize> = (0..t.len())
+        .filter(|&i| t[i] > 0.0 && t[i].is_finite())
+        .collect();
+    let (Some(&a), Some(&b)) = (pos.first(), pos.last()) else {
+        return Vec::new();
+    };
+    if pos.len() <= n || t[b] <= t[a] {
+        return pos;
+    }
+    let (la, lb) = (t[a].ln(), t[b].ln());
+    let mut out: Vec<usize> = Vec::new();
+    let mut k = 0;
+    for j in 0..n {
+        let target = (la + (lb - la) * j as f64 / (n - 1) as f64).exp() * (1.0 - 1e-12);
+        while k < pos.len() - 1 && t[pos[k]] < target {
+            k += 1;
+        }
+        if out.last() != Some(&pos[k]) {
+            out.push(pos[k]);
+        }
+    }
+    out
+}
+
+/// The series restricted to rows `keep`.
+fn thinned(mut s: Series, keep: &[usize]) -> Series {
+    let pick = |v: &[f64]| keep.iter().filter_map(|&i| v.get(i).copied()).collect();
+    s.x = pick(&s.x);
+    s.y = pick(&s.y);
+    s.y_err = s.y_err.as_deref().map(pick);
+    s
+}
+
+/// Guides beside ⟨x²⟩(t) on log axes: the early power law through the
+/// first positive value over its first 1.5 decades (∝ t² from a
+/// stationary velocity, ∝ t⁴ from rest: the integer 2 to 4 nearest the
+/// data's slope over its first decade), and the diffusive law ∝ t through
+/// the last value over the last 1.5 decades (grey dashes, labelled below
+/// the line); the early exponent.
+fn power_law_guides(p: &mut Panel, t: &[f64], x2: &[f64]) -> Option<i32> {
+    let ok: Vec<usize> = (0..t.len())
+        .filter(|&i| t[i] > 0.0 && x2[i] > 0.0 && x2[i].is_finite())
+        .collect();
+    let (&a, &b) = (ok.first()?, ok.last()?);
+    if t[b] < 10.0 * t[a] {
+        return None;
+    }
+    let c = *ok.iter().find(|&&i| t[i] >= 10.0 * t[a]).unwrap_or(&b);
+    let slope = (x2[c] / x2[a]).ln() / (t[c] / t[a]).ln();
+    let early = (slope.round() as i32).clamp(2, 4);
+    let sup = ["", "", "²", "³", "⁴"][early as usize];
+    let span = (t[b] / t[a]).min(10f64.powf(1.5));
+    for (t0, y0, from, to, k, text) in [
+        (t[a], x2[a], t[a], t[a] * span, early, format!("∝ t{sup}")),
+        (t[b], x2[b], t[b] / span, t[b], 1, "∝ t".to_string()),
+    ] {
+        let xs: Vec<f64> = (0..=10)
+            .map(|i| from * (to / from).powf(i as f64 / 10.0))
+            .collect();
+        let ys: Vec<f64> = xs.iter().map(|x| y0 * (x / t0).powi(k)).collect();
+        let mid = (from * to).sqrt();
+        p.series
+            .push(Series::line(None, Color::Gray, Dash::Dashed, GUIDE, xs, ys));
+        p.notes.push(Note {
+            text,
+            x: mid,
+            y: y0 * (mid / t0).powi(k) / 6.0,
+        });
+    }
+    Some(early)
 }
 
 /// `analytic`: the exact r = 0 stationary density.
@@ -358,28 +444,101 @@ fn analytic_panel(dir: &Path) -> Result<Panel> {
     ))
 }
 
-/// `fp stationary`: p = p₊ + p₋ and its two parts.
+/// `fp stationary`: the density P_s(v) and its parts per noise state,
+/// named as the noise model names its states (η = +Σ, −Σ of the
+/// telegraph noise; the levels of `summary.json` otherwise, a level 0 of
+/// run-and-tumble-with-pauses noise being the pause).
 fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
     let d = Table::read(dir, "density.csv")?;
-    let series = vec![
-        line(
-            &d,
-            "v",
-            "p",
-            "p = p_{+} + p_{-}",
-            Color::Palette(0),
-            Dash::Solid,
-        ),
-        line(&d, "v", "p_plus", "p_{+}", Color::Palette(1), Dash::Dashed),
-        line(&d, "v", "p_minus", "p_{-}", Color::Palette(2), Dash::Dotted),
-    ];
+    let mut series = vec![line(
+        &d,
+        "v",
+        "p",
+        "P_{s}(v), all states",
+        Color::Black,
+        Dash::Solid,
+    )];
+    let dashes = [Dash::Dashed, Dash::Dotted];
+    if d.has("p_plus") {
+        for (k, (col, name)) in [("p_plus", "η = +Σ"), ("p_minus", "η = −Σ")]
+            .iter()
+            .enumerate()
+        {
+            series.push(line(&d, "v", col, name, Color::Palette(k), dashes[k]));
+        }
+    } else {
+        let (levels, rpt) = state_levels(dir);
+        let mut k = 0;
+        while d.has(&format!("p_{k}")) {
+            let name = state_name(levels.get(k).copied(), rpt, k);
+            let col = format!("p_{k}");
+            series.push(line(&d, "v", &col, &name, Color::Palette(k), dashes[k % 2]));
+            k += 1;
+        }
+    }
+    series.extend(exact_r0(dir));
     Ok(panel(
         "",
-        "stationary density",
+        "stationary velocity density",
         Axis::linear("v"),
-        Axis::linear("p(v)"),
+        Axis::linear("P_{s}(v)"),
         series,
     ))
+}
+
+/// The exact density without resetting (docs/equations.md (34)-(35),
+/// `R0Density`) of the run's telegraph noise and drag, as a grey
+/// guide beside a density at r > 0: what resetting changed. `None` for
+/// another noise, a thermal noise, a drag without it, or a run at r = 0
+/// (whose density it is).
+fn exact_r0(dir: &Path) -> Option<Series> {
+    let run = irtp_app::io::read_provenance(&dir.join("run.json"))?;
+    let m = symbols::model(&run["parameters"])?;
+    let rate = m["rate"].as_f64().unwrap_or(0.0);
+    let thermal = m["temperature"].as_f64().unwrap_or(0.0) != 0.0;
+    if !m["noise"].is_null() || thermal || rate == 0.0 {
+        return None;
+    }
+    let drag: irtp::model::drag::DragLaw = m["drag"].as_str()?.parse().ok()?;
+    let (sigma, lambda) = (m["sigma"].as_f64()?, m["lambda"].as_f64()?);
+    let d = irtp::analytic::r0::R0Density::new(drag, sigma, lambda).ok()?;
+    let (lo, hi) = d.bounds();
+    let n = 400;
+    let v: Vec<f64> = (1..n)
+        .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+        .collect();
+    let p = v.iter().map(|&v| d.pdf(v)).collect();
+    let label = Some("exact at r = 0".to_string());
+    Some(Series::line(label, Color::Gray, Dash::Dotted, GUIDE, v, p))
+}
+
+/// The noise levels of `summary.json` (`results.levels`; empty when
+/// absent) and whether the noise is run-and-tumble with pauses (`rpt:`).
+fn state_levels(dir: &Path) -> (Vec<f64>, bool) {
+    let v = fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+        .unwrap_or_default();
+    let levels = v["results"]["levels"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+        .unwrap_or_default();
+    let spec = v["params"]["model"]["noise"].as_str().unwrap_or_default();
+    (levels, spec.starts_with("rpt:"))
+}
+
+/// The legend name of noise state `k` at `level`: "η = level", and for
+/// run-and-tumble-with-pauses noise "pause (η = 0)", "run (η = ±Σ)".
+fn state_name(level: Option<f64>, rpt: bool, k: usize) -> String {
+    let Some(l) = level else {
+        return format!("state {k}");
+    };
+    let eta = format!("η = {}", symbols::number(l)).replace("= -", "= −");
+    match (rpt, l == 0.0) {
+        (true, true) => format!("pause ({eta})"),
+        (true, false) => format!("run ({eta})"),
+        _ => eta,
+    }
 }
 
 /// The most snapshots `fp transient`'s figure shows (evenly picked).
@@ -431,13 +590,14 @@ fn fp_transient_panels(dir: &Path) -> Result<Vec<Panel>> {
             "(b)",
             "moments",
             Axis::linear("t"),
-            Axis::linear("moment"),
+            Axis::linear("⟨v²⟩, ⟨v⟩"),
             moments,
         ),
     ])
 }
 
-/// `fp msd`: ⟨x²⟩(t) on log axes and its exponent α(t).
+/// `fp msd`: ⟨x²⟩(t) on log axes with the t² and t laws, and its
+/// exponent α(t) with the levels 2 and 1.
 fn fp_msd_panels(dir: &Path) -> Result<Vec<Panel>> {
     let m = Table::read(dir, "moments.csv")?;
     let x2 = if m.has("x2_err") {
@@ -453,22 +613,46 @@ fn fp_msd_panels(dir: &Path) -> Result<Vec<Panel>> {
         Color::Palette(3),
         Dash::Solid,
     );
-    Ok(vec![
-        panel(
-            "(a)",
-            "mean squared displacement",
-            Axis::log("t"),
-            Axis::log("⟨x²⟩"),
-            vec![x2],
-        ),
-        panel(
-            "(b)",
-            "exponent",
-            Axis::log("t"),
-            Axis::linear("α"),
-            vec![alpha],
-        ),
-    ])
+    let mut msd = panel(
+        "(a)",
+        "mean squared displacement",
+        Axis::log("t"),
+        Axis::log("⟨x²⟩"),
+        vec![x2],
+    );
+    let t = m.col("t");
+    let early = power_law_guides(&mut msd, &t, &m.col("x2"));
+    let mut exponent = panel(
+        "(b)",
+        "exponent",
+        Axis::log("t"),
+        Axis::linear("α"),
+        vec![alpha],
+    );
+    let ends: Vec<f64> = t.iter().copied().filter(|&v| v > 0.0).collect();
+    if let (Some(&a), Some(&b)) = (ends.first(), ends.last()) {
+        let mut levels = vec![(2.0, "ballistic, α = 2".to_string())];
+        if let Some(k) = early.filter(|&k| k != 2) {
+            levels.push((f64::from(k), format!("early, α = {k}")));
+        }
+        levels.push((1.0, "diffusive, α = 1".to_string()));
+        for (level, text) in levels {
+            exponent.series.push(Series::line(
+                None,
+                Color::Gray,
+                Dash::Dashed,
+                GUIDE,
+                vec![a, b],
+                vec![level, level],
+            ));
+            exponent.notes.push(Note {
+                text,
+                x: a * 1.3,
+                y: level + 0.1,
+            });
+        }
+    }
+    Ok(vec![msd, exponent])
 }
 
 /// The survival curve S(t) of `survival.csv`, with its errors.
@@ -588,8 +772,28 @@ fn scan_panel(dir: &Path) -> Result<Panel> {
             Color::Palette(3),
         ));
     }
-    let x = auto_axis(&axis, &t.col(&axis));
-    let y = auto_axis("τ", &t.col("tau"));
+    let (xs, taus) = (t.col(&axis), t.col("tau"));
+    let best = (0..taus.len())
+        .filter(|&i| taus[i].is_finite())
+        .min_by(|&a, &b| taus[a].total_cmp(&taus[b]));
+    let symbol = symbols::param(&axis);
+    if let Some(i) = best {
+        let label = format!(
+            "smallest τ = {} at {symbol} = {}",
+            symbols::number(taus[i]),
+            symbols::number(xs[i])
+        );
+        series.push(Series::points(
+            Some(label),
+            Color::Palette(3),
+            "optimum",
+            vec![xs[i]],
+            vec![taus[i]],
+            vec![0.0],
+        ));
+    }
+    let x = auto_axis(&symbol, &xs);
+    let y = auto_axis("τ", &taus);
     Ok(panel("", "mean first-passage time", x, y, series))
 }
 
@@ -609,8 +813,13 @@ fn optimize_panel(dir: &Path) -> Result<Panel> {
         .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok());
     if let Some(o) = opt {
         if let (Some(r), Some(tau)) = (o["r_opt"].as_f64(), o["tau_opt"].as_f64()) {
+            let label = format!(
+                "optimum: τ = {} at r = {}",
+                symbols::number(tau),
+                symbols::number(r)
+            );
             let s = Series::points(
-                Some("optimum".into()),
+                Some(label),
                 Color::Palette(3),
                 "optimum",
                 vec![r],
@@ -706,7 +915,7 @@ fn distribution_panels(dir: &Path) -> Result<Vec<Panel>> {
 /// Write `picture` to `out` (a temporary name beside it, then renamed): a
 /// location that cannot be written is bad input and leaves nothing.
 #[cfg(feature = "plot")]
-fn write(picture: &Picture, out: &Path, svg: bool) -> Result<()> {
+fn write(picture: &Figure, out: &Path, svg: bool) -> Result<()> {
     let name = out
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -721,11 +930,9 @@ fn write(picture: &Picture, out: &Path, svg: bool) -> Result<()> {
             format!("a writable image path ({why})"),
         )
     };
-    let drawn = match (picture, svg) {
-        (Picture::Figure(f), false) => f.render_png(&tmp),
-        (Picture::Figure(f), true) => f.render_svg(&tmp),
-        (Picture::Heat(h), false) => h.render_png(&tmp),
-        (Picture::Heat(h), true) => h.render_svg(&tmp),
+    let drawn = match svg {
+        false => picture.render_png(&tmp),
+        true => picture.render_svg(&tmp),
     };
     drawn.map_err(|e| refused(e.to_string()))?;
     mark(&tmp, svg).map_err(|e| refused(e.to_string()))?;
@@ -777,83 +984,12 @@ fn crc32(bytes: &[u8]) -> u32 {
 /// Without the `plot` feature there is nothing to draw with: refused after
 /// the input was checked, nothing written.
 #[cfg(not(feature = "plot"))]
-fn write(_: &Picture, out: &Path, _: bool) -> Result<()> {
+fn write(_: &Figure, out: &Path, _: bool) -> Result<()> {
     Err(Error::invalid(
         "out",
         out.display(),
         "only in a build with the cargo feature `plot` (irtp-cli's default; this irtp was built without it)",
     ))
-}
-
-/// The heat map of the sweep in `dir`: column `var` of its `results.csv`
-/// over the plan's first two crossed axes (the first, varying slowest,
-/// upwards; the second across). With more crossed axes the others stay at
-/// their first value, which the title names; a plan crossing one axis is
-/// refused.
-fn sweep_heat_map(dir: &Path, var: Option<&str>) -> Result<HeatMap> {
-    let text = fs::read_to_string(dir.join("plan.toml")).map_err(|_| not_irtp(dir))?;
-    let crossed = Plan::parse(&text)?.crossed();
-    if crossed.len() < 2 {
-        return Err(Error::invalid(
-            "dir",
-            dir.display(),
-            "for a heat map, a sweep whose plan.toml crosses at least two axes (this one crosses one: \
-             its results.csv is the table to read)",
-        ));
-    }
-    let (header, records) = read_results(dir)?;
-    let var = choose_var(&header, &records, var)?;
-    let (ys, xs) = (&crossed[0], &crossed[1]);
-    let mut h = HeatMap {
-        title: format!("irtp sweep: {}", dir_name(dir)),
-        x_label: xs.0.join(", "),
-        y_label: ys.0.join(", "),
-        value_label: var.clone(),
-        x_ticks: vec![String::new(); xs.1],
-        y_ticks: vec![String::new(); ys.1],
-        values: vec![vec![None; xs.1]; ys.1],
-    };
-    let at = |rec: &csv::StringRecord, name: &str| -> String {
-        let j = header.iter().position(|h| h == name);
-        j.and_then(|j| rec.get(j)).unwrap_or("").to_string()
-    };
-    let values = |rec: &csv::StringRecord, names: &[String]| -> String {
-        names
-            .iter()
-            .map(|n| at(rec, n))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let mut others = String::new();
-    for rec in &records {
-        let Some(digits) = at(rec, "point")
-            .parse()
-            .ok()
-            .and_then(|p| digits(p, &crossed))
-        else {
-            continue;
-        };
-        if digits[2..].iter().any(|&d| d != 0) {
-            continue;
-        }
-        let (j, i) = (digits[0], digits[1]);
-        h.y_ticks[j] = values(rec, &ys.0);
-        h.x_ticks[i] = values(rec, &xs.0);
-        let ok = at(rec, "status") == "ok";
-        h.values[j][i] = at(rec, &var)
-            .parse::<f64>()
-            .ok()
-            .filter(|v| ok && v.is_finite());
-        let rest: Vec<String> = crossed[2..]
-            .iter()
-            .flat_map(|g| g.0.iter().map(|n| format!("{n} = {}", at(rec, n))))
-            .collect();
-        others = rest.join(", ");
-    }
-    if !others.is_empty() {
-        h.title = format!("{} at {others}", h.title);
-    }
-    Ok(h)
 }
 
 /// The header and rows of a sweep's `results.csv`; refused when it is

@@ -1,31 +1,33 @@
-//! A heat map: one scalar over a grid of two categorical axes (the two
-//! crossed axes of a sweep plan), each cell coloured by its value on the
-//! viridis scale, with a colour bar. Cells without a value (a failed point,
+//! A heat map layer of a [`super::Panel`]: one scalar over a grid of
+//! cells whose edges lie on the panel's axes in data units (between the
+//! values of a sweep's axes: geometric means on a log axis, arithmetic
+//! ones on a linear axis, [`edges`]), each cell coloured by its value on
+//! the viridis scale (linear, or logarithmic in the value), with a colour
+//! bar right of the plotting area. Cells without a value (a failed point,
 //! a `nan`) are drawn light grey.
 //!
-//! The model needs no plotting library; rendering (`render_png`,
-//! `render_svg`) uses `plotters` and exists only with the cargo feature
-//! `plot`, like [`super::Figure`]'s.
+//! The model needs no plotting library; rendering is the panel's (cargo
+//! feature `plot`).
 
 use serde::Serialize;
 
 /// A value per cell of an `x` × `y` grid.
 #[derive(Clone, Debug, Serialize)]
-pub struct HeatMap {
-    /// Title over the map.
-    pub title: String,
-    /// Name of the horizontal axis.
-    pub x_label: String,
-    /// Name of the vertical axis.
-    pub y_label: String,
-    /// Name of the coloured quantity (the colour bar's label).
-    pub value_label: String,
-    /// Tick labels of the columns (left to right).
-    pub x_ticks: Vec<String>,
-    /// Tick labels of the rows (bottom to top).
-    pub y_ticks: Vec<String>,
+pub struct Heat {
+    /// Cell edges along x in data units (one more than the columns).
+    pub x_edges: Vec<f64>,
+    /// Cell edges along y in data units (one more than the rows).
+    pub y_edges: Vec<f64>,
     /// `values[row][column]`; `None` or non-finite: no value.
     pub values: Vec<Vec<Option<f64>>>,
+    /// Name of the coloured quantity (the colour bar's label, `_{...}`
+    /// subscripts allowed).
+    pub label: String,
+    /// The colour scale's ends; `None`: the finite values' own (small
+    /// multiples share one).
+    pub range: Option<(f64, f64)>,
+    /// Logarithmic colour scale (positive values only).
+    pub log: bool,
 }
 
 /// Viridis at five stops (0, 1/4, 1/2, 3/4, 1), interpolated linearly.
@@ -52,37 +54,79 @@ pub fn viridis(t: f64) -> (u8, u8, u8) {
     (mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
-impl HeatMap {
-    /// The smallest and largest finite value (`None` when there is none).
+/// Cell edges around the centres `c` (increasing): midpoints between
+/// neighbours (geometric means when `log`), the outer edges half a step
+/// beyond the end values; one cell of a single value spans a factor 2
+/// (log) or ±0.5 around it.
+pub fn edges(c: &[f64], log: bool) -> Vec<f64> {
+    type Map = fn(f64) -> f64;
+    let (f, g): (Map, Map) = if log {
+        (f64::log10, |u| 10f64.powf(u))
+    } else {
+        (|v| v, |u| u)
+    };
+    let u: Vec<f64> = c.iter().map(|&v| f(v)).collect();
+    let n = u.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    if n == 1 {
+        let h = if log { 0.15 } else { 0.5 * (1.0 + u[0].abs()) };
+        return vec![g(u[0] - h), g(u[0] + h)];
+    }
+    let mut e = Vec::with_capacity(n + 1);
+    e.push(u[0] - 0.5 * (u[1] - u[0]));
+    e.extend(u.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+    e.push(u[n - 1] + 0.5 * (u[n - 1] - u[n - 2]));
+    e.into_iter().map(g).collect()
+}
+
+/// Whether `vals` (at least three, increasing) are evenly spaced in their
+/// logarithm rather than in value (a plan's `spacing = "log"`, or a list
+/// like 0.1, 1, 10); two positive values a factor 10 or more apart count
+/// as log-spaced too.
+pub fn log_spaced(vals: &[f64]) -> bool {
+    if vals.len() < 2 || vals.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
+        return false;
+    }
+    let (lo, hi) = (vals[0], vals[vals.len() - 1]);
+    if vals.len() == 2 {
+        return hi / lo >= 10.0;
+    }
+    let even = |u: &[f64]| {
+        let d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
+        let mean = d.iter().sum::<f64>() / d.len() as f64;
+        d.iter().all(|x| (x - mean).abs() <= 0.02 * mean.abs())
+    };
+    let logs: Vec<f64> = vals.iter().map(|v| v.log10()).collect();
+    hi / lo >= 4.0 && !even(vals) && (even(&logs) || hi / lo >= 100.0)
+}
+
+impl Heat {
+    /// The colour scale's ends: the given range, else the smallest and
+    /// largest finite value (positive ones on a log scale); `None` when
+    /// there is none.
     pub fn value_range(&self) -> Option<(f64, f64)> {
+        if let Some(r) = self.range {
+            return Some(r);
+        }
         let finite = self.values.iter().flatten().flatten().copied();
         let (lo, hi) = finite
-            .filter(|v| v.is_finite())
+            .filter(|v| v.is_finite() && (!self.log || *v > 0.0))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                 (lo.min(v), hi.max(v))
             });
         (lo <= hi).then_some((lo, hi))
     }
 
-    /// Where `v` lies between the smallest and the largest value (0.5 when
-    /// they are equal).
+    /// Where `v` lies on the colour scale, 0 to 1 (0.5 when its ends are
+    /// equal).
     pub fn level(&self, v: f64) -> f64 {
+        let t = |x: f64| if self.log { x.log10() } else { x };
         match self.value_range() {
-            Some((lo, hi)) if hi > lo => (v - lo) / (hi - lo),
+            Some((lo, hi)) if hi > lo => (t(v) - t(lo)) / (t(hi) - t(lo)),
             _ => 0.5,
         }
-    }
-
-    /// Render to a PNG file.
-    #[cfg(feature = "plot")]
-    pub fn render_png(&self, path: &std::path::Path) -> irtp::error::Result<()> {
-        super::render::heatmap_png(self, path)
-    }
-
-    /// Render to an SVG file.
-    #[cfg(feature = "plot")]
-    pub fn render_svg(&self, path: &std::path::Path) -> irtp::error::Result<()> {
-        super::render::heatmap_svg(self, path)
     }
 }
 
@@ -101,16 +145,37 @@ mod tests {
 
     #[test]
     fn range_skips_missing_and_non_finite_cells() {
-        let h = HeatMap {
-            title: String::new(),
-            x_label: "a".into(),
-            y_label: "b".into(),
-            value_label: "v".into(),
-            x_ticks: vec!["1".into(), "2".into()],
-            y_ticks: vec!["3".into()],
+        let mut h = Heat {
+            x_edges: vec![0.0, 1.0, 2.0],
+            y_edges: vec![0.0, 1.0, 2.0],
+            label: "v".into(),
             values: vec![vec![Some(2.0), None], vec![Some(f64::NAN), Some(4.0)]],
+            range: None,
+            log: false,
         };
         assert_eq!(h.value_range(), Some((2.0, 4.0)));
         assert_eq!(h.level(3.0), 0.5);
+        h.log = true;
+        h.values[0][1] = Some(8.0);
+        assert!((h.level(4.0) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn edges_are_geometric_on_log_axes() {
+        let e = edges(&[0.1, 1.0, 10.0], true);
+        let want = [
+            10f64.powf(-1.5),
+            10f64.powf(-0.5),
+            10f64.powf(0.5),
+            10f64.powf(1.5),
+        ];
+        for (a, b) in e.iter().zip(want) {
+            assert!((a / b - 1.0).abs() < 1e-12, "{e:?}");
+        }
+        assert_eq!(edges(&[1.0, 2.0, 3.0], false), [0.5, 1.5, 2.5, 3.5]);
+        assert!(log_spaced(&[0.1, 0.316, 1.0, 3.16, 10.0]));
+        assert!(!log_spaced(&[1.0, 2.0, 3.0]));
+        assert!(!log_spaced(&[0.0, 1.0, 2.0]));
+        assert!(log_spaced(&[0.5, 1.0, 5.0, 50.0]));
     }
 }

@@ -10,8 +10,9 @@
 //! subscripts come out lowered and smaller.
 
 use super::{
-    choose_place, clip_polyline, fit_range, label_at, legend_entries, occupancy, rich_segments,
-    split_sharp, tick_labels, ticks, Axis, Color, Dash, Entry, Figure, Panel, Place, Scale, Style,
+    choose_place, clip_polyline, fit_range, fit_y, fmt_sig, legend_entries, occupancy,
+    rich_segments, split_sharp, tick_labels, ticks, Axis, Color, Dash, Entry, Figure, Panel,
+    PanelDrawn, Place, Scale, Style, TextBox, GUIDE,
 };
 use irtp::error::{Error, Result};
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
@@ -25,7 +26,7 @@ use std::path::Path;
 use std::sync::Once;
 
 mod heatmap;
-pub(super) use heatmap::{heatmap_png, heatmap_svg};
+use heatmap::bar_width;
 
 /// The embedded sans-serif font (DejaVu Sans, free license, see assets/fonts).
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
@@ -89,26 +90,28 @@ fn header_px(fig: &Figure, width: u32) -> u32 {
     TITLE_PX + KEY_ROW_PX * fig.key_rows(width, LEGEND_FONT_PX, SAMPLE_PX as u32).len() as u32
 }
 
-/// Render to a PNG file.
-pub(super) fn png(fig: &Figure, path: &Path) -> Result<()> {
+/// Render to a PNG file; where each panel put its ranges and texts.
+pub(super) fn png(fig: &Figure, path: &Path) -> Result<Vec<PanelDrawn>> {
     register_font();
     let root = BitMapBackend::new(path, size(fig)).into_drawing_area();
-    draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))
+    let drawn = draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(drawn)
 }
 
-/// Render to an SVG file.
-pub(super) fn svg(fig: &Figure, path: &Path) -> Result<()> {
+/// Render to an SVG file; where each panel put its ranges and texts.
+pub(super) fn svg(fig: &Figure, path: &Path) -> Result<Vec<PanelDrawn>> {
     register_font();
     let root = SVGBackend::new(path, size(fig)).into_drawing_area();
-    draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))
+    let drawn = draw_figure(fig, &root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(drawn)
 }
 
 fn draw_figure<DB: DrawingBackend>(
     fig: &Figure,
     root: &DrawingArea<DB, Shift>,
-) -> std::result::Result<(), DynErr>
+) -> std::result::Result<Vec<PanelDrawn>, DynErr>
 where
     DB::ErrorType: 'static,
 {
@@ -136,10 +139,14 @@ where
         }
     }
     let areas = body.split_evenly(fig.grid());
+    let mut drawn = Vec::new();
     for (panel, area) in fig.panels.iter().zip(areas.iter()) {
-        draw_panel(panel, area)?;
+        let mut d = draw_panel(panel, area)?;
+        let (ax, ay) = area.get_base_pixel();
+        d.shift(ax, ay);
+        drawn.push(d);
     }
-    Ok(())
+    Ok(drawn)
 }
 
 /// plotters' linear or logarithmic (`log_scale`) coordinate.
@@ -207,67 +214,185 @@ impl Ranged for AxisCoord {
 struct Layout {
     xr: (f64, f64),
     yr: (f64, f64),
+    /// Whether the vertical range cuts off data ([`crate::plot::fit_y`]).
+    clipped: bool,
     entries: Vec<Entry>,
     legend_px: (i32, i32),
     place: Place,
+    /// Width of the colour bar's area right of the plotting area (0 without a heat map).
+    bar_px: i32,
 }
 
 fn layout<DB: DrawingBackend>(p: &Panel, area: &DrawingArea<DB, Shift>) -> Layout {
-    let xr = fit_range(&p.x, p.series.iter().flat_map(|s| s.x.iter().copied()));
-    let yvals = p.series.iter().flat_map(|s| {
-        let e = s.y_err.clone();
-        s.y.iter().enumerate().flat_map(move |(i, &y)| {
-            let d = e
-                .as_ref()
-                .map_or(0.0, |e| if e[i].is_finite() { e[i] } else { 0.0 });
-            [y - d, y + d]
-        })
-    });
-    let yr = fit_range(&p.y, yvals.collect::<Vec<_>>().into_iter());
-    let entries = legend_entries(p);
+    let (xr, (yr, clipped)) = match &p.heat {
+        Some(h) => (
+            fit_range(&p.x, h.x_edges.iter().copied()),
+            (fit_range(&p.y, h.y_edges.iter().copied()), false),
+        ),
+        None => {
+            // Only where a value can be drawn (an empty bin on a log axis cannot).
+            let xs = p.series.iter().flat_map(|s| {
+                let drawn = s.y.iter().map(|&y| p.y.tr(y).is_some());
+                s.x.iter().zip(drawn).filter(|q| q.1).map(|q| *q.0)
+            });
+            (fit_range(&p.x, xs), fit_y(p))
+        }
+    };
+    let mut entries = legend_entries(p);
+    if clipped {
+        entries.push(clip_entry(p, yr));
+    }
     let (lw, lh) = legend_size(area, &entries, p.legend_title.as_deref());
+    let bar_px = p.heat.as_ref().map_or(0, |h| bar_width(area, h));
     let (aw, ah) = area.dim_in_pixel();
     // Approximate plotting-area size (margins and label areas subtracted).
-    let pw = aw as f64 - f64::from(8 + 16 + Y_LABEL_AREA);
+    let pw = aw as f64 - f64::from(8 + 16 + Y_LABEL_AREA) - bar_px as f64;
     let ph = ah as f64 - f64::from(6 + CAPTION_PX + 6 + X_LABEL_AREA);
-    let place = if entries.is_empty() {
+    let (fw, fh) = (lw as f64 / pw, lh as f64 / ph);
+    let mut yr = yr;
+    let mut place = if entries.is_empty() {
         Place::Inside(0.0, 0.0)
     } else {
-        choose_place(&occupancy(p, xr, yr), lw as f64 / pw, lh as f64 / ph)
+        match choose_place(&occupancy(p, xr, yr), fw, fh) {
+            Place::Outside if p.heat.is_some() => Place::Inside(0.015, 0.015),
+            place => place,
+        }
     };
+    if place == Place::Outside && p.y.range.is_none() && p.heat.is_none() && fh < 0.45 {
+        // Headroom above the data for the legend rather than a narrower plot.
+        let f = fh + 0.05;
+        let high = (yr.0, yr.1 + (yr.1 - yr.0) * f / (1.0 - f));
+        if let Place::Inside(x, y) = choose_place(&occupancy(p, xr, high), fw, fh) {
+            (yr, place) = (high, Place::Inside(x, y));
+        }
+    }
     Layout {
         xr,
         yr,
+        clipped,
         entries,
         legend_px: (lw, lh),
         place,
+        bar_px,
     }
 }
 
-/// Caption, margins, axes, ticks, tick labels and grid of a panel.
+/// The legend entry saying that marked values lie beyond the vertical
+/// axis, with the most extreme of them.
+fn clip_entry(p: &Panel, yr: (f64, f64)) -> Entry {
+    let beyond = p
+        .series
+        .iter()
+        .filter(|s| s.source != GUIDE)
+        .flat_map(|s| s.y.iter().copied())
+        .filter(|&y| p.y.tr(y).is_some_and(|u| u > yr.1 || u < yr.0));
+    let far = beyond.fold(f64::NAN, |m, y| {
+        if m.is_nan() || y.abs() > m.abs() {
+            y
+        } else {
+            m
+        }
+    });
+    Entry {
+        label: format!("▲ beyond the axis (to {})", fmt_sig(far, 3)),
+        color: Color::Gray,
+        dash: None,
+        marker: false,
+    }
+}
+
+/// Pixel positions of ticks along an axis and their labels: the axis'
+/// own ticks, or nice ones with labels of one format; labels that would
+/// run into their neighbours (estimated text widths, `gap` pixels apart)
+/// left out, every second one or more.
+fn axis_ticks<DB: DrawingBackend>(
+    axis: &Axis,
+    range: (f64, f64),
+    area: &DrawingArea<DB, Shift>,
+    px: impl Fn(f64) -> i32,
+    along_x: bool,
+) -> (Vec<f64>, Vec<f64>, Vec<(i32, String)>) {
+    let (bold, light, labels) = match &axis.ticks {
+        Some(t) => {
+            let u: Vec<(f64, String)> = t
+                .iter()
+                .filter_map(|(v, l)| Some((axis.tr(*v)?, l.clone())))
+                .filter(|(u, _)| *u >= range.0 - 1e-9 && *u <= range.1 + 1e-9)
+                .collect();
+            let (pos, labels): (Vec<f64>, Vec<String>) = u.into_iter().unzip();
+            (pos, Vec::new(), labels)
+        }
+        None => {
+            let (t, minor, step) = ticks(axis, range.0, range.1);
+            let labels = tick_labels(axis, &t, step);
+            (t, minor, labels)
+        }
+    };
+    let placed: Vec<(i32, String)> = bold
+        .iter()
+        .zip(labels)
+        .map(|(&u, l)| (px(axis.inv(u)), l))
+        .collect();
+    let size = |l: &str| text_size(area, l, TICK_FONT_PX);
+    let extent = |l: &str| if along_x { size(l).0 } else { size(l).1 };
+    let fits = |k: usize| {
+        let kept: Vec<&(i32, String)> = placed.iter().step_by(k).collect();
+        kept.windows(2).all(|w| {
+            let need = (extent(&w[0].1) + extent(&w[1].1)) / 2 + 8;
+            (w[1].0 - w[0].0).abs() >= need
+        })
+    };
+    let k = (1..=placed.len().max(1)).find(|&k| fits(k)).unwrap_or(1);
+    let shown = placed
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % k == 0)
+        .map(|(_, t)| t)
+        .collect();
+    (bold, light, shown)
+}
+
+/// Caption, margins, axes, ticks, tick labels and grid of a panel; the
+/// boxes of the tick labels drawn.
 fn chart<'a, DB: DrawingBackend>(
     p: &Panel,
     area: &'a DrawingArea<DB, Shift>,
     l: &Layout,
-) -> std::result::Result<Chart<'a, DB>, DynErr>
+) -> std::result::Result<(Chart<'a, DB>, Vec<TextBox>), DynErr>
 where
     DB::ErrorType: 'static,
 {
-    let (xt, xminor, xstep) = ticks(&p.x, l.xr.0, l.xr.1);
-    let (yt, yminor, ystep) = ticks(&p.y, l.yr.0, l.yr.1);
     let right_margin = if l.place == Place::Outside && !l.entries.is_empty() {
         l.legend_px.0 + 16
     } else {
         16
-    };
+    } + l.bar_px;
     let caption = if p.title.is_empty() {
         p.label.clone()
+    } else if p.label.is_empty() {
+        p.title.clone()
     } else {
         format!("{}  {}", p.label, p.title)
     };
     let cw = rich_width(area, &caption, FONT_PX);
     let aw = area.dim_in_pixel().0 as i32;
-    draw_rich(area, &caption, ((aw - cw) / 2, 6), FONT_PX, false)?;
+    draw_rich(area, &caption, ((aw - cw).max(0) / 2, 6), FONT_PX, false)?;
+    let plain = |axis: &Axis, r: (f64, f64)| AxisCoord::new(axis, r, &[], &[]);
+    let probe = ChartBuilder::on(area)
+        .margin_top(6 + CAPTION_PX)
+        .margin_left(8)
+        .margin_bottom(6)
+        .margin_right(right_margin)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
+        .build_cartesian_2d(plain(&p.x, l.xr), plain(&p.y, l.yr))?;
+    let (ax, ay) = area.get_base_pixel();
+    let y0 = probe.plotting_area().get_y_range().start;
+    let x0 = probe.plotting_area().get_x_range().start;
+    let xpx = |v: f64| probe.backend_coord(&(v, y0)).0 - ax;
+    let ypx = |v: f64| probe.backend_coord(&(x0, v)).1 - ay;
+    let (xt, xminor, xlab) = axis_ticks(&p.x, l.xr, area, xpx, true);
+    let (yt, yminor, ylab) = axis_ticks(&p.y, l.yr, area, ypx, false);
     let mut chart = ChartBuilder::on(area)
         .margin_top(6 + CAPTION_PX)
         .margin_left(8)
@@ -279,53 +404,93 @@ where
             AxisCoord::new(&p.x, l.xr, &xt, &xminor),
             AxisCoord::new(&p.y, l.yr, &yt, &yminor),
         )?;
-    // One format for all tick labels of an axis (plotters asks per value).
-    let label = |axis: &Axis, t: Vec<f64>, step: f64| {
-        let labels = tick_labels(axis, &t, step);
-        let scale = axis.scale;
-        move |v: &f64| {
-            let u = match scale {
-                Scale::Linear => *v,
-                Scale::Log => v.log10(),
-            };
-            label_at(&t, &labels, u)
-        }
-    };
-    let (fx, fy) = (label(&p.x, xt, xstep), label(&p.y, yt, ystep));
-    chart
-        .configure_mesh()
-        .label_style((FAMILY, TICK_FONT_PX))
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy)
+    let mut mesh = chart.configure_mesh();
+    mesh.label_style((FAMILY, TICK_FONT_PX))
+        .x_label_formatter(&|_| String::new())
+        .y_label_formatter(&|_| String::new())
         .bold_line_style(RGBColor(225, 225, 225))
-        .light_line_style(RGBColor(243, 243, 243))
-        .draw()?;
-    axis_labels(p, area, &chart)?;
-    Ok(chart)
+        .light_line_style(RGBColor(243, 243, 243));
+    if p.heat.is_some() {
+        mesh.disable_mesh();
+    }
+    mesh.draw()?;
+    let mut boxes = tick_texts(area, &chart, &xlab, &ylab)?;
+    boxes.extend(axis_labels(p, area, &chart)?);
+    Ok((chart, boxes))
 }
 
-/// The axis labels, centred below and left of the plotting area (the y
-/// label reading upwards).
-fn axis_labels<DB: DrawingBackend>(
-    p: &Panel,
+/// Draw the tick labels (x centred under the axis, y right-aligned left
+/// of it); their boxes in area pixels.
+fn tick_texts<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     chart: &Chart<'_, DB>,
-) -> std::result::Result<(), DynErr>
+    xlab: &[(i32, String)],
+    ylab: &[(i32, String)],
+) -> std::result::Result<Vec<TextBox>, DynErr>
 where
     DB::ErrorType: 'static,
 {
+    let (l, _, _, b) = plot_box(area, chart);
+    let font = || (FAMILY, TICK_FONT_PX).into_font();
+    let mut out = Vec::new();
+    for (x, s) in xlab {
+        let (w, h) = text_size(area, s, TICK_FONT_PX);
+        let bx = TextBox::new(s, x - w / 2, b + 8, w, h);
+        area.draw(&Text::new(s.clone(), (bx.x0, bx.y0), font()))?;
+        out.push(bx);
+    }
+    for (y, s) in ylab {
+        let (w, h) = text_size(area, s, TICK_FONT_PX);
+        let bx = TextBox::new(s, l - 8 - w, y - h / 2, w, h);
+        area.draw(&Text::new(s.clone(), (bx.x0, bx.y0), font()))?;
+        out.push(bx);
+    }
+    Ok(out)
+}
+
+/// The plotting area's left, top, right and bottom edges in area pixels.
+fn plot_box<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart<'_, DB>,
+) -> (i32, i32, i32, i32) {
     let plot = chart.plotting_area();
     let (xrange, yrange) = (plot.get_x_range(), plot.get_y_range());
     let (ax, ay) = area.get_base_pixel();
     let tl = chart.backend_coord(&(xrange.start, yrange.end));
     let br = chart.backend_coord(&(xrange.end, yrange.start));
-    let (l, t, r, b) = (tl.0 - ax, tl.1 - ay, br.0 - ax, br.1 - ay);
+    (tl.0 - ax, tl.1 - ay, br.0 - ax, br.1 - ay)
+}
+
+/// The axis labels, centred below and left of the plotting area (the y
+/// label reading upwards); their boxes in area pixels.
+fn axis_labels<DB: DrawingBackend>(
+    p: &Panel,
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart<'_, DB>,
+) -> std::result::Result<Vec<TextBox>, DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    let (l, t, r, b) = plot_box(area, chart);
+    let h = FONT_PX as i32 + 4;
     let w = rich_width(area, &p.x.label, FONT_PX);
     let y = b + X_LABEL_AREA as i32 - FONT_PX as i32 - 4;
     draw_rich(area, &p.x.label, ((l + r - w) / 2, y), FONT_PX, false)?;
-    let h = rich_width(area, &p.y.label, FONT_PX);
+    let xb = TextBox::new(&p.x.label, (l + r - w) / 2, y, w, h);
+    let len = rich_width(area, &p.y.label, FONT_PX);
     let x = l - Y_LABEL_AREA as i32 + 2;
-    draw_rich(area, &p.y.label, (x, (t + b + h) / 2), FONT_PX, true)
+    draw_rich(area, &p.y.label, (x, (t + b + len) / 2), FONT_PX, true)?;
+    let yb = TextBox::new(&p.y.label, x, (t + b - len) / 2, h, len);
+    Ok(vec![xb, yb])
+}
+
+/// Width and height in pixels of plain `t` at `px` font size (the
+/// backend's estimate).
+fn text_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, t: &str, px: f64) -> (i32, i32) {
+    let font = (FAMILY, px).into_font();
+    area.estimate_text_size(t, &TextStyle::from(font))
+        .map(|(w, h)| (w as i32, h as i32))
+        .unwrap_or(((0.6 * px) as i32 * t.chars().count() as i32, px as i32))
 }
 
 /// Width in pixels of `text` (with `_{...}` subscripts) at `px` font size.
@@ -379,36 +544,104 @@ where
 fn draw_panel<DB: DrawingBackend>(
     p: &Panel,
     area: &DrawingArea<DB, Shift>,
-) -> std::result::Result<(), DynErr>
+) -> std::result::Result<PanelDrawn, DynErr>
 where
     DB::ErrorType: 'static,
 {
     let l = layout(p, area);
-    let mut chart = chart(p, area, &l)?;
+    let (mut chart, mut labels) = chart(p, area, &l)?;
+    if let Some(h) = &p.heat {
+        heatmap::draw_cells(&mut chart, h)?;
+        let (_, pt, pr, pb) = plot_box(area, &chart);
+        labels.extend(heatmap::draw_bar(area, h, (pr + 12, pt, pb))?);
+    }
     // Lines first, points on top.
     draw_lines(&mut chart, p, &l)?;
     draw_points(&mut chart, p, &l)?;
+    let clipped = draw_clip_marks(area, &chart, p, &l)?;
     draw_notes(&mut chart, p, &l)?;
+    let drawn = PanelDrawn {
+        x_range: (p.x.inv(l.xr.0), p.x.inv(l.xr.1)),
+        y_range: (p.y.inv(l.yr.0), p.y.inv(l.yr.1)),
+        clipped,
+        labels,
+        plot_box: plot_box(area, &chart),
+    };
     if l.entries.is_empty() {
-        return Ok(());
+        return Ok(drawn);
     }
-    let plot = chart.plotting_area();
-    let (xrange, yrange) = (plot.get_x_range(), plot.get_y_range());
-    // Pixel corners of the plotting area: top left and bottom right.
-    let (ox, oy) = chart.backend_coord(&(xrange.start, yrange.end));
-    let br = chart.backend_coord(&(xrange.end, yrange.start));
-    let (w, h) = (br.0 - ox, br.1 - oy);
+    let (ox, oy, br0, br1) = plot_box(area, &chart);
+    let (w, h) = (br0 - ox, br1 - oy);
+    let (ax, ay) = area.get_base_pixel();
     let corner = match l.place {
         Place::Inside(fx, fy) => (ox + (fx * w as f64) as i32, oy + (fy * h as f64) as i32),
-        Place::Outside => (br.0 + 10, oy),
+        Place::Outside => (br0 + 10, oy),
     };
     draw_legend(
         area,
         &l.entries,
         p.legend_title.as_deref(),
-        corner,
+        (corner.0 + ax, corner.1 + ay),
         l.legend_px,
-    )
+    )?;
+    Ok(drawn)
+}
+
+/// Mark values beyond the vertical range: a triangle at the edge they
+/// pass, one per run of consecutive such values of a series (at the
+/// extreme one); the number of values beyond.
+fn draw_clip_marks<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart<'_, DB>,
+    p: &Panel,
+    l: &Layout,
+) -> std::result::Result<usize, DynErr>
+where
+    DB::ErrorType: 'static,
+{
+    if !l.clipped {
+        return Ok(0);
+    }
+    let ax = area.get_base_pixel().0;
+    let (_, top, _, bottom) = plot_box(area, chart);
+    let mut count = 0;
+    for s in p.series.iter().filter(|s| s.source != GUIDE) {
+        let style = ShapeStyle::from(&rgb(s.color)).filled();
+        let side = |y: f64| match p.y.tr(y) {
+            Some(u) if u > l.yr.1 => 1,
+            Some(u) if u < l.yr.0 => -1,
+            _ => 0,
+        };
+        let mut i = 0;
+        while i < s.y.len() {
+            let d = side(s.y[i]);
+            if d == 0 || !p.x.tr(s.x[i]).is_some_and(|u| u >= l.xr.0 && u <= l.xr.1) {
+                i += 1;
+                continue;
+            }
+            let mut j = i;
+            let mut far = i;
+            while j < s.y.len() && side(s.y[j]) == d {
+                if (s.y[j] - s.y[far]) * d as f64 > 0.0 {
+                    far = j;
+                }
+                j += 1;
+            }
+            count += j - i;
+            let x = chart.backend_coord(&(s.x[far], p.y.inv(l.yr.0))).0 - ax;
+            let (tip, base) = if d > 0 {
+                (top, top + 9)
+            } else {
+                (bottom, bottom - 9)
+            };
+            area.draw(&Polygon::new(
+                vec![(x, tip), (x - 5, base), (x + 5, base)],
+                style,
+            ))?;
+            i = j;
+        }
+    }
+    Ok(count)
 }
 
 /// Lines, clipped to the axes and split at cusps, solid or with plotters' dashes.

@@ -1,128 +1,143 @@
-//! Rendering of a [`HeatMap`] with `plotters`: cells on segmented axes
-//! (one tick label per column and row, the values as typed in the plan)
-//! and a colour bar on the right.
+//! Rendering of a panel's [`Heat`] layer: the cells between their edges
+//! in data coordinates (so a log axis gets geometric cells), and the
+//! colour bar right of the plotting area with its ticks and its label
+//! placed past the widest tick label (they never run into each other).
 
-use super::{plot_err, register_font, DynErr, FAMILY, FONT_PX, TICK_FONT_PX};
-use crate::plot::heatmap::{viridis, HeatMap};
-use irtp::error::Result;
+use super::{draw_rich, rich_width, text_size, Chart, DynErr, FONT_PX, TICK_FONT_PX};
+use crate::plot::heatmap::{viridis, Heat};
+use crate::plot::{log_ticks, nice_ticks, tick_labels, Axis, TextBox};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::path::Path;
 
-/// Pixel size of a heat map image.
-const SIZE: (u32, u32) = (820, 620);
-/// Width of the colour bar's area (bar, ticks and label).
-const BAR_AREA: u32 = 150;
 /// Fill of a cell without a value.
 const MISSING: RGBColor = RGBColor(220, 220, 220);
+/// Width of the bar itself, its tick marks and the gaps around them.
+const BAR_PX: i32 = 16;
+const TICK_PX: i32 = 4;
+const GAP_PX: i32 = 6;
 
-/// Render to a PNG file.
-pub(in crate::plot) fn heatmap_png(h: &HeatMap, path: &Path) -> Result<()> {
-    register_font();
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-    draw(h, &root).map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))
-}
-
-/// Render to an SVG file.
-pub(in crate::plot) fn heatmap_svg(h: &HeatMap, path: &Path) -> Result<()> {
-    register_font();
-    let root = SVGBackend::new(path, SIZE).into_drawing_area();
-    draw(h, &root).map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))
-}
-
-/// The label of segment `v` of an axis with tick labels `ticks`.
-fn segment_label(ticks: &[String], v: &SegmentValue<usize>) -> String {
-    match v {
-        SegmentValue::CenterOf(i) => ticks.get(*i).cloned().unwrap_or_default(),
-        _ => String::new(),
-    }
-}
-
-fn draw<DB: DrawingBackend>(h: &HeatMap, root: &DrawingArea<DB, Shift>) -> Result<(), DynErr>
+/// Draw the cells (rows bottom to top, columns left to right).
+pub(super) fn draw_cells<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    h: &Heat,
+) -> Result<(), DynErr>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE)?;
-    let (w, _) = root.dim_in_pixel();
-    let (main, bar) = root.split_horizontally(w - BAR_AREA);
-    let (nx, ny) = (h.x_ticks.len(), h.y_ticks.len());
-    let mut chart = ChartBuilder::on(&main)
-        .caption(&h.title, (FAMILY, FONT_PX + 2.0))
-        .margin(12)
-        .x_label_area_size(56)
-        .y_label_area_size(84)
-        // A discrete range holds its end: `0..n - 1` has n segments.
-        .build_cartesian_2d(
-            (0..nx.saturating_sub(1)).into_segmented(),
-            (0..ny.saturating_sub(1)).into_segmented(),
-        )?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_labels(nx.max(1))
-        .y_labels(ny.max(1))
-        .x_label_formatter(&|v| segment_label(&h.x_ticks, v))
-        .y_label_formatter(&|v| segment_label(&h.y_ticks, v))
-        .x_desc(h.x_label.as_str())
-        .y_desc(h.y_label.as_str())
-        .label_style((FAMILY, TICK_FONT_PX))
-        .axis_desc_style((FAMILY, FONT_PX))
-        .draw()?;
     let cells = h.values.iter().enumerate().flat_map(|(j, row)| {
-        row.iter().enumerate().map(move |(i, v)| {
+        row.iter().enumerate().filter_map(move |(i, v)| {
             let fill = match v {
-                Some(v) if v.is_finite() => {
+                Some(v) if v.is_finite() && (!h.log || *v > 0.0) => {
                     let (r, g, b) = viridis(h.level(*v));
                     RGBColor(r, g, b)
                 }
                 _ => MISSING,
             };
-            let corners = [
-                (SegmentValue::Exact(i), SegmentValue::Exact(j)),
-                (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
-            ];
-            Rectangle::new(corners, fill.filled())
+            let (x0, x1) = (*h.x_edges.get(i)?, *h.x_edges.get(i + 1)?);
+            let (y0, y1) = (*h.y_edges.get(j)?, *h.y_edges.get(j + 1)?);
+            Some(Rectangle::new([(x0, y0), (x1, y1)], fill.filled()))
         })
     });
     chart.draw_series(cells)?;
-    draw_bar(h, &bar)
+    Ok(())
 }
 
-/// The colour bar: the viridis scale from the smallest to the largest
-/// value, with ticks and the quantity's name.
-fn draw_bar<DB: DrawingBackend>(h: &HeatMap, area: &DrawingArea<DB, Shift>) -> Result<(), DynErr>
+/// The colour scale's ends, never empty.
+fn bar_range(h: &Heat) -> (f64, f64) {
+    match h.value_range() {
+        Some((lo, hi)) if hi > lo => (lo, hi),
+        Some((v, _)) if h.log => (v / 2.0, v * 2.0),
+        Some((v, _)) => (v - 0.5 * (1.0 + v.abs()), v + 0.5 * (1.0 + v.abs())),
+        None => (0.0, 1.0),
+    }
+}
+
+/// The colour bar's ticks: positions as fractions of its height and labels
+/// (one format, as an axis'; decades and 2, 5 multiples on a log scale).
+fn bar_ticks(h: &Heat) -> Vec<(f64, String)> {
+    let (lo, hi) = bar_range(h);
+    let axis = if h.log {
+        Axis::log("")
+    } else {
+        Axis::linear("")
+    };
+    let (a, b) = (axis.tr(lo).unwrap_or(0.0), axis.tr(hi).unwrap_or(1.0));
+    let (t, step) = if h.log {
+        (log_ticks(a, b).0, 1.0)
+    } else {
+        let t = nice_ticks(a, b, 5);
+        let step = if t.len() > 1 { t[1] - t[0] } else { b - a };
+        (t, step)
+    };
+    let labels = tick_labels(&axis, &t, step);
+    t.iter()
+        .zip(labels)
+        .map(|(&u, l)| ((u - a) / (b - a), l))
+        .collect()
+}
+
+/// Width of the colour bar's area: gap, bar, ticks, the widest tick label,
+/// gap, the label's line height, margin.
+pub(super) fn bar_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &Heat) -> i32 {
+    let widest = bar_ticks(h)
+        .iter()
+        .map(|(_, l)| text_size(area, l, TICK_FONT_PX).0)
+        .max()
+        .unwrap_or(0);
+    12 + BAR_PX + TICK_PX + GAP_PX + widest + GAP_PX + FONT_PX as i32 + 8
+}
+
+/// Draw the colour bar from (x, top) down to `bottom` (area pixels): the
+/// scale, ticks with labels right of it, and the quantity's name reading
+/// upwards past the widest label; the boxes of the texts.
+pub(super) fn draw_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    h: &Heat,
+    (x, top, bottom): (i32, i32, i32),
+) -> Result<Vec<TextBox>, DynErr>
 where
     DB::ErrorType: 'static,
 {
-    let (lo, hi) = match h.value_range() {
-        Some((lo, hi)) if hi > lo => (lo, hi),
-        Some((v, _)) => (v - 0.5 * (1.0 + v.abs()), v + 0.5 * (1.0 + v.abs())),
-        None => (0.0, 1.0),
-    };
-    let mut chart = ChartBuilder::on(area)
-        .margin_top(48)
-        .margin_bottom(68)
-        .margin_left(8)
-        .margin_right(16)
-        .y_label_area_size(0)
-        .right_y_label_area_size(96)
-        .build_cartesian_2d(0.0..1.0, lo..hi)?
-        .set_secondary_coord(0.0..1.0, lo..hi);
-    const STEPS: usize = 100;
-    let step = (hi - lo) / STEPS as f64;
-    chart.draw_series((0..STEPS).map(|k| {
-        let y = lo + k as f64 * step;
-        let (r, g, b) = viridis((k as f64 + 0.5) / STEPS as f64);
-        Rectangle::new([(0.0, y), (1.0, y + step)], RGBColor(r, g, b).filled())
-    }))?;
-    chart
-        .configure_secondary_axes()
-        .y_labels(6)
-        .label_style((FAMILY, TICK_FONT_PX))
-        .y_desc(h.value_label.as_str())
-        .axis_desc_style((FAMILY, FONT_PX))
-        .draw()?;
-    Ok(())
+    const STEPS: i32 = 120;
+    let height = (bottom - top).max(1);
+    for k in 0..STEPS {
+        let (y0, y1) = (
+            bottom - height * k / STEPS,
+            bottom - height * (k + 1) / STEPS,
+        );
+        let (r, g, b) = viridis((f64::from(k) + 0.5) / f64::from(STEPS));
+        area.draw(&Rectangle::new(
+            [(x, y1), (x + BAR_PX, y0)],
+            RGBColor(r, g, b).filled(),
+        ))?;
+    }
+    area.draw(&Rectangle::new(
+        [(x, top), (x + BAR_PX, bottom)],
+        ShapeStyle::from(&RGBColor(120, 120, 120)).stroke_width(1),
+    ))?;
+    let mut boxes = Vec::new();
+    let mut widest = 0;
+    let font = || (super::FAMILY, TICK_FONT_PX).into_font();
+    for (f, l) in bar_ticks(h) {
+        let y = bottom - (f * f64::from(height)).round() as i32;
+        let tick = vec![(x + BAR_PX, y), (x + BAR_PX + TICK_PX, y)];
+        area.draw(&PathElement::new(tick, BLACK))?;
+        let (w, th) = text_size(area, &l, TICK_FONT_PX);
+        let b = TextBox::new(&l, x + BAR_PX + TICK_PX + GAP_PX, y - th / 2, w, th);
+        area.draw(&Text::new(l.clone(), (b.x0, b.y0), font()))?;
+        widest = widest.max(w);
+        boxes.push(b);
+    }
+    let len = rich_width(area, &h.label, FONT_PX);
+    let lx = x + BAR_PX + TICK_PX + GAP_PX + widest + GAP_PX;
+    let ly = (top + bottom + len) / 2;
+    draw_rich(area, &h.label, (lx, ly), FONT_PX, true)?;
+    boxes.push(TextBox::new(
+        &h.label,
+        lx,
+        ly - len,
+        FONT_PX as i32 + 4,
+        len,
+    ));
+    Ok(boxes)
 }

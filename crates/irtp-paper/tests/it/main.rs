@@ -1,0 +1,3 @@
+//! Integration tests of irtp-paper: one binary (`cargo test -p irtp-paper --test it`).
+
+mod gallery;
