@@ -190,6 +190,10 @@ fn the_version_is_cargos() {
     assert_eq!(irtp_app::VERSION, version);
 }
 
+/// A cheap search by the renewal route.
+const RENEWAL: &str =
+    "mfpt --v0 0 --xt 1 --reset-position 0 --rate 1 --method renewal --cells-x 16 --cells-v 8";
+
 /// `(a cheap command line, a flag whose default its help prints by hand)`:
 /// the flags without a clap default (their absence means something), whose
 /// `[default: ...]` is typed in the help text.
@@ -211,6 +215,8 @@ const TYPED_DEFAULTS: &[(&str, &str)] = &[
         "mfpt --v0 0 --xt 1 --reset-position 0 --rate 1 --cells-x 16 --cells-v 8",
         "--x0",
     ),
+    (RENEWAL, "--time-steps"),
+    (RENEWAL, "--horizon-tail"),
     ("mfpt distribution --v0 0 --vt 1 --cells 400", "--points"),
     ("mfpt distribution --v0 0 --vt 1 --cells 400", "--grid"),
     ("mfpt distribution --v0 0 --vt 1 --cells 400", "--rtol"),
