@@ -31,7 +31,7 @@ const LONG_ABOUT: &str = "\
 Inertial run-and-tumble particles with velocity resetting in shear-thinning and shear-thickening
 media. The velocity obeys dv/dt = -g(v) + eta(t): a drag g(v) (tan: shear-thickening, tanh:
 shear-thinning, linear, or any other law), a telegraph noise eta = ±Sigma flipping at rate lambda,
-and resets to v_r at rate r. irtp computes, each with its error estimate:
+and resets to v_r at rate r. irtp computes (closed forms exactly, the others with error estimates):
   - the stationary velocity density P_s(v), exact at r = 0 (analytic) or solved (fp stationary);
   - <v²>(t), <x²>(t) and the effective diffusion coefficient D_eff (fp, simulate);
   - the mean first-passage time tau to a velocity or a position and the resetting rate that
@@ -42,7 +42,7 @@ and resets to v_r at rate r. irtp computes, each with its error estimate:
 /// The examples that end `irtp --help` (run by the tests).
 const EXAMPLES: &str = "\
 Examples:
-  irtp analytic --drag tanh --sigma 0.6            # exact P_s(v) at r = 0: a cusp at v = 0
+  irtp analytic --drag tanh --sigma 0.6            # exact P_s(v) at r = 0, diverging at the edges
   irtp fp stationary --rate 0.5 --out runs/fp      # P_s(v), <v²> and D_eff at r = 0.5
   irtp plot runs/fp                                # its figure: runs/fp/plot.png
   irtp mfpt optimize --v0 0 --vt 1                 # the resetting rate that minimises tau";
