@@ -153,10 +153,10 @@ fn describe<'py>(py: Python<'py>, command: &str) -> PyResult<Bound<'py, PyList>>
         let d = PyDict::new(py);
         d.set_item("name", a.get_id().as_str())?;
         d.set_item("flag", a.get_long().map(|l| format!("--{l}")))?;
-        d.set_item(
-            "help",
-            a.get_help().map(|h| h.to_string()).unwrap_or_default(),
-        )?;
+        // The long help (`--help`): a docstring has room for the spec syntax
+        // and where a flag runs, which `-h` leaves out.
+        let help = a.get_long_help().or(a.get_help());
+        d.set_item("help", help.map(|h| h.to_string()).unwrap_or_default())?;
         let defaults: Vec<String> = a
             .get_default_values()
             .iter()

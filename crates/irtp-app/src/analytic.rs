@@ -16,20 +16,23 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Flags of `irtp analytic`: the shared `--drag --sigma --lambda`, and its own
-/// `--rate` (default 0, the only admissible value) instead of the resetting flags.
+/// `--rate` (default 0, the only admissible value but with linear drag) and
+/// `--reset-velocity` instead of the resetting flags.
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("lambda", |a| a.help("Flip rate lambda of the telegraph noise (> 0)")))]
 pub struct AnalyticArgs {
     /// `--drag --sigma --lambda`.
     #[command(flatten)]
     pub noise: NoiseArgs,
-    /// Reset rate: the closed form exists only for r = 0 (any other value is
-    /// rejected), except for linear drag with --noise or --temperature.
+    /// Reset rate r: 0, or any r with linear drag.
+    ///
+    /// The closed-form density exists only without resetting; with linear
+    /// drag the moments have closed forms at any r, with any noise and
+    /// temperature (Eqs. (N3)-(N6)).
     #[arg(long, short = 'r', default_value_t = 0.0, allow_hyphen_values = true)]
     pub rate: f64,
-    /// Reset velocity v_r of the Poisson resetting, only for linear drag
-    /// with --noise or --temperature (with the paper's noise only 0, as
-    /// nothing resets at r = 0) [default: 0].
+    /// Reset velocity v_r of the Poisson resetting, only with linear drag
+    /// (with another drag only 0, as nothing resets at r = 0) [default: 0].
     #[arg(long, allow_hyphen_values = true)]
     pub reset_velocity: Option<f64>,
     /// Number of points of density.csv (interior Chebyshev points, clustered at the edges).

@@ -2,6 +2,7 @@
 
 use clap::Args;
 use irtp::model::noise::NoiseModel;
+use irtp::model::reset::support::{runners, Feature};
 use irtp::model::reset::{spec as reset_spec, NoiseAtReset, Schedule, Target};
 use irtp::model::Drag;
 use irtp::{DragLaw, Params};
@@ -13,7 +14,7 @@ use std::path::PathBuf;
 #[derive(Args, Clone, Debug)]
 pub struct NoiseArgs {
     /// Drag law g(v) (help text generated from the registry by `drag_help`).
-    #[arg(long, default_value = "tan", value_parser = parse_drag, help = drag_help())]
+    #[arg(long, default_value = "tan", value_parser = parse_drag, help = drag_names(), long_help = drag_help())]
     pub drag: DragLaw,
     /// Noise amplitude Sigma (eta = ±Sigma).
     #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
@@ -22,24 +23,54 @@ pub struct NoiseArgs {
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub lambda: f64,
     /// The active noise as a spec, instead of --sigma and --lambda
-    /// (docs/equations.md, "Noise kinds"): telegraph:sigma=S,lambda=L (the
-    /// paper's, the same as --sigma S --lambda L),
-    /// telegraph:plus=P,minus=M,rate_plus=KP,rate_minus=KM,
-    /// rpt:sigma=S,alpha=A,beta=B, states:levels=[..],rates=[[..],..] or
-    /// none. Every noise runs in simulate, fp stationary/transient/msd and
-    /// mfpt (--method backward, euler, exact; scan, optimize,
-    /// distribution); analytic: linear drag, or an asymmetric telegraph at
-    /// r = 0; a search (--xt, --interval): the paper's only.
-    #[arg(long, value_name = "SPEC", conflicts_with_all = ["sigma", "lambda"])]
+    /// (help text with the methods that run it: `noise_help`).
+    #[arg(
+        long,
+        value_name = "SPEC",
+        conflicts_with_all = ["sigma", "lambda"],
+        help = "The active noise as a spec, instead of --sigma and --lambda: telegraph, rpt, states or none",
+        long_help = noise_help()
+    )]
     pub noise: Option<String>,
     /// Temperature T >= 0 of a thermal noise sqrt(2T) dW added to the
-    /// active noise [default: 0]. T > 0 runs in simulate --method euler, fp
-    /// and mfpt --method euler with any drag; in analytic and simulate
-    /// --method exact with linear drag; in mfpt --method backward (scan,
-    /// optimize, distribution) with linear, tanh, tan drags; not in mfpt
-    /// --method exact.
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    /// active noise (help text: `temperature_help`).
+    #[arg(
+        long,
+        value_name = "T",
+        allow_hyphen_values = true,
+        help = "Temperature T >= 0 of a thermal noise sqrt(2T) dW added to the active noise [default: 0]",
+        long_help = temperature_help()
+    )]
     pub temperature: Option<f64>,
+}
+
+/// Where a noise other than the paper's runs, from the core's list beside
+/// its support table ([`irtp::model::noise::support::RUNNERS`]).
+fn noise_runs_in() -> String {
+    format!(
+        "Runs in: {}. A search (--xt, --interval) runs the paper's noise only.",
+        irtp::model::noise::support::RUNNERS
+    )
+}
+
+/// The long help of `--noise`: the spec of every kind and where it runs.
+fn noise_help() -> String {
+    format!(
+        "The active noise as a spec, instead of --sigma and --lambda (docs/equations.md, \
+         \"Noise kinds\"): telegraph:sigma=S,lambda=L (the paper's, the same as --sigma S \
+         --lambda L), telegraph:plus=P,minus=M,rate_plus=KP,rate_minus=KM, \
+         rpt:sigma=S,alpha=A,beta=B, states:levels=[..],rates=[[..],..] or none.\n\n{}",
+        noise_runs_in()
+    )
+}
+
+/// The long help of `--temperature`.
+fn temperature_help() -> String {
+    format!(
+        "Temperature T >= 0 of a thermal noise sqrt(2T) dW added to the active noise \
+         [default: 0]. T > 0 is a noise other than the paper's.\n\n{}",
+        noise_runs_in()
+    )
 }
 
 impl NoiseArgs {
@@ -84,36 +115,93 @@ pub struct ModelArgs {
     #[arg(long, value_name = "kept|redrawn")]
     pub reset_noise: Option<String>,
     /// Where a reset sends the velocity, as a spec (instead of
-    /// --reset-velocity): point:v=V, gauss:mean=M,std=S (a Gaussian
+    /// --reset-velocity): point:v=V, gauss:mean=M,std=S or uniform:a=A,b=B.
+    ///
+    /// point:v=V, gauss:mean=M,std=S (a Gaussian
     /// truncated to the velocity interval, M inside it, S > 0) or
     /// uniform:a=A,b=B (inside the interval, A < B); optionally
     /// ,noise=kept|redrawn. A random target runs in every method.
     #[arg(long, value_name = "SPEC", conflicts_with = "reset_velocity")]
     pub reset_to: Option<String>,
-    /// Periodic (sharp) resetting: a reset at every multiple of T > 0 of
-    /// the time since the start, instead of a Poisson clock (then no
-    /// --rate, or --rate 0).
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    /// Periodic (sharp) resetting (help text: `feature_help`).
+    #[arg(
+        long,
+        value_name = "T",
+        allow_hyphen_values = true,
+        help = "Periodic (sharp) resetting: a reset at every multiple of T > 0, instead of a Poisson clock",
+        long_help = feature_help(PERIOD_HELP, &[Feature::Periodic])
+    )]
     pub reset_period: Option<f64>,
-    /// Renewal resetting: the waiting times between resets drawn from a
-    /// law, the clock restarting at every reset (then no --rate, or --rate
-    /// 0; not with --reset-period): exp:rate=R, gamma:k=K,theta=TH,
-    /// weibull:k=K,scale=L, pareto:alpha=A,scale=X (Pareto I, t >= X),
-    /// fixed:t=T, table:0:1;T1:W1;...;Tn:0 (survival W, linear between
-    /// points) or table:file=PATH (lines 't,W'), hazard:EXPR (a rate r(a)
-    /// in the age a since the last reset).
-    #[arg(long, value_name = "SPEC")]
+    /// Renewal resetting (help text: `feature_help`).
+    #[arg(
+        long,
+        value_name = "SPEC",
+        help = "Renewal resetting: waiting times between resets drawn from a law (exp, gamma, weibull, pareto, fixed, table, hazard)",
+        long_help = feature_help(CLOCK_HELP, &[Feature::Renewal])
+    )]
     pub reset_clock: Option<String>,
-    /// Position resetting: at every reset the position jumps to X with the
-    /// velocity (full resetting); the position then has a stationary
-    /// distribution.
-    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    /// Position resetting (help text: `feature_help`).
+    #[arg(
+        long,
+        value_name = "X",
+        allow_hyphen_values = true,
+        help = "Position resetting: at every reset the position jumps to X with the velocity",
+        long_help = feature_help(POSITION_HELP, &[Feature::Position])
+    )]
     pub reset_position: Option<f64>,
-    /// A refractory period after every reset (velocity held at the reset
-    /// velocity, resets ignored, noise flipping on): exp:mean=M
-    /// (exponential duration of mean M) or fixed:t=T.
-    #[arg(long, value_name = "SPEC")]
+    /// A refractory period after every reset (help text: `feature_help`).
+    #[arg(
+        long,
+        value_name = "SPEC",
+        help = "A refractory period after every reset: exp:mean=M or fixed:t=T",
+        long_help = feature_help(REFRACTORY_HELP, &[Feature::RefractoryExp, Feature::RefractoryFixed])
+    )]
     pub refractory: Option<String>,
+}
+
+/// The long help of `--reset-period`, before where it runs.
+const PERIOD_HELP: &str = "Periodic (sharp) resetting: a reset at every multiple of T > 0 of the \
+     time since the start, instead of a Poisson clock (then no --rate, or --rate 0).";
+
+/// The long help of `--reset-clock`, before where it runs.
+const CLOCK_HELP: &str = "Renewal resetting: the waiting times between resets drawn from a law, \
+     the clock restarting at every reset (then no --rate, or --rate 0; not with --reset-period): \
+     exp:rate=R, gamma:k=K,theta=TH, weibull:k=K,scale=L, pareto:alpha=A,scale=X (Pareto I, \
+     t >= X), fixed:t=T, table:0:1;T1:W1;...;Tn:0 (survival W, linear between points) or \
+     table:file=PATH (lines 't,W'), hazard:EXPR (a rate r(a) in the age a since the last reset).";
+
+/// The long help of `--reset-position`, before where it runs.
+const POSITION_HELP: &str = "Position resetting: at every reset the position jumps to X with the \
+     velocity (full resetting); the position then has a stationary distribution.";
+
+/// The long help of `--refractory`, before where it runs.
+const REFRACTORY_HELP: &str = "A refractory period after every reset (velocity held at the reset \
+     velocity, resets ignored, noise flipping on): exp:mean=M (exponential duration of mean M) \
+     or fixed:t=T.";
+
+/// `text`, then the methods that run each of `features`, from the core's
+/// support table ([`irtp::model::reset::support::runners`]).
+fn feature_help(text: &str, features: &[Feature]) -> String {
+    let runs: Vec<String> = features
+        .iter()
+        .map(|f| format!("{} runs in: {}.", capitalised(f.describe()), runners(*f)))
+        .collect();
+    format!("{text}\n\n{}", runs.join(" "))
+}
+
+/// `text` with its first letter in upper case.
+fn capitalised(text: &str) -> String {
+    let mut chars = text.chars();
+    chars
+        .next()
+        .map_or_else(String::new, |c| c.to_uppercase().chain(chars).collect())
+}
+
+/// `Drag law g(v): tan, tanh, ...`: every registered law by name, for
+/// `-h` (`--help` gives [`drag_help`]).
+fn drag_names() -> String {
+    let laws: Vec<String> = DragLaw::examples().iter().map(|d| d.to_string()).collect();
+    format!("Drag law g(v): {}", laws.join(", "))
 }
 
 /// `Drag law g(v): tan (shear-thickening, g = tan v), ...`, every registered
@@ -294,8 +382,9 @@ impl OutputArgs {
 /// `--force`, of every command with `--out`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct ForceArgs {
-    /// Write into an --out that holds another run or files irtp did not write:
-    /// the previous run's outputs (as its run.json lists them) are replaced,
+    /// Write into an --out that holds another run or files irtp did not write.
+    ///
+    /// The previous run's outputs (as its run.json lists them) are replaced,
     /// other files are left alone (and named in a warning).
     #[arg(long)]
     pub force: bool,

@@ -16,21 +16,30 @@ pub struct FpArgs {
     pub command: FpCommand,
 }
 
+/// The solvers of `irtp fp`.
 #[derive(Subcommand, Debug)]
 pub enum FpCommand {
-    /// Stationary density, `<v>`, `<v²>` (Eq. (33)) and exact D_eff by a direct O(N) solve.
-    #[command(
-        about = "Stationary density, <v>, <v²> (Eq. (33)) and exact D_eff by a direct O(N) solve."
-    )]
+    /// Stationary density P_s(v), <v>, <v²> (Eq. (33)) and the exact D_eff by a direct O(N) solve.
+    ///
+    /// The stationary Fokker-Planck equations on a finite-volume mesh of
+    /// the velocity interval, solved directly and extrapolated over the
+    /// meshes with --cells and --cells/2 (Richardson): density.csv, the
+    /// moments and the exact effective diffusion coefficient D_eff.
+    #[command(after_help = crate::help::FP_STATIONARY)]
     Stationary(StationaryArgs),
-    /// Time-dependent solution from the paper's initial condition (adaptive
-    /// TR-BDF2 on the graded mesh, or the paper's explicit scheme, Sec. 3).
+    /// <v²>(t) and density snapshots from the paper's initial condition (TR-BDF2 or the paper's scheme).
+    ///
+    /// The time-dependent Fokker-Planck equations from v = 0 (Sec. 3):
+    /// adaptive TR-BDF2 on the graded mesh (default) or the paper's
+    /// explicit upwind scheme on a uniform mesh (--scheme paper).
+    #[command(after_help = crate::help::FP_TRANSIENT)]
     Transient(TransientArgs),
-    /// `<x>(t)`, `<x v>(t)`, `<x²>(t)` and d ln⟨x²⟩/d ln t without sampling
-    /// (moment chain of the forward equations, TR-BDF2, Richardson in the mesh).
-    #[command(
-        about = "<x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling (moment chain of the forward equations)."
-    )]
+    /// <x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling (moment chain).
+    ///
+    /// The position moments from the moment chain of the forward
+    /// equations (TR-BDF2 in time, Richardson over nested meshes), on a log
+    /// time grid: the ballistic-to-diffusive crossover of <x²>(t).
+    #[command(after_help = crate::help::FP_MSD)]
     Msd(super::fp_msd::MsdArgs),
 }
 

@@ -52,7 +52,9 @@ pub struct DistributionArgs {
     /// Initial velocity v_0 (inside (v_l, v_u), on the same side of v_t as v_r).
     #[arg(long, allow_hyphen_values = true)]
     v0: f64,
-    /// Cells of the backward-equation mesh on [v_l, v_t]: the upwind scheme
+    /// Cells of the backward-equation mesh on [v_l, v_t].
+    ///
+    /// The upwind scheme
     /// runs on cells/2 and on cells and extrapolates; the stationary moments
     /// use the box scheme on cells. The distribution's mean agrees with tau
     /// to 1e-7-1e-5 at 4000 cells (error ~ cells⁻²); S(t) to the reported

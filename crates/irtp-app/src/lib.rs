@@ -21,6 +21,7 @@ pub mod format;
 pub mod fp;
 pub mod fp_msd;
 pub mod fpt;
+pub mod help;
 pub mod io;
 pub mod keywords;
 pub mod lock;
@@ -66,13 +67,42 @@ pub struct Cli {
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Exact r = 0 stationary velocity density: regime, <v^2>, density.csv.
+    /// Exact stationary velocity density P_s(v) at r = 0, its regime and <v²> (closed form).
+    ///
+    /// The r = 0 stationary density of the velocity in closed form: the
+    /// regime (peaks inside the interval or at its edges), the edge
+    /// exponent, <v²>, <v⁴> and density.csv. With linear drag also r > 0
+    /// and other noises (Eqs. (N3)-(N6)); an asymmetric telegraph noise at
+    /// r = 0 with any drag (Eq. (N8)). Nothing is sampled or discretised.
+    #[command(after_help = help::ANALYTIC)]
     Analytic(analytic::AnalyticArgs),
-    /// Particle simulation (exact event-driven sampler, or the paper's Euler scheme): moments, densities.
+    /// Simulate particles: <v²>(t), <x²>(t), P_s(v) and D_eff (exact sampler or Euler scheme).
+    ///
+    /// Independent particles from v = 0, x = 0: the moments <v>, <v²>,
+    /// <x²> on a time grid, the stationary velocity histogram over
+    /// [--burn-in, --t-max] and D_eff, with standard errors. `--method
+    /// exact` (default) samples the process event by event with no time
+    /// step; `--method euler` is the paper's scheme (Eqs. (30)-(32)).
+    #[command(after_help = help::SIMULATE)]
     Simulate(simulate::SimulateArgs),
-    /// Mean first-passage time to a target velocity (backward equations or particles).
+    /// Mean first-passage time tau to a target velocity --vt or, a search, a position --xt/--interval.
+    ///
+    /// tau from --v0 to the target velocity --vt by the backward equations
+    /// (default, with an error estimate) or by particles (--method exact or
+    /// euler); with --xt or --interval, the search: first passage of the
+    /// position x (with --reset-position the mean is finite; --method
+    /// renewal integrates over the reset clock). Subcommands scan a
+    /// parameter, find the optimal reset rate, or give the whole
+    /// distribution of the first-passage time.
+    #[command(after_help = help::MFPT)]
     Mfpt(mfpt::MfptArgs),
-    /// Fokker-Planck solvers: stationary density, <v²>, D_eff; transient <v²>(t).
+    /// Fokker-Planck solvers: stationary P_s(v), <v²>, exact D_eff; transient <v²>(t); <x²>(t).
+    ///
+    /// Deterministic solutions of the forward (Fokker-Planck) equations of
+    /// the velocity (Eqs. (11)-(12)), with no sampling noise: `stationary`
+    /// (density, moments, D_eff), `transient` (from the paper's initial
+    /// condition) and `msd` (position moments by the moment chain).
+    #[command(after_help = help::FP)]
     Fp(fp::FpArgs),
 }
 

@@ -49,12 +49,31 @@ pub struct MfptArgs {
 /// The subcommands of `irtp mfpt`.
 #[derive(Subcommand, Debug)]
 pub enum MfptCommand {
-    /// tau against the target velocity or the reset rate (paper Fig. 7).
+    /// tau over a range of the target velocity, the reset rate or (a search) x0 or xt (paper Fig. 7).
+    ///
+    /// One first-passage problem per point of --over from --from to --to
+    /// (--points values, --log spacing): tau with its error estimate,
+    /// written as mfpt_scan.csv with --out. --over vt or rate: a target
+    /// velocity; --over x0 or xt: a search (--xt or --interval).
+    #[command(after_help = crate::help::MFPT_SCAN)]
     Scan(ScanArgs),
-    /// The reset rate r minimising tau (r in {0} ∪ [r-min, r-max]).
+    /// The reset rate r* minimising tau, searched over r in {0} ∪ [--r-min, --r-max].
+    ///
+    /// Answers whether resetting helps: tau(r) on a log grid of
+    /// --grid-points rates brackets the minimum, a golden-section search in
+    /// log r refines it, and r = 0 is compared;
+    /// r* = 0 when resetting does not shorten the first passage. A target
+    /// velocity --vt or a search (--xt or --interval with
+    /// --reset-position).
+    #[command(after_help = crate::help::MFPT_OPTIMIZE)]
     Optimize(OptimizeArgs),
-    /// First-passage-time distribution: survival S(t), density f(t), variance
-    /// (backward equations), or the sampled histogram and Kaplan-Meier curve (exact).
+    /// The distribution of the first-passage time: S(t), f(t), mean and variance.
+    ///
+    /// The survival S(t) and density f(t) from the time-dependent
+    /// backward equations (default), or the sampled histogram and
+    /// Kaplan-Meier curve of the exact particle sampler (--method exact);
+    /// the mean and variance of the first-passage time.
+    #[command(after_help = crate::help::MFPT_DISTRIBUTION)]
     Distribution(super::fpt::DistributionArgs),
 }
 
@@ -104,13 +123,14 @@ struct SimArgs {
     /// [default: 1e-3; --method euler only].
     #[arg(long, allow_hyphen_values = true)]
     dt: Option<f64>,
-    /// Censoring time of the particles. If any has not arrived by t-max, tau is not reported
+    /// Censoring time of the particles [default: 1e4; particle methods only].
+    ///
+    /// If any has not arrived by t-max, tau is not reported
     /// (null; `censored`, `censored_fraction` say how many) and `rmst` ± `rmst_err`, the
     /// restricted mean E[min(T, t-max)], is its lower bound `tau_lower_bound` (tau > rmst).
     /// With --out, survival.csv holds the Kaplan-Meier survival curve S(t) (t, survival,
     /// survival_err, at_risk); a scan adds censored_fraction, rmst_sim, rmst_sim_err columns
     /// and writes tau_sim as nan (JSON null) at censored points.
-    /// [default: 1e4; particle methods only]
     #[arg(long, allow_hyphen_values = true)]
     t_max: Option<f64>,
 }
@@ -123,8 +143,9 @@ pub(crate) struct TargetArgs {
     /// Target velocity v_t (v_l < v_t < v_u).
     #[arg(long, required_unless_present_any = ["xt", "interval"], allow_hyphen_values = true)]
     pub(crate) vt: Option<f64>,
-    /// Search target in position (instead of --vt): the first time x reaches the level L
-    /// (one-sided). With velocity-only resetting the mean search time is infinite: tau is
+    /// Search target in position (instead of --vt): the first time x reaches the level L.
+    ///
+    /// One-sided. With velocity-only resetting the mean search time is infinite: tau is
     /// null, `infinite_mean` true, and the tail exponent of S(t) is reported (--method exact).
     #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
     pub(crate) xt: Option<f64>,
@@ -195,9 +216,11 @@ pub struct DirectArgs {
     /// run with twice as many and extrapolated) [default: 100; --method renewal only].
     #[arg(long, allow_hyphen_values = true, value_parser = super::common::parse_size)]
     time_steps: Option<usize>,
-    /// The renewal route's horizon: its integrals stop where the reset clock's survival is
-    /// below this (Poisson clock; a periodic clock stops at its period), the bound on the cut
-    /// tail reported [default: 1e-8; --method renewal only].
+    /// The renewal route's horizon: the reset clock's survival where its integrals stop
+    /// [default: 1e-8; --method renewal only].
+    ///
+    /// Below this survival (Poisson clock; a periodic clock stops at its period) the
+    /// integrals stop; the bound on the cut tail is reported.
     #[arg(long, allow_hyphen_values = true)]
     horizon_tail: Option<f64>,
     #[command(flatten)]

@@ -6,13 +6,46 @@ use clap::{Parser, Subcommand};
 use irtp_paper::Command;
 use std::process::ExitCode;
 
-/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media.
+/// Inertial run-and-tumble particles with velocity resetting in non-Newtonian media: exact
+/// densities, simulations, Fokker-Planck solutions and first-passage times.
 #[derive(Parser, Debug)]
-#[command(name = "irtp", version = irtp_app::long_version(), about, long_about = None)]
+#[command(
+    name = "irtp",
+    version = irtp_app::long_version(),
+    about = ABOUT,
+    long_about = LONG_ABOUT,
+    after_help = EXAMPLES
+)]
 struct Cli {
     #[command(subcommand)]
     command: TopCommand,
 }
+
+/// The first line of `irtp -h`.
+const ABOUT: &str = "Inertial run-and-tumble particles with velocity resetting in shear-thinning and \
+                     shear-thickening media: exact densities, simulations, Fokker-Planck solutions, \
+                     first-passage times";
+
+/// The opening of `irtp --help`: the model and the questions each command answers.
+const LONG_ABOUT: &str = "\
+Inertial run-and-tumble particles with velocity resetting in shear-thinning and shear-thickening
+media. The velocity obeys dv/dt = -g(v) + eta(t): a drag g(v) (tan: shear-thickening, tanh:
+shear-thinning, linear, or any other law), a telegraph noise eta = ±Sigma flipping at rate lambda,
+and resets to v_r at rate r. irtp computes (closed forms exactly, the others with error estimates):
+  - the stationary velocity density P_s(v), exact at r = 0 (analytic) or solved (fp stationary);
+  - <v²>(t), <x²>(t) and the effective diffusion coefficient D_eff (fp, simulate);
+  - the mean first-passage time tau to a velocity or a position and the resetting rate that
+    minimises it (mfpt, mfpt optimize);
+  - the paper's figures and claims (reproduce), parameter sweeps (sweep) and their plots (plot).
+`irtp <command> --help` says what a command computes, its flags with their defaults, and examples.";
+
+/// The examples that end `irtp --help` (run by the tests).
+const EXAMPLES: &str = "\
+Examples:
+  irtp analytic --drag tanh --sigma 0.6            # exact P_s(v) at r = 0, diverging at the edges
+  irtp fp stationary --rate 0.5 --out runs/fp      # P_s(v), <v²> and D_eff at r = 0.5
+  irtp plot runs/fp                                # its figure: runs/fp/plot.png
+  irtp mfpt optimize --v0 0 --vt 1                 # the resetting rate that minimises tau";
 
 /// The library's commands ([`irtp_paper::Command`]), the sweeps and `plot`.
 // Parsed once per run: the size of the largest flag set costs nothing.
@@ -22,10 +55,23 @@ enum TopCommand {
     #[command(flatten)]
     App(Command),
     /// Parameter sweeps from a TOML plan: run (sharded, resumable), merge, status, SLURM arrays.
+    #[command(long_about = cli::sweep::long_about(), after_help = cli::sweep::EXAMPLES)]
     Sweep(cli::sweep::SweepArgs),
     /// Draw the natural figure of an output directory (a run or a sweep) as PNG or SVG.
+    ///
+    /// The figure each command's outputs call for (a density, <v²>(t),
+    /// tau against the scanned parameter, ...), or a heat map of a sweep
+    /// over its two crossed axes.
+    #[command(after_help = PLOT_EXAMPLES)]
     Plot(irtp_paper::quicklook::PlotArgs),
 }
+
+/// The examples that end `irtp plot --help` (run by the tests).
+const PLOT_EXAMPLES: &str = "\
+Examples:
+  irtp fp stationary --out runs/fp
+  irtp plot runs/fp                                # runs/fp/plot.png
+  irtp plot runs/fp --out fp.svg                   # as SVG";
 
 /// Run the command; the exit code on success (0; `sweep` may report 3;
 /// 130 or 143 after SIGINT or SIGTERM).

@@ -48,9 +48,25 @@ pub enum Command {
     /// The app's commands (analytic, simulate, mfpt, fp).
     #[command(flatten)]
     App(irtp_app::Command),
-    /// Regenerate the paper's figures (data, plots, claims).
+    /// Regenerate the paper's figures and check its numeric claims (data, plots, claims.json).
+    ///
+    /// Each figure is computed from scratch with the paper's parameters,
+    /// written as CSV data and a PNG plot, and its claims (D_eff ∝ r⁻²,
+    /// the optimal resetting rate, ...) are checked against our numbers in
+    /// claims.json with a verdict each; `all` runs every figure in paper
+    /// order, then those beyond the paper. --quick runs the same code at
+    /// small sizes (seconds).
+    #[command(after_help = REPRODUCE_EXAMPLES)]
     Reproduce(reproduce::ReproduceArgs),
 }
+
+/// The examples that end `irtp reproduce --help` (run by the tests, at
+/// `--quick` size).
+const REPRODUCE_EXAMPLES: &str = "\
+Examples:
+  irtp reproduce fig2 --quick --out runs/paper     # P_s(v) with its cusp, in seconds
+  irtp reproduce fig7 --out runs/paper             # tau against v_t - v_0 and r
+  irtp reproduce all --out runs/paper              # every figure and claim (minutes on 2 cores)";
 
 impl Command {
     /// The command's flags, behind the app's one command interface.

@@ -14,7 +14,9 @@ use std::path::PathBuf;
 /// same command skips the figures already finished.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
-    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7, fpt (first-passage-time densities, beyond the paper), media (every drag law: Figs. 2 and 7 questions, beyond the paper), search (first passage in position: tau(r) and r* in every medium, beyond the paper), noise (the questions of Figs. 2, 6 and 7 under asymmetric, run-pause-tumble and thermal noise, beyond the paper), or all.
+    /// Figures: fig1 fig2 fig3 fig5 fig6 fig7 (the paper's), fpt, media, search, noise (beyond it), or all.
+    ///
+    /// fpt (first-passage-time densities, beyond the paper), media (every drag law: Figs. 2 and 7 questions, beyond the paper), search (first passage in position: tau(r) and r* in every medium, beyond the paper), noise (the questions of Figs. 2, 6 and 7 under asymmetric, run-pause-tumble and thermal noise, beyond the paper), or all.
     #[arg(required = true, value_parser = parse_figure)]
     pub figures: Vec<Selection>,
     /// Output directory.

@@ -16,8 +16,8 @@
 //! - [`model`]: drag laws g(v) (Table 1), one file each behind the
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
 //!   dispatch; noise kinds behind [`model::Noise`] with the
-//!   [`model::NoiseKind`] registry and [`with_noise!`] dispatch (not yet run
-//!   by the engines); resetting rules behind [`model::Reset`]; validated [`Params`]
+//!   [`model::NoiseKind`] registry and [`with_noise!`] dispatch (which
+//!   method runs which: `model::noise::support`); resetting rules behind [`model::Reset`]; validated [`Params`]
 //!   and velocity bounds (Eqs. (8)-(10)).
 //! - [`sim`]: particle samplers (exact event-driven sampler; the paper's
 //!   Euler scheme, Eqs. (30)-(32)) and their mergeable observables.
@@ -27,8 +27,9 @@
 //!   equations (Sec. 2.2 with the generator's signs), particle estimators,
 //!   scans and the optimal resetting rate.
 //! - [`search`]: first passage in position (the search problem): a level
-//!   or an interval, by the exact event-driven sampler; the tail exponent
-//!   where the mean search time is infinite.
+//!   or an interval, by the exact event-driven sampler, the 2-D backward
+//!   equation, the renewal route of full resetting or the Euler scheme; the
+//!   tail exponent where the mean search time is infinite.
 //! - [`analytic`]: closed forms (linear drag; r = 0 densities, Eqs. (34)-(35)).
 //! - [`numerics`]: quadrature, root finding, Chebyshev tables, fast
 //!   elementary functions, point grids.

@@ -28,9 +28,10 @@ use std::time::Instant;
 /// The search target of `mfpt scan` and `mfpt optimize` (instead of --vt).
 #[derive(Args, Debug, Clone)]
 pub(crate) struct SearchTargetArgs {
-    /// Search target in position (instead of --vt): the first time x reaches the level L
-    /// (one-sided; with velocity-only resetting its mean is infinite: full resetting,
-    /// --reset-position, makes it finite).
+    /// Search target in position (instead of --vt): the first time x reaches the level L.
+    ///
+    /// One-sided; with velocity-only resetting its mean is infinite: full resetting,
+    /// --reset-position, makes it finite.
     #[arg(long, value_name = "L", allow_hyphen_values = true, conflicts_with_all = ["vt", "interval"])]
     pub(crate) xt: Option<f64>,
     /// Search target in position (instead of --vt): the first exit of x from the open

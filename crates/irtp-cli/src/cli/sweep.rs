@@ -1,4 +1,4 @@
-//! `irtp sweep {run, merge, status, slurm}`: parameter sweeps (library:
+//! `irtp sweep {run, merge, status, slurm, collect}`: parameter sweeps (library:
 //! [`irtp_app::sweep`]).
 
 use super::progress::Bar;
@@ -13,19 +13,86 @@ pub struct SweepArgs {
     command: SweepCommand,
 }
 
+/// The subcommands of `irtp sweep`.
 #[derive(Subcommand, Debug)]
 enum SweepCommand {
     /// Run the plan's points (those of --shard), skipping finished ones; results.csv when all are done.
+    ///
+    /// Every point of the plan's grid is one run of its command, written
+    /// under --out with its own seed (derived from the plan's seed and the
+    /// point); an interrupted or failed sweep resumes where it stopped.
+    /// --shard K/N runs every N-th point, for several machines.
+    #[command(after_help = RUN_EXAMPLES)]
     Run(RunArgs),
     /// Merge shard directories into the first one and write results.csv (exit 3 if points are missing).
+    #[command(after_help = MERGE_EXAMPLES)]
     Merge(MergeArgs),
     /// Points done, failed and missing, and the command that finishes them.
+    #[command(after_help = STATUS_EXAMPLES)]
     Status(StatusArgs),
     /// Write (and with --submit, submit) a SLURM job array and its merge job.
+    ///
+    /// One array task per point (or per bundle of points, within
+    /// --max-tasks), split into several arrays above the cluster's
+    /// MaxArraySize, and a merge job that runs after them; --missing
+    /// resubmits only the tasks whose points are missing.
+    #[command(after_help = SLURM_EXAMPLES)]
     Slurm(SlurmArgs),
     /// The sweep as one dataset file over the plan's axes: netCDF, zarr or CSV (through the Python module).
+    #[command(after_help = COLLECT_EXAMPLES)]
     Collect(CollectArgs),
 }
+
+/// The opening of `irtp sweep --help`, naming the commands a plan may
+/// sweep ([`sweep::plan::SWEEPABLE`]).
+pub fn long_about() -> String {
+    format!(
+        "Parameter sweeps from a TOML plan: one command ({}) over a grid of its flags \
+         (docs/sweeps.md, examples/sweeps/), run here (sharded, resumable) or as SLURM job \
+         arrays, merged into one results.csv and collected as an xarray dataset.",
+        sweep::plan::SWEEPABLE.join(", ")
+    )
+}
+
+/// The examples of `irtp sweep --help` (run by the tests, as those below).
+pub const EXAMPLES: &str = "\
+Examples:
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep   # the r = 0 regimes over (Sigma, lambda)
+  irtp sweep status runs/sweep
+  irtp plot runs/sweep                             # a heat map of the first result";
+
+/// The examples of `irtp sweep run --help`.
+const RUN_EXAMPLES: &str = "\
+Examples:
+  irtp sweep run examples/sweeps/fp_stationary.toml --out runs/sweep-fp
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep --shard 1/2   # half the points";
+
+/// The examples of `irtp sweep merge --help`.
+const MERGE_EXAMPLES: &str = "\
+Examples:
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep --shard 1/2
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep-2 --shard 2/2
+  irtp sweep merge runs/sweep runs/sweep-2         # runs/sweep/results.csv";
+
+/// The examples of `irtp sweep status --help`.
+const STATUS_EXAMPLES: &str = "\
+Examples:
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep
+  irtp sweep status runs/sweep                     # exit 3 while points are missing";
+
+/// The examples of `irtp sweep slurm --help`.
+const SLURM_EXAMPLES: &str = "\
+Examples:
+  irtp sweep slurm examples/sweeps/mfpt.toml --out runs/sweep-mfpt --time 00:30:00 --dry-run
+  irtp sweep slurm examples/sweeps/mfpt.toml --out runs/sweep-mfpt --time 00:30:00 --max-array 1001 --submit";
+
+/// The examples of `irtp sweep collect --help` (the Python module with its
+/// xarray extra: pip install './python[xarray]').
+const COLLECT_EXAMPLES: &str = "\
+Examples:
+  irtp sweep run examples/sweeps/analytic.toml --out runs/sweep
+  irtp sweep collect runs/sweep --out runs/sweep.nc              # netCDF, for xarray
+  irtp sweep collect runs/sweep --format csv --out runs/sweep-csv";
 
 /// `irtp sweep collect`: the Python module's `python -m irtp collect`, whose
 /// libraries (xarray with h5netcdf, zarr) write these formats; the binary

@@ -29,7 +29,8 @@ const LONG_PLANS: [&str; 2] = ["fp_stationary_10k.toml", "simulate.toml"];
 /// The shards a long plan is cut into in the test: 1/40 of its points.
 const LONG_PLAN_SHARDS: usize = 40;
 
-fn root() -> PathBuf {
+/// The repository root.
+pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
@@ -97,7 +98,7 @@ fn commands(text: &str) -> Vec<(usize, Vec<String>)> {
 }
 
 /// Shell words of `s` up to an unquoted `#` comment.
-fn words(s: &str) -> Vec<String> {
+pub fn words(s: &str) -> Vec<String> {
     let mut lexer = shlex::Shlex::new(s);
     let mut w: Vec<String> = (&mut lexer).take_while(|w| !w.starts_with('#')).collect();
     assert!(!lexer.had_error, "unbalanced quotes in {s}");
@@ -106,8 +107,9 @@ fn words(s: &str) -> Vec<String> {
 }
 
 /// The command as the test runs it (see the module doc); `dirs` maps each
-/// documented output directory to its temporary one.
-fn adapt(args: &[String], tmp: &Path, dirs: &mut HashMap<String, PathBuf>) -> Vec<String> {
+/// documented output directory to its temporary one (its extension kept:
+/// `--out fig.svg`).
+pub fn adapt(args: &[String], tmp: &Path, dirs: &mut HashMap<String, PathBuf>) -> Vec<String> {
     let mut out = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -115,9 +117,12 @@ fn adapt(args: &[String], tmp: &Path, dirs: &mut HashMap<String, PathBuf>) -> Ve
             "--out" => {
                 let doc = it.next().expect("--out takes a directory").clone();
                 let n = dirs.len();
+                let ext = Path::new(&doc)
+                    .extension()
+                    .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
                 let dir = dirs
                     .entry(doc)
-                    .or_insert_with(|| tmp.join(format!("out{n}")));
+                    .or_insert_with(|| tmp.join(format!("out{n}{ext}")));
                 out.extend(["--out".to_string(), dir.display().to_string()]);
             }
             "--particles" => {
@@ -139,7 +144,7 @@ fn adapt(args: &[String], tmp: &Path, dirs: &mut HashMap<String, PathBuf>) -> Ve
 
 /// Run one documented command; panics with its place and stderr on a
 /// non-zero exit.
-fn run(place: &str, args: &[String]) {
+pub fn run(place: &str, args: &[String]) {
     let t0 = std::time::Instant::now();
     let o = Command::new(BIN)
         .args(args)

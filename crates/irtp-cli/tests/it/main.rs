@@ -17,6 +17,7 @@ mod fp_cli;
 mod fp_msd;
 mod fp_protocols_transient;
 mod fpt_distribution;
+mod help;
 mod hostile;
 #[cfg(unix)]
 mod interrupt;

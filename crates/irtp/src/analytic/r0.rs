@@ -640,7 +640,8 @@ impl R0Density {
             return Err(Error::invalid(
                 "rate",
                 p.rate(),
-                "0 (the closed-form density exists only without resetting)",
+                "0 (the closed-form density exists only without resetting; with linear drag the \
+                 moments at any r)",
             ));
         }
         Self::new(p.drag(), p.sigma(), p.lambda())

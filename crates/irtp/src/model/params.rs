@@ -398,7 +398,8 @@ impl Params {
 
     /// Refuse what `solver` does not run: every feature of the schedule
     /// is looked up in [`support::supports`]; the first one missing is an
-    /// error naming its flag, the solver and the methods that run it.
+    /// error naming its flag, the solver and the first command that runs it
+    /// (the whole list, [`support::runners`], is in `--help` of the flag).
     /// A noise other than the paper's is looked up in
     /// [`noise_support::check`] first.
     pub fn require(&self, solver: Solver) -> Result<()> {
@@ -407,13 +408,15 @@ impl Params {
         }
         for f in self.schedule.features() {
             if !support::supports(solver, f) {
+                let groups = support::runner_groups(f);
+                let first = groups.first().map_or("no method", String::as_str);
                 return Err(Error::invalid(
                     f.flag(),
                     self.schedule.spec_of(f),
                     format!(
-                        "a protocol that {solver} runs ({} runs in: {})",
+                        "a protocol that {solver} runs ({} runs in {} and more: see --help)",
                         f.describe(),
-                        support::runners(f)
+                        first
                     ),
                 ));
             }

@@ -173,7 +173,7 @@ impl SearchProblem {
     /// side of L as x0, or inside (a, b)). NaN fails every check.
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
         if let Some(m) = params.noise() {
-            crate::model::noise::support::refuse("the search (mfpt --xt/--interval)", m)?;
+            crate::model::noise::support::refuse("a search (--xt, --interval)", m)?;
         }
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;

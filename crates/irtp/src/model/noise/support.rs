@@ -119,7 +119,7 @@ pub fn refuse(method: &str, noise: &NoiseModel) -> Result<()> {
     Err(Error::invalid(
         name,
         value,
-        format!("the paper's noise at temperature 0 for {method}; {RUNS_IT}"),
+        format!("the paper's noise at T = 0 for {method}; {RUNS_IT}"),
     ))
 }
 

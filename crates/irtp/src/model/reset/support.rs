@@ -62,7 +62,7 @@ impl Solver {
             Solver::MfptEuler => "mfpt --method euler",
             Solver::FptDistribution => "mfpt distribution",
             Solver::MfptOptimize => "mfpt optimize",
-            Solver::ClosedForm => "analytic and the linear closed forms",
+            Solver::ClosedForm => "analytic's closed forms",
         }
     }
 }
@@ -164,13 +164,24 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
     }
 }
 
-/// The solvers that run `feature`, for messages, the methods of one
+/// The solvers that run `feature`, for `--help`, the methods of one
 /// command together: `simulate (exact, euler), fp transient, mfpt (exact,
 /// euler)`.
 pub fn runners(feature: Feature) -> String {
+    let list = runner_groups(feature);
+    if list.is_empty() {
+        "no method yet".into()
+    } else {
+        list.join(", ")
+    }
+}
+
+/// The groups of [`runners`], in the order of [`Solver::ALL`]: one per
+/// command, its methods in parentheses (`simulate (exact, euler)`).
+pub fn runner_groups(feature: Feature) -> Vec<String> {
     let mut groups: Vec<(&str, Vec<&str>)> = Vec::new();
     for s in Solver::ALL.iter().filter(|s| supports(**s, feature)) {
-        let command = s.command().trim_end_matches(" and the linear closed forms");
+        let command = s.command().trim_end_matches("'s closed forms");
         let (name, method) = match command.split_once(" --method ") {
             Some((name, method)) => (name, Some(method)),
             None => (command, None),
@@ -180,16 +191,11 @@ pub fn runners(feature: Feature) -> String {
             None => groups.push((name, method.into_iter().collect())),
         }
     }
-    let list: Vec<String> = groups
+    groups
         .iter()
         .map(|(name, methods)| match methods.is_empty() {
             true => name.to_string(),
             false => format!("{name} ({})", methods.join(", ")),
         })
-        .collect();
-    if list.is_empty() {
-        "no method yet".into()
-    } else {
-        list.join(", ")
-    }
+        .collect()
 }
