@@ -6,6 +6,7 @@ pub mod keys;
 pub mod noise;
 pub mod params;
 pub mod reset;
+pub mod support_table;
 
 pub use drag::{Drag, DragLaw, FlowMap};
 pub use noise::{Noise, NoiseKind, NoiseModel};

@@ -465,3 +465,29 @@ fn every_law_family_is_in_the_matrix() {
         );
     }
 }
+
+/// docs/reference/support.md carries the table the methods consult,
+/// rendered by `irtp::model::support_table::markdown` between its markers;
+/// `IRTP_BLESS=1` rewrites the block.
+#[test]
+fn the_support_page_is_the_code_s_table() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/reference/support.md");
+    let page = std::fs::read_to_string(&path).expect("docs/reference/support.md");
+    let (begin, end) = (
+        "<!-- generated: support table -->\n",
+        "<!-- end of the generated table -->",
+    );
+    let a = page.find(begin).expect("the begin marker") + begin.len();
+    let b = page.find(end).expect("the end marker");
+    let table = irtp::model::support_table::markdown();
+    if std::env::var_os("IRTP_BLESS").is_some() {
+        std::fs::write(&path, format!("{}{table}{}", &page[..a], &page[b..])).unwrap();
+        return;
+    }
+    assert_eq!(
+        &page[a..b],
+        table,
+        "docs/reference/support.md is stale: rerun with IRTP_BLESS=1"
+    );
+}

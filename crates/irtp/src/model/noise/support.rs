@@ -41,6 +41,11 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting); \
     mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting)";
 
+/// What the closed forms of `irtp analytic` run of a noise model other
+/// than the paper's: [`supports`] answers `false` for them, as
+/// [`crate::analytic::noise`] checks its own cases.
+pub const CLOSED_FORMS: &str = "linear drag; T = 0, r = 0: asymmetric telegraph";
+
 /// What a refusal of a noise model says runs it (one line; [`RUNNERS`],
 /// the full list, is in `--help` of `--noise` and docs/reference/support.md).
 pub const RUNS_IT: &str = "simulate and fp run any noise (see --help of --noise)";
