@@ -156,3 +156,47 @@ fn fp_stationary_reports_the_d_eff_error() {
         assert!(text.contains("D_eff = ") && text.contains(" ± "), "{text}");
     }
 }
+
+/// The samplers' atoms of a refractory hold (the paper's noise, `--refractory
+/// exp:mean=M`: mass r M/(1 + r M) at v_r) and of the pause (Euler), against
+/// their closed forms: the exact sampler within the Bonferroni bound of its
+/// standard errors; Euler within it plus r dt (the step of each reset is
+/// held on the time grid: an O(r dt) shift of the held time).
+#[test]
+fn samplers_report_refractory_and_pause_atoms() {
+    let hold = [
+        "--drag",
+        "linear",
+        "--sigma",
+        "1",
+        "--lambda",
+        "0.3",
+        "--rate",
+        "2",
+        "--refractory",
+        "exp:mean=0.5",
+        "--reset-velocity",
+        "0.2",
+    ];
+    let euler = ["--method", "euler", "--dt", "0.001"];
+    // (model flags, method flags, v_r, closed form, bias bound)
+    type Case<'a> = (&'a [&'a str], &'a [&'a str], f64, f64, f64);
+    let cases: [Case; 3] = [
+        (&hold, &[], 0.2, 0.5, 0.0),
+        (&hold, &euler, 0.2, 0.5, 2.0 * 0.001),
+        (&MODEL, &euler, 0.0, ATOM, 1.0 * 0.001),
+    ];
+    let z = stats::bonferroni_z(cases.len());
+    for (model, method, v_r, want, bias) in cases {
+        let mut a = vec!["simulate", "--particles", "4000", "--json"];
+        a.extend(model);
+        a.extend(method);
+        let (v, m, e) = atom(&json(&irtp(&a)));
+        assert_eq!(v, v_r, "{a:?}");
+        assert!(e > 0.0, "{a:?}");
+        assert!(
+            (m - want).abs() <= z * e + bias,
+            "{a:?}: {m} ± {e} vs {want}"
+        );
+    }
+}
