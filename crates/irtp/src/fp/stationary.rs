@@ -95,7 +95,8 @@ pub struct Stationary {
     /// velocity autocorrelation, and the CLI does not report it.
     pub d_eff: f64,
     /// Error estimate of `d_eff` from the meshes cells/4, cells/2, cells
-    /// ([`extrapolation_error`]; the N-state solver's Eq. (N27) estimate);
+    /// (twice the change of the first-order extrapolation from the meshes
+    /// cells/4, cells/2, where it converges; the N-state solver's Eq. (N27));
     /// None without extrapolation, with fewer than 32 cells, or where
     /// D_eff is infinite (λ = 0).
     pub d_eff_err: Option<f64>,
@@ -350,7 +351,7 @@ fn coarse_moments(p: &Params, mesh: Mesh, cells: usize) -> Result<Moments> {
 /// (6 times the model's error: E₀'s error may pass near 0 where the
 /// density has a kink between nodes, at v_r); otherwise (not yet
 /// asymptotic) 2 |d₁| + 2 |E₁ - E₀|. Never below 1e-14 |x₂|.
-pub fn extrapolation_error(x0: f64, x1: f64, x2: f64) -> f64 {
+fn extrapolation_error(x0: f64, x1: f64, x2: f64) -> f64 {
     let (d0, d1) = (x1 - x0, x2 - x1);
     let gap = ((2.0 * x2 - x1) - (2.0 * x1 - x0)).abs();
     let floor = 1e-14 * x2.abs();
