@@ -154,9 +154,9 @@ class Result:
     def __getattr__(self, name: str) -> Any: ...
     def to_dict(self, lists: bool = False) -> Dict[str, Any]: ...
     def to_pandas(self, table: Optional[str] = None) -> Any: ...
-    # An xarray.Dataset (xarray is optional: pip install 'irtp[xarray]').
+    # An xarray.Dataset (xarray is optional: pip install './python[xarray]').
     def to_xarray(self) -> Any: ...
-    # A matplotlib Axes (matplotlib is optional: pip install 'irtp[plot]').
+    # A matplotlib Axes (matplotlib is optional: pip install './python[plot]').
     def plot(self, panel: Optional[int] = None, ax: Any = None) -> Any: ...
 
 class SimulateResult(Result):
@@ -187,6 +187,8 @@ class SimulateResult(Result):
     x2_final_err: float
     d_eff_msd: Optional[float]
     d_eff_msd_err: Optional[float]
+    # point masses of the stationary law: [{"v", "mass", "err"}], not in p
+    atoms: List[Dict[str, Any]]
     wall_time_s: float
 
 class AnalyticResult(Result):
@@ -212,6 +214,9 @@ class FpStationaryResult(Result):
     v2: float
     v_mean: float
     d_eff: float
+    d_eff_err: Optional[float]
+    # point masses of the stationary law: [{"v", "mass", "err"}], not in p
+    atoms: List[Dict[str, Any]]
     cells: int
     mass: float
 

@@ -1,6 +1,6 @@
 """Pictures of results: ``Result.plot()`` and :func:`irtp.plot_sweep`.
 
-matplotlib is an optional dependency (``pip install 'irtp[plot]'``),
+matplotlib is an optional dependency (``pip install './python[plot]'``),
 imported only when a picture is asked for, as pandas is for
 ``to_pandas()``. The figures are those of ``irtp plot DIR`` (the CLI), with
 the same look: axes and legends in the paper's (dimensionless) symbols, the

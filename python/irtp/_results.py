@@ -202,7 +202,7 @@ class Result:
 
     def to_xarray(self) -> Any:
         """The result as an ``xarray.Dataset`` (xarray is imported only here;
-        ``pip install 'irtp[xarray]'``).
+        ``pip install './python[xarray]'``).
 
         Each table's first column is a dimension coordinate (``t``, ``v``,
         ``x``, ``v0``, ...) and its other columns are variables along it,
@@ -222,7 +222,7 @@ class Result:
 
     def plot(self, panel: Optional[int] = None, ax: Any = None) -> Any:
         """Draw the result's natural figure with matplotlib (imported only
-        here; ``pip install 'irtp[plot]'``): the figure ``irtp plot DIR``
+        here; ``pip install './python[plot]'``): the figure ``irtp plot DIR``
         draws (densities with ±1 standard-error bands, moments on log axes,
         snapshots, survival curves, tau against the scanned quantity).
 

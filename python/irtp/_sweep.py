@@ -55,7 +55,7 @@ def toml_loads(text: str) -> Dict[str, Any]:
             import tomli as tomllib  # type: ignore[no-redef]
         except ImportError as e:
             raise ImportError("reading a sweep plan on Python < 3.11 needs tomli: "
-                              "pip install 'irtp[xarray]' (or pip install tomli)") from e
+                              "pip install './python[xarray]' in the irtp repository (or pip install tomli)") from e
     return tomllib.loads(text)
 
 
@@ -339,7 +339,7 @@ def netcdf_engine() -> str:
         except ImportError:
             continue
     raise ImportError("writing netCDF needs h5netcdf and h5py (or netCDF4): "
-                      "pip install 'irtp[xarray]'")
+                      "pip install './python[xarray]' in the irtp repository")
 
 
 def write_csv(ds: Any, out: pathlib.Path, axes: Sequence[str]) -> None:

@@ -1,6 +1,6 @@
 """Results as labelled arrays: ``Result.to_xarray()``.
 
-xarray is an optional dependency (``pip install 'irtp[xarray]'``), imported
+xarray is an optional dependency (``pip install './python[xarray]'``), imported
 only when a Dataset is asked for, as pandas is for ``to_pandas()``.
 
 The rules (docs/python.md, "Labelled arrays and sweeps as one dataset"):
@@ -97,8 +97,8 @@ def require_xarray() -> Any:
         import xarray
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError(
-            "irtp's labelled arrays need xarray: pip install 'irtp[xarray]' "
-            "(xarray, pandas, h5netcdf, zarr), or pip install xarray"
+            "irtp's labelled arrays need xarray: pip install './python[xarray]' "
+            "in the irtp repository (xarray, pandas, h5netcdf, zarr), or pip install xarray"
         ) from e
     return xarray
 

@@ -213,6 +213,16 @@ fn drag_laws<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
     Ok(list)
 }
 
+/// The `irtp` command line (`irtp_cli::run_cli`, the binary's own entry)
+/// on `argv` (the program name first), off the GIL; its exit status. The
+/// console script `irtp` of the wheel (`irtp._cli:main`) runs it, so
+/// `pip install ./python` alone installs the whole tool.
+#[pyfunction]
+fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
+    let args = argv.into_iter().map(Into::into).collect();
+    py.detach(|| irtp_cli::run_cli(args))
+}
+
 /// The module `irtp._irtp`.
 #[pymodule]
 fn _irtp(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -224,5 +234,6 @@ fn _irtp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(describe, m)?)?;
     m.add_function(wrap_pyfunction!(about, m)?)?;
     m.add_function(wrap_pyfunction!(drag_laws, m)?)?;
+    m.add_function(wrap_pyfunction!(cli_main, m)?)?;
     Ok(())
 }

@@ -166,7 +166,9 @@ def test_load_refuses_what_is_not_a_run(tmp_path):
 def test_missing_xarray_names_the_extra(monkeypatch):
     res = irtp.fp_stationary(cells=200)
     monkeypatch.setitem(sys.modules, "xarray", None)
-    with pytest.raises(ImportError, match=r"irtp\[xarray\]"):
+    # The install command that works from the repository (the package is
+    # on no index): pip install './python[xarray]'.
+    with pytest.raises(ImportError, match=r"pip install '\./python\[xarray\]' in the irtp repository"):
         res.to_xarray()
 
 

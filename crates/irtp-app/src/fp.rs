@@ -1,7 +1,7 @@
 //! `irtp fp stationary` and `irtp fp transient`: Fokker-Planck solvers.
 
 use super::common::{ModelArgs, OutputArgs};
-use super::format::{fmt_digits, fmt_sig};
+use super::format::{fmt_digits, fmt_pm, fmt_sig};
 use super::{finish, open_out, Context, Outcome, Results, Table};
 use clap::{Args, Subcommand, ValueEnum};
 use irtp::fp::{self, Mesh, StationaryOptions, TransientOptions};
@@ -276,7 +276,9 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         "v2": s.v2,
         "v_mean": s.v_mean,
         "d_eff": s.d_eff,
+        "d_eff_err": s.d_eff_err,
         "refractory_mass": s.refractory_mass,
+        "atoms": atoms_json(&s.atoms),
         "cells": s.cells,
         "mass": s.mass,
         "mesh": s.mesh,
@@ -294,6 +296,7 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         (Some(x1), Some(x2)) => {
             let obj = summary.as_object_mut().expect("a JSON object");
             obj.remove("d_eff");
+            obj.remove("d_eff_err");
             obj.insert("x_mean".into(), json!(x1));
             obj.insert("x2".into(), json!(x2));
             format!(
@@ -302,7 +305,7 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
                 fmt_digits(x2, 12)
             )
         }
-        _ => format!("D_eff = {}", fmt_digits(s.d_eff, 12)),
+        _ => format!("D_eff = {}", fmt_estimate(s.d_eff, s.d_eff_err)),
     };
     // The refractory point mass as a last row of zero width.
     let point = (s.refractory_mass > 0.0).then(|| {
@@ -324,11 +327,7 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         ),
         Some(n) => noise_density(&s, n),
     };
-    let held = if s.refractory_mass > 0.0 {
-        format!("  point mass = {}", fmt_digits(s.refractory_mass, 12))
-    } else {
-        String::new()
-    };
+    let held = atoms_text(&s.atoms);
     let text = format!(
         "<v^2> = {}  <v> = {}  {diffusion}{held}  ({} cells, {} mesh{})\n",
         fmt_digits(s.v2, 12),
@@ -358,6 +357,39 @@ pub fn stationary(a: &StationaryArgs, ctx: &Context) -> irtp::Result<Outcome> {
         wall_time_s: wall,
     };
     finish("fp stationary", results, out, ctx)
+}
+
+/// The `atoms` field of `results`: [{"v", "mass", "err"}] (an error that
+/// is not finite as null).
+pub(crate) fn atoms_json(atoms: &[irtp::model::VelocityAtom]) -> serde_json::Value {
+    let err = |e: f64| e.is_finite().then_some(e);
+    atoms
+        .iter()
+        .map(|a| json!({"v": a.v, "mass": a.mass, "err": err(a.err)}))
+        .collect()
+}
+
+/// The atoms on the text line: `  atom at v = 0: 0.11111 ± 0.00002`.
+pub(crate) fn atoms_text(atoms: &[irtp::model::VelocityAtom]) -> String {
+    atoms
+        .iter()
+        .map(|a| {
+            format!(
+                "  atom at v = {}: {}",
+                fmt_sig(a.v),
+                fmt_estimate(a.mass, Some(a.err))
+            )
+        })
+        .collect()
+}
+
+/// A mesh-extrapolated value: with its error estimate as `x ± err`
+/// (digits the error supports); without one, to 12 digits.
+fn fmt_estimate(x: f64, err: Option<f64>) -> String {
+    match err {
+        Some(e) if e > 0.0 && e.is_finite() && x.is_finite() => fmt_pm(x, e),
+        _ => fmt_digits(x, 12),
+    }
 }
 
 /// The density table of the N-state solver: v, p, one column p_s per

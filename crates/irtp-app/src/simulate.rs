@@ -498,6 +498,12 @@ fn text_report(a: &SimulateArgs, c: &Config, s: &SimSummary, wall: f64) -> Strin
         fmt_pm(s.v2_final, s.v2_final_err),
         fmt_pm(s.x2_final, s.x2_final_err)
     );
+    if !s.atoms.is_empty() {
+        text += &format!(
+            "point mass of the stationary law (not in density.csv): {}\n",
+            super::fp::atoms_text(&s.atoms).trim_start()
+        );
+    }
     if let (Some([lo, hi]), Some(out), Some(err)) = (s.x_range, s.x_outside, s.x_outside_err) {
         text += &format!(
             "position resetting: P_s(x) at t = {t_max} on [{}, {}] (position.csv), mass outside {}; <x> = {}\n",

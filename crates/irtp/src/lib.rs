@@ -8,8 +8,9 @@
 //! at rate r the velocity is reset to v_r (position and noise state kept).
 //!
 //! The core of the irtp workspace. Crates, with dependencies running one way
-//! (enforced by Cargo): irtp-cli (the `irtp` binary) and irtp-python →
-//! irtp-paper (the paper's figures, `irtp reproduce`) → irtp-app (the
+//! (enforced by Cargo): irtp-python → irtp-cli (the `irtp` command line:
+//! the binary, and the library function the wheel's `irtp` console script
+//! runs) → irtp-paper (the paper's figures, `irtp reproduce`) → irtp-app (the
 //! commands as library calls, output directories with provenance, sweeps) →
 //! this crate. Modules here, one per concept ({search, mfpt, fp, sim, analytic} →
 //! model → numerics):

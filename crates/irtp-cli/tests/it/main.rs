@@ -1,6 +1,7 @@
 //! The one integration-test binary of the `irtp` program, run as a user runs it (flags, outputs, exit codes), and the cross-method checks that go through it.
 //! Each module is one former test file; shared helpers live in `common`.
 
+mod atoms;
 mod censoring;
 mod cli_analytic;
 mod cli_errors;

@@ -6,8 +6,8 @@ use super::refractory::Held;
 use super::solve::{solve_free, solve_reset};
 use crate::error::{Error, Result};
 use crate::model::reset::NoiseAtReset;
-use crate::model::reset::Solver;
-use crate::model::Params;
+use crate::model::reset::{Reset, Solver};
+use crate::model::{Params, VelocityAtom};
 use serde::{Deserialize, Serialize};
 
 /// Smallest number of cells accepted.
@@ -94,12 +94,23 @@ pub struct Stationary {
     /// the position does not diffuse: this is then only the integral of the
     /// velocity autocorrelation, and the CLI does not report it.
     pub d_eff: f64,
+    /// Error estimate of `d_eff` from the meshes cells/4, cells/2, cells
+    /// (twice the change of the first-order extrapolation from the meshes
+    /// cells/4, cells/2, where it converges; the N-state solver's Eq. (N27));
+    /// None without extrapolation, with fewer than 32 cells, or where
+    /// D_eff is infinite (λ = 0).
+    pub d_eff_err: Option<f64>,
     /// The refractory point mass q+ + q- at the held velocity (v_r, or
     /// spread as the random target), fine mesh; 0 without a refractory
     /// period. `p` is the continuous part only: Σ p Δv + this = 1.
     pub refractory_mass: f64,
     /// Its + and - parts.
     pub refractory: [f64; 2],
+    /// The point masses of the stationary law (docs/output-formats.md,
+    /// "atoms"): the refractory mass at a point target v_r (exact on every
+    /// mesh: its error is rounding), or the mass a noise state holds at
+    /// v_r ([`crate::model::atoms`]); `p` is the density without them.
+    pub atoms: Vec<VelocityAtom>,
     /// Stationary `<x>` under position resetting (extrapolated if
     /// `extrapolated`), else None.
     pub x_mean: Option<f64>,
@@ -111,6 +122,10 @@ pub struct Stationary {
     pub fine: Moments,
     /// Observables on the coarse mesh (when extrapolating).
     pub coarse: Option<Moments>,
+    /// Observables on the mesh of cells/4 that checks the extrapolation
+    /// (paper's noise, when extrapolating with cells >= 32; the N-state
+    /// solver lists its meshes in `noise`).
+    pub coarsest: Option<Moments>,
     /// With a noise model (the N-state solver, Eqs. (N20)-(N27)): the
     /// per-state densities, per-state means, error estimates and the
     /// domain; None for the paper's noise.
@@ -302,6 +317,53 @@ fn check_invariants(params: &Params, v2: f64, d_eff: f64) -> Result<()> {
     Ok(())
 }
 
+/// The refractory point mass `q` at a point target v_r as an atom (none
+/// for a random target, whose held phase is spread as its law). Summed
+/// over the states, K q = W r M reads κ q = r (1 - q): no mesh quantity
+/// enters, and the error estimate is the change from the coarse mesh's
+/// `coarse` (rounding; at least 1e-14 q).
+fn refractory_atoms(p: &Params, q: f64, coarse: Option<f64>) -> Vec<VelocityAtom> {
+    match p.reset().point() {
+        Some(v) if q > 0.0 => vec![VelocityAtom {
+            v,
+            mass: q,
+            err: coarse.map_or(0.0, |c| (q - c).abs()).max(1e-14 * q),
+        }],
+        _ => Vec::new(),
+    }
+}
+
+/// The observables on the (unrefined) mesh of `cells` cells.
+fn coarse_moments(p: &Params, mesh: Mesh, cells: usize) -> Result<Moments> {
+    crate::parallel::check_stop()?;
+    let g = make_grid(p, mesh, cells, 0)?;
+    let h = Held::new(&g, p);
+    let (m, q) = stationary_masses(&g, p, h.as_ref())?;
+    Ok(moments(&g, p, h.as_ref(), &m, q))
+}
+
+/// Error estimate of the first-order extrapolation E₁ = 2 x₂ - x₁ from
+/// the values x₀, x₁, x₂ on the meshes N/4, N/2, N. With x_h = x + a h +
+/// b h², E₁ - x = -2 b h² and E₀ = 2 x₁ - x₀ has 4 times that error, so
+/// |E₁ - E₀| is 3 times E₁'s error. Where the changes d₀ = x₁ - x₀,
+/// d₁ = x₂ - x₁ shrink like h^p with 1/2 <= p <= 3 (1.4 <= d₀/d₁ <= 8,
+/// the N-state solver's check, Eq. (N27)) the estimate is 2 |E₁ - E₀|
+/// (6 times the model's error: E₀'s error may pass near 0 where the
+/// density has a kink between nodes, at v_r); otherwise (not yet
+/// asymptotic) 2 |d₁| + 2 |E₁ - E₀|. Never below 1e-14 |x₂|.
+fn extrapolation_error(x0: f64, x1: f64, x2: f64) -> f64 {
+    let (d0, d1) = (x1 - x0, x2 - x1);
+    let gap = ((2.0 * x2 - x1) - (2.0 * x1 - x0)).abs();
+    let floor = 1e-14 * x2.abs();
+    let rho = d0 / d1;
+    let est = if (1.4..=8.0).contains(&rho) {
+        2.0 * gap
+    } else {
+        2.0 * (d1.abs() + gap)
+    };
+    est.max(floor)
+}
+
 /// Solve the stationary forward equations directly (no time stepping), in O(N).
 ///
 /// With a noise model (`params.noise()` is Some) the N-state solver runs
@@ -324,14 +386,13 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
     crate::parallel::check_stop()?;
     let fine = moments(&g, params, held.as_ref(), &m, q);
     crate::parallel::check_stop()?;
-    let coarse = if opts.extrapolate {
-        let gc = make_grid(params, opts.mesh, opts.cells / 2, 0)?;
-        let hc = Held::new(&gc, params);
-        let (mc, qc) = stationary_masses(&gc, params, hc.as_ref())?;
-        Some(moments(&gc, params, hc.as_ref(), &mc, qc))
-    } else {
-        None
-    };
+    let coarse = opts
+        .extrapolate
+        .then(|| coarse_moments(params, opts.mesh, opts.cells / 2))
+        .transpose()?;
+    let coarsest = (opts.extrapolate && opts.cells >= 32)
+        .then(|| coarse_moments(params, opts.mesh, opts.cells / 4))
+        .transpose()?;
     // ∞ (λ = 0) stays ∞.
     let ex = |f: f64, c: f64| if f.is_finite() { 2.0 * f - c } else { f };
     let (v_mean, v2, d_eff) = match &coarse {
@@ -347,6 +408,12 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         None => fine.x_moments.map(|f| f[i]),
     };
     let (x_mean, x2) = (xm(0), xm(1));
+    let d_eff_err = match (&coarse, &coarsest) {
+        (Some(c), Some(cc)) if d_eff.is_finite() => {
+            Some(extrapolation_error(cc.d_eff, c.d_eff, fine.d_eff))
+        }
+        _ => None,
+    };
     for (name, x) in [
         ("<v>", v_mean),
         ("<v^2>", v2),
@@ -380,13 +447,16 @@ pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationar
         v_mean,
         v2,
         d_eff,
+        d_eff_err,
         refractory_mass: q[0] + q[1],
         refractory: q,
+        atoms: refractory_atoms(params, q[0] + q[1], coarse.map(|c| c.refractory_mass)),
         x_mean,
         x2,
         extrapolated: coarse.is_some(),
         fine,
         coarse,
+        coarsest,
         noise: None,
     })
 }

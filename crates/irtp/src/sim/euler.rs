@@ -730,6 +730,8 @@ impl<D: Drag> Kernel<'_, D> {
         let mut periodic_step = (next_periodic / dt).round();
         let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
         let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        // Steps held at the reset velocity (the law's atom), in no bin.
+        let mut at_atom = 0.0f64;
         for n in 0..plan.steps {
             // Stopped: the cancelled reduction discards this chunk.
             if crate::parallel::stop_due(n) {
@@ -743,7 +745,11 @@ impl<D: Drag> Kernel<'_, D> {
             if n >= plan.burn_in_step {
                 sv += v;
                 sv2 += v * v;
-                occ[self.bin(v)] += 1.0;
+                if hold > 0 && obs.is_atom(v) {
+                    at_atom += 1.0;
+                } else {
+                    occ[self.bin(v)] += 1.0;
+                }
             }
             x += v * dt;
             let poisson = ev.reset(n, &mut rng);
@@ -777,6 +783,7 @@ impl<D: Drag> Kernel<'_, D> {
         }
         let w = (plan.steps - plan.burn_in_step) as f64;
         obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
+        obs.finish_atom(at_atom, w, v);
         obs.record_final_position(x);
         obs.steps += plan.steps;
     }

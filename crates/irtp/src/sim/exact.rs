@@ -551,6 +551,7 @@ impl<F: FlowMap> Sampler<F> {
             int_v: 0.0,
             int_v2: 0.0,
             msd: 0.0,
+            at_atom: 0.0,
             events: 0,
             done: false,
             held: false,
@@ -690,7 +691,8 @@ impl<F: FlowMap> Sampler<F> {
     }
 
     /// A held segment (refractory period) from p.t to `t_end`: v constant
-    /// at p.a.v, x linear in t, the held velocity's bin occupied.
+    /// at p.a.v, x linear in t, the held velocity's bin (or its atom)
+    /// occupied.
     fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch, t_end: f64) {
         let (t, v) = (p.t, p.a.v);
         while p.k < self.times.len() && self.times[p.k] <= t_end {
@@ -703,7 +705,11 @@ impl<F: FlowMap> Sampler<F> {
             let dw = t_end - t.max(self.burn_in);
             p.int_v += v * dw;
             p.int_v2 += v * v * dw;
-            sc.occ[obs.bin_of(v)] += dw;
+            if obs.is_atom(v) {
+                p.at_atom += dw;
+            } else {
+                sc.occ[obs.bin_of(v)] += dw;
+            }
         }
         p.x += v * (t_end - t);
         p.t = t_end;
@@ -797,7 +803,12 @@ fn flow_segment<F: FlowMap, T: StateTables<F>, S: Occupation>(
         let (j1, j2) = (w.q[0] - b.q[0], w.q[1] - b.q[1]);
         p.int_v += vs * dw - j1;
         p.int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-        occupy(tab, obs, sc, si, &w, b.v, dw);
+        // Resting exactly at the law's atom: its own account, no bin.
+        if w.v == b.v && obs.is_atom(b.v) {
+            p.at_atom += dw;
+        } else {
+            occupy(tab, obs, sc, si, &w, b.v, dw);
+        }
     }
     p.x += vs * dt - (a.q[0] - b.q[0]);
     p.t = t_end;
@@ -866,6 +877,7 @@ fn close_particle(p: &Lane, obs: &mut Observables, occ: &mut [f64], window: f64)
         p.a.v,
         p.msd,
     );
+    obs.finish_atom(p.at_atom, window, p.a.v);
     obs.record_final_position(p.x);
     obs.steps += p.events;
 }
@@ -884,6 +896,8 @@ struct Lane {
     int_v: f64,
     int_v2: f64,
     msd: f64,
+    /// Time in the window spent exactly at the law's atom.
+    at_atom: f64,
     events: u64,
     done: bool,
     /// Inside a refractory period (v held at p.a.v until `hold_until`).

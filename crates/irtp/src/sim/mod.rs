@@ -412,6 +412,23 @@ pub struct Observables {
     /// otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<PositionHistogram>,
+    /// The point mass of the stationary law, if it has one
+    /// ([`crate::model::atoms::atom_velocities`]): the time spent exactly
+    /// at its velocity is counted here and in no histogram bin.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atom: Option<AtomAcc>,
+}
+
+/// Occupation of a point mass of the velocity law at `v`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AtomAcc {
+    /// The atom's velocity.
+    pub v: f64,
+    /// Per-particle fraction of the window [burn_in, t_max] spent exactly
+    /// at `v`.
+    pub time: MeanAcc,
+    /// Per-particle indicator of being exactly at `v` at t_max.
+    pub at_final: MeanAcc,
 }
 
 /// Histogram of the position at t_max on [lo, hi] (position resetting:
@@ -508,7 +525,20 @@ impl Observables {
             msd_fit_d: MeanAcc::new(),
             msd_weights: msd_fit_weights(spec.grid.times(), spec.burn_in, params),
             position: PositionHistogram::new(params, spec),
+            atom: crate::model::atoms::atom_velocities(params)
+                .first()
+                .map(|&v| AtomAcc {
+                    v,
+                    time: MeanAcc::new(),
+                    at_final: MeanAcc::new(),
+                }),
         }
+    }
+
+    /// Whether `v` is exactly the velocity of the law's atom.
+    #[inline]
+    pub fn is_atom(&self, v: f64) -> bool {
+        self.atom.as_ref().is_some_and(|a| a.v == v)
     }
 
     /// Add one particle's position at t_max to the histogram of P_s(x)
@@ -568,12 +598,33 @@ impl Observables {
             self.msd_fit_d.push(msd_d);
         }
         let w = self.bin_width();
-        let final_bin = self.bin_of(v_final);
+        // A particle at the atom at t_max is in no bin.
+        let final_bin = (!self.is_atom(v_final)).then(|| self.bin_of(v_final));
         for (b, occ) in occupation.iter_mut().enumerate() {
             self.density_time[b].push(*occ / (window * w));
-            self.density_final[b].push(if b == final_bin { 1.0 / w } else { 0.0 });
+            self.density_final[b].push(if Some(b) == final_bin { 1.0 / w } else { 0.0 });
             *occ = 0.0;
         }
+    }
+
+    /// Add one particle's time `at` (within the window of length `window`)
+    /// spent exactly at the atom, and whether it ends there; nothing
+    /// without an atom.
+    pub fn finish_atom(&mut self, at: f64, window: f64, v_final: f64) {
+        if let Some(a) = &mut self.atom {
+            a.time.push(at / window);
+            a.at_final.push(if a.v == v_final { 1.0 } else { 0.0 });
+        }
+    }
+
+    /// The atom as (velocity, time-averaged mass, its standard error), if
+    /// the law has one.
+    pub fn atom_mass(&self) -> Option<crate::model::VelocityAtom> {
+        self.atom.as_ref().map(|a| crate::model::VelocityAtom {
+            v: a.v,
+            mass: a.time.mean(),
+            err: a.time.sem(),
+        })
     }
 
     /// Merge another accumulator (same spec) into this one.
@@ -590,6 +641,10 @@ impl Observables {
         self.msd_fit_d.merge(&o.msd_fit_d);
         if let (Some(a), Some(b)) = (&mut self.position, &o.position) {
             a.merge(b);
+        }
+        if let (Some(a), Some(b)) = (&mut self.atom, &o.atom) {
+            a.time.merge(&b.time);
+            a.at_final.merge(&b.at_final);
         }
     }
 
@@ -676,6 +731,7 @@ impl Observables {
             steps: self.steps,
             d_eff_msd: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.mean()),
             d_eff_msd_err: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.sem()),
+            atoms: self.atom_mass().into_iter().collect(),
         }
     }
 }
@@ -724,4 +780,10 @@ pub struct SimSummary {
     pub d_eff_msd: Option<f64>,
     /// Its standard error (across particles).
     pub d_eff_msd_err: Option<f64>,
+    /// The point mass of the stationary law, if it has one: its velocity,
+    /// the time-averaged fraction of particles exactly there over
+    /// [burn_in, t_max] and its standard error; the density histogram
+    /// holds the rest.
+    #[serde(default)]
+    pub atoms: Vec<crate::model::VelocityAtom>,
 }

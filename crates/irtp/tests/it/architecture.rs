@@ -1,6 +1,6 @@
 //! The module layering inside the core crate, checked on the source text.
 //!
-//! Between crates Cargo enforces the direction (irtp-cli, irtp-python →
+//! Between crates Cargo enforces the direction (irtp-python → irtp-cli →
 //! irtp-paper → irtp-app → irtp); inside the core the rules it cannot see
 //! are checked here: {`search`, `mfpt`, `fp`, `sim`, `analytic`} → `model`
 //! → `numerics`. A module may import from its own layer's allowed siblings

@@ -142,3 +142,52 @@ fn d_eff_large_r_law() {
         );
     }
 }
+
+/// The paper's noise: the error estimate of D_eff bounds its distance to
+/// the closed form (Eq. (R3)) in every linear case, at several meshes, the
+/// singular edges (λ < 1, r < 1) and v_r != 0 included, and shrinks with
+/// the mesh.
+#[test]
+fn d_eff_error_estimate_bounds_the_distance_to_the_closed_form() {
+    for (s, l, r, vr) in models::LINEAR_CASES {
+        let p = models::linear(s, l, r, vr);
+        let exact = linear::d_eff(&p).unwrap();
+        let mut last = f64::INFINITY;
+        for cells in [400, 2000, 20_000] {
+            for mesh in [Mesh::Graded, Mesh::Uniform] {
+                let o = StationaryOptions {
+                    cells,
+                    mesh,
+                    extrapolate: true,
+                };
+                let st = stationary(&p, &o).unwrap();
+                let est = st.d_eff_err.unwrap();
+                let err = (st.d_eff - exact).abs();
+                let tag = format!("s={s} l={l} r={r} vr={vr} {cells} {mesh:?}");
+                println!("{tag}: error {err:.2e}, estimate {est:.2e}");
+                assert!(
+                    err <= est,
+                    "{tag}: |{} - {exact}| = {err:e} > {est:e}",
+                    st.d_eff
+                );
+                if mesh == Mesh::Graded {
+                    assert!(est < last, "{tag}: estimate {est:e} after {last:e}");
+                    last = est;
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn d_eff_error_needs_three_meshes() {
+    let p = models::linear(1.0, 0.3, 2.0, 0.0);
+    let o = |cells, extrapolate| StationaryOptions {
+        cells,
+        mesh: Mesh::Graded,
+        extrapolate,
+    };
+    assert!(stationary(&p, &o(2000, false)).unwrap().d_eff_err.is_none());
+    assert!(stationary(&p, &o(16, true)).unwrap().d_eff_err.is_none());
+    assert!(stationary(&p, &o(32, true)).unwrap().d_eff_err.is_some());
+}

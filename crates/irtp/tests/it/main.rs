@@ -13,6 +13,7 @@ mod exact_fpt;
 mod exact_mfpt;
 mod exact_r0;
 mod exact_sim;
+mod fp_atoms;
 mod fp_linear;
 mod fp_r0;
 mod fp_sim;

@@ -26,7 +26,9 @@ pub(crate) use time::{msd, transient};
 
 use super::stationary::{Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
 use crate::error::{Error, Result};
-use crate::model::Params;
+use crate::model::atoms::reset_atom_states;
+use crate::model::reset::Reset;
+use crate::model::{Params, VelocityAtom};
 use serde::{Deserialize, Serialize};
 use stationary::{richardson, solve_mesh};
 
@@ -127,6 +129,7 @@ pub(crate) fn stationary(params: &Params, opts: &StationaryOptions) -> Result<St
                 .collect()
         })
         .collect();
+    let (atoms, densities) = split_atoms(params, &sols, densities)?;
     let p = (0..n)
         .map(|i| densities.iter().map(|d| d[i]).sum())
         .collect();
@@ -170,15 +173,72 @@ pub(crate) fn stationary(params: &Params, opts: &StationaryOptions) -> Result<St
         v_mean: v_mean.0,
         v2: v2.0,
         d_eff: d_eff.0,
+        d_eff_err: extrapolated.then_some(d_eff.1),
         refractory_mass: 0.0,
         refractory: [0.0; 2],
+        atoms,
         x_mean: None,
         x2: None,
         extrapolated,
         fine: moments(&fine.moments),
         coarse: extrapolated.then(|| moments(&mo[1])),
+        coarsest: extrapolated.then(|| moments(&mo[0])),
         noise: Some(summary),
     })
+}
+
+/// The point mass at v_r of the states that hold one
+/// ([`reset_atom_states`]) and the fine-mesh densities without it. A
+/// state's atom sits in the two cells beside v_r that receive its resets
+/// (no transport crosses its fixed point); their mass is the atom plus the
+/// density's share of those cells, which vanishes with the mesh: the atom
+/// is that mass Richardson-extrapolated over the meshes N/4, N/2, N (Eq.
+/// (N27)), with its error estimate (NaN on one mesh). Each cell gives up
+/// its share of the atom (at most its mass). Refused (exit 4) unless the
+/// densities' mass and the atom's add up to 1 within the atom's error.
+fn split_atoms(
+    params: &Params,
+    sols: &[stationary::MeshSolution],
+    mut densities: Vec<Vec<f64>>,
+) -> Result<(Vec<VelocityAtom>, Vec<Vec<f64>>)> {
+    let states = reset_atom_states(params);
+    let Some(vr) = params.reset().point().filter(|_| !states.is_empty()) else {
+        return Ok((Vec::new(), densities));
+    };
+    let fine = sols.last().expect("one mesh at least");
+    let (mut mass, mut err) = (0.0, 0.0);
+    for &s in &states {
+        let x: Vec<f64> = sols.iter().map(|m| stationary::target_mass(m, s)).collect();
+        let (value, e) = match x.as_slice() {
+            [a, b, c] => {
+                let (v, e, _) = richardson(*a, *b, *c);
+                (v, e)
+            }
+            _ => (x[0], f64::NAN),
+        };
+        for &(i, f) in &fine.op.mesh.target[s] {
+            let w = fine.op.mesh.widths[i];
+            let cell = densities[s][i] * w;
+            densities[s][i] = (cell - (value * f).min(cell)) / w;
+        }
+        mass += value;
+        err += e;
+    }
+    let widths = &fine.op.mesh.widths;
+    let total: f64 = densities
+        .iter()
+        .map(|d| d.iter().zip(widths).map(|(p, w)| p * w).sum::<f64>())
+        .sum::<f64>()
+        + mass;
+    if !((total - 1.0).abs() <= err + 1e-12) {
+        return Err(Error::Numerical {
+            method: "fp stationary",
+            reason: format!(
+                "the density and the atom at v = {vr} add up to {total}, not 1 within the atom's error {err:e}"
+            ),
+        });
+    }
+    Ok((vec![VelocityAtom { v: vr, mass, err }], densities))
 }
 
 /// Σ_k Σ_s |fine_{2k,s} + fine_{2k+1,s} - coarse_{k,s}| over nested meshes.

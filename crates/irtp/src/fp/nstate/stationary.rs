@@ -74,6 +74,16 @@ pub(crate) fn solve_mesh(
     })
 }
 
+/// The mass of state `s` in the cells receiving its resets at v_r (its
+/// atom there, if it has one, plus the density's share of those cells).
+pub(crate) fn target_mass(sol: &MeshSolution, s: usize) -> f64 {
+    let ns = sol.op.mesh.states;
+    sol.op.mesh.target[s]
+        .iter()
+        .map(|&(i, _)| sol.masses[i * ns + s])
+        .sum()
+}
+
 /// A row where the null vector of A is far from 0 (middle cell, the state
 /// of largest π): pinned when r = 0.
 fn pinned_row(op: &NoiseOperator) -> usize {

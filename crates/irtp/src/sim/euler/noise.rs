@@ -374,6 +374,9 @@ impl<D: Drag> NoiseKernel<'_, D> {
         let mut st = self.enter(s0, 0, &mut rng);
         let (mut v, mut x) = (0.0f64, 0.0f64);
         let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        // Steps resting at the law's atom (a state whose fixed point it
+        // is: the step leaves v there), in no bin.
+        let mut at_atom = 0.0f64;
         for n in 0..plan.steps {
             if plan.record_steps.get(k) == Some(&n) {
                 obs.record(k, v, x);
@@ -383,7 +386,12 @@ impl<D: Drag> NoiseKernel<'_, D> {
             if n >= plan.burn_in_step {
                 sv += v;
                 sv2 += v * v;
-                occ[self.bin(v)] += 1.0;
+                let level = self.chain.levels[st.s];
+                if obs.is_atom(v) && !thermal && self.step.step(self.f, v, level, 0.0) == v {
+                    at_atom += 1.0;
+                } else {
+                    occ[self.bin(v)] += 1.0;
+                }
             }
             x += v * dt;
             if ev.reset(n, &mut rng) {
@@ -410,6 +418,7 @@ impl<D: Drag> NoiseKernel<'_, D> {
         }
         let w = (plan.steps - plan.burn_in_step) as f64;
         obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
+        obs.finish_atom(at_atom, w, v);
         obs.steps += plan.steps;
     }
 }

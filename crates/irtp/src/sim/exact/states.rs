@@ -332,6 +332,7 @@ impl<F: FlowMap> StatesSampler<F> {
             int_v: 0.0,
             int_v2: 0.0,
             msd: 0.0,
+            at_atom: 0.0,
             events: 0,
             done: false,
             held: false,
