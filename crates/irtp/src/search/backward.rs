@@ -448,7 +448,10 @@ pub fn estimate(problem: &SearchProblem, opts: &BackwardOptions) -> Result<Cost>
     if !problem.mean_is_finite() {
         return Ok(Cost::NOTHING);
     }
-    Ok(cost_of(&with_check(&setup, meshes(&setup, opts), opts.refine), 3.0))
+    Ok(cost_of(
+        &with_check(&setup, meshes(&setup, opts), opts.refine),
+        3.0,
+    ))
 }
 
 /// `plans` and, when refining, the check mesh ([`check_plan`]) last.
@@ -801,11 +804,19 @@ impl Ladder<'_> {
             let (d1, d2, ratio) = match asymptotic(m, floor) {
                 Ok(factor) => {
                     let factor = Some(factor);
-                    return Ok(Top { rungs, finest, factor });
+                    return Ok(Top {
+                        rungs,
+                        finest,
+                        factor,
+                    });
                 }
                 Err(_) if !self.climb => {
                     let factor = None;
-                    return Ok(Top { rungs, finest, factor });
+                    return Ok(Top {
+                        rungs,
+                        finest,
+                        factor,
+                    });
                 }
                 Err(e) => e,
             };
@@ -816,13 +827,16 @@ impl Ladder<'_> {
             let fits = self.spent <= self.budget.0 && c.memory <= self.budget.1;
             if !fits || level > TOP_LEVEL {
                 let k = 1usize << (level - 1);
-                let over = if fits { "over the ladder's top" } else { "over --max-work" };
+                let over = if fits {
+                    ", past the top"
+                } else {
+                    " > --max-work"
+                };
                 return Err(Error::Numerical {
                     method: self.method,
                     reason: format!(
-                        "meshes not asymptotic (differences {d1:.1e}, {d2:.1e}: ratio {ratio:.2} \
-                         < {LEAST_RATIO}); needs --cells-x {} --cells-v {} or more ({:.0e} \
-                         operations, {over})",
+                        "meshes not asymptotic (steps {d1:.1e}, {d2:.1e}: ratio {ratio:.2} < \
+                         {LEAST_RATIO}); needs --cells-x {} --cells-v {} ({:.0e} ops{over})",
                         k * self.cells.0,
                         k * self.cells.1,
                         self.spent,

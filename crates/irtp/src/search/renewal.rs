@@ -37,17 +37,17 @@
 //! reached between resets (about 2e-3 at r = 3 in the tests).
 
 use super::backward::{
-    build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info,
-    truncation_factor, verify, with_check, Cost, Ladder, Watch, MeshInfo, Plan, Resetting, Setup,
+    build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info, truncation_factor,
+    verify, with_check, Cost, Ladder, MeshInfo, Plan, Resetting, Setup, Watch,
 };
 use super::distribution::Stepper;
-use super::yes;
 use super::mesh::{Generator, Mesh};
+use super::yes;
 use super::SearchProblem;
-use crate::parallel::{NoProgress, Progress};
 use crate::error::{Error, Result};
 use crate::model::reset::clock::{Clock, ExpClock, FixedClock};
 use crate::model::reset::{Periodic, Schedule};
+use crate::parallel::{NoProgress, Progress};
 use crate::Params;
 use serde::{Deserialize, Serialize};
 

@@ -40,7 +40,11 @@ fn cases() -> Vec<(SearchProblem, usize, usize)> {
         (problem(DragLaw::Linear, 1.0, 0.01, level), 16, 8),
         (problem(DragLaw::Tan, 3.0, 1.0, interval), 24, 12),
         (problem(DragLaw::Tanh, 0.8, 2.0, interval), 16, 32),
-        (problem(DragLaw::Linear, 1.0, 1.0, PositionTarget::Level(-2.0)), 40, 8),
+        (
+            problem(DragLaw::Linear, 1.0, 1.0, PositionTarget::Level(-2.0)),
+            40,
+            8,
+        ),
     ]
 }
 
@@ -81,26 +85,5 @@ fn renewal_estimate_is_within_3x_of_the_work_done() {
         let est = renewal::estimate(&pr, &waiting, &opts).unwrap().work;
         let s = renewal::solve(&pr, &waiting, &opts).unwrap();
         assert_within_3(&format!("renewal {waiting:?} {pr:?}"), est, s.work);
-    }
-}
-
-#[test]
-#[ignore = "probe"]
-fn probe_rates() {
-    for r in [1e-3, 1e-2, 0.1, 1.0, 10.0, 100.0, 1000.0] {
-        let pr = problem(DragLaw::Linear, 1.0, r, PositionTarget::Level(2.0));
-        let opts = BackwardOptions {
-            climb: false,
-            max_work: 1e13,
-            ..BackwardOptions::with_cells(64, 32)
-        };
-        let est = backward::estimate(&pr, &opts).unwrap().work;
-        if r < 0.01 {
-            println!("r {r}: est {est:.3e}");
-            continue;
-        }
-        let t = std::time::Instant::now();
-        let s = backward::solve(&pr, &opts).unwrap();
-        println!("r {r}: est {est:.3e} work {:.3e} ratio {:.2} {:?} {:.2}s", s.work, est / s.work, s.mesh, t.elapsed().as_secs_f64());
     }
 }

@@ -57,7 +57,14 @@ fn reported_errors_bound_a_finer_solve() {
             0.0,
             PositionTarget::Level(-1.5),
         ),
-        problem(DragLaw::Tanh, 0.8, 1.0, 3.0, 0.0, PositionTarget::Level(0.5)),
+        problem(
+            DragLaw::Tanh,
+            0.8,
+            1.0,
+            3.0,
+            0.0,
+            PositionTarget::Level(0.5),
+        ),
         problem(
             DragLaw::Tanh,
             0.8,
