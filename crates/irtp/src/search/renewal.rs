@@ -461,7 +461,7 @@ pub fn solve_watched(
         let top = ladder.climb(
             rungs,
             meshes[1].clone(),
-            &in_time,
+            in_time,
             |(a, time)| (a.mean(), 3.0 * time),
             |p| level_cost(p, opts.steps),
         )?;
