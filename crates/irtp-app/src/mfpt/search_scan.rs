@@ -441,7 +441,8 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
             max_memory: f64::INFINITY,
             ..RenewalOptions::default()
         };
-        let c = optimize_cost(&range, zero_cost(&problem, &backward)?, |f| {
+        let max_work = a.output.budget.max_work;
+        let c = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |f| {
             let waiting = WaitingTime::Renewal {
                 clock: clock.with_mean(1.0 / f)?,
             };
@@ -472,7 +473,8 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         });
     }
     so::check_optimizable(&problem, &range)?;
-    let cost = optimize_cost(&range, zero_cost(&problem, &backward)?, |r| {
+    let max_work = a.output.budget.max_work;
+    let cost = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |r| {
         solve_cost(&problem.with_rate(r)?, &backward, 1.0)
     })?;
     a.output.budget.check(&Cost {
@@ -508,11 +510,22 @@ fn golden_solves(range: &RateRange) -> f64 {
 /// grid rate, the golden-section solves at the median of the grid's costs
 /// (where r* lies is not known before the grid is solved), the checked
 /// solve at the optimum, and `at_zero` (an interval's solve at r = 0).
+/// Where the grid alone at the cheapest rate (r_max: the shortest domain)
+/// exceeds `max_work`, that lower bound, before any rate is priced.
 fn optimize_cost(
     range: &RateRange,
     at_zero: f64,
+    max_work: f64,
     cost_at: impl Fn(f64) -> irtp::Result<Cost>,
 ) -> irtp::Result<Cost> {
+    let cheapest = cost_at(range.r_max)?;
+    let floor = cheapest.work * range.grid_points as f64;
+    if !(floor <= max_work) {
+        return Ok(Cost {
+            work: floor,
+            ..cheapest
+        });
+    }
     let grid = range
         .grid()
         .into_iter()
