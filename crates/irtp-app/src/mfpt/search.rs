@@ -166,18 +166,11 @@ fn mesh_method(
         e => e,
     };
     let cost = method.cost(problem).map_err(named)?.expect("a mesh method");
-    // The mesh grows with its cells, the target's distance (the cell size
-    // of the far stretch) and the clock (the length of the far stretch).
-    let mut drivers = vec!["cells_x", "cells_v"];
-    drivers.push(match problem.target() {
-        PositionTarget::Level(_) => "xt",
-        PositionTarget::Interval(..) => "interval",
-    });
-    drivers.push("rate");
-    drivers.extend(problem.params().schedule().cost_drivers());
-    if let SearchMethod::Renewal(_) = method {
-        drivers.extend(["time_steps", "horizon_tail"]);
-    }
+    let extra: &[&'static str] = match method {
+        SearchMethod::Renewal(_) => &["time_steps", "horizon_tail"],
+        _ => &[],
+    };
+    let drivers = search::backward::mesh_drivers(problem, extra);
     budget.check(&Cost {
         work: cost.work,
         unit: "operations",
@@ -494,8 +487,12 @@ pub(super) fn run(a: &DirectArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let out = open_out("mfpt", a.output.out.as_deref(), a.output.force.force)?;
     let t0 = Instant::now();
     let result = {
-        let total = c.method.particles().map_or(1, |r| r.particles);
-        let bar = ctx.reporter.stage("search", total);
+        // A mesh method reports millions of operations of its estimate.
+        let (label, total) = match c.method.particles() {
+            Some(r) => ("search", r.particles),
+            None => ("search (mesh)", 1),
+        };
+        let bar = ctx.reporter.stage(label, total);
         search::solve(&c.problem, &c.method, bar.as_ref())?
     };
     ctx.check()?;

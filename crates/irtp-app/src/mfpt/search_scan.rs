@@ -47,11 +47,11 @@ pub(crate) struct SearchTargetArgs {
     #[arg(long, value_name = "X0", allow_hyphen_values = true)]
     pub(crate) x0: Option<f64>,
     /// Cells in x of the coarse mesh of a search's backward equation (refined once and
-    /// extrapolated) [default: 64; --xt or --interval only].
+    /// extrapolated) [default: 64, mfpt optimize 32; --xt or --interval only].
     #[arg(long, allow_hyphen_values = true, value_parser = parse_size)]
     pub(crate) cells_x: Option<usize>,
-    /// Cells in v of the coarse mesh of a search's backward equation [default: 32; --xt or
-    /// --interval only].
+    /// Cells in v of the coarse mesh of a search's backward equation [default: 32, mfpt
+    /// optimize 16; --xt or --interval only].
     #[arg(long, allow_hyphen_values = true, value_parser = parse_size)]
     pub(crate) cells_v: Option<usize>,
 }
@@ -93,12 +93,13 @@ impl SearchTargetArgs {
         .problem()
     }
 
-    /// The backward options (the app's budget replaces the library's).
-    fn backward(&self) -> irtp::Result<BackwardOptions> {
+    /// The backward options (the app's budget replaces the library's), the
+    /// mesh `(cells_x, cells_v)` by default.
+    fn backward(&self, (cx, cv): (usize, usize)) -> irtp::Result<BackwardOptions> {
         let o = BackwardOptions {
             max_work: f64::INFINITY,
             max_memory: f64::INFINITY,
-            ..BackwardOptions::with_cells(self.cells_x.unwrap_or(64), self.cells_v.unwrap_or(32))
+            ..BackwardOptions::with_cells(self.cells_x.unwrap_or(cx), self.cells_v.unwrap_or(cv))
         };
         o.validate().map_err(|e| match e {
             Error::InvalidParameter {
@@ -231,7 +232,7 @@ pub(super) fn scan_config(a: &ScanArgs) -> irtp::Result<SearchScanConfig> {
             ))
         }
     };
-    let backward = a.search.backward()?;
+    let backward = a.search.backward((64, 32))?;
     let base = a.search.problem(&a.problem)?;
     a.output
         .budget
@@ -329,7 +330,20 @@ fn sample(
         .collect()
 }
 
-/// Run a search scan: `mfpt_scan.csv` (the velocity scan's columns).
+/// The note on points whose meshes are not asymptotic (tau_err NaN).
+fn unresolved_note(n: usize) -> String {
+    if n == 0 {
+        return String::new();
+    }
+    format!(
+        "{n} point(s) unresolved: the meshes are not asymptotic there (tau_err = NaN); \
+         raise --cells-x/--cells-v\n"
+    )
+}
+
+/// Run a search scan: `mfpt_scan.csv` (the velocity scan's columns); a
+/// point whose mesh sequence is not asymptotic keeps its extrapolated tau
+/// with tau_err NaN (unresolved, counted in the note).
 pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let c = scan_config(a)?;
     let out = open_out("mfpt scan", a.output.out.as_deref(), a.output.force.force)?;
@@ -351,7 +365,8 @@ pub(super) fn run_scan(a: &ScanArgs, ctx: &Context) -> irtp::Result<Outcome> {
         })
         .collect();
     let table = scan_table(c.axis.name(), &rows, sims.as_deref());
-    let note = sims.as_deref().map_or(String::new(), scan_note);
+    let unresolved = points.iter().filter(|p| !p.solution.asymptotic).count();
+    let note = sims.as_deref().map_or(String::new(), scan_note) + &unresolved_note(unresolved);
     let params = SearchScanParams {
         base: &c.base,
         over: c.axis.name(),
@@ -405,7 +420,12 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         ));
     }
     a.output.no_seed("mfpt optimize")?;
-    let backward = a.search.backward()?;
+    // The grid and the golden section solve about a hundred rates, the
+    // smallest on long truncated domains (about 1e10 operations at 32 x 16
+    // and r = 1e-3): half the scan's cells each way keeps the default run
+    // within the default --max-work; the optimum's checked solve refines
+    // where its meshes are not asymptotic.
+    let backward = a.search.backward((32, 16))?;
     let problem = a.search.problem(&a.problem)?;
     let range = RateRange {
         r_min: a.r_min,
@@ -413,7 +433,6 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         grid_points: a.grid_points,
         ..RateRange::default()
     };
-    let solves = a.grid_points as f64 + 62.0;
     if let Some(clock) = problem.params().schedule().clock {
         range.validate()?;
         let renewal = RenewalOptions {
@@ -423,17 +442,30 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
             max_memory: f64::INFINITY,
             ..RenewalOptions::default()
         };
-        let slowest = WaitingTime::Renewal {
-            clock: clock.with_mean(1.0 / a.r_min)?,
-        };
-        let c = search::renewal::estimate(&problem, &slowest, &renewal)?;
-        a.output.budget.check(&Cost {
-            work: c.work * solves,
-            unit: "operations",
-            drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
-            memory: c.memory,
-            memory_drivers: vec!["cells_x", "cells_v"],
+        let max_work = a.output.budget.max_work;
+        let c = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |f| {
+            let waiting = WaitingTime::Renewal {
+                clock: clock.with_mean(1.0 / f)?,
+            };
+            let c = search::renewal::estimate(&problem, &waiting, &renewal)?;
+            Ok(Cost {
+                work: c.work,
+                unit: "operations",
+                drivers: Vec::new(),
+                memory: c.memory,
+                memory_drivers: vec!["cells_x", "cells_v"],
+            })
         })?;
+        a.output.budget.check(&Cost {
+            drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
+            ..c
+        })?;
+        // The optimum's checked solve climbs its mesh ladder within the budget.
+        let renewal = RenewalOptions {
+            max_work: a.output.budget.max_work,
+            max_memory: a.output.budget.max_memory,
+            ..renewal
+        };
         return Ok(OptimizeConfig {
             problem,
             range,
@@ -442,17 +474,81 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         });
     }
     so::check_optimizable(&problem, &range)?;
-    let cost = solve_cost(&problem.with_rate(a.r_min)?, &backward, solves)?;
-    solve_cost(&problem.with_rate(a.r_max)?, &backward, 1.0)?;
+    let max_work = a.output.budget.max_work;
+    let cost = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |r| {
+        solve_cost(&problem.with_rate(r)?, &backward, 1.0)
+    })?;
     a.output.budget.check(&Cost {
         drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
         ..cost
     })?;
+    // The optimum's checked solve climbs its mesh ladder within the budget.
+    let backward = BackwardOptions {
+        max_work: a.output.budget.max_work,
+        max_memory: a.output.budget.max_memory,
+        ..backward
+    };
     Ok(OptimizeConfig {
         problem,
         range,
         backward,
         renewal: None,
+    })
+}
+
+/// Solves of the golden-section refinement of r* (`minimize_rate`): the
+/// bracket of two grid steps in ln r shrunk by 0.618 a step to `rtol`, two
+/// to start.
+fn golden_solves(range: &RateRange) -> f64 {
+    let step = (range.r_max / range.r_min).ln() / (range.grid_points - 1) as f64;
+    let width = (2.0 * step).max(range.r_min * step.exp());
+    let shrink = 2.0 / (5f64.sqrt() - 1.0);
+    ((width / range.rtol).ln() / shrink.ln()).ceil().max(0.0) + 2.0
+}
+
+/// The estimated work of a rate optimisation ([`so::optimize_rate`],
+/// [`optimize_clock`]) from `cost_at(r)`, one solve's: the solve at each
+/// grid rate, the golden-section solves at the median of the grid's costs
+/// (where r* lies is not known before the grid is solved), the checked
+/// solve at the optimum, and `at_zero` (an interval's solve at r = 0).
+/// Where the grid alone at the cheapest rate (r_max: the shortest domain)
+/// exceeds `max_work`, that lower bound, before any rate is priced.
+fn optimize_cost(
+    range: &RateRange,
+    at_zero: f64,
+    max_work: f64,
+    cost_at: impl Fn(f64) -> irtp::Result<Cost>,
+) -> irtp::Result<Cost> {
+    let cheapest = cost_at(range.r_max)?;
+    let floor = cheapest.work * range.grid_points as f64;
+    if !(floor <= max_work) {
+        return Ok(Cost {
+            work: floor,
+            ..cheapest
+        });
+    }
+    let grid = range
+        .grid()
+        .into_iter()
+        .map(cost_at)
+        .collect::<irtp::Result<Vec<_>>>()?;
+    let mut works: Vec<f64> = grid.iter().map(|c| c.work).collect();
+    works.sort_by(f64::total_cmp);
+    let median = works[works.len() / 2];
+    let total = works.iter().sum::<f64>() + (golden_solves(range) + 1.0) * median + at_zero;
+    let memory = grid.iter().map(|c| c.memory).fold(0.0, f64::max);
+    Ok(Cost {
+        work: total,
+        memory,
+        ..grid.into_iter().next().expect("at least three grid rates")
+    })
+}
+
+/// The backward solve at r = 0 of an interval (0 for a level: tau = ∞).
+fn zero_cost(problem: &SearchProblem, o: &BackwardOptions) -> irtp::Result<f64> {
+    Ok(match problem.target() {
+        search::PositionTarget::Interval(..) => solve_cost(&problem.with_rate(0.0)?, o, 1.0)?.work,
+        search::PositionTarget::Level(_) => 0.0,
     })
 }
 

@@ -30,6 +30,7 @@ pub fn unit_of(label: &str) -> Unit {
         "mfpt scan" | "points" => Unit::Count("points"),
         "mfpt optimize" => Unit::Count("grid points"),
         "fp transient" => Unit::Count("time steps"),
+        "search (mesh)" => Unit::Count("Mflop"),
         "fp msd" => Unit::Count("mesh-times"),
         l if l.starts_with("fig") => Unit::Percent,
         _ => Unit::Count("steps"),

@@ -192,3 +192,51 @@ fn random_searches_answer_or_refuse() {
     }
     assert!(t0.elapsed().as_secs() < 60, "{:?}", t0.elapsed());
 }
+
+/// A mesh sequence that is not asymptotic (tanh drag, an interval, the
+/// renewal route on 16 x 8: 679 ± 268 once, against the exact sampler's
+/// tau >= 2409 ± 16): refused (exit 4, one line naming --cells-x, nothing
+/// written) within a small --max-work, or an interval [tau - err, tau +
+/// err] that reaches the sampler's 4-sigma interval.
+#[test]
+fn a_non_asymptotic_mesh_sequence_is_refined_or_refused() {
+    let args = [
+        "--drag",
+        "tanh",
+        "--sigma",
+        "0.8213",
+        "--lambda",
+        "1.8046",
+        "--rate",
+        "2.1034",
+        "--v0",
+        "-0.0321",
+        "--reset-position",
+        "0",
+        "--interval",
+        "-1.7507,1.4297",
+        "--method",
+        "renewal",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+        "--time-steps",
+        "50",
+        "--max-work",
+        "5e9",
+    ];
+    let mut json_run = vec!["mfpt"];
+    json_run.extend(args);
+    json_run.push("--json");
+    let o = irtp(&json_run);
+    if o.status.code() == Some(0) {
+        let v = json(&o);
+        let err = v["error_estimate"].as_f64().unwrap();
+        let tau = v["tau"].as_f64().unwrap();
+        assert!(tau + err >= 2409.0 - 4.0 * 16.0, "{tau} ± {err}");
+    } else {
+        let (o, tmp) = run_out(&args);
+        assert_refused(&o, 4, "--cells-x", &tmp.path().join("out"));
+    }
+}

@@ -330,7 +330,22 @@ pub fn minimize_rate(
         .min_by(|&i, &j| taus[i].total_cmp(&taus[j]))
         .expect("non-empty grid");
     let at_upper_bound = kmin == k - 1;
-    let tau = |r: f64| f.tau(r).map(|e| e.0);
+    // The golden section's solves continue the grid's progress, out of at
+    // most 2 + ln(width / rtol) / ln(1/0.618) (the bracket of the branch
+    // taken below).
+    let width = if kmin == 0 {
+        rs[1]
+    } else {
+        (rs[(kmin + 1).min(k - 1)] / rs[kmin - 1]).ln()
+    };
+    let golden_max = 2 + ((width / range.rtol).ln() / 1.618_f64.ln()).ceil().max(0.0) as u64;
+    let total = k as u64 + golden_max;
+    let calls = std::sync::atomic::AtomicU64::new(k as u64);
+    let tau = |r: f64| {
+        let n = calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress.update(n.min(total), total);
+        f.tau(r).map(|e| e.0)
+    };
     let (r_opt, tau_opt) = if at_upper_bound {
         (rs[k - 1], taus[k - 1])
     } else if kmin == 0 {

@@ -11,7 +11,27 @@
 //! extra super-diagonals). The operation order is fixed (row by row, left
 //! to right), so results are reproducible to the bit.
 
+use std::cell::Cell;
 use std::ops::RangeInclusive;
+
+thread_local! {
+    /// Floating-point operations of the factorisations and solves run on
+    /// this thread so far (see [`work_done`]).
+    static WORK: Cell<f64> = const { Cell::new(0.0) };
+}
+
+/// Floating-point operations counted by [`Band::factor`] (2 per
+/// multiply-subtract actually performed, 1 per multiplier) and
+/// [`Band::solve`] (2 per multiply-subtract) on the calling thread since it
+/// started: a solver reads it before and after its work to report what it
+/// did, to compare with its cost estimate.
+pub fn work_done() -> f64 {
+    WORK.with(|w| w.get())
+}
+
+fn count(flops: f64) {
+    WORK.with(|w| w.set(w.get() + flops));
+}
 
 /// A zero or non-finite pivot: the matrix is singular (or overflowed) at
 /// this row of the elimination.
@@ -94,9 +114,13 @@ impl Band {
     /// to stop discards the run.
     pub fn factor(&mut self) -> Result<(), Singular> {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
+        let mut flops = 0.0;
         for k in 0..n {
-            if k % STOP_POLL_ROWS == 0 && crate::stop::stop_requested() {
-                return Err(Singular { row: k });
+            if k % STOP_POLL_ROWS == 0 {
+                count(std::mem::take(&mut flops));
+                if crate::stop::stop_requested() {
+                    return Err(Singular { row: k });
+                }
             }
             let last = (k + kl).min(n - 1);
             let mut p = k;
@@ -109,6 +133,7 @@ impl Band {
                 }
             }
             if !(best > 0.0) || !best.is_finite() {
+                count(flops);
                 return Err(Singular { row: k });
             }
             self.piv[k] = p;
@@ -119,21 +144,26 @@ impl Band {
                     self.a.swap(x, y);
                 }
             }
-            self.eliminate(k, last, jmax);
+            flops += self.eliminate(k, last, jmax);
         }
+        count(flops);
         Ok(())
     }
 
     /// Eliminate column k from rows k+1..=last (columns up to `jmax`),
-    /// storing the multipliers in place of the eliminated entries.
+    /// storing the multipliers in place of the eliminated entries; returns
+    /// the floating-point operations done.
     #[inline]
-    fn eliminate(&mut self, k: usize, last: usize, jmax: usize) {
+    fn eliminate(&mut self, k: usize, last: usize, jmax: usize) -> f64 {
         let d = self.a[self.idx(k, k)];
+        let mut flops = 0.0;
         for i in k + 1..=last {
             let ik = self.idx(i, k);
             let l = self.a[ik] / d;
             self.a[ik] = l;
+            flops += 1.0;
             if l != 0.0 {
+                flops += 2.0 * (jmax - k) as f64;
                 for j in k + 1..=jmax {
                     let kj = self.a[self.idx(k, j)];
                     let ij = self.idx(i, j);
@@ -141,6 +171,7 @@ impl Band {
                 }
             }
         }
+        flops
     }
 
     /// Solve A x = b in place with the factors of [`Band::factor`]. A stop
@@ -149,6 +180,8 @@ impl Band {
     #[allow(clippy::needless_range_loop)] // index form mirrors the band algebra
     pub fn solve(&self, b: &mut [f64]) {
         let (n, kl, ku) = (self.n, self.kl, self.ku);
+        // Full rows but near the end: 2 (kl + kl + ku) + 1 a row.
+        count(n as f64 * (2.0 * (2 * kl + ku) as f64 + 1.0));
         for k in 0..n {
             if k % STOP_POLL_SOLVE_ROWS == 0 && crate::stop::stop_requested() {
                 return;

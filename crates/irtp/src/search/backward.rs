@@ -53,13 +53,15 @@
 //! ```
 
 use super::mesh::{Generator, Layout, LocalReset, Mesh, Side};
-use super::{PositionTarget, SearchProblem};
+use super::{yes, PositionTarget, SearchProblem};
 use crate::error::{Error, Result};
 use crate::model::reset::{NoiseAtReset, Reset};
 use crate::numerics::band::Band;
 use crate::numerics::bordered::Capacitance;
+use crate::parallel::{NoProgress, Progress};
 use crate::Params;
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
 
 /// Options of the direct (backward) search solver.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -74,6 +76,14 @@ pub struct BackwardOptions {
     /// Solve on the mesh halved too and extrapolate (Richardson); without
     /// it the coarse answer is returned and the mesh error is NaN.
     pub refine: bool,
+    /// With `refine`: a mesh sequence that is not asymptotic (the check
+    /// of [`asymptotic`] on three meshes) is refined a level at a time
+    /// within the budgets, else refused (exit 4, naming the mesh flags).
+    /// Without it nothing is refined: such an answer comes back with
+    /// `asymptotic` false and its error NaN (a scan's unresolved point,
+    /// the optimiser's solves that locate r*).
+    #[serde(default = "yes")]
+    pub climb: bool,
     /// Truncation tolerance of a one-sided level: the far side is cut at
     /// X = v_u ln(1/tol) / r (the chance of travelling X before a reset is
     /// below tol); checked by a solve at 1.5 X.
@@ -90,6 +100,7 @@ impl Default for BackwardOptions {
             cells_x: 64,
             cells_v: 32,
             refine: true,
+            climb: true,
             truncation: 1e-8,
             max_work: 1e11,
             max_memory: 4e9,
@@ -173,6 +184,15 @@ pub struct SearchSolution {
     /// ([`SearchProblem::infinite_mean_reason`]): tau = +∞, nothing solved.
     #[serde(default)]
     pub infinite_mean: bool,
+    /// The last three meshes passed the check of [`asymptotic`] (false
+    /// only without `climb`: then the error estimate is NaN).
+    #[serde(default = "yes")]
+    pub asymptotic: bool,
+    /// Floating-point operations done (band factorisations and solves,
+    /// counted by [`crate::numerics::band::work_done`]): the measure the
+    /// cost estimate ([`estimate`]) predicts.
+    #[serde(default)]
+    pub work: f64,
 }
 
 impl MeshInfo {
@@ -203,6 +223,8 @@ impl SearchSolution {
             reset_values: Some([inf; 2]),
             mesh: MeshInfo::none(),
             infinite_mean: true,
+            asymptotic: true,
+            work: 0.0,
         }
     }
 }
@@ -426,7 +448,19 @@ pub fn estimate(problem: &SearchProblem, opts: &BackwardOptions) -> Result<Cost>
     if !problem.mean_is_finite() {
         return Ok(Cost::NOTHING);
     }
-    Ok(cost_of(&meshes(&setup, opts), 3.0))
+    Ok(cost_of(
+        &with_check(&setup, meshes(&setup, opts), opts.refine),
+        3.0,
+    ))
+}
+
+/// `plans` and, when refining, the check mesh ([`check_plan`]) last.
+pub(crate) fn with_check(setup: &Setup, mut plans: Vec<Plan>, refine: bool) -> Vec<Plan> {
+    if refine {
+        let check = check_plan(setup, &plans[0].0);
+        plans.push(check);
+    }
+    plans
 }
 
 /// A mesh before it is built: its layout and refinement level. Costs are
@@ -441,7 +475,12 @@ pub(crate) fn build(plans: &[Plan]) -> Vec<Mesh> {
 
 /// Cost of factorising each mesh of `plans` and `solves` solves with each,
 /// in f64 from the node counts ([`Layout::nodes`]): 2 n_x n_v unknowns,
-/// 2 n_v sub- and super-diagonals.
+/// 2 n_v = kl sub- and super-diagonals. A solve is 2 (3 kl + 1) operations
+/// a row; the factorisation does 2 (kl + ku) = 4 kl a row for each nonzero
+/// multiplier, and about 0.4 kl of a row's kl multipliers are nonzero
+/// (upwind rows reach back a column only where v < 0; counted by
+/// [`crate::numerics::band::work_done`]: 0.35-0.45 kl on the tests'
+/// meshes), so 1.6 kl² a row.
 pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
     let mut c = Cost {
         work: 0.0,
@@ -450,15 +489,16 @@ pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
     for (layout, k) in plans {
         let (nx, nv) = layout.nodes(*k);
         let (n, kl) = (2.0 * nx * nv, 2.0 * nv);
-        c.work += n * kl * 3.0 * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
+        c.work += 1.6 * n * kl * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
         c.memory = c.memory.max(8.0 * n * (3.0 * kl + 7.0));
     }
     c
 }
 
 /// What the size of a search mesh grows with, by the library's names: the
-/// mesh options, the target (its distance sets the cell size), the clock.
-pub(crate) fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'static str> {
+/// mesh options, the target (its distance sets the cell size), the reset
+/// rate and the clock (the length of the far stretch), then `extra`.
+pub fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'static str> {
     let mut d = vec!["cells_x", "cells_v"];
     d.push(match problem.target() {
         PositionTarget::Level(_) => "xt",
@@ -524,39 +564,69 @@ pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Plan> {
 /// infinite mean (one-sided level without full resetting), and a solve
 /// above the budgets of `opts` ([`estimate`]).
 pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSolution> {
+    solve_watched(problem, opts, &NoProgress)
+}
+
+/// [`solve`], its progress reported to `progress` in millions of
+/// operations of the estimate ([`Watch`]).
+pub fn solve_watched(
+    problem: &SearchProblem,
+    opts: &BackwardOptions,
+    progress: &dyn Progress,
+) -> Result<SearchSolution> {
     opts.validate()?;
     let setup = Setup::new(problem, "--method backward", false)?;
     if !problem.mean_is_finite() {
         return Ok(SearchSolution::infinite());
     }
-    let plans = meshes(&setup, opts);
-    check_budget(
-        &cost_of(&plans, 3.0),
-        (opts.max_work, opts.max_memory),
-        mesh_drivers(problem, &["truncation"]),
-    )?;
+    let plans = with_check(&setup, meshes(&setup, opts), opts.refine);
+    let cost = cost_of(&plans, 3.0);
+    let budget = (opts.max_work, opts.max_memory);
+    check_budget(&cost, budget, mesh_drivers(problem, &["truncation"]))?;
+    let watch = Watch::new(progress, cost.work);
     let meshes = build(&plans);
-    let answers = meshes
-        .iter()
-        .map(|m| solve_on(&setup, m))
-        .collect::<Result<Vec<_>>>()?;
+    let on = |m: &Mesh| {
+        let a = solve_on(&setup, m);
+        watch.tick();
+        a
+    };
+    let answers = meshes.iter().map(on).collect::<Result<Vec<_>>>()?;
     let coarse = &answers[0];
-    let (best, mesh_error, finest) = if opts.refine {
-        let fine = &answers[1];
+    let (best, mesh_error, finest, asymptotic) = if opts.refine {
+        let rungs = vec![
+            answers[answers.len() - 1].clone(),
+            coarse.clone(),
+            answers[1].clone(),
+        ];
+        let ladder = Ladder {
+            layout: &plans[0].0,
+            cells: (opts.cells_x, opts.cells_v),
+            budget,
+            spent: cost.work,
+            climb: opts.climb,
+            method: METHOD,
+            watch: &watch,
+        };
+        let top = ladder.climb(
+            rungs,
+            meshes[1].clone(),
+            on,
+            |a| (a.mean(), 0.0),
+            |p| cost_of(std::slice::from_ref(p), 3.0),
+        )?;
+        let (c, f) = top.last_two();
         let ex = |c: f64, f: f64| 2.0 * f - c;
         let best = NodeAnswer {
-            tau: [
-                ex(coarse.tau[0], fine.tau[0]),
-                ex(coarse.tau[1], fine.tau[1]),
-            ],
-            reset: coarse
+            tau: [ex(c.tau[0], f.tau[0]), ex(c.tau[1], f.tau[1])],
+            reset: c
                 .reset
-                .zip(fine.reset)
+                .zip(f.reset)
                 .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
         };
-        (best, (fine.mean() - coarse.mean()).abs(), &meshes[1])
+        let error = top.factor.unwrap_or(1.0) * (f.mean() - c.mean()).abs();
+        (best, error, top.finest, top.factor.is_some())
     } else {
-        (coarse.clone(), f64::NAN, &meshes[0])
+        (coarse.clone(), f64::NAN, meshes[0].clone(), true)
     };
     // The extrapolated values pass the same checks as each mesh's.
     verify(
@@ -566,12 +636,13 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         "the backward solver (--method backward, extrapolated)",
     )?;
     let truncation_error = if setup.truncated() {
-        let diff = (answers[answers.len() - 1].mean() - coarse.mean()).abs();
+        // The coarse mesh widened to 1.5 X follows the coarse and fine ones.
+        let diff = (answers[1 + opts.refine as usize].mean() - coarse.mean()).abs();
         diff * truncation_factor(opts.truncation)
     } else {
         0.0
     };
-    let error_estimate = if opts.refine {
+    let error_estimate = if opts.refine && asymptotic {
         mesh_error + truncation_error
     } else {
         f64::NAN
@@ -584,9 +655,199 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
         mesh_error,
         truncation_error,
         reset_values: best.reset,
-        mesh: mesh_info(finest),
+        mesh: mesh_info(&finest),
         infinite_mean: false,
+        asymptotic,
+        work: watch.done(),
     })
+}
+
+/// The progress of a mesh solver: the operations counted on this thread
+/// ([`crate::numerics::band::work_done`]) since it started, of the
+/// estimated total (raised as the ladder climbs), reported to `progress`
+/// in millions.
+pub(crate) struct Watch<'a> {
+    progress: &'a dyn Progress,
+    start: f64,
+    total: Cell<f64>,
+}
+
+impl<'a> Watch<'a> {
+    /// Watching from now, `total` operations expected.
+    pub fn new(progress: &'a dyn Progress, total: f64) -> Self {
+        Watch {
+            progress,
+            start: crate::numerics::band::work_done(),
+            total: Cell::new(total),
+        }
+    }
+
+    /// Operations done since [`Watch::new`].
+    pub fn done(&self) -> f64 {
+        crate::numerics::band::work_done() - self.start
+    }
+
+    /// `more` operations expected.
+    pub fn expect(&self, more: f64) {
+        self.total.set(self.total.get() + more);
+    }
+
+    /// Report the work done so far.
+    pub fn tick(&self) {
+        let done = self.done();
+        let total = self.total.get().max(done);
+        self.progress
+            .update((done / 1e6) as u64, (total / 1e6).ceil() as u64);
+    }
+}
+
+/// The backward solver's name in its refusals.
+const METHOD: &str = "the backward solver (--method backward)";
+
+/// The least observed ratio ρ = (T_h - T_2h) / (T_h/2 - T_h) of successive
+/// mesh differences taken as converging (first-order upwind: ρ ≈ 2). In
+/// the model T_h = T + c h^p (ρ = 2^p) the error of 2 T_h/2 - T_h is
+/// d (2 - ρ) / (ρ - 1), d = T_h/2 - T_h: at most |d| from ρ = 1.5 up, and
+/// [`error_factor`] times |d| below (at most 4 at ρ = 1.2).
+pub(crate) const LEAST_RATIO: f64 = 1.2;
+
+/// The bound on the error of 2 T_h/2 - T_h in units of |T_h/2 - T_h| at
+/// the observed ratio `ratio` ≥ [`LEAST_RATIO`] (see there): at least 1.
+pub(crate) fn error_factor(ratio: f64) -> f64 {
+    ((2.0 - ratio) / (ratio - 1.0)).max(1.0)
+}
+
+/// The mesh that checks the observed order: the layout of half the cells
+/// (at least 2 each way), so that h runs 2h, h, h/2 with the two meshes
+/// solved already.
+pub(crate) fn check_plan(setup: &Setup, layout: &Layout) -> Plan {
+    let cells = |c: &[usize]| (c.iter().sum::<usize>() / 2).max(2);
+    let x = layout.far.map_or(0.0, |f| f.length);
+    (setup.layout((cells(&layout.xc), cells(&layout.vc)), x), 0)
+}
+
+/// The error factor ([`error_factor`]) of the last three means (coarsest
+/// first) where they converge (ratio ≥ [`LEAST_RATIO`], the differences
+/// of one sign), 1 where the last difference is below what the mesh can
+/// resolve (`floor`: the time error of the renewal route; √ε |T| for
+/// round-off); else the two differences and their ratio.
+pub(crate) fn asymptotic(m: [f64; 3], floor: f64) -> std::result::Result<f64, (f64, f64, f64)> {
+    let (d1, d2) = (m[1] - m[0], m[2] - m[1]);
+    let ratio = d1 / d2;
+    let floor = floor.max(f64::EPSILON.sqrt() * m[2].abs());
+    if d2.abs() <= floor {
+        Ok(1.0)
+    } else if ratio >= LEAST_RATIO {
+        Ok(error_factor(ratio))
+    } else {
+        Err((d1, d2, ratio))
+    }
+}
+
+/// The finest level a ladder climbs to: 2^5 times the coarse mesh's cells
+/// each way (a level costs about 16 times the one before).
+pub(crate) const TOP_LEVEL: u32 = 5;
+
+/// The Richardson ladder of a mesh method: meshes of `layout` (the coarse
+/// mesh of `cells`) refined one level at a time while the last three
+/// answers are not asymptotic and the next one fits the budget (work
+/// `spent` so far); without `climb`, not refined at all.
+pub(crate) struct Ladder<'a> {
+    pub layout: &'a Layout,
+    pub cells: (usize, usize),
+    pub budget: (f64, f64),
+    pub spent: f64,
+    pub climb: bool,
+    pub method: &'static str,
+    pub watch: &'a Watch<'a>,
+}
+
+/// Where a ladder stopped: the answers (coarsest first), the finest mesh
+/// and the error factor of the last difference ([`error_factor`]; None
+/// where the sequence is not asymptotic and the ladder did not climb).
+pub(crate) struct Top<A> {
+    pub rungs: Vec<A>,
+    pub finest: Mesh,
+    pub factor: Option<f64>,
+}
+
+impl<A> Top<A> {
+    /// The answers on the last two meshes (h, h/2).
+    pub fn last_two(&self) -> (&A, &A) {
+        let n = self.rungs.len();
+        (&self.rungs[n - 2], &self.rungs[n - 1])
+    }
+}
+
+impl Ladder<'_> {
+    /// From `rungs` (answers on the check mesh, levels 0 and 1 of the
+    /// layout) and the finest mesh so far: more levels until
+    /// [`asymptotic`] (`mean` gives an answer's mean and its floor), each
+    /// one's `cost` checked before it is built; refused (exit 4, naming
+    /// the mesh flags and the mesh needed) when the next level is beyond
+    /// the budget or [`TOP_LEVEL`].
+    pub fn climb<A>(
+        mut self,
+        mut rungs: Vec<A>,
+        mut finest: Mesh,
+        solve: impl Fn(&Mesh) -> Result<A>,
+        mean: impl Fn(&A) -> (f64, f64),
+        cost: impl Fn(&Plan) -> Cost,
+    ) -> Result<Top<A>> {
+        let mut level = 1;
+        loop {
+            let n = rungs.len();
+            let (m, floor) = (
+                [0, 1, 2].map(|k| mean(&rungs[n - 3 + k]).0),
+                mean(&rungs[n - 1]).1,
+            );
+            let (d1, d2, ratio) = match asymptotic(m, floor) {
+                Ok(factor) => {
+                    let factor = Some(factor);
+                    return Ok(Top {
+                        rungs,
+                        finest,
+                        factor,
+                    });
+                }
+                Err(_) if !self.climb => {
+                    let factor = None;
+                    return Ok(Top {
+                        rungs,
+                        finest,
+                        factor,
+                    });
+                }
+                Err(e) => e,
+            };
+            level += 1;
+            let plan = (self.layout.clone(), level);
+            let c = cost(&plan);
+            self.spent += c.work;
+            let fits = self.spent <= self.budget.0 && c.memory <= self.budget.1;
+            if !fits || level > TOP_LEVEL {
+                let k = 1usize << (level - 1);
+                let over = if fits {
+                    ", past the top"
+                } else {
+                    " > --max-work"
+                };
+                return Err(Error::Numerical {
+                    method: self.method,
+                    reason: format!(
+                        "meshes not asymptotic (steps {d1:.1e}, {d2:.1e}: ratio {ratio:.2} < \
+                         {LEAST_RATIO}); needs --cells-x {} --cells-v {} ({:.0e} ops{over})",
+                        k * self.cells.0,
+                        k * self.cells.1,
+                        self.spent,
+                    ),
+                });
+            }
+            self.watch.expect(c.work);
+            finest = Mesh::build(&plan.0, level);
+            rungs.push(solve(&finest)?);
+        }
+    }
 }
 
 /// From |T_{1.5X} - T_X| to a bound on the error of T_X when

@@ -46,8 +46,13 @@ struct ClockTarget<'a> {
 
 impl ClockTarget<'_> {
     fn solve(&self, f: f64) -> Result<RenewalSolution> {
+        self.solve_with(f, self.renewal)
+    }
+
+    /// The renewal route at frequency f with `opts`.
+    fn solve_with(&self, f: f64, opts: &RenewalOptions) -> Result<RenewalSolution> {
         let clock = self.clock.with_mean(1.0 / f)?;
-        renewal::solve(self.base, &WaitingTime::Renewal { clock }, self.renewal)
+        renewal::solve(self.base, &WaitingTime::Renewal { clock }, opts)
     }
 
     /// The search without resets (the clock removed, rate 0).
@@ -63,18 +68,26 @@ impl ClockTarget<'_> {
 }
 
 /// The route's error estimate, or its known parts where the mesh step has
-/// none.
+/// none (unrefined; or, not asymptotic, the last mesh difference).
 fn error_of(s: &RenewalSolution) -> f64 {
     if s.error_estimate.is_finite() {
         s.error_estimate
+    } else if !s.asymptotic {
+        s.mesh_error + s.time_error + s.tail_bound + s.truncation_error
     } else {
         s.time_error + s.tail_bound + s.truncation_error
     }
 }
 
 impl RateObjective for ClockTarget<'_> {
+    /// Located without climbing the mesh ladder (as the Poisson rate's
+    /// [`super::optimize::SearchTarget`]); the optimum is checked.
     fn tau(&self, f: f64) -> Result<(f64, f64)> {
-        let s = self.solve(f)?;
+        let locate = RenewalOptions {
+            climb: false,
+            ..*self.renewal
+        };
+        let s = self.solve_with(f, &locate)?;
         Ok((s.tau, error_of(&s)))
     }
 
@@ -140,8 +153,10 @@ pub fn optimize_clock(
     };
     // The route's refusals (velocity-only resetting, an infinite-mean law)
     // before the grid.
-    target.solve(range.r_max)?;
-    let optimum = minimize_rate(&target, range, progress)?;
+    target.tau(range.r_max)?;
+    let mut optimum = minimize_rate(&target, range, progress)?;
+    // tau at the optimum from its checked solve (as the Poisson rate's).
+    optimum.tau_opt = 0.5 * (optimum.tau_plus_opt + optimum.tau_minus_opt);
     let inv = |f: f64| if f > 0.0 { 1.0 / f } else { f64::INFINITY };
     let (lo, hi) = optimum.r_opt_range;
     let clock = if optimum.r_opt > 0.0 {

@@ -52,6 +52,12 @@ use crate::parallel::Progress;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 
+/// `true`: the serde default of a flag added to serialised options and
+/// solutions (older files read as they were written).
+pub(crate) fn yes() -> bool {
+    true
+}
+
 pub use tail::{fit_tail, TailFit};
 
 /// Where the search ends.
@@ -586,10 +592,12 @@ pub fn solve(
 ) -> Result<SearchResult> {
     method.check(problem)?;
     match (*method, method.unit_count()) {
-        (SearchMethod::Backward(o), _) => backward::solve(problem, &o).map(SearchResult::Backward),
+        (SearchMethod::Backward(o), _) => {
+            backward::solve_watched(problem, &o, progress).map(SearchResult::Backward)
+        }
         (SearchMethod::Renewal(o), _) => {
             let waiting = renewal::WaitingTime::of(problem.params())?;
-            renewal::solve(problem, &waiting, &o).map(SearchResult::Renewal)
+            renewal::solve_watched(problem, &waiting, &o, progress).map(SearchResult::Renewal)
         }
         (_, Some(all)) => assemble(
             problem,

@@ -71,7 +71,10 @@ pub fn scan_problem(base: &SearchProblem, axis: SearchAxis, x: f64) -> Result<Se
 
 /// tau against r, x_0 or L: every value is validated and checked by the
 /// solver ([`backward::estimate`]: its refusals, e.g. an infinite mean, and
-/// its budgets) before anything is solved, then solved in parallel.
+/// its budgets) before anything is solved, then solved in parallel. The
+/// meshes are not refined beyond `opts` (no `climb`): a point whose mesh
+/// sequence is not asymptotic is unresolved, reported with
+/// `asymptotic` false and a NaN error, the rest of the scan kept.
 pub fn scan(
     base: &SearchProblem,
     axis: SearchAxis,
@@ -86,6 +89,10 @@ pub fn scan(
     for p in &problems {
         backward::estimate(p, opts)?;
     }
+    let opts = &BackwardOptions {
+        climb: false,
+        ..*opts
+    };
     let sols = parallel::map(
         problems.len() as u64,
         |i| backward::solve(&problems[i as usize], opts),
@@ -106,7 +113,12 @@ pub fn scan(
 }
 
 /// The search's tau(r): the 2-D backward equation at each rate, the rest
-/// of the problem kept (reset position and velocity, noise rule).
+/// of the problem kept (reset position and velocity, noise rule). The
+/// rates that locate r* are solved on the meshes of `backward` without
+/// climbing (one mesh sequence for every rate, so that tau(r) is one
+/// smooth function to minimise); the reported values (r = 0, the
+/// optimum) with the checked ladder (`climb`), whose refusal ends the
+/// optimisation (exit 4, naming the mesh flags).
 pub struct SearchTarget<'a> {
     /// The problem (its own rate is replaced).
     pub base: &'a SearchProblem,
@@ -114,19 +126,36 @@ pub struct SearchTarget<'a> {
     pub backward: &'a BackwardOptions,
 }
 
+impl SearchTarget<'_> {
+    /// The checked solve at rate r (the options' `climb` as given).
+    fn verified(&self, r: f64) -> Result<SearchSolution> {
+        backward::solve(&self.base.with_rate(r)?, self.backward)
+    }
+}
+
 impl RateObjective for SearchTarget<'_> {
-    /// tau and its error estimate (mesh plus truncation).
+    /// tau and its error estimate (mesh plus truncation; where the meshes
+    /// are not asymptotic, the last mesh difference plus truncation).
     fn tau(&self, r: f64) -> Result<(f64, f64)> {
-        let s = backward::solve(&self.base.with_rate(r)?, self.backward)?;
-        Ok((s.tau, s.error_estimate))
+        let locate = BackwardOptions {
+            climb: false,
+            ..*self.backward
+        };
+        let s = backward::solve(&self.base.with_rate(r)?, &locate)?;
+        let err = if s.asymptotic {
+            s.error_estimate
+        } else {
+            s.mesh_error + s.truncation_error
+        };
+        Ok((s.tau, err))
     }
 
     /// A one-sided level without resets: tau = +∞; an interval: solved at
-    /// r = 0. The slope is not computed (NaN).
+    /// r = 0 (checked). The slope is not computed (NaN).
     fn at_zero(&self) -> Result<AtZero> {
         let tau = match self.base.target() {
             PositionTarget::Level(_) => f64::INFINITY,
-            PositionTarget::Interval(..) => self.tau(0.0)?.0,
+            PositionTarget::Interval(..) => self.verified(0.0)?.tau,
         };
         Ok(AtZero {
             tau,
@@ -135,7 +164,7 @@ impl RateObjective for SearchTarget<'_> {
     }
 
     fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
-        let s = backward::solve(&self.base.with_rate(r)?, self.backward)?;
+        let s = self.verified(r)?;
         Ok(AtOptimum {
             tau_plus: s.tau_plus,
             tau_minus: s.tau_minus,
@@ -168,7 +197,9 @@ pub fn check_optimizable(base: &SearchProblem, range: &RateRange) -> Result<()> 
 
 /// The reset rate minimising the mean search time over
 /// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`SearchTarget`]),
-/// refused where it is infinite for every r ([`check_optimizable`]).
+/// refused where it is infinite for every r ([`check_optimizable`]). tau
+/// at the optimum is the checked solve's (its mean of tau±, with its
+/// error), not the value that located r*.
 pub fn optimize_rate(
     base: &SearchProblem,
     range: &RateRange,
@@ -183,5 +214,7 @@ pub fn optimize_rate(
         base,
         backward: opts,
     };
-    minimize_rate(&f, range, progress)
+    let mut best = minimize_rate(&f, range, progress)?;
+    best.tau_opt = 0.5 * (best.tau_plus_opt + best.tau_minus_opt);
+    Ok(best)
 }

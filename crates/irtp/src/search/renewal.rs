@@ -38,14 +38,16 @@
 
 use super::backward::{
     build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info, truncation_factor,
-    verify, Cost, MeshInfo, Plan, Resetting, Setup,
+    verify, with_check, Cost, Ladder, MeshInfo, Plan, Resetting, Setup, Watch,
 };
 use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
+use super::yes;
 use super::SearchProblem;
 use crate::error::{Error, Result};
 use crate::model::reset::clock::{Clock, ExpClock, FixedClock};
 use crate::model::reset::{Periodic, Schedule};
+use crate::parallel::{NoProgress, Progress};
 use crate::Params;
 use serde::{Deserialize, Serialize};
 
@@ -161,6 +163,11 @@ pub struct RenewalOptions {
     pub cells_v: usize,
     /// Solve on the mesh halved too and extrapolate (first order).
     pub refine: bool,
+    /// As [`super::backward::BackwardOptions::climb`]: a mesh sequence
+    /// that is not asymptotic refined within the budgets or refused;
+    /// without it returned with `asymptotic` false and its error NaN.
+    #[serde(default = "yes")]
+    pub climb: bool,
     /// Time steps to the horizon (also run with twice as many).
     pub steps: usize,
     /// Poisson horizon: w(t_max) ≤ tail; the far side of a one-sided level
@@ -178,6 +185,7 @@ impl Default for RenewalOptions {
             cells_x: 32,
             cells_v: 16,
             refine: true,
+            climb: true,
             steps: 100,
             tail: 1e-8,
             max_work: 1e11,
@@ -241,6 +249,14 @@ pub struct RenewalSolution {
     /// ([`SearchProblem::infinite_mean_reason`]): tau = +∞, nothing solved.
     #[serde(default)]
     pub infinite_mean: bool,
+    /// As [`super::backward::SearchSolution::asymptotic`].
+    #[serde(default = "yes")]
+    pub asymptotic: bool,
+    /// Floating-point operations done, as
+    /// [`super::backward::SearchSolution::work`] (what [`estimate`]
+    /// predicts).
+    #[serde(default)]
+    pub work: f64,
 }
 
 impl RenewalSolution {
@@ -260,6 +276,8 @@ impl RenewalSolution {
             textbook: nan,
             mesh: MeshInfo::none(),
             infinite_mean: true,
+            asymptotic: true,
+            work: 0.0,
         }
     }
 }
@@ -372,7 +390,7 @@ pub fn estimate(
         return Ok(Cost::NOTHING);
     }
     waiting.validate(opts.tail)?;
-    let m = meshes(&setup, waiting, opts);
+    let m = with_check(&setup, meshes(&setup, waiting, opts), opts.refine);
     let solves = cost_of(&m, 12.0 * opts.steps as f64);
     // The clock's product-integration weights: two series of 2 steps + 1.
     let weights = 2.0 * 8.0 * (2.0 * opts.steps as f64 + 1.0);
@@ -392,6 +410,17 @@ pub fn solve(
     waiting: &WaitingTime,
     opts: &RenewalOptions,
 ) -> Result<RenewalSolution> {
+    solve_watched(problem, waiting, opts, &NoProgress)
+}
+
+/// [`solve`], its progress reported to `progress` in millions of
+/// operations of the estimate (as [`super::backward::solve_watched`]).
+pub fn solve_watched(
+    problem: &SearchProblem,
+    waiting: &WaitingTime,
+    opts: &RenewalOptions,
+    progress: &dyn Progress,
+) -> Result<RenewalSolution> {
     let cost = estimate(problem, waiting, opts)?;
     check_budget(
         &cost,
@@ -401,25 +430,51 @@ pub fn solve(
     if !finite_under(problem, waiting) {
         return Ok(RenewalSolution::infinite());
     }
+    let watch = Watch::new(progress, cost.work);
     let setup = Setup::new(problem, "--method renewal", true)?;
-    let meshes = build(&meshes(&setup, waiting, opts));
+    let plans = with_check(&setup, meshes(&setup, waiting, opts), opts.refine);
+    let meshes = build(&plans);
     let t_max = waiting.horizon(opts.tail);
-    let on = |m: &Mesh, steps: usize| answer(&setup, m, waiting, t_max, steps);
+    let on = |m: &Mesh, steps: usize| answer(&setup, m, waiting, (t_max, steps), &watch);
     let in_time = |m: &Mesh| -> Result<(Answer, f64)> {
         let (a1, a2) = (on(m, opts.steps)?, on(m, 2 * opts.steps)?);
         let err = (a2.mean() - a1.mean()).abs() / 3.0;
         Ok((a2.combine(4.0 / 3.0, &a1, -1.0 / 3.0), err))
     };
     let (coarse, coarse_time) = in_time(&meshes[0])?;
-    let (best, mesh_error, time_error, finest) = if opts.refine {
-        let (fine, fine_time) = in_time(&meshes[1])?;
-        let e = (fine.mean() - coarse.mean()).abs();
-        (fine.combine(2.0, &coarse, -1.0), e, fine_time, &meshes[1])
+    let (best, mesh_error, time_error, finest, asymptotic) = if opts.refine {
+        let rungs = vec![
+            in_time(&meshes[meshes.len() - 1])?,
+            (coarse, coarse_time),
+            in_time(&meshes[1])?,
+        ];
+        let ladder = Ladder {
+            layout: &plans[0].0,
+            cells: (opts.cells_x, opts.cells_v),
+            budget: (opts.max_work, opts.max_memory),
+            spent: cost.work,
+            climb: opts.climb,
+            method: METHOD,
+            watch: &watch,
+        };
+        // The mesh differences are resolved down to the time errors.
+        let top = ladder.climb(
+            rungs,
+            meshes[1].clone(),
+            in_time,
+            |(a, time)| (a.mean(), 3.0 * time),
+            |p| level_cost(p, opts.steps),
+        )?;
+        let ((c, _), (f, fine_time)) = top.last_two();
+        let e = top.factor.unwrap_or(1.0) * (f.mean() - c.mean()).abs();
+        let best = f.combine(2.0, c, -1.0);
+        (best, e, *fine_time, top.finest, top.factor.is_some())
     } else {
-        (coarse, f64::NAN, coarse_time, &meshes[0])
+        (coarse, f64::NAN, coarse_time, meshes[0].clone(), true)
     };
     let truncation_error = if setup.truncated() {
-        let wide = on(&meshes[meshes.len() - 1], opts.steps)?;
+        // The coarse mesh widened to 1.5 X follows the coarse and fine ones.
+        let wide = on(&meshes[1 + opts.refine as usize], opts.steps)?;
         let diff = (wide.mean() - on(&meshes[0], opts.steps)?.mean()).abs();
         // Poisson: X = v_u ln(1/tail) / r, as for the direct solve; a
         // period T: X = v_u T is beyond the reach of the reset-free
@@ -447,7 +502,7 @@ pub fn solve(
         tau_plus: best.tau[0],
         tau_minus: best.tau[1],
         reset_values: best.reset,
-        error_estimate: if opts.refine {
+        error_estimate: if opts.refine && asymptotic {
             error_estimate
         } else {
             f64::NAN
@@ -457,9 +512,22 @@ pub fn solve(
         truncation_error,
         tail_bound: best.tail,
         textbook: best.textbook,
-        mesh: mesh_info(finest),
+        mesh: mesh_info(&finest),
         infinite_mean: false,
+        asymptotic,
+        work: watch.done(),
     })
+}
+
+/// The cost of one more level of the ladder: the answers at `steps` and
+/// twice as many time steps (two factorisations, 12 × steps solves).
+fn level_cost(plan: &Plan, steps: usize) -> Cost {
+    let plan = std::slice::from_ref(plan);
+    let c = cost_of(plan, 12.0 * steps as f64);
+    Cost {
+        work: c.work + cost_of(plan, 0.0).work,
+        memory: c.memory,
+    }
 }
 
 /// The renewal answer on one mesh with `steps` time steps to `t_max`. The
@@ -470,8 +538,8 @@ fn answer(
     setup: &Setup,
     mesh: &Mesh,
     waiting: &WaitingTime,
-    t_max: f64,
-    steps: usize,
+    (t_max, steps): (f64, usize),
+    watch: &Watch,
 ) -> Result<Answer> {
     let Resetting::Full { x: xr, v: vr } = setup.resetting else {
         unreachable!("Setup::new with renewal = true makes full resetting");
@@ -493,6 +561,7 @@ fn answer(
         e: [beyond; 2],
     };
     survival_series(&g, t_max, steps, |n, q| {
+        watch.tick();
         for (at, points) in [&target, &start].into_iter().enumerate() {
             for s in 0..2 {
                 for &(i, j, w) in points {
@@ -511,10 +580,12 @@ fn answer(
     renew(setup, &p, waiting.tail(t_max))
 }
 
+/// The route's name in its refusals.
+const METHOD: &str = "the renewal route (--method renewal)";
+
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
-    const METHOD: &str = "the renewal route (--method renewal)";
     let mix = setup.mix;
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
