@@ -4,11 +4,16 @@ binary's command line, run by the extension (``irtp_cli::run_cli``), so
 
 from __future__ import annotations
 
+import signal
 import sys
 
 from . import _irtp
 
 
 def main() -> None:
-    """Run ``irtp`` with this process's arguments and exit with its status."""
+    """Run ``irtp`` with this process's arguments and exit with its status.
+    A closed pipe (``irtp ... | head``) ends it quietly, as it ends the
+    binary (this process runs nothing else)."""
+    if hasattr(signal, "SIGPIPE"):
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     sys.exit(_irtp.cli_main(["irtp", *sys.argv[1:]]))

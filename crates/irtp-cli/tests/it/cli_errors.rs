@@ -228,3 +228,34 @@ fn a_noise_models_event_rate_counts_against_max_work() {
         start.elapsed()
     );
 }
+
+/// A reader that closes the pipe early (`irtp ... | head`) ends the
+/// program quietly, as it ends any Unix filter: no panic, no message.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_program_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/sweeps/analytic.toml"
+    );
+    let out = dir.path().join("s");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_irtp"))
+        .args(["sweep", "slurm", plan, "--dry-run", "--out"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader is gone before the first line
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        o.status.success() || o.status.signal() == Some(libc::SIGPIPE),
+        "{:?}: {err}",
+        o.status
+    );
+}
