@@ -286,7 +286,25 @@ def _survival(t: Table) -> Drawer:
     return draw
 
 
-def _simulate(tables: Dict[str, Table]) -> List[Drawer]:
+def _atoms(ax: Any, summary: Any) -> None:
+    """The point masses of the stationary law (``summary["atoms"]``:
+    ``[{"v", "mass", "err"}]``; the density holds the law without them),
+    drawn as atoms after the range is set: a stem at v to 90 % of the axis
+    height, a marker on it, the mass and its error in the legend."""
+    atoms = summary.get("atoms") if isinstance(summary, dict) else None
+    lo, hi = ax.get_ylim()
+    top = lo + 0.9 * (hi - lo)
+    for k, a in enumerate(atoms or []):
+        err = a.get("err")
+        mass = f"{a['mass']:.4g}" + ("" if err is None else f" ± {err:.2g}")
+        label = f"atom at v = {_num(a['v'])}: mass {mass}".replace("= -", "= −")
+        color = f"C{4 + k}"
+        ax.vlines(a["v"], max(lo, 0.0), top, color=color, lw=1.5, gid="atom")
+        ax.plot([a["v"]], [top], "o", color=color, gid="atom", label=label)
+    ax.set_ylim(lo, hi)
+
+
+def _simulate(tables: Dict[str, Table], summary: Any = None) -> List[Drawer]:
     d, m = tables["density"], tables["moments"]
 
     def density(ax: Any) -> None:
@@ -294,6 +312,7 @@ def _simulate(tables: Dict[str, Table]) -> List[Drawer]:
         ax.plot(d["v"], d["p_final"], "--", lw=1, label="at $t_{max}$")
         ax.set(xlabel="v", ylabel="$P_s(v)$", title="velocity density")
         _fit_y(ax)
+        _atoms(ax, summary)
 
     def moments(ax: Any) -> None:
         keep = log_thin(m["t"])
@@ -367,6 +386,7 @@ def _density(res: Any, parts: bool) -> List[Drawer]:
             _exact_r0(ax, res)
         ax.set(xlabel="v", ylabel="$P_s(v)$", title="stationary velocity density")
         _fit_y(ax)
+        _atoms(ax, res.summary)
     return [draw]
 
 
@@ -494,7 +514,7 @@ def drawers(res: Any) -> List[Drawer]:
     """The panels of ``res``'s picture, each a function drawing into an Axes."""
     tables, command = res.tables, res.command
     if command == "simulate":
-        return _simulate(tables)
+        return _simulate(tables, res.summary)
     if command in ("analytic", "fp stationary"):
         return _density(res, command == "fp stationary")
     if command == "fp transient":

@@ -150,6 +150,23 @@ def test_readme_density_is_not_a_flat_line(tmp_path):
     assert not any("₊" in s or "p_" in s for s in labels), labels
 
 
+def test_an_atom_is_drawn_as_an_atom():
+    """The reset into the pause of rpt noise is a point mass (pi_0 r/(r +
+    beta) = 1/3 here, within 4 of its errors): a stem inside the axis
+    range, its mass in the legend, not a cell."""
+    rpt = irtp.fp_stationary(noise="rpt:sigma=1,alpha=1,beta=1", drag="tan", rate=2.0, cells=200)
+    (atom,) = rpt.summary["atoms"]
+    assert abs(atom["mass"] - 1 / 3) <= 4 * atom["err"], atom
+    ax = rpt.plot()
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(s.startswith("atom at v = 0: mass 0.33") for s in labels), labels
+    lo, hi = ax.get_ylim()
+    stems = [c for c in ax.collections if c.get_gid() == "atom"]
+    assert len(stems) == 1
+    (seg,) = stems[0].get_segments()
+    assert seg[0][0] == atom["v"] and lo <= seg[:, 1].min() and seg[:, 1].max() <= hi
+
+
 def test_a_runaway_tau_does_not_hide_the_optimum():
     """τ(r) on a sparse grid reaches 10⁷⁹ at r = 1000: cut and marked, the
     optimum in view."""

@@ -19,7 +19,7 @@ pub struct FpArgs {
 /// The solvers of `irtp fp`.
 #[derive(Subcommand, Debug)]
 pub enum FpCommand {
-    /// Stationary density P_s(v), <v>, <v²> (Eq. (33)) and the exact D_eff by a direct O(N) solve.
+    /// Stationary density P_s(v), ⟨v⟩, ⟨v²⟩ (Eq. (33)) and the exact D_eff by a direct O(N) solve.
     ///
     /// The stationary Fokker-Planck equations on a finite-volume mesh of
     /// the velocity interval, solved directly and extrapolated over the
@@ -34,7 +34,7 @@ pub enum FpCommand {
     /// explicit upwind scheme on a uniform mesh (--scheme paper).
     #[command(after_help = crate::help::FP_TRANSIENT)]
     Transient(TransientArgs),
-    /// <x>(t), <x v>(t), <x²>(t) and d ln<x²>/d ln t without sampling (moment chain).
+    /// ⟨x⟩(t), ⟨x v⟩(t), ⟨x²⟩(t) and d ln⟨x²⟩/d ln t without sampling (moment chain).
     ///
     /// The position moments from the moment chain of the forward
     /// equations (TR-BDF2 in time, Richardson over nested meshes), on a log

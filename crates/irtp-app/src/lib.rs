@@ -78,7 +78,7 @@ pub enum Command {
     Analytic(analytic::AnalyticArgs),
     /// Simulate particles: <v²>(t), <x²>(t), P_s(v) and D_eff (exact sampler or Euler scheme).
     ///
-    /// Independent particles from v = 0, x = 0: the moments <v>, <v²>,
+    /// Independent particles from v = 0, x = 0: the moments ⟨v⟩, ⟨v²⟩,
     /// <x²> on a time grid, the stationary velocity histogram over
     /// [--burn-in, --t-max] and D_eff, with standard errors. `--method
     /// exact` (default) samples the process event by event with no time

@@ -326,7 +326,8 @@ fn simulate_panels(dir: &Path) -> Result<Vec<Panel>> {
             ]
             .into_iter()
             .chain(exact_r0(dir))
-            .collect(),
+            .collect::<Vec<_>>()
+            .with_atoms(dir),
         ),
         moments,
     ];
@@ -477,6 +478,7 @@ fn fp_stationary_panel(dir: &Path) -> Result<Panel> {
         }
     }
     series.extend(exact_r0(dir));
+    let series = series.with_atoms(dir);
     Ok(panel(
         "",
         "stationary velocity density",
@@ -510,6 +512,70 @@ fn exact_r0(dir: &Path) -> Option<Series> {
     let p = v.iter().map(|&v| d.pdf(v)).collect();
     let label = Some("exact at r = 0".to_string());
     Some(Series::line(label, Color::Gray, Dash::Dotted, GUIDE, v, p))
+}
+
+/// A density panel's series with the point masses of the stationary law
+/// drawn as atoms ([`atom_stems`]).
+trait WithAtoms {
+    fn with_atoms(self, dir: &Path) -> Vec<Series>;
+}
+
+impl WithAtoms for Vec<Series> {
+    fn with_atoms(mut self, dir: &Path) -> Vec<Series> {
+        let probe = Panel::new("", "", Axis::linear("v"), Axis::linear("p"));
+        let probe = Panel {
+            series: self.clone(),
+            ..probe
+        };
+        let top = crate::plot::robust_range(&probe).map_or(1.0, |r| r.1);
+        self.extend(atom_stems(dir, top));
+        self
+    }
+}
+
+/// The point masses of the stationary law (`results.atoms` of
+/// `summary.json`: `[{"v", "mass", "err"}]`; the density files hold the
+/// law without them) drawn as atoms: a stem at v up to `top` (the robust
+/// top of the continuous density, so it never sets the range) and a
+/// marker on it, its mass and error in the legend. None without atoms.
+fn atom_stems(dir: &Path, top: f64) -> Vec<Series> {
+    let v = fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+        .unwrap_or_default();
+    let Some(atoms) = v["results"]["atoms"].as_array() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (k, a) in atoms.iter().enumerate() {
+        let (Some(at), Some(mass)) = (a["v"].as_f64(), a["mass"].as_f64()) else {
+            continue;
+        };
+        let mass_text = match a["err"].as_f64() {
+            Some(e) => irtp_app::format::fmt_pm(mass, e),
+            None => irtp_app::format::fmt_sig(mass),
+        };
+        let at_text = symbols::number(at).replace('-', "−");
+        let label = format!("atom at v = {at_text}: mass {mass_text}");
+        let color = Color::Palette(4 + k);
+        out.push(Series::line(
+            None,
+            color,
+            Dash::Solid,
+            "atom",
+            vec![at, at],
+            vec![0.0, top],
+        ));
+        out.push(Series::points(
+            Some(label),
+            color,
+            "atom",
+            vec![at],
+            vec![top],
+            vec![0.0],
+        ));
+    }
+    out
 }
 
 /// The noise levels of `summary.json` (`results.levels`; empty when

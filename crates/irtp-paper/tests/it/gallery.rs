@@ -243,6 +243,16 @@ fn three_state_noise_names_its_states() {
         "{legend}"
     );
     assert!(!legend.contains("p₊") && !legend.contains("p+"), "{legend}");
+    // The reset into the pause is a point mass, drawn as an atom (a stem
+    // no taller than the continuous density's range, its mass in the legend).
+    assert!(legend.contains("atom at v = 0: mass 0.3"), "{legend}");
+    let ((_, hi), _) = irtp_paper::plot::fit_y(&fig.panels[0]);
+    let stem = fig.panels[0]
+        .series
+        .iter()
+        .find(|s| s.source == "atom")
+        .expect("a stem");
+    assert!(stem.y.iter().all(|&y| y <= hi), "{:?} above {hi}", stem.y);
 }
 
 #[test]

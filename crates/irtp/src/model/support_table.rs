@@ -1,6 +1,6 @@
 //! The support table of docs/reference/support.md, rendered from the two
-//! tables the methods consult before any work: [`reset::support::supports`]
-//! (method × protocol feature) and [`noise::support::supports`] (method ×
+//! tables the methods consult before any work: [`super::reset::support::supports`]
+//! (method × protocol feature) and [`super::noise::support::supports`] (method ×
 //! noise model). A test compares the page with [`markdown`], so the page
 //! cannot say what the code does not do.
 

@@ -77,7 +77,7 @@ pub struct BackwardOptions {
     /// it the coarse answer is returned and the mesh error is NaN.
     pub refine: bool,
     /// With `refine`: a mesh sequence that is not asymptotic (the check
-    /// of [`asymptotic`] on three meshes) is refined a level at a time
+    /// of `asymptotic` on three meshes) is refined a level at a time
     /// within the budgets, else refused (exit 4, naming the mesh flags).
     /// Without it nothing is refined: such an answer comes back with
     /// `asymptotic` false and its error NaN (a scan's unresolved point,
@@ -184,7 +184,7 @@ pub struct SearchSolution {
     /// ([`SearchProblem::infinite_mean_reason`]): tau = +∞, nothing solved.
     #[serde(default)]
     pub infinite_mean: bool,
-    /// The last three meshes passed the check of [`asymptotic`] (false
+    /// The last three meshes passed the check of `asymptotic` (false
     /// only without `climb`: then the error estimate is NaN).
     #[serde(default = "yes")]
     pub asymptotic: bool,
@@ -568,7 +568,7 @@ pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSo
 }
 
 /// [`solve`], its progress reported to `progress` in millions of
-/// operations of the estimate ([`Watch`]).
+/// operations of the estimate (`Watch`).
 pub fn solve_watched(
     problem: &SearchProblem,
     opts: &BackwardOptions,
