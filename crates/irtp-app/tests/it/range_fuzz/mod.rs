@@ -492,36 +492,88 @@ fn simulate(json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
     let (v, p, pf) = (column(d, "v"), column(d, "p"), column(d, "p_final"));
     nonneg("p", p)?;
     nonneg("p_final", pf)?;
-    mass_one("p_final", binned_mass(v, pf, vu))?;
+    // Atoms (docs/output-formats.md): the time spent exactly at an atom's
+    // velocity is in no bin, so Σ p dv + Σ mass = 1; at t_max the
+    // particles held at an atom are in no bin of p_final either.
+    let atoms: f64 = json["atoms"]
+        .as_array()
+        .ok_or("no atoms field")?
+        .iter()
+        .map(|a| a["mass"].as_f64().unwrap_or(f64::NAN))
+        .sum();
+    ensure((0.0..=1.0 + MASS_TOL).contains(&atoms), || {
+        format!("atoms' mass = {atoms}")
+    })?;
+    let mf = binned_mass(v, pf, vu);
+    if atoms == 0.0 {
+        mass_one("p_final", mf)?;
+    } else {
+        ensure(mf <= 1.0 + MASS_TOL, || format!("p_final mass = {mf} > 1"))?;
+    }
     // The time-averaged density is empty when no recording time lies in the
     // window [burn_in, t_max].
     let mp = binned_mass(v, p, vu);
     if mp != 0.0 {
-        mass_one("p", mp)?;
+        mass_one("p + atoms", mp + atoms)?;
     }
     Ok(())
+}
+
+/// Whether `d_eff_err` is documented to be null for `case`
+/// (docs/output-formats.md): `--no-extrapolate`, fewer than 32 cells,
+/// λ = 0, or no D_eff (position resetting).
+fn d_eff_err_null(case: &Case) -> bool {
+    let flag = |f: &str| case.args.iter().position(|a| a == f);
+    let cells = flag("--cells")
+        .and_then(|i| case.args.get(i + 1))
+        .and_then(|c| c.parse::<usize>().ok());
+    flag("--no-extrapolate").is_some()
+        || cells.is_some_and(|c| c < 32)
+        || case.lambda == 0.0
+        || flag("--reset-position").is_some()
 }
 
 fn fp_stationary(case: &Case, json: &Value, o: &Outcome, vu: f64) -> Result<(), String> {
     finite_tables(o, &[])?;
     in_v2_range("v2", num(json, "v2")?, vu)?;
+    if d_eff_err_null(case) {
+        ensure(json["d_eff_err"].is_null(), || {
+            "d_eff_err where none is documented".into()
+        })?;
+    } else {
+        let e = num(json, "d_eff_err")?;
+        ensure(e >= 0.0, || format!("d_eff_err = {e} < 0"))?;
+    }
     if case.args.iter().any(|a| a == "--reset-position") {
         // Documented: with position resetting x is stationary, D_eff is
         // omitted (null) and x_moments is given.
-        no_nulls(json, &["fine", "coarse", "grading", "d_eff"])?;
+        no_nulls(json, &["fine", "coarse", "grading", "d_eff", "d_eff_err"])?;
         ensure(json["d_eff"].is_null(), || {
             "d_eff with position resetting".into()
         })?;
     } else if case.lambda == 0.0 {
         // Documented: D_eff = ∞ at lambda = 0 (ballistic), JSON null.
-        no_nulls(json, &["fine", "coarse", "grading", "d_eff", "x_moments"])?;
+        no_nulls(
+            json,
+            &[
+                "fine",
+                "coarse",
+                "grading",
+                "d_eff",
+                "d_eff_err",
+                "x_moments",
+            ],
+        )?;
         ensure(json["d_eff"].is_null(), || {
             "finite d_eff at lambda = 0".into()
         })?;
     } else {
         // fine, coarse: null without Richardson extrapolation; their
-        // x_moments null without --reset-position.
-        no_nulls(json, &["fine", "coarse", "grading", "x_moments"])?;
+        // x_moments null without --reset-position; d_eff_err checked above.
+        no_nulls(
+            json,
+            &["fine", "coarse", "grading", "x_moments", "d_eff_err"],
+        )?;
         let d = num(json, "d_eff")?;
         ensure(d >= 0.0, || format!("d_eff = {d} < 0"))?;
     }
