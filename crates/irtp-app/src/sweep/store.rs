@@ -112,13 +112,19 @@ impl PointResult {
     }
 }
 
-/// Write `bytes` to `path` atomically (temporary file, then rename).
+/// Write `bytes` to `path` atomically (temporary file, then rename). The
+/// temporary file's name is unique to the process and the call, so threads
+/// writing the same file at once (the parts of one point each record its
+/// statepoint) never rename each other's file away.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static CALLS: AtomicU64 = AtomicU64::new(0);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let call = CALLS.fetch_add(1, Ordering::Relaxed);
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}-{call}", std::process::id()));
     fs::write(&tmp, bytes).map_err(|e| io(&tmp, e))?;
     fs::rename(&tmp, path).map_err(|e| io(path, e))
 }
@@ -417,5 +423,28 @@ fn foreign(path: &Path, why: &str) -> Error {
             "a sweep directory of this plan only: {} {why}; use another --out or remove it",
             path.display()
         ),
+    }
+}
+
+#[cfg(test)]
+mod atomic_write_tests {
+    /// Threads writing one file at once (the parts of one point each
+    /// record its statepoint) all succeed, and the file is one whole write.
+    #[test]
+    fn concurrent_writers_of_one_file_all_succeed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("signac_statepoint.json");
+        std::thread::scope(|s| {
+            for k in 0..8u8 {
+                let path = &path;
+                s.spawn(move || {
+                    for _ in 0..200 {
+                        super::write_atomic(path, &[b'0' + k; 64]).unwrap();
+                    }
+                });
+            }
+        });
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(bytes.len() == 64 && bytes.iter().all(|&b| b == bytes[0]));
     }
 }
