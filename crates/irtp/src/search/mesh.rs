@@ -356,10 +356,16 @@ impl Generator {
     }
 
     /// The band matrix `alpha I - beta A` (identity rows where absorbing).
+    /// A stop request (SIGTERM) leaves it unfilled: the factorisation that
+    /// follows polls the request at its first row and discards the run, so
+    /// filling a large band (page faults under load) does not delay the stop.
     pub fn shifted(&self, alpha: f64, beta: f64) -> Band {
         let n = self.dim();
         let mut b = Band::new(n, self.kl, self.kl);
         for k in 0..n {
+            if k % crate::numerics::band::STOP_POLL_ROWS == 0 && crate::stop::stop_requested() {
+                return b;
+            }
             if self.absorbing[k] {
                 b.set(k, k, 1.0);
                 continue;
