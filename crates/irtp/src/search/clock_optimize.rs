@@ -42,6 +42,8 @@ struct ClockTarget<'a> {
     renewal: &'a RenewalOptions,
     /// For the reset-free interval search at f = 0.
     backward: BackwardOptions,
+    /// tau(0) of the checked reset-free solve, set by `at_zero`.
+    checked_zero: std::sync::OnceLock<f64>,
 }
 
 impl ClockTarget<'_> {
@@ -55,15 +57,15 @@ impl ClockTarget<'_> {
         renewal::solve(self.base, &WaitingTime::Renewal { clock }, opts)
     }
 
-    /// The search without resets (the clock removed, rate 0).
-    fn reset_free(&self) -> Result<backward::SearchSolution> {
+    /// The search without resets (the clock removed, rate 0) with `opts`.
+    fn reset_free(&self, opts: &BackwardOptions) -> Result<backward::SearchSolution> {
         let p = self.base.params();
         let mut schedule = *p.schedule();
         schedule.clock = None;
         let params = p.with_schedule(schedule)?;
         let problem =
             SearchProblem::new(params, self.base.x0(), self.base.v0(), self.base.target())?;
-        backward::solve(&problem, &self.backward)
+        backward::solve(&problem, opts)
     }
 }
 
@@ -91,10 +93,20 @@ impl RateObjective for ClockTarget<'_> {
         Ok((s.tau, error_of(&s)))
     }
 
+    /// An interval: the reset-free search on the grid's meshes (the
+    /// route's own reset-free survival), after its checked solve, whose
+    /// value is kept in `checked_zero`.
     fn at_zero(&self) -> Result<AtZero> {
         let tau = match self.base.target() {
             PositionTarget::Level(_) => f64::INFINITY,
-            PositionTarget::Interval(..) => self.reset_free()?.tau,
+            PositionTarget::Interval(..) => {
+                let _ = self.checked_zero.set(self.reset_free(&self.backward)?.tau);
+                let locate = BackwardOptions {
+                    climb: false,
+                    ..self.backward
+                };
+                self.reset_free(&locate)?.tau
+            }
         };
         Ok(AtZero {
             tau,
@@ -104,7 +116,7 @@ impl RateObjective for ClockTarget<'_> {
 
     fn at_optimum(&self, f: f64) -> Result<AtOptimum> {
         if f == 0.0 {
-            let s = self.reset_free()?;
+            let s = self.reset_free(&self.backward)?;
             return Ok(AtOptimum {
                 tau_plus: s.tau_plus,
                 tau_minus: s.tau_minus,
@@ -150,6 +162,7 @@ pub fn optimize_clock(
             max_memory: renewal.max_memory,
             ..BackwardOptions::with_cells(renewal.cells_x, renewal.cells_v)
         },
+        checked_zero: std::sync::OnceLock::new(),
     };
     // The route's refusals (velocity-only resetting, an infinite-mean law)
     // before the grid.
@@ -157,6 +170,9 @@ pub fn optimize_clock(
     let mut optimum = minimize_rate(&target, range, progress)?;
     // tau at the optimum from its checked solve (as the Poisson rate's).
     optimum.tau_opt = 0.5 * (optimum.tau_plus_opt + optimum.tau_minus_opt);
+    if let Some(&t0) = target.checked_zero.get() {
+        optimum.tau_r0 = t0;
+    }
     let inv = |f: f64| if f > 0.0 { 1.0 / f } else { f64::INFINITY };
     let (lo, hi) = optimum.r_opt_range;
     let clock = if optimum.r_opt > 0.0 {

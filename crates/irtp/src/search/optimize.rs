@@ -118,12 +118,16 @@ pub fn scan(
 /// climbing (one mesh sequence for every rate, so that tau(r) is one
 /// smooth function to minimise); the reported values (r = 0, the
 /// optimum) with the checked ladder (`climb`), whose refusal ends the
-/// optimisation (exit 4, naming the mesh flags).
+/// optimisation (exit 4, naming the mesh flags). r = 0 is compared with
+/// the grid on the grid's meshes (the checked value differs from them by
+/// the mesh error, which would otherwise decide r* = 0 against a tiny r).
 pub struct SearchTarget<'a> {
     /// The problem (its own rate is replaced).
     pub base: &'a SearchProblem,
     /// Backward solver options.
     pub backward: &'a BackwardOptions,
+    /// tau(0) of the checked solve, set by `at_zero` (an interval).
+    pub checked_zero: std::sync::OnceLock<f64>,
 }
 
 impl SearchTarget<'_> {
@@ -151,11 +155,17 @@ impl RateObjective for SearchTarget<'_> {
     }
 
     /// A one-sided level without resets: tau = +∞; an interval: solved at
-    /// r = 0 (checked). The slope is not computed (NaN).
+    /// r = 0 on the grid's meshes, after the checked solve there (its
+    /// refusal ends the optimisation; its value is kept in
+    /// `checked_zero`). The slope is not computed (NaN).
     fn at_zero(&self) -> Result<AtZero> {
         let tau = match self.base.target() {
             PositionTarget::Level(_) => f64::INFINITY,
-            PositionTarget::Interval(..) => self.verified(0.0)?.tau,
+            PositionTarget::Interval(..) => {
+                let checked = self.verified(0.0)?.tau;
+                let _ = self.checked_zero.set(checked);
+                self.tau(0.0)?.0
+            }
         };
         Ok(AtZero {
             tau,
@@ -198,8 +208,8 @@ pub fn check_optimizable(base: &SearchProblem, range: &RateRange) -> Result<()> 
 /// The reset rate minimising the mean search time over
 /// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`SearchTarget`]),
 /// refused where it is infinite for every r ([`check_optimizable`]). tau
-/// at the optimum is the checked solve's (its mean of tau±, with its
-/// error), not the value that located r*.
+/// at the optimum and at r = 0 are the checked solves' (at the optimum the
+/// mean of tau±, with its error), not the values that located r*.
 pub fn optimize_rate(
     base: &SearchProblem,
     range: &RateRange,
@@ -213,8 +223,12 @@ pub fn optimize_rate(
     let f = SearchTarget {
         base,
         backward: opts,
+        checked_zero: std::sync::OnceLock::new(),
     };
     let mut best = minimize_rate(&f, range, progress)?;
     best.tau_opt = 0.5 * (best.tau_plus_opt + best.tau_minus_opt);
+    if let Some(&t0) = f.checked_zero.get() {
+        best.tau_r0 = t0;
+    }
     Ok(best)
 }

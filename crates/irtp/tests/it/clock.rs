@@ -322,7 +322,10 @@ fn exp_clock_matches_the_poisson_rate() {
 }
 
 /// Sampler against renewal route, each case (drag, clock): within z SE
-/// plus the route's error estimate (Bonferroni over `cases`).
+/// plus the route's error estimate (Bonferroni over `cases`). Where the
+/// route's mesh ladder is not asymptotic within its budget it refuses,
+/// naming the mesh flags (a verdict, not an answer); every other refusal
+/// fails, and so does a law without one resolved case.
 fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usize) {
     let z = bonferroni_z(total);
     let opts = RenewalOptions {
@@ -332,11 +335,22 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
         tail: 1e-6,
         ..Default::default()
     };
+    let mut resolved = std::collections::BTreeSet::new();
     for (i, &(drag, sigma, spec)) in cases.iter().enumerate() {
         let p = full_reset(drag, sigma, 0.5, 0.0, sched(None, Some(0.0), Some(spec)));
         let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
-        let route = renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts)
-            .unwrap_or_else(|e| panic!("{drag:?} {spec}: {e}"));
+        let route = match renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts) {
+            Ok(route) => route,
+            Err(e @ irtp::Error::Numerical { .. })
+                if e.to_string().contains("meshes not asymptotic")
+                    && e.to_string().contains("--cells-x") =>
+            {
+                eprintln!("{drag:?} {spec}: refused: {e}");
+                continue;
+            }
+            Err(e) => panic!("{drag:?} {spec}: {e}"),
+        };
+        resolved.insert(spec.split(':').next().unwrap());
         let (tau, se) = sampled(p, particles, 300 + i as u64);
         let diff = (tau - route.tau).abs();
         assert!(
@@ -346,13 +360,17 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
             route.error_estimate
         );
     }
+    for &(_, _, spec) in cases {
+        let law = spec.split(':').next().unwrap();
+        assert!(resolved.contains(law), "no case of {law} resolved");
+    }
 }
 
 const SLOW_CASES: [(DragLaw, f64, &str); 8] = [
     (DragLaw::Linear, 1.0, "gamma:k=0.5,theta=1.6"),
     (DragLaw::Tanh, 0.9, "gamma:k=3,theta=0.6"),
     (DragLaw::Linear, 1.0, "weibull:k=1.5,scale=1"),
-    (DragLaw::Tanh, 0.9, "pareto:alpha=4,scale=1"),
+    (DragLaw::Linear, 1.0, "pareto:alpha=2.5,scale=0.3"),
     (DragLaw::Linear, 1.0, "fixed:t=3"),
     (DragLaw::Tanh, 0.9, "fixed:t=3"),
     (DragLaw::Linear, 1.0, "table:0:1;0.5:0.8;1:0.5;2:0.1;4:0"),
