@@ -1,8 +1,10 @@
 //! Running a command off the Python thread: the GIL is released while the
 //! library computes on a worker thread; the calling thread wakes every
 //! 50 ms to run Python's signal handlers (Ctrl-C → `KeyboardInterrupt`,
-//! which cancels the run through [`irtp_app::Reporter::cancelled`]) and to
-//! report progress.
+//! which cancels the run through [`irtp_app::Reporter::cancelled`] and the
+//! process's stop request that the numerical kernels poll, withdrawn once
+//! the run has ended: [`irtp::parallel::stop_during`]) and to report
+//! progress.
 
 use irtp::parallel::Progress;
 use irtp_app::{Context, Outcome, Reporter};
@@ -118,7 +120,7 @@ pub fn run(
     };
     let stop = |py: Python<'_>, e: PyErr| {
         shared.cancel.store(true, Ordering::Relaxed);
-        py.detach(|| worker_join(&rx));
+        py.detach(|| irtp::parallel::stop_during(|| worker_join(&rx)));
         Err(e)
     };
     let mut last = Instant::now();

@@ -20,7 +20,9 @@ use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-pub use crate::stop::{check_stop, stop_due, stop_flag, stop_requested, STOP_POLL_STEPS};
+pub use crate::stop::{
+    check_stop, stop_due, stop_during, stop_flag, stop_requested, STOP_POLL_STEPS,
+};
 
 /// Number of samples per chunk. Part of the value-stability contract:
 /// changing it changes the last bits of every pinned result.

@@ -8,12 +8,25 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// it as the flag of its SIGINT and SIGTERM handlers, [`stop_flag`]); the
 /// library's long loops poll it through [`check_stop`] once per time step,
 /// linear solve, mesh, point or chunk, and [`crate::parallel::Progress::cancelled`] answers it
-/// by default. Never cleared: a process asked to stop stays stopped.
+/// by default. The binary never clears it (a process asked to stop stays
+/// stopped); a front end that outlives a cancelled run withdraws its request
+/// when the run has ended ([`stop_during`]).
 static STOP: AtomicBool = AtomicBool::new(false);
 
 /// The flag behind [`stop_requested`], for a signal handler to set.
 pub fn stop_flag() -> &'static AtomicBool {
     &STOP
+}
+
+/// Ask this process's long loops to stop while `wait` runs (a front end
+/// waiting for its cancelled run to end), then withdraw the request, so the
+/// next run starts (the Python module after a `KeyboardInterrupt`). Work
+/// running beside it in the process ends `Interrupted` too.
+pub fn stop_during<R>(wait: impl FnOnce() -> R) -> R {
+    STOP.store(true, Ordering::Relaxed);
+    let r = wait();
+    STOP.store(false, Ordering::Relaxed);
+    r
 }
 
 /// Whether this process was asked to stop (one relaxed atomic load).
