@@ -352,6 +352,22 @@ fn axis_ticks<DB: DrawingBackend>(
     (bold, light, shown)
 }
 
+/// A panel's chart frame: margins (`right` px on the right) and the tick
+/// label areas.
+fn frame<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    right: i32,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(area);
+    b.margin_top(6 + CAPTION_PX)
+        .margin_left(8)
+        .margin_bottom(6)
+        .margin_right(right)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA);
+    b
+}
+
 /// Caption, margins, axes, ticks, tick labels and grid of a panel; the
 /// boxes of the tick labels drawn.
 fn chart<'a, DB: DrawingBackend>(
@@ -378,14 +394,10 @@ where
     let aw = area.dim_in_pixel().0 as i32;
     draw_rich(area, &caption, ((aw - cw).max(0) / 2, 6), FONT_PX, false)?;
     let plain = |axis: &Axis, r: (f64, f64)| AxisCoord::new(axis, r, &[], &[]);
-    let probe = ChartBuilder::on(area)
-        .margin_top(6 + CAPTION_PX)
-        .margin_left(8)
-        .margin_bottom(6)
-        .margin_right(right_margin)
-        .x_label_area_size(X_LABEL_AREA)
-        .y_label_area_size(Y_LABEL_AREA)
-        .build_cartesian_2d(plain(&p.x, l.xr), plain(&p.y, l.yr))?;
+    // The same frame twice: once to learn the pixel scale of the axes (the
+    // tick labels' placement needs it), once with the ticks chosen.
+    let probe =
+        frame(area, right_margin).build_cartesian_2d(plain(&p.x, l.xr), plain(&p.y, l.yr))?;
     let (ax, ay) = area.get_base_pixel();
     let y0 = probe.plotting_area().get_y_range().start;
     let x0 = probe.plotting_area().get_x_range().start;
@@ -393,17 +405,10 @@ where
     let ypx = |v: f64| probe.backend_coord(&(x0, v)).1 - ay;
     let (xt, xminor, xlab) = axis_ticks(&p.x, l.xr, area, xpx, true);
     let (yt, yminor, ylab) = axis_ticks(&p.y, l.yr, area, ypx, false);
-    let mut chart = ChartBuilder::on(area)
-        .margin_top(6 + CAPTION_PX)
-        .margin_left(8)
-        .margin_bottom(6)
-        .margin_right(right_margin)
-        .x_label_area_size(X_LABEL_AREA)
-        .y_label_area_size(Y_LABEL_AREA)
-        .build_cartesian_2d(
-            AxisCoord::new(&p.x, l.xr, &xt, &xminor),
-            AxisCoord::new(&p.y, l.yr, &yt, &yminor),
-        )?;
+    let mut chart = frame(area, right_margin).build_cartesian_2d(
+        AxisCoord::new(&p.x, l.xr, &xt, &xminor),
+        AxisCoord::new(&p.y, l.yr, &yt, &yminor),
+    )?;
     let mut mesh = chart.configure_mesh();
     mesh.label_style((FAMILY, TICK_FONT_PX))
         .x_label_formatter(&|_| String::new())
