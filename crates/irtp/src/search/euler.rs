@@ -58,8 +58,14 @@ trait EulerNoise {
     fn level(&self, s: usize) -> f64;
     /// The state and next jump step after a reset at `step` from s (whose
     /// next jump is at `next`), by the rule's noise option.
-    fn reset(&self, s: usize, next: u64, step: u64, rule: &ResetRule, rng: &mut Rng)
-        -> (usize, u64);
+    fn reset(
+        &self,
+        s: usize,
+        next: u64,
+        step: u64,
+        rule: &ResetRule,
+        rng: &mut Rng,
+    ) -> (usize, u64);
     /// The state and next jump step after the jump at `step` from s.
     fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64);
 }
@@ -103,16 +109,29 @@ impl EulerNoise for StepChain {
     }
     /// A re-drawn state enters at the step before (it may jump in this
     /// step, as [`crate::mfpt::euler`]'s noise kernel).
-    fn reset(&self, s: usize, next: u64, step: u64, rule: &ResetRule, rng: &mut Rng) -> (usize, u64) {
+    fn reset(
+        &self,
+        s: usize,
+        next: u64,
+        step: u64,
+        rule: &ResetRule,
+        rng: &mut Rng,
+    ) -> (usize, u64) {
         let s2 = rule.draw_noise_state(s, &self.chain, rng);
         if s2 == s {
             return (s, next);
         }
-        (s2, (step - 1).saturating_add(geometric_gap(rng, self.ln_stay[s2])))
+        (
+            s2,
+            (step - 1).saturating_add(geometric_gap(rng, self.ln_stay[s2])),
+        )
     }
     fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64) {
         let s2 = self.dest(s, rng.gen::<f64>() * self.leave[s]);
-        (s2, step.saturating_add(geometric_gap(rng, self.ln_stay[s2])))
+        (
+            s2,
+            step.saturating_add(geometric_gap(rng, self.ln_stay[s2])),
+        )
     }
 }
 
@@ -213,9 +232,14 @@ impl SearchEuler {
                 .expect("noise chain validated by SearchEuler::new")
         });
         let run = |noise: &(dyn Fn(&mut Rng, bool) -> FptSample + Sync)| {
-            first_passage_units(n, units.clone(), seed, self.t_max, progress, |_, rng, plus| {
-                noise(rng, plus)
-            })
+            first_passage_units(
+                n,
+                units.clone(),
+                seed,
+                self.t_max,
+                progress,
+                |_, rng, plus| noise(rng, plus),
+            )
         };
         crate::with_drag!(p.drag(), |d| match &chain {
             None => run(&|rng, plus| c.run(d, &paper, plus, rng)),
@@ -245,7 +269,13 @@ impl SearchEuler {
 impl Chain {
     /// One particle (module docs): the passage time (None by t_max) and
     /// the number of steps.
-    fn run<D: Drag, N: EulerNoise>(&self, drag: &D, noise: &N, plus: bool, rng: &mut Rng) -> FptSample {
+    fn run<D: Drag, N: EulerNoise>(
+        &self,
+        drag: &D,
+        noise: &N,
+        plus: bool,
+        rng: &mut Rng,
+    ) -> FptSample {
         let (mut x, mut v) = (self.x0, self.v0);
         let (mut s, mut next_flip) = noise.start(plus, rng);
         let mut next_reset = geometric_gap(rng, self.ln_reset);

@@ -201,7 +201,14 @@ impl<D: Drag> SearchSampler<D, Telegraph> {
         let noise = Telegraph {
             lambda: params.lambda(),
         };
-        Ok(Self::assemble(drag, problem, noise, [sigma, -sigma].into(), segs, flows))
+        Ok(Self::assemble(
+            drag,
+            problem,
+            noise,
+            [sigma, -sigma].into(),
+            segs,
+            flows,
+        ))
     }
 }
 
@@ -224,10 +231,12 @@ impl<D: Drag> SearchSampler<D, Chain> {
         let mut flows = Vec::with_capacity(chain.states());
         for &a in &chain.levels {
             segs.push(level_segments(drag, law, a, bounds.0, bounds.1)?);
-            flows.push(match level_kind(drag, law, a, bounds, "the exact sampler")? {
-                LevelKind::Edge => drag.flow(a).accelerated(),
-                LevelKind::Interior => drag.flow(a),
-            });
+            flows.push(
+                match level_kind(drag, law, a, bounds, "the exact sampler")? {
+                    LevelKind::Edge => drag.flow(a).accelerated(),
+                    LevelKind::Interior => drag.flow(a),
+                },
+            );
         }
         let levels = chain.levels.clone();
         Ok(Self::assemble(drag, problem, chain, levels, segs, flows))

@@ -277,9 +277,8 @@ impl SearchProblem {
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
         // A noise model's chain is irreducible with two or more states:
         // every state is left, so a particle always turns.
-        let turns = p.noise().is_some()
-            || p.lambda() > 0.0
-            || p.reset().noise() == NoiseAtReset::Redrawn;
+        let turns =
+            p.noise().is_some() || p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
@@ -355,9 +354,12 @@ impl SearchProblem {
         let p = &self.params;
         match p.noise() {
             None => (-p.sigma(), p.sigma()),
-            Some(m) => m.levels().iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &l| {
-                (a.min(l), b.max(l))
-            }),
+            Some(m) => m
+                .levels()
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &l| {
+                    (a.min(l), b.max(l))
+                }),
         }
     }
 
@@ -377,7 +379,9 @@ impl SearchProblem {
     /// Whether the noise is mirror-symmetric (the paper's, or a model with
     /// a mirror map of its states: a_m(s) = -a_s, the same rates).
     fn mirrored(&self) -> bool {
-        self.params.noise().is_none_or(|m| m.kind().mirror().is_some())
+        self.params
+            .noise()
+            .is_none_or(|m| m.kind().mirror().is_some())
     }
 
     /// Whether resets (Poisson or periodic) to a target whose mean <v_r>
@@ -431,7 +435,8 @@ pub(crate) const EXACT: &str = "--method exact";
 /// The Euler scheme's name in [`noise_gate`].
 pub(crate) const EULER: &str = "--method euler";
 /// The paper-noise constructor of the exact sampler, for [`noise_gate`].
-pub(crate) const PAPER_NOISE_ONLY: &str = "SearchSampler::new (SearchSampler::with_chain runs a noise)";
+pub(crate) const PAPER_NOISE_ONLY: &str =
+    "SearchSampler::new (SearchSampler::with_chain runs a noise)";
 
 /// The noise gate of the search, the one place deciding per method
 /// whether it runs the problem's noise model: the paper's noise (no

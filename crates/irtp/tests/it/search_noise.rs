@@ -56,7 +56,10 @@ fn euler(pr: &SearchProblem, dt: f64, particles: u64, seed: u64) -> (f64, f64) {
     match search::solve(pr, &m, &NoProgress).unwrap() {
         SearchResult::Euler(e) => {
             let (c, f) = (e.coarse.summary(), e.fine.summary());
-            (2.0 * f.tau - c.tau, (4.0 * f.tau_err.powi(2) + c.tau_err.powi(2)).sqrt())
+            (
+                2.0 * f.tau - c.tau,
+                (4.0 * f.tau_err.powi(2) + c.tau_err.powi(2)).sqrt(),
+            )
         }
         other => panic!("the Euler scheme gave {other:?}"),
     }
@@ -80,7 +83,12 @@ fn paper_noise_as_a_chain_matches_the_backward_solver() {
     let cases = [
         (DragLaw::Linear, TWO, 1.0, PositionTarget::Level(1.0)),
         (DragLaw::Linear, THREE, 1.0, PositionTarget::Level(1.0)),
-        (DragLaw::Tanh, THREE_TANH, 0.8, PositionTarget::Interval(-0.8, 0.6)),
+        (
+            DragLaw::Tanh,
+            THREE_TANH,
+            0.8,
+            PositionTarget::Interval(-0.8, 0.6),
+        ),
     ];
     for (k, (drag, noise, sigma, target)) in cases.into_iter().enumerate() {
         let paper = full(Params::new(drag, sigma, 1.0, 0.5, 0.0).unwrap());
@@ -89,7 +97,10 @@ fn paper_noise_as_a_chain_matches_the_backward_solver() {
         let pr = SearchProblem::new(noisy(drag, noise, 0.5), 0.0, 0.0, target).unwrap();
         let (tau, se) = exact(&pr, 20_000, 40 + k as u64);
         let diff = (tau - b.tau).abs();
-        eprintln!("{drag} {noise} {target:?}: exact {tau} ± {se}, backward {} ± {}", b.tau, b.error_estimate);
+        eprintln!(
+            "{drag} {noise} {target:?}: exact {tau} ± {se}, backward {} ± {}",
+            b.tau, b.error_estimate
+        );
         assert!(
             diff < 4.25 * se + b.error_estimate,
             "{drag} {noise}: |{tau} - {}| = {diff} >= 4.25 x {se} + {}",
@@ -110,11 +121,36 @@ fn paper_noise_as_a_chain_matches_the_backward_solver() {
 fn rpt_exact_agrees_with_euler_extrapolated() {
     let kept = NoiseAtReset::Kept;
     let cases = [
-        (DragLaw::Linear, "rpt:sigma=1,alpha=1,beta=2", PositionTarget::Level(1.0), kept),
-        (DragLaw::Linear, "rpt:sigma=1,alpha=1,beta=2", PositionTarget::Interval(-0.7, 0.5), kept),
-        (DragLaw::Linear, "rpt:sigma=1,alpha=1,beta=2", PositionTarget::Level(1.0), NoiseAtReset::Redrawn),
-        (DragLaw::Tanh, "rpt:sigma=0.8,alpha=1,beta=2", PositionTarget::Level(0.6), kept),
-        (DragLaw::Tanh, "rpt:sigma=0.8,alpha=1,beta=2", PositionTarget::Interval(-0.5, 0.4), kept),
+        (
+            DragLaw::Linear,
+            "rpt:sigma=1,alpha=1,beta=2",
+            PositionTarget::Level(1.0),
+            kept,
+        ),
+        (
+            DragLaw::Linear,
+            "rpt:sigma=1,alpha=1,beta=2",
+            PositionTarget::Interval(-0.7, 0.5),
+            kept,
+        ),
+        (
+            DragLaw::Linear,
+            "rpt:sigma=1,alpha=1,beta=2",
+            PositionTarget::Level(1.0),
+            NoiseAtReset::Redrawn,
+        ),
+        (
+            DragLaw::Tanh,
+            "rpt:sigma=0.8,alpha=1,beta=2",
+            PositionTarget::Level(0.6),
+            kept,
+        ),
+        (
+            DragLaw::Tanh,
+            "rpt:sigma=0.8,alpha=1,beta=2",
+            PositionTarget::Interval(-0.5, 0.4),
+            kept,
+        ),
     ];
     for (k, (drag, noise, target, rule)) in cases.into_iter().enumerate() {
         let params = noisy(drag, noise, 0.5)
@@ -124,7 +160,9 @@ fn rpt_exact_agrees_with_euler_extrapolated() {
         let (tau, se) = exact(&pr, 20_000, 60 + k as u64);
         let (ext, se_ext) = euler(&pr, 0.01, 20_000, 80 + k as u64);
         let z = (tau - ext).abs() / se.hypot(se_ext);
-        eprintln!("{drag} {noise} {target:?} {rule:?}: exact {tau} ± {se}, euler {ext} ± {se_ext}, z {z}");
+        eprintln!(
+            "{drag} {noise} {target:?} {rule:?}: exact {tau} ± {se}, euler {ext} ± {se_ext}, z {z}"
+        );
         assert!(z < 4.37, "{drag} {noise} {target:?} {rule:?}: z = {z}");
     }
 }
@@ -147,7 +185,12 @@ fn deterministic_methods_refuse_a_noise_model() {
     };
     let refusals = [
         backward::solve(&pr, &BackwardOptions::default()).map(drop),
-        search::solve(&pr, &SearchMethod::Backward(BackwardOptions::default()), &NoProgress).map(drop),
+        search::solve(
+            &pr,
+            &SearchMethod::Backward(BackwardOptions::default()),
+            &NoProgress,
+        )
+        .map(drop),
         search::distribution::estimate(
             &pr,
             &search::distribution::DistributionOptions {
@@ -155,20 +198,31 @@ fn deterministic_methods_refuse_a_noise_model() {
                 t_max: 10.0,
                 steps: 100,
             },
-        ).map(drop),
+        )
+        .map(drop),
     ];
     for r in refusals {
         let (name, msg) = named(r.unwrap_err());
         assert_eq!(name, "noise", "{msg}");
-        assert!(msg.len() < 200 && !msg.contains('\n'), "{} chars: {msg}", msg.len());
-        assert!(msg.contains("--method exact") && msg.contains("--method euler"), "{msg}");
+        assert!(
+            msg.len() < 200 && !msg.contains('\n'),
+            "{} chars: {msg}",
+            msg.len()
+        );
+        assert!(
+            msg.contains("--method exact") && msg.contains("--method euler"),
+            "{msg}"
+        );
     }
     let thermal = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=2", 0.5).unwrap();
     let hot = full(Params::with_noise(DragLaw::Linear, thermal, 0.5, 0.0).unwrap());
     let pr = SearchProblem::new(hot, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     for m in [
         SearchMethod::Exact(run(100, 1)),
-        SearchMethod::Euler { dt: 0.01, run: run(100, 1) },
+        SearchMethod::Euler {
+            dt: 0.01,
+            run: run(100, 1),
+        },
     ] {
         let (name, msg) = named(m.check(&pr).unwrap_err());
         assert_eq!(name, "noise", "{msg}");
