@@ -381,7 +381,7 @@ impl SearchProblem {
     fn mirrored(&self) -> bool {
         self.params
             .noise()
-            .is_none_or(|m| m.kind().mirror().is_some())
+            .map_or(true, |m| m.kind().mirror().is_some())
     }
 
     /// Whether resets (Poisson or periodic) to a target whose mean <v_r>
