@@ -47,10 +47,7 @@ pub struct NoiseArgs {
 /// Where a noise other than the paper's runs, from the core's list beside
 /// its support table ([`irtp::model::noise::support::RUNNERS`]).
 fn noise_runs_in() -> String {
-    format!(
-        "Runs in: {}. A search (--xt, --interval) runs the paper's noise only.",
-        irtp::model::noise::support::RUNNERS
-    )
+    format!("Runs in: {}.", irtp::model::noise::support::RUNNERS)
 }
 
 /// The long help of `--noise`: the spec of every kind and where it runs.

@@ -98,6 +98,59 @@ fn thermal_refused() -> Vec<Vec<&'static str>> {
     vec![[&mfpt[..], &["--method", "exact", "--particles", "10"][..]].concat()]
 }
 
+/// The search with run-pause-tumble noise runs by `--method exact` and
+/// `--method euler` (exit 0, a finite tau with a standard error) and the
+/// default method (backward) refuses it in one line naming `--noise` and
+/// the methods that run it.
+#[test]
+fn a_search_with_a_noise_model_runs_by_the_samplers() {
+    let base = [
+        "mfpt",
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--drag",
+        "linear",
+        "--noise",
+        "rpt:sigma=1,alpha=1,beta=2",
+        "--rate",
+        "0.5",
+    ];
+    for m in ["exact", "euler"] {
+        let extra = [
+            "--method",
+            m,
+            "--particles",
+            "2000",
+            "--dt",
+            "0.01",
+            "--json",
+        ];
+        let extra = if m == "exact" {
+            [&extra[..4], &extra[6..]].concat()
+        } else {
+            extra.to_vec()
+        };
+        let r = json(&irtp(&[&base[..], &extra[..]].concat()));
+        let (tau, err) = (r["tau"].as_f64().unwrap(), r["tau_err"].as_f64().unwrap());
+        assert!(
+            tau.is_finite() && tau > 1.0 && err > 0.0 && err < 0.1 * tau,
+            "{m}: {r}"
+        );
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let out = irtp(&[&base[..], &["--out", dir.to_str().unwrap()]].concat());
+    let err = assert_rejected(&out, "--noise", &dir);
+    assert!(
+        err.len() < 200 && err.contains("--method exact and --method euler"),
+        "{err}"
+    );
+}
+
 #[test]
 fn every_command_refuses_a_noise_it_does_not_run() {
     let tmp = tempfile::tempdir().unwrap();
@@ -111,16 +164,21 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             (vec!["--noise", RPT], "--noise"),
             (vec!["--temperature", "0.5"], "--temperature"),
         ] {
-            if flag == "--noise" && !with_noise {
+            // The search's samplers run a noise model at T = 0.
+            let search = cmd.contains(&"--xt") || cmd.contains(&"--interval=-1,1");
+            let sampler = search && cmd.contains(&"exact");
+            if flag == "--noise" && (!with_noise || sampler) {
                 continue;
             }
             let args = [&fit(&cmd)[..], &extra[..], &["--out", d][..]].concat();
             let out = irtp(&args);
             let err = assert_rejected(&out, flag, &dir);
-            assert!(
-                err.contains("simulate and fp run any noise"),
-                "{args:?}: {err}"
-            );
+            let runners = if search {
+                "--method exact and --method euler run any finite-state noise at T = 0"
+            } else {
+                "simulate and fp run any noise"
+            };
+            assert!(err.contains(runners), "{args:?}: {err}");
         }
     }
 }

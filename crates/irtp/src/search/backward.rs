@@ -282,11 +282,13 @@ pub(crate) struct Setup {
 }
 
 impl Setup {
-    /// Check what the search solvers run: no refractory period; a finite
+    /// Check what the search solvers run: the paper's noise
+    /// ([`super::noise_gate`]); no refractory period; a finite
     /// mean. `renewal`: full resetting required, any
     /// clock (the renewal route takes its waiting-time law separately);
     /// otherwise a Poisson clock only.
     pub fn new(problem: &SearchProblem, method: &str, renewal: bool) -> Result<Setup> {
+        super::noise_gate(problem, method)?;
         let p = *problem.params();
         let s = p.schedule();
         if let Some(r) = s.refractory {

@@ -24,6 +24,16 @@
 //! a negative mean): the extrapolated means are verified
 //! ([`crate::mfpt::euler::verify_extrapolation`]) and refused. Refractory periods are refused
 //! (the exact sampler runs them).
+//!
+//! With a noise model at T = 0 (docs/equations.md, "Euler schemes with a
+//! noise model") the velocity step uses the level a_s of the current
+//! state, the chain moves by P = exp(Q dt) ([`StepChain`], as
+//! [`crate::mfpt::euler`]'s noise kernel: geometric stays, the jump's
+//! target from one uniform), a reset keeps the state or re-draws it from
+//! π, and a particle starts in a state drawn from π (the stream's first
+//! uniform): tau is the π-averaged mean, the even and odd particles two
+//! independent halves of the same law. The step is written once over the
+//! noise states ([`EulerNoise`]).
 
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
@@ -32,8 +42,98 @@ use crate::model::reset::{Periodic, Reset, ResetRule};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
+use crate::sim::euler::noise::StepChain;
 use crate::sim::euler::{euler_step, geometric_gap};
+use rand::Rng as _;
 use std::ops::Range;
+
+/// The noise states of an Euler search: the paper's telegraph or a chain
+/// stepped by P = exp(Q dt). A state enters with the step of its next
+/// jump (a geometric gap).
+trait EulerNoise {
+    /// The start state of a particle (`plus`: an even particle) and the
+    /// step of its first jump.
+    fn start(&self, plus: bool, rng: &mut Rng) -> (usize, u64);
+    /// The level a_s of state s.
+    fn level(&self, s: usize) -> f64;
+    /// The state and next jump step after a reset at `step` from s (whose
+    /// next jump is at `next`), by the rule's noise option.
+    fn reset(
+        &self,
+        s: usize,
+        next: u64,
+        step: u64,
+        rule: &ResetRule,
+        rng: &mut Rng,
+    ) -> (usize, u64);
+    /// The state and next jump step after the jump at `step` from s.
+    fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64);
+}
+
+/// The paper's noise: ±Sigma (state 0: +Sigma), a flip per step with
+/// probability q = ½(1 - e^{-2 lambda dt}), ln(1 - q) = `ln_flip`.
+struct Telegraph {
+    sigma: f64,
+    ln_flip: f64,
+}
+
+impl EulerNoise for Telegraph {
+    fn start(&self, plus: bool, rng: &mut Rng) -> (usize, u64) {
+        (usize::from(!plus), geometric_gap(rng, self.ln_flip))
+    }
+    #[inline]
+    fn level(&self, s: usize) -> f64 {
+        if s == 0 {
+            self.sigma
+        } else {
+            -self.sigma
+        }
+    }
+    fn reset(&self, s: usize, next: u64, _: u64, rule: &ResetRule, rng: &mut Rng) -> (usize, u64) {
+        (usize::from(!rule.draw_noise(s == 0, rng)), next)
+    }
+    fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64) {
+        (1 - s, step.saturating_add(geometric_gap(rng, self.ln_flip)))
+    }
+}
+
+impl EulerNoise for StepChain {
+    /// Drawn from π (one uniform), then its first jump.
+    fn start(&self, _: bool, rng: &mut Rng) -> (usize, u64) {
+        let s = self.draw_stationary(rng);
+        (s, geometric_gap(rng, self.ln_stay[s]))
+    }
+    #[inline]
+    fn level(&self, s: usize) -> f64 {
+        self.levels[s]
+    }
+    /// A re-drawn state enters at the step before (it may jump in this
+    /// step, as [`crate::mfpt::euler`]'s noise kernel).
+    fn reset(
+        &self,
+        s: usize,
+        next: u64,
+        step: u64,
+        rule: &ResetRule,
+        rng: &mut Rng,
+    ) -> (usize, u64) {
+        let s2 = rule.draw_noise_state(s, &self.chain, rng);
+        if s2 == s {
+            return (s, next);
+        }
+        (
+            s2,
+            (step - 1).saturating_add(geometric_gap(rng, self.ln_stay[s2])),
+        )
+    }
+    fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64) {
+        let s2 = self.dest(s, rng.gen::<f64>() * self.leave[s]);
+        (
+            s2,
+            step.saturating_add(geometric_gap(rng, self.ln_stay[s2])),
+        )
+    }
+}
 
 /// The Euler search sampler of one problem and step (build with
 /// [`SearchEuler::new`]).
@@ -47,12 +147,10 @@ pub struct SearchEuler {
 /// The constants of one run.
 struct Chain {
     dt: f64,
-    /// ln(1 - q) and ln(1 - r dt): the geometric gaps of flips and resets.
-    ln_flip: f64,
+    /// ln(1 - r dt): the geometric gaps of resets.
     ln_reset: f64,
     x0: f64,
     v0: f64,
-    sigma: f64,
     lo: f64,
     hi: f64,
     max_steps: u64,
@@ -62,11 +160,16 @@ struct Chain {
 }
 
 impl SearchEuler {
-    /// Validate: dt inside the Euler stability limit with r dt < 1, a
-    /// finite t_max ≥ dt, no refractory period.
+    /// Validate: a noise model at T = 0 ([`super::noise_gate`]) with its
+    /// step chain exp(Q dt), dt inside the Euler stability limit with
+    /// r dt < 1, a finite t_max ≥ dt, no refractory period.
     pub fn new(problem: &SearchProblem, dt: f64, t_max: f64) -> Result<Self> {
+        super::noise_gate(problem, super::EULER)?;
         let p = problem.params();
         let dt = p.check_dt(dt)?;
+        if p.noise().is_some() {
+            StepChain::new(&p.chain()?, dt)?;
+        }
         if !(p.rate() * dt < 1.0) {
             return Err(Error::invalid(
                 "dt",
@@ -117,15 +220,30 @@ impl SearchEuler {
         progress: &dyn Progress,
     ) -> Vec<FptStats> {
         let c = self.chain();
-        crate::with_drag!(self.problem.params().drag(), |d| {
+        let p = self.problem.params();
+        let paper = Telegraph {
+            sigma: p.sigma(),
+            ln_flip: (-(0.5 * (-(-2.0 * p.lambda() * self.dt).exp_m1()))).ln_1p(),
+        };
+        // Validated when the SearchEuler was built (the same chain and dt).
+        let chain = p.noise().map(|_| {
+            p.chain()
+                .and_then(|ch| StepChain::new(&ch, self.dt))
+                .expect("noise chain validated by SearchEuler::new")
+        });
+        let run = |noise: &(dyn Fn(&mut Rng, bool) -> FptSample + Sync)| {
             first_passage_units(
                 n,
                 units.clone(),
                 seed,
                 self.t_max,
                 progress,
-                |_, rng, plus| c.run(d, plus, rng),
+                |_, rng, plus| noise(rng, plus),
             )
+        };
+        crate::with_drag!(p.drag(), |d| match &chain {
+            None => run(&|rng, plus| c.run(d, &paper, plus, rng)),
+            Some(ch) => run(&|rng, plus| c.run(d, ch, plus, rng)),
         })
     }
 
@@ -135,11 +253,9 @@ impl SearchEuler {
         let (lo, hi) = self.problem.target().bounds(self.problem.x0());
         Chain {
             dt,
-            ln_flip: (-(0.5 * (-(-2.0 * p.lambda() * dt).exp_m1()))).ln_1p(),
             ln_reset: (-(p.rate() * dt)).ln_1p(),
             x0: self.problem.x0(),
             v0: self.problem.v0(),
-            sigma: p.sigma(),
             lo,
             hi,
             max_steps: (self.t_max / dt).floor() as u64,
@@ -153,10 +269,15 @@ impl SearchEuler {
 impl Chain {
     /// One particle (module docs): the passage time (None by t_max) and
     /// the number of steps.
-    fn run<D: Drag>(&self, drag: &D, plus: bool, rng: &mut Rng) -> FptSample {
+    fn run<D: Drag, N: EulerNoise>(
+        &self,
+        drag: &D,
+        noise: &N,
+        plus: bool,
+        rng: &mut Rng,
+    ) -> FptSample {
         let (mut x, mut v) = (self.x0, self.v0);
-        let mut s = if plus { self.sigma } else { -self.sigma };
-        let mut next_flip = geometric_gap(rng, self.ln_flip);
+        let (mut s, mut next_flip) = noise.start(plus, rng);
         let mut next_reset = geometric_gap(rng, self.ln_reset);
         let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
         let mut step = 0u64;
@@ -175,15 +296,14 @@ impl Chain {
             let periodic = (step - 1) as f64 >= (next_periodic / self.dt).round();
             if poisson || periodic {
                 v = self.reset.draw_velocity(rng);
-                let plus = self.reset.draw_noise(s > 0.0, rng);
-                s = if plus { self.sigma } else { -self.sigma };
+                (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
                 x = self.x_reset.unwrap_or(x);
                 if let (Some(p), true) = (self.periodic, periodic) {
                     next_periodic = p.next_after(next_periodic);
                 }
             } else {
                 x += self.dt * v;
-                v = euler_step(drag, v, s, self.dt);
+                v = euler_step(drag, v, noise.level(s), self.dt);
                 if !(x > self.lo && x < self.hi) {
                     return FptSample {
                         time: Some(step as f64 * self.dt),
@@ -192,8 +312,7 @@ impl Chain {
                 }
             }
             if step == next_flip {
-                s = -s;
-                next_flip = step.saturating_add(geometric_gap(rng, self.ln_flip));
+                (s, next_flip) = noise.jump(s, step, rng);
             }
         }
         FptSample {

@@ -1,54 +1,157 @@
 //! Exact first passage in position: the event-driven sampler of
-//! [`crate::sim::exact`] run until x leaves the search region.
+//! [`crate::sim::exact`] run until x leaves the search region, over the
+//! paper's ±Sigma telegraph noise or any finite-state noise at T = 0
+//! ([`SearchNoise`]: one walk, generic over the noise states).
 //!
-//! Between events (noise flips and Poisson resets: a clock of rate
-//! lambda + r; periodic or renewal reset times; the end of a refractory period) the
-//! velocity follows the exact flow dv/dt = s - g(v), and x along a flow
-//! segment is the flow's displacement v* t - ∫ (v* - v) dt (the flow
-//! potential tables of the simulation sampler). Along a segment v moves
-//! monotonically towards v* = g⁻¹(s), so it changes sign at most once (at
-//! the flow time to v = 0): x(t) is monotone on at most two pieces. On a
+//! Between events (noise jumps and Poisson resets: a clock of rate
+//! q_s + r in state s, q_s = lambda for the paper's noise; periodic or
+//! renewal reset times; the end of a refractory period) the velocity
+//! follows the exact flow dv/dt = a_s - g(v) (a_s = ±Sigma for the paper's
+//! noise), and x along a flow segment is the flow's displacement
+//! v*_s t - ∫ (v*_s - v) dt (the flow potential tables of the simulation
+//! sampler; for a level whose fixed point v*_s = g⁻¹(a_s) is inside the
+//! velocity interval, such as the pause a_s = 0 of run-pause-tumble, the
+//! tables on each side of v*_s, [`level_segments`]). Along a segment v
+//! moves monotonically towards v*_s, so it changes sign at most once (at
+//! the flow time to v = 0; never where v*_s = 0: v keeps its sign and
+//! tends to 0): x(t) is monotone on at most two pieces. On a
 //! piece that moves towards a boundary and ends beyond it, the crossing is
 //! the root of x(t) = boundary, found by safeguarded Halley steps with
-//! dx/dt = v and d²x/dt² = s - g(v) inside the piece's bracket
+//! dx/dt = v and d²x/dt² = a_s - g(v) inside the piece's bracket
 //! ([`crate::numerics::root::solve_increasing`], bisection where it does
 //! not converge): exact to rounding, no time step, no overshoot.
 //!
-//! At a reset the velocity is drawn from the reset target, the noise state
-//! kept or re-drawn by the rule, and with position resetting x → x_r (on
-//! the start side of the target, so a reset is never a passage). A
-//! refractory period holds v at the reset velocity: x moves linearly (its
-//! crossing is closed-form), Poisson resets are off, the noise state flips
-//! with the probability ½(1 - e^{-2 lambda D}) of an odd number of flips,
-//! and the periodic times inside it or at its end are skipped (as in
-//! [`crate::mfpt::exact`]).
+//! One uniform u on [0, q_s + r) picks a jump of the noise (u < q_s, its
+//! target by [`Chain::jump`] from the same u; the other state for the
+//! paper's noise) or a reset. At a reset the velocity is drawn from the
+//! reset target, the noise state kept or re-drawn by the rule (±Sigma
+//! equally likely for the paper's noise, from π for a chain), and with
+//! position resetting x → x_r (on the start side of the target, so a reset
+//! is never a passage). A refractory period holds v at the reset velocity:
+//! x moves linearly (its crossing is closed-form), Poisson resets are off,
+//! the noise keeps jumping (the paper's noise flips with the probability
+//! ½(1 - e^{-2 lambda D}) of an odd number of flips; a chain's jumps are
+//! drawn one by one over D), and the periodic times inside it or at its
+//! end are skipped (as in [`crate::mfpt::exact`]).
+//!
+//! Start: the paper's noise starts at +Sigma for even particles and -Sigma
+//! for odd ones (stratified); a chain starts in a state drawn from π with
+//! the stream's first uniform, so τ is the π-averaged mean search time and
+//! the even and odd particles (the `plus` and `minus` halves of
+//! [`FptStats`]) are two independent halves of the same law (as in
+//! [`crate::mfpt::exact`]'s N-state sampler).
 
 use super::SearchProblem;
 use crate::error::Result;
 use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
 use crate::model::drag::{FlowMap, FlowPoint};
+use crate::model::noise::chain::Chain;
 use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::{check_relaxation, exp_gap, segments, Segments};
+use crate::sim::exact::{
+    check_relaxation, exp_gap, level_kind, level_segments, segments, LevelKind, Segments,
+};
 use rand::Rng as _;
 use std::ops::Range;
 
-/// Prepared exact sampler of one search problem (flow tables built once).
-#[derive(Clone)]
-pub struct SearchSampler<D: Drag> {
-    drag: D,
-    /// Flow segments of s = +Sigma (index 0) and s = -Sigma (index 1).
-    segs: [Segments<D::Flow>; 2],
-    /// The same flows, for flow times (the turning point v = 0).
-    flows: [D::Flow; 2],
-    /// Fixed points v* and noise values s, per state.
-    vs: [f64; 2],
-    s: [f64; 2],
+/// The noise states of a search walk: the paper's telegraph
+/// ([`Telegraph`], states 0 = +Sigma and 1 = -Sigma) or a finite-state
+/// [`Chain`]. The walk of [`SearchSampler`] is written once over it.
+pub trait SearchNoise: Clone + Send + Sync {
+    /// The start state of a particle (`plus`: an even particle).
+    fn start(&self, plus: bool, rng: &mut Rng) -> usize;
+    /// The exit rate q_s of state s.
+    fn exit(&self, s: usize) -> f64;
+    /// The state a jump from s goes to, given u uniform on [0, q_s).
+    fn jump(&self, s: usize, u: f64) -> usize;
+    /// The state after a reset from s, by the rule's noise option.
+    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize;
+    /// The state after a refractory hold of duration d from s (the noise
+    /// runs on while v is held).
+    fn after_hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize;
+}
+
+/// The paper's noise: ±Sigma flipping at rate lambda (state 0: +Sigma).
+#[derive(Clone, Copy, Debug)]
+pub struct Telegraph {
     lambda: f64,
-    total_rate: f64,
+}
+
+impl SearchNoise for Telegraph {
+    #[inline]
+    fn start(&self, plus: bool, _: &mut Rng) -> usize {
+        usize::from(!plus)
+    }
+    #[inline]
+    fn exit(&self, _: usize) -> f64 {
+        self.lambda
+    }
+    #[inline]
+    fn jump(&self, s: usize, _: f64) -> usize {
+        1 - s
+    }
+    #[inline]
+    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
+        usize::from(!rule.draw_noise(s == 0, rng))
+    }
+    /// A flip with the probability ½(1 - e^{-2 lambda d}) of an odd number
+    /// of flips.
+    fn after_hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize {
+        if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
+            1 - s
+        } else {
+            s
+        }
+    }
+}
+
+impl SearchNoise for Chain {
+    /// Drawn from π with one uniform (the stream's first draw).
+    #[inline]
+    fn start(&self, _: bool, rng: &mut Rng) -> usize {
+        self.draw_stationary(rng.gen::<f64>())
+    }
+    #[inline]
+    fn exit(&self, s: usize) -> f64 {
+        self.exit[s]
+    }
+    #[inline]
+    fn jump(&self, s: usize, u: f64) -> usize {
+        Chain::jump(self, s, u)
+    }
+    #[inline]
+    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
+        rule.draw_noise_state(s, self, rng)
+    }
+    /// The chain's jumps over d, one exponential gap each.
+    fn after_hold(&self, mut s: usize, d: f64, rng: &mut Rng) -> usize {
+        let mut t = exp_gap(rng, self.exit[s]);
+        while t < d {
+            s = Chain::jump(self, s, rng.gen::<f64>() * self.exit[s]);
+            t += exp_gap(rng, self.exit[s]);
+        }
+        s
+    }
+}
+
+/// Prepared exact sampler of one search problem (flow tables built once),
+/// over the noise states `N`.
+#[derive(Clone)]
+pub struct SearchSampler<D: Drag, N: SearchNoise = Telegraph> {
+    drag: D,
+    noise: N,
+    /// Flow segments of each noise state (the paper's: +Sigma, -Sigma).
+    segs: Vec<Segments<D::Flow>>,
+    /// The same flows, for flow times (the turning point v = 0).
+    flows: Vec<D::Flow>,
+    /// Fixed points v*_s and levels a_s, per state.
+    vs: Vec<f64>,
+    s: Vec<f64>,
+    /// Per state: q_s + r.
+    total: Vec<f64>,
     reset: ResetRule,
     schedule: Schedule,
     refractory: Option<Refractory>,
@@ -62,7 +165,7 @@ pub struct SearchSampler<D: Drag> {
 struct Walk {
     t: f64,
     x: f64,
-    /// Noise state: 0 for +Sigma, 1 for -Sigma.
+    /// Noise state (the paper's: 0 for +Sigma, 1 for -Sigma).
     si: usize,
     /// The start of the current flow segment.
     a: FlowPoint,
@@ -76,45 +179,108 @@ enum Segment {
     Moved(FlowPoint, f64),
 }
 
-impl<D: Drag> SearchSampler<D> {
-    /// Prepare for `problem` with the law `drag` (its own type: the walk
-    /// is monomorphised). Errors where the flow tables cannot resolve the
-    /// law (as the simulation sampler).
+impl<D: Drag> SearchSampler<D, Telegraph> {
+    /// Prepare for `problem` (the paper's noise; a noise model is run by
+    /// [`SearchSampler::with_chain`]) with the law `drag` (its own type:
+    /// the walk is monomorphised). Errors where the flow tables cannot
+    /// resolve the law (as the simulation sampler).
     pub fn new(drag: &D, problem: &SearchProblem) -> Result<Self> {
+        super::noise_gate(problem, super::PAPER_NOISE_ONLY)?;
         let params = problem.params();
         let sigma = params.sigma();
         let (vl, vu) = params.bounds();
         check_relaxation(drag, sigma, vu)?;
-        let segs = [
+        let segs = vec![
             segments(drag, sigma, vl, vu)?,
             segments(drag, -sigma, vl, vu)?,
         ];
-        let flows = [
+        let flows = vec![
             drag.flow(sigma).accelerated(),
             drag.flow(-sigma).accelerated(),
         ];
-        let (lo, hi) = problem.target().bounds(problem.x0());
-        let sched = params.schedule();
-        Ok(SearchSampler {
-            drag: drag.clone(),
-            vs: [flows[0].fixed_point(), flows[1].fixed_point()],
-            s: [sigma, -sigma],
+        let noise = Telegraph {
+            lambda: params.lambda(),
+        };
+        Ok(Self::assemble(
+            drag,
+            problem,
+            noise,
+            [sigma, -sigma].into(),
             segs,
             flows,
-            lambda: params.lambda(),
-            total_rate: params.lambda() + params.rate(),
+        ))
+    }
+}
+
+impl<D: Drag> SearchSampler<D, Chain> {
+    /// Prepare for `problem` with its noise model at T = 0 (the paper's
+    /// noise as a two-state chain where it has none): per level the
+    /// segments of [`level_segments`] and the flow of [`level_kind`]
+    /// (accelerated at an interval edge); refused naming `noise` where a
+    /// level's flow is not exact (a kink of the drag at v*, an interior
+    /// fixed point of a law without closed-form flows), naming
+    /// `temperature` at T > 0 ([`super::noise_gate`]).
+    pub fn with_chain(drag: &D, problem: &SearchProblem) -> Result<Self> {
+        super::noise_gate(problem, super::EXACT)?;
+        let params = problem.params();
+        let chain = params.chain()?;
+        let spec = params.noise_model()?.spec();
+        let law = (params.drag(), spec.as_str());
+        let bounds = params.bounds();
+        let mut segs = Vec::with_capacity(chain.states());
+        let mut flows = Vec::with_capacity(chain.states());
+        for &a in &chain.levels {
+            segs.push(level_segments(drag, law, a, bounds.0, bounds.1)?);
+            flows.push(
+                match level_kind(drag, law, a, bounds, "the exact sampler")? {
+                    LevelKind::Edge => drag.flow(a).accelerated(),
+                    LevelKind::Interior => drag.flow(a),
+                },
+            );
+        }
+        let levels = chain.levels.clone();
+        Ok(Self::assemble(drag, problem, chain, levels, segs, flows))
+    }
+}
+
+impl<D: Drag, N: SearchNoise> SearchSampler<D, N> {
+    /// The sampler from its noise states and per-state levels, segments
+    /// and flows.
+    fn assemble(
+        drag: &D,
+        problem: &SearchProblem,
+        noise: N,
+        levels: Vec<f64>,
+        segs: Vec<Segments<D::Flow>>,
+        flows: Vec<D::Flow>,
+    ) -> Self {
+        let params = problem.params();
+        let (lo, hi) = problem.target().bounds(problem.x0());
+        let sched = params.schedule();
+        let total = (0..levels.len())
+            .map(|s| noise.exit(s) + params.rate())
+            .collect();
+        SearchSampler {
+            drag: drag.clone(),
+            vs: flows.iter().map(|f| f.fixed_point()).collect(),
+            s: levels,
+            total,
+            noise,
+            segs,
+            flows,
             reset: *params.reset(),
             schedule: *sched,
             refractory: sched.refractory,
             x_reset: sched.position.map(|p| p.x),
             lo,
             hi,
-        })
+        }
     }
 
-    /// One search from (x0, v0) in noise state +Sigma (`start_plus`) or
-    /// -Sigma: (the first time x leaves the search region, or None if not
-    /// by `t_max`; the number of events).
+    /// One search from (x0, v0), the noise state by [`SearchNoise::start`]
+    /// (the paper's: +Sigma where `start_plus`, else -Sigma): (the first
+    /// time x leaves the search region, or None if not by `t_max`; the
+    /// number of events).
     pub fn run(
         &self,
         x0: f64,
@@ -123,7 +289,7 @@ impl<D: Drag> SearchSampler<D> {
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
-        let si = usize::from(!start_plus);
+        let si = self.noise.start(start_plus, rng);
         let mut w = Walk {
             t: 0.0,
             x: x0,
@@ -133,7 +299,8 @@ impl<D: Drag> SearchSampler<D> {
         let mut next_periodic = self.schedule.first_reset(rng);
         let mut events = 0u64;
         loop {
-            let gap = exp_gap(rng, self.total_rate);
+            let total = self.total[w.si];
+            let gap = exp_gap(rng, total);
             let periodic = next_periodic - w.t <= gap;
             let step = if periodic { next_periodic - w.t } else { gap };
             let span = step.min(t_max - w.t);
@@ -148,10 +315,13 @@ impl<D: Drag> SearchSampler<D> {
             w.x = x;
             w.t = if periodic { next_periodic } else { w.t + step };
             events += 1;
-            if !periodic && rng.gen::<f64>() * self.total_rate < self.lambda {
-                w.si = 1 - w.si;
-                w.a = self.segs[w.si].at(b.v);
-                continue;
+            if !periodic {
+                let u = rng.gen::<f64>() * total;
+                if u < self.noise.exit(w.si) {
+                    w.si = self.noise.jump(w.si, u);
+                    w.a = self.segs[w.si].at(b.v);
+                    continue;
+                }
             }
             if let Some(hit) = self.reset_at(&mut w, t_max, rng, &mut events) {
                 return (hit, events);
@@ -173,7 +343,7 @@ impl<D: Drag> SearchSampler<D> {
         events: &mut u64,
     ) -> Option<Option<f64>> {
         let v = self.reset.draw_velocity(rng);
-        w.si = usize::from(!self.reset.draw_noise(w.si == 0, rng));
+        w.si = self.noise.after_reset(w.si, &self.reset, rng);
         if let Some(xr) = self.x_reset {
             w.x = xr;
         }
@@ -185,9 +355,7 @@ impl<D: Drag> SearchSampler<D> {
             if w.t + d >= t_max {
                 return Some(None);
             }
-            if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
-                w.si = 1 - w.si;
-            }
+            w.si = self.noise.after_hold(w.si, d, rng);
             w.t += d;
             w.x += v * d;
             *events += 1;
@@ -327,12 +495,29 @@ fn monotone_root(h: &dyn Fn(f64) -> (f64, f64, f64), lo: f64, hi: f64, guess: f6
     }
 }
 
+/// The sampler of `problem` for the law `d`, over its noise states: the
+/// paper's telegraph, or the chain of its noise model; `$f` runs with it.
+macro_rules! with_sampler {
+    ($problem:expr, |$d:ident, $s:ident| $body:expr) => {
+        crate::with_drag!($problem.params().drag(), |$d| {
+            if $problem.params().noise().is_some() {
+                let $s = SearchSampler::with_chain($d, $problem)?;
+                $body
+            } else {
+                let $s = SearchSampler::new($d, $problem)?;
+                $body
+            }
+        })
+    };
+}
+
 /// The unit totals of units `units` of the search run of `particles`
 /// particles of `problem` by the exact sampler, through the method-agnostic
 /// driver [`first_passage_units`] (particle i: stream (seed, i), start
-/// state +Sigma for even i, censored at `t_max`), monomorphised for the
-/// law's type. Merged in unit order ([`stats`]) they are bit-identical for
-/// any thread count and any split into parts.
+/// state +Sigma for even i with the paper's noise, drawn from π with a
+/// noise model; censored at `t_max`), monomorphised for the law's type and
+/// the noise states. Merged in unit order ([`stats`]) they are
+/// bit-identical for any thread count and any split into parts.
 pub fn units(
     problem: &SearchProblem,
     t_max: f64,
@@ -341,21 +526,18 @@ pub fn units(
     units: Range<u64>,
     progress: &dyn Progress,
 ) -> Result<Vec<FptStats>> {
-    crate::with_drag!(problem.params().drag(), |d| {
-        let sampler = SearchSampler::new(d, problem)?;
-        let (x0, v0) = (problem.x0(), problem.v0());
-        Ok(first_passage_units(
-            particles,
-            units.clone(),
-            seed,
-            t_max,
-            progress,
-            |_, rng, plus| {
-                let (time, work) = sampler.run(x0, v0, plus, t_max, rng);
-                FptSample { time, work }
-            },
-        ))
-    })
+    let (x0, v0) = (problem.x0(), problem.v0());
+    with_sampler!(problem, |d, sampler| Ok(first_passage_units(
+        particles,
+        units.clone(),
+        seed,
+        t_max,
+        progress,
+        |_, rng, plus| {
+            let (time, work) = sampler.run(x0, v0, plus, t_max, rng);
+            FptSample { time, work }
+        },
+    )))
 }
 
 /// Search statistics of `problem` by the exact sampler: all [`units`]
@@ -372,8 +554,8 @@ pub fn stats(
     Ok(merge_units(t_max, &u))
 }
 
-/// One search of `problem` (any law, dispatched per call; for many
-/// particles build a [`SearchSampler`] once, as [`stats`] does): the
+/// One search of `problem` (any law and noise, dispatched per call; for
+/// many particles build a [`SearchSampler`] once, as [`stats`] does): the
 /// passage time (None if not by `t_max`) and the number of events.
 pub fn search_once(
     problem: &SearchProblem,
@@ -381,8 +563,11 @@ pub fn search_once(
     t_max: f64,
     rng: &mut Rng,
 ) -> Result<(Option<f64>, u64)> {
-    crate::with_drag!(problem.params().drag(), |d| {
-        let sampler = SearchSampler::new(d, problem)?;
-        Ok(sampler.run(problem.x0(), problem.v0(), start_plus, t_max, rng))
-    })
+    with_sampler!(problem, |d, sampler| Ok(sampler.run(
+        problem.x0(),
+        problem.v0(),
+        start_plus,
+        t_max,
+        rng
+    )))
 }

@@ -173,14 +173,11 @@ fn check_reset_position(x0: f64, target: PositionTarget, xr: f64) -> Result<()> 
 }
 
 impl SearchProblem {
-    /// Validate: the paper's noise (another noise model is refused, naming
-    /// `noise`: no search method runs it yet); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
+    /// Validate: x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
     /// (v_l, v_u); a reset position strictly on the start side (the same
-    /// side of L as x0, or inside (a, b)). NaN fails every check.
+    /// side of L as x0, or inside (a, b)). NaN fails every check. A noise
+    /// model is admitted here and gated per method by [`noise_gate`].
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
-        if let Some(m) = params.noise() {
-            crate::model::noise::support::refuse("a search (--xt, --interval)", m)?;
-        }
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;
         let (vl, vu) = params.bounds();
@@ -245,7 +242,9 @@ impl SearchProblem {
     /// finite). Finite: an interval target, or full resetting
     /// (params.schedule().position is Some) with a reset rate/period/clock.
     /// Refinements, each a case where the particle can never arrive with
-    /// positive probability: a level with the noise kept at resets needs
+    /// positive probability: a level needs a velocity towards it (with a
+    /// noise model, a level whose fixed point is on its side of 0:
+    /// `moves_towards`); a level with the paper's noise kept at resets needs
     /// lambda > 0 (else a particle in the state pointing away never turns);
     /// a clock of bounded support (a period, or a bounded law, Poisson
     /// resets added or not) needs the target within reach of its longest
@@ -256,18 +255,30 @@ impl SearchProblem {
     /// With velocity-only resetting and a level, S(t) decays as a power law
     /// (or tends to a constant): infinite, unless the resets give the
     /// velocity a stationary mean towards the level (`drifts_towards`):
-    /// then x moves ballistically on average and the mean is finite.
+    /// then x moves ballistically on average and the mean is finite. With
+    /// a noise model without mirror symmetry the sign of the mean velocity
+    /// is not decided here: such a level search is treated as infinite
+    /// (tau not reported, the tail exponent fitted).
     pub fn infinite_mean_reason(&self) -> Option<&'static str> {
         let p = &self.params;
         let sched = p.schedule();
+        if let PositionTarget::Level(l) = self.target {
+            if !self.moves_towards(l) {
+                return Some(AWAY_REASON);
+            }
+        }
         let Some(pos) = sched.position else {
             return match self.target {
+                PositionTarget::Level(_) if !self.mirrored() => Some(ASYMMETRIC_NOISE_REASON),
                 PositionTarget::Level(l) if !self.drifts_towards(l) => Some(INFINITE_MEAN_REASON),
                 _ => None,
             };
         };
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
-        let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
+        // A noise model's chain is irreducible with two or more states:
+        // every state is left, so a particle always turns.
+        let turns =
+            p.noise().is_some() || p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
@@ -322,13 +333,13 @@ impl SearchProblem {
             return false;
         }
         let (lo, hi) = self.target.bounds(self.x0);
-        let s = p.sigma();
+        let (amin, amax) = self.extreme_levels();
         let (mut low_max, mut high_min) = (f64::NEG_INFINITY, f64::INFINITY);
         for k in 1..=64 {
             let t = per.period * k as f64 / 64.0;
             let (down, up) = crate::with_drag!(p.drag(), |d| (
-                d.flow_displacement(-s, self.v0, t),
-                d.flow_displacement(s, self.v0, t)
+                d.flow_displacement(amin, self.v0, t),
+                d.flow_displacement(amax, self.v0, t)
             ));
             low_max = low_max.max(down);
             high_min = high_min.min(up);
@@ -336,9 +347,46 @@ impl SearchProblem {
         self.x0 + low_max >= hi || self.x0 + high_min <= lo
     }
 
+    /// The lowest and highest noise levels (-Sigma, Sigma for the paper's
+    /// noise): the flow is monotone in the level, so every path lies
+    /// between the flows of these two.
+    fn extreme_levels(&self) -> (f64, f64) {
+        let p = &self.params;
+        match p.noise() {
+            None => (-p.sigma(), p.sigma()),
+            Some(m) => m
+                .levels()
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &l| {
+                    (a.min(l), b.max(l))
+                }),
+        }
+    }
+
+    /// Whether the velocity can point towards the level `l` (the velocity
+    /// interval (v_l, v_u) reaches the side of 0 towards l): always for the
+    /// paper's noise; with a noise model whose levels all push away from
+    /// l, x never moves towards it.
+    fn moves_towards(&self, l: f64) -> bool {
+        let (vl, vu) = self.params.bounds();
+        if l > self.x0 {
+            vu > 0.0
+        } else {
+            vl < 0.0
+        }
+    }
+
+    /// Whether the noise is mirror-symmetric (the paper's, or a model with
+    /// a mirror map of its states: a_m(s) = -a_s, the same rates).
+    fn mirrored(&self) -> bool {
+        self.params
+            .noise()
+            .map_or(true, |m| m.kind().mirror().is_some())
+    }
+
     /// Whether resets (Poisson or periodic) to a target whose mean <v_r>
-    /// is not 0 drive x towards the level `l`. The noise is symmetric and
-    /// g odd, so <v_r> = 0 gives <v> = 0 by mirror symmetry, and the flow
+    /// is not 0 drive x towards the level `l`. The noise is symmetric (the
+    /// caller checks it: [`Self::mirrored`]) and g odd, so <v_r> = 0 gives <v> = 0 by mirror symmetry, and the flow
     /// is monotone in its start, so a reset distribution shifted up (down)
     /// gives a larger (smaller) stationary velocity: <v> has the sign of
     /// <v_r>.
@@ -369,15 +417,46 @@ impl SearchProblem {
             }
             None => {
                 let (vlo, vhi) = p.reset().target().support();
-                let s = p.sigma();
+                let (amin, amax) = self.extreme_levels();
                 crate::with_drag!(p.drag(), |d| (
-                    d.flow_displacement(s, vhi, period),
-                    d.flow_displacement(-s, vlo, period)
+                    d.flow_displacement(amax, vhi, period),
+                    d.flow_displacement(amin, vlo, period)
                 ))
             }
         };
         xr + up >= hi || xr + down <= lo
     }
+}
+
+/// The search methods that run a noise model other than the paper's.
+pub const NOISE_RUNNERS: &str = "--method exact and --method euler";
+/// The exact sampler's name in [`noise_gate`].
+pub(crate) const EXACT: &str = "--method exact";
+/// The Euler scheme's name in [`noise_gate`].
+pub(crate) const EULER: &str = "--method euler";
+/// The paper-noise constructor of the exact sampler, for [`noise_gate`].
+pub(crate) const PAPER_NOISE_ONLY: &str =
+    "SearchSampler::new (SearchSampler::with_chain runs a noise)";
+
+/// The noise gate of the search, the one place deciding per method
+/// whether it runs the problem's noise model: the paper's noise (no
+/// model) runs everywhere; a noise model at T = 0 runs in the samplers
+/// ([`EXACT`], [`EULER`]); any other (a backward, renewal or distribution
+/// solve, or thermal noise) is refused naming `noise` (or `temperature`
+/// for the paper's noise with T > 0) in one line listing [`NOISE_RUNNERS`].
+pub(crate) fn noise_gate(problem: &SearchProblem, method: &str) -> Result<()> {
+    let Some(m) = problem.params().noise() else {
+        return Ok(());
+    };
+    if [EXACT, EULER].contains(&method) && m.temperature() == 0.0 {
+        return Ok(());
+    }
+    let (name, value) = crate::model::noise::support::blamed(m);
+    Err(Error::invalid(
+        name,
+        value,
+        format!("the paper's noise for a search by {method}; {NOISE_RUNNERS} run any finite-state noise at T = 0"),
+    ))
 }
 
 /// How a search problem is solved. The one dispatch point: a deterministic
@@ -460,6 +539,7 @@ impl SearchMethod {
                 euler::SearchEuler::new(problem, dt, run.t_max).map(drop)
             }
             SearchMethod::Exact(run) => {
+                noise_gate(problem, EXACT)?;
                 if run.particles < 4 {
                     return Err(Error::invalid("particles", run.particles, "particles >= 4"));
                 }
@@ -563,6 +643,15 @@ pub const INFINITE_MEAN_REASON: &str = "the mean search time is infinite: with v
      resetting (no position reset) x is unbounded and a one-sided level is reached with a \
      power-law survival S(t) ~ t^-theta (theta = 1/2 with zero mean velocity) or, out of reach, \
      never; the tail exponent is reported instead";
+
+/// A level that no velocity moves towards.
+const AWAY_REASON: &str = "the mean search time is infinite: every level of the noise drives \
+     the velocity away from the target level, so x never moves towards it";
+
+/// Velocity-only resetting to a level with an asymmetric noise model.
+const ASYMMETRIC_NOISE_REASON: &str = "the mean search time is treated as infinite: with \
+     velocity-only resetting and a noise without mirror symmetry the sign of the mean velocity \
+     is not decided, so tau is not reported; the tail exponent is reported instead";
 
 /// Full resetting without any reset (no rate, period or clock).
 const NO_RESETS_REASON: &str = "the mean search time is infinite: the position is never reset \

@@ -76,7 +76,7 @@ use std::ops::Range;
 mod ou;
 mod states;
 
-pub(crate) use states::{level_kind, LevelKind};
+pub(crate) use states::{level_kind, level_segments, LevelKind};
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on

@@ -39,6 +39,7 @@ mod search_cross;
 mod search_errors;
 mod search_exact;
 mod search_methods;
+mod search_noise;
 mod search_optimize;
 mod search_reach;
 mod shards;

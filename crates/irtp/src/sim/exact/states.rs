@@ -111,7 +111,7 @@ pub(crate) fn level_kind<D: Drag>(
 /// (distances up to the interval's ends), or where a side does not fit in
 /// its tables the iterative closed-form flow with the deficit table on
 /// [lo, hi].
-fn level_segments<D: Drag>(
+pub(crate) fn level_segments<D: Drag>(
     drag: &D,
     (law, spec): (DragLaw, &str),
     a: f64,
