@@ -2,6 +2,7 @@
 //! Each module is one former test file; shared helpers live in `common`.
 
 mod analytic;
+mod atoms_transient;
 mod architecture;
 mod clock;
 mod common;
