@@ -515,7 +515,9 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
         let sum = |f: fn(&irtp::model::VelocityAtom) -> f64| -> Vec<f64> {
             tr.atoms.iter().map(|a| a.iter().map(f).sum()).collect()
         };
-        moments.header.extend(["atom_mass", "atom_err"].map(String::from));
+        moments
+            .header
+            .extend(["atom_mass", "atom_err"].map(String::from));
         moments.columns.push(sum(|a| a.mass));
         moments.columns.push(sum(|a| a.err));
     }
@@ -555,7 +557,10 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     );
     let text = match atoms_text(&tr.atoms[k]) {
         a if a.is_empty() => text,
-        a => format!("{text}point mass at t = {} (not in snapshots.csv):{a}\n", fmt_sig(t_max)),
+        a => format!(
+            "{text}point mass at t = {} (not in snapshots.csv):{a}\n",
+            fmt_sig(t_max)
+        ),
     };
     let method = match tr.scheme {
         fp::Scheme::Paper => "fv-upwind-explicit-uniform",

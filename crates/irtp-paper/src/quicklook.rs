@@ -654,7 +654,14 @@ fn fp_transient_panels(dir: &Path) -> Result<Vec<Panel>> {
     ];
     // With point masses: their total mass in time.
     if m.has("atom_mass") {
-        let atoms = line(&m, "t", "atom_mass", "atom mass", Color::Palette(2), Dash::Dotted);
+        let atoms = line(
+            &m,
+            "t",
+            "atom_mass",
+            "atom mass",
+            Color::Palette(2),
+            Dash::Dotted,
+        );
         moments.push(atoms);
     }
     Ok(vec![

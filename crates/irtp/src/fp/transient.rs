@@ -25,8 +25,8 @@ use super::grid::{uniform_target, Grid, Mesh};
 use super::operator::ForwardOperator;
 use super::stationary::{MAX_CELLS, MIN_CELLS};
 use crate::error::{finite, Error, Result};
-use crate::model::reset::Solver;
 use crate::model::reset::Reset;
+use crate::model::reset::Solver;
 use crate::model::{Drag, Params, VelocityAtom};
 use crate::numerics::trbdf2::{self, Tolerances};
 use crate::parallel::{NoProgress, Progress};
@@ -927,7 +927,10 @@ impl Transient {
     /// refractory period or with a random target (its held mass is spread
     /// over the target's cells' velocities).
     fn held_atoms(&self, held: f64) -> Vec<VelocityAtom> {
-        match (self.params.schedule().refractory, self.params.reset().point()) {
+        match (
+            self.params.schedule().refractory,
+            self.params.reset().point(),
+        ) {
             (Some(_), Some(v)) => vec![VelocityAtom {
                 v,
                 mass: held,

@@ -796,7 +796,8 @@ pub struct SimSummary {
     /// [burn_in, t_max] and its standard error; the density histogram
     /// holds the rest.
     #[serde(default)]
-    pub atoms: Vec<crate::model::VelocityAtom>,    /// The same point mass at t_max: the fraction of particles exactly at
+    pub atoms: Vec<crate::model::VelocityAtom>,
+    /// The same point mass at t_max: the fraction of particles exactly at
     /// its velocity at t_max and its standard error (the time-dependent
     /// atom of `fp transient` at t_max; `density_final` holds the rest).
     #[serde(default)]

@@ -49,7 +49,21 @@ fn one(a: &[VelocityAtom]) -> VelocityAtom {
 /// stationary solver's atom π₀ r/(r + β) within both errors.
 #[test]
 fn rpt_reset_atom_follows_its_ode_and_reaches_the_stationary_atom() {
+    rpt_atom_case(1.0, 800);
+}
+
+/// [`rpt_reset_atom_follows_its_ode_and_reaches_the_stationary_atom`] on
+/// finer meshes and a faster reset.
+#[test]
+#[ignore = "slow tier: two runs of 2000 and 4000 cells to t = 12 (~100 s)"]
+fn rpt_reset_atom_on_finer_meshes() {
     for (rate, cells) in [(1.0, 2000), (3.0, 4000)] {
+        rpt_atom_case(rate, cells);
+    }
+}
+
+fn rpt_atom_case(rate: f64, cells: usize) {
+    {
         let p = rpt(rate);
         let tr = run(&p, cells);
         let st = stationary(
@@ -70,7 +84,12 @@ fn rpt_reset_atom_follows_its_ode_and_reaches_the_stationary_atom() {
             println!("{tag}: atom {} ± {:.1e} (want {want})", a.mass, a.err);
             assert_eq!(a.v, 0.0, "{tag}");
             assert!(a.err > 0.0 && a.err < 1e-3, "{tag}: error {}", a.err);
-            assert!((a.mass - want).abs() <= a.err, "{tag}: {} vs {want} ± {}", a.mass, a.err);
+            assert!(
+                (a.mass - want).abs() <= a.err,
+                "{tag}: {} vs {want} ± {}",
+                a.mass,
+                a.err
+            );
             let snap = &tr.snapshots[k];
             assert_eq!((snap.t, one(&snap.atoms)), (t, a), "{tag}");
             let density: f64 = snap.p.iter().zip(&st.widths).map(|(p, w)| p * w).sum();
@@ -95,16 +114,28 @@ fn rpt_reset_atom_follows_its_ode_and_reaches_the_stationary_atom() {
 /// atom; thermal noise holds nothing.
 #[test]
 fn the_start_held_by_the_pause_is_an_atom_without_resets() {
-    let tr = run(&rpt(0.0), 2000);
+    let tr = run(&rpt(0.0), 800);
     for (k, &t) in TIMES.iter().enumerate() {
         let a = one(&tr.atoms[k]);
         let want = rpt_atom(0.0, t);
-        assert!((a.mass - want).abs() <= a.err, "t = {t}: {} vs {want} ± {}", a.mass, a.err);
+        assert!(
+            (a.mass - want).abs() <= a.err,
+            "t = {t}: {} vs {want} ± {}",
+            a.mass,
+            a.err
+        );
     }
     let drag: DragLaw = "tan".parse().unwrap();
     let noise = NoiseModel::parse("rpt:sigma=3,alpha=1,beta=2", 0.1).unwrap();
     let p = Params::with_noise(drag, noise, 1.0, 0.0).unwrap();
-    let tr = run(&p, 2000);
+    let opts = TransientOptions {
+        cells: 400,
+        t_max: 0.5,
+        times: vec![0.5],
+        snapshot_times: vec![0.5],
+        ..Default::default()
+    };
+    let tr = transient(&p, &opts).unwrap();
     assert!(tr.atoms.iter().all(|a| a.is_empty()), "{:?}", tr.atoms);
     assert!(tr.snapshots.iter().all(|s| s.atoms.is_empty()));
 }
@@ -150,13 +181,21 @@ fn refractory_hold_is_an_atom_in_time() {
         let want = r * m / (1.0 + r * m) * (1.0 - (-(r + 1.0 / m) * t).exp());
         assert_eq!(a.v, vr);
         assert_eq!(a.mass, tr.refractory_mass[k]);
-        assert!((a.mass - want).abs() <= a.err + 5e-6, "t = {t}: {} vs {want}", a.mass);
+        assert!(
+            (a.mass - want).abs() <= a.err + 5e-6,
+            "t = {t}: {} vs {want}",
+            a.mass
+        );
         let snap = &tr.snapshots[k];
         assert_eq!(one(&snap.atoms), a, "t = {t}");
         let widths: Vec<f64> = st.widths.clone();
         assert_eq!(st.v, tr.v);
         let density: f64 = snap.p.iter().zip(&widths).map(|(p, w)| p * w).sum();
-        assert!((density + a.mass - 1.0).abs() < 1e-8, "t = {t}: {density} + {}", a.mass);
+        assert!(
+            (density + a.mass - 1.0).abs() < 1e-8,
+            "t = {t}: {density} + {}",
+            a.mass
+        );
     }
 }
 

@@ -2,8 +2,8 @@
 //! Each module is one former test file; shared helpers live in `common`.
 
 mod analytic;
-mod atoms_transient;
 mod architecture;
+mod atoms_transient;
 mod clock;
 mod common;
 mod conformance;

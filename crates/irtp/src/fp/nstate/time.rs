@@ -201,7 +201,10 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
                     .map(|j| [atom_rows[0][k][j], atom_rows[1][k][j], arows[k][j]])
                     .collect();
                 let (split, rest) = split_held(u, &cells, &x);
-                fine_rows[k] = FineAtoms { split, total: rest.iter().sum() };
+                fine_rows[k] = FineAtoms {
+                    split,
+                    total: rest.iter().sum(),
+                };
                 if o.snapshot_times.contains(&times[k]) {
                     snapshots.push((times[k], rest));
                 }
@@ -285,7 +288,11 @@ fn held_mass(u: &[f64], c: &[(usize, f64)]) -> f64 {
 /// cells' masses `x` on the meshes N/4, N/2, N (Eq. (N27)), with its error,
 /// and the fine cell masses `u` less it: each cell gives up its share of
 /// the atom (at most its mass), as the stationary split does.
-fn split_held(u: &[f64], cells: &[Vec<(usize, f64)>], x: &[[f64; 3]]) -> (Vec<(f64, f64)>, Vec<f64>) {
+fn split_held(
+    u: &[f64],
+    cells: &[Vec<(usize, f64)>],
+    x: &[[f64; 3]],
+) -> (Vec<(f64, f64)>, Vec<f64>) {
     let mut rest = u.to_vec();
     let split = cells
         .iter()
@@ -328,7 +335,9 @@ fn check_balance(
 ) -> Result<()> {
     for (k, (t, f)) in times.iter().zip(fine).enumerate() {
         let a = atoms(k);
-        let (mass, err) = a.iter().fold((0.0, 0.0), |(m, e), a| (m + a.mass, e + a.err));
+        let (mass, err) = a
+            .iter()
+            .fold((0.0, 0.0), |(m, e), a| (m + a.mass, e + a.err));
         let total = f.total + mass;
         if !((total - 1.0).abs() <= err + MASS_TOLERANCE) {
             return Err(Error::Numerical {
