@@ -240,7 +240,7 @@ fn fp_transient_atom_in_time_against_its_ode_and_simulate() {
     }
     let (_, m, e) = atom(&fp);
     let mut a = vec!["simulate", "--particles", "40000", "--t-max", "1"];
-    a.extend(["--json"]);
+    a.extend(["--burn-in", "0.5", "--json"]);
     a.extend(MODEL);
     let sim = json(&irtp(&a));
     let f = sim["atoms_final"].as_array().unwrap();
