@@ -558,8 +558,9 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let text = match atoms_text(&tr.atoms[k]) {
         a if a.is_empty() => text,
         a => format!(
-            "{text}point mass at t = {} (not in snapshots.csv):{a}\n",
-            fmt_sig(t_max)
+            "{text}point mass at t = {} (not in snapshots.csv): {}\n",
+            fmt_sig(t_max),
+            a.trim_start()
         ),
     };
     let method = match tr.scheme {

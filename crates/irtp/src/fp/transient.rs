@@ -208,10 +208,11 @@ pub struct Transient {
     /// mass, error the change from the mesh of cells/2), and with a noise
     /// model at T = 0 the mass held at a state's fixed point (Eq. (N52):
     /// the reset target, or the start v = 0), extrapolated over the three
-    /// meshes. The snapshots' densities are without them, and density mass
-    /// + atoms = 1 is checked at every time (refused otherwise). Empty
-    /// lists where nothing holds the velocity. At t = 0 the start's share
-    /// in the states that move is in the cells of v = 0, not an atom.
+    /// meshes. The snapshots' densities are without them, and the density
+    /// mass plus the atoms is checked to be 1 at every time (refused
+    /// otherwise). Empty lists where nothing holds the velocity. At t = 0
+    /// the start's share in the states that move is in the cells of v = 0,
+    /// not an atom.
     pub atoms: Vec<Vec<VelocityAtom>>,
     /// |Σ P Δv - 1|, maximum over every step (paper scheme) or over every
     /// recording and snapshot time of the three meshes (TR-BDF2).
