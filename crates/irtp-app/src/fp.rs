@@ -475,6 +475,10 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
         "v_mean_final": tr.v_mean[k],
         "mass": tr.mass[k],
         "refractory_mass": tr.refractory_mass[k],
+        "atoms": atoms_json(&tr.atoms[k]),
+        "atoms_t": tr.times.iter().zip(&tr.atoms)
+            .map(|(t, a)| json!({"t": t, "atoms": atoms_json(a)}))
+            .collect::<Vec<_>>(),
         "mass_error_max": tr.mass_error_max,
         "dt": tr.dt,
         "steps": tr.steps,
@@ -505,6 +509,17 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     if params.schedule().refractory.is_some() {
         moments.header.push("refractory_mass".into());
         moments.columns.push(tr.refractory_mass.clone());
+    }
+    // With point masses: their total mass and error per recording time.
+    if tr.atoms.iter().any(|a| !a.is_empty()) {
+        let sum = |f: fn(&irtp::model::VelocityAtom) -> f64| -> Vec<f64> {
+            tr.atoms.iter().map(|a| a.iter().map(f).sum()).collect()
+        };
+        moments
+            .header
+            .extend(["atom_mass", "atom_err"].map(String::from));
+        moments.columns.push(sum(|a| a.mass));
+        moments.columns.push(sum(|a| a.err));
     }
     let snapshots = match tr.snapshots.first().map(|s| s.states.len()) {
         Some(ns) if ns > 0 => noise_snapshots(&tr, ns),
@@ -540,6 +555,14 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
             ""
         }
     );
+    let text = match atoms_text(&tr.atoms[k]) {
+        a if a.is_empty() => text,
+        a => format!(
+            "{text}point mass at t = {} (not in snapshots.csv): {}\n",
+            fmt_sig(t_max),
+            a.trim_start()
+        ),
+    };
     let method = match tr.scheme {
         fp::Scheme::Paper => "fv-upwind-explicit-uniform",
         fp::Scheme::TrBdf2 if params.noise().is_some() => "fv-nstate-trbdf2-graded",

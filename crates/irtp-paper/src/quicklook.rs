@@ -546,6 +546,13 @@ fn atom_stems(dir: &Path, top: f64) -> Vec<Series> {
     let Some(atoms) = v["results"]["atoms"].as_array() else {
         return Vec::new();
     };
+    // `fp transient`: the atoms at t_max (its last snapshot).
+    let when = match (&v["results"]["atoms_t"], v["results"]["t_max"].as_f64()) {
+        (serde_json::Value::Array(_), Some(t)) => {
+            format!(", t = {}", irtp_app::io::format_float(t))
+        }
+        _ => String::new(),
+    };
     let mut out = Vec::new();
     for (k, a) in atoms.iter().enumerate() {
         let (Some(at), Some(mass)) = (a["v"].as_f64(), a["mass"].as_f64()) else {
@@ -556,7 +563,7 @@ fn atom_stems(dir: &Path, top: f64) -> Vec<Series> {
             None => irtp_app::format::fmt_sig(mass),
         };
         let at_text = symbols::number(at).replace('-', "−");
-        let label = format!("atom at v = {at_text}: mass {mass_text}");
+        let label = format!("atom at v = {at_text}{when}: mass {mass_text}");
         let color = Color::Palette(4 + k);
         out.push(Series::line(
             None,
@@ -638,12 +645,25 @@ fn fp_transient_panels(dir: &Path) -> Result<Vec<Panel>> {
             let label = format!("t = {}", irtp_app::io::format_float(t));
             Series::line(Some(label), Color::Palette(k), Dash::Solid, "p", v, p)
         })
-        .collect();
+        .collect::<Vec<_>>()
+        .with_atoms(dir);
     let m = Table::read(dir, "moments.csv")?;
-    let moments = vec![
+    let mut moments = vec![
         line(&m, "t", "v2", "⟨v²⟩", Color::Palette(0), Dash::Solid),
         line(&m, "t", "v_mean", "⟨v⟩", Color::Palette(1), Dash::Dashed),
     ];
+    // With point masses: their total mass in time.
+    if m.has("atom_mass") {
+        let atoms = line(
+            &m,
+            "t",
+            "atom_mass",
+            "atom mass",
+            Color::Palette(2),
+            Dash::Dotted,
+        );
+        moments.push(atoms);
+    }
     Ok(vec![
         panel(
             "(a)",

@@ -212,3 +212,73 @@ fn samplers_report_refractory_and_pause_atoms() {
         );
     }
 }
+
+/// `fp transient` reports the atom of the time-dependent law at every
+/// recording time (`atoms_t`), the closed form (N52)
+/// m(t) = π₀ [r + β e^{-(r+β) t}]/(r + β) within its error; at t_max = 1
+/// it agrees with the fraction of `simulate`'s particles exactly at v = 0
+/// at t_max (`atoms_final`) within 4 SE (Bonferroni over the two
+/// comparisons) + the FP error; the snapshots at t_max (density without
+/// the atom) integrate to 1 - atom within the atom's error.
+#[test]
+fn fp_transient_atom_in_time_against_its_ode_and_simulate() {
+    let dir = tempfile::tempdir().unwrap();
+    let fp_dir = dir.path().join("fp");
+    let mut a = vec!["fp", "transient", "--t-max", "1", "--cells", "800"];
+    a.extend(["--samples", "5", "--snapshots", "1", "--json", "--out"]);
+    a.push(fp_dir.to_str().unwrap());
+    a.extend(MODEL);
+    let fp = json(&irtp(&a));
+    let series = fp["atoms_t"].as_array().unwrap();
+    assert_eq!(series.len(), 5, "{fp}");
+    for e in series {
+        let t = e["t"].as_f64().unwrap();
+        let (v, m, err) = atom(e);
+        let want = (1.0 + 2.0 * (-3.0 * t).exp()) / 9.0;
+        assert_eq!(v, 0.0);
+        assert!((m - want).abs() <= err, "t = {t}: {m} ± {err} vs {want}");
+    }
+    let (_, m, e) = atom(&fp);
+    let mut a = vec!["simulate", "--particles", "40000", "--t-max", "1"];
+    a.extend(["--burn-in", "0.5", "--json"]);
+    a.extend(MODEL);
+    let sim = json(&irtp(&a));
+    let f = sim["atoms_final"].as_array().unwrap();
+    assert_eq!(f.len(), 1, "{sim}");
+    let (ms, es) = (
+        f[0]["mass"].as_f64().unwrap(),
+        f[0]["err"].as_f64().unwrap(),
+    );
+    assert!(es > 0.0, "{sim}");
+    let z = stats::bonferroni_z(2);
+    let want = (1.0 + 2.0 * (-3.0f64).exp()) / 9.0;
+    assert!(
+        (ms - want).abs() <= z * es,
+        "simulate {ms} ± {es} vs {want}"
+    );
+    assert!(
+        (ms - m).abs() <= z * es + e,
+        "simulate {ms} ± {es} vs fp {m} ± {e}"
+    );
+    // The density at t_max without the atom, on the fp stationary mesh
+    // (the same cells).
+    let st_dir = dir.path().join("st");
+    let mut a = vec!["fp", "stationary", "--cells", "800", "--out"];
+    a.push(st_dir.to_str().unwrap());
+    a.extend(MODEL);
+    irtp(&a);
+    let snaps = columns(&fp_dir.join("snapshots.csv"));
+    let dv = columns(&st_dir.join("density.csv"));
+    assert_eq!(col(&snaps, "v"), col(&dv, "v"));
+    let density: f64 = col(&snaps, "p")
+        .iter()
+        .zip(col(&dv, "dv"))
+        .map(|(p, h)| p * h)
+        .sum();
+    assert!(
+        (density + m - 1.0).abs() <= e + 1e-8,
+        "density {density} + atom {m}"
+    );
+    let moments = columns(&fp_dir.join("moments.csv"));
+    assert_eq!(col(&moments, "atom_mass").last(), Some(&m));
+}

@@ -316,7 +316,8 @@ fn paper_scheme_refuses_a_refractory_period() {
 }
 
 /// The CLI: `fp transient` with a refractory period writes the held mass
-/// as a fifth column of moments.csv and in the summary (mass 1 with it);
+/// as a fifth column of moments.csv and in the summary (mass 1 with it),
+/// and, at a point target, as the atom (`atom_mass`, `atoms`);
 /// `fp msd` with position resetting omits `d_eff_slope`, and without it
 /// reports it.
 #[test]
@@ -333,9 +334,15 @@ fn cli_reports_held_mass_and_omits_d_eff_with_position_resetting() {
     close(mr, held_mass(2.0, 0.3, 1.0), 1e-6, "refractory_mass");
     close(v["mass"].as_f64().unwrap(), 1.0, 1e-12, "mass");
     let csv = std::fs::read_to_string(dir.join("moments.csv")).unwrap();
-    assert_eq!(csv.lines().next(), Some("t,v_mean,v2,mass,refractory_mass"));
+    assert_eq!(
+        csv.lines().next(),
+        Some("t,v_mean,v2,mass,refractory_mass,atom_mass,atom_err")
+    );
     let last = common::last_csv_row(&dir.join("moments.csv"));
     assert_eq!(last[4], mr);
+    // The hold at the point target v_r = 0 is the atom (its mass).
+    assert_eq!(last[5], mr);
+    assert_eq!(v["atoms"][0]["mass"].as_f64(), Some(mr));
     for (position, has_d) in [(true, false), (false, true)] {
         let mut args = vec!["fp", "msd", "--t-max", "2", "--samples", "3"];
         args.extend(model);

@@ -25,8 +25,9 @@ use super::grid::{uniform_target, Grid, Mesh};
 use super::operator::ForwardOperator;
 use super::stationary::{MAX_CELLS, MIN_CELLS};
 use crate::error::{finite, Error, Result};
+use crate::model::reset::Reset;
 use crate::model::reset::Solver;
-use crate::model::{Drag, Params};
+use crate::model::{Drag, Params, VelocityAtom};
 use crate::numerics::trbdf2::{self, Tolerances};
 use crate::parallel::{NoProgress, Progress};
 use serde::{Deserialize, Serialize};
@@ -156,6 +157,9 @@ pub struct Snapshot {
     /// `p_minus` are empty); empty for the paper's noise.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub states: Vec<Vec<f64>>,
+    /// The point masses at this time ([`Transient::atoms`]); the densities
+    /// above are without them.
+    pub atoms: Vec<VelocityAtom>,
 }
 
 /// Result of [`transient`].
@@ -198,6 +202,18 @@ pub struct Transient {
     /// refractory period. `mass`, `v_mean` and `v2` include it, at the held
     /// velocities; the snapshots are the continuous part.
     pub refractory_mass: Vec<f64>,
+    /// The point masses of the velocity law at each recording time (one
+    /// list per time, the same velocities at every time, masses possibly
+    /// 0): the refractory hold at a point target v_r (the fine mesh's held
+    /// mass, error the change from the mesh of cells/2), and with a noise
+    /// model at T = 0 the mass held at a state's fixed point (Eq. (N52):
+    /// the reset target, or the start v = 0), extrapolated over the three
+    /// meshes. The snapshots' densities are without them, and the density
+    /// mass plus the atoms is checked to be 1 at every time (refused
+    /// otherwise). Empty lists where nothing holds the velocity. At t = 0
+    /// the start's share in the states that move is in the cells of v = 0,
+    /// not an atom.
+    pub atoms: Vec<Vec<VelocityAtom>>,
     /// |Σ P Δv - 1|, maximum over every step (paper scheme) or over every
     /// recording and snapshot time of the three meshes (TR-BDF2).
     pub mass_error_max: f64,
@@ -520,6 +536,7 @@ fn paper(
         v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
         refractory_mass: Vec::with_capacity(times.len()),
+        atoms: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
     };
@@ -611,12 +628,39 @@ fn run_trbdf2(
         v2_mesh_error,
         mass: fine.mass,
         refractory_mass: fine.refractory_mass,
+        atoms: held_errors(fine.atoms, &half.atoms),
         mass_error_max: fine
             .mass_error_max
             .max(half.mass_error_max)
             .max(quarter.mass_error_max),
-        snapshots: fine.snapshots,
+        snapshots: fine
+            .snapshots
+            .into_iter()
+            .zip(&half.snapshots)
+            .map(|(s, h)| Snapshot {
+                atoms: held_errors(vec![s.atoms], std::slice::from_ref(&h.atoms)).remove(0),
+                ..s
+            })
+            .collect(),
     })
+}
+
+/// The refractory atoms of the fine mesh with their error estimates: the
+/// change from the mesh of cells/2 (as the stationary solver's), at least
+/// 1e-14 of the mass.
+fn held_errors(fine: Vec<Vec<VelocityAtom>>, half: &[Vec<VelocityAtom>]) -> Vec<Vec<VelocityAtom>> {
+    fine.into_iter()
+        .zip(half)
+        .map(|(f, h)| {
+            f.into_iter()
+                .zip(h)
+                .map(|(a, b)| VelocityAtom {
+                    err: (a.mass - b.mass).abs().max(1e-14 * a.mass),
+                    ..a
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Nested meshes of the TR-BDF2 scheme: cells/4, cells/2 and cells.
@@ -718,6 +762,7 @@ fn integrate_mesh(
         v2_mesh_error: Vec::new(),
         mass: Vec::with_capacity(times.len()),
         refractory_mass: Vec::with_capacity(times.len()),
+        atoms: Vec::with_capacity(times.len()),
         mass_error_max: 0.0,
         snapshots: Vec::with_capacity(snaps.len()),
     };
@@ -857,8 +902,9 @@ impl Transient {
         }
         self.times.push(t);
         self.mass.push(s0);
-        self.refractory_mass
-            .push(m[cells..].iter().map(|c| c[0] + c[1]).sum());
+        let held: f64 = m[cells..].iter().map(|c| c[0] + c[1]).sum();
+        self.refractory_mass.push(held);
+        self.atoms.push(self.held_atoms(held));
         self.v_mean.push(s1);
         self.v2.push(s2);
     }
@@ -873,7 +919,26 @@ impl Transient {
             p_plus: pp,
             p_minus: pm,
             states: Vec::new(),
+            atoms: self.held_atoms(m[g.cells()..].iter().map(|c| c[0] + c[1]).sum()),
         });
+    }
+
+    /// The refractory hold at a point target v_r as an atom of mass `held`
+    /// (error set by [`held_errors`]); none without an exponential
+    /// refractory period or with a random target (its held mass is spread
+    /// over the target's cells' velocities).
+    fn held_atoms(&self, held: f64) -> Vec<VelocityAtom> {
+        match (
+            self.params.schedule().refractory,
+            self.params.reset().point(),
+        ) {
+            (Some(_), Some(v)) => vec![VelocityAtom {
+                v,
+                mass: held,
+                err: 0.0,
+            }],
+            _ => Vec::new(),
+        }
     }
 }
 

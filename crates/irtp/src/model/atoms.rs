@@ -56,3 +56,26 @@ pub fn atom_velocities(p: &Params) -> Vec<f64> {
         _ => Vec::new(),
     }
 }
+
+/// The states that hold a point mass of the time-dependent law started at
+/// v = 0 (`fp transient`, Eq. (N52)), as (velocity, state): at T = 0 a
+/// state whose fixed point is v_r holds the resets there
+/// ([`reset_atom_states`]); one whose fixed point is the start v = 0 holds
+/// its share π_s of the start until it leaves the state or is reset.
+/// Empty for the paper's noise and at T > 0.
+pub fn transient_atom_states(p: &Params) -> Vec<(f64, usize)> {
+    let resets = reset_atom_states(p);
+    match (p.noise(), p.chain(), p.reset().point()) {
+        (Some(_), Ok(c), vr) if c.temperature == 0.0 => c
+            .levels
+            .iter()
+            .enumerate()
+            .filter_map(|(s, &a)| match vr {
+                Some(v) if resets.contains(&s) => Some((v, s)),
+                _ if p.drag().inverse(a) == 0.0 => Some((0.0, s)),
+                _ => None,
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
+}

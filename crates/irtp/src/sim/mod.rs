@@ -627,6 +627,16 @@ impl Observables {
         })
     }
 
+    /// The atom at t_max as (velocity, fraction of particles there, its
+    /// standard error), if the law has one.
+    pub fn atom_final(&self) -> Option<crate::model::VelocityAtom> {
+        self.atom.as_ref().map(|a| crate::model::VelocityAtom {
+            v: a.v,
+            mass: a.at_final.mean(),
+            err: a.at_final.sem(),
+        })
+    }
+
     /// Merge another accumulator (same spec) into this one.
     pub fn merge(&mut self, o: &Observables) {
         merge_all(&mut self.v, &o.v);
@@ -732,6 +742,7 @@ impl Observables {
             d_eff_msd: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.mean()),
             d_eff_msd_err: (self.msd_fit_d.n >= 2).then(|| self.msd_fit_d.sem()),
             atoms: self.atom_mass().into_iter().collect(),
+            atoms_final: self.atom_final().into_iter().collect(),
         }
     }
 }
@@ -786,4 +797,9 @@ pub struct SimSummary {
     /// holds the rest.
     #[serde(default)]
     pub atoms: Vec<crate::model::VelocityAtom>,
+    /// The same point mass at t_max: the fraction of particles exactly at
+    /// its velocity at t_max and its standard error (the time-dependent
+    /// atom of `fp transient` at t_max; `density_final` holds the rest).
+    #[serde(default)]
+    pub atoms_final: Vec<crate::model::VelocityAtom>,
 }

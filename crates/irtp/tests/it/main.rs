@@ -3,6 +3,7 @@
 
 mod analytic;
 mod architecture;
+mod atoms_transient;
 mod clock;
 mod common;
 mod conformance;

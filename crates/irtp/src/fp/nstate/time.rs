@@ -6,12 +6,14 @@
 
 use super::super::moments::{MomentSeries, MsdOptions};
 use super::super::stationary::MIN_CELLS;
-use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions};
+use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE};
 use super::super::Mesh;
 use super::operator::NoiseOperator;
 use super::stationary::{operator, richardson};
 use crate::error::{Error, Result};
-use crate::model::Params;
+use crate::model::atoms::transient_atom_states;
+use crate::model::reset::Reset;
+use crate::model::{Params, VelocityAtom};
 use crate::numerics::trbdf2::{integrate, ShiftedLinear, Tolerances};
 use crate::numerics::Failure;
 
@@ -177,33 +179,58 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
         atol: o.atol,
         ..Tolerances::default()
     };
+    let held = transient_atom_states(p);
     let mut obs = Vec::new();
+    let mut atom_rows: Vec<Vec<Vec<f64>>> = Vec::new();
     let (mut steps, mut snapshots, mut mass_err) = (0u64, Vec::new(), 0.0f64);
+    let mut fine_rows = vec![FineAtoms::default(); times.len()];
     let mut last = None;
     for refine in 0..3 {
         let fine = refine == 2;
         let mut rows = vec![[0.0; 6]; times.len()];
-        let (s, op) = run(p, o.cells / 4, refine, 1, &times, &tol, |k, v, u| {
-            rows[k] = observe(v, 1, u);
-            if fine && o.snapshot_times.contains(&times[k]) {
-                snapshots.push((times[k], u.to_vec()));
+        let mut arows = vec![Vec::new(); times.len()];
+        let mut b = Blocks::new(operator(p, o.cells / 4, refine, true)?, 1);
+        let cells = atom_cells(p, &b.op, &held);
+        let mut u = b.initial()?;
+        let v = b.v.clone();
+        let stats = integrate(&mut b, &mut u, &times, &tol, |k, _, u| {
+            rows[k] = observe(&v, 1, u);
+            arows[k] = cells.iter().map(|c| held_mass(u, c)).collect();
+            if fine {
+                let x: Vec<[f64; 3]> = (0..held.len())
+                    .map(|j| [atom_rows[0][k][j], atom_rows[1][k][j], arows[k][j]])
+                    .collect();
+                let (split, rest) = split_held(u, &cells, &x);
+                fine_rows[k] = FineAtoms {
+                    split,
+                    total: rest.iter().sum(),
+                };
+                if o.snapshot_times.contains(&times[k]) {
+                    snapshots.push((times[k], rest));
+                }
             }
             Ok(())
         })?;
         mass_err = rows.iter().fold(mass_err, |m, r| m.max((r[0] - 1.0).abs()));
-        steps += s as u64;
+        steps += stats.steps as u64;
         obs.push(rows);
-        last = Some(op);
+        atom_rows.push(arows);
+        last = Some(b.op);
     }
     let op = last.expect("three meshes");
     let pick = |k: usize, j: usize| richardson(obs[0][k][j], obs[1][k][j], obs[2][k][j]);
+    let atoms = |k: usize| merge_atoms(&held, &fine_rows[k].split);
+    check_balance(&times, &fine_rows, &atoms)?;
     let idx: Vec<usize> = rec
         .iter()
         .map(|t| times.iter().position(|x| x == t).expect("a recording time"))
         .collect();
     let snaps = snapshots
         .into_iter()
-        .map(|(t, u)| snapshot(&op, t, &u))
+        .map(|(t, u)| {
+            let k = times.iter().position(|x| *x == t).expect("a snapshot time");
+            snapshot(&op, t, &u, atoms(k))
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(Transient {
         params: *p,
@@ -221,14 +248,114 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
         v2_mesh_error: idx.iter().map(|&k| pick(k, 2).1).collect(),
         mass: idx.iter().map(|&k| obs[2][k][0]).collect(),
         refractory_mass: vec![0.0; idx.len()],
+        atoms: idx.iter().map(|&k| atoms(k)).collect(),
         mass_error_max: mass_err,
         snapshots: snaps,
     })
 }
 
+/// The fine mesh's atoms at one time: per held (velocity, state) the
+/// extrapolated mass and its error, and the cell masses without them.
+#[derive(Clone, Debug, Default)]
+struct FineAtoms {
+    split: Vec<(f64, f64)>,
+    total: f64,
+}
+
+/// The flat indices (cell i, state s: i N + s) and weights of the cells
+/// that hold each (velocity, state) of `held` (Eq. (N52)): the reset
+/// target's cells for v_r, the start's for v = 0.
+fn atom_cells(p: &Params, op: &NoiseOperator, held: &[(f64, usize)]) -> Vec<Vec<(usize, f64)>> {
+    let m = &op.mesh;
+    held.iter()
+        .map(|&(v, s)| {
+            let cells = if p.reset().point() == Some(v) {
+                &m.target[s]
+            } else {
+                &m.origin[s]
+            };
+            cells.iter().map(|&(i, f)| (i * m.states + s, f)).collect()
+        })
+        .collect()
+}
+
+/// The mass of the cells `c` (one state's).
+fn held_mass(u: &[f64], c: &[(usize, f64)]) -> f64 {
+    c.iter().map(|&(k, _)| u[k]).sum()
+}
+
+/// Each held (velocity, state)'s mass Richardson-extrapolated from its
+/// cells' masses `x` on the meshes N/4, N/2, N (Eq. (N27)), with its error,
+/// and the fine cell masses `u` less it: each cell gives up its share of
+/// the atom (at most its mass), as the stationary split does.
+fn split_held(
+    u: &[f64],
+    cells: &[Vec<(usize, f64)>],
+    x: &[[f64; 3]],
+) -> (Vec<(f64, f64)>, Vec<f64>) {
+    let mut rest = u.to_vec();
+    let split = cells
+        .iter()
+        .zip(x)
+        .map(|(c, x)| {
+            let (value, err, _) = richardson(x[0], x[1], x[2]);
+            for &(k, f) in c {
+                rest[k] -= (value * f).min(rest[k]).max(0.0);
+            }
+            (value, err)
+        })
+        .collect();
+    (split, rest)
+}
+
+/// The atoms of one time: the held (velocity, state) masses summed per
+/// velocity, their errors added.
+fn merge_atoms(held: &[(f64, usize)], split: &[(f64, f64)]) -> Vec<VelocityAtom> {
+    let mut out: Vec<VelocityAtom> = Vec::new();
+    for (&(v, _), &(mass, err)) in held.iter().zip(split) {
+        match out.iter_mut().find(|a| a.v == v) {
+            Some(a) => {
+                a.mass += mass;
+                a.err += err;
+            }
+            None => out.push(VelocityAtom { v, mass, err }),
+        }
+    }
+    out
+}
+
+/// Density mass + atoms = 1 at every time within the atoms' error and
+/// [`MASS_TOLERANCE`] (the integration's conservation), or refused: a
+/// cell that holds less than its share of an atom means the atom is not
+/// resolved.
+fn check_balance(
+    times: &[f64],
+    fine: &[FineAtoms],
+    atoms: &dyn Fn(usize) -> Vec<VelocityAtom>,
+) -> Result<()> {
+    for (k, (t, f)) in times.iter().zip(fine).enumerate() {
+        let a = atoms(k);
+        let (mass, err) = a
+            .iter()
+            .fold((0.0, 0.0), |(m, e), a| (m + a.mass, e + a.err));
+        let total = f.total + mass;
+        if !((total - 1.0).abs() <= err + MASS_TOLERANCE) {
+            return Err(Error::Numerical {
+                method: "fp transient",
+                reason: format!(
+                    "at t = {t} the density ({:e}) and the atoms ({mass:e}) add up to {total}, not 1 \
+                     within the atoms' error {err:e}; raise --cells",
+                    f.total
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The fine mesh's densities at time t, per state (round-off negatives
 /// down to 1e-9 of the largest density set to 0; a larger one refused).
-fn snapshot(op: &NoiseOperator, t: f64, u: &[f64]) -> Result<Snapshot> {
+fn snapshot(op: &NoiseOperator, t: f64, u: &[f64], atoms: Vec<VelocityAtom>) -> Result<Snapshot> {
     let (ns, w) = (op.mesh.states, &op.mesh.widths);
     let scale = u
         .iter()
@@ -254,6 +381,7 @@ fn snapshot(op: &NoiseOperator, t: f64, u: &[f64]) -> Result<Snapshot> {
         p_plus: Vec::new(),
         p_minus: Vec::new(),
         states,
+        atoms,
     })
 }
 
