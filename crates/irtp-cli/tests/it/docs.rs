@@ -5,7 +5,8 @@
 //! later argument naming the same directory) goes to a temporary directory,
 //! `--particles` is at most [`MAX_PARTICLES`], `reproduce` runs `--quick`
 //! and `--submit` is left out (the SLURM test submits); documented commands
-//! that become the same command this way run once. Each example sweep plan
+//! that become the same command this way run once, and `reproduce all
+//! --out DIR` is run (with `--seed 7`) and checked by the reproduce test. Each example sweep plan
 //! runs as its header comment says, the long ones ([`LONG_PLANS`]) as one
 //! shard of [`LONG_PLAN_SHARDS`] (`--shard 1/N`: every N-th point, through
 //! the same plan parsing, point seeds and store). A non-zero exit fails,
@@ -187,7 +188,9 @@ fn shard_of(file: &Path) -> usize {
 /// Every documented command of the files of `shard`, in order per file;
 /// `reproduce all` (also run by the reproduce tests) only when
 /// `with_reproduce_all`. A command that
-/// is, once adapted, one already run (output directories aside) runs once.
+/// is, once adapted, one already run (output directories aside) runs once,
+/// and one that [`run_by_the_reproduce_test`] is not run here. Returns the
+/// number of commands checked.
 fn run_documented(with_reproduce_all: bool, shard: usize) -> usize {
     let mut ran = 0;
     let mut seen = std::collections::HashSet::new();
@@ -212,11 +215,56 @@ fn run_documented(with_reproduce_all: bool, shard: usize) -> usize {
             if !seen.insert(key) {
                 continue;
             }
-            run(&format!("{}:{line}", file.display()), &adapted);
+            if !run_by_the_reproduce_test(&adapted) {
+                run(&format!("{}:{line}", file.display()), &adapted);
+            }
             ran += 1;
         }
     }
     ran
+}
+
+/// Whether `adapted` is, but for its output directory and seed, the command
+/// [`super::reproduce::reproduce_all_quick`] runs and checks file by file
+/// (`irtp reproduce all --out DIR` once `--quick` is added): a second run
+/// here (about a minute on 2 cores) would differ only in the seed.
+fn run_by_the_reproduce_test(adapted: &[String]) -> bool {
+    let strip = |args: &[&str]| {
+        let mut kept = Vec::new();
+        let mut it = args.iter();
+        while let Some(&a) = it.next() {
+            match a {
+                "--out" | "--seed" => {
+                    it.next();
+                }
+                _ => kept.push(a.to_string()),
+            }
+        }
+        kept.sort();
+        kept
+    };
+    let adapted: Vec<&str> = adapted.iter().map(String::as_str).collect();
+    adapted.starts_with(&["reproduce", "all"])
+        && strip(&adapted) == strip(&super::reproduce::ALL_QUICK)
+}
+
+/// The reproduce test's command is recognised whatever the seed, output
+/// directory and order; one more flag is not it.
+#[test]
+fn only_the_reproduce_tests_command_is_left_to_it() {
+    assert!(run_by_the_reproduce_test(&words(
+        "reproduce all --out d --quick"
+    )));
+    assert!(run_by_the_reproduce_test(&words(
+        "reproduce all --quick --seed 3 --out e"
+    )));
+    assert!(!run_by_the_reproduce_test(&words(
+        "reproduce all --out d --quick --force"
+    )));
+    assert!(!run_by_the_reproduce_test(&words(
+        "reproduce fig2 --out d --quick"
+    )));
+    assert!(!run_by_the_reproduce_test(&words("simulate --out d")));
 }
 
 #[test]

@@ -6,6 +6,9 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
 
+/// The command [`reproduce_all_quick`] runs, with `--out DIR`.
+pub const ALL_QUICK: [&str; 5] = ["reproduce", "all", "--quick", "--seed", "7"];
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_irtp"))
 }
@@ -78,7 +81,8 @@ fn reproduce_all_quick() {
     let out = tmp.path().join("figs");
     let t0 = std::time::Instant::now();
     let o = bin()
-        .args(["reproduce", "all", "--quick", "--seed", "7", "--out"])
+        .args(ALL_QUICK)
+        .arg("--out")
         .arg(&out)
         .output()
         .unwrap();
