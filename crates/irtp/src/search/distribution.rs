@@ -144,6 +144,7 @@ pub struct SearchDistribution {
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
     let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    setup.paper_noise("mfpt distribution --xt")?;
     let c = cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0);
     // The curves kept: S, f and their errors, on the steps and half steps.
     let curves = 8.0 * 12.0 * (2.0 * opts.steps as f64 + 1.0);
@@ -163,6 +164,7 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         mesh_drivers(problem, &["steps"]),
     )?;
     let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    setup.paper_noise("mfpt distribution --xt")?;
     let plans = meshes(&setup, &opts.mesh);
     let meshes = build(&plans);
     let n = opts.steps;
@@ -336,11 +338,11 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
         Resetting::Velocity { .. } => Some(LocalReset {
             rate: p.rate(),
             target: mesh.target_weights(p)?,
-            mix: setup.mix,
+            mix: setup.mix.clone(),
         }),
         _ => None,
     };
-    let g = Generator::assemble(mesh, p, local.as_ref());
+    let g = Generator::assemble(mesh, p, &setup.noise, local.as_ref());
     let (r, reset) = match setup.resetting {
         Resetting::Full { x, v } => {
             let ir = mesh.node(x, v)?.0;
@@ -354,7 +356,7 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
         g: &g,
         r,
         reset,
-        mix: setup.mix,
+        mix: setup.mix2(),
     };
     let stepper = Stepper::new(t_max / steps as f64);
     let d = stepper.d();

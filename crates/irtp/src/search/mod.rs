@@ -173,14 +173,21 @@ fn check_reset_position(x0: f64, target: PositionTarget, xr: f64) -> Result<()> 
 }
 
 impl SearchProblem {
-    /// Validate: the paper's noise (another noise model is refused, naming
-    /// `noise`: no search method runs it yet); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
+    /// Validate: a noise model other than the paper's at temperature 0 only
+    /// (a temperature is refused, naming `temperature`; which methods run
+    /// such a noise: [`SearchMethod::check`]); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
     /// (v_l, v_u); a reset position strictly on the start side (the same
     /// side of L as x0, or inside (a, b)). NaN fails every check.
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
-        if let Some(m) = params.noise() {
-            crate::model::noise::support::refuse("a search (--xt, --interval)", m)?;
+        // --- noise gate (problem): any finite-state noise at T = 0 ---
+        if let Some(m) = params.noise().filter(|m| m.temperature() > 0.0) {
+            return Err(Error::invalid(
+                "temperature",
+                m.temperature(),
+                "temperature 0 for a search (--xt, --interval): no search method runs thermal noise",
+            ));
         }
+        // --- end of the noise gate (problem) ---
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;
         let (vl, vu) = params.bounds();
@@ -267,7 +274,11 @@ impl SearchProblem {
             };
         };
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
-        let turns = p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
+        // A noise model's chain is irreducible: with two states or more
+        // every state is left.
+        let turns = p.lambda() > 0.0
+            || p.noise().is_some_and(|m| m.levels().len() > 1)
+            || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
@@ -451,6 +462,11 @@ impl SearchMethod {
     /// starting state), t_max > 0, and a finite t_max where the mean search
     /// time is infinite (some particles would never stop).
     pub fn check(&self, problem: &SearchProblem) -> Result<()> {
+        // --- noise gate (samplers): the paper's noise only ---
+        if let (Some(m), Some(_)) = (problem.params().noise(), self.particles()) {
+            crate::model::noise::support::refuse("a search by particles (--method exact, euler)", m)?;
+        }
+        // --- end of the noise gate (samplers) ---
         match *self {
             SearchMethod::Backward(_) | SearchMethod::Renewal(_) => self.cost(problem).map(|_| ()),
             SearchMethod::Euler { dt, run } => {

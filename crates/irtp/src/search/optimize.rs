@@ -44,7 +44,7 @@ impl SearchAxis {
 }
 
 /// One point of a search scan.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SearchScanPoint {
     /// The scanned value (r, x_0 or L).
     pub x: f64,

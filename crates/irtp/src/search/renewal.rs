@@ -386,6 +386,7 @@ pub fn estimate(
 ) -> Result<Cost> {
     opts.validate()?;
     let setup = Setup::new(problem, "--method renewal", true)?;
+    setup.paper_noise("--method renewal")?;
     if !finite_under(problem, waiting) {
         return Ok(Cost::NOTHING);
     }
@@ -432,6 +433,7 @@ pub fn solve_watched(
     }
     let watch = Watch::new(progress, cost.work);
     let setup = Setup::new(problem, "--method renewal", true)?;
+    setup.paper_noise("--method renewal")?;
     let plans = with_check(&setup, meshes(&setup, waiting, opts), opts.refine);
     let meshes = build(&plans);
     let t_max = waiting.horizon(opts.tail);
@@ -492,7 +494,7 @@ pub fn solve_watched(
     // The extrapolated values pass the same checks as each mesh's.
     verify(
         &best.tau,
-        best.tau,
+        &best.tau,
         &setup,
         "the renewal route (--method renewal, extrapolated)",
     )?;
@@ -553,7 +555,7 @@ fn answer(
         .into_iter()
         .map(|(j, w)| (ir, j, w))
         .collect();
-    let g = Generator::assemble(mesh, &setup.params, None);
+    let g = Generator::assemble(mesh, &setup.params, &setup.noise, None);
     let (wq, rq, beyond) = waiting.weights(t_max, steps);
     let mut p = Periods {
         a: [[0.0; 2]; 2],
@@ -586,7 +588,7 @@ const METHOD: &str = "the renewal route (--method renewal)";
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
-    let mix = setup.mix;
+    let mix = setup.mix2();
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
     let m =
@@ -605,7 +607,7 @@ fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Ans
     let per = tail_a + tail_b * reset[0].max(reset[1]);
     let tail = per + norm * per;
     let all = [tau[0], tau[1], reset[0], reset[1]];
-    verify(&all, tau, setup, METHOD)?;
+    verify(&all, &tau, setup, METHOD)?;
     Ok(Answer {
         tau,
         reset,
