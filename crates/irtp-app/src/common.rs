@@ -48,7 +48,7 @@ pub struct NoiseArgs {
 /// its support table ([`irtp::model::noise::support::RUNNERS`]).
 fn noise_runs_in() -> String {
     format!(
-        "Runs in: {}. A search (--xt, --interval) runs the paper's noise only.",
+        "Runs in: {}. A search (--xt, --interval) runs it by --method backward at temperature 0 only.",
         irtp::model::noise::support::RUNNERS
     )
 }

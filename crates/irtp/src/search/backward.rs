@@ -13,6 +13,12 @@
 //! state whose drift vanishes there has no v-derivative term); a one-sided
 //! level is truncated at distance X on the far side, zero gradient there.
 //!
+//! A finite-state noise model at temperature 0 (Eq. (S12)) runs the same
+//! code with N states per node: levels a_s for ±Sigma, the jumps Q_ss' for
+//! the flips, and tau = Σ_s π_s T(x0, v0, s) (the state at the start drawn
+//! from the stationary law π; the paper's noise: (tau+ + tau-)/2). Its
+//! per-state values are `tau_states` (`tau_plus`, `tau_minus` are NaN).
+//!
 //! Discretisation: first-order upwind in x and v on the mesh of
 //! `search::mesh` (a Markov generator: the matrix `r I - A` is an M-matrix,
 //! so T ≥ 0 and the mean speed bound T ≥ distance / v_u hold exactly on
@@ -712,11 +718,7 @@ pub fn solve_watched(
         error_estimate,
         mesh_error,
         truncation_error,
-        reset_values: best
-            .reset
-            .as_ref()
-            .filter(|_| paper)
-            .map(|r| [r[0], r[1]]),
+        reset_values: best.reset.as_ref().filter(|_| paper).map(|r| [r[0], r[1]]),
         reset_states: best.reset.clone().filter(|_| !paper),
         mesh: mesh_info(&finest),
         infinite_mean: false,
@@ -1070,13 +1072,12 @@ fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<V
         return Ok(tr.to_vec());
     }
     refuse_unreached(m, e, method)?;
-    let a: Vec<Vec<f64>> = (0..m.len())
+    let n = m.len();
+    let off = |s: usize| (0..n).filter(|&k| k != s).map(|k| m[s][k]).sum::<f64>();
+    let a: Vec<Vec<f64>> = (0..n)
         .map(|s| {
-            (0..m.len())
-                .map(|t| match t == s {
-                    true => e[s] + (0..m.len()).filter(|&k| k != s).map(|k| m[s][k]).sum::<f64>(),
-                    false => -m[s][t],
-                })
+            (0..n)
+                .map(|t| if t == s { e[s] + off(s) } else { -m[s][t] })
                 .collect()
         })
         .collect();

@@ -1,7 +1,8 @@
 //! The search problem: first passage in *position*.
 //!
-//! The particle starts at (x_0, v_0) with eta(0) = ±Sigma (equally likely)
-//! and the search ends the first time x(t) reaches a level L
+//! The particle starts at (x_0, v_0) with eta(0) = ±Sigma (equally likely;
+//! with a noise model, its state drawn from the stationary law, which
+//! `--method backward` runs at temperature 0: Eq. (S12)) and the search ends the first time x(t) reaches a level L
 //! ([`PositionTarget::Level`], one-sided) or leaves an interval (a, b)
 //! ([`PositionTarget::Interval`]). Every resetting protocol of the model
 //! runs: velocity resetting (x kept), full resetting (`--reset-position`:
@@ -464,7 +465,10 @@ impl SearchMethod {
     pub fn check(&self, problem: &SearchProblem) -> Result<()> {
         // --- noise gate (samplers): the paper's noise only ---
         if let (Some(m), Some(_)) = (problem.params().noise(), self.particles()) {
-            crate::model::noise::support::refuse("a search by particles (--method exact, euler)", m)?;
+            crate::model::noise::support::refuse(
+                "a search by particles (--method exact, euler)",
+                m,
+            )?;
         }
         // --- end of the noise gate (samplers) ---
         match *self {
