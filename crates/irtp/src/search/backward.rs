@@ -1062,9 +1062,11 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
 /// The reset values R solving R = M R + u (the renewal at the reset point,
 /// M[s][s'] the chance that a reset into s' comes first from s, e_s the
 /// chance of the target first): two states by [`capacitance`], N states
-/// by the dense system with diagonal e_s + Σ_{s'≠s} M[s][s'] (the rows'
-/// escape chances known, no cancellation), refused alike unless every
-/// e_s > 0.
+/// by elimination on `I - M` in the manner of Grassmann-Taksar-Heyman:
+/// each pivot is its row's escape chance plus its off-diagonal chances,
+/// the escape chances updated as e_i + l e_k with l ≥ 0 (sums of
+/// non-negative terms, no cancellation when the target is rarely reached
+/// first, so R ≥ 0); refused alike unless every e_s > 0.
 fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<Vec<f64>> {
     if m.len() == 2 {
         let m2 = [[m[0][0], m[0][1]], [m[1][0], m[1][1]]];
@@ -1073,15 +1075,30 @@ fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<V
     }
     refuse_unreached(m, e, method)?;
     let n = m.len();
-    let off = |s: usize| (0..n).filter(|&k| k != s).map(|k| m[s][k]).sum::<f64>();
-    let a: Vec<Vec<f64>> = (0..n)
-        .map(|s| {
-            (0..n)
-                .map(|t| if t == s { e[s] + off(s) } else { -m[s][t] })
-                .collect()
-        })
-        .collect();
-    crate::model::noise::chain::solve(&a, u, method)
+    // Off-diagonal chances c[i][j] = M_ij (the system's entries are -c).
+    let (mut c, mut e, mut b) = (m.to_vec(), e.to_vec(), u.to_vec());
+    let pivot = |c: &[Vec<f64>], e: &[f64], k: usize| -> f64 {
+        e[k] + (k + 1..n).map(|j| c[k][j]).sum::<f64>()
+    };
+    for k in 0..n {
+        let p = pivot(&c, &e, k);
+        for i in k + 1..n {
+            let l = c[i][k] / p;
+            for j in k + 1..n {
+                if j != i {
+                    c[i][j] += l * c[k][j];
+                }
+            }
+            e[i] += l * e[k];
+            b[i] += l * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let known: f64 = (k + 1..n).map(|j| c[k][j] * x[j]).sum();
+        x[k] = (b[k] + known) / pivot(&c, &e, k);
+    }
+    Ok(x)
 }
 
 /// Refused (typed) unless every escape chance e_s > 0 and M ≥ 0: the
