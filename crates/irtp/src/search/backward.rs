@@ -1084,9 +1084,10 @@ fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<V
         let p = pivot(&c, &e, k);
         for i in k + 1..n {
             let l = c[i][k] / p;
-            for j in k + 1..n {
+            let row_k = c[k].clone();
+            for (j, cij) in c[i].iter_mut().enumerate().skip(k + 1) {
                 if j != i {
-                    c[i][j] += l * c[k][j];
+                    *cij += l * row_k[j];
                 }
             }
             e[i] += l * e[k];
