@@ -47,7 +47,10 @@ pub struct NoiseArgs {
 /// Where a noise other than the paper's runs, from the core's list beside
 /// its support table ([`irtp::model::noise::support::RUNNERS`]).
 fn noise_runs_in() -> String {
-    format!("Runs in: {}.", irtp::model::noise::support::RUNNERS)
+    format!(
+        "Runs in: {}. A search (--xt, --interval) runs it at temperature 0 by --method backward, exact and euler.",
+        irtp::model::noise::support::RUNNERS
+    )
 }
 
 /// The long help of `--noise`: the spec of every kind and where it runs.

@@ -29,7 +29,7 @@ const REFUSED: &[(&str, &str)] = &[
     ("mfpt distribution --v0 0 --vt 1 --t-min 0.1", "--t-min"),
     ("mfpt distribution --v0 0 --vt 1 --method exact --rtol 0.1", "--rtol"),
     (
-        "mfpt --xt 1 --v0 0 --reset-position 0 --drag linear --noise rpt:sigma=1,alpha=1,beta=2 --rate 0.5",
+        "mfpt --xt 1 --v0 0 --reset-position 0 --drag linear --noise rpt:sigma=1,alpha=1,beta=2 --rate 0.5 --method renewal",
         "--noise",
     ),
     ("simulate --t-min 0.1", "--t-min"),

@@ -68,6 +68,7 @@ fn commands() -> Vec<Vec<&'static str>> {
         ];
         out.push([&interval[..], &["--particles", "10"][..]].concat());
     }
+    out.push([&search[..], &["--method", "renewal"][..]].concat());
     out
 }
 
@@ -100,8 +101,8 @@ fn thermal_refused() -> Vec<Vec<&'static str>> {
 
 /// The search with run-pause-tumble noise runs by `--method exact` and
 /// `--method euler` (exit 0, a finite tau with a standard error) and the
-/// default method (backward) refuses it in one line naming `--noise` and
-/// the methods that run it.
+/// default method (backward); `--method renewal` refuses it in one line
+/// naming `--noise` and the methods that run it.
 #[test]
 fn a_search_with_a_noise_model_runs_by_the_samplers() {
     let base = [
@@ -143,10 +144,17 @@ fn a_search_with_a_noise_model_runs_by_the_samplers() {
     }
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
-    let out = irtp(&[&base[..], &["--out", dir.to_str().unwrap()]].concat());
+    let r = json(&irtp(&[&base[..], &["--json"]].concat()));
+    let (tau, err) = (
+        r["tau"].as_f64().unwrap(),
+        r["error_estimate"].as_f64().unwrap(),
+    );
+    assert!(tau > 1.0 && err > 0.0 && err < 0.1 * tau, "backward: {r}");
+    let renewal = ["--method", "renewal", "--out", dir.to_str().unwrap()];
+    let out = irtp(&[&base[..], &renewal[..]].concat());
     let err = assert_rejected(&out, "--noise", &dir);
     assert!(
-        err.len() < 200 && err.contains("--method exact and --method euler"),
+        err.len() < 200 && err.contains(irtp::search::NOISE_RUNNERS),
         "{err}"
     );
 }
@@ -164,17 +172,20 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             (vec!["--noise", RPT], "--noise"),
             (vec!["--temperature", "0.5"], "--temperature"),
         ] {
-            // The search's samplers run a noise model at T = 0.
+            // The search's backward solver and samplers run a noise model
+            // at T = 0.
             let search = cmd.contains(&"--xt") || cmd.contains(&"--interval=-1,1");
-            let sampler = search && cmd.contains(&"exact");
-            if flag == "--noise" && (!with_noise || sampler) {
+            let runs = search && !cmd.contains(&"renewal") && !cmd.contains(&"distribution");
+            if flag == "--noise" && (!with_noise || runs) {
                 continue;
             }
             let args = [&fit(&cmd)[..], &extra[..], &["--out", d][..]].concat();
             let out = irtp(&args);
             let err = assert_rejected(&out, flag, &dir);
-            let runners = if search {
-                "--method exact and --method euler run any finite-state noise at T = 0"
+            let runners = if search && flag == "--temperature" {
+                "no search method runs thermal noise"
+            } else if search {
+                irtp::search::NOISE_RUNNERS
             } else {
                 "simulate and fp run any noise"
             };

@@ -13,6 +13,12 @@
 //! state whose drift vanishes there has no v-derivative term); a one-sided
 //! level is truncated at distance X on the far side, zero gradient there.
 //!
+//! A finite-state noise model at temperature 0 (Eq. (S12)) runs the same
+//! code with N states per node: levels a_s for ±Sigma, the jumps Q_ss' for
+//! the flips, and tau = Σ_s π_s T(x0, v0, s) (the state at the start drawn
+//! from the stationary law π; the paper's noise: (tau+ + tau-)/2). Its
+//! per-state values are `tau_states` (`tau_plus`, `tau_minus` are NaN).
+//!
 //! Discretisation: first-order upwind in x and v on the mesh of
 //! `search::mesh` (a Markov generator: the matrix `r I - A` is an M-matrix,
 //! so T ≥ 0 and the mean speed bound T ≥ distance / v_u hold exactly on
@@ -52,10 +58,11 @@
 //! # Ok::<(), irtp::Error>(())
 //! ```
 
-use super::mesh::{Generator, Layout, LocalReset, Mesh, Side};
+use super::mesh::{Generator, Layout, LocalReset, Mesh, Noise, Side};
 use super::{yes, PositionTarget, SearchProblem};
 use crate::error::{Error, Result};
 use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::Drag;
 use crate::numerics::band::Band;
 use crate::numerics::bordered::Capacitance;
 use crate::parallel::{NoProgress, Progress};
@@ -159,14 +166,22 @@ pub struct MeshInfo {
 }
 
 /// Mean first-passage time to the position target.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SearchSolution {
-    /// tau = (tau+ + tau-)/2: the paper's random noise start.
+    /// tau = Σ_s π_s T(x0, v0, s): the noise state at the start drawn from
+    /// the stationary law π (the paper's noise: (tau+ + tau-)/2).
     pub tau: f64,
-    /// Start in the +Sigma state.
+    /// Start in the +Sigma state (the paper's noise; NaN for another noise
+    /// model: see `tau_states`).
     pub tau_plus: f64,
-    /// Start in the -Sigma state.
+    /// Start in the -Sigma state (the paper's noise; NaN for another noise
+    /// model: see `tau_states`).
     pub tau_minus: f64,
+    /// T(x0, v0, s) for each state s of a noise model other than the
+    /// paper's, in the model's state order (extrapolated like tau); absent
+    /// for the paper's noise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tau_states: Option<Vec<f64>>,
     /// Error estimate of tau: mesh plus truncation (NaN without
     /// refinement).
     pub error_estimate: f64,
@@ -176,8 +191,13 @@ pub struct SearchSolution {
     /// (0 without truncation): a bound on the truncation error of T_X
     /// (the far field decays at least like e^{-r X / v_u}).
     pub truncation_error: f64,
-    /// T(x_r, v_r, ±) for full resetting (extrapolated like tau).
+    /// T(x_r, v_r, ±) for full resetting (extrapolated like tau); None for
+    /// a noise model other than the paper's (see `reset_states`).
     pub reset_values: Option<[f64; 2]>,
+    /// T(x_r, v_r, s) for each state s of a noise model other than the
+    /// paper's with full resetting; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset_states: Option<Vec<f64>>,
     /// The finest mesh.
     pub mesh: MeshInfo,
     /// The mean search time is infinite
@@ -217,10 +237,12 @@ impl SearchSolution {
             tau: inf,
             tau_plus: inf,
             tau_minus: inf,
+            tau_states: None,
             error_estimate: f64::NAN,
             mesh_error: f64::NAN,
             truncation_error: f64::NAN,
             reset_values: Some([inf; 2]),
+            reset_states: None,
             mesh: MeshInfo::none(),
             infinite_mean: true,
             asymptotic: true,
@@ -272,8 +294,11 @@ pub(crate) struct Setup {
     pub x0: f64,
     pub v0: f64,
     pub resetting: Resetting,
-    /// mix[s][s']: chance of state s' after a reset from state s.
-    pub mix: [[f64; 2]; 2],
+    /// The noise: levels, generator, stationary law (N states).
+    pub noise: Noise,
+    /// mix[s][s']: chance of state s' after a reset from state s (N × N:
+    /// the identity when kept, every row π when re-drawn).
+    pub mix: Vec<Vec<f64>>,
     pub sides: (Side, Side),
     /// x breakpoints of the near part.
     pub near: Vec<f64>,
@@ -282,7 +307,7 @@ pub(crate) struct Setup {
 }
 
 impl Setup {
-    /// Check what the search solvers run: the paper's noise
+    /// Check what the search solvers run: the noise the method runs
     /// ([`super::noise_gate`]); no refractory period; a finite
     /// mean. `renewal`: full resetting required, any
     /// clock (the renewal route takes its waiting-time law separately);
@@ -335,9 +360,13 @@ impl Setup {
             (true, None) => Resetting::Velocity { v: vr },
         };
         refuse_infinite(problem, resetting)?;
+        let noise = Noise::of(&p, method)?;
+        let n = noise.states();
         let mix = match p.reset().noise() {
-            NoiseAtReset::Kept => [[1.0, 0.0], [0.0, 1.0]],
-            NoiseAtReset::Redrawn => [[0.5, 0.5], [0.5, 0.5]],
+            NoiseAtReset::Kept => (0..n)
+                .map(|s| (0..n).map(|t| if s == t { 1.0 } else { 0.0 }).collect())
+                .collect(),
+            NoiseAtReset::Redrawn => vec![noise.pi.clone(); n],
         };
         let (x0, v0) = (problem.x0(), problem.v0());
         let mut near = vec![x0];
@@ -358,6 +387,7 @@ impl Setup {
             x0,
             v0,
             resetting,
+            noise,
             mix,
             sides,
             near,
@@ -366,14 +396,30 @@ impl Setup {
     }
 
     /// The velocities that must be nodes: 0 (where v changes sign at the
-    /// target), v_0, v_r.
+    /// target), v_0, v_r, and with a noise model other than the paper's
+    /// each level's fixed point v*_s = g⁻¹(a_s) inside (v_l, v_u) (where
+    /// that state's drift changes sign; the paper's fixed points are the
+    /// edges v_l, v_u).
     pub fn v_points(&self) -> Vec<f64> {
         let mut v = vec![0.0, self.v0];
         match self.resetting {
             Resetting::Full { v: vr, .. } | Resetting::Velocity { v: vr } => v.push(vr),
             Resetting::None => {}
         }
+        if self.params.noise().is_some() {
+            let (vl, vu) = self.params.bounds();
+            let drag = self.params.drag();
+            let fixed = self.noise.levels.iter().map(|&a| drag.inverse(a));
+            v.extend(fixed.filter(|&w| w > vl && w < vu));
+        }
         v
+    }
+
+    /// The noise rule at a reset of the paper's noise (after
+    /// [`super::noise_gate`] refused a noise model): mix[s][s'] for s, s'
+    /// in (+, -).
+    pub fn mix2(&self) -> [[f64; 2]; 2] {
+        [0, 1].map(|s| [0, 1].map(|t| self.mix[s][t]))
     }
 
     /// Whether the x-domain has a truncated side.
@@ -383,14 +429,15 @@ impl Setup {
 
     /// The mesh layout with a far stretch of length `extent` on the scale
     /// of the far field's decay, v_u / √(r_e (2 lambda + r_e)) (r_e: the
-    /// reset rate, or 1/T for a period).
+    /// reset rate, or 1/T for a period; lambda: the noise's mean jump rate
+    /// [`Noise::rate`], the paper's flip rate).
     pub fn layout(&self, cells: (usize, usize), extent: f64) -> Layout {
         let p = &self.params;
         let re = match p.schedule().periodic {
             Some(t) => 1.0 / t.period,
             None => p.rate(),
         };
-        let scale = (p.v_upper() / (re * (2.0 * p.lambda() + re)).sqrt()).min(extent);
+        let scale = (p.v_upper() / (re * (2.0 * self.noise.rate + re)).sqrt()).min(extent);
         Layout::new(
             p,
             self.near.clone(),
@@ -399,6 +446,7 @@ impl Setup {
             scale,
             cells,
             &self.v_points(),
+            self.noise.states(),
         )
     }
 }
@@ -446,14 +494,20 @@ fn extent(p: &Params, tol: f64) -> f64 {
 /// memory of the finest band matrix (n (3 kl + 1) values) and six vectors.
 pub fn estimate(problem: &SearchProblem, opts: &BackwardOptions) -> Result<Cost> {
     opts.validate()?;
-    let setup = Setup::new(problem, "--method backward", false)?;
+    let setup = Setup::new(problem, super::BACKWARD, false)?;
     if !problem.mean_is_finite() {
         return Ok(Cost::NOTHING);
     }
     Ok(cost_of(
         &with_check(&setup, meshes(&setup, opts), opts.refine),
-        3.0,
+        solves(&setup),
     ))
+}
+
+/// Solves per mesh in the cost estimate: N + 1 for N noise states (T and
+/// a response per reset state; 3 for the paper's noise).
+fn solves(setup: &Setup) -> f64 {
+    setup.noise.states() as f64 + 1.0
 }
 
 /// `plans` and, when refining, the check mesh ([`check_plan`]) last.
@@ -476,8 +530,8 @@ pub(crate) fn build(plans: &[Plan]) -> Vec<Mesh> {
 }
 
 /// Cost of factorising each mesh of `plans` and `solves` solves with each,
-/// in f64 from the node counts ([`Layout::nodes`]): 2 n_x n_v unknowns,
-/// 2 n_v = kl sub- and super-diagonals. A solve is 2 (3 kl + 1) operations
+/// in f64 from the node counts ([`Layout::nodes`]): N n_x n_v unknowns,
+/// N n_v = kl sub- and super-diagonals (N noise states). A solve is 2 (3 kl + 1) operations
 /// a row; the factorisation does 2 (kl + ku) = 4 kl a row for each nonzero
 /// multiplier, and about 0.4 kl of a row's kl multipliers are nonzero
 /// (upwind rows reach back a column only where v < 0; counted by
@@ -490,7 +544,8 @@ pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
     };
     for (layout, k) in plans {
         let (nx, nv) = layout.nodes(*k);
-        let (n, kl) = (2.0 * nx * nv, 2.0 * nv);
+        let ns = layout.states as f64;
+        let (n, kl) = (ns * nx * nv, ns * nv);
         c.work += 1.6 * n * kl * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
         c.memory = c.memory.max(8.0 * n * (3.0 * kl + 7.0));
     }
@@ -577,12 +632,12 @@ pub fn solve_watched(
     progress: &dyn Progress,
 ) -> Result<SearchSolution> {
     opts.validate()?;
-    let setup = Setup::new(problem, "--method backward", false)?;
+    let setup = Setup::new(problem, super::BACKWARD, false)?;
     if !problem.mean_is_finite() {
         return Ok(SearchSolution::infinite());
     }
     let plans = with_check(&setup, meshes(&setup, opts), opts.refine);
-    let cost = cost_of(&plans, 3.0);
+    let cost = cost_of(&plans, solves(&setup));
     let budget = (opts.max_work, opts.max_memory);
     check_budget(&cost, budget, mesh_drivers(problem, &["truncation"]))?;
     let watch = Watch::new(progress, cost.work);
@@ -614,17 +669,10 @@ pub fn solve_watched(
             meshes[1].clone(),
             on,
             |a| (a.mean(), 0.0),
-            |p| cost_of(std::slice::from_ref(p), 3.0),
+            |p| cost_of(std::slice::from_ref(p), solves(&setup)),
         )?;
         let (c, f) = top.last_two();
-        let ex = |c: f64, f: f64| 2.0 * f - c;
-        let best = NodeAnswer {
-            tau: [ex(c.tau[0], f.tau[0]), ex(c.tau[1], f.tau[1])],
-            reset: c
-                .reset
-                .zip(f.reset)
-                .map(|(c, f)| [ex(c[0], f[0]), ex(c[1], f[1])]),
-        };
+        let best = c.extrapolated(f);
         let error = top.factor.unwrap_or(1.0) * (f.mean() - c.mean()).abs();
         (best, error, top.finest, top.factor.is_some())
     } else {
@@ -633,7 +681,7 @@ pub fn solve_watched(
     // The extrapolated values pass the same checks as each mesh's.
     verify(
         &best.tau,
-        best.tau,
+        &best.tau,
         &setup,
         "the backward solver (--method backward, extrapolated)",
     )?;
@@ -649,14 +697,22 @@ pub fn solve_watched(
     } else {
         f64::NAN
     };
+    let paper = problem.params().noise().is_none();
+    let (tau_plus, tau_minus) = if paper {
+        (best.tau[0], best.tau[1])
+    } else {
+        (f64::NAN, f64::NAN)
+    };
     Ok(SearchSolution {
         tau: best.mean(),
-        tau_plus: best.tau[0],
-        tau_minus: best.tau[1],
+        tau_plus,
+        tau_minus,
+        tau_states: (!paper).then(|| best.tau.clone()),
         error_estimate,
         mesh_error,
         truncation_error,
-        reset_values: best.reset,
+        reset_values: best.reset.as_ref().filter(|_| paper).map(|r| [r[0], r[1]]),
+        reset_states: best.reset.clone().filter(|_| !paper),
         mesh: mesh_info(&finest),
         infinite_mean: false,
         asymptotic,
@@ -872,17 +928,38 @@ pub(crate) fn mesh_info(m: &Mesh) -> MeshInfo {
     }
 }
 
-/// T(x0, v0, ±) and T(x_r, v_r, ±) on one mesh.
+/// T(x0, v0, s) and T(x_r, v_r, s) on one mesh, for each noise state s,
+/// and the stationary law π of the states.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct NodeAnswer {
-    pub tau: [f64; 2],
-    pub reset: Option<[f64; 2]>,
+    pub tau: Vec<f64>,
+    pub reset: Option<Vec<f64>>,
+    pub pi: Vec<f64>,
 }
 
 impl NodeAnswer {
-    /// (tau+ + tau-)/2.
+    /// Σ_s π_s T(x0, v0, s) (the paper's noise: 0.5 tau+ + 0.5 tau-, which
+    /// is (tau+ + tau-)/2 to the bit: halving is exact).
     pub fn mean(&self) -> f64 {
-        0.5 * (self.tau[0] + self.tau[1])
+        let mut terms = self.tau.iter().zip(&self.pi).map(|(t, p)| p * t);
+        let first = terms.next().unwrap_or(0.0);
+        terms.fold(first, |a, b| a + b)
+    }
+
+    /// 2 `fine` - `self` for each value (first-order Richardson).
+    pub fn extrapolated(&self, fine: &NodeAnswer) -> NodeAnswer {
+        let ex = |c: &[f64], f: &[f64]| -> Vec<f64> {
+            c.iter().zip(f).map(|(c, f)| 2.0 * f - c).collect()
+        };
+        NodeAnswer {
+            tau: ex(&self.tau, &fine.tau),
+            reset: self
+                .reset
+                .as_ref()
+                .zip(fine.reset.as_ref())
+                .map(|(c, f)| ex(c, f)),
+            pi: self.pi.clone(),
+        }
     }
 }
 
@@ -909,7 +986,8 @@ pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str)
 /// `R = M R + U_r`, M[s][s'] = Σ_j w_j W_s'(x_r, v_j, s) (the chance that a
 /// reset comes first, into state s'), its escape chances
 /// e_s = Σ_j w_j h(x_r, v_j, s) from the hitting chance h solved for
-/// directly (no cancellation when it is small).
+/// directly (no cancellation when it is small); one response W_s' per
+/// noise state s'.
 fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     const METHOD: &str = "the backward solver (--method backward)";
     let p = &setup.params;
@@ -917,11 +995,11 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
         Resetting::Velocity { .. } => Some(LocalReset {
             rate: p.rate(),
             target: mesh.target_weights(p)?,
-            mix: setup.mix,
+            mix: setup.mix.clone(),
         }),
         _ => None,
     };
-    let g = Generator::assemble(mesh, p, local.as_ref());
+    let g = Generator::assemble(mesh, p, &setup.noise, local.as_ref());
     let full = matches!(setup.resetting, Resetting::Full { .. });
     let r = if full { p.rate() } else { 0.0 };
     let band = factor(&g, r, 1.0, METHOD)?;
@@ -932,6 +1010,7 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     };
     let mut t = fill(&|_| 1.0);
     band.solve(&mut t);
+    let ns = mesh.states;
     let reset = match setup.resetting {
         Resetting::Full { x, v } => {
             let ir = mesh.node(x, v)?.0;
@@ -942,30 +1021,95 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
                     .map(|&(j, w)| w * f[mesh.idx(ir, j, s)])
                     .sum()
             };
-            let w = [0, 1].map(|s2| {
-                let mut w = fill(&|k| r * setup.mix[k % 2][s2]);
-                band.solve(&mut w);
-                w
-            });
+            let w: Vec<Vec<f64>> = (0..ns)
+                .map(|s2| {
+                    let mut w = fill(&|k| r * setup.mix[k % ns][s2]);
+                    band.solve(&mut w);
+                    w
+                })
+                .collect();
             let mut hit: Vec<f64> = (0..g.dim())
                 .map(|k| if g.absorbing[k] { 1.0 } else { 0.0 })
                 .collect();
             band.solve(&mut hit);
-            let m = [0, 1].map(|s| [at_reset(&w[0], s), at_reset(&w[1], s)]);
-            let escape = [0, 1].map(|s| at_reset(&hit, s));
-            let u = [0, 1].map(|s| at_reset(&t, s));
-            let tr = capacitance(m, escape, METHOD)?.solve(u);
+            let m: Vec<Vec<f64>> = (0..ns)
+                .map(|s| w.iter().map(|ws| at_reset(ws, s)).collect())
+                .collect();
+            let escape: Vec<f64> = (0..ns).map(|s| at_reset(&hit, s)).collect();
+            let u: Vec<f64> = (0..ns).map(|s| at_reset(&t, s)).collect();
+            let tr = renew(&m, &escape, &u, METHOD)?;
             for (k, tk) in t.iter_mut().enumerate() {
-                *tk += tr[0] * w[0][k] + tr[1] * w[1][k];
+                *tk += (1..ns).fold(tr[0] * w[0][k], |a, s| a + tr[s] * w[s][k]);
             }
             Some(tr)
         }
         _ => None,
     };
     let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
-    let tau = [t[mesh.idx(i0, j0, 0)], t[mesh.idx(i0, j0, 1)]];
-    verify(&t, tau, setup, METHOD)?;
-    Ok(NodeAnswer { tau, reset })
+    let tau: Vec<f64> = (0..ns).map(|s| t[mesh.idx(i0, j0, s)]).collect();
+    verify(&t, &tau, setup, METHOD)?;
+    let pi = setup.noise.pi.clone();
+    Ok(NodeAnswer { tau, reset, pi })
+}
+
+/// The reset values R solving R = M R + u (the renewal at the reset point,
+/// M[s][s'] the chance that a reset into s' comes first from s, e_s the
+/// chance of the target first): two states by [`capacitance`], N states
+/// by elimination on `I - M` in the manner of Grassmann-Taksar-Heyman:
+/// each pivot is its row's escape chance plus its off-diagonal chances,
+/// the escape chances updated as e_i + l e_k with l ≥ 0 (sums of
+/// non-negative terms, no cancellation when the target is rarely reached
+/// first, so R ≥ 0); refused alike unless every e_s > 0.
+fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<Vec<f64>> {
+    if m.len() == 2 {
+        let m2 = [[m[0][0], m[0][1]], [m[1][0], m[1][1]]];
+        let tr = capacitance(m2, [e[0], e[1]], method)?.solve([u[0], u[1]]);
+        return Ok(tr.to_vec());
+    }
+    refuse_unreached(m, e, method)?;
+    let n = m.len();
+    // Off-diagonal chances c[i][j] = M_ij (the system's entries are -c).
+    let (mut c, mut e, mut b) = (m.to_vec(), e.to_vec(), u.to_vec());
+    let pivot = |c: &[Vec<f64>], e: &[f64], k: usize| -> f64 {
+        e[k] + (k + 1..n).map(|j| c[k][j]).sum::<f64>()
+    };
+    for k in 0..n {
+        let p = pivot(&c, &e, k);
+        for i in k + 1..n {
+            let l = c[i][k] / p;
+            let row_k = c[k].clone();
+            for (j, cij) in c[i].iter_mut().enumerate().skip(k + 1) {
+                if j != i {
+                    *cij += l * row_k[j];
+                }
+            }
+            e[i] += l * e[k];
+            b[i] += l * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let known: f64 = (k + 1..n).map(|j| c[k][j] * x[j]).sum();
+        x[k] = (b[k] + known) / pivot(&c, &e, k);
+    }
+    Ok(x)
+}
+
+/// Refused (typed) unless every escape chance e_s > 0 and M ≥ 0: the
+/// target must be reachable between resets from every state at x_r.
+fn refuse_unreached(m: &[Vec<f64>], e: &[f64], method: &'static str) -> Result<()> {
+    if e.iter().all(|x| *x > 0.0) && m.iter().flatten().all(|x| *x >= 0.0) {
+        return Ok(());
+    }
+    let chances: Vec<String> = e.iter().map(|x| format!("{x:e}")).collect();
+    Err(Error::Numerical {
+        method,
+        reason: format!(
+            "the target is not reached between resets (chance of reaching it first \
+             from x_r: {})",
+            chances.join(", ")
+        ),
+    })
 }
 
 /// The system I - M of a renewal at the reset point, with the rows' escape
@@ -1000,7 +1144,7 @@ pub(crate) fn capacitance(
 /// linearly with the unknowns (Wilkinson's bound, no pivot growth in an
 /// M-matrix), so a value of T ≈ 0 next to the target may come out
 /// slightly negative.
-pub(crate) fn verify(t: &[f64], tau: [f64; 2], setup: &Setup, method: &'static str) -> Result<()> {
+pub(crate) fn verify(t: &[f64], tau: &[f64], setup: &Setup, method: &'static str) -> Result<()> {
     let max = t.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
     if !max.is_finite() {
         return Err(Error::NonFinite {
@@ -1019,7 +1163,7 @@ pub(crate) fn verify(t: &[f64], tau: [f64; 2], setup: &Setup, method: &'static s
         });
     }
     let bound = setup.distance / setup.params.v_upper();
-    for x in tau {
+    for &x in tau {
         if !(x >= bound * (1.0 - 1e-12)) {
             return Err(Error::Numerical {
                 method,

@@ -336,11 +336,11 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
         Resetting::Velocity { .. } => Some(LocalReset {
             rate: p.rate(),
             target: mesh.target_weights(p)?,
-            mix: setup.mix,
+            mix: setup.mix.clone(),
         }),
         _ => None,
     };
-    let g = Generator::assemble(mesh, p, local.as_ref());
+    let g = Generator::assemble(mesh, p, &setup.noise, local.as_ref());
     let (r, reset) = match setup.resetting {
         Resetting::Full { x, v } => {
             let ir = mesh.node(x, v)?.0;
@@ -354,7 +354,7 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
         g: &g,
         r,
         reset,
-        mix: setup.mix,
+        mix: setup.mix2(),
     };
     let stepper = Stepper::new(t_max / steps as f64);
     let d = stepper.d();

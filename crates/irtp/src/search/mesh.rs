@@ -12,8 +12,13 @@
 //! v_l, v_r, 0, v_0, v_u. Doubling every count nests the meshes (the
 //! stretch is uniform in s), so Richardson extrapolation applies.
 //!
-//! Unknowns are ordered x-column by x-column, (v_j, ±) interleaved inside a
-//! column: the generator is banded with 2 n_v sub- and super-diagonals.
+//! Unknowns are ordered x-column by x-column, (v_j, s) interleaved inside a
+//! column (N noise states s, N = 2 for the paper's ±Sigma): the generator
+//! is banded with N n_v sub- and super-diagonals. A noise state whose
+//! fixed point v*_s = g⁻¹(a_s) lies inside (v_l, v_u) (the pause level
+//! a = 0 at v = 0) has its drift a_s - g(v) change sign there: v*_s is a
+//! node (a breakpoint of the layout), so each row is upwinded by the sign
+//! of its own node's drift and no cell straddles a fixed point.
 
 use crate::error::{Error, Result};
 use crate::model::reset::Reset;
@@ -47,6 +52,8 @@ pub(crate) struct Layout {
     pub vb: Vec<f64>,
     /// Cells between consecutive v breakpoints.
     pub vc: Vec<usize>,
+    /// Noise states N: the unknowns per (x, v) node.
+    pub states: usize,
 }
 
 /// The geometric far stretch of a truncated side.
@@ -87,7 +94,8 @@ impl Layout {
     /// position, target ends) with `cells_x` cells, ends `sides`, a far
     /// stretch of length `extent` (if a side is truncated) on the scale
     /// `scale`; v with `cells_v` cells between the breakpoints `v_points`
-    /// (v_l and v_u added).
+    /// (v_l and v_u added), `states` noise states per node.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         p: &Params,
         near: Vec<f64>,
@@ -96,6 +104,7 @@ impl Layout {
         scale: f64,
         cells: (usize, usize),
         v_points: &[f64],
+        states: usize,
     ) -> Layout {
         let xb = breakpoints(near);
         let xc = split(&xb, cells.0);
@@ -125,6 +134,7 @@ impl Layout {
             sides,
             vb,
             vc,
+            states,
         }
     }
 
@@ -192,6 +202,8 @@ pub(crate) struct Mesh {
     pub v: Vec<f64>,
     /// Ends of the domain: (low, high).
     pub sides: (Side, Side),
+    /// Noise states N per node.
+    pub states: usize,
 }
 
 impl Mesh {
@@ -214,23 +226,25 @@ impl Mesh {
             x,
             v,
             sides: layout.sides,
+            states: layout.states,
         }
     }
 
-    /// Number of unknowns, 2 n_x n_v.
+    /// Number of unknowns, N n_x n_v.
     pub fn unknowns(&self) -> usize {
-        2 * self.x.len() * self.v.len()
+        self.states * self.x.len() * self.v.len()
     }
 
-    /// Sub- (and super-) diagonals of the generator: 2 n_v.
+    /// Sub- (and super-) diagonals of the generator: N n_v.
     pub fn band(&self) -> usize {
-        2 * self.v.len()
+        self.states * self.v.len()
     }
 
-    /// Index of node (x_i, v_j) in state s (0: +Sigma, 1: -Sigma).
+    /// Index of node (x_i, v_j) in state s (the paper's noise: 0 is
+    /// +Sigma, 1 is -Sigma).
     #[inline]
     pub fn idx(&self, i: usize, j: usize, s: usize) -> usize {
-        (i * self.v.len() + j) * 2 + s
+        (i * self.v.len() + j) * self.states + s
     }
 
     /// Whether node (i, j) lies on the target with a velocity pointing out:
@@ -265,7 +279,60 @@ pub(crate) struct LocalReset {
     /// (j, w_j): the reset target on the v nodes ([`Mesh::target_weights`]).
     pub target: Vec<(usize, f64)>,
     /// mix[s][s']: probability of state s' after a reset from state s.
-    pub mix: [[f64; 2]; 2],
+    pub mix: Vec<Vec<f64>>,
+}
+
+/// The noise as the search mesh runs it (Eq. (N1) at T = 0): levels a_s,
+/// generator Q (rows summing to 0), stationary law π. The paper's noise is
+/// (+Sigma, -Sigma) with Q_01 = Q_10 = lambda and π = (1/2, 1/2).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Noise {
+    /// Levels a_s.
+    pub levels: Vec<f64>,
+    /// Generator Q: Q[s][s'] the rate of s → s' (s' ≠ s).
+    pub q: Vec<Vec<f64>>,
+    /// Stationary law π.
+    pub pi: Vec<f64>,
+    /// The mean jump rate Σ_s π_s q_s (the paper's: lambda), which sets
+    /// the scale of the far stretch with the reset rate.
+    pub rate: f64,
+}
+
+impl Noise {
+    /// The noise of `p`: the paper's from Sigma and lambda, another model
+    /// from its chain ([`Params::chain`]); a temperature is refused
+    /// (naming it: the mesh has no diffusion in v).
+    pub fn of(p: &Params, method: &str) -> Result<Noise> {
+        let Some(m) = p.noise() else {
+            let (s, l) = (p.sigma(), p.lambda());
+            return Ok(Noise {
+                levels: vec![s, -s],
+                q: vec![vec![-l, l], vec![l, -l]],
+                pi: vec![0.5, 0.5],
+                rate: l,
+            });
+        };
+        if m.temperature() > 0.0 {
+            return Err(Error::invalid(
+                "temperature",
+                m.temperature(),
+                format!("temperature 0 with --noise for {method} (no thermal noise on its mesh)"),
+            ));
+        }
+        let c = p.chain()?;
+        let rate = c.pi.iter().zip(&c.exit).map(|(p, q)| p * q).sum();
+        Ok(Noise {
+            levels: c.levels,
+            q: c.q,
+            pi: c.pi,
+            rate,
+        })
+    }
+
+    /// Number of states N.
+    pub fn states(&self) -> usize {
+        self.levels.len()
+    }
 }
 
 impl Mesh {
@@ -313,9 +380,15 @@ pub(crate) struct Generator {
 
 impl Generator {
     /// Assemble the reset-free generator of docs/equations.md (search
-    /// section) on `mesh`: upwind x- and v-transport, flips at rate lambda,
-    /// and a velocity-only reset if `local` is given.
-    pub fn assemble(mesh: &Mesh, p: &Params, local: Option<&LocalReset>) -> Generator {
+    /// section) on `mesh`: upwind x- and v-transport, the noise's jumps
+    /// (rates Q_ss'; the paper's flips at rate lambda), and a velocity-only
+    /// reset if `local` is given.
+    pub fn assemble(
+        mesh: &Mesh,
+        p: &Params,
+        noise: &Noise,
+        local: Option<&LocalReset>,
+    ) -> Generator {
         let n = mesh.unknowns();
         let mut g = Generator {
             start: Vec::with_capacity(n + 1),
@@ -328,12 +401,12 @@ impl Generator {
         let mut row: Vec<(usize, f64)> = Vec::with_capacity(8);
         for i in 0..mesh.x.len() {
             for j in 0..mesh.v.len() {
-                for s in 0..2 {
+                for s in 0..mesh.states {
                     row.clear();
                     if mesh.absorbing(i, j) {
                         g.absorbing[mesh.idx(i, j, s)] = true;
                     } else {
-                        upwind_row(mesh, p, local, (i, j, s), &mut row);
+                        upwind_row(mesh, p, noise, local, (i, j, s), &mut row);
                     }
                     g.push_row(&row);
                 }
@@ -390,11 +463,15 @@ impl Generator {
 }
 
 /// The entries of row (i, j, s) of the generator: transport in x at speed
-/// v_j and in v at the drift eta_s - g(v_j), each upwind (towards where the
-/// motion goes), flips, and the velocity-only reset.
+/// v_j and in v at the drift a_s - g(v_j), each upwind (towards where the
+/// motion goes: by the sign at the node, so on either side of a fixed
+/// point v*_s towards it), the jumps s → s' at rate Q_ss', and the
+/// velocity-only reset. The entries come in this order, the diagonal last
+/// (the paper's noise: one flip at rate lambda).
 fn upwind_row(
     mesh: &Mesh,
     p: &Params,
+    noise: &Noise,
     local: Option<&LocalReset>,
     (i, j, s): (usize, usize, usize),
     row: &mut Vec<(usize, f64)>,
@@ -411,18 +488,19 @@ fn upwind_row(
     } else if v < 0.0 && i > 0 {
         add(row, mesh.idx(i - 1, j, s), -v / (mesh.x[i] - mesh.x[i - 1]));
     }
-    let eta = if s == 0 { p.sigma() } else { -p.sigma() };
-    let b = p.drag().drift(eta, v);
+    let b = p.drag().drift(noise.levels[s], v);
     if b > 0.0 && j + 1 < mesh.v.len() {
         add(row, mesh.idx(i, j + 1, s), b / (mesh.v[j + 1] - mesh.v[j]));
     } else if b < 0.0 && j > 0 {
         add(row, mesh.idx(i, j - 1, s), -b / (mesh.v[j] - mesh.v[j - 1]));
     }
-    if p.lambda() > 0.0 {
-        add(row, mesh.idx(i, j, 1 - s), p.lambda());
+    for (t, &q) in noise.q[s].iter().enumerate() {
+        if t != s && q > 0.0 {
+            add(row, mesh.idx(i, j, t), q);
+        }
     }
     if let Some(r) = local {
-        for t in 0..2 {
+        for t in 0..mesh.states {
             for &(jr, w) in r.target.iter().filter(|_| r.mix[s][t] > 0.0) {
                 add(row, mesh.idx(i, jr, t), r.rate * r.mix[s][t] * w);
             }

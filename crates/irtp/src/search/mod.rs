@@ -1,7 +1,8 @@
 //! The search problem: first passage in *position*.
 //!
-//! The particle starts at (x_0, v_0) with eta(0) = ±Sigma (equally likely)
-//! and the search ends the first time x(t) reaches a level L
+//! The particle starts at (x_0, v_0) with eta(0) = ±Sigma (equally likely;
+//! with a noise model, its state drawn from the stationary law, which
+//! `--method backward` runs at temperature 0: Eq. (S12)) and the search ends the first time x(t) reaches a level L
 //! ([`PositionTarget::Level`], one-sided) or leaves an interval (a, b)
 //! ([`PositionTarget::Interval`]). Every resetting protocol of the model
 //! runs: velocity resetting (x kept), full resetting (`--reset-position`:
@@ -173,11 +174,19 @@ fn check_reset_position(x0: f64, target: PositionTarget, xr: f64) -> Result<()> 
 }
 
 impl SearchProblem {
-    /// Validate: x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
+    /// Validate: a noise model at temperature 0 only (a temperature is
+    /// refused, naming `temperature`); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
     /// (v_l, v_u); a reset position strictly on the start side (the same
     /// side of L as x0, or inside (a, b)). NaN fails every check. A noise
     /// model is admitted here and gated per method by [`noise_gate`].
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
+        if let Some(m) = params.noise().filter(|m| m.temperature() > 0.0) {
+            return Err(Error::invalid(
+                "temperature",
+                m.temperature(),
+                "temperature 0 for a search (--xt, --interval): no search method runs thermal noise",
+            ));
+        }
         let x0 = finite("x0", x0)?;
         let v0 = finite("v0", v0)?;
         let (vl, vu) = params.bounds();
@@ -275,10 +284,11 @@ impl SearchProblem {
             };
         };
         let resets = p.rate() > 0.0 || sched.scheduled_clock();
-        // A noise model's chain is irreducible with two or more states:
+        // A noise model's chain is irreducible: with two states or more
         // every state is left, so a particle always turns.
-        let turns =
-            p.noise().is_some() || p.lambda() > 0.0 || p.reset().noise() == NoiseAtReset::Redrawn;
+        let turns = p.lambda() > 0.0
+            || p.noise().is_some_and(|m| m.levels().len() > 1)
+            || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
         let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
@@ -429,7 +439,9 @@ impl SearchProblem {
 }
 
 /// The search methods that run a noise model other than the paper's.
-pub const NOISE_RUNNERS: &str = "--method exact and --method euler";
+pub const NOISE_RUNNERS: &str = "--method backward, exact and euler";
+/// The backward solver's name in [`noise_gate`].
+pub(crate) const BACKWARD: &str = "--method backward";
 /// The exact sampler's name in [`noise_gate`].
 pub(crate) const EXACT: &str = "--method exact";
 /// The Euler scheme's name in [`noise_gate`].
@@ -440,15 +452,16 @@ pub(crate) const PAPER_NOISE_ONLY: &str =
 
 /// The noise gate of the search, the one place deciding per method
 /// whether it runs the problem's noise model: the paper's noise (no
-/// model) runs everywhere; a noise model at T = 0 runs in the samplers
-/// ([`EXACT`], [`EULER`]); any other (a backward, renewal or distribution
-/// solve, or thermal noise) is refused naming `noise` (or `temperature`
-/// for the paper's noise with T > 0) in one line listing [`NOISE_RUNNERS`].
+/// model) runs everywhere; a noise model at T = 0 runs in the backward
+/// solver and the samplers ([`BACKWARD`], [`EXACT`], [`EULER`]); any other
+/// (a renewal or distribution solve, or thermal noise) is refused naming
+/// `noise` (or `temperature` for the paper's noise with T > 0) in one line
+/// listing [`NOISE_RUNNERS`].
 pub(crate) fn noise_gate(problem: &SearchProblem, method: &str) -> Result<()> {
     let Some(m) = problem.params().noise() else {
         return Ok(());
     };
-    if [EXACT, EULER].contains(&method) && m.temperature() == 0.0 {
+    if [BACKWARD, EXACT, EULER].contains(&method) && m.temperature() == 0.0 {
         return Ok(());
     }
     let (name, value) = crate::model::noise::support::blamed(m);

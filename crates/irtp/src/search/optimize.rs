@@ -44,7 +44,7 @@ impl SearchAxis {
 }
 
 /// One point of a search scan.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SearchScanPoint {
     /// The scanned value (r, x_0 or L).
     pub x: f64,
@@ -128,6 +128,9 @@ pub struct SearchTarget<'a> {
     pub backward: &'a BackwardOptions,
     /// tau(0) of the checked solve, set by `at_zero` (an interval).
     pub checked_zero: std::sync::OnceLock<f64>,
+    /// tau of the checked solve at the optimum, set by `at_optimum` (a
+    /// noise model's tau = Σ_s π_s T_s: its tau± are NaN).
+    pub checked_opt: std::sync::OnceLock<f64>,
 }
 
 impl SearchTarget<'_> {
@@ -175,6 +178,7 @@ impl RateObjective for SearchTarget<'_> {
 
     fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
         let s = self.verified(r)?;
+        let _ = self.checked_opt.set(s.tau);
         Ok(AtOptimum {
             tau_plus: s.tau_plus,
             tau_minus: s.tau_minus,
@@ -209,7 +213,8 @@ pub fn check_optimizable(base: &SearchProblem, range: &RateRange) -> Result<()> 
 /// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`SearchTarget`]),
 /// refused where it is infinite for every r ([`check_optimizable`]). tau
 /// at the optimum and at r = 0 are the checked solves' (at the optimum the
-/// mean of tau±, with its error), not the values that located r*.
+/// mean of tau±, with its error; with a noise model the solve's
+/// Σ_s π_s T_s), not the values that located r*.
 pub fn optimize_rate(
     base: &SearchProblem,
     range: &RateRange,
@@ -224,9 +229,13 @@ pub fn optimize_rate(
         base,
         backward: opts,
         checked_zero: std::sync::OnceLock::new(),
+        checked_opt: std::sync::OnceLock::new(),
     };
     let mut best = minimize_rate(&f, range, progress)?;
-    best.tau_opt = 0.5 * (best.tau_plus_opt + best.tau_minus_opt);
+    best.tau_opt = match f.checked_opt.get() {
+        Some(&t) if base.params().noise().is_some() => t,
+        _ => 0.5 * (best.tau_plus_opt + best.tau_minus_opt),
+    };
     if let Some(&t0) = f.checked_zero.get() {
         best.tau_r0 = t0;
     }

@@ -492,7 +492,7 @@ pub fn solve_watched(
     // The extrapolated values pass the same checks as each mesh's.
     verify(
         &best.tau,
-        best.tau,
+        &best.tau,
         &setup,
         "the renewal route (--method renewal, extrapolated)",
     )?;
@@ -553,7 +553,7 @@ fn answer(
         .into_iter()
         .map(|(j, w)| (ir, j, w))
         .collect();
-    let g = Generator::assemble(mesh, &setup.params, None);
+    let g = Generator::assemble(mesh, &setup.params, &setup.noise, None);
     let (wq, rq, beyond) = waiting.weights(t_max, steps);
     let mut p = Periods {
         a: [[0.0; 2]; 2],
@@ -586,7 +586,7 @@ const METHOD: &str = "the renewal route (--method renewal)";
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
-    let mix = setup.mix;
+    let mix = setup.mix2();
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
     let m =
@@ -605,7 +605,7 @@ fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Ans
     let per = tail_a + tail_b * reset[0].max(reset[1]);
     let tail = per + norm * per;
     let all = [tau[0], tau[1], reset[0], reset[1]];
-    verify(&all, tau, setup, METHOD)?;
+    verify(&all, &tau, setup, METHOD)?;
     Ok(Answer {
         tau,
         reset,

@@ -35,6 +35,7 @@ mod noise_fp;
 mod noise_fpt_exact;
 mod power_kink;
 mod search_backward;
+mod search_backward_noise;
 mod search_cost;
 mod search_cross;
 mod search_errors;

@@ -1,10 +1,10 @@
 //! The search (first passage in position) with a finite-state noise model
-//! at T = 0 by the two samplers (`--method exact`, `--method euler`): the
-//! paper's noise written as a chain (two states, and three states with a
-//! hidden duplicate level, lumpable to the telegraph) against the paper's
-//! backward solver; run-pause-tumble noise by the exact sampler against
-//! the Euler scheme extrapolated to dt → 0; the noise gate of the
-//! deterministic methods.
+//! at T = 0: the paper's noise written as a chain (two states, and three
+//! states with a hidden duplicate level, lumpable to the telegraph) by the
+//! exact sampler against the paper's backward solver; run-pause-tumble
+//! noise by the exact sampler against the Euler scheme extrapolated to
+//! dt → 0 and against the 2-D backward equation (Eq. (S12)); the noise
+//! gate of the methods that do not run a noise model.
 
 use irtp::mfpt::ParticleOptions;
 use irtp::model::noise::NoiseModel;
@@ -184,13 +184,6 @@ fn deterministic_methods_refuse_a_noise_model() {
         other => panic!("not an invalid parameter: {other:?}"),
     };
     let refusals = [
-        backward::solve(&pr, &BackwardOptions::default()).map(drop),
-        search::solve(
-            &pr,
-            &SearchMethod::Backward(BackwardOptions::default()),
-            &NoProgress,
-        )
-        .map(drop),
         search::distribution::estimate(
             &pr,
             &search::distribution::DistributionOptions {
@@ -200,6 +193,7 @@ fn deterministic_methods_refuse_a_noise_model() {
             },
         )
         .map(drop),
+        search::solve(&pr, &SearchMethod::Renewal(Default::default()), &NoProgress).map(drop),
     ];
     for r in refusals {
         let (name, msg) = named(r.unwrap_err());
@@ -209,22 +203,67 @@ fn deterministic_methods_refuse_a_noise_model() {
             "{} chars: {msg}",
             msg.len()
         );
-        assert!(
-            msg.contains("--method exact") && msg.contains("--method euler"),
-            "{msg}"
-        );
+        assert!(msg.contains(search::NOISE_RUNNERS), "{msg}");
     }
     let thermal = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=2", 0.5).unwrap();
     let hot = full(Params::with_noise(DragLaw::Linear, thermal, 0.5, 0.0).unwrap());
-    let pr = SearchProblem::new(hot, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
-    for m in [
-        SearchMethod::Exact(run(100, 1)),
-        SearchMethod::Euler {
-            dt: 0.01,
-            run: run(100, 1),
-        },
-    ] {
-        let (name, msg) = named(m.check(&pr).unwrap_err());
-        assert_eq!(name, "noise", "{msg}");
+    // Thermal noise: no search method runs it, refused with the problem.
+    let (name, msg) =
+        named(SearchProblem::new(hot, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap_err());
+    assert_eq!(name, "temperature", "{msg}");
+}
+
+const RPT: &str = "rpt:sigma=1,alpha=1,beta=2";
+/// Tanh drag bounds |v| < 1: the run level inside.
+const RPT_TANH: &str = "rpt:sigma=0.8,alpha=1,beta=2";
+
+/// Run-pause-tumble noise: the 2-D backward equation (Eq. (S12), its
+/// three-mesh error estimate) against the exact sampler over the chain, two
+/// independent routes: |diff| < z SE + error estimate, z for 4 sigma
+/// family-wise over the cases.
+fn rpt_backward_vs_exact(cases: &[(DragLaw, &str, PositionTarget, f64)], particles: u64) {
+    let z = irtp_testkit::stats::bonferroni_z(cases.len());
+    for (i, &(drag, noise, target, rate)) in cases.iter().enumerate() {
+        let p = noisy(drag, noise, rate);
+        let pr = SearchProblem::new(p, 0.0, 0.0, target).unwrap();
+        let b = backward::solve(&pr, &BackwardOptions::default()).unwrap();
+        let (tau, se) = exact(&pr, particles, 70 + i as u64);
+        assert!(
+            (tau - b.tau).abs() < z * se + b.error_estimate,
+            "{drag:?} {target:?} r = {rate}: exact {tau} ± {se}, backward {} ± {}",
+            b.tau,
+            b.error_estimate
+        );
     }
+}
+
+#[test]
+fn rpt_backward_matches_the_exact_sampler() {
+    rpt_backward_vs_exact(
+        &[(DragLaw::Linear, RPT, PositionTarget::Level(1.0), 0.5)],
+        20_000,
+    );
+}
+
+#[test]
+#[ignore = "slow tier: rpt backward against the sampler, tanh drag, interval, two rates"]
+fn rpt_backward_matches_the_exact_sampler_more_cases() {
+    rpt_backward_vs_exact(
+        &[
+            (
+                DragLaw::Tanh,
+                RPT_TANH,
+                PositionTarget::Interval(-1.0, 1.5),
+                0.5,
+            ),
+            (DragLaw::Tanh, RPT_TANH, PositionTarget::Level(1.0), 2.0),
+            (
+                DragLaw::Linear,
+                RPT,
+                PositionTarget::Interval(-1.0, 1.5),
+                2.0,
+            ),
+        ],
+        100_000,
+    );
 }

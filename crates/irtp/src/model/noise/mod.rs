@@ -25,8 +25,8 @@
 //! - [`support`]: which method runs which noise (every engine runs every
 //!   finite-state noise at T = 0; with T > 0 all but `mfpt --method exact`,
 //!   some only for some drags; the search any finite-state noise at T = 0
-//!   by its samplers (`--method exact`, `--method euler`), its
-//!   deterministic methods only the paper's noise;
+//!   by its backward equation and samplers (`--method backward`, `exact`,
+//!   `euler`), its renewal route and distribution only the paper's noise;
 //!   `irtp analytic` runs the closed forms (N3)-(N8)).
 //! - [`noise_model`]: [`NoiseModel`], a kind plus the temperature T of the
 //!   thermal noise sqrt(2T) dW added to it (Eq. (N1)).

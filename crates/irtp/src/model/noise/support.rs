@@ -22,10 +22,11 @@
 //! tanh and tan drags as the backward equations, Eq. (N49)), and the exact
 //! first-passage sampler (`mfpt --method exact`, [`crate::mfpt::exact`]):
 //! any finite-state noise at T = 0 (Eqs. (N46)-(N48)); T > 0 refused naming
-//! `temperature` (no exact flow with thermal noise), and the search's two
-//! samplers (`mfpt --xt` or `--interval` with `--method exact` or `--method
-//! euler`, [`crate::search::exact`], [`crate::search::euler`]): any
-//! finite-state noise at T = 0, the other search methods refusing it at
+//! `temperature` (no exact flow with thermal noise), and the search's 2-D
+//! backward equation and two samplers (`mfpt --xt` or `--interval` with
+//! `--method backward`, `exact` or `euler`, [`crate::search::backward`],
+//! [`crate::search::exact`], [`crate::search::euler`]): any finite-state
+//! noise at T = 0, the renewal route and the distribution refusing it at
 //! one gate (`crate::search::noise_gate`).
 
 use super::NoiseModel;
@@ -44,8 +45,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
     temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting); \
     mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting); the search \
-    (mfpt --xt or --interval) with --method exact or --method euler (any finite-state noise at \
-    temperature 0, every protocol the method runs)";
+    (mfpt --xt or --interval) with --method backward, exact or euler, and mfpt scan and optimize \
+    with --xt (any finite-state noise at temperature 0, every protocol the method runs)";
 
 /// What the closed forms of `irtp analytic` run of a noise model other
 /// than the paper's: [`supports`] answers `false` for them, as
@@ -122,8 +123,8 @@ pub fn check(solver: Solver, noise: &NoiseModel) -> Result<()> {
 
 /// The refusal of a noise model by `method` (a command, for the message):
 /// names `temperature` for the paper's noise with T > 0, else `noise`, and
-/// lists [`RUNNERS`] (the search's deterministic methods refuse a noise
-/// model at their own gate, `crate::search::noise_gate`). The message
+/// lists [`RUNNERS`] (the search's methods decide at their own gate,
+/// `crate::search::noise_gate`). The message
 /// says what runs it in one line ([`RUNS_IT`]).
 pub fn refuse(method: &str, noise: &NoiseModel) -> Result<()> {
     let (name, value) = blamed(noise);
