@@ -33,7 +33,7 @@
 //! π, and a particle starts in a state drawn from π (the stream's first
 //! uniform): tau is the π-averaged mean, the even and odd particles two
 //! independent halves of the same law. The step is written once over the
-//! noise states ([`EulerNoise`]).
+//! noise states (`EulerNoise`).
 
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
@@ -160,7 +160,7 @@ struct Chain {
 }
 
 impl SearchEuler {
-    /// Validate: a noise model at T = 0 ([`super::noise_gate`]) with its
+    /// Validate: a noise model at T = 0 (`super::noise_gate`) with its
     /// step chain exp(Q dt), dt inside the Euler stability limit with
     /// r dt < 1, a finite t_max ≥ dt, no refractory period.
     pub fn new(problem: &SearchProblem, dt: f64, t_max: f64) -> Result<Self> {

@@ -11,7 +11,7 @@
 //! v*_s t - ∫ (v*_s - v) dt (the flow potential tables of the simulation
 //! sampler; for a level whose fixed point v*_s = g⁻¹(a_s) is inside the
 //! velocity interval, such as the pause a_s = 0 of run-pause-tumble, the
-//! tables on each side of v*_s, [`level_segments`]). Along a segment v
+//! tables on each side of v*_s, `level_segments`). Along a segment v
 //! moves monotonically towards v*_s, so it changes sign at most once (at
 //! the flow time to v = 0; never where v*_s = 0: v keeps its sign and
 //! tends to 0): x(t) is monotone on at most two pieces. On a
@@ -215,11 +215,11 @@ impl<D: Drag> SearchSampler<D, Telegraph> {
 impl<D: Drag> SearchSampler<D, Chain> {
     /// Prepare for `problem` with its noise model at T = 0 (the paper's
     /// noise as a two-state chain where it has none): per level the
-    /// segments of [`level_segments`] and the flow of [`level_kind`]
+    /// segments of `level_segments` and the flow of `level_kind`
     /// (accelerated at an interval edge); refused naming `noise` where a
     /// level's flow is not exact (a kink of the drag at v*, an interior
     /// fixed point of a law without closed-form flows), naming
-    /// `temperature` at T > 0 ([`super::noise_gate`]).
+    /// `temperature` at T > 0 (`super::noise_gate`).
     pub fn with_chain(drag: &D, problem: &SearchProblem) -> Result<Self> {
         super::noise_gate(problem, super::EXACT)?;
         let params = problem.params();

@@ -178,7 +178,7 @@ impl SearchProblem {
     /// refused, naming `temperature`); x0, L, a, b finite; L != x0; a < x0 < b; v0 inside
     /// (v_l, v_u); a reset position strictly on the start side (the same
     /// side of L as x0, or inside (a, b)). NaN fails every check. A noise
-    /// model is admitted here and gated per method by [`noise_gate`].
+    /// model is admitted here and gated per method by `noise_gate`.
     pub fn new(params: Params, x0: f64, v0: f64, target: PositionTarget) -> Result<Self> {
         if let Some(m) = params.noise().filter(|m| m.temperature() > 0.0) {
             return Err(Error::invalid(
