@@ -705,8 +705,8 @@ fn params_with_the_papers_noise_are_the_default() {
 
 /// Another noise is carried, serialised and read back, kept by the
 /// `with_*` builders, and refused by every solver whose line of the
-/// support table is off, the first-passage and search problems, naming
-/// `noise` (or `temperature` for the paper's noise at T > 0).
+/// support table is off, naming `noise` (or `temperature` for the paper's
+/// noise at T > 0); the search problem refuses thermal noise only.
 #[test]
 fn params_carry_another_noise_and_every_solver_refuses_it() {
     use irtp::model::reset::Solver;
@@ -740,8 +740,13 @@ fn params_carry_another_noise_and_every_solver_refuses_it() {
         }
         // The backward equations run every noise model (mfpt::nstate).
         assert!(irtp::mfpt::Problem::new(p, 0.0, 0.5).is_ok());
+        // A search admits a noise model at T = 0 (its methods decide at
+        // `search::noise_gate`) and refuses thermal noise with the problem.
         let search = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Interval(-1.0, 1.0));
-        assert_eq!(blamed(search.unwrap_err()).0, flag);
+        match flag {
+            "noise" => assert!(search.is_ok()),
+            _ => assert_eq!(blamed(search.unwrap_err()).0, flag),
+        }
     }
     // A level outside the drag's force range, and v_r outside the interval.
     let e = Params::with_noise(
