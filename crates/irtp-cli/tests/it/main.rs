@@ -39,6 +39,7 @@ mod reset_protocols;
 mod search_cli;
 mod search_guards;
 mod search_hostile;
+mod sim_noise_schedule;
 mod sweep;
 mod value_stability;
 mod verified;

@@ -32,31 +32,37 @@
 //! occupation time of every histogram bin over [burn_in, t_max] (bin edges
 //! crossed in full contribute the precomputed flow time across the bin).
 //!
+//! The noise's state space is a type parameter of the one event loop
+//! (`Sampler` over `NoiseStates`), dispatched once per run: the paper's
+//! two-state noise (fixed-size per-state arrays, its random draws bit for
+//! bit) or any finite-state noise at T = 0 (docs/equations.md Eqs.
+//! (N10)-(N12), `states`: per level its own segments, fixed point
+//! (possibly interior) and crossing times, events at rate q_s + r in state
+//! s). Both share the segment code (`Segments`, `flow_segment`, the
+//! occupation and crossing times).
+//!
 //! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
-//! run in a second event loop, chosen once per run (the paper's protocol
-//! keeps its own loop, bit for bit): the next event is the earliest of the
-//! exponential clock (flips at rate lambda, plus Poisson resets at rate r
-//! outside a refractory period), the next scheduled reset time (resets at
+//! run in a second step function of that loop, chosen once per run (the
+//! paper's protocol keeps its own step, bit for bit), for every
+//! finite-state noise: the next event is the earliest of the
+//! exponential clock (noise jumps at rate q_s, the paper's flips at rate
+//! lambda, plus Poisson resets at rate r outside a refractory period), the
+//! next scheduled reset time (resets at
 //! T, 2T, ... from t = 0 with a periodic clock; with a renewal clock a
 //! waiting time drawn at each reset, or at the end of its refractory
 //! period, from the clock's law) and the end of a refractory period. A reset sends
 //! x to x_r with position resetting; a refractory period is a held segment:
 //! v constant at the reset velocity, x linear in t, the occupation of the
-//! held velocity's bin and the time averages exact; the noise flips during
-//! it, reset-clock events are ignored (the periodic times inside it or at
+//! held velocity's bin and the time averages exact; the noise jumps during
+//! it (state-dependent rate q_s), reset-clock events are ignored (the periodic times inside it or at
 //! its end skipped), and the flow resumes from the held velocity with the
 //! noise state of that moment. An event at t acts just after t: a
 //! recording time equal to a periodic reset time sees the state before it.
 //!
-//! A noise model other than the paper's (any finite-state noise at T = 0,
-//! docs/equations.md Eqs. (N10)-(N12)) runs the N-state loop of `states`
-//! through the same entry points ([`simulate`], [`simulate_units`]): per
-//! level its own segments, fixed point (possibly interior) and crossing
-//! times, events at rate q_s + r. It shares this module's segment code
-//! (`Segments`, `flow_segment`, the occupation and crossing times).
-//! With thermal noise (T > 0) and linear drag a third loop, `ou`, runs the
+//! With thermal noise (T > 0) and linear drag a second loop, `ou`, runs the
 //! same event clock with exact Ornstein-Uhlenbeck segments in between
-//! (Eqs. (N40)-(N45)); any other drag at T > 0 is refused naming
+//! (Eqs. (N40)-(N45)), Poisson resetting only (a schedule modifier is
+//! refused naming its flag); any other drag at T > 0 is refused naming
 //! `temperature`.
 
 use crate::error::{Error, Result};
@@ -394,8 +400,50 @@ impl<F: FlowMap> LawSetup<F> {
     }
 }
 
-/// Everything fixed for a run: parameters, tables, histogram geometry.
-struct Sampler<F> {
+/// The noise's state space as the one event loop ([`Sampler`]) reads it:
+/// per state its tables (segments, fixed point, 1/g'(v*), edge
+/// potentials, bin crossing times), its event clock and what an event
+/// does. Two implementations, chosen once per run ([`simulate_drag`]): the
+/// paper's two-state noise ([`Paper`], fixed-size arrays, its random draws
+/// kept bit for bit) and a finite-state chain (`states::ChainStates`,
+/// Eqs. (N10)-(N12)); the loop is monomorphised over each.
+trait NoiseStates: Sized + Sync {
+    type Flow: FlowMap;
+    /// Per-state crossing difference arrays of a chunk.
+    type Cross: AsMut<[Vec<i64>]> + Send;
+    /// The tables of `params`'s noise (the caller has checked the solver's
+    /// support line and the recording window).
+    fn build<D: Drag<Flow = Self::Flow>>(drag: &D, params: &Params, spec: &SimSpec)
+        -> Result<Self>;
+    fn seg(&self, si: usize) -> &Segments<Self::Flow>;
+    fn fixed_point(&self, si: usize) -> f64;
+    fn inv_rate(&self, si: usize) -> f64;
+    fn phi_edges(&self, si: usize) -> &[f64];
+    /// Flow time across each bin in full (0 where never crossed).
+    fn tau(&self, si: usize) -> &[f64];
+    /// Empty crossing arrays for `bins` bins.
+    fn cross(&self, bins: usize) -> Self::Cross;
+    /// The state of a particle at t = 0 (its stream's first draw).
+    fn start(&self, rng: &mut Rng) -> usize;
+    /// The event clock in state s outside a refractory period: (q_s + r,
+    /// its inverse).
+    fn clock(&self, si: usize) -> (f64, f64);
+    /// The clock inside a refractory period, jumps only: (q_s, its
+    /// inverse, 0 where q_s = 0).
+    fn jump_clock(&self, si: usize) -> (f64, f64);
+    /// The event of the clock in state s, given u uniform on [0, 1): a
+    /// jump to the returned state, or a reset (None).
+    fn event(&self, si: usize, u: f64) -> Option<usize>;
+    /// The state after a jump of the clock inside a refractory period.
+    fn jump_held(&self, si: usize, rng: &mut Rng) -> usize;
+    /// The state after a reset from s, by the rule's noise option.
+    fn after_reset(&self, si: usize, rule: &ResetRule, rng: &mut Rng) -> usize;
+    /// The segment start in state s after a reset to velocity v.
+    fn reset_point(&self, si: usize, v: f64) -> FlowPoint;
+}
+
+/// The paper's noise ±Sigma flipping at rate lambda (state 0: +Sigma).
+struct Paper<F> {
     /// Flow segments for s = +Sigma (index 0) and s = -Sigma (index 1).
     segs: [Segments<F>; 2],
     /// Fixed points and inverse relaxation rates 1/g'(v*), per noise state.
@@ -404,22 +452,28 @@ struct Sampler<F> {
     lambda: f64,
     total_rate: f64,
     inv_total_rate: f64,
-    /// The resetting rule (rate, target, noise state at a reset).
-    reset: ResetRule,
+    /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
+    inv_lambda: f64,
     /// The segment start at the point target v_r, per noise state.
     at_vr: Option<[FlowPoint; 2]>,
     /// Flow time across bin k in full, per noise state (0 where never crossed).
     tau: [Vec<f64>; 2],
     /// Flow potential (see [`FlowMap::potential`]) at every edge, per noise state.
     phi_edges: [Vec<f64>; 2],
+}
+
+/// Everything fixed for a run: the noise's tables and clock, the resetting
+/// protocol, the recording window.
+struct Sampler<N> {
+    noise: N,
+    /// The resetting rule (rate, target, noise state at a reset).
+    reset: ResetRule,
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
     seed: u64,
-    /// The paper's protocol (no modifier): the plain event loop runs.
+    /// The paper's protocol (no modifier): the plain step runs.
     plain: bool,
-    /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
-    inv_lambda: f64,
     /// The schedule (its periodic or renewal clock).
     schedule: Schedule,
     /// Position resetting: x_r.
@@ -440,10 +494,11 @@ enum Edge {
 }
 
 /// Per-chunk scratch: occupation times and full-crossing counts
-/// (difference arrays, so a segment crossing many bins costs O(1)).
-struct Scratch {
+/// (difference arrays, so a segment crossing many bins costs O(1)), one
+/// per noise state.
+struct Scratch<C> {
     occ: Vec<f64>,
-    cross: [Vec<i64>; 2],
+    cross: C,
 }
 
 /// The segments of noise value s: tables when they fit, else the solve.
@@ -492,10 +547,11 @@ fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> 
         .collect()
 }
 
-impl<F: FlowMap> Sampler<F> {
-    fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
-        params.require(Solver::Exact)?;
-        super::check_period_window(params, spec)?;
+impl<F: FlowMap> NoiseStates for Paper<F> {
+    type Flow = F;
+    type Cross = [Vec<i64>; 2];
+
+    fn build<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
         let sigma = params.sigma();
         let (lo, hi) = params.bounds();
         check_relaxation(drag, sigma, hi)?;
@@ -509,26 +565,95 @@ impl<F: FlowMap> Sampler<F> {
             vs,
             inv_rate,
         } = (*law).clone();
-        let reset = *params.reset();
+        let reset = params.reset();
         let at_vr = reset.point().map(|vr| [segs[0].at(vr), segs[1].at(vr)]);
-        let schedule = params.schedule();
         let lambda = params.lambda();
-        Ok(Sampler {
-            plain: schedule.is_plain(),
+        Ok(Paper {
             inv_lambda: if lambda > 0.0 { 1.0 / lambda } else { 0.0 },
-            schedule: *schedule,
-            x_reset: schedule.position.map(|p| p.x),
-            refractory: schedule.refractory,
             vs,
             inv_rate,
             segs,
             phi_edges,
             at_vr,
-            lambda: params.lambda(),
-            total_rate: params.lambda() + reset.rate(),
-            inv_total_rate: 1.0 / (params.lambda() + reset.rate()),
-            reset,
+            lambda,
+            total_rate: lambda + reset.rate(),
+            inv_total_rate: 1.0 / (lambda + reset.rate()),
             tau,
+        })
+    }
+    #[inline(always)]
+    fn seg(&self, si: usize) -> &Segments<F> {
+        &self.segs[si]
+    }
+    #[inline(always)]
+    fn fixed_point(&self, si: usize) -> f64 {
+        self.vs[si]
+    }
+    #[inline(always)]
+    fn inv_rate(&self, si: usize) -> f64 {
+        self.inv_rate[si]
+    }
+    #[inline(always)]
+    fn phi_edges(&self, si: usize) -> &[f64] {
+        &self.phi_edges[si]
+    }
+    #[inline(always)]
+    fn tau(&self, si: usize) -> &[f64] {
+        &self.tau[si]
+    }
+    fn cross(&self, bins: usize) -> [Vec<i64>; 2] {
+        [vec![0; bins], vec![0; bins]]
+    }
+    /// ±Sigma with probability ½ each (one boolean).
+    #[inline(always)]
+    fn start(&self, rng: &mut Rng) -> usize {
+        usize::from(!rng.gen::<bool>())
+    }
+    #[inline(always)]
+    fn clock(&self, _: usize) -> (f64, f64) {
+        (self.total_rate, self.inv_total_rate)
+    }
+    #[inline(always)]
+    fn jump_clock(&self, _: usize) -> (f64, f64) {
+        (self.lambda, self.inv_lambda)
+    }
+    #[inline(always)]
+    fn event(&self, si: usize, u: f64) -> Option<usize> {
+        (u * self.total_rate < self.lambda).then_some(1 - si)
+    }
+    /// The flip (no draw: the other state whatever u).
+    #[inline(always)]
+    fn jump_held(&self, si: usize, _: &mut Rng) -> usize {
+        1 - si
+    }
+    #[inline(always)]
+    fn after_reset(&self, si: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
+        usize::from(!rule.draw_noise(si == 0, rng))
+    }
+    #[inline(always)]
+    fn reset_point(&self, si: usize, v: f64) -> FlowPoint {
+        match &self.at_vr {
+            Some(at) => at[si],
+            None => self.segs[si].at(v),
+        }
+    }
+}
+
+impl<N: NoiseStates> Sampler<N> {
+    /// The sampler of `params` with the noise states `N` (its tables built
+    /// or shared through [`crate::memo`]).
+    fn new<D: Drag<Flow = N::Flow>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
+        params.require(Solver::Exact)?;
+        super::check_period_window(params, spec)?;
+        let noise = N::build(drag, params, spec)?;
+        let schedule = params.schedule();
+        Ok(Sampler {
+            noise,
+            plain: schedule.is_plain(),
+            schedule: *schedule,
+            x_reset: schedule.position.map(|p| p.x),
+            refractory: schedule.refractory,
+            reset: *params.reset(),
             times: spec.grid.times().to_vec(),
             burn_in: spec.burn_in,
             t_max: spec.grid.t_max(),
@@ -536,15 +661,23 @@ impl<F: FlowMap> Sampler<F> {
         })
     }
 
+    /// Empty scratch for `bins` bins.
+    fn scratch(&self, bins: usize) -> Scratch<N::Cross> {
+        Scratch {
+            occ: vec![0.0; bins],
+            cross: self.noise.cross(bins),
+        }
+    }
+
     /// A particle at t = 0 (v = 0, noise state drawn).
     fn start(&self, i: u64) -> Lane {
         let mut rng = rng::stream(self.seed, i);
-        let si = usize::from(!rng.gen::<bool>());
+        let si = self.noise.start(&mut rng);
         let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             rng,
             si,
-            a: self.segs[si].at(0.0),
+            a: self.noise.seg(si).at(0.0),
             t: 0.0,
             x: 0.0,
             k: 0,
@@ -561,67 +694,54 @@ impl<F: FlowMap> Sampler<F> {
     }
 
     /// One flow segment of a particle up to its next event (or t_max), then
-    /// the event.
+    /// the event (the paper's protocol).
     #[inline]
-    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
-        let gap = if self.total_rate > 0.0 {
+    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
+        let (rate, inv) = self.noise.clock(p.si);
+        let gap = if rate > 0.0 {
             // Exp(rate) by a product with 1/rate (the division sits on the
             // event's dependency chain).
-            p.rng.sample::<f64, _>(rand_distr::Exp1) * self.inv_total_rate
+            p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
         } else {
             f64::INFINITY
         };
         let t_end = (p.t + gap).min(self.t_max);
-        let b = self.flow_to(p, obs, sc, t_end);
+        let b = flow_segment(self, p, obs, sc, t_end);
         if t_end >= self.t_max {
             p.done = true;
             return;
         }
         p.events += 1;
-        if p.rng.gen::<f64>() * self.total_rate < self.lambda {
-            p.si = 1 - p.si;
-            p.a = self.segs[p.si].at(b.v);
-        } else {
-            let v = self.draw_reset(p);
-            p.a = match &self.at_vr {
-                Some(at) => at[p.si],
-                None => self.segs[p.si].at(v),
-            };
+        match self.noise.event(p.si, p.rng.gen::<f64>()) {
+            Some(j) => {
+                p.si = j;
+                p.a = self.noise.seg(j).at(b.v);
+            }
+            None => {
+                let v = self.draw_reset(p);
+                p.a = self.noise.reset_point(p.si, v);
+            }
         }
-    }
-
-    /// The flow segment of a particle from p.t to `t_end` under its noise
-    /// state (`flow_segment`); returns (and stores) the end point.
-    #[inline(always)]
-    fn flow_to(
-        &self,
-        p: &mut Lane,
-        obs: &mut Observables,
-        sc: &mut Scratch,
-        t_end: f64,
-    ) -> FlowPoint {
-        flow_segment(self, p, obs, sc, t_end)
     }
 
     /// The velocity after a reset (drawn for a random target) and the noise
     /// state (kept or re-drawn), stored in the lane.
     #[inline(always)]
     fn draw_reset(&self, p: &mut Lane) -> f64 {
-        let plus = p.si == 0;
         let v = self.reset.draw_velocity(&mut p.rng);
-        p.si = usize::from(!self.reset.draw_noise(plus, &mut p.rng));
+        p.si = self.noise.after_reset(p.si, &self.reset, &mut p.rng);
         v
     }
 
     /// [`Sampler::step`] with the schedule's modifiers (see the module
     /// docs): the segment ends at the exponential clock, the next periodic
     /// reset time or the end of the refractory period, whichever is first.
-    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
-        // Inside a refractory period only the flips run (rate lambda).
+    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
+        // Inside a refractory period only the noise's jumps run (rate q_s).
         let (rate, inv) = if p.held {
-            (self.lambda, self.inv_lambda)
+            self.noise.jump_clock(p.si)
         } else {
-            (self.total_rate, self.inv_total_rate)
+            self.noise.clock(p.si)
         };
         let gap = if rate > 0.0 {
             p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
@@ -641,7 +761,7 @@ impl<F: FlowMap> Sampler<F> {
         if p.held {
             self.hold_to(p, obs, sc, t_end);
         } else {
-            self.flow_to(p, obs, sc, t_end);
+            flow_segment(self, p, obs, sc, t_end);
         }
         if t_end >= self.t_max {
             p.done = true;
@@ -651,18 +771,17 @@ impl<F: FlowMap> Sampler<F> {
         match edge {
             Edge::Release => {
                 p.held = false;
-                p.a = self.segs[p.si].at(p.a.v);
+                p.a = self.noise.seg(p.si).at(p.a.v);
             }
             Edge::Periodic => self.reset_scheduled(p),
-            Edge::Clock if p.held => p.si = 1 - p.si,
-            Edge::Clock => {
-                if p.rng.gen::<f64>() * self.total_rate < self.lambda {
-                    p.si = 1 - p.si;
-                    p.a = self.segs[p.si].at(p.a.v);
-                } else {
-                    self.reset_scheduled(p);
+            Edge::Clock if p.held => p.si = self.noise.jump_held(p.si, &mut p.rng),
+            Edge::Clock => match self.noise.event(p.si, p.rng.gen::<f64>()) {
+                Some(j) => {
+                    p.si = j;
+                    p.a = self.noise.seg(j).at(p.a.v);
                 }
-            }
+                None => self.reset_scheduled(p),
+            },
         }
     }
 
@@ -672,10 +791,7 @@ impl<F: FlowMap> Sampler<F> {
     /// first one after the reset, or after the refractory period.
     fn reset_scheduled(&self, p: &mut Lane) {
         let v = self.draw_reset(p);
-        p.a = match &self.at_vr {
-            Some(at) => at[p.si],
-            None => self.segs[p.si].at(v),
-        };
+        p.a = self.noise.reset_point(p.si, v);
         if let Some(x) = self.x_reset {
             p.x = x;
         }
@@ -693,7 +809,7 @@ impl<F: FlowMap> Sampler<F> {
     /// A held segment (refractory period) from p.t to `t_end`: v constant
     /// at p.a.v, x linear in t, the held velocity's bin (or its atom)
     /// occupied.
-    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch, t_end: f64) {
+    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>, t_end: f64) {
         let (t, v) = (p.t, p.a.v);
         while p.k < self.times.len() && self.times[p.k] <= t_end {
             let xk = p.x + v * (self.times[p.k] - t);
@@ -717,9 +833,9 @@ impl<F: FlowMap> Sampler<F> {
 
     /// Close a particle: full bin crossings (occupation += crossings × tau)
     /// and its contribution to the observables.
-    fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch) {
-        for si in 0..2 {
-            add_crossings(&mut sc.cross[si], &mut sc.occ, &self.tau[si]);
+    fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
+        for (si, cross) in sc.cross.as_mut().iter_mut().enumerate() {
+            add_crossings(cross, &mut sc.occ, self.noise.tau(si));
         }
         close_particle(p, obs, &mut sc.occ, self.t_max - self.burn_in);
     }
@@ -727,7 +843,7 @@ impl<F: FlowMap> Sampler<F> {
     /// Particles `ids` one after the other. (Interleaving four particles
     /// per thread, one event of each in turn, measured no faster: the
     /// event's chain is short next to its instruction count.)
-    fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
+    fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
         for i in ids {
             let mut p = self.start(i);
             if self.plain {
@@ -885,7 +1001,7 @@ fn close_particle(p: &Lane, obs: &mut Observables, occ: &mut [f64], window: f64)
 /// One particle in flight.
 struct Lane {
     rng: Rng,
-    /// Noise state: 0 for +Sigma, 1 for -Sigma.
+    /// Noise state (the paper's: 0 for +Sigma, 1 for -Sigma).
     si: usize,
     /// The start of the current segment.
     a: FlowPoint,
@@ -907,22 +1023,22 @@ struct Lane {
     next_periodic: f64,
 }
 
-impl<F: FlowMap> StateTables<F> for Sampler<F> {
+impl<N: NoiseStates> StateTables<N::Flow> for Sampler<N> {
     #[inline(always)]
-    fn seg(&self, si: usize) -> &Segments<F> {
-        &self.segs[si]
+    fn seg(&self, si: usize) -> &Segments<N::Flow> {
+        self.noise.seg(si)
     }
     #[inline(always)]
     fn fixed_point(&self, si: usize) -> f64 {
-        self.vs[si]
+        self.noise.fixed_point(si)
     }
     #[inline(always)]
     fn inv_rate(&self, si: usize) -> f64 {
-        self.inv_rate[si]
+        self.noise.inv_rate(si)
     }
     #[inline(always)]
     fn phi_edges(&self, si: usize) -> &[f64] {
-        &self.phi_edges[si]
+        self.noise.phi_edges(si)
     }
     #[inline(always)]
     fn window(&self) -> (&[f64], f64) {
@@ -930,14 +1046,14 @@ impl<F: FlowMap> StateTables<F> for Sampler<F> {
     }
 }
 
-impl Occupation for Scratch {
+impl<C: AsMut<[Vec<i64>]>> Occupation for Scratch<C> {
     #[inline(always)]
     fn occ(&mut self) -> &mut [f64] {
         &mut self.occ
     }
     #[inline(always)]
     fn cross(&mut self, si: usize) -> &mut [i64] {
-        &mut self.cross[si]
+        &mut self.cross.as_mut()[si]
     }
 }
 
@@ -987,8 +1103,9 @@ fn simulate_part(
     ))
 }
 
-/// [`simulate_part`] for one law's type (monomorphised). The accumulator
-/// carries the per-chunk [`Scratch`]; only its observables are the result.
+/// [`simulate_part`] for one law's type (monomorphised): the noise is
+/// dispatched here, once, to the one event loop over its states (the
+/// paper's two-state noise, or a finite-state chain).
 fn simulate_drag<D: Drag>(
     drag: &D,
     params: &Params,
@@ -997,21 +1114,28 @@ fn simulate_drag<D: Drag>(
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
     if params.noise().is_some() {
-        return simulate_states(drag, params, spec, part, progress);
+        run_noise::<D, states::ChainStates<D::Flow>>(drag, params, spec, part, progress)
+    } else {
+        run_noise::<D, Paper<D::Flow>>(drag, params, spec, part, progress)
     }
-    let sampler = Sampler::new(drag, params, spec)?;
-    let b = spec.bins;
-    let scratch = || Scratch {
-        occ: vec![0.0; b],
-        cross: [vec![0; b], vec![0; b]],
-    };
-    let run = |ids, obs: &mut Observables, sc: &mut Scratch| sampler.particles(ids, obs, sc);
+}
+
+/// The run's particles with the noise states `N`. The accumulator carries
+/// the per-chunk [`Scratch`]; only its observables are the result.
+fn run_noise<D: Drag, N: NoiseStates<Flow = D::Flow>>(
+    drag: &D,
+    params: &Params,
+    spec: &SimSpec,
+    part: Part,
+    progress: &dyn Progress,
+) -> Result<Vec<Observables>> {
+    let sampler = Sampler::<N>::new(drag, params, spec)?;
     Ok(reduce_particles(
         (params, spec),
         part,
         progress,
-        scratch,
-        run,
+        || sampler.scratch(spec.bins),
+        |ids, obs, sc| sampler.particles(ids, obs, sc),
     ))
 }
 
@@ -1043,27 +1167,6 @@ where
     totals.into_iter().map(|(obs, _)| obs).collect()
 }
 
-/// [`simulate_drag`] with a noise model other than the paper's
-/// ([`states`]): the same reduction over particles.
-fn simulate_states<D: Drag>(
-    drag: &D,
-    params: &Params,
-    spec: &SimSpec,
-    part: Part,
-    progress: &dyn Progress,
-) -> Result<Vec<Observables>> {
-    params.require(Solver::Exact)?;
-    super::check_period_window(params, spec)?;
-    let sampler = states::StatesSampler::new(drag, params, spec)?;
-    Ok(reduce_particles(
-        (params, spec),
-        part,
-        progress,
-        || sampler.scratch(spec.bins),
-        |ids, obs, sc| sampler.particles(ids, obs, sc),
-    ))
-}
-
 /// [`crate::sim::control::coupled`]: every particle of the run twice, with
 /// `params` and with the linear proxy `proxy` ([`Params::linear_proxy`]),
 /// from the same stream (seed, i), so both see the same events; the pairs
@@ -1084,7 +1187,7 @@ pub(crate) fn simulate_coupled(
 struct CoupledChunk {
     totals: Coupled,
     one: [Observables; 2],
-    sc: Scratch,
+    sc: Scratch<[Vec<i64>; 2]>,
 }
 
 fn coupled_drag<D: Drag>(
@@ -1094,8 +1197,8 @@ fn coupled_drag<D: Drag>(
     spec: &SimSpec,
     progress: &dyn Progress,
 ) -> Result<Coupled> {
-    let target = Sampler::new(drag, params, spec)?;
-    let linear = Sampler::new(&crate::model::drag::Linear, proxy, spec)?;
+    let target = Sampler::<Paper<D::Flow>>::new(drag, params, spec)?;
+    let linear = Sampler::<Paper<_>>::new(&crate::model::drag::Linear, proxy, spec)?;
     let empty = [
         Observables::new(spec, params),
         Observables::new(spec, proxy),
@@ -1105,10 +1208,7 @@ fn coupled_drag<D: Drag>(
     let init = || CoupledChunk {
         totals: Coupled::empty(empty[0].clone()),
         one: empty.clone(),
-        sc: Scratch {
-            occ: vec![0.0; b],
-            cross: [vec![0; b], vec![0; b]],
-        },
+        sc: target.scratch(b),
     };
     let chunk = |lo: u64, hi: u64, c: &mut CoupledChunk| {
         for i in first + lo..first + hi {

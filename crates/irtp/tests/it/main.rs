@@ -46,5 +46,6 @@ mod search_optimize;
 mod search_reach;
 mod shards;
 mod sim_euler;
+mod sim_noise_schedule;
 mod support_matrix;
 mod tabulated_flow;

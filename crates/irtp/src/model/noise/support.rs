@@ -36,8 +36,8 @@ use crate::model::reset::Solver;
 /// What runs a noise model other than the paper's, for messages.
 pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poisson resetting \
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
-    --method exact (any finite-state noise at temperature 0; linear drag at any temperature; the \
-    paper's Poisson protocol); \
+    --method exact (any finite-state noise at temperature 0, every protocol; linear drag at any \
+    temperature, Poisson resetting); \
     simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
     Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
@@ -63,7 +63,7 @@ pub const RUNS_IT: &str = "simulate and fp run any noise (see --help of --noise)
 /// constructor refuses another drag at T > 0 naming `temperature`, and, naming
 /// `noise`, a level whose fixed point sits at a kink of the drag, and for a
 /// tabulated law a level whose fixed point is not the interval's farthest
-/// edge; the schedule modifiers by their flags); the Euler schemes run
+/// edge; at T > 0 the schedule modifiers by their flags); the Euler schemes run
 /// every one (Eqs. (N15)-(N19)). The closed forms of `irtp analytic` for
 /// such models are in [`crate::analytic::noise`], which checks its own
 /// cases.

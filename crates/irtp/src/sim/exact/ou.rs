@@ -160,8 +160,8 @@ impl OuSampler {
             return Err(Error::invalid(
                 f.flag(),
                 params.schedule().spec_of(f),
-                "the paper's Poisson protocol for the exact sampler with a noise model other than \
-                 the paper's (a schedule modifier with such a noise is not run)",
+                "unset with thermal noise (temperature > 0) for the exact sampler; it runs the \
+                 schedule modifiers with any noise at temperature 0",
             ));
         }
         // The histogram's range, as Observables::new has it.

@@ -14,25 +14,21 @@
 //! reset (velocity by the rule, noise kept or re-drawn from π). A particle
 //! starts at v = 0 with its noise state drawn from π.
 //!
-//! This is a second event loop beside the paper's two-state one, on
-//! purpose: the paper's loop keeps its fixed-size per-state arrays and its
-//! random draws bit for bit (and its speed); both loops share the segment
-//! building blocks ([`Segments`], `flow_segment` over the `StateTables`
-//! of either loop, the bin crossing times and occupation).
+//! These are the N-state noise states ([`ChainStates`]) of the exact
+//! sampler's one event loop (`Sampler`, monomorphised over the paper's
+//! two-state noise and this chain), so every schedule modifier runs here
+//! as for the paper's noise; inside a refractory period the chain jumps
+//! at its exit rate q_s.
 
-use super::{
-    add_crossings, close_particle, crossing_times, flow_segment, segments, DeficitTable, Lane,
-    Occupation, Segments, StateTables, MIN_RELAXATION_RATE,
-};
+use super::{crossing_times, segments, DeficitTable, NoiseStates, Segments, MIN_RELAXATION_RATE};
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
 use crate::model::noise::chain::Chain;
 use crate::model::reset::{Reset, ResetRule};
 use crate::model::{Drag, DragLaw, Params};
-use crate::rng;
-use crate::sim::{Observables, SimSpec};
+use crate::rng::Rng;
+use crate::sim::SimSpec;
 use rand::Rng as _;
-use std::ops::Range;
 
 /// What the levels and the number of bins fix (no rate enters): per state
 /// the segments, fixed point, 1/g'(v*), bin crossing times and edge
@@ -188,80 +184,30 @@ impl<F: FlowMap> StatesSetup<F> {
     }
 }
 
-/// Everything fixed for an N-state run.
-pub(super) struct StatesSampler<F> {
+/// A finite-state chain's noise states for the one event loop
+/// ([`NoiseStates`]): per state the tables of [`StatesSetup`], events at
+/// rate q_s + r (Eq. (N10)), jumps only (rate q_s) inside a refractory
+/// period.
+pub(super) struct ChainStates<F> {
     setup: StatesSetup<F>,
     chain: Chain,
     /// Per state: q_s + r and its inverse.
     total: Vec<f64>,
     inv_total: Vec<f64>,
-    reset: ResetRule,
+    /// Per state: 1/q_s (0 where q_s = 0).
+    inv_exit: Vec<f64>,
     /// The segment start at the point target v_r, per noise state.
     at_vr: Option<Vec<FlowPoint>>,
-    times: Vec<f64>,
-    burn_in: f64,
-    t_max: f64,
-    seed: u64,
 }
 
-impl<F: FlowMap> StateTables<F> for StatesSampler<F> {
-    #[inline(always)]
-    fn seg(&self, si: usize) -> &Segments<F> {
-        &self.setup.segs[si]
-    }
-    #[inline(always)]
-    fn fixed_point(&self, si: usize) -> f64 {
-        self.setup.vs[si]
-    }
-    #[inline(always)]
-    fn inv_rate(&self, si: usize) -> f64 {
-        self.setup.inv_rate[si]
-    }
-    #[inline(always)]
-    fn phi_edges(&self, si: usize) -> &[f64] {
-        &self.setup.phi_edges[si]
-    }
-    #[inline(always)]
-    fn window(&self) -> (&[f64], f64) {
-        (&self.times, self.burn_in)
-    }
-}
+impl<F: FlowMap> NoiseStates for ChainStates<F> {
+    type Flow = F;
+    type Cross = Vec<Vec<i64>>;
 
-impl Occupation for StatesScratch {
-    #[inline(always)]
-    fn occ(&mut self) -> &mut [f64] {
-        &mut self.occ
-    }
-    #[inline(always)]
-    fn cross(&mut self, si: usize) -> &mut [i64] {
-        &mut self.cross[si]
-    }
-}
-
-/// Per-chunk scratch: occupation times and one crossing difference array
-/// per noise state.
-pub(super) struct StatesScratch {
-    occ: Vec<f64>,
-    cross: Vec<Vec<i64>>,
-}
-
-impl<F: FlowMap> StatesSampler<F> {
-    /// The sampler of `params` (a noise model at T = 0; the caller has
-    /// checked the solver's support line). The schedule's modifiers are
-    /// refused here, naming their flag.
-    pub(super) fn new<D: Drag<Flow = F>>(
-        drag: &D,
-        params: &Params,
-        spec: &SimSpec,
-    ) -> Result<Self> {
-        if let Some(f) = params.schedule().features().into_iter().next() {
-            return Err(Error::invalid(
-                f.flag(),
-                params.schedule().spec_of(f),
-                "the paper's Poisson protocol for the exact sampler with a noise model other than \
-                 the paper's (a schedule modifier with such a noise is not run)",
-            ));
-        }
+    /// The chain of `params` (a noise model at T = 0), refused naming
+    /// `noise` where the velocity interval does not hold v = 0 or a level
+    /// is not run ([`level_kind`]).
+    fn build<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
         let chain = params.chain()?;
         let (lo, hi) = params.bounds();
         if !(lo < hi && lo <= 0.0 && 0.0 <= hi) {
@@ -290,99 +236,82 @@ impl<F: FlowMap> StatesSampler<F> {
             StatesSetup::new(drag, (law, &noise), &chain.levels, spec.bins, (lo, hi))
         })?;
         let setup = (*setup).clone();
-        let reset = *params.reset();
+        let reset = params.reset();
         let r = reset.rate();
         let total: Vec<f64> = chain.exit.iter().map(|q| q + r).collect();
         let at_vr = reset
             .point()
             .map(|vr| setup.segs.iter().map(|s| s.at(vr)).collect());
-        Ok(StatesSampler {
+        Ok(ChainStates {
             inv_total: total.iter().map(|t| 1.0 / t).collect(),
+            inv_exit: chain
+                .exit
+                .iter()
+                .map(|&q| if q > 0.0 { 1.0 / q } else { 0.0 })
+                .collect(),
             total,
             setup,
             chain,
-            reset,
             at_vr,
-            times: spec.grid.times().to_vec(),
-            burn_in: spec.burn_in,
-            t_max: spec.grid.t_max(),
-            seed: spec.seed,
         })
     }
-
-    /// Empty scratch for `bins` bins.
-    pub(super) fn scratch(&self, bins: usize) -> StatesScratch {
-        StatesScratch {
-            occ: vec![0.0; bins],
-            cross: vec![vec![0; bins]; self.chain.states()],
-        }
+    #[inline(always)]
+    fn seg(&self, si: usize) -> &Segments<F> {
+        &self.setup.segs[si]
     }
-
-    /// A particle at t = 0: v = 0, noise state drawn from π.
-    fn start(&self, i: u64) -> Lane {
-        let mut rng = rng::stream(self.seed, i);
-        let si = self.chain.draw_stationary(rng.gen::<f64>());
-        Lane {
-            rng,
-            si,
-            a: self.setup.segs[si].at(0.0),
-            t: 0.0,
-            x: 0.0,
-            k: 0,
-            int_v: 0.0,
-            int_v2: 0.0,
-            msd: 0.0,
-            at_atom: 0.0,
-            events: 0,
-            done: false,
-            held: false,
-            hold_until: f64::INFINITY,
-            next_periodic: f64::INFINITY,
-        }
+    #[inline(always)]
+    fn fixed_point(&self, si: usize) -> f64 {
+        self.setup.vs[si]
     }
-
-    /// One flow segment of a particle up to its next event (or t_max), then
-    /// the event: a jump of the noise (Eq. (N10)) or a reset.
+    #[inline(always)]
+    fn inv_rate(&self, si: usize) -> f64 {
+        self.setup.inv_rate[si]
+    }
+    #[inline(always)]
+    fn phi_edges(&self, si: usize) -> &[f64] {
+        &self.setup.phi_edges[si]
+    }
+    #[inline(always)]
+    fn tau(&self, si: usize) -> &[f64] {
+        &self.setup.tau[si]
+    }
+    fn cross(&self, bins: usize) -> Vec<Vec<i64>> {
+        vec![vec![0; bins]; self.chain.states()]
+    }
+    /// Drawn from π (one uniform).
     #[inline]
-    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut StatesScratch) {
-        let s = p.si;
-        let gap = if self.total[s] > 0.0 {
-            p.rng.sample::<f64, _>(rand_distr::Exp1) * self.inv_total[s]
-        } else {
-            f64::INFINITY
-        };
-        let t_end = (p.t + gap).min(self.t_max);
-        let b = flow_segment(self, p, obs, sc, t_end);
-        if t_end >= self.t_max {
-            p.done = true;
-            return;
-        }
-        p.events += 1;
-        let u = p.rng.gen::<f64>() * self.total[s];
-        if u < self.chain.exit[s] {
-            p.si = self.chain.jump(s, u);
-            p.a = self.setup.segs[p.si].at(b.v);
-        } else {
-            let v = self.reset.draw_velocity(&mut p.rng);
-            p.si = self.reset.draw_noise_state(s, &self.chain, &mut p.rng);
-            p.a = match &self.at_vr {
-                Some(at) => at[p.si],
-                None => self.setup.segs[p.si].at(v),
-            };
-        }
+    fn start(&self, rng: &mut Rng) -> usize {
+        self.chain.draw_stationary(rng.gen::<f64>())
     }
-
-    /// Particles `ids` one after the other.
-    pub(super) fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut StatesScratch) {
-        for i in ids {
-            let mut p = self.start(i);
-            while !p.done {
-                self.step(&mut p, obs, sc);
-            }
-            for (cross, tau) in sc.cross.iter_mut().zip(&self.setup.tau) {
-                add_crossings(cross, &mut sc.occ, tau);
-            }
-            close_particle(&p, obs, &mut sc.occ, self.t_max - self.burn_in);
+    #[inline(always)]
+    fn clock(&self, si: usize) -> (f64, f64) {
+        (self.total[si], self.inv_total[si])
+    }
+    #[inline(always)]
+    fn jump_clock(&self, si: usize) -> (f64, f64) {
+        (self.chain.exit[si], self.inv_exit[si])
+    }
+    /// One uniform on [0, q_s + r): a jump (u < q_s, its target by
+    /// [`Chain::jump`] from the same u) or a reset.
+    #[inline]
+    fn event(&self, si: usize, u: f64) -> Option<usize> {
+        let u = u * self.total[si];
+        (u < self.chain.exit[si]).then(|| self.chain.jump(si, u))
+    }
+    /// The target of a jump by one uniform on [0, q_s).
+    #[inline]
+    fn jump_held(&self, si: usize, rng: &mut Rng) -> usize {
+        self.chain.jump(si, rng.gen::<f64>() * self.chain.exit[si])
+    }
+    #[inline]
+    fn after_reset(&self, si: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
+        rule.draw_noise_state(si, &self.chain, rng)
+    }
+    #[inline]
+    fn reset_point(&self, si: usize, v: f64) -> FlowPoint {
+        match &self.at_vr {
+            Some(at) => at[si],
+            None => self.setup.segs[si].at(v),
         }
     }
 }
