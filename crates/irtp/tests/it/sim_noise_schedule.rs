@@ -128,17 +128,19 @@ fn paper_noise_as_states_agrees_under_every_modifier() {
         (
             "exp refractory",
             1.0,
-            parse(None, None, Some("exp:mean=0.5")),
+            parse(None, None, Some("exp:mean=1.5")),
         ),
         (
             "fixed refractory",
             1.0,
-            parse(None, None, Some("fixed:t=0.5")),
+            parse(None, None, Some("fixed:t=1.5")),
         ),
         ("position", 1.0, parse(None, Some(0.0), None)),
     ];
-    let grid = TimeGrid::linear(4.0, 5).unwrap();
-    let spec = SimSpec::new(6000, grid, 1.0, 8, 23).unwrap();
+    // Long enough for several holds per path: x² sees whether the noise
+    // decorrelates across a hold (it jumps on while v is held).
+    let grid = TimeGrid::linear(12.0, 7).unwrap();
+    let spec = SimSpec::new(10_000, grid, 2.0, 8, 23).unwrap();
     let (vr, drag) = (0.2, DragLaw::Tan);
     let mut rows = Vec::new();
     for (name, rate, sched) in cases {
