@@ -1,9 +1,9 @@
 //! The exact sampler for linear drag g(v) = v with thermal noise T > 0 and
 //! any finite-state noise (docs/equations.md, Eqs. (N40)-(N45)).
 //!
-//! The event clock is the N-state loop's (Eq. (N10)): events at rate
-//! q_s + r in state s, one uniform picking a jump of the noise or a reset,
-//! drawn from the particle's stream (seed, i) in the same order, so at the
+//! The event clock is that of the exact sampler with a finite-state noise
+//! at T = 0 (Eq. (N10)): events at rate q_s + r in state s, one uniform
+//! picking a jump of the noise or a reset, drawn from the particle's stream (seed, i) in the same order, so at the
 //! same seed a run at T → 0 sees the events of the T = 0 sampler. Between
 //! events the velocity is an Ornstein-Uhlenbeck process toward the level
 //! a_s, and (v(t), x(t) - x(0)) is jointly Gaussian given v(0) (Eqs.
@@ -122,7 +122,7 @@ pub(super) struct OuSampler {
 
 /// One particle in flight.
 struct OuLane {
-    /// The event stream (seed, i): the N-state loop's draws.
+    /// The event stream (seed, i): the N-state chain's draws.
     ev: Rng,
     /// The Gaussian draws.
     gauss: Rng,
@@ -318,7 +318,7 @@ impl OuSampler {
     }
 
     /// One segment up to the next event (or t_max), then the event: a jump
-    /// of the noise or a reset (Eq. (N10), the N-state loop's draws).
+    /// of the noise or a reset (Eq. (N10), the N-state chain's draws).
     /// Returns false at t_max.
     fn step(&self, p: &mut OuLane, obs: &mut Observables, occ: &mut [f64]) -> bool {
         let s = p.si;
