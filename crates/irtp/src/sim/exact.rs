@@ -860,13 +860,13 @@ impl<N: NoiseStates> Sampler<N> {
     }
 }
 
-/// The per-state tables as the event loops read them, by noise state: its
-/// segments, fixed point v*, 1/g'(v*) and the flow potential at the bin
-/// edges, and the recording window. The building block the two-state
-/// sampler (fixed-size arrays) and the N-state one (vectors) share; each
-/// entry is read where the segment code needs it, as the two-state loop
-/// always did (measured: building a per-state view up front cost that loop
-/// 3 % CPU time).
+/// The per-state tables as the segment code reads them, by noise state:
+/// its segments, fixed point v*, 1/g'(v*) and the flow potential at the
+/// bin edges, and the recording window ([`Sampler`] reads them from its
+/// [`NoiseStates`]: fixed-size arrays for the paper's noise, vectors for a
+/// chain); each entry is read where the segment code needs it (measured:
+/// building a per-state view up front cost the two-state loop 3 % CPU
+/// time).
 trait StateTables<F> {
     fn seg(&self, si: usize) -> &Segments<F>;
     fn fixed_point(&self, si: usize) -> f64;

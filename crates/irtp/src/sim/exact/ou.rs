@@ -3,8 +3,9 @@
 //!
 //! The event clock is that of the exact sampler with a finite-state noise
 //! at T = 0 (Eq. (N10)): events at rate q_s + r in state s, one uniform
-//! picking a jump of the noise or a reset, drawn from the particle's stream (seed, i) in the same order, so at the
-//! same seed a run at T → 0 sees the events of the T = 0 sampler. Between
+//! picking a jump of the noise or a reset, drawn from the particle's
+//! stream (seed, i) in the same order, so at the same seed a run at T → 0
+//! sees the events of the T = 0 sampler. Between
 //! events the velocity is an Ornstein-Uhlenbeck process toward the level
 //! a_s, and (v(t), x(t) - x(0)) is jointly Gaussian given v(0) (Eqs.
 //! (N40)-(N42)); it is sampled at every event, grid time and at the start
