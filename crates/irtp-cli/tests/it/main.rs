@@ -29,6 +29,7 @@ mod noise_cli;
 mod noise_euler_cli;
 mod noise_exact_cli;
 mod noise_fp_cli;
+mod noise_fpt_dist_exact_cli;
 mod noise_fpt_exact_cli;
 mod plot;
 mod protocol_samplers;

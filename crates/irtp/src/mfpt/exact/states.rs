@@ -89,8 +89,8 @@ impl<F: FlowMap> StatesPassage<F> {
             return Err(Error::invalid(
                 f.flag(),
                 params.schedule().spec_of(f),
-                "the paper's Poisson protocol for mfpt --method exact with a noise model other \
-                 than the paper's (a schedule modifier with such a noise is not run)",
+                "the paper's noise for mfpt --method exact and euler (a noise model runs with \
+                 Poisson resetting only)",
             ));
         }
         let model = params.noise_model()?;
