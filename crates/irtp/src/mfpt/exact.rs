@@ -34,6 +34,8 @@ use rand::Rng as _;
 
 mod states;
 
+pub(super) use states::StatesPassage;
+
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
 /// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
 /// A flow segment is tested with the exact flow time to vt (no overshoot);
@@ -159,51 +161,63 @@ impl<F: FlowMap> FirstPassage<F> {
             v = match end {
                 Segment::Done(hit) => {
                     if let Some(hit) = hit {
-                        tally.flow(plus, v, vt, hit - t);
+                        tally.flow(state(plus), v, vt, hit - t);
                     }
                     return (hit, events);
                 }
                 Segment::Moved(w) => {
-                    tally.flow(plus, v, w, gap);
+                    tally.flow(state(plus), v, w, gap);
                     w
                 }
             };
             t += gap;
             events += 1;
             if rng.gen::<f64>() * self.total_rate < self.lambda {
-                tally.jump(v, plus, Some((v, !plus)));
+                tally.jump(v, state(plus), Some((v, state(!plus))));
                 plus = !plus;
             } else {
                 let w = self.reset.draw_velocity(rng);
                 let after = self.reset.draw_noise(plus, rng);
                 if w >= vt {
-                    tally.jump(v, plus, None);
+                    tally.jump(v, state(plus), None);
                     return (Some(t), events);
                 }
-                tally.jump(v, plus, Some((w, after)));
+                tally.jump(v, state(plus), Some((w, state(after))));
                 (v, plus) = (w, after);
             }
         }
     }
 }
 
-/// An observer of a first-passage walk ([`FirstPassage::walk`]): the
-/// passage-time control variate of [`super::control`] integrates along it.
-/// `()` observes nothing and compiles away.
+/// The index of the paper's noise state in a [`Tally`]: 0 for +Sigma, 1
+/// for -Sigma (the order of [`FirstPassage`]'s flows).
+#[inline(always)]
+pub fn state(plus: bool) -> usize {
+    usize::from(!plus)
+}
+
+/// An observer of a first-passage walk ([`FirstPassage::walk`], and the
+/// N-state walk of a noise model): the passage-time control variate of
+/// [`super::control`] integrates along it. Noise states are indices (the
+/// paper's: [`state`]). `()` observes nothing and compiles away.
 pub trait Tally {
-    /// A flow segment in noise state `plus` from `va` to `vb` lasting `dt`
+    /// The walk's start in state `s` at `v` (called by the N-state walk,
+    /// whose start state is drawn from π).
+    #[inline(always)]
+    fn start(&mut self, _v: f64, _s: usize) {}
+    /// A flow segment in noise state `s` from `va` to `vb` lasting `dt`
     /// (the last one ends at v_t).
-    fn flow(&mut self, plus: bool, va: f64, vb: f64, dt: f64);
-    /// A flip or reset from (v, plus) to `after`; `None` when the jump is
+    fn flow(&mut self, s: usize, va: f64, vb: f64, dt: f64);
+    /// A flip or reset from (v, s) to `after`; `None` when the jump is
     /// the passage (a reset at or beyond v_t).
-    fn jump(&mut self, v: f64, plus: bool, after: Option<(f64, bool)>);
+    fn jump(&mut self, v: f64, s: usize, after: Option<(f64, usize)>);
 }
 
 impl Tally for () {
     #[inline(always)]
-    fn flow(&mut self, _: bool, _: f64, _: f64, _: f64) {}
+    fn flow(&mut self, _: usize, _: f64, _: f64, _: f64) {}
     #[inline(always)]
-    fn jump(&mut self, _: f64, _: bool, _: Option<(f64, bool)>) {}
+    fn jump(&mut self, _: f64, _: usize, _: Option<(f64, usize)>) {}
 }
 
 /// The end of one flow segment of [`FirstPassage`].

@@ -30,6 +30,7 @@
 //! their tabulated flows are exact), and the estimator and driver
 //! ([`super::super::estimator`]) are shared.
 
+use super::Tally;
 use crate::error::{Error, Result};
 use crate::model::drag::FlowMap;
 use crate::model::noise::chain::Chain;
@@ -45,6 +46,8 @@ use rand::Rng as _;
 pub(crate) struct StatesPassage<F> {
     /// The flow of each level.
     flows: Vec<F>,
+    /// Per state: its fixed point v*_s = g⁻¹(a_s).
+    stars: Vec<f64>,
     /// Per state: its fixed point lies beyond v_t (its flow crosses v_t).
     crosses: Vec<bool>,
     chain: Chain,
@@ -116,11 +119,13 @@ impl<F: FlowMap> StatesPassage<F> {
             level_flows(drag, (params.drag(), &spec), &chain.levels, bounds)
         })?;
         let flows = (*flows).clone();
-        let crosses = chain.levels.iter().map(|&a| drag.inverse(a) > vt).collect();
+        let stars: Vec<f64> = chain.levels.iter().map(|&a| drag.inverse(a)).collect();
+        let crosses = stars.iter().map(|&star| star > vt).collect();
         let reset = *params.reset();
         let total = chain.exit.iter().map(|q| q + reset.rate()).collect();
         Ok(StatesPassage {
             flows,
+            stars,
             crosses,
             chain,
             total,
@@ -129,15 +134,35 @@ impl<F: FlowMap> StatesPassage<F> {
         })
     }
 
+    /// The flow and fixed point of each state, the chain and the resetting
+    /// rule (for the control variate of [`super::super::control`]).
+    pub(crate) fn parts(&self) -> (&[F], &[f64], &Chain, &ResetRule) {
+        (&self.flows, &self.stars, &self.chain, &self.reset)
+    }
+
     /// One upward first passage from `v0` < v_t, the start state drawn
     /// from π with the stream's first uniform: (passage time, or None if
     /// not reached by `t_max`; number of events).
     pub(crate) fn run(&self, v0: f64, t_max: f64, rng: &mut Rng) -> (Option<f64>, u64) {
+        self.walk(v0, t_max, rng, &mut ())
+    }
+
+    /// [`StatesPassage::run`] reporting the start, every flow segment and
+    /// jump to `tally` (the random stream consumed exactly as by `run`).
+    #[inline(always)]
+    pub(crate) fn walk<T: Tally>(
+        &self,
+        v0: f64,
+        t_max: f64,
+        rng: &mut Rng,
+        tally: &mut T,
+    ) -> (Option<f64>, u64) {
         let vt = self.vt;
         let mut s = self.chain.draw_stationary(rng.gen::<f64>());
         if v0 >= vt {
             return (Some(0.0), 0);
         }
+        tally.start(v0, s);
         let (mut t, mut v, mut events) = (0.0f64, v0, 0u64);
         loop {
             let total = self.total[s];
@@ -147,25 +172,33 @@ impl<F: FlowMap> StatesPassage<F> {
                 let tau = flow.time(v, vt);
                 if tau <= gap {
                     let hit = t + tau;
+                    if hit <= t_max {
+                        tally.flow(s, v, vt, tau);
+                    }
                     return ((hit <= t_max).then_some(hit), events);
                 }
             }
             if t + gap >= t_max {
                 return (None, events);
             }
-            v = flow.velocity(v, gap);
-            t += gap;
+            let w = flow.velocity(v, gap);
+            tally.flow(s, v, w, gap);
+            (v, t) = (w, t + gap);
             events += 1;
             let u = rng.gen::<f64>() * total;
             if u < self.chain.exit[s] {
-                s = self.chain.jump(s, u);
+                let j = self.chain.jump(s, u);
+                tally.jump(v, s, Some((v, j)));
+                s = j;
             } else {
                 let w = self.reset.draw_velocity(rng);
-                s = self.reset.draw_noise_state(s, &self.chain, rng);
+                let after = self.reset.draw_noise_state(s, &self.chain, rng);
                 if w >= vt {
+                    tally.jump(v, s, None);
                     return (Some(t), events);
                 }
-                v = w;
+                tally.jump(v, s, Some((w, after)));
+                (v, s) = (w, after);
             }
         }
     }
