@@ -31,6 +31,7 @@ mod noise_exact_cli;
 mod noise_fp_cli;
 mod noise_fpt_dist_exact_cli;
 mod noise_fpt_exact_cli;
+mod noise_fpt_schedule_cli;
 mod plot;
 mod protocol_samplers;
 mod protocol_solvers;

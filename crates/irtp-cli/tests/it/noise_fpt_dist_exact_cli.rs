@@ -1,7 +1,7 @@
 //! `mfpt distribution --method exact` with a finite-state noise at T = 0
 //! (docs/equations.md, Eqs. (N46)-(N48)): the sampled survival S(t) and
 //! mean against `mfpt distribution --method backward` (Eqs. (N37)-(N39))
-//! and `mfpt --method backward`; what it still refuses, in one line naming
+//! and `mfpt --method backward`; thermal noise refused in one line naming
 //! the flag, nothing written.
 
 use super::common::*;
@@ -96,37 +96,14 @@ fn exact_distribution_with_a_noise_model_matches_the_backward_one() {
 }
 
 /// What `mfpt distribution --method exact` refuses with a noise model:
-/// thermal noise (naming `--temperature`) and the schedule modifiers (by
-/// their flags), each in one line under 200 characters saying what runs
-/// it, exit 2, nothing written.
+/// thermal noise, naming `--temperature`, in one line under 200
+/// characters saying what runs it, exit 2, nothing written; it runs the
+/// schedule modifiers (the exact kernel runs every noise under them).
 #[test]
-fn exact_distribution_with_a_noise_model_refuses_in_one_line() {
+fn exact_distribution_with_a_noise_model_refuses_thermal_noise_in_one_line() {
     let tmp = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &str, &str); 4] = [
-        (
-            &["--rate", "1", "--temperature", "0.5"],
-            "--temperature",
-            "simulate and fp run any noise",
-        ),
-        (
-            &["--rate", "0", "--reset-period", "1"],
-            "--reset-period",
-            "mfpt --method exact and euler",
-        ),
-        (
-            &["--rate", "1", "--refractory", "fixed:t=0.5"],
-            "--refractory",
-            "mfpt --method exact and euler",
-        ),
-        (
-            &["--rate", "0", "--reset-clock", "gamma:k=2,theta=1"],
-            "--reset-clock",
-            "mfpt --method exact and euler",
-        ),
-    ];
-    for (i, (extra, flag, runner)) in cases.into_iter().enumerate() {
-        let dir = tmp.path().join(format!("o{i}"));
-        let cmd = [
+    let cmd = |out: &str, extra: &[&str]| {
+        let base = [
             "mfpt",
             "distribution",
             "--method",
@@ -141,11 +118,27 @@ fn exact_distribution_with_a_noise_model_refuses_in_one_line() {
             "1",
             "--t-max",
             "100",
+            "--particles",
+            "2000",
             "--out",
-            dir.to_str().unwrap(),
+            out,
         ];
-        let out = irtp(&[&cmd[..], extra].concat());
-        let err = assert_rejected(&out, flag, &dir);
-        assert!(err.len() < 200 && err.contains(runner), "{flag}: {err}");
-    }
+        irtp(&[&base[..], extra].concat())
+    };
+    let dir = tmp.path().join("thermal");
+    let out = cmd(
+        dir.to_str().unwrap(),
+        &["--rate", "1", "--temperature", "0.5"],
+    );
+    let err = assert_rejected(&out, "--temperature", &dir);
+    assert!(
+        err.len() < 200 && err.contains("simulate and fp run any noise"),
+        "{err}"
+    );
+    let dir = tmp.path().join("periodic");
+    assert_success(&cmd(
+        dir.to_str().unwrap(),
+        &["--rate", "0", "--reset-period", "1"],
+    ));
+    assert!(dir.join("survival.csv").exists());
 }

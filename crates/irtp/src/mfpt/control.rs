@@ -36,7 +36,7 @@
 //! naming their flags).
 
 use super::backward::{self, BackwardOptions, Profile};
-use super::exact::{FirstPassage, StatesPassage, Tally};
+use super::exact::{FirstPassage, NoiseSpace, StatesPassage, Tally};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::FlowMap;
@@ -129,6 +129,14 @@ impl PassageControl {
         cells: usize,
         u: impl Fn(f64, usize) -> f64,
     ) -> Result<Self> {
+        let (schedule, refractory) = fpt.schedule();
+        if schedule.scheduled_clock() || refractory.is_some() {
+            return Err(Error::invalid(
+                "reset",
+                "periodic, renewal or refractory",
+                "a Poisson reset clock for the passage-time control variate",
+            ));
+        }
         let (flows, stars, chain, reset) = fpt.parts();
         let space = Space {
             flows,

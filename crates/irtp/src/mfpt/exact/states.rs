@@ -22,19 +22,20 @@
 //! [`super::super::FptStats`]) are two independent halves of the same law,
 //! as for the Euler particles with a noise model.
 //!
-//! This is a second loop beside the paper's two-state [`super::FirstPassage`],
-//! which keeps its stratified ±Sigma start and its draws bit for bit; the
+//! The chain is a [`super::NoiseSpace`] of the one kernel
+//! ([`super::walk`]) that also runs the paper's two-state
+//! [`super::FirstPassage`] (with its stratified ±Sigma start); the
 //! flows are those of the simulation (closed-form flows of tan, tanh and
 //! linear drag on either side of a fixed point; for the other laws only
 //! levels whose fixed point is the interval's edge farther from 0, where
 //! their tabulated flows are exact), and the estimator and driver
 //! ([`super::super::estimator`]) are shared.
 
-use super::Tally;
+use super::{NoiseSpace, Tally};
 use crate::error::{Error, Result};
 use crate::model::drag::FlowMap;
 use crate::model::noise::chain::Chain;
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::{Drag, DragLaw, Params};
 use crate::rng::Rng;
 use crate::sim::exact::{exp_gap, level_kind, LevelKind};
@@ -54,6 +55,8 @@ pub(crate) struct StatesPassage<F> {
     /// Per state: q_s + r.
     total: Vec<f64>,
     reset: ResetRule,
+    /// The periodic or renewal clock and the refractory period.
+    schedule: Schedule,
     vt: f64,
 }
 
@@ -84,18 +87,10 @@ fn level_flows<D: Drag>(
 
 impl<F: FlowMap> StatesPassage<F> {
     /// The sampler of the upward problem to `vt` under `params` (a noise
-    /// model at T = 0, its support checked by the caller): the schedule
-    /// modifiers refused naming their flag, the flows as
+    /// model at T = 0, its support checked by the caller; any schedule
+    /// modifier, run by [`super::walk_scheduled`]): the flows as
     /// [`level_flows`] (memoised per law, levels and interval).
     pub(crate) fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, vt: f64) -> Result<Self> {
-        if let Some(f) = params.schedule().features().into_iter().next() {
-            return Err(Error::invalid(
-                f.flag(),
-                params.schedule().spec_of(f),
-                "the paper's noise for mfpt --method exact and euler (a noise model runs with \
-                 Poisson resetting only)",
-            ));
-        }
         let model = params.noise_model()?;
         let chain = params.chain()?;
         if chain.temperature > 0.0 {
@@ -130,6 +125,7 @@ impl<F: FlowMap> StatesPassage<F> {
             chain,
             total,
             reset,
+            schedule: *params.schedule(),
             vt,
         })
     }
@@ -157,49 +153,55 @@ impl<F: FlowMap> StatesPassage<F> {
         rng: &mut Rng,
         tally: &mut T,
     ) -> (Option<f64>, u64) {
-        let vt = self.vt;
-        let mut s = self.chain.draw_stationary(rng.gen::<f64>());
-        if v0 >= vt {
+        let s = self.chain.draw_stationary(rng.gen::<f64>());
+        if v0 >= self.vt {
             return (Some(0.0), 0);
         }
-        tally.start(v0, s);
-        let (mut t, mut v, mut events) = (0.0f64, v0, 0u64);
-        loop {
-            let total = self.total[s];
-            let gap = exp_gap(rng, total);
-            let flow = &self.flows[s];
-            if self.crosses[s] {
-                let tau = flow.time(v, vt);
-                if tau <= gap {
-                    let hit = t + tau;
-                    if hit <= t_max {
-                        tally.flow(s, v, vt, tau);
-                    }
-                    return ((hit <= t_max).then_some(hit), events);
-                }
-            }
-            if t + gap >= t_max {
-                return (None, events);
-            }
-            let w = flow.velocity(v, gap);
-            tally.flow(s, v, w, gap);
-            (v, t) = (w, t + gap);
-            events += 1;
-            let u = rng.gen::<f64>() * total;
-            if u < self.chain.exit[s] {
-                let j = self.chain.jump(s, u);
-                tally.jump(v, s, Some((v, j)));
-                s = j;
-            } else {
-                let w = self.reset.draw_velocity(rng);
-                let after = self.reset.draw_noise_state(s, &self.chain, rng);
-                if w >= vt {
-                    tally.jump(v, s, None);
-                    return (Some(t), events);
-                }
-                tally.jump(v, s, Some((w, after)));
-                (v, s) = (w, after);
-            }
+        if self.schedule.scheduled_clock() || self.schedule.refractory.is_some() {
+            return super::walk_scheduled(self, s, v0, self.vt, t_max, rng);
         }
+        tally.start(v0, s);
+        super::walk(self, s, v0, self.vt, t_max, rng, tally)
+    }
+}
+
+impl<F: FlowMap> NoiseSpace for StatesPassage<F> {
+    type Flow = F;
+    #[inline(always)]
+    fn flow(&self, s: usize) -> &F {
+        &self.flows[s]
+    }
+    #[inline(always)]
+    fn crosses(&self, s: usize) -> bool {
+        self.crosses[s]
+    }
+    #[inline(always)]
+    fn total(&self, s: usize) -> f64 {
+        self.total[s]
+    }
+    #[inline(always)]
+    fn event(&self, s: usize, u: f64) -> Option<usize> {
+        (u < self.chain.exit[s]).then(|| self.chain.jump(s, u))
+    }
+    #[inline(always)]
+    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize) {
+        let w = self.reset.draw_velocity(rng);
+        (w, self.reset.draw_noise_state(s, &self.chain, rng))
+    }
+    /// The chain run alone for `d` (exact: its exponential holding times
+    /// and jumps, Eq. (N10)).
+    fn hold(&self, mut s: usize, mut d: f64, rng: &mut Rng) -> usize {
+        loop {
+            let exit = self.chain.exit[s];
+            let gap = exp_gap(rng, exit);
+            if gap >= d {
+                return s;
+            }
+            d -= gap;
+            s = self.chain.jump(s, rng.gen::<f64>() * exit);
+        }
+    }
+    fn schedule(&self) -> (&Schedule, Option<Refractory>) {
+        (&self.schedule, self.schedule.refractory)
     }
 }
