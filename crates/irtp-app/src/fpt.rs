@@ -404,11 +404,9 @@ impl DistributionArgs {
             t_max,
             seed: self.output.seed(),
         };
-        // The histogram's halves are the ±Sigma starts: the paper's noise
-        // only (`mfpt --method exact` runs the others).
-        if let Some(m) = problem.params().noise() {
-            irtp::model::noise::support::refuse("mfpt distribution --method exact", m)?;
-        }
+        // The histogram's halves are the ±Sigma starts for the paper's
+        // noise; with a noise model (any finite-state noise at T = 0) two
+        // independent halves of the particles started from π (Eq. (N47)).
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();

@@ -34,8 +34,9 @@ fn commands() -> Vec<Vec<&'static str>> {
         // (noise_fp_cli.rs), mfpt scan / optimize, `mfpt --method
         // backward` and `mfpt distribution --method backward`
         // (noise_backward_cli.rs), `mfpt --method euler` and `mfpt
-        // --method exact` at temperature 0 (noise_fpt_exact_cli.rs) run
-        // noise models.
+        // --method exact` at temperature 0 (noise_fpt_exact_cli.rs) and
+        // `mfpt distribution --method exact` (noise_fpt_dist_exact_cli.rs)
+        // run noise models; the latter still refuses thermal noise.
         vec![
             "mfpt",
             "distribution",
@@ -172,10 +173,11 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             (vec!["--noise", RPT], "--noise"),
             (vec!["--temperature", "0.5"], "--temperature"),
         ] {
-            // The search's backward solver and samplers run a noise model
-            // at T = 0.
+            // The search's backward solver and samplers, and `mfpt
+            // distribution --method exact`, run a noise model at T = 0.
             let search = cmd.contains(&"--xt") || cmd.contains(&"--interval=-1,1");
-            let runs = search && !cmd.contains(&"renewal") && !cmd.contains(&"distribution");
+            let dist = cmd.contains(&"distribution");
+            let runs = (search && !cmd.contains(&"renewal") && !dist) || (!search && dist);
             if flag == "--noise" && (!with_noise || runs) {
                 continue;
             }

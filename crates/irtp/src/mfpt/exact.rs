@@ -15,11 +15,16 @@
 //! cannot cross v_t: it advances the time by D and flips the noise state
 //! with the probability of an odd number of flips, ½(1 - e^{-2 lambda D});
 //! Poisson resets are off during it and the periodic times inside it or at
-//! its end are skipped.
+//! its end are skipped. With a finite-state noise the chain runs on alone
+//! during the period (its own holding times and jumps).
 //!
-//! A noise model other than the paper's (any finite-state noise at T = 0)
-//! runs in the N-state loop of the `states` submodule beside this one
-//! (Eqs. (N46)-(N48)), its particles started in a state drawn from π.
+//! One kernel runs every noise ([`walk`], [`walk_scheduled`]), generic over
+//! the noise state space ([`NoiseSpace`]): the paper's noise
+//! ([`FirstPassage`], two states, its random draws those of the two-state
+//! sampler bit for bit) and any finite-state noise at T = 0 (the chain of
+//! the `states` submodule, Eqs. (N46)-(N48), its particles started in a
+//! state drawn from π); the noise is dispatched once, at the entry
+//! ([`units`]).
 
 use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;
@@ -33,6 +38,8 @@ use crate::sim::exact::exp_gap;
 use rand::Rng as _;
 
 mod states;
+
+pub(crate) use states::StatesPassage;
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
 /// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
@@ -149,61 +156,155 @@ impl<F: FlowMap> FirstPassage<F> {
             return (Some(0.0), 0);
         }
         if self.schedule.scheduled_clock() || self.refractory.is_some() {
-            return self.run_scheduled(v0, vt, start_plus, t_max, rng);
+            return walk_scheduled(self, state(start_plus), v0, vt, t_max, rng);
         }
-        let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-        let mut events = 0u64;
-        loop {
-            let gap = exp_gap(rng, self.total_rate);
-            let end = self.segment(plus, v, vt, t, gap, t_max);
-            v = match end {
-                Segment::Done(hit) => {
-                    if let Some(hit) = hit {
-                        tally.flow(plus, v, vt, hit - t);
-                    }
-                    return (hit, events);
+        walk(self, state(start_plus), v0, vt, t_max, rng, tally)
+    }
+}
+
+/// The noise state space of the exact first-passage kernel ([`walk`],
+/// [`walk_scheduled`]): per state its flow, whether that flow crosses v_t
+/// (its fixed point lies beyond), its event rate q_s + r, what an event
+/// is given a uniform on [0, q_s + r) (a jump of the noise to j, or a
+/// reset), the state after a reset and after a refractory hold. The
+/// paper's noise ([`FirstPassage`]: states 0 = +Sigma, 1 = -Sigma) and a
+/// finite-state chain (the `states` submodule) implement it.
+pub(crate) trait NoiseSpace {
+    /// The flow of each state.
+    type Flow: FlowMap;
+    /// The flow of state `s`.
+    fn flow(&self, s: usize) -> &Self::Flow;
+    /// Whether the flow of `s` reaches v_t.
+    fn crosses(&self, s: usize) -> bool;
+    /// q_s + r.
+    fn total(&self, s: usize) -> f64;
+    /// The event of uniform `u` on [0, q_s + r) in state `s`: Some(j) a
+    /// jump of the noise to j, None a reset.
+    fn event(&self, s: usize, u: f64) -> Option<usize>;
+    /// The reset's velocity and the noise state after it (in this order
+    /// from `rng`).
+    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize);
+    /// The noise state after holding the velocity for `d` from state `s`
+    /// (a refractory period: the noise runs on, no resets).
+    fn hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize;
+    /// The periodic or renewal clock and the refractory period, if any.
+    fn schedule(&self) -> (&Schedule, Option<Refractory>);
+}
+
+impl<F: FlowMap> NoiseSpace for FirstPassage<F> {
+    type Flow = F;
+    #[inline(always)]
+    fn flow(&self, s: usize) -> &F {
+        &self.flows[s]
+    }
+    #[inline(always)]
+    fn crosses(&self, s: usize) -> bool {
+        s == 0
+    }
+    #[inline(always)]
+    fn total(&self, _: usize) -> f64 {
+        self.total_rate
+    }
+    #[inline(always)]
+    fn event(&self, s: usize, u: f64) -> Option<usize> {
+        (u < self.lambda).then_some(1 - s)
+    }
+    #[inline(always)]
+    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize) {
+        let w = self.reset.draw_velocity(rng);
+        (w, state(self.reset.draw_noise(s == 0, rng)))
+    }
+    /// Flipped with the probability of an odd number of flips,
+    /// ½(1 - e^{-2 lambda d}) (one uniform).
+    #[inline(always)]
+    fn hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize {
+        if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
+            1 - s
+        } else {
+            s
+        }
+    }
+    fn schedule(&self) -> (&Schedule, Option<Refractory>) {
+        (&self.schedule, self.refractory)
+    }
+}
+
+/// The exact first passage of `space` from (v0 < v_t, state s) under
+/// Poisson events (module docs), reporting to `tally`: (passage time, or
+/// None if not reached by `t_max`; number of events).
+#[inline(always)]
+pub(crate) fn walk<N: NoiseSpace, T: Tally>(
+    space: &N,
+    mut s: usize,
+    v0: f64,
+    vt: f64,
+    t_max: f64,
+    rng: &mut Rng,
+    tally: &mut T,
+) -> (Option<f64>, u64) {
+    let (mut t, mut v) = (0.0f64, v0);
+    let mut events = 0u64;
+    loop {
+        let total = space.total(s);
+        let gap = exp_gap(rng, total);
+        v = match segment(space, s, v, vt, t, gap, t_max) {
+            Segment::Done(hit) => {
+                if let Some(hit) = hit {
+                    tally.flow(s, v, vt, hit - t);
                 }
-                Segment::Moved(w) => {
-                    tally.flow(plus, v, w, gap);
-                    w
-                }
-            };
-            t += gap;
-            events += 1;
-            if rng.gen::<f64>() * self.total_rate < self.lambda {
-                tally.jump(v, plus, Some((v, !plus)));
-                plus = !plus;
-            } else {
-                let w = self.reset.draw_velocity(rng);
-                let after = self.reset.draw_noise(plus, rng);
-                if w >= vt {
-                    tally.jump(v, plus, None);
-                    return (Some(t), events);
-                }
-                tally.jump(v, plus, Some((w, after)));
-                (v, plus) = (w, after);
+                return (hit, events);
             }
+            Segment::Moved(w) => {
+                tally.flow(s, v, w, gap);
+                w
+            }
+        };
+        t += gap;
+        events += 1;
+        if let Some(j) = space.event(s, rng.gen::<f64>() * total) {
+            tally.jump(v, s, Some((v, j)));
+            s = j;
+        } else {
+            let (w, after) = space.reset(s, rng);
+            if w >= vt {
+                tally.jump(v, s, None);
+                return (Some(t), events);
+            }
+            tally.jump(v, s, Some((w, after)));
+            (v, s) = (w, after);
         }
     }
 }
 
-/// An observer of a first-passage walk ([`FirstPassage::walk`]): the
-/// passage-time control variate of [`super::control`] integrates along it.
-/// `()` observes nothing and compiles away.
+/// The index of the paper's noise state in a [`Tally`]: 0 for +Sigma, 1
+/// for -Sigma (the order of [`FirstPassage`]'s flows).
+#[inline(always)]
+pub fn state(plus: bool) -> usize {
+    usize::from(!plus)
+}
+
+/// An observer of a first-passage walk ([`FirstPassage::walk`], and the
+/// N-state walk of a noise model): the passage-time control variate of
+/// [`super::control`] integrates along it. Noise states are indices (the
+/// paper's: [`state`]). `()` observes nothing and compiles away.
 pub trait Tally {
-    /// A flow segment in noise state `plus` from `va` to `vb` lasting `dt`
+    /// The walk's start in state `s` at `v` (called by the N-state walk,
+    /// whose start state is drawn from π).
+    #[inline(always)]
+    fn start(&mut self, _v: f64, _s: usize) {}
+    /// A flow segment in noise state `s` from `va` to `vb` lasting `dt`
     /// (the last one ends at v_t).
-    fn flow(&mut self, plus: bool, va: f64, vb: f64, dt: f64);
-    /// A flip or reset from (v, plus) to `after`; `None` when the jump is
+    fn flow(&mut self, s: usize, va: f64, vb: f64, dt: f64);
+    /// A flip or reset from (v, s) to `after`; `None` when the jump is
     /// the passage (a reset at or beyond v_t).
-    fn jump(&mut self, v: f64, plus: bool, after: Option<(f64, bool)>);
+    fn jump(&mut self, v: f64, s: usize, after: Option<(f64, usize)>);
 }
 
 impl Tally for () {
     #[inline(always)]
-    fn flow(&mut self, _: bool, _: f64, _: f64, _: f64) {}
+    fn flow(&mut self, _: usize, _: f64, _: f64, _: f64) {}
     #[inline(always)]
-    fn jump(&mut self, _: f64, _: bool, _: Option<(f64, bool)>) {}
+    fn jump(&mut self, _: f64, _: usize, _: Option<(f64, usize)>) {}
 }
 
 /// The end of one flow segment of [`FirstPassage`].
@@ -214,72 +315,79 @@ enum Segment {
     Moved(f64),
 }
 
-impl<F: FlowMap> FirstPassage<F> {
-    /// Flow for `step` from (t, v) in state `plus`: the passage if the +
-    /// flow reaches v_t within the step (None when that is past t_max), a
-    /// stop when the step reaches t_max, else the velocity at its end.
-    #[inline(always)]
-    fn segment(&self, plus: bool, v: f64, vt: f64, t: f64, step: f64, t_max: f64) -> Segment {
-        let flow = &self.flows[usize::from(!plus)];
-        if plus {
-            let tau = flow.time(v, vt);
-            if tau <= step {
-                let hit = t + tau;
-                return Segment::Done(if hit <= t_max { Some(hit) } else { None });
-            }
+/// Flow for `step` from (t, v) in state `s`: the passage if the flow
+/// crosses v_t within the step (None when that is past t_max), a stop when
+/// the step reaches t_max, else the velocity at its end.
+#[inline(always)]
+fn segment<N: NoiseSpace>(
+    space: &N,
+    s: usize,
+    v: f64,
+    vt: f64,
+    t: f64,
+    step: f64,
+    t_max: f64,
+) -> Segment {
+    let flow = space.flow(s);
+    if space.crosses(s) {
+        let tau = flow.time(v, vt);
+        if tau <= step {
+            let hit = t + tau;
+            return Segment::Done(if hit <= t_max { Some(hit) } else { None });
         }
-        if t + step >= t_max {
-            return Segment::Done(None);
-        }
-        Segment::Moved(flow.velocity(v, step))
     }
+    if t + step >= t_max {
+        return Segment::Done(None);
+    }
+    Segment::Moved(flow.velocity(v, step))
+}
 
-    /// [`FirstPassage::run`] with a periodic or renewal clock and/or a refractory
-    /// period (module docs).
-    fn run_scheduled(
-        &self,
-        v0: f64,
-        vt: f64,
-        start_plus: bool,
-        t_max: f64,
-        rng: &mut Rng,
-    ) -> (Option<f64>, u64) {
-        let (mut t, mut v, mut plus) = (0.0f64, v0, start_plus);
-        let mut next_periodic = self.schedule.first_reset(rng);
-        let mut events = 0u64;
-        loop {
-            let gap = exp_gap(rng, self.total_rate);
-            let periodic = next_periodic - t <= gap;
-            let step = if periodic { next_periodic - t } else { gap };
-            v = match self.segment(plus, v, vt, t, step, t_max) {
-                Segment::Done(hit) => return (hit, events),
-                Segment::Moved(v) => v,
-            };
-            t = if periodic { next_periodic } else { t + step };
-            events += 1;
-            if !periodic && rng.gen::<f64>() * self.total_rate < self.lambda {
-                plus = !plus;
+/// [`walk`] with a periodic or renewal clock and/or a refractory period
+/// (module docs); nothing is reported (the clock is not a Poisson one).
+pub(crate) fn walk_scheduled<N: NoiseSpace>(
+    space: &N,
+    mut s: usize,
+    v0: f64,
+    vt: f64,
+    t_max: f64,
+    rng: &mut Rng,
+) -> (Option<f64>, u64) {
+    let (schedule, refractory) = space.schedule();
+    let (mut t, mut v) = (0.0f64, v0);
+    let mut next_periodic = schedule.first_reset(rng);
+    let mut events = 0u64;
+    loop {
+        let total = space.total(s);
+        let gap = exp_gap(rng, total);
+        let periodic = next_periodic - t <= gap;
+        let step = if periodic { next_periodic - t } else { gap };
+        v = match segment(space, s, v, vt, t, step, t_max) {
+            Segment::Done(hit) => return (hit, events),
+            Segment::Moved(v) => v,
+        };
+        t = if periodic { next_periodic } else { t + step };
+        events += 1;
+        if !periodic {
+            if let Some(j) = space.event(s, rng.gen::<f64>() * total) {
+                s = j;
                 continue;
             }
-            v = self.reset.draw_velocity(rng);
-            plus = self.reset.draw_noise(plus, rng);
-            if v >= vt {
-                return (Some(t), events);
+        }
+        (v, s) = space.reset(s, rng);
+        if v >= vt {
+            return (Some(t), events);
+        }
+        if let Some(r) = refractory {
+            let d = r.draw(rng);
+            if t + d >= t_max {
+                return (None, events);
             }
-            if let Some(r) = self.refractory {
-                let d = r.draw(rng);
-                if t + d >= t_max {
-                    return (None, events);
-                }
-                if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
-                    plus = !plus;
-                }
-                t += d;
-                events += 1;
-            }
-            if self.schedule.scheduled_clock() {
-                next_periodic = self.schedule.next_reset(t, rng);
-            }
+            s = space.hold(s, d, rng);
+            t += d;
+            events += 1;
+        }
+        if schedule.scheduled_clock() {
+            next_periodic = schedule.next_reset(t, rng);
         }
     }
 }
@@ -314,8 +422,8 @@ pub fn check_t_max(t_max: f64) -> Result<f64> {
 
 /// Refuse what the exact first-passage sampler does not run for `problem`,
 /// beyond [`check_t_max`] and the support table: with a noise model other
-/// than the paper's, the schedule modifiers (their flags), thermal noise
-/// (`temperature`) and the levels a law's flows do not run (`noise`).
+/// than the paper's, thermal noise (`temperature`) and the levels a law's
+/// flows do not run (`noise`); every schedule modifier runs.
 pub(super) fn check_problem(problem: &Problem) -> Result<()> {
     if problem.params().noise().is_none() {
         return Ok(());

@@ -781,6 +781,25 @@ pub(super) fn moments_at_start(
     Ok((set.at_start(&x).1, set.at_start(&y).1, set.mesh.v.len() - 1))
 }
 
+/// T_s(v) of every state on the mesh of the canonical (upward) problem of
+/// `problem` ([`Problem::canonical`], its states in the noise's order):
+/// (nodes, T_s at the nodes per state), verified as [`solve_on`].
+pub(super) fn canonical_states(
+    problem: &Problem,
+    cells: usize,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+    BackwardOptions::with_cells(cells).validate()?;
+    let set = setup(problem, cells, BARRIER)?;
+    let x = set.solve_source(set.p.params().rate(), &|_, _| 1.0)?;
+    non_negative(&x)?;
+    let ns = set.states();
+    let n = set.mesh.v.len();
+    let per_state = (0..ns)
+        .map(|s| (0..n).map(|k| x[ns * k + s]).collect())
+        .collect();
+    Ok((set.mesh.v.clone(), per_state))
+}
+
 /// T_s(v) on the whole mesh in the user's frame, as a [`Profile`]: tau the
 /// mean over π, tau_plus / tau_minus the states of highest / lowest level
 /// (verified as [`solve_on`]).

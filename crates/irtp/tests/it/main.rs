@@ -21,6 +21,7 @@ mod fp_sim;
 mod fp_transient;
 mod mfpt_backward;
 mod mfpt_control;
+mod mfpt_control_noise;
 mod mfpt_sim;
 mod models;
 mod msd_fit;

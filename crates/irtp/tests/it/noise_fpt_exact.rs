@@ -197,9 +197,9 @@ fn refused_name(p: &Params, v0: f64, vt: f64) -> &'static str {
 }
 
 /// Thermal noise is refused naming `temperature` (no exact flow), a
-/// schedule modifier naming its flag, a level at a kink of a law without
-/// a closed-form flow naming `noise`, as is the passage-time control
-/// variate with a noise model.
+/// schedule modifier runs, a level at a kink of a law without
+/// a closed-form flow naming `noise`; the passage-time control variate
+/// refuses thermal noise naming `temperature`.
 #[test]
 fn refusals_name_their_flag() {
     for c in NOISE_CASES.iter().filter(|c| c.thermal()) {
@@ -209,7 +209,7 @@ fn refusals_name_their_flag() {
     }
     let rpt = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=1", 0.0).unwrap();
     let thermal = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=1", 0.5).unwrap();
-    let p = Params::with_noise(DragLaw::Tan, thermal, 0.5, 0.0).unwrap();
+    let p = Params::with_noise(DragLaw::Tan, thermal.clone(), 0.5, 0.0).unwrap();
     assert_eq!(refused_name(&p, 0.0, 0.3), "temperature");
     let periodic = Schedule {
         periodic: Some(Periodic::new(1.5).unwrap()),
@@ -219,15 +219,18 @@ fn refusals_name_their_flag() {
         .unwrap()
         .with_schedule(periodic)
         .unwrap();
-    assert_eq!(refused_name(&p, 0.0, 0.3), "reset_period");
+    // Every schedule modifier runs with a noise model (one kernel).
+    let pr = Problem::new(p, 0.0, 0.3).unwrap();
+    assert!(mfpt::solve(&pr, &exact(10, 1), &NoProgress).is_ok());
     let power: DragLaw = "power:n=0.5".parse().unwrap();
-    let p = Params::with_noise(power, rpt.clone(), 0.5, 0.0).unwrap();
+    let p = Params::with_noise(power, rpt, 0.5, 0.0).unwrap();
     assert_eq!(refused_name(&p, 0.0, 0.3), "noise");
-    // The passage-time control variate is the two-state flips' martingale.
-    let p = Params::with_noise(DragLaw::Tan, rpt, 0.5, 0.0).unwrap();
+    // The passage-time control variate runs a noise model at T = 0
+    // (mfpt_control_noise.rs) and refuses it with thermal noise.
+    let p = Params::with_noise(DragLaw::Tan, thermal, 0.5, 0.0).unwrap();
     let pr = Problem::new(p, 0.0, 0.3).unwrap();
     match mfpt::control::run(&pr, (10, 1, f64::INFINITY), 64, 400, &NoProgress) {
-        Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "noise"),
-        other => panic!("control variate with a noise model: {other:?}"),
+        Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "temperature"),
+        other => panic!("control variate with thermal noise: {other:?}"),
     }
 }

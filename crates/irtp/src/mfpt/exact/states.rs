@@ -22,18 +22,20 @@
 //! [`super::super::FptStats`]) are two independent halves of the same law,
 //! as for the Euler particles with a noise model.
 //!
-//! This is a second loop beside the paper's two-state [`super::FirstPassage`],
-//! which keeps its stratified ±Sigma start and its draws bit for bit; the
+//! The chain is a [`super::NoiseSpace`] of the one kernel
+//! ([`super::walk`]) that also runs the paper's two-state
+//! [`super::FirstPassage`] (with its stratified ±Sigma start); the
 //! flows are those of the simulation (closed-form flows of tan, tanh and
 //! linear drag on either side of a fixed point; for the other laws only
 //! levels whose fixed point is the interval's edge farther from 0, where
 //! their tabulated flows are exact), and the estimator and driver
 //! ([`super::super::estimator`]) are shared.
 
+use super::{NoiseSpace, Tally};
 use crate::error::{Error, Result};
 use crate::model::drag::FlowMap;
 use crate::model::noise::chain::Chain;
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::{Drag, DragLaw, Params};
 use crate::rng::Rng;
 use crate::sim::exact::{exp_gap, level_kind, LevelKind};
@@ -45,12 +47,16 @@ use rand::Rng as _;
 pub(crate) struct StatesPassage<F> {
     /// The flow of each level.
     flows: Vec<F>,
+    /// Per state: its fixed point v*_s = g⁻¹(a_s).
+    stars: Vec<f64>,
     /// Per state: its fixed point lies beyond v_t (its flow crosses v_t).
     crosses: Vec<bool>,
     chain: Chain,
     /// Per state: q_s + r.
     total: Vec<f64>,
     reset: ResetRule,
+    /// The periodic or renewal clock and the refractory period.
+    schedule: Schedule,
     vt: f64,
 }
 
@@ -81,18 +87,10 @@ fn level_flows<D: Drag>(
 
 impl<F: FlowMap> StatesPassage<F> {
     /// The sampler of the upward problem to `vt` under `params` (a noise
-    /// model at T = 0, its support checked by the caller): the schedule
-    /// modifiers refused naming their flag, the flows as
+    /// model at T = 0, its support checked by the caller; any schedule
+    /// modifier, run by [`super::walk_scheduled`]): the flows as
     /// [`level_flows`] (memoised per law, levels and interval).
     pub(crate) fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, vt: f64) -> Result<Self> {
-        if let Some(f) = params.schedule().features().into_iter().next() {
-            return Err(Error::invalid(
-                f.flag(),
-                params.schedule().spec_of(f),
-                "the paper's Poisson protocol for mfpt --method exact with a noise model other \
-                 than the paper's (a schedule modifier with such a noise is not run)",
-            ));
-        }
         let model = params.noise_model()?;
         let chain = params.chain()?;
         if chain.temperature > 0.0 {
@@ -116,57 +114,94 @@ impl<F: FlowMap> StatesPassage<F> {
             level_flows(drag, (params.drag(), &spec), &chain.levels, bounds)
         })?;
         let flows = (*flows).clone();
-        let crosses = chain.levels.iter().map(|&a| drag.inverse(a) > vt).collect();
+        let stars: Vec<f64> = chain.levels.iter().map(|&a| drag.inverse(a)).collect();
+        let crosses = stars.iter().map(|&star| star > vt).collect();
         let reset = *params.reset();
         let total = chain.exit.iter().map(|q| q + reset.rate()).collect();
         Ok(StatesPassage {
             flows,
+            stars,
             crosses,
             chain,
             total,
             reset,
+            schedule: *params.schedule(),
             vt,
         })
+    }
+
+    /// The flow and fixed point of each state, the chain and the resetting
+    /// rule (for the control variate of [`super::super::control`]).
+    pub(crate) fn parts(&self) -> (&[F], &[f64], &Chain, &ResetRule) {
+        (&self.flows, &self.stars, &self.chain, &self.reset)
     }
 
     /// One upward first passage from `v0` < v_t, the start state drawn
     /// from π with the stream's first uniform: (passage time, or None if
     /// not reached by `t_max`; number of events).
     pub(crate) fn run(&self, v0: f64, t_max: f64, rng: &mut Rng) -> (Option<f64>, u64) {
-        let vt = self.vt;
-        let mut s = self.chain.draw_stationary(rng.gen::<f64>());
-        if v0 >= vt {
+        self.walk(v0, t_max, rng, &mut ())
+    }
+
+    /// [`StatesPassage::run`] reporting the start, every flow segment and
+    /// jump to `tally` (the random stream consumed exactly as by `run`).
+    #[inline(always)]
+    pub(crate) fn walk<T: Tally>(
+        &self,
+        v0: f64,
+        t_max: f64,
+        rng: &mut Rng,
+        tally: &mut T,
+    ) -> (Option<f64>, u64) {
+        let s = self.chain.draw_stationary(rng.gen::<f64>());
+        if v0 >= self.vt {
             return (Some(0.0), 0);
         }
-        let (mut t, mut v, mut events) = (0.0f64, v0, 0u64);
-        loop {
-            let total = self.total[s];
-            let gap = exp_gap(rng, total);
-            let flow = &self.flows[s];
-            if self.crosses[s] {
-                let tau = flow.time(v, vt);
-                if tau <= gap {
-                    let hit = t + tau;
-                    return ((hit <= t_max).then_some(hit), events);
-                }
-            }
-            if t + gap >= t_max {
-                return (None, events);
-            }
-            v = flow.velocity(v, gap);
-            t += gap;
-            events += 1;
-            let u = rng.gen::<f64>() * total;
-            if u < self.chain.exit[s] {
-                s = self.chain.jump(s, u);
-            } else {
-                let w = self.reset.draw_velocity(rng);
-                s = self.reset.draw_noise_state(s, &self.chain, rng);
-                if w >= vt {
-                    return (Some(t), events);
-                }
-                v = w;
-            }
+        if self.schedule.scheduled_clock() || self.schedule.refractory.is_some() {
+            return super::walk_scheduled(self, s, v0, self.vt, t_max, rng);
         }
+        tally.start(v0, s);
+        super::walk(self, s, v0, self.vt, t_max, rng, tally)
+    }
+}
+
+impl<F: FlowMap> NoiseSpace for StatesPassage<F> {
+    type Flow = F;
+    #[inline(always)]
+    fn flow(&self, s: usize) -> &F {
+        &self.flows[s]
+    }
+    #[inline(always)]
+    fn crosses(&self, s: usize) -> bool {
+        self.crosses[s]
+    }
+    #[inline(always)]
+    fn total(&self, s: usize) -> f64 {
+        self.total[s]
+    }
+    #[inline(always)]
+    fn event(&self, s: usize, u: f64) -> Option<usize> {
+        (u < self.chain.exit[s]).then(|| self.chain.jump(s, u))
+    }
+    #[inline(always)]
+    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize) {
+        let w = self.reset.draw_velocity(rng);
+        (w, self.reset.draw_noise_state(s, &self.chain, rng))
+    }
+    /// The chain run alone for `d` (exact: its exponential holding times
+    /// and jumps, Eq. (N10)).
+    fn hold(&self, mut s: usize, mut d: f64, rng: &mut Rng) -> usize {
+        loop {
+            let exit = self.chain.exit[s];
+            let gap = exp_gap(rng, exit);
+            if gap >= d {
+                return s;
+            }
+            d -= gap;
+            s = self.chain.jump(s, rng.gen::<f64>() * exit);
+        }
+    }
+    fn schedule(&self) -> (&Schedule, Option<Refractory>) {
+        (&self.schedule, self.schedule.refractory)
     }
 }

@@ -20,8 +20,9 @@
 //! [`crate::mfpt::distribution()`] (`mfpt distribution --method backward`:
 //! any finite-state noise at T = 0, Eqs. (N37)-(N39); with T > 0 linear,
 //! tanh and tan drags as the backward equations, Eq. (N49)), and the exact
-//! first-passage sampler (`mfpt --method exact`, [`crate::mfpt::exact`]):
-//! any finite-state noise at T = 0 (Eqs. (N46)-(N48)); T > 0 refused naming
+//! first-passage sampler (`mfpt --method exact` and `mfpt distribution
+//! --method exact`, [`crate::mfpt::exact`]): any finite-state noise at
+//! T = 0 (Eqs. (N46)-(N48)), with every schedule modifier; T > 0 refused naming
 //! `temperature` (no exact flow with thermal noise), and the search's 2-D
 //! backward equation and two samplers (`mfpt --xt` or `--interval` with
 //! `--method backward`, `exact` or `euler`, [`crate::search::backward`],
@@ -44,7 +45,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
     Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
     temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; Poisson resetting); \
-    mfpt --method exact (any finite-state noise at temperature 0, Poisson resetting); the search \
+    mfpt --method exact, mfpt distribution --method exact (any finite-state noise at \
+    temperature 0, every protocol); the search \
     (mfpt --xt or --interval) with --method backward, exact or euler, and mfpt scan and optimize \
     with --xt (any finite-state noise at temperature 0, every protocol the method runs)";
 
