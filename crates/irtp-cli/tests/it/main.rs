@@ -13,6 +13,7 @@ mod counts;
 mod data_safety;
 mod docs;
 mod drag_specs;
+mod euler_noise_schedule_cli;
 mod exact_cli;
 mod fp_cli;
 mod fp_msd;

@@ -43,10 +43,11 @@
 //! - position resetting: x ← x_r at the reset of step 3.
 //!
 //! A noise model other than the paper's (any finite-state noise, thermal
-//! noise) runs in the scalar kernel of [`noise`] (docs/equations.md,
-//! "Euler schemes with a noise model", Eqs. (N15)-(N19)), with the same
-//! plan, reset sampler and observables; the paper's noise keeps the kernel
-//! above bit for bit.
+//! noise) runs the steps of [`noise`] (docs/equations.md, "Euler schemes
+//! with a noise model", Eqs. (N15)-(N19)) in the same one-particle loop,
+//! generic over the noise's steps, with every modifier above (during a
+//! hold its chain jumps on and no thermal kick is drawn); the paper's
+//! noise keeps the kernel above bit for bit.
 //!
 //! Time grid: grid time t_k is recorded at step n_k = round(t_k/dt) and
 //! reported as n_k·dt (the exact time of the recorded state); grid times that
@@ -121,10 +122,7 @@ impl EulerPlan {
         super::check_period_window(params, spec)?;
         let dt = match params.noise() {
             None => params.check_dt(dt)?,
-            Some(_) => {
-                refuse_schedule(params)?;
-                noise::check_noise_dt(params, dt)?
-            }
+            Some(_) => noise::check_noise_dt(params, dt)?,
         };
         let p_reset = params.rate() * dt;
         if !(p_reset < 1.0) {
@@ -192,15 +190,15 @@ impl EulerPlan {
     }
 }
 
-/// A noise model runs the paper's protocol only: a modifier of the
-/// resetting rule is refused by its flag.
+/// The Euler first passage with a noise model runs the paper's protocol
+/// only: a modifier of the resetting rule is refused by its flag.
 pub(crate) fn refuse_schedule(params: &Params) -> Result<()> {
     if let Some(&f) = params.schedule().features().first() {
         return Err(Error::invalid(
             f.flag(),
             params.schedule().spec_of(f),
             format!(
-                "no {} with a noise model in the Euler schemes (Poisson resetting only)",
+                "no {} with a noise model in the Euler first passage (Poisson resetting only)",
                 f.describe()
             ),
         ));
@@ -311,13 +309,14 @@ fn run_noise<D: Drag>(
         || template.clone(),
         |lo, hi, obs| {
             let mut occ = vec![0.0; spec.bins];
+            let fr = &kernel.frame;
             for i in lo..hi {
                 match sampling {
                     EventSampling::Geometric => {
-                        kernel.particle::<Geometric>(first + i, obs, &mut occ)
+                        scheduled::<_, Geometric>(&kernel, fr, first + i, obs, &mut occ)
                     }
                     EventSampling::Bernoulli => {
-                        kernel.particle::<Bernoulli>(first + i, obs, &mut occ)
+                        scheduled::<_, Bernoulli>(&kernel, fr, first + i, obs, &mut occ)
                     }
                 }
             }
@@ -465,6 +464,15 @@ fn run<D: Drag, E: Events>(
         plan,
         schedule: *params.schedule(),
     };
+    let frame = Frame {
+        plan,
+        seed: spec.seed,
+        reset: *params.reset(),
+        schedule: *params.schedule(),
+        lo,
+        scale: kernel.scale,
+        bins: spec.bins,
+    };
     // Chunks of parallel::CHUNK consecutive particles, reduced exactly like
     // parallel::reduce (each chunk from an empty accumulator in particle
     // order, chunks merged in index order into their unit, units in order):
@@ -479,7 +487,7 @@ fn run<D: Drag, E: Events>(
             let mut i = lo;
             if !kernel.schedule.is_plain() {
                 for i in lo..hi {
-                    kernel.scheduled::<E>(first + i, obs, &mut occ[..spec.bins]);
+                    scheduled::<_, E>(&kernel, &frame, first + i, obs, &mut occ[..spec.bins]);
                 }
                 return;
             }
@@ -710,83 +718,152 @@ impl<D: Drag> Kernel<'_, D> {
         }
         obs.steps += L as u64 * plan.steps;
     }
+}
 
-    /// Particle `i` with the schedule's modifiers (module docs), one step
-    /// at a time in the step order of [`Kernel::group`]; the random stream
-    /// is consumed as there, plus the refractory duration after a reset's
-    /// draws.
-    fn scheduled<E: Events>(&self, i: u64, obs: &mut Observables, occ: &mut [f64]) {
-        let plan = self.plan;
-        let dt = plan.dt;
-        let mut rng = rng::stream(self.seed, i);
-        let mut eta = if rng.gen::<f64>() < 0.5 {
+/// What the scheduled loop ([`scheduled`]) reads of a run besides the
+/// noise: the plan, seed, resetting rule and its modifiers, the bins.
+struct Frame<'a> {
+    plan: &'a EulerPlan,
+    seed: u64,
+    reset: ResetRule,
+    schedule: Schedule,
+    /// The histogram's lower edge, bins per unit velocity, bin count.
+    lo: f64,
+    scale: f64,
+    bins: usize,
+}
+
+impl Frame<'_> {
+    #[inline]
+    fn bin(&self, v: f64) -> usize {
+        let i = ((v - self.lo) * self.scale) as isize;
+        i.clamp(0, self.bins as isize - 1) as usize
+    }
+}
+
+/// The noise's part of one Euler step in the scheduled loop: the paper's
+/// η = ±Σ flipped by the event sampler ([`Kernel`]) or a finite-state
+/// chain with its thermal kick ([`noise::NoiseKernel`]).
+trait NoiseSteps {
+    /// The noise state of one particle.
+    type State;
+    /// The start state and the event sampler, drawn from `rng`.
+    fn start<E: Events>(&self, rng: &mut Rng, plan: &EulerPlan) -> (Self::State, E);
+    /// Step 3 without a reset: the velocity after one step from v.
+    fn drift(&self, v: f64, st: &Self::State, rng: &mut Rng) -> f64;
+    /// Step 3 with a reset in step n: the noise state at the reset.
+    fn reset(&self, st: &mut Self::State, n: u64, rng: &mut Rng);
+    /// Step 4 in step n: the noise state moves on.
+    fn jump<E: Events>(&self, st: &mut Self::State, ev: &mut E, n: u64, rng: &mut Rng);
+    /// Whether v rests at the law's atom outside a hold (a state whose
+    /// fixed point it is).
+    fn rests(&self, v: f64, st: &Self::State, obs: &Observables) -> bool;
+}
+
+impl<D: Drag> NoiseSteps for Kernel<'_, D> {
+    type State = f64;
+    fn start<E: Events>(&self, rng: &mut Rng, plan: &EulerPlan) -> (f64, E) {
+        let eta = if rng.gen::<f64>() < 0.5 {
             self.sigma
         } else {
             -self.sigma
         };
-        let mut ev = E::new(&mut rng, plan);
-        let mut next_periodic = self.schedule.first_reset(&mut rng);
-        // The step of the next periodic or renewal reset (∞ without one).
-        let mut periodic_step = (next_periodic / dt).round();
-        let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
-        let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
-        // Steps held at the reset velocity (the law's atom), in no bin.
-        let mut at_atom = 0.0f64;
-        for n in 0..plan.steps {
-            // Stopped: the cancelled reduction discards this chunk.
-            if crate::parallel::stop_due(n) {
-                return;
-            }
-            if plan.record_steps.get(k) == Some(&n) {
-                obs.record(k, v, x);
-                msd += obs.msd_term(k, x);
-                k += 1;
-            }
-            if n >= plan.burn_in_step {
-                sv += v;
-                sv2 += v * v;
-                if hold > 0 && obs.is_atom(v) {
-                    at_atom += 1.0;
-                } else {
-                    occ[self.bin(v)] += 1.0;
-                }
-            }
-            x += v * dt;
-            let poisson = ev.reset(n, &mut rng);
-            if hold > 0 {
-                hold -= 1;
-            } else if poisson || n as f64 >= periodic_step {
-                v = self.reset.draw_velocity(&mut rng);
-                let plus = self.reset.draw_noise(eta > 0.0, &mut rng);
-                eta = if plus { self.sigma } else { -self.sigma };
-                if let Some(p) = self.schedule.position {
-                    x = p.x;
-                }
-                if let Some(r) = self.schedule.refractory {
-                    hold = (r.draw(&mut rng) / dt).round() as u64;
-                }
-                if self.schedule.scheduled_clock() {
-                    let free = next_periodic + hold as f64 * dt;
-                    next_periodic = self.schedule.next_reset(free, &mut rng);
-                    periodic_step = (next_periodic / dt).round();
-                }
-            } else {
-                v = euler_step(self.f, v, eta, dt);
-            }
-            if ev.flip(n, &mut rng) {
-                eta = -eta;
-            }
+        (eta, E::new(rng, plan))
+    }
+    fn drift(&self, v: f64, eta: &f64, _rng: &mut Rng) -> f64 {
+        euler_step(self.f, v, *eta, self.plan.dt)
+    }
+    fn reset(&self, eta: &mut f64, _n: u64, rng: &mut Rng) {
+        let plus = self.reset.draw_noise(*eta > 0.0, rng);
+        *eta = if plus { self.sigma } else { -self.sigma };
+    }
+    fn jump<E: Events>(&self, eta: &mut f64, ev: &mut E, n: u64, rng: &mut Rng) {
+        if ev.flip(n, rng) {
+            *eta = -*eta;
         }
-        if k < plan.record_steps.len() {
+    }
+    fn rests(&self, _v: f64, _eta: &f64, _obs: &Observables) -> bool {
+        false
+    }
+}
+
+/// Particle `i` with the schedule's modifiers (module docs) and the noise
+/// steps `noise`, one step at a time in the step order of
+/// [`Kernel::group`]. The stream: the noise's start draws, the first
+/// scheduled reset time; per step the Poisson reset draws, then a reset's
+/// velocity, noise state, refractory duration and next scheduled time (or
+/// the drift's draws), then step 4's draws. During a hold v stays put and
+/// the noise moves on.
+fn scheduled<N: NoiseSteps, E: Events>(
+    noise: &N,
+    fr: &Frame,
+    i: u64,
+    obs: &mut Observables,
+    occ: &mut [f64],
+) {
+    let plan = fr.plan;
+    let dt = plan.dt;
+    let mut rng = rng::stream(fr.seed, i);
+    let (mut st, mut ev) = noise.start::<E>(&mut rng, plan);
+    let mut next_periodic = fr.schedule.first_reset(&mut rng);
+    // The step of the next periodic or renewal reset (∞ without one).
+    let mut periodic_step = (next_periodic / dt).round();
+    let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
+    let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    // Steps at the law's atom (held at the reset velocity, or resting at
+    // a state's fixed point), in no bin.
+    let mut at_atom = 0.0f64;
+    for n in 0..plan.steps {
+        // Stopped: the cancelled reduction discards this chunk.
+        if crate::parallel::stop_due(n) {
+            return;
+        }
+        if plan.record_steps.get(k) == Some(&n) {
             obs.record(k, v, x);
             msd += obs.msd_term(k, x);
+            k += 1;
         }
-        let w = (plan.steps - plan.burn_in_step) as f64;
-        obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
-        obs.finish_atom(at_atom, w, v);
-        obs.record_final_position(x);
-        obs.steps += plan.steps;
+        if n >= plan.burn_in_step {
+            sv += v;
+            sv2 += v * v;
+            if (hold > 0 && obs.is_atom(v)) || noise.rests(v, &st, obs) {
+                at_atom += 1.0;
+            } else {
+                occ[fr.bin(v)] += 1.0;
+            }
+        }
+        x += v * dt;
+        let poisson = ev.reset(n, &mut rng);
+        if hold > 0 {
+            hold -= 1;
+        } else if poisson || n as f64 >= periodic_step {
+            v = fr.reset.draw_velocity(&mut rng);
+            noise.reset(&mut st, n, &mut rng);
+            if let Some(p) = fr.schedule.position {
+                x = p.x;
+            }
+            if let Some(r) = fr.schedule.refractory {
+                hold = (r.draw(&mut rng) / dt).round() as u64;
+            }
+            if fr.schedule.scheduled_clock() {
+                let free = next_periodic + hold as f64 * dt;
+                next_periodic = fr.schedule.next_reset(free, &mut rng);
+                periodic_step = (next_periodic / dt).round();
+            }
+        } else {
+            v = noise.drift(v, &st, &mut rng);
+        }
+        noise.jump(&mut st, &mut ev, n, &mut rng);
     }
+    if k < plan.record_steps.len() {
+        obs.record(k, v, x);
+        msd += obs.msd_term(k, x);
+    }
+    let w = (plan.steps - plan.burn_in_step) as f64;
+    obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
+    obs.finish_atom(at_atom, w, v);
+    obs.record_final_position(x);
+    obs.steps += plan.steps;
 }
 
 /// Exact expected moments of the Euler chain (not of the continuum process)

@@ -19,18 +19,20 @@
 //! noise spelt as a generator runs the same Markov chain as the default
 //! kernel). Particles start at x = v = 0 in a state drawn from π.
 //!
-//! This is a separate, scalar kernel from the paper's SIMD kernel so the
-//! default path stays bit-identical and as fast; both share the plan
-//! ([`EulerPlan`]), the reset sampler (the kernel's `Events`), the observables and
-//! the drift step [`euler_step`].
+//! These steps run in the scalar scheduled loop of [`super`] (the one the
+//! paper's noise runs with a schedule modifier), not the paper's SIMD
+//! kernel, so the default path stays bit-identical and as fast; so every
+//! modifier of the resetting rule runs with them: step 3's reset is also
+//! the periodic or renewal one, a refractory hold keeps v with no drift
+//! (and no ξ) while step 4 goes on, and a position reset sets x.
 
-use super::{euler_step, geometric_gap, EulerPlan, Events};
+use super::{euler_step, geometric_gap, EulerPlan, Events, Frame, NoiseSteps};
 use crate::error::{Error, Result};
 use crate::model::noise::chain::Chain;
-use crate::model::reset::{Reset, ResetRule};
+use crate::model::reset::Reset;
 use crate::model::{Drag, DragLaw, Params};
 use crate::numerics::root::solve_increasing;
-use crate::rng::{self, Rng};
+use crate::rng::Rng;
 use crate::sim::{Observables, SimSpec};
 use rand::Rng as _;
 
@@ -281,23 +283,19 @@ pub fn max_noise_dt(params: &Params) -> Result<f64> {
     Ok(1.0 / slope)
 }
 
-/// The constants of one N-state run.
+/// The constants of one N-state run: the noise's steps of the scheduled
+/// loop ([`super::scheduled`]) and its frame.
 pub(super) struct NoiseKernel<'a, D> {
-    pub f: &'a D,
-    pub chain: StepChain,
-    pub step: ThermalStep,
-    pub reset: ResetRule,
-    pub lo: f64,
-    pub scale: f64,
-    pub bins: usize,
-    pub seed: u64,
-    pub plan: &'a EulerPlan,
+    f: &'a D,
+    chain: StepChain,
+    step: ThermalStep,
+    pub(super) frame: Frame<'a>,
     /// Geometric jump gaps (else one Bernoulli draw per step).
-    pub geometric: bool,
+    geometric: bool,
 }
 
 /// The noise state of one particle and its next jump step.
-struct State {
+pub(super) struct State {
     s: usize,
     next_jump: u64,
 }
@@ -316,20 +314,17 @@ impl<D: Drag> NoiseKernel<'_, D> {
             f,
             chain: StepChain::new(&params.chain()?, plan.dt)?,
             step: ThermalStep::new(params, plan.dt),
-            reset: *params.reset(),
-            lo: obs.v_lo,
-            scale: spec.bins as f64 / (obs.v_hi - obs.v_lo),
-            bins: spec.bins,
-            seed: spec.seed,
-            plan,
+            frame: Frame {
+                plan,
+                seed: spec.seed,
+                reset: *params.reset(),
+                schedule: *params.schedule(),
+                lo: obs.v_lo,
+                scale: spec.bins as f64 / (obs.v_hi - obs.v_lo),
+                bins: spec.bins,
+            },
             geometric,
         })
-    }
-
-    #[inline]
-    fn bin(&self, v: f64) -> usize {
-        let i = ((v - self.lo) * self.scale) as isize;
-        i.clamp(0, self.bins as isize - 1) as usize
     }
 
     /// Enter state s at step n: its next jump step (geometric sampling).
@@ -342,10 +337,38 @@ impl<D: Drag> NoiseKernel<'_, D> {
         };
         State { s, next_jump }
     }
+}
 
+/// The steps of the module docs. The stream: the start state (one
+/// uniform), the reset sampler's initial draws, the first jump gap; per
+/// step the reset draws, the normal ξ (T > 0, drifting steps only), the
+/// jump draws (every step, during a refractory hold too).
+impl<D: Drag> NoiseSteps for NoiseKernel<'_, D> {
+    type State = State;
+    fn start<E: Events>(&self, rng: &mut Rng, plan: &EulerPlan) -> (State, E) {
+        let s0 = self.chain.draw_stationary(rng);
+        let ev = E::new(rng, plan);
+        (self.enter(s0, 0, rng), ev)
+    }
+    fn drift(&self, v: f64, st: &State, rng: &mut Rng) -> f64 {
+        let xi = if self.step.kick > 0.0 {
+            rng.sample::<f64, _>(rand_distr::StandardNormal)
+        } else {
+            0.0
+        };
+        self.step.step(self.f, v, self.chain.levels[st.s], xi)
+    }
+    fn reset(&self, st: &mut State, n: u64, rng: &mut Rng) {
+        let s = self
+            .frame
+            .reset
+            .draw_noise_state(st.s, &self.chain.chain, rng);
+        if s != st.s {
+            *st = self.enter(s, n, rng);
+        }
+    }
     /// Step 4: does the state leave s in step n, and where to.
-    #[inline]
-    fn jump(&self, st: &mut State, n: u64, rng: &mut Rng) {
+    fn jump<E: Events>(&self, st: &mut State, _ev: &mut E, n: u64, rng: &mut Rng) {
         let s = st.s;
         if self.geometric {
             if n == st.next_jump {
@@ -359,67 +382,9 @@ impl<D: Drag> NoiseKernel<'_, D> {
             }
         }
     }
-
-    /// Particle `i`, one step at a time in the order of the module docs.
-    /// The stream: the start state (one uniform), the reset sampler's
-    /// initial draws, the first jump gap; per step the reset draws, the
-    /// normal ξ (T > 0, drifting steps only), the jump draws.
-    pub fn particle<E: Events>(&self, i: u64, obs: &mut Observables, occ: &mut [f64]) {
-        let plan = self.plan;
-        let dt = plan.dt;
-        let thermal = self.step.kick > 0.0;
-        let mut rng = rng::stream(self.seed, i);
-        let s0 = self.chain.draw_stationary(&mut rng);
-        let mut ev = E::new(&mut rng, plan);
-        let mut st = self.enter(s0, 0, &mut rng);
-        let (mut v, mut x) = (0.0f64, 0.0f64);
-        let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
-        // Steps resting at the law's atom (a state whose fixed point it
-        // is: the step leaves v there), in no bin.
-        let mut at_atom = 0.0f64;
-        for n in 0..plan.steps {
-            if plan.record_steps.get(k) == Some(&n) {
-                obs.record(k, v, x);
-                msd += obs.msd_term(k, x);
-                k += 1;
-            }
-            if n >= plan.burn_in_step {
-                sv += v;
-                sv2 += v * v;
-                let level = self.chain.levels[st.s];
-                if obs.is_atom(v) && !thermal && self.step.step(self.f, v, level, 0.0) == v {
-                    at_atom += 1.0;
-                } else {
-                    occ[self.bin(v)] += 1.0;
-                }
-            }
-            x += v * dt;
-            if ev.reset(n, &mut rng) {
-                v = self.reset.draw_velocity(&mut rng);
-                let s = self
-                    .reset
-                    .draw_noise_state(st.s, &self.chain.chain, &mut rng);
-                if s != st.s {
-                    st = self.enter(s, n, &mut rng);
-                }
-            } else {
-                let xi = if thermal {
-                    rng.sample::<f64, _>(rand_distr::StandardNormal)
-                } else {
-                    0.0
-                };
-                v = self.step.step(self.f, v, self.chain.levels[st.s], xi);
-            }
-            self.jump(&mut st, n, &mut rng);
-        }
-        if k < plan.record_steps.len() {
-            obs.record(k, v, x);
-            msd += obs.msd_term(k, x);
-        }
-        let w = (plan.steps - plan.burn_in_step) as f64;
-        obs.finish_particle(sv / w, sv2 / w, occ, w, v, msd);
-        obs.finish_atom(at_atom, w, v);
-        obs.steps += plan.steps;
+    fn rests(&self, v: f64, st: &State, obs: &Observables) -> bool {
+        let level = self.chain.levels[st.s];
+        obs.is_atom(v) && self.step.kick == 0.0 && self.step.step(self.f, v, level, 0.0) == v
     }
 }
 
