@@ -39,8 +39,8 @@ pub const RUNNERS: &str = "analytic (linear drag: any noise and temperature, Poi
     to a point; any drag: an asymmetric telegraph noise at temperature 0 and r = 0); simulate \
     --method exact (any finite-state noise at temperature 0, every protocol; linear drag at any \
     temperature, Poisson resetting); \
-    simulate --method euler and mfpt --method euler (any drag, noise and temperature, \
-    Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
+    simulate --method euler (any drag, noise and temperature, every protocol); mfpt --method \
+    euler (any drag, noise and temperature, Poisson resetting without schedule modifiers); fp stationary, fp transient, fp msd (any \
     drag, any noise and temperature, Poisson resetting); mfpt --method backward, mfpt scan, mfpt optimize \
     (any noise at temperature 0; with a temperature: linear, tanh and tan (T <= 1) drags; \
     Poisson resetting); mfpt distribution --method backward (any finite-state noise at \
