@@ -283,8 +283,8 @@ impl DistributionArgs {
         )?;
         // A noise model the distribution does not run is refused by name
         // before tau (which the backward equations refuse for it) is needed.
-        if let Some(m) = problem.params().noise() {
-            irtp::model::noise::support::check(irtp::model::reset::Solver::FptDistribution, m)?;
+        irtp::capability::check_noise(irtp::capability::Solver::FptDistribution, problem.params())?;
+        if problem.params().noise().is_some() {
             if self.method == DistMethod::Backward {
                 mfpt::distribution::check_problem(&problem)?;
             }
@@ -294,7 +294,9 @@ impl DistributionArgs {
         // one without a default.
         let tau = match backward::solve(&problem, &BackwardOptions::with_cells(1000)) {
             Ok(s) => s.tau,
-            Err(e @ Error::InvalidParameter { .. }) if self.method == DistMethod::Backward => {
+            Err(e @ (Error::InvalidParameter { .. } | Error::Unsupported { .. }))
+                if self.method == DistMethod::Backward =>
+            {
                 return Err(e)
             }
             Err(_) => f64::INFINITY,
@@ -406,9 +408,7 @@ impl DistributionArgs {
         };
         // The histogram's halves are the ±Sigma starts: the paper's noise
         // only (`mfpt --method exact` runs the others).
-        if let Some(m) = problem.params().noise() {
-            irtp::model::noise::support::refuse("mfpt distribution --method exact", m)?;
-        }
+        irtp::capability::check_noise(irtp::capability::Solver::FptDistributionExact, problem.params())?;
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();

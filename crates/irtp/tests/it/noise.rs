@@ -734,7 +734,7 @@ fn params_carry_another_noise_and_every_solver_refuses_it() {
             let (name, msg) = blamed(p.require(solver).unwrap_err());
             assert_eq!(name, flag, "{solver}: {msg}");
             assert!(
-                msg.contains(solver.command()) && msg.contains("simulate and fp run any noise"),
+                msg.contains(solver.command()) && msg.contains("runs in simulate, fp"),
                 "{msg}"
             );
         }
