@@ -326,7 +326,6 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
-                | S::SearchEuler
                 | S::FpStationary
                 | S::FpTransient
                 | S::FpMsd
@@ -341,7 +340,6 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
-                | S::SearchEuler
         ),
         F::Periodic => matches!(
             solver,
@@ -380,12 +378,16 @@ pub fn check(solver: Solver, params: &Params) -> Result<()> {
     let noise = NoiseClass::of(params);
     for f in params.schedule().features() {
         if !protocol_runs(solver, f, noise) {
+            let feature = match noise {
+                NoiseClass::Paper => f.describe(),
+                _ => "this protocol with a noise model",
+            };
             return Err(unsupported(
                 solver,
                 f.flag(),
                 params.schedule().spec_of(f),
-                f.describe(),
-                |s| protocol_runs(s, f, noise),
+                feature,
+                |s| noise_runs(s, noise) && protocol_runs(s, f, noise),
             ));
         }
     }
@@ -445,13 +447,18 @@ fn unsupported(
     feature: &'static str,
     runs: impl Fn(Solver) -> bool,
 ) -> Error {
+    // The methods nearest the refusing one first (its own command, then
+    // those of the same problem: a search's or the velocity's), as a long
+    // list is cut at its end.
     let own = solver.parts().0;
+    let search = |g: &str| g.contains("--xt");
     let list = runners_where(runs);
-    let (mut first, rest): (Vec<&str>, Vec<&str>) = split_groups(&list)
-        .into_iter()
-        .partition(|g| *g == own || g.starts_with(&format!("{own} (")));
-    first.extend(rest);
-    fitted(flag, value, feature, solver.command(), first.join(", "))
+    let mut groups = split_groups(&list);
+    groups.sort_by_key(|g| {
+        let same = *g == own || g.starts_with(&format!("{own} ("));
+        (!same, search(g) != search(own))
+    });
+    fitted(flag, value, feature, solver.command(), groups.join(", "))
 }
 
 /// The longest message of an [`Error::Unsupported`], as a command line

@@ -145,6 +145,17 @@ impl Error {
         }
     }
 
+    /// The parameter a refusal names: the `name` of an
+    /// [`Error::InvalidParameter`], the `flag` of an [`Error::Unsupported`];
+    /// None for any other error.
+    pub fn parameter(&self) -> Option<&'static str> {
+        match self {
+            Error::InvalidParameter { name, .. } => Some(name),
+            Error::Unsupported { flag, .. } => Some(flag),
+            _ => None,
+        }
+    }
+
     /// True for a numerical failure of a method (exit code 4): no answer it
     /// could verify.
     pub fn is_numerical(&self) -> bool {

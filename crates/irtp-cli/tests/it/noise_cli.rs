@@ -187,7 +187,7 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             } else if search {
                 irtp::search::NOISE_RUNNERS
             } else {
-                "runs in simulate, fp"
+                "simulate, fp"
             };
             assert!(err.contains(runners), "{args:?}: {err}");
         }

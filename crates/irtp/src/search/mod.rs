@@ -461,21 +461,27 @@ pub(crate) const PAPER_NOISE_ONLY: &str =
 /// backward solver and the samplers, [`NOISE_RUNNERS`]); a routine of the
 /// paper's noise only ([`PAPER_NOISE_ONLY`]) refuses every noise model.
 pub(crate) fn noise_gate(problem: &SearchProblem, method: &str) -> Result<()> {
+    match solver_of(method) {
+        Some(solver) => crate::capability::check_noise(solver, problem.params()),
+        None => match problem.params().noise() {
+            Some(m) => crate::model::noise::support::refuse(method, m),
+            None => Ok(()),
+        },
+    }
+}
+
+/// The [`crate::capability::Solver`] of a search method's name (None for
+/// [`PAPER_NOISE_ONLY`]).
+pub(crate) fn solver_of(method: &str) -> Option<crate::capability::Solver> {
     use crate::capability::Solver;
-    let solver = match method {
+    Some(match method {
         BACKWARD => Solver::SearchBackward,
         EXACT => Solver::SearchExact,
         EULER => Solver::SearchEuler,
         RENEWAL => Solver::SearchRenewal,
         DISTRIBUTION => Solver::SearchDistribution,
-        _ => {
-            return match problem.params().noise() {
-                Some(m) => crate::model::noise::support::refuse(method, m),
-                None => Ok(()),
-            }
-        }
-    };
-    crate::capability::check_noise(solver, problem.params())
+        _ => return None,
+    })
 }
 
 /// How a search problem is solved. The one dispatch point: a deterministic
