@@ -408,7 +408,10 @@ impl DistributionArgs {
         };
         // The histogram's halves are the ±Sigma starts: the paper's noise
         // only (`mfpt --method exact` runs the others).
-        irtp::capability::check_noise(irtp::capability::Solver::FptDistributionExact, problem.params())?;
+        irtp::capability::check_noise(
+            irtp::capability::Solver::FptDistributionExact,
+            problem.params(),
+        )?;
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();

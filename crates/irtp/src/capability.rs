@@ -222,7 +222,9 @@ impl NoiseClass {
 
     /// The class of the noise of `params`.
     pub fn of(params: &Params) -> NoiseClass {
-        params.noise().map_or(NoiseClass::Paper, NoiseClass::of_model)
+        params
+            .noise()
+            .map_or(NoiseClass::Paper, NoiseClass::of_model)
     }
 
     /// The class of noise model `m` (never the paper's default, which
@@ -409,7 +411,11 @@ pub fn check_noise(solver: Solver, params: &Params) -> Result<()> {
         let class = NoiseClass::of(params);
         let (flag, value, feature) = match drag.thermal_backward() {
             None => ("drag", drag.to_string(), "this drag with thermal noise"),
-            Some(_) => ("temperature", t.to_string(), "this drag at this temperature"),
+            Some(_) => (
+                "temperature",
+                t.to_string(),
+                "this drag at this temperature",
+            ),
         };
         return Err(unsupported(solver, flag, value, feature, |s| {
             noise_runs(s, class) && drag_runs(s, &drag, t)
@@ -427,12 +433,11 @@ pub fn check_model(solver: Solver, m: &NoiseModel) -> Result<()> {
     if noise_runs(solver, class) {
         return Ok(());
     }
-    let (flag, value) = match class == NoiseClass::Thermal
-        && noise_runs(solver, NoiseClass::FiniteState)
-    {
-        true => ("temperature", m.temperature().to_string()),
-        false => crate::model::noise::support::blamed(m),
-    };
+    let (flag, value) =
+        match class == NoiseClass::Thermal && noise_runs(solver, NoiseClass::FiniteState) {
+            true => ("temperature", m.temperature().to_string()),
+            false => crate::model::noise::support::blamed(m),
+        };
     Err(unsupported(solver, flag, value, class.describe(), |s| {
         noise_runs(s, class)
     }))
@@ -552,4 +557,62 @@ pub fn runners(feature: Feature) -> String {
 /// The methods that run noise of class `noise` (with some drag).
 pub fn noise_runners(noise: NoiseClass) -> String {
     runners_where(|s| noise_runs(s, noise))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::DragLaw;
+
+    /// Every refusal the table can give, with a value as long as a message
+    /// echoes, is one line that fits [`MAX_MESSAGE`] and names the method.
+    #[test]
+    fn every_refusal_fits_one_line() {
+        let value = "v".repeat(60);
+        for s in Solver::ALL {
+            for c in NoiseClass::ALL {
+                for f in Feature::ALL {
+                    let e = unsupported(s, f.flag(), value.clone(), f.describe(), |m| {
+                        protocol_runs(m, f, c)
+                    });
+                    let msg = e.message_with(|n| format!("--{}", n.replace('_', "-")));
+                    assert!(msg.chars().count() <= MAX_MESSAGE, "{msg}");
+                    assert!(!msg.contains('\n') && msg.contains(s.command()), "{msg}");
+                }
+                let e = unsupported(s, "temperature", value.clone(), c.describe(), |m| {
+                    noise_runs(m, c)
+                });
+                let msg = e.message_with(|n| format!("--{n}"));
+                assert!(msg.chars().count() <= MAX_MESSAGE, "{msg}");
+            }
+        }
+    }
+
+    /// The runners group by command; a cut list ends in `…`.
+    #[test]
+    fn runners_group_by_command() {
+        assert_eq!(
+            runners(Feature::RefractoryFixed),
+            "simulate, mfpt (exact, euler), mfpt distribution (exact), mfpt --xt (exact)"
+        );
+        let e = fitted(
+            "noise",
+            "x".repeat(48),
+            "a noise model",
+            &"m".repeat(60),
+            "a, b (c, d), e".repeat(20),
+        );
+        assert!(e.to_string().ends_with(", …"), "{e}");
+    }
+
+    /// The thermal backward equations run the laws that say so, up to
+    /// their temperature: tan to T = 1, linear and tanh at any T.
+    #[test]
+    fn drag_capabilities_decide_the_thermal_backward_equations() {
+        let runs = |d: DragLaw, t| drag_runs(Solver::Backward, &d, t);
+        assert!(runs(DragLaw::Tan, 1.0) && !runs(DragLaw::Tan, 1.5));
+        assert!(runs(DragLaw::Linear, 50.0) && runs(DragLaw::Tanh, 50.0));
+        assert!(!runs(DragLaw::Cubic, 0.1) && runs(DragLaw::Cubic, 0.0));
+        assert!(drag_runs(Solver::Euler, &DragLaw::Cubic, 5.0));
+    }
 }

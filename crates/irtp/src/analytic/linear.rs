@@ -193,6 +193,7 @@ pub fn position_moments(p: &Params) -> Result<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::DragLaw;
 
     fn lin(s: f64, l: f64, r: f64, vr: f64) -> Params {
         Params::new(DragLaw::Linear, s, l, r, vr).unwrap()

@@ -8,8 +8,8 @@
 
 use super::linear_noise::{LinearNoise, NoiseMoments};
 use super::telegraph_r0::TelegraphR0Density;
-use crate::error::{Error, Result};
 use crate::capability::{noise_runners, NoiseClass};
+use crate::error::{Error, Result};
 use crate::model::noise::{support::blamed, NoiseKind, NoiseModel};
 use crate::model::{Drag, Params};
 

@@ -3,8 +3,8 @@
 use super::drag::{Drag, DragLaw};
 use super::noise::{chain::Chain, NoiseModel};
 use super::reset::{
-    spec, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule,
-    Schedule, Solver, Target,
+    spec, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule, Schedule,
+    Solver, Target,
 };
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};

@@ -73,10 +73,7 @@ fn out_of_reach_is_infinite_on_every_route() {
         );
         let e = backward::solve(&pr, &BackwardOptions::with_cells(16, 8)).unwrap_err();
         let named = clock.map_or("reset_period", |_| "reset_clock");
-        assert!(
-            e.parameter() == Some(named),
-            "{clock:?}: {e}"
-        );
+        assert!(e.parameter() == Some(named), "{clock:?}: {e}");
         let s = sampled(&pr, 64);
         assert!(!s.mean_is_finite && s.tau().is_nan(), "{clock:?}");
         assert_eq!(s.stats.summary().censored, 64, "{clock:?}");
