@@ -284,10 +284,8 @@ impl DistributionArgs {
         // A noise model the distribution does not run is refused by name
         // before tau (which the backward equations refuse for it) is needed.
         irtp::capability::check_noise(irtp::capability::Solver::FptDistribution, problem.params())?;
-        if problem.params().noise().is_some() {
-            if self.method == DistMethod::Backward {
-                mfpt::distribution::check_problem(&problem)?;
-            }
+        if problem.params().noise().is_some() && self.method == DistMethod::Backward {
+            mfpt::distribution::check_problem(&problem)?;
         }
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact

@@ -8,7 +8,7 @@ use irtp::parallel::NoProgress;
 use irtp::search::backward::{self, BackwardOptions};
 use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
 use irtp::search::{self, PositionTarget, SearchMethod, SearchProblem, SearchResult};
-use irtp::{DragLaw, Error, Params};
+use irtp::{DragLaw, Params};
 
 /// Every registered law of bounded support (its end is 1), and the
 /// periodic clock (`None`): `fixed`, a uniform law and a two-piece law by
