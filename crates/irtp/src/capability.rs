@@ -282,17 +282,28 @@ pub fn noise_runs(solver: Solver, noise: NoiseClass) -> bool {
 /// Whether `solver` runs protocol `feature` with noise of class `noise`
 /// (exactly, or with its stated discretisation error).
 pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> bool {
-    use Solver as S;
-    // The N-state Fokker-Planck and backward equations run a noise model
-    // with the Poisson protocol only.
-    let n_state = matches!(
-        solver,
-        S::FpStationary | S::FpTransient | S::FpMsd | S::Backward | S::FptDistribution
-    ) || solver == S::MfptOptimize;
-    if noise != NoiseClass::Paper && n_state {
+    if noise != NoiseClass::Paper && !modifiers_with_noise(solver) {
         return false;
     }
     supports(solver, feature)
+}
+
+/// Whether `solver` runs the protocol features it runs ([`supports`])
+/// with a noise model too. The velocity methods run a noise model with
+/// Poisson resetting only (any target, noise kept or re-drawn): the
+/// N-state Fokker-Planck and backward equations, the exact samplers'
+/// N-state and Ornstein-Uhlenbeck loops and the Euler schemes' noise
+/// kernels; the search's methods run every protocol they run.
+pub fn modifiers_with_noise(solver: Solver) -> bool {
+    use Solver as S;
+    matches!(
+        solver,
+        S::SearchBackward
+            | S::SearchRenewal
+            | S::SearchExact
+            | S::SearchEuler
+            | S::SearchDistribution
+    )
 }
 
 /// Whether `solver` runs drag `drag` with noise of class `noise`: the

@@ -44,8 +44,8 @@ fn noise_cell(solver: Solver, noise: NoiseClass) -> String {
 }
 
 /// Whether `solver` runs, with a noise model, every feature it runs with
-/// the paper's noise.
-fn modifiers_with_noise(solver: Solver) -> String {
+/// the paper's noise ([`crate::capability::modifiers_with_noise`]).
+fn with_noise(solver: Solver) -> String {
     if !noise_runs(solver, NoiseClass::FiniteState) {
         return "—".into();
     }
@@ -82,7 +82,7 @@ pub fn markdown() -> String {
             .collect();
         cells.push(noise_cell(m, NoiseClass::FiniteState));
         cells.push(noise_cell(m, NoiseClass::Thermal));
-        cells.push(modifiers_with_noise(m));
+        cells.push(with_noise(m));
         s += &format!("| `{}` | {} |\n", m.command(), cells.join(" | "));
     }
     s
