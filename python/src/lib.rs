@@ -34,7 +34,9 @@ fn keyword(name: &str) -> String {
 /// named in a message read as keywords.
 fn to_pyerr(command: &str, e: irtp::Error) -> PyErr {
     match &e {
-        irtp::Error::InvalidParameter { .. } | irtp::Error::TooCostly { .. } => {
+        irtp::Error::InvalidParameter { .. }
+        | irtp::Error::Unsupported { .. }
+        | irtp::Error::TooCostly { .. } => {
             let msg = e.message_with(keyword);
             PyValueError::new_err(argv::flags_to_keywords::<Cli>(command, &msg))
         }

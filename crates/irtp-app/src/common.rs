@@ -44,12 +44,15 @@ pub struct NoiseArgs {
     pub temperature: Option<f64>,
 }
 
-/// Where a noise other than the paper's runs, from the core's list beside
-/// its support table ([`irtp::model::noise::support::RUNNERS`]).
-fn noise_runs_in() -> String {
+/// Where a noise other than the paper's runs: one line per class, from
+/// the core's table ([`irtp::capability::noise_runners`]).
+pub fn noise_runs_in() -> String {
+    use irtp::capability::{noise_runners, NoiseClass};
     format!(
-        "Runs in: {}. A search (--xt, --interval) runs it at temperature 0 by --method backward, exact and euler.",
-        irtp::model::noise::support::RUNNERS
+        "Runs in (docs/reference/support.md):\nT = 0: {};\nT > 0: {} (mfpt backward, \
+         distribution, optimize: drags linear, tanh, tan with T <= 1).",
+        noise_runners(NoiseClass::FiniteState),
+        noise_runners(NoiseClass::Thermal)
     )
 }
 

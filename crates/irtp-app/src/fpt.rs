@@ -283,18 +283,18 @@ impl DistributionArgs {
         )?;
         // A noise model the distribution does not run is refused by name
         // before tau (which the backward equations refuse for it) is needed.
-        if let Some(m) = problem.params().noise() {
-            irtp::model::noise::support::check(irtp::model::reset::Solver::FptDistribution, m)?;
-            if self.method == DistMethod::Backward {
-                mfpt::distribution::check_problem(&problem)?;
-            }
+        irtp::capability::check_noise(irtp::capability::Solver::FptDistribution, problem.params())?;
+        if problem.params().noise().is_some() && self.method == DistMethod::Backward {
+            mfpt::distribution::check_problem(&problem)?;
         }
         // tau sets the default t-max; a protocol the backward equations
         // refuse is an error of the backward method, and leaves the exact
         // one without a default.
         let tau = match backward::solve(&problem, &BackwardOptions::with_cells(1000)) {
             Ok(s) => s.tau,
-            Err(e @ Error::InvalidParameter { .. }) if self.method == DistMethod::Backward => {
+            Err(e @ (Error::InvalidParameter { .. } | Error::Unsupported { .. }))
+                if self.method == DistMethod::Backward =>
+            {
                 return Err(e)
             }
             Err(_) => f64::INFINITY,
@@ -407,6 +407,10 @@ impl DistributionArgs {
         // The histogram's halves are the ±Sigma starts for the paper's
         // noise; with a noise model (any finite-state noise at T = 0) two
         // independent halves of the particles started from π (Eq. (N47)).
+        irtp::capability::check_noise(
+            irtp::capability::Solver::FptDistributionExact,
+            problem.params(),
+        )?;
         let method = mfpt::Method::Exact(run);
         method.check(problem)?;
         let p = problem.params();

@@ -21,6 +21,22 @@ pub enum Error {
         /// Human-readable admissible range.
         allowed: String,
     },
+    /// A method does not run a combination of model and protocol (the
+    /// table of [`crate::capability`]): refused before any work, naming
+    /// the flag, the method and the methods that run it.
+    #[error("invalid {flag} = {value}: {feature} not run by {method}; runs in {runners}")]
+    Unsupported {
+        /// The parameter that asks for it, in snake_case (`noise`, `refractory`).
+        flag: &'static str,
+        /// Its value, formatted.
+        value: String,
+        /// What is refused, in words (`thermal noise (T > 0)`).
+        feature: &'static str,
+        /// The method that refuses it (`mfpt --method exact`).
+        method: String,
+        /// The methods that run it (`simulate, fp, mfpt (backward, euler)`).
+        runners: String,
+    },
     /// A result exceeds the f64 range (~1e308), e.g. a mean first-passage time
     /// under resetting so frequent that the target is practically never reached.
     #[error("numerical failure in {method}: {quantity} exceeds the f64 range (~1e308): {meaning}")]
@@ -111,6 +127,35 @@ impl Error {
         }
     }
 
+    /// Build an [`Error::Unsupported`]: `method` refuses `feature`, asked
+    /// for by `flag` = `value`; `runners` run it.
+    pub fn unsupported(
+        flag: &'static str,
+        value: impl std::fmt::Display,
+        feature: &'static str,
+        method: impl Into<String>,
+        runners: impl Into<String>,
+    ) -> Self {
+        Error::Unsupported {
+            flag,
+            value: echo(&short_number(value.to_string())),
+            feature,
+            method: method.into(),
+            runners: runners.into(),
+        }
+    }
+
+    /// The parameter a refusal names: the `name` of an
+    /// [`Error::InvalidParameter`], the `flag` of an [`Error::Unsupported`];
+    /// None for any other error.
+    pub fn parameter(&self) -> Option<&'static str> {
+        match self {
+            Error::InvalidParameter { name, .. } => Some(name),
+            Error::Unsupported { flag, .. } => Some(flag),
+            _ => None,
+        }
+    }
+
     /// True for a numerical failure of a method (exit code 4): no answer it
     /// could verify.
     pub fn is_numerical(&self) -> bool {
@@ -127,7 +172,7 @@ impl Error {
     pub fn is_input_error(&self) -> bool {
         matches!(
             self,
-            Error::InvalidParameter { .. } | Error::TooCostly { .. }
+            Error::InvalidParameter { .. } | Error::Unsupported { .. } | Error::TooCostly { .. }
         )
     }
 
@@ -144,6 +189,16 @@ impl Error {
                 "invalid {} = {value}: allowed {}",
                 rename(name),
                 rename_parameters(allowed, &rename)
+            ),
+            Error::Unsupported {
+                flag,
+                value,
+                feature,
+                method,
+                runners,
+            } => format!(
+                "invalid {} = {value}: {feature} not run by {method}; runs in {runners}",
+                rename(flag)
             ),
             Error::TooCostly {
                 unit,

@@ -18,7 +18,7 @@
 //!   [`Drag`] trait with the [`DragLaw`] registry and [`with_drag!`]
 //!   dispatch; noise kinds behind [`model::Noise`] with the
 //!   [`model::NoiseKind`] registry and [`with_noise!`] dispatch (which
-//!   method runs which: `model::noise::support`); resetting rules behind [`model::Reset`]; validated [`Params`]
+//!   method runs which: [`capability`]); resetting rules behind [`model::Reset`]; validated [`Params`]
 //!   and velocity bounds (Eqs. (8)-(10)).
 //! - [`sim`]: particle samplers (exact event-driven sampler; the paper's
 //!   Euler scheme, Eqs. (30)-(32)) and their mergeable observables.
@@ -43,6 +43,7 @@
 //! returns plain, serialisable result structs.
 
 pub mod analytic;
+pub mod capability;
 pub mod error;
 pub mod fp;
 pub mod memo;

@@ -299,7 +299,9 @@ fn the_defaults_help_prints_are_the_codes() {
 #[test]
 fn the_supported_combinations_in_help_are_the_support_tables() {
     let help = help(&["simulate".into()], "--help");
-    assert!(help.contains(noise_support::RUNNERS), "--noise: {help}");
+    for line in irtp_app::common::noise_runs_in().lines() {
+        assert!(help.contains(line), "--noise: no `{line}` in {help}");
+    }
     for f in [
         Feature::Position,
         Feature::RefractoryExp,
@@ -314,10 +316,11 @@ fn the_supported_combinations_in_help_are_the_support_tables() {
     // lets run one.
     let rpt: NoiseModel =
         NoiseModel::new("rpt:sigma=1,alpha=1,beta=2".parse().unwrap(), 0.0).unwrap();
+    let runners = irtp::capability::noise_runners(irtp::capability::NoiseClass::FiniteState);
     for s in Solver::ALL {
         if noise_support::supports(s, &rpt) {
-            let name = s.command().trim_end_matches("/scan");
-            assert!(noise_support::RUNNERS.contains(name), "{name}");
+            let (command, _) = s.parts();
+            assert!(runners.contains(command), "{command}");
         }
     }
     assert!(!help.contains("Only `analytic` runs"), "{help}");

@@ -11,6 +11,8 @@
 //! (c) SLURM scripts: a partition or time limit SLURM would not accept, or
 //!     a zero count, is refused naming its flag before --out is created.
 //! (d) An --out with a control character is refused naming --out.
+//! (e) Combinations a method does not run (`irtp::capability`): one line
+//!     under 200 characters naming the flag and the method, nothing written.
 
 use crate::common::{assert_rejected, irtp, json};
 use std::time::{Duration, Instant};
@@ -475,4 +477,168 @@ fn an_unresolvable_law_fails_fast_with_short_numbers() {
     assert_eq!(o.status.code(), Some(4), "{err}");
     assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
     assert!(err.contains("5.011087e206") && err.len() < 300, "{err}");
+}
+
+/// Combinations a method does not run (`irtp::capability`): each refused
+/// before any work, exit 2, one line under 200 characters naming the flag
+/// and the method that refuses it, nothing written.
+#[test]
+fn refused_combinations_are_one_short_line_naming_the_flag() {
+    const RPT: &str = "rpt:sigma=3,alpha=1,beta=2";
+    let fpt = ["--v0", "0", "--vt", "0.5"];
+    let search = [
+        "--xt",
+        "1",
+        "--v0",
+        "0",
+        "--reset-position",
+        "0",
+        "--rate",
+        "1",
+    ];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "mfpt",
+                "distribution",
+                "--method",
+                "exact",
+                "--noise",
+                RPT,
+                "--v0",
+                "0",
+                "--vt",
+                "1",
+            ],
+            "--noise",
+        ),
+        (
+            [
+                &["mfpt", "--method", "exact", "--temperature", "0.5"][..],
+                &fpt,
+            ]
+            .concat(),
+            "--temperature",
+        ),
+        (
+            [
+                &["mfpt", "--drag", "cubic", "--temperature", "0.5"][..],
+                &fpt,
+            ]
+            .concat(),
+            "--drag",
+        ),
+        (
+            [&["mfpt", "--drag", "tan", "--temperature", "2"][..], &fpt].concat(),
+            "--temperature",
+        ),
+        (
+            [
+                &[
+                    "mfpt",
+                    "optimize",
+                    "--drag",
+                    "cubic",
+                    "--noise",
+                    RPT,
+                    "--temperature",
+                    "0.5",
+                ][..],
+                &fpt,
+            ]
+            .concat(),
+            "--drag",
+        ),
+        (
+            [&["mfpt", "--reset-clock", "gamma:k=2,theta=1"][..], &fpt].concat(),
+            "--reset-clock",
+        ),
+        (
+            [
+                &[
+                    "mfpt",
+                    "distribution",
+                    "--noise",
+                    RPT,
+                    "--reset-position",
+                    "0",
+                    "--rate",
+                    "1",
+                ][..],
+                &fpt,
+            ]
+            .concat(),
+            "--reset-position",
+        ),
+        (
+            vec!["fp", "stationary", "--reset-period", "2"],
+            "--reset-period",
+        ),
+        (
+            vec![
+                "fp",
+                "stationary",
+                "--refractory",
+                "fixed:t=1",
+                "--rate",
+                "1",
+            ],
+            "--refractory",
+        ),
+        (
+            vec![
+                "fp",
+                "msd",
+                "--noise",
+                RPT,
+                "--rate",
+                "1",
+                "--reset-position",
+                "0",
+            ],
+            "--reset-position",
+        ),
+        (
+            vec!["analytic", "--noise", RPT, "--drag", "tan", "--rate", "1"],
+            "--noise",
+        ),
+        (
+            [
+                &["mfpt", "--method", "renewal", "--noise", RPT][..],
+                &search,
+            ]
+            .concat(),
+            "--noise",
+        ),
+        (
+            [
+                &["mfpt", "--method", "backward", "--refractory", "exp:mean=1"][..],
+                &search,
+            ]
+            .concat(),
+            "--refractory",
+        ),
+        (
+            [
+                &["mfpt", "--method", "euler", "--refractory", "fixed:t=1"][..],
+                &search,
+            ]
+            .concat(),
+            "--refractory",
+        ),
+        (
+            [&["mfpt", "distribution", "--noise", RPT][..], &search].concat(),
+            "--noise",
+        ),
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    for (i, (args, flag)) in cases.iter().enumerate() {
+        let dir = tmp.path().join(format!("o{i}")).join("out");
+        std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
+        let all = [&args[..], &["--out", dir.to_str().unwrap()][..]].concat();
+        let err = assert_rejected(&irtp(&all), flag, &dir);
+        let line = err.trim_end();
+        assert!(line.chars().count() < 200, "{all:?}: {line}");
+        assert!(line.contains(" not run by "), "{all:?}: {line}");
+    }
 }

@@ -205,7 +205,7 @@ fn distribution_runs_a_noise_model_and_writes_it() {
     ]
     .concat();
     let err = assert_rejected(&irtp(&args), "--drag", &refused);
-    assert!(err.contains("linear, tanh or tan"), "{err}");
+    assert!(err.contains("this drag with thermal noise"), "{err}");
 }
 
 /// `mfpt distribution` with thermal noise (Eq. (N49)): the paper's noise

@@ -189,7 +189,7 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             } else if search {
                 irtp::search::NOISE_RUNNERS
             } else {
-                "simulate and fp run any noise"
+                "simulate, fp"
             };
             assert!(err.contains(runners), "{args:?}: {err}");
         }

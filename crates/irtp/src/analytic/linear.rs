@@ -38,11 +38,11 @@ use crate::error::{Error, Result};
 use crate::model::reset::Solver;
 use crate::model::reset::{NoiseAtReset, Refractory};
 use crate::model::Reset;
-use crate::model::{DragLaw, Params};
+use crate::model::{Drag, Params};
 
 pub(super) fn require_linear(p: &Params) -> Result<()> {
     p.require(Solver::ClosedForm)?;
-    if p.drag() != DragLaw::Linear {
+    if !p.drag().newtonian() {
         return Err(Error::invalid(
             "drag",
             p.drag(),
@@ -193,6 +193,7 @@ pub fn position_moments(p: &Params) -> Result<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::DragLaw;
 
     fn lin(s: f64, l: f64, r: f64, vr: f64) -> Params {
         Params::new(DragLaw::Linear, s, l, r, vr).unwrap()

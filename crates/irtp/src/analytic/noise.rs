@@ -8,12 +8,10 @@
 
 use super::linear_noise::{LinearNoise, NoiseMoments};
 use super::telegraph_r0::TelegraphR0Density;
+use crate::capability::{noise_runners, NoiseClass};
 use crate::error::{Error, Result};
-use crate::model::noise::{
-    support::{blamed, RUNS_IT},
-    NoiseKind, NoiseModel,
-};
-use crate::model::{DragLaw, Params};
+use crate::model::noise::{support::blamed, NoiseKind, NoiseModel};
+use crate::model::{Drag, Params};
 
 /// What the closed forms give for one set of parameters.
 #[derive(Clone, Debug)]
@@ -58,12 +56,12 @@ pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
             format!("a point target, noise kept, with noise {}", noise.spec()),
         ));
     }
-    let moments = match p.drag() {
-        DragLaw::Linear => {
+    let moments = match p.drag().newtonian() {
+        true => {
             let v_r = p.point_target("the linear-drag noise moments")?;
             Some(LinearNoise::new(1.0, noise.clone(), p.rate(), v_r)?.moments()?)
         }
-        _ => None,
+        false => None,
     };
     let density = match noise.kind() {
         NoiseKind::Telegraph(t) if noise.temperature() == 0.0 && p.rate() == 0.0 => {
@@ -73,15 +71,17 @@ pub fn solve(p: &Params) -> Result<NoiseClosedForm> {
     };
     if moments.is_none() && density.is_none() {
         let (name, value) = blamed(noise);
-        return Err(Error::invalid(
+        let class = match noise.temperature() > 0.0 {
+            true => NoiseClass::Thermal,
+            false => NoiseClass::FiniteState,
+        };
+        let method = format!("analytic with drag {} at r = {}", p.drag(), p.rate());
+        return Err(crate::capability::fitted(
             name,
             value,
-            format!(
-                "a closed form (not drag {} at T = {}, r = {}); {RUNS_IT}",
-                p.drag(),
-                noise.temperature(),
-                p.rate()
-            ),
+            "a closed form of this noise",
+            &method,
+            noise_runners(class),
         ));
     }
     Ok(NoiseClosedForm {

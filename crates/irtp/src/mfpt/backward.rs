@@ -597,9 +597,7 @@ fn spread_correction(
 pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
     // A noise model the backward equations do not run is refused here,
     // for every caller (scans, default t-max estimates), by name.
-    if let Some(m) = problem.params().noise() {
-        crate::model::noise::support::check(crate::model::reset::Solver::Backward, m)?;
-    }
+    crate::capability::check_noise(crate::capability::Solver::Backward, problem.params())?;
     opts.validate()?;
     if problem.params().noise().is_some() {
         return super::nstate::profile(problem, opts.cells, super::nstate::BARRIER);

@@ -126,29 +126,15 @@ fn wrong_side(v0: f64, vt: f64, vr: f64) -> Error {
 }
 
 impl Problem {
-    /// Validate: a noise model some first-passage method runs (each method
-    /// refuses the others through `Params::require`), lambda > 0 for the
+    /// Validate: lambda > 0 for the
     /// paper's noise (else the - state never arrives), v_l < v_t < v_u
     /// (the ± state only approaches v_u / v_l asymptotically, so a target
     /// there is never reached), v_0 and v_r strictly on the same side of v_t
     /// (a reset must not jump across the target) and inside (v_l, v_u).
     pub fn new(params: Params, v0: f64, vt: f64) -> Result<Self> {
-        if let Some(m) = params.noise() {
-            // Each method refuses what it does not run (`Params::require`);
-            // a noise no first-passage method runs is refused here.
-            use crate::model::noise::support;
-            use crate::model::reset::Solver;
-            let methods = [
-                Solver::Backward,
-                Solver::MfptExact,
-                Solver::MfptEuler,
-                Solver::FptDistribution,
-                Solver::MfptOptimize,
-            ];
-            if !methods.iter().any(|&s| support::supports(s, m)) {
-                support::refuse("mfpt (first passage in velocity)", m)?;
-            }
-        }
+        // Each method refuses what it does not run (`Params::require`);
+        // every noise class runs in `mfpt --method backward` or `euler`
+        // (crate::capability::noise_runs).
         let v0 = finite("v0", v0)?;
         let vt = finite("vt", vt)?;
         let (vl, vu) = params.bounds();

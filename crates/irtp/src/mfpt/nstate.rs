@@ -126,38 +126,13 @@ enum Cond {
     Regular(usize),
 }
 
-/// Refuse what the N-state solver does not run: schedule modifiers, and
-/// with T > 0 a drag other than linear, tanh and tan (tan: T ≤ 1, the
-/// bound ±π/2 being unreachable only then).
-pub(super) fn admissible(p: &Problem, chain: &Chain) -> Result<()> {
-    let par = p.params();
-    if let Some(f) = par.schedule().features().first() {
-        return Err(Error::invalid(
-            f.flag(),
-            par.schedule().spec_of(*f),
-            "none with a noise model for the backward equations (Poisson resetting only)",
-        ));
-    }
-    let t = chain.temperature;
-    if t > 0.0 {
-        let name = par.drag().name();
-        if !matches!(name, "linear" | "tanh" | "tan") {
-            return Err(Error::invalid(
-                "drag",
-                name,
-                "linear, tanh or tan for the backward equations with --temperature > 0",
-            ));
-        }
-        if name == "tan" && !(t <= 1.0) {
-            return Err(Error::invalid(
-                "temperature",
-                t,
-                "temperature <= 1 with the tan drag for the backward equations (above 1 the \
-                 thermal particle reaches the bound ±π/2)",
-            ));
-        }
-    }
-    Ok(())
+/// Refuse what the N-state solver does not run, as
+/// [`crate::capability::check`] says for the backward equations: schedule
+/// modifiers with a noise model, and with T > 0 a drag without
+/// [`crate::model::Drag::thermal_backward`] up to T.
+/// (`_chain` is the problem's: its temperature is the noise model's.)
+pub(super) fn admissible(p: &Problem, _chain: &Chain) -> Result<()> {
+    crate::capability::check(crate::capability::Solver::Backward, p.params())
 }
 
 /// The truncation point of a thermal problem (canonical frame, Eq. (N33)):

@@ -1,10 +1,10 @@
 //! Model parameters, validated in one place.
 
 use super::drag::{Drag, DragLaw};
-use super::noise::{chain::Chain, support as noise_support, NoiseModel};
+use super::noise::{chain::Chain, NoiseModel};
 use super::reset::{
-    spec, support, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule,
-    Schedule, Solver, Target,
+    spec, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule, Schedule,
+    Solver, Target,
 };
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
@@ -396,32 +396,11 @@ impl Params {
         &self.schedule
     }
 
-    /// Refuse what `solver` does not run: every feature of the schedule
-    /// is looked up in [`support::supports`]; the first one missing is an
-    /// error naming its flag, the solver and the first command that runs it
-    /// (the whole list, [`support::runners`], is in `--help` of the flag).
-    /// A noise other than the paper's is looked up in
-    /// [`noise_support::check`] first.
+    /// Refuse what `solver` does not run of these parameters: the one
+    /// check of [`crate::capability::check`], called by every method
+    /// before any work.
     pub fn require(&self, solver: Solver) -> Result<()> {
-        if let Some(m) = self.noise {
-            noise_support::check(solver, m)?;
-        }
-        for f in self.schedule.features() {
-            if !support::supports(solver, f) {
-                let groups = support::runner_groups(f);
-                let first = groups.first().map_or("no method", String::as_str);
-                return Err(Error::invalid(
-                    f.flag(),
-                    self.schedule.spec_of(f),
-                    format!(
-                        "a protocol that {solver} runs ({} runs in {} and more: see --help)",
-                        f.describe(),
-                        first
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        crate::capability::check(solver, self)
     }
 
     /// The point target v_r, or an error naming `method` and the rule for a
@@ -628,6 +607,7 @@ impl Params {
 
 #[cfg(test)]
 mod tests {
+    use super::super::reset::support;
     use super::*;
 
     fn ok(drag: DragLaw, s: f64, l: f64, r: f64, vr: f64) -> bool {

@@ -1,81 +1,93 @@
-//! The support table of docs/reference/support.md, rendered from the two
-//! tables the methods consult before any work: [`super::reset::support::supports`]
-//! (method × protocol feature) and [`super::noise::support::supports`] (method ×
-//! noise model). A test compares the page with [`markdown`], so the page
-//! cannot say what the code does not do.
+//! The support table of docs/reference/support.md, rendered from
+//! [`crate::capability`], the table every method consults before any
+//! work. A test compares the page with [`markdown`], so the page cannot
+//! say what the code does not do.
 
-use super::noise::{self, NoiseModel};
-use super::reset::support::{self as reset_support, Feature, Solver};
+use super::drag::{Drag, DragLaw};
+use super::noise::support::CLOSED_FORMS;
+use crate::capability::{drag_runs, noise_runs, protocol_runs, Feature, NoiseClass, Solver};
 
-/// The protocol features, in the rows' order.
-const FEATURES: [Feature; 5] = [
-    Feature::Position,
-    Feature::RefractoryExp,
-    Feature::RefractoryFixed,
-    Feature::Periodic,
-    Feature::Renewal,
-];
-
-/// The noise rows: a label and the model asked for (each stands for its
-/// class: the table's noise arm answers by finite-state-ness and
-/// temperature, not by kind).
-fn noise_rows() -> Vec<(&'static str, NoiseModel)> {
-    let parse = |spec: &str, t: f64| NoiseModel::parse(spec, t).expect("a valid spec");
-    vec![
-        (
-            "`--noise` another finite-state noise (e.g. `rpt:…`), T = 0",
-            parse("rpt:sigma=1,alpha=1,beta=2", 0.0),
-        ),
-        (
-            "`--temperature T > 0` (thermal noise)",
-            parse("telegraph:sigma=1,lambda=0.5", 0.5),
-        ),
-    ]
-}
-
-fn cell(yes: bool) -> &'static str {
-    if yes {
-        "yes"
-    } else {
-        "—"
+fn cell(yes: bool) -> String {
+    match yes {
+        true => "yes".into(),
+        false => "—".into(),
     }
 }
 
-/// The table as Markdown: one column per [`Solver`] (in [`Solver::ALL`]'s
-/// order), one row per protocol feature, then one per class of noise
+/// The drags `solver` runs at T > 0, when not every law: `linear, tanh,
+/// tan (T ≤ 1)` ([`Drag::thermal_backward`]).
+fn thermal_drags(solver: Solver) -> Option<String> {
+    let laws = DragLaw::ALL;
+    if laws.iter().all(|d| drag_runs(solver, d, f64::MAX)) {
+        return None;
+    }
+    let named: Vec<String> = laws
+        .iter()
+        .filter(|d| drag_runs(solver, *d, f64::MIN_POSITIVE))
+        .map(|d| match d.thermal_backward() {
+            Some(t) if t.is_finite() => format!("{} (T ≤ {t})", d.name()),
+            _ => d.name().to_string(),
+        })
+        .collect();
+    Some(named.join(", "))
+}
+
+/// The cell of `solver` for noise of class `noise`.
+fn noise_cell(solver: Solver, noise: NoiseClass) -> String {
+    if solver == Solver::ClosedForm {
+        return CLOSED_FORMS.into();
+    }
+    match (noise_runs(solver, noise), noise) {
+        (true, NoiseClass::Thermal) => thermal_drags(solver).unwrap_or_else(|| "yes".into()),
+        (yes, _) => cell(yes),
+    }
+}
+
+/// Whether `solver` runs, with a noise model, every feature it runs with
+/// the paper's noise ([`crate::capability::modifiers_with_noise`]): "yes"
+/// for every class of noise it runs, "T = 0" for finite-state noise only.
+fn with_noise(solver: Solver) -> String {
+    if !noise_runs(solver, NoiseClass::FiniteState) {
+        return "—".into();
+    }
+    let same = |noise: NoiseClass| {
+        Feature::ALL.iter().all(|f| {
+            protocol_runs(solver, *f, noise) == protocol_runs(solver, *f, NoiseClass::Paper)
+        })
+    };
+    let thermal = noise_runs(solver, NoiseClass::Thermal);
+    match (same(NoiseClass::FiniteState), thermal && !same(NoiseClass::Thermal)) {
+        (true, false) => "yes".into(),
+        (true, true) => "T = 0".into(),
+        (false, _) => "Poisson only".into(),
+    }
+}
+
+/// The table as Markdown: one row per [`Solver`] (in [`Solver::ALL`]'s
+/// order), one column per protocol feature (with the paper's noise), then
+/// one per class of noise model and one for the protocol with a noise
 /// model. "yes": the method runs it (exactly, or with its stated
 /// discretisation error); "—": refused before any work, naming the flag.
 pub fn markdown() -> String {
-    let mut s = String::from("| | ");
-    let heads: Vec<String> = Solver::ALL
+    let mut heads: Vec<String> = Feature::ALL
         .iter()
-        .map(|m| format!("`{}`", m.command()))
+        .map(|f| format!("`--{}`: {}", f.flag().replace('_', "-"), f.describe()))
         .collect();
-    s += &heads.join(" | ");
-    s += " |\n|---|";
-    s += &"---|".repeat(Solver::ALL.len());
+    heads.push("`--noise` (e.g. `rpt:…`), T = 0".into());
+    heads.push("`--temperature T > 0`".into());
+    heads.push("modifiers with `--noise` or T > 0".into());
+    let mut s = format!("| method | {} |\n|---|", heads.join(" | "));
+    s += &"---|".repeat(heads.len());
     s.push('\n');
-    for f in FEATURES {
-        let cells: Vec<&str> = Solver::ALL
+    for m in Solver::ALL {
+        let mut cells: Vec<String> = Feature::ALL
             .iter()
-            .map(|m| cell(reset_support::supports(*m, f)))
+            .map(|f| cell(protocol_runs(m, *f, NoiseClass::Paper)))
             .collect();
-        s += &format!(
-            "| `--{}`: {} | {} |\n",
-            f.flag().replace('_', "-"),
-            f.describe(),
-            cells.join(" | ")
-        );
-    }
-    for (label, model) in noise_rows() {
-        let cells: Vec<&str> = Solver::ALL
-            .iter()
-            .map(|m| match (*m, noise::support::supports(*m, &model)) {
-                (Solver::ClosedForm, false) => noise::support::CLOSED_FORMS,
-                (_, yes) => cell(yes),
-            })
-            .collect();
-        s += &format!("| {label} | {} |\n", cells.join(" | "));
+        cells.push(noise_cell(m, NoiseClass::FiniteState));
+        cells.push(noise_cell(m, NoiseClass::Thermal));
+        cells.push(with_noise(m));
+        s += &format!("| `{}` | {} |\n", m.command(), cells.join(" | "));
     }
     s
 }

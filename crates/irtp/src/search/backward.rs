@@ -313,36 +313,13 @@ impl Setup {
     /// clock (the renewal route takes its waiting-time law separately);
     /// otherwise a Poisson clock only.
     pub fn new(problem: &SearchProblem, method: &str, renewal: bool) -> Result<Setup> {
-        super::noise_gate(problem, method)?;
+        // The noise and the protocol the method runs (crate::capability).
+        match super::solver_of(method) {
+            Some(solver) => crate::capability::check(solver, problem.params())?,
+            None => super::noise_gate(problem, method)?,
+        }
         let p = *problem.params();
         let s = p.schedule();
-        if let Some(r) = s.refractory {
-            return Err(Error::invalid(
-                "refractory",
-                r.spec(),
-                format!("no refractory period: {method} does not run one"),
-            ));
-        }
-        if let (Some(t), false) = (s.periodic, renewal) {
-            return Err(Error::invalid(
-                "reset_period",
-                t.period,
-                format!(
-                    "a Poisson clock for {method}; periodic resetting is run by \
-                     --method renewal and --method exact"
-                ),
-            ));
-        }
-        if let (Some(c), false) = (s.clock, renewal) {
-            return Err(Error::invalid(
-                "reset_clock",
-                c.spec(),
-                format!(
-                    "a Poisson clock for {method}; a renewal clock is run by --method exact \
-                     and --method renewal"
-                ),
-            ));
-        }
         // A random target enters through its node weights; meshes put a
         // node at its centre.
         let vr = p.reset_velocity();

@@ -143,7 +143,7 @@ pub struct SearchDistribution {
 /// responses) band solves per step on dt and dt/2.
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
-    let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    let setup = Setup::new(problem, super::DISTRIBUTION, false)?;
     let c = cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0);
     // The curves kept: S, f and their errors, on the steps and half steps.
     let curves = 8.0 * 12.0 * (2.0 * opts.steps as f64 + 1.0);
@@ -162,7 +162,7 @@ pub fn solve(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Sear
         (opts.mesh.max_work, opts.mesh.max_memory),
         mesh_drivers(problem, &["steps"]),
     )?;
-    let setup = Setup::new(problem, "mfpt distribution --xt", false)?;
+    let setup = Setup::new(problem, super::DISTRIBUTION, false)?;
     let plans = meshes(&setup, &opts.mesh);
     let meshes = build(&plans);
     let n = opts.steps;

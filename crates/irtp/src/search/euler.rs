@@ -164,7 +164,8 @@ impl SearchEuler {
     /// step chain exp(Q dt), dt inside the Euler stability limit with
     /// r dt < 1, a finite t_max ≥ dt, no refractory period.
     pub fn new(problem: &SearchProblem, dt: f64, t_max: f64) -> Result<Self> {
-        super::noise_gate(problem, super::EULER)?;
+        // The noise and the protocol it runs (no refractory period).
+        crate::capability::check(crate::capability::Solver::SearchEuler, problem.params())?;
         let p = problem.params();
         let dt = p.check_dt(dt)?;
         if p.noise().is_some() {
@@ -186,14 +187,6 @@ impl SearchEuler {
                 "t_max",
                 t_max,
                 format!("a finite t_max >= dt = {dt}"),
-            ));
-        }
-        if let Some(r) = p.schedule().refractory {
-            return Err(Error::invalid(
-                "refractory",
-                r.spec(),
-                "no refractory period: the search's Euler scheme does not run one \
-                 (--method exact does)",
             ));
         }
         Ok(SearchEuler {

@@ -438,38 +438,50 @@ impl SearchProblem {
     }
 }
 
-/// The search methods that run a noise model other than the paper's.
-pub const NOISE_RUNNERS: &str = "--method backward, exact and euler";
+/// The search methods that run a noise model other than the paper's at
+/// T = 0, as a refusal lists them ([`crate::capability::runners_where`]).
+pub const NOISE_RUNNERS: &str = "mfpt --xt (backward, exact, euler)";
 /// The backward solver's name in [`noise_gate`].
 pub(crate) const BACKWARD: &str = "--method backward";
 /// The exact sampler's name in [`noise_gate`].
 pub(crate) const EXACT: &str = "--method exact";
 /// The Euler scheme's name in [`noise_gate`].
 pub(crate) const EULER: &str = "--method euler";
+/// The renewal route's name in [`noise_gate`].
+pub(crate) const RENEWAL: &str = "--method renewal";
+/// The distribution's name in [`noise_gate`].
+pub(crate) const DISTRIBUTION: &str = "mfpt distribution --xt";
 /// The paper-noise constructor of the exact sampler, for [`noise_gate`].
 pub(crate) const PAPER_NOISE_ONLY: &str =
     "SearchSampler::new (SearchSampler::with_chain runs a noise)";
 
-/// The noise gate of the search, the one place deciding per method
-/// whether it runs the problem's noise model: the paper's noise (no
-/// model) runs everywhere; a noise model at T = 0 runs in the backward
-/// solver and the samplers ([`BACKWARD`], [`EXACT`], [`EULER`]); any other
-/// (a renewal or distribution solve, or thermal noise) is refused naming
-/// `noise` (or `temperature` for the paper's noise with T > 0) in one line
-/// listing [`NOISE_RUNNERS`].
+/// The noise gate of the search: the method's name mapped to its
+/// [`crate::capability::Solver`], whose table decides
+/// ([`crate::capability::check_noise`]: a noise model at T = 0 runs in the
+/// backward solver and the samplers, [`NOISE_RUNNERS`]); a routine of the
+/// paper's noise only ([`PAPER_NOISE_ONLY`]) refuses every noise model.
 pub(crate) fn noise_gate(problem: &SearchProblem, method: &str) -> Result<()> {
-    let Some(m) = problem.params().noise() else {
-        return Ok(());
-    };
-    if [BACKWARD, EXACT, EULER].contains(&method) && m.temperature() == 0.0 {
-        return Ok(());
+    match solver_of(method) {
+        Some(solver) => crate::capability::check_noise(solver, problem.params()),
+        None => match problem.params().noise() {
+            Some(m) => crate::model::noise::support::refuse(method, m),
+            None => Ok(()),
+        },
     }
-    let (name, value) = crate::model::noise::support::blamed(m);
-    Err(Error::invalid(
-        name,
-        value,
-        format!("the paper's noise for a search by {method}; {NOISE_RUNNERS} run any finite-state noise at T = 0"),
-    ))
+}
+
+/// The [`crate::capability::Solver`] of a search method's name (None for
+/// [`PAPER_NOISE_ONLY`]).
+pub(crate) fn solver_of(method: &str) -> Option<crate::capability::Solver> {
+    use crate::capability::Solver;
+    Some(match method {
+        BACKWARD => Solver::SearchBackward,
+        EXACT => Solver::SearchExact,
+        EULER => Solver::SearchEuler,
+        RENEWAL => Solver::SearchRenewal,
+        DISTRIBUTION => Solver::SearchDistribution,
+        _ => return None,
+    })
 }
 
 /// How a search problem is solved. The one dispatch point: a deterministic

@@ -385,7 +385,7 @@ pub fn estimate(
     opts: &RenewalOptions,
 ) -> Result<Cost> {
     opts.validate()?;
-    let setup = Setup::new(problem, "--method renewal", true)?;
+    let setup = Setup::new(problem, super::RENEWAL, true)?;
     if !finite_under(problem, waiting) {
         return Ok(Cost::NOTHING);
     }
@@ -431,7 +431,7 @@ pub fn solve_watched(
         return Ok(RenewalSolution::infinite());
     }
     let watch = Watch::new(progress, cost.work);
-    let setup = Setup::new(problem, "--method renewal", true)?;
+    let setup = Setup::new(problem, super::RENEWAL, true)?;
     let plans = with_check(&setup, meshes(&setup, waiting, opts), opts.refine);
     let meshes = build(&plans);
     let t_max = waiting.horizon(opts.tail);

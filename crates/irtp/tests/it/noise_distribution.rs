@@ -420,9 +420,9 @@ fn noise_distribution_thermal_refuses_by_name() {
             distribution(&prob, &[1.0], &options(200)).unwrap_err(),
             mfpt::distribution::check_problem(&prob).unwrap_err(),
         ] {
-            match e {
-                irtp::Error::InvalidParameter { name, .. } => assert_eq!(name, flag, "{drag}"),
-                e => panic!("{drag}: {e}"),
+            match e.parameter() {
+                Some(name) => assert_eq!(name, flag, "{drag}"),
+                None => panic!("{drag}: {e}"),
             }
         }
     }

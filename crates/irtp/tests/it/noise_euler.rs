@@ -279,10 +279,7 @@ fn noise_runs_are_identical_across_threads_and_shards() {
 /// refused by name; a schedule modifier runs (the scheduled loop).
 #[test]
 fn noise_step_bound_and_refusals_name_the_flag() {
-    let blamed = |e: irtp::Error| match e {
-        irtp::Error::InvalidParameter { name, .. } => name,
-        other => panic!("{other}"),
-    };
+    let blamed = |e: irtp::Error| e.parameter().unwrap_or_else(|| panic!("{e}"));
     let c = NOISE_CASES.iter().find(|c| c.name == "tan-asym").unwrap();
     let p = c.params();
     let max = irtp::sim::euler::noise::max_noise_dt(&p).unwrap();

@@ -191,7 +191,7 @@ fn exact_passage_with_noise_is_identical_across_threads_and_shards() {
 fn refused_name(p: &Params, v0: f64, vt: f64) -> &'static str {
     let pr = Problem::new(*p, v0, vt).unwrap();
     match mfpt::solve(&pr, &exact(10, 1), &NoProgress) {
-        Err(Error::InvalidParameter { name, .. }) => name,
+        Err(e) if e.parameter().is_some() => e.parameter().unwrap(),
         other => panic!("not refused by name: {other:?}"),
     }
 }

@@ -376,26 +376,14 @@ fn periodic_resetting_by_renewal() {
     assert!((a.tau - b.tau).abs() <= a.time_error && b.time_error < a.time_error);
     // The direct solver refuses a periodic clock, naming it.
     let e = solve(&problem, &BackwardOptions::default()).unwrap_err();
-    assert!(
-        matches!(
-            e,
-            Error::InvalidParameter {
-                name: "reset_period",
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert_eq!(e.parameter(), Some("reset_period"), "{e}");
 }
 
 /// Infinite means and protocols the search solvers do not run are refused,
 /// naming the parameter.
 #[test]
 fn refusals_name_the_parameter() {
-    let name = |e: Error| match e {
-        Error::InvalidParameter { name, .. } => name,
-        other => panic!("{other}"),
-    };
+    let name = |e: Error| e.parameter().unwrap_or_else(|| panic!("{e}"));
     let level = PositionTarget::Level(1.0);
     let velocity_only = Params::new(DragLaw::Linear, 1.0, 0.5, 1.0, 0.0).unwrap();
     let pr = SearchProblem::new(velocity_only, 0.0, 0.0, level).unwrap();

@@ -91,9 +91,9 @@ fn euler_search_refuses_by_name() {
         PositionTarget::Level(1.0),
     )
     .unwrap();
-    let name = |m: SearchMethod, pr: &SearchProblem| match m.check(pr).unwrap_err() {
-        irtp::Error::InvalidParameter { name, .. } => name,
-        e => panic!("{e}"),
+    let name = |m: SearchMethod, pr: &SearchProblem| {
+        let e = m.check(pr).unwrap_err();
+        e.parameter().unwrap_or_else(|| panic!("{e}"))
     };
     let euler = |dt, t_max| SearchMethod::Euler {
         dt,
@@ -303,7 +303,7 @@ fn backward_distribution_matches_the_sampler_and_the_mean() {
 #[test]
 fn backward_distribution_refuses_by_name() {
     let name = |pr: &SearchProblem| match search::distribution::solve(pr, &dist_opts(5.0, 50)) {
-        Err(irtp::Error::InvalidParameter { name, .. }) => name,
+        Err(e) if e.parameter().is_some() => e.parameter().unwrap(),
         r => panic!("{r:?}"),
     };
     let velocity_only = Params::new(DragLaw::Linear, 1.0, 1.0, 0.5, 0.0).unwrap();

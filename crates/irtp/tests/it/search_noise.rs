@@ -179,9 +179,9 @@ fn deterministic_methods_refuse_a_noise_model() {
         PositionTarget::Level(1.0),
     )
     .unwrap();
-    let named = |e: Error| match e {
-        Error::InvalidParameter { name, .. } => (name, e.to_string()),
-        other => panic!("not an invalid parameter: {other:?}"),
+    let named = |e: Error| match e.parameter() {
+        Some(name) => (name, e.to_string()),
+        None => panic!("not an invalid parameter: {e:?}"),
     };
     let refusals = [
         search::distribution::estimate(

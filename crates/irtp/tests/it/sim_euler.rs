@@ -234,10 +234,7 @@ fn plan_validation_and_rounding() {
     assert_eq!(obs.v[0].mean(), 0.0);
     assert_eq!(obs.x[1].mean(), 0.0); // x moves only from step 2 on (v_0 = 0)
 
-    let name = |e: irtp::Error| match e {
-        irtp::Error::InvalidParameter { name, .. } => name,
-        other => panic!("{other}"),
-    };
+    let name = |e: irtp::Error| e.parameter().unwrap_or_else(|| panic!("{e}"));
     let close = SimSpec::new(
         10,
         TimeGrid::from_times(vec![0.0, 0.0101, 0.0104, 1.0]).unwrap(),

@@ -28,6 +28,18 @@ impl Drag for Linear {
         "Newtonian, g = v"
     }
     /// g' = 1.
+    fn newtonian(&self) -> bool {
+        true
+    }
+    fn two_sided_flow(&self) -> bool {
+        true
+    }
+    fn explicit_thermal_step(&self) -> bool {
+        true
+    }
+    fn thermal_backward(&self) -> Option<f64> {
+        Some(f64::INFINITY)
+    }
     fn riccati(&self) -> Option<f64> {
         Some(0.0)
     }

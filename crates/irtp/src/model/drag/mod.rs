@@ -143,6 +143,32 @@ pub trait Drag: Clone + Send + Sync + fmt::Debug + 'static {
     fn static_friction(&self) -> f64 {
         0.0
     }
+    /// Capability: g(v) = v, Newtonian drag. The linear closed forms
+    /// (Eqs. (N3)-(N6)) and the exact sampler's Ornstein-Uhlenbeck
+    /// segments at T > 0 (Eqs. (N40)-(N45)) need it. Default: false.
+    fn newtonian(&self) -> bool {
+        false
+    }
+    /// Capability: the flow map is in closed form on the whole velocity
+    /// line (a fixed point approached from either side, at any distance),
+    /// which the exact sampler's N-state flows need off the paper's side
+    /// of v*. Default: false (tabulated flows, exact on one side only).
+    fn two_sided_flow(&self) -> bool {
+        false
+    }
+    /// Capability: g' <= 1 everywhere, so the explicit Euler-Maruyama step
+    /// (Eq. (N17)) is stable for dt < 1 at T > 0. Default: false (the
+    /// drift-implicit step).
+    fn explicit_thermal_step(&self) -> bool {
+        false
+    }
+    /// Capability: the highest temperature at which the N-state backward
+    /// equations with thermal noise (Eqs. (N30)-(N36)) run this law (their
+    /// truncated domain needs a barrier the thermal particle does not
+    /// cross); None: not at all. Default: None.
+    fn thermal_backward(&self) -> Option<f64> {
+        None
+    }
     /// The cost of one evaluation of g and g' relative to a shipped law's
     /// (about 50 ns): budgets multiply the work of methods that evaluate the
     /// law per cell, point or step by it. Default: 1.

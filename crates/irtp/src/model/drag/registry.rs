@@ -254,6 +254,18 @@ impl Drag for DragLaw {
     fn static_friction(&self) -> f64 {
         crate::with_drag!(self, |d| d.static_friction())
     }
+    fn newtonian(&self) -> bool {
+        crate::with_drag!(self, |d| d.newtonian())
+    }
+    fn two_sided_flow(&self) -> bool {
+        crate::with_drag!(self, |d| d.two_sided_flow())
+    }
+    fn explicit_thermal_step(&self) -> bool {
+        crate::with_drag!(self, |d| d.explicit_thermal_step())
+    }
+    fn thermal_backward(&self) -> Option<f64> {
+        crate::with_drag!(self, |d| d.thermal_backward())
+    }
     fn evaluation_weight(&self) -> f64 {
         crate::with_drag!(self, |d| d.evaluation_weight())
     }

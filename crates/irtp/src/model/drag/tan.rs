@@ -30,6 +30,13 @@ impl Drag for Tan {
         "shear-thickening, g = tan v"
     }
     /// tan' = 1 + tan².
+    fn two_sided_flow(&self) -> bool {
+        true
+    }
+    /// T <= 1: above it the thermal particle reaches the bound ±π/2.
+    fn thermal_backward(&self) -> Option<f64> {
+        Some(1.0)
+    }
     fn riccati(&self) -> Option<f64> {
         Some(1.0)
     }

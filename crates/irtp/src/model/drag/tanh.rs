@@ -30,6 +30,15 @@ impl Drag for Tanh {
         "shear-thinning, g = tanh v"
     }
     /// tanh' = 1 - tanh².
+    fn two_sided_flow(&self) -> bool {
+        true
+    }
+    fn explicit_thermal_step(&self) -> bool {
+        true
+    }
+    fn thermal_backward(&self) -> Option<f64> {
+        Some(f64::INFINITY)
+    }
     fn riccati(&self) -> Option<f64> {
         Some(-1.0)
     }
