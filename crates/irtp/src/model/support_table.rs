@@ -56,7 +56,10 @@ fn with_noise(solver: Solver) -> String {
         })
     };
     let thermal = noise_runs(solver, NoiseClass::Thermal);
-    match (same(NoiseClass::FiniteState), thermal && !same(NoiseClass::Thermal)) {
+    match (
+        same(NoiseClass::FiniteState),
+        thermal && !same(NoiseClass::Thermal),
+    ) {
         (true, false) => "yes".into(),
         (true, true) => "T = 0".into(),
         (false, _) => "Poisson only".into(),

@@ -59,7 +59,7 @@
 use super::{Observables, Part, SimSpec};
 use crate::error::{Error, Result};
 use crate::model::reset::{Reset, ResetRule, Schedule, Solver};
-use crate::model::{Drag, DragLaw, Params};
+use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use rand::Rng as _;
@@ -922,7 +922,7 @@ impl LinearChain {
                 format!("no {} in the exactly solvable Euler chain", f.describe()),
             ));
         }
-        if params.drag() != DragLaw::Linear {
+        if !params.drag().newtonian() {
             return Err(Error::invalid(
                 "drag",
                 params.drag(),
@@ -1006,6 +1006,7 @@ pub fn linear_chain_expectations(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::DragLaw;
     use crate::rng::stream;
     use crate::stats::MeanAcc;
 

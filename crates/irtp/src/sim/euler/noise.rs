@@ -30,7 +30,7 @@ use super::{euler_step, geometric_gap, EulerPlan, Events, Frame, NoiseSteps};
 use crate::error::{Error, Result};
 use crate::model::noise::chain::Chain;
 use crate::model::reset::Reset;
-use crate::model::{Drag, DragLaw, Params};
+use crate::model::{Drag, Params};
 use crate::numerics::root::solve_increasing;
 use crate::rng::Rng;
 use crate::sim::{Observables, SimSpec};
@@ -163,7 +163,7 @@ pub fn temperature(params: &Params) -> f64 {
 /// (an explicit step can jump past the bound) and the others grow
 /// superlinearly or jump.
 pub fn implicit_drift(params: &Params) -> bool {
-    temperature(params) > 0.0 && !matches!(params.drag(), DragLaw::Linear | DragLaw::Tanh)
+    temperature(params) > 0.0 && !params.drag().explicit_thermal_step()
 }
 
 /// The velocity step of the Euler schemes with a noise model: explicit
@@ -392,6 +392,7 @@ impl<D: Drag> NoiseSteps for NoiseKernel<'_, D> {
 mod tests {
     use super::*;
     use crate::model::noise::NoiseModel;
+    use crate::model::DragLaw;
 
     #[test]
     fn step_matrix_of_two_states_is_eq_32() {

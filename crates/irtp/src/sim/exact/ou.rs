@@ -25,7 +25,7 @@
 use crate::error::{Error, Result};
 use crate::model::noise::chain::Chain;
 use crate::model::reset::{Reset, ResetRule};
-use crate::model::{DragLaw, Params};
+use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use crate::sim::{Observables, Part, SimSpec};
@@ -146,7 +146,7 @@ impl OuSampler {
     pub(super) fn new(params: &Params, spec: &SimSpec) -> Result<Self> {
         let chain = params.chain()?;
         let t = chain.temperature;
-        if !matches!(params.drag(), DragLaw::Linear) {
+        if !params.drag().newtonian() {
             return Err(Error::invalid(
                 "temperature",
                 t,
@@ -381,6 +381,7 @@ pub(super) fn simulate(
 mod tests {
     use super::*;
     use crate::model::noise::NoiseModel;
+    use crate::model::DragLaw;
     use crate::sim::TimeGrid;
 
     /// F(h) by its series and closed form agree across h = 1, and match a

@@ -42,14 +42,6 @@ struct StatesSetup<F> {
     phi_edges: Vec<Vec<f64>>,
 }
 
-/// Whether the law's flow map is in closed form on the whole velocity line
-/// (tan, tanh, linear: a fixed point approached from either side, at any
-/// distance); the tabulated flows are exact only on the side of v* of the
-/// paper's noise, within 2 |v*|.
-fn two_sided(drag: DragLaw) -> bool {
-    matches!(drag, DragLaw::Tan | DragLaw::Tanh | DragLaw::Linear)
-}
-
 /// Where a level's fixed point v* = g⁻¹(a) sits in the velocity interval.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum LevelKind {
@@ -87,7 +79,7 @@ pub(crate) fn level_kind<D: Drag>(
     if (a > 0.0 && vs == hi && lo >= -vs) || (a < 0.0 && vs == lo && hi <= -vs) {
         return Ok(LevelKind::Edge);
     }
-    if two_sided(law) {
+    if law.two_sided_flow() {
         return Ok(LevelKind::Interior);
     }
     Err(Error::invalid(
