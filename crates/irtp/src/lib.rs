@@ -43,7 +43,7 @@
 //! returns plain, serialisable result structs.
 
 pub mod analytic;
-pub mod capability;
+pub use model::capability;
 pub mod error;
 pub mod fp;
 pub mod memo;

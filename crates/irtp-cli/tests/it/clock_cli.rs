@@ -122,7 +122,10 @@ fn bad_clocks_exit_2_naming_the_flag() {
         dir.to_str().unwrap(),
     ]);
     let err = assert_rejected(&out, "--reset-clock", &dir);
-    assert!(err.contains("simulate (exact, euler)"), "{err}");
+    assert!(
+        err.contains("runs in simulate, mfpt (exact, euler)"),
+        "{err}"
+    );
 }
 
 /// `mfpt optimize --xt L --reset-clock SPEC`: the best mean waiting time of

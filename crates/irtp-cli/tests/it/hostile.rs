@@ -505,12 +505,14 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
                 "exact",
                 "--noise",
                 RPT,
+                "--temperature",
+                "0.5",
                 "--v0",
                 "0",
                 "--vt",
                 "1",
             ],
-            "--noise",
+            "--temperature",
         ),
         (
             [

@@ -132,7 +132,7 @@ fn exact_distribution_with_a_noise_model_refuses_thermal_noise_in_one_line() {
     );
     let err = assert_rejected(&out, "--temperature", &dir);
     assert!(
-        err.len() < 200 && err.contains("simulate and fp run any noise"),
+        err.len() < 200 && err.contains("runs in mfpt distribution (backward), simulate, fp"),
         "{err}"
     );
     let dir = tmp.path().join("periodic");

@@ -18,13 +18,13 @@
 //! its end are skipped. With a finite-state noise the chain runs on alone
 //! during the period (its own holding times and jumps).
 //!
-//! One kernel runs every noise ([`walk`], [`walk_scheduled`]), generic over
-//! the noise state space ([`NoiseSpace`]): the paper's noise
+//! One kernel runs every noise (`walk`, `walk_scheduled`), generic over
+//! the noise state space (`NoiseSpace`): the paper's noise
 //! ([`FirstPassage`], two states, its random draws those of the two-state
 //! sampler bit for bit) and any finite-state noise at T = 0 (the chain of
 //! the `states` submodule, Eqs. (N46)-(N48), its particles started in a
 //! state drawn from π); the noise is dispatched once, at the entry
-//! ([`units`]).
+//! (`units`).
 
 use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;

@@ -2,6 +2,7 @@
 //! "Noise kinds"), parameters and velocity bounds (Eqs. (5)-(10)).
 
 pub mod atoms;
+pub mod capability;
 pub mod drag;
 pub mod keys;
 pub mod noise;

@@ -11,7 +11,6 @@
 use irtp::mfpt::control;
 use irtp::mfpt::{self, backward, BackwardOptions, Method, ParticleOptions, Problem};
 use irtp::parallel::NoProgress;
-use irtp::Error;
 use irtp_testkit::noises::{athermal, NoiseCase, NOISE_CASES};
 use irtp_testkit::stats::bonferroni_z;
 
@@ -81,7 +80,7 @@ fn the_controlled_run_refuses_thermal_noise_by_name() {
     let c = NOISE_CASES.iter().find(|c| c.thermal()).unwrap();
     let [p, _] = problems(c);
     match control::run(&p, (10, 1, f64::INFINITY), 64, 400, &NoProgress) {
-        Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "temperature"),
+        Err(e) => assert_eq!(e.parameter(), Some("temperature"), "{e}"),
         other => panic!("{other:?}"),
     }
 }

@@ -13,7 +13,7 @@ use irtp::mfpt::{self, BackwardOptions, FptSummary, Method, ParticleOptions, Pro
 use irtp::model::noise::NoiseModel;
 use irtp::model::reset::{Periodic, Schedule};
 use irtp::parallel::NoProgress;
-use irtp::{DragLaw, Error, Params};
+use irtp::{DragLaw, Params};
 use irtp_testkit::noises::{athermal, NoiseCase, NOISE_CASES, PAPER_AS_STATES};
 use irtp_testkit::stats::bonferroni_z;
 
@@ -230,7 +230,7 @@ fn refusals_name_their_flag() {
     let p = Params::with_noise(DragLaw::Tan, thermal, 0.5, 0.0).unwrap();
     let pr = Problem::new(p, 0.0, 0.3).unwrap();
     match mfpt::control::run(&pr, (10, 1, f64::INFINITY), 64, 400, &NoProgress) {
-        Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "temperature"),
+        Err(e) => assert_eq!(e.parameter(), Some("temperature"), "{e}"),
         other => panic!("control variate with thermal noise: {other:?}"),
     }
 }
