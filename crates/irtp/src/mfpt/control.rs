@@ -87,6 +87,20 @@ struct Space<'a, F, R> {
     reset: &'a R,
 }
 
+/// Refuse a periodic, renewal or refractory schedule: the compensator
+/// of the control variate is that of a Poisson reset clock.
+fn poisson_clock<N: NoiseSpace>(fpt: &N) -> Result<()> {
+    let (schedule, refractory) = fpt.schedule();
+    if schedule.scheduled_clock() || refractory.is_some() {
+        return Err(Error::invalid(
+            "reset",
+            "periodic, renewal or refractory",
+            "a Poisson reset clock for the passage-time control variate",
+        ));
+    }
+    Ok(())
+}
+
 impl PassageControl {
     /// Tables for `fpt` (the sampler of the canonical problem on [vl, vt])
     /// with u(v, plus) = `u(v, plus)` at the midpoints of `cells` uniform
@@ -98,14 +112,8 @@ impl PassageControl {
         cells: usize,
         u: impl Fn(f64, bool) -> f64,
     ) -> Result<Self> {
-        let (lambda, r, reset, scheduled) = fpt.rates();
-        if scheduled {
-            return Err(Error::invalid(
-                "reset",
-                "periodic, renewal or refractory",
-                "a Poisson reset clock for the passage-time control variate",
-            ));
-        }
+        poisson_clock(fpt)?;
+        let (lambda, r, reset) = fpt.rates();
         // The + flow rises through every cell, the - flow falls to v_l.
         let space = Space {
             flows: fpt.flows(),
@@ -129,14 +137,7 @@ impl PassageControl {
         cells: usize,
         u: impl Fn(f64, usize) -> f64,
     ) -> Result<Self> {
-        let (schedule, refractory) = fpt.schedule();
-        if schedule.scheduled_clock() || refractory.is_some() {
-            return Err(Error::invalid(
-                "reset",
-                "periodic, renewal or refractory",
-                "a Poisson reset clock for the passage-time control variate",
-            ));
-        }
+        poisson_clock(fpt)?;
         let (flows, stars, chain, reset) = fpt.parts();
         let space = Space {
             flows,

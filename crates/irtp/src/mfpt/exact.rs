@@ -119,11 +119,9 @@ impl<F: FlowMap> FirstPassage<F> {
         &self.flows
     }
 
-    /// (lambda, r, the resetting rule, whether a periodic, renewal or
-    /// refractory schedule runs).
-    pub(super) fn rates(&self) -> (f64, f64, &ResetRule, bool) {
-        let scheduled = self.schedule.scheduled_clock() || self.refractory.is_some();
-        (self.lambda, self.rate, &self.reset, scheduled)
+    /// (lambda, r, the resetting rule).
+    pub(super) fn rates(&self) -> (f64, f64, &ResetRule) {
+        (self.lambda, self.rate, &self.reset)
     }
 
     /// One upward first passage, as [`first_passage`].
