@@ -313,13 +313,18 @@ pub fn modifiers_with_noise(solver: Solver, noise: NoiseClass) -> bool {
     }
 }
 
-/// Whether `solver` runs drag `drag` with noise of class `noise`: the
-/// N-state backward equations at T > 0 need [`Drag::thermal_backward`]
-/// at least `temperature`; every other method runs every drag (an engine
-/// may still refuse a case for a numerical reason).
+/// Whether `solver` runs drag `drag` at temperature `temperature`: at
+/// T > 0 the N-state backward equations need [`Drag::thermal_backward`]
+/// at least `temperature`, and the exact sampler's Ornstein-Uhlenbeck
+/// segments (Eqs. (N40)-(N45)) need [`Drag::newtonian`]; every other
+/// method runs every drag (an engine may still refuse a case for a
+/// numerical reason).
 pub fn drag_runs(solver: Solver, drag: &impl Drag, temperature: f64) -> bool {
     if temperature > 0.0 && solver.velocity_backward() {
         return drag.thermal_backward().is_some_and(|t| temperature <= t);
+    }
+    if temperature > 0.0 && solver == Solver::Exact {
+        return drag.newtonian();
     }
     true
 }
@@ -400,7 +405,8 @@ pub fn check(solver: Solver, params: &Params) -> Result<()> {
         if !protocol_runs(solver, f, noise) {
             let feature = match noise {
                 NoiseClass::Paper => f.describe(),
-                _ => "this protocol with a noise model",
+                NoiseClass::FiniteState => "this protocol with a noise model",
+                NoiseClass::Thermal => "this protocol with thermal noise",
             };
             return Err(unsupported(
                 solver,
@@ -424,15 +430,21 @@ pub fn check_noise(solver: Solver, params: &Params) -> Result<()> {
     check_model(solver, m)?;
     let (drag, t) = (params.drag(), m.temperature());
     if !drag_runs(solver, &drag, t) {
-        // A law the method never runs at T > 0 is blamed on `drag`; one
-        // it runs at a lower temperature on `temperature`.
+        // A law the backward equations never run at T > 0 is blamed on
+        // `drag`; one they run at a lower temperature, and any law but
+        // linear in the exact sampler, on `temperature`.
         let class = NoiseClass::of(params);
-        let (flag, value, feature) = match drag.thermal_backward() {
-            None => ("drag", drag.to_string(), "this drag with thermal noise"),
-            Some(_) => (
+        let (flag, value, feature) = match (solver.velocity_backward(), drag.thermal_backward()) {
+            (true, None) => ("drag", drag.to_string(), "this drag with thermal noise"),
+            (true, Some(_)) => (
                 "temperature",
                 t.to_string(),
                 "this drag at this temperature",
+            ),
+            (false, _) => (
+                "temperature",
+                t.to_string(),
+                "thermal noise with a drag other than linear",
             ),
         };
         return Err(unsupported(solver, flag, value, feature, |s| {

@@ -193,8 +193,8 @@ fn thermal_runs_are_bit_identical_for_threads_and_units() {
 }
 
 /// Every thermal case runs or is refused: linear drag runs (occupation
-/// summing to 1), any other drag is refused naming `temperature` and
-/// `--method euler`.
+/// summing to 1), any other drag is refused by the capability module
+/// naming `temperature` and `simulate (euler)` among the methods that run it.
 #[test]
 fn other_drags_at_positive_temperature_are_refused_by_name() {
     let spec = SimSpec::new(20, TimeGrid::linear(2.0, 2).unwrap(), 0.5, 10, 3).unwrap();
@@ -209,12 +209,12 @@ fn other_drags_at_positive_temperature_are_refused_by_name() {
             }
             Err(e) => {
                 let msg = e.to_string();
-                let Error::InvalidParameter { name, .. } = e else {
+                let Error::Unsupported { flag, runners, .. } = e else {
                     panic!("{}: {msg}", c.name)
                 };
                 assert!(!c.linear(), "{}: {msg}", c.name);
-                assert_eq!(name, "temperature", "{}: {msg}", c.name);
-                assert!(msg.contains("--method euler"), "{msg}");
+                assert_eq!(flag, "temperature", "{}: {msg}", c.name);
+                assert!(runners.contains("simulate (euler)"), "{msg}");
             }
         }
     }
@@ -225,8 +225,8 @@ fn other_drags_at_positive_temperature_are_refused_by_name() {
     assert!(
         matches!(
             e,
-            Error::InvalidParameter {
-                name: "temperature",
+            Error::Unsupported {
+                flag: "temperature",
                 ..
             }
         ),

@@ -22,10 +22,10 @@
 //! the mean of the path integral it replaces, and the particles stay
 //! independent, so the across-particle standard errors hold as they are.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::model::noise::chain::Chain;
 use crate::model::reset::{Reset, ResetRule};
-use crate::model::{Drag, Params};
+use crate::model::Params;
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use crate::sim::{Observables, Part, SimSpec};
@@ -140,31 +140,12 @@ struct OuLane {
 }
 
 impl OuSampler {
-    /// The sampler of `params` (a noise model at T > 0): refuses a drag
-    /// other than linear naming `temperature`, and the schedule's modifiers
-    /// naming their flags.
+    /// The sampler of `params` (a noise model at T > 0, linear drag:
+    /// [`crate::capability::drag_runs`] admits no other, and no schedule
+    /// modifier, before any work).
     pub(super) fn new(params: &Params, spec: &SimSpec) -> Result<Self> {
         let chain = params.chain()?;
         let t = chain.temperature;
-        if !params.drag().newtonian() {
-            return Err(Error::invalid(
-                "temperature",
-                t,
-                format!(
-                    "0 for the exact sampler with drag {} (its exact Ornstein-Uhlenbeck segments \
-                     at T > 0 are built for linear drag only); --method euler runs it",
-                    params.drag()
-                ),
-            ));
-        }
-        if let Some(f) = params.schedule().features().into_iter().next() {
-            return Err(Error::invalid(
-                f.flag(),
-                params.schedule().spec_of(f),
-                "unset with thermal noise (temperature > 0) for the exact sampler; it runs the \
-                 schedule modifiers with any noise at temperature 0",
-            ));
-        }
         // The histogram's range, as Observables::new has it.
         let (lo, hi) = crate::sim::histogram_range(params);
         let b = spec.bins;
