@@ -18,7 +18,10 @@ pub enum Noise {
     /// The paper's telegraph noise ±Sigma flipping at rate lambda.
     Paper { sigma: f64, lambda: f64 },
     /// A noise spec (`rpt:..`, `telegraph:..`, `none`) at temperature T.
-    Model { spec: &'static str, temperature: f64 },
+    Model {
+        spec: &'static str,
+        temperature: f64,
+    },
 }
 
 /// The reset target (the rule's velocity law).
@@ -389,8 +392,8 @@ pub const PROTOCOL_CASES: [ProtocolCase; 16] = [
             refractory: Some("fixed:t=0.2"),
             ..NONE
         },
-        // v_u = atanh 0.6.
-        passage(0.693_147_180_559_945_3),
+        // v_u = atanh 0.6 = ln 2.
+        passage(std::f64::consts::LN_2),
     ),
     case(
         "tan-rpt-periodic-passage",
@@ -432,7 +435,7 @@ pub const PROTOCOL_CASES: [ProtocolCase; 16] = [
         Quantity::Search {
             x0: 0.0,
             v0: 0.0,
-            target: PositionTarget::Level(0.8),
+            target: PositionTarget::Interval(-0.6, 0.5),
         },
     )
     .goal(Goal::Point(0.0), false),
