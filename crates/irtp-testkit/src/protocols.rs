@@ -248,7 +248,7 @@ const TAN_VU: f64 = std::f64::consts::FRAC_PI_4;
 /// The suite: stationary moments, transient moments under periodic
 /// resetting, the velocity's mean first passage and the search, each under
 /// modifiers and noises the methods run differently.
-pub const PROTOCOL_CASES: [ProtocolCase; 16] = [
+pub const PROTOCOL_CASES: [ProtocolCase; 17] = [
     case(
         "tan-refr-exp-deff",
         "tan",
@@ -410,6 +410,19 @@ pub const PROTOCOL_CASES: [ProtocolCase; 16] = [
          in irtp-app)",
     ),
     case(
+        "tan-thermal-refr-exp-passage",
+        "tan",
+        model("telegraph:sigma=1,lambda=0.5", 0.2),
+        1.5,
+        refractory("exp:mean=0.3"),
+        passage(TAN_VU),
+    )
+    .single(
+        "thermal noise with a schedule modifier: no velocity passage runs it (the N-state \
+         backward equations and mfpt --method euler's noise kernel run Poisson resetting only, \
+         the exact samplers T = 0 only)",
+    ),
+    case(
         "linear-search-poisson",
         "linear",
         PAPER,
@@ -518,7 +531,9 @@ mod tests {
             ];
             let want = n.iter().filter(|b| **b).count();
             assert_eq!(p.schedule().features().len(), want, "{}", c.name);
-            if let Quantity::Passage { v0, vt } = c.quantity {
+            // At T > 0 the velocity is unbounded: the passage is the
+            // telegraph's.
+            if let (Quantity::Passage { v0, vt }, 0.0) = (c.quantity, c.temperature()) {
                 let vu = p.v_upper();
                 assert!((v0 - PASSAGE.0 * vu).abs() < 1e-12, "{}", c.name);
                 assert!((vt - PASSAGE.1 * vu).abs() < 1e-12, "{}", c.name);
