@@ -531,22 +531,30 @@ fn protocol_passages_agree_slow_tier() {
     });
 }
 
-/// The capability module admits `fp transient` for periodic resetting
-/// with an exponential refractory period (each feature alone is in its
-/// table), and `fp transient` refuses the pair as an invalid parameter:
-/// the table and the method disagree ([`KNOWN_DEFECTS`]).
+/// The capability module admits `fp transient` and `analytic`'s closed
+/// forms for periodic resetting with an exponential refractory period
+/// (each feature alone is in their rows of the table), and both refuse
+/// the pair as an invalid parameter (`--refractory`), not as
+/// `Error::Unsupported`: the table and the methods disagree
+/// ([`KNOWN_DEFECTS`]; the closed form on the case's linear twin).
 #[test]
-#[ignore = "known defect: capability::check admits fp transient for --reset-period with --refractory exp:.., fp transient refuses the pair"]
-fn known_defect_fp_transient_periodic_refractory() {
+#[ignore = "known defect: capability::check admits fp transient and analytic for --reset-period with --refractory exp:.., both refuse the pair"]
+fn known_defect_periodic_exp_refractory_admitted_and_refused() {
     let (name, solver, _) = KNOWN_DEFECTS[0];
     let c = PROTOCOL_CASES.iter().find(|c| c.name == name).unwrap();
     let p = c.params();
+    let linear = Params::new(irtp::DragLaw::Linear, 1.0, 0.5, 0.0, 0.1)
+        .and_then(|l| l.with_schedule(*p.schedule()))
+        .unwrap();
     assert!(
         check(solver, &p).is_ok(),
         "{name}: the table refuses it now"
     );
+    assert!(check(Solver::ClosedForm, &linear).is_ok());
+    let closed = linear_moments::moments(&linear, &[0.5]).map(drop);
     let mut t = Table::new();
     deterministic_transient(c, &mut t, &[solver]);
+    closed.unwrap_or_else(|e| panic!("linear twin of {name}: analytic: {e}"));
 }
 
 /// Every case has at least two methods (references included) for its
