@@ -263,14 +263,18 @@ pub const PROTOCOL_CASES: [ProtocolCase; 17] = [
     )
     .goal(Goal::Point(0.0), false),
     case(
-        "linear-refr-exp-gauss-redrawn",
+        "linear-refr-exp-gauss-redrawn-deff",
         "linear",
         PAPER,
         1.0,
         refractory("exp:mean=0.5"),
-        STATIONARY,
+        Quantity::Stationary {
+            t_max: 40.0,
+            burn_in: 10.0,
+            d_eff: true,
+        },
     )
-    .goal(Goal::Gauss(0.1, 0.2), true)
+    .goal(Goal::Gauss(0.0, 0.3), true)
     .fast(),
     case(
         "linear-position",
