@@ -4,12 +4,14 @@
 //! the linear-drag cases with closed-form answers, [`linear_protocols`] the
 //! linear-drag closed forms of the reset-protocol modifiers, [`spectral`] an
 //! independent spectral reference, [`stats`] the tolerances of statistical
-//! tests. Each test binary uses a subset.
+//! tests, [`noises`] the noise models and [`protocols`] the reset protocols of
+//! their cross-method suites. Each test binary uses a subset.
 #![allow(dead_code)]
 
 pub mod laws;
 pub mod linear_protocols;
 pub mod models;
 pub mod noises;
+pub mod protocols;
 pub mod spectral;
 pub mod stats;
