@@ -396,12 +396,27 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
     }
 }
 
+/// Whether `solver` runs the protocol features `features` together, each
+/// of which it runs alone ([`protocol_runs`]). Periodic resetting with an
+/// exponential refractory period is Markov (the resets come at the
+/// multiples of T, skipped by a particle still held), but the
+/// time-dependent Fokker-Planck solver and the linear closed forms reset
+/// the whole density at every multiple of T: neither keeps the held mass
+/// apart at a periodic reset, so neither runs the pair.
+pub fn combination_runs(solver: Solver, features: &[Feature]) -> bool {
+    let periodic_hold =
+        features.contains(&Feature::Periodic) && features.contains(&Feature::RefractoryExp);
+    !(periodic_hold && matches!(solver, Solver::FpTransient | Solver::ClosedForm))
+}
+
 /// Refuse what `solver` does not run of `params`: its noise class
-/// ([`check_noise`]), then each protocol feature ([`protocol_runs`]).
+/// ([`check_noise`]), then each protocol feature ([`protocol_runs`]), then
+/// their combination ([`combination_runs`]).
 pub fn check(solver: Solver, params: &Params) -> Result<()> {
     check_noise(solver, params)?;
     let noise = NoiseClass::of(params);
-    for f in params.schedule().features() {
+    let features = params.schedule().features();
+    for &f in &features {
         if !protocol_runs(solver, f, noise) {
             let feature = match noise {
                 NoiseClass::Paper => f.describe(),
@@ -416,6 +431,20 @@ pub fn check(solver: Solver, params: &Params) -> Result<()> {
                 |s| noise_runs(s, noise) && protocol_runs(s, f, noise),
             ));
         }
+    }
+    if !combination_runs(solver, &features) {
+        let f = Feature::RefractoryExp;
+        return Err(unsupported(
+            solver,
+            f.flag(),
+            params.schedule().spec_of(f),
+            "an exponential refractory period with periodic resetting",
+            |s| {
+                noise_runs(s, noise)
+                    && features.iter().all(|&g| protocol_runs(s, g, noise))
+                    && combination_runs(s, &features)
+            },
+        ));
     }
     Ok(())
 }

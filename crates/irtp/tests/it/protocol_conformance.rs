@@ -14,10 +14,8 @@
 //! can make ([`comparisons_bound`]), the fast and the slow tier alike.
 //!
 //! Fast tier: `cargo test -p irtp --test it protocol_conformance` (the
-//! cases marked fast); slow tier: the same with
-//! `-- --ignored --skip known_defect` (the others). A combination the
-//! table admits and its method refuses is a [`KNOWN_DEFECTS`] line, left
-//! out of the comparisons and run by its own `known_defect_` test.
+//! cases marked fast); slow tier: the same with `-- --ignored` (the
+//! others).
 
 use crate::common::protocols::{
     closed_form, transient_closed_form, ProtocolCase, Quantity, PROTOCOL_CASES,
@@ -81,26 +79,15 @@ fn computes(q: &Quantity, solver: Solver) -> bool {
     }
 }
 
-/// Combinations the capability module admits and the method refuses
-/// (case, method, the refusal): left out of the comparisons, each run by
-/// its own ignored test below until the table and the method agree.
-const KNOWN_DEFECTS: [(&str, Solver, &str); 1] = [(
-    "tan-periodic-refr-exp",
-    Solver::FpTransient,
-    "invalid refractory = exp:mean=0.2: allowed none together with --reset-period in fp transient",
-)];
-
 /// The methods of `c`: those that compute its quantity and that the
 /// capability module admits; the closed forms for linear drag only (the
-/// table admits `analytic` for any drag, its closed forms are Newtonian);
-/// not those of [`KNOWN_DEFECTS`].
+/// table admits `analytic` for any drag, its closed forms are Newtonian).
 fn admitted(c: &ProtocolCase) -> Vec<Solver> {
     let p = c.params();
     Solver::ALL
         .into_iter()
         .filter(|&s| computes(&c.quantity, s) && check(s, &p).is_ok())
         .filter(|&s| s != Solver::ClosedForm || c.linear())
-        .filter(|&s| !KNOWN_DEFECTS.iter().any(|d| d.0 == c.name && d.1 == s))
         .collect()
 }
 
@@ -531,30 +518,40 @@ fn protocol_passages_agree_slow_tier() {
     });
 }
 
-/// The capability module admits `fp transient` and `analytic`'s closed
-/// forms for periodic resetting with an exponential refractory period
-/// (each feature alone is in their rows of the table), and both refuse
-/// the pair as an invalid parameter (`--refractory`), not as
-/// `Error::Unsupported`: the table and the methods disagree
-/// ([`KNOWN_DEFECTS`]; the closed form on the case's linear twin).
+/// Periodic resetting with an exponential refractory period is refused
+/// before any work by `fp transient` and the closed forms (they reset the
+/// whole density at every multiple of T, held mass included), as
+/// `Error::Unsupported` naming `refractory` and a method that runs it; the
+/// particle samplers run it.
 #[test]
-#[ignore = "known defect: capability::check admits fp transient and analytic for --reset-period with --refractory exp:.., both refuse the pair"]
-fn known_defect_periodic_exp_refractory_admitted_and_refused() {
-    let (name, solver, _) = KNOWN_DEFECTS[0];
-    let c = PROTOCOL_CASES.iter().find(|c| c.name == name).unwrap();
+fn periodic_with_exp_refractory_is_refused_by_the_table_alone() {
+    let c = PROTOCOL_CASES
+        .iter()
+        .find(|c| c.name == "tan-periodic-refr-exp")
+        .unwrap();
     let p = c.params();
     let linear = Params::new(irtp::DragLaw::Linear, 1.0, 0.5, 0.0, 0.1)
         .and_then(|l| l.with_schedule(*p.schedule()))
         .unwrap();
-    assert!(
-        check(solver, &p).is_ok(),
-        "{name}: the table refuses it now"
-    );
-    assert!(check(Solver::ClosedForm, &linear).is_ok());
-    let closed = linear_moments::moments(&linear, &[0.5]).map(drop);
-    let mut t = Table::new();
-    deterministic_transient(c, &mut t, &[solver]);
-    closed.unwrap_or_else(|e| panic!("linear twin of {name}: analytic: {e}"));
+    for (solver, params) in [(Solver::FpTransient, &p), (Solver::ClosedForm, &linear)] {
+        match check(solver, params) {
+            Err(Error::Unsupported { flag, runners, .. }) => {
+                assert_eq!(flag, "refractory", "{solver}");
+                assert!(runners.contains("simulate"), "{solver}: {runners}");
+            }
+            other => panic!("{solver}: {other:?}"),
+        }
+    }
+    assert!(check(Solver::Exact, &p).is_ok() && check(Solver::Euler, &p).is_ok());
+    let opts = TransientOptions::default();
+    assert!(matches!(
+        transient(&p, &opts),
+        Err(Error::Unsupported { .. })
+    ));
+    assert!(matches!(
+        linear_moments::moments(&linear, &[0.5]),
+        Err(Error::Unsupported { .. })
+    ));
 }
 
 /// Every case has at least two methods (references included) for its
