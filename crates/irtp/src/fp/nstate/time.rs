@@ -4,13 +4,13 @@
 //! x, so every block has the same A), by the shared TR-BDF2 on the
 //! operator's shifted solve.
 
+use super::super::grid::MIN_CELLS;
 use super::super::moments::{MomentSeries, MsdOptions};
-use super::super::stationary::MIN_CELLS;
 use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE};
 use super::super::Mesh;
-use super::operator::NoiseOperator;
-use super::stationary::{operator, richardson};
+use super::operator::{operator, NoiseOperator};
 use crate::error::{Error, Result};
+use crate::fp::extrapolate::richardson;
 use crate::model::atoms::transient_atom_states;
 use crate::model::reset::Reset;
 use crate::model::{Params, VelocityAtom};
@@ -167,7 +167,6 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
             format!("a multiple of 4, at least {MIN_CELLS}, with a noise model"),
         ));
     }
-    super::refuse_protocols(p, "fp transient")?;
     let rec = if o.times.is_empty() {
         vec![o.t_max]
     } else {
@@ -388,7 +387,6 @@ fn snapshot(op: &NoiseOperator, t: f64, u: &[f64], atoms: Vec<VelocityAtom>) -> 
 /// [`crate::fp::msd`] for a noise model: the moment chain on `levels`
 /// nested meshes, Richardson-extrapolated in 1/N as the two-state chain.
 pub(crate) fn msd(p: &Params, o: &MsdOptions, times: &[f64]) -> Result<MomentSeries> {
-    super::refuse_protocols(p, "fp msd")?;
     let tol = Tolerances {
         rtol: o.rtol,
         atol: o.rtol,
