@@ -19,4 +19,4 @@ mod time;
 
 pub(crate) use operator::operator;
 pub use operator::NoiseOperator;
-pub(crate) use time::{msd, transient};
+pub(crate) use time::{msd_level, transient};

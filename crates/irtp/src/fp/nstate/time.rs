@@ -5,7 +5,7 @@
 //! operator's shifted solve.
 
 use super::super::grid::MIN_CELLS;
-use super::super::moments::{MomentSeries, MsdOptions};
+use super::super::moments::MsdOptions;
 use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE};
 use super::super::Mesh;
 use super::operator::{operator, NoiseOperator};
@@ -384,66 +384,24 @@ fn snapshot(op: &NoiseOperator, t: f64, u: &[f64], atoms: Vec<VelocityAtom>) -> 
     })
 }
 
-/// [`crate::fp::msd`] for a noise model: the moment chain on `levels`
-/// nested meshes, Richardson-extrapolated in 1/N as the two-state chain.
-pub(crate) fn msd(p: &Params, o: &MsdOptions, times: &[f64]) -> Result<MomentSeries> {
+/// One level of [`crate::fp::msd`] for a noise model: the moment chain
+/// on the mesh refined `refine` times, the rows of [`observe`] at `times`
+/// and the number of steps.
+pub(crate) fn msd_level(
+    p: &Params,
+    o: &MsdOptions,
+    times: &[f64],
+    refine: usize,
+) -> Result<(Vec<[f64; 6]>, usize)> {
     let tol = Tolerances {
         rtol: o.rtol,
         atol: o.rtol,
         ..Tolerances::default()
     };
-    let mut levels = Vec::with_capacity(o.levels);
-    let mut steps = 0;
-    for refine in 0..o.levels {
-        let mut rows = vec![[0.0; 6]; times.len()];
-        let (s, _) = run(p, o.cells, refine, 3, times, &tol, |k, v, u| {
-            rows[k] = observe(v, 3, u);
-            Ok(())
-        })?;
-        steps += s;
-        levels.push(rows);
-    }
-    let col = |k: usize, j: usize| {
-        super::super::moments::richardson(&levels.iter().map(|r| r[k][j]).collect::<Vec<_>>())
-    };
-    let mut out = MomentSeries {
-        t: times.to_vec(),
-        mass: Vec::new(),
-        v_mean: Vec::new(),
-        v2: Vec::new(),
-        x_mean: Vec::new(),
-        xv: Vec::new(),
-        x2: Vec::new(),
-        x2_err: Vec::new(),
-        alpha: Vec::new(),
-        cells_finest: o.cells << (o.levels - 1),
-        steps,
-    };
-    for (k, &t) in times.iter().enumerate() {
-        let at0 = t == 0.0;
-        let c = |j: usize| {
-            if at0 {
-                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0][j]
-            } else {
-                col(k, j)
-            }
-        };
-        out.mass.push(c(0));
-        out.v_mean.push(c(1));
-        out.v2.push(c(2));
-        out.x_mean.push(c(3));
-        out.xv.push(c(4));
-        out.x2.push(c(5));
-        out.x2_err.push(match levels.len() {
-            _ if at0 => 0.0,
-            1 => f64::INFINITY,
-            n => {
-                let coarser: Vec<f64> = levels[..n - 1].iter().map(|r| r[k][5]).collect();
-                (c(5) - super::super::moments::richardson(&coarser)).abs()
-            }
-        });
-        out.alpha
-            .push(if at0 { 4.0 } else { 2.0 * t * c(4) / c(5) });
-    }
-    Ok(out)
+    let mut rows = vec![[0.0; 6]; times.len()];
+    let (steps, _) = run(p, o.cells, refine, 3, times, &tol, |k, v, u| {
+        rows[k] = observe(v, 3, u);
+        Ok(())
+    })?;
+    Ok((rows, steps))
 }
