@@ -6,7 +6,9 @@
 
 use super::super::grid::MIN_CELLS;
 use super::super::moments::MsdOptions;
-use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE};
+use super::super::transient::{
+    merged, Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE,
+};
 use super::super::Mesh;
 use super::operator::{operator, NoiseOperator};
 use crate::error::{Error, Result};
@@ -141,14 +143,6 @@ pub(crate) fn run(
     Ok((stats.steps, b.op))
 }
 
-/// The sorted, de-duplicated union of the recording and snapshot times.
-fn all_times(a: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut t: Vec<f64> = a.iter().chain(b).copied().collect();
-    t.sort_by(f64::total_cmp);
-    t.dedup();
-    t
-}
-
 /// [`crate::fp::transient`] for a noise model: TR-BDF2 on the meshes of
 /// cells/4, cells/2, cells cells, `<v>` and `<v²>` extrapolated with
 /// their observed order (Eq. (N27)), snapshots of the fine mesh.
@@ -172,7 +166,7 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
     } else {
         o.times.clone()
     };
-    let times = all_times(&rec, &o.snapshot_times);
+    let times = merged(&rec, &o.snapshot_times);
     let tol = Tolerances {
         rtol: o.rtol,
         atol: o.atol,

@@ -283,10 +283,6 @@ impl StationarySpace for MeshSolution {
     const NEST_RULE: &'static str =
         "a multiple of 4 with a noise model (extrapolation uses cells/2 and cells/4)";
 
-    fn check(_: &Params) -> Result<()> {
-        Ok(())
-    }
-
     /// cells/4 refined 0, 1, 2 times (Eq. (N27)); or cells alone.
     fn meshes(o: &StationaryOptions) -> Vec<(usize, usize)> {
         if o.extrapolate {

@@ -146,7 +146,9 @@ pub(crate) trait StationarySpace: Sized {
     const NEST_RULE: &'static str;
     /// The space's numerical refusals (the capability module refuses the
     /// unsupported models at the entry).
-    fn check(p: &Params) -> Result<()>;
+    fn check(_: &Params) -> Result<()> {
+        Ok(())
+    }
     /// The meshes solved, as (cells, refinements), the fine mesh last.
     fn meshes(o: &StationaryOptions) -> Vec<(usize, usize)>;
     /// The stationary solution on the mesh of `n << refine` cells.
