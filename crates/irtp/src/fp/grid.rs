@@ -51,6 +51,11 @@ impl Mesh {
     }
 }
 
+/// Smallest number of cells accepted.
+pub const MIN_CELLS: usize = 16;
+/// Largest number of cells accepted (memory: ~100 bytes per cell).
+pub const MAX_CELLS: usize = 50_000_000;
+
 /// Width of the graded edge layer as a fraction of the half interval.
 pub(crate) const LAYER: f64 = 0.2;
 /// Largest grading exponent (a -> -1 would ask for q -> infinity).

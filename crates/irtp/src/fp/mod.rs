@@ -24,6 +24,7 @@
 //!   adaptive TR-BDF2 on the graded mesh ([`ForwardOperator`]), or the
 //!   paper's explicit scheme on a uniform mesh.
 
+mod extrapolate;
 mod grid;
 mod moments;
 mod nstate;
@@ -36,9 +37,12 @@ mod transient;
 
 pub use grid::Mesh;
 pub use moments::{moments as msd, MomentSeries, MsdOptions, MAX_LEVELS, MAX_MSD_CELLS};
-pub use nstate::{NoiseMoments, NoiseOperator, NoiseSummary};
+pub use nstate::NoiseOperator;
 pub use operator::ForwardOperator;
-pub use stationary::{stationary, Moments, Stationary, StationaryOptions, MAX_CELLS, MIN_CELLS};
+pub use stationary::{
+    stationary, Moments, NoiseMoments, NoiseSummary, Stationary, StationaryOptions, MAX_CELLS,
+    MIN_CELLS,
+};
 pub use transient::{
     plan as transient_plan, transient, transient_with_progress, trbdf2_step_bound,
     Plan as TransientPlan, Scheme, Snapshot, Transient, TransientOptions, DEFAULT_ATOL,

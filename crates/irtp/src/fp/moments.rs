@@ -343,17 +343,23 @@ pub fn moments(
 ) -> Result<MomentSeries> {
     params.require(Solver::FpMsd)?;
     let times = check(params, opts)?;
-    if params.noise().is_some() {
-        let out = super::nstate::msd(params, opts, &times)?;
-        verify(params, &out)?;
-        return Ok(out);
-    }
     let total = (opts.levels * times.len()) as u64;
     let mut done = 0;
+    // One mesh of the chain over the noise's state space: the paper's two
+    // states ([`ForwardOperator`]) or a finite-state chain
+    // ([`super::nstate`]); the extrapolation below serves both.
+    let chain = params.noise().is_some();
+    let mut level = |refine: usize| {
+        if chain {
+            super::nstate::msd_level(params, opts, &times, refine)
+        } else {
+            one_mesh(params, opts, &times, refine, progress, &mut done, total)
+        }
+    };
     let mut levels = Vec::with_capacity(opts.levels);
     let mut steps = 0;
     for refine in 0..opts.levels {
-        let (rows, s) = one_mesh(params, opts, &times, refine, progress, &mut done, total)?;
+        let (rows, s) = level(refine)?;
         levels.push(rows);
         steps += s;
     }

@@ -353,7 +353,7 @@ fn plan_on(params: &Params, opts: &TransientOptions, g: &Grid) -> Result<Plan> {
 }
 
 /// Sorted union of the recording and snapshot times.
-fn merged(times: &[f64], snaps: &[f64]) -> Vec<f64> {
+pub(crate) fn merged(times: &[f64], snaps: &[f64]) -> Vec<f64> {
     let mut all: Vec<f64> = times.iter().chain(snaps).copied().collect();
     all.sort_by(|a, b| a.total_cmp(b));
     all.dedup();

@@ -9,11 +9,12 @@
 //! off-diagonal entries are ≥ 0: A is the generator of a Markov jump
 //! process on (cell, state), which conserves mass and positivity.
 
-use super::mesh::NMesh;
+use super::mesh::{mesh, NMesh};
 use crate::error::{Error, Result};
 use crate::model::noise::chain::{self, Chain};
-use crate::model::reset::NoiseAtReset;
+use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::DragLaw;
+use crate::model::Params;
 use crate::numerics::band::Band;
 use crate::numerics::Failure;
 
@@ -221,4 +222,19 @@ impl NoiseOperator {
             .collect();
         Ok(ShiftedFactor { c, band, z, k })
     }
+}
+
+/// The operator of `p` on the mesh of `n << refine` cells.
+/// `graded`: cells graded towards the singular fixed points (else only
+/// the breakpoints are nodes).
+pub(crate) fn operator(p: &Params, n: usize, refine: usize, graded: bool) -> Result<NoiseOperator> {
+    let c = p.chain()?;
+    let m = mesh(p, &c, n, refine, graded)?;
+    Ok(NoiseOperator::new(
+        m,
+        c,
+        p.drag(),
+        p.rate(),
+        p.reset().noise(),
+    ))
 }

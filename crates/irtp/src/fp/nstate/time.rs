@@ -4,13 +4,15 @@
 //! x, so every block has the same A), by the shared TR-BDF2 on the
 //! operator's shifted solve.
 
-use super::super::moments::{MomentSeries, MsdOptions};
-use super::super::stationary::MIN_CELLS;
-use super::super::transient::{Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE};
+use super::super::grid::MIN_CELLS;
+use super::super::moments::MsdOptions;
+use super::super::transient::{
+    merged, Scheme, Snapshot, Transient, TransientOptions, MASS_TOLERANCE,
+};
 use super::super::Mesh;
-use super::operator::NoiseOperator;
-use super::stationary::{operator, richardson};
+use super::operator::{operator, NoiseOperator};
 use crate::error::{Error, Result};
+use crate::fp::extrapolate::richardson;
 use crate::model::atoms::transient_atom_states;
 use crate::model::reset::Reset;
 use crate::model::{Params, VelocityAtom};
@@ -141,14 +143,6 @@ pub(crate) fn run(
     Ok((stats.steps, b.op))
 }
 
-/// The sorted, de-duplicated union of the recording and snapshot times.
-fn all_times(a: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut t: Vec<f64> = a.iter().chain(b).copied().collect();
-    t.sort_by(f64::total_cmp);
-    t.dedup();
-    t
-}
-
 /// [`crate::fp::transient`] for a noise model: TR-BDF2 on the meshes of
 /// cells/4, cells/2, cells cells, `<v>` and `<v²>` extrapolated with
 /// their observed order (Eq. (N27)), snapshots of the fine mesh.
@@ -167,13 +161,12 @@ pub(crate) fn transient(p: &Params, o: &TransientOptions) -> Result<Transient> {
             format!("a multiple of 4, at least {MIN_CELLS}, with a noise model"),
         ));
     }
-    super::refuse_protocols(p, "fp transient")?;
     let rec = if o.times.is_empty() {
         vec![o.t_max]
     } else {
         o.times.clone()
     };
-    let times = all_times(&rec, &o.snapshot_times);
+    let times = merged(&rec, &o.snapshot_times);
     let tol = Tolerances {
         rtol: o.rtol,
         atol: o.atol,
@@ -385,67 +378,24 @@ fn snapshot(op: &NoiseOperator, t: f64, u: &[f64], atoms: Vec<VelocityAtom>) -> 
     })
 }
 
-/// [`crate::fp::msd`] for a noise model: the moment chain on `levels`
-/// nested meshes, Richardson-extrapolated in 1/N as the two-state chain.
-pub(crate) fn msd(p: &Params, o: &MsdOptions, times: &[f64]) -> Result<MomentSeries> {
-    super::refuse_protocols(p, "fp msd")?;
+/// One level of [`crate::fp::msd`] for a noise model: the moment chain
+/// on the mesh refined `refine` times, the rows of [`observe`] at `times`
+/// and the number of steps.
+pub(crate) fn msd_level(
+    p: &Params,
+    o: &MsdOptions,
+    times: &[f64],
+    refine: usize,
+) -> Result<(Vec<[f64; 6]>, usize)> {
     let tol = Tolerances {
         rtol: o.rtol,
         atol: o.rtol,
         ..Tolerances::default()
     };
-    let mut levels = Vec::with_capacity(o.levels);
-    let mut steps = 0;
-    for refine in 0..o.levels {
-        let mut rows = vec![[0.0; 6]; times.len()];
-        let (s, _) = run(p, o.cells, refine, 3, times, &tol, |k, v, u| {
-            rows[k] = observe(v, 3, u);
-            Ok(())
-        })?;
-        steps += s;
-        levels.push(rows);
-    }
-    let col = |k: usize, j: usize| {
-        super::super::moments::richardson(&levels.iter().map(|r| r[k][j]).collect::<Vec<_>>())
-    };
-    let mut out = MomentSeries {
-        t: times.to_vec(),
-        mass: Vec::new(),
-        v_mean: Vec::new(),
-        v2: Vec::new(),
-        x_mean: Vec::new(),
-        xv: Vec::new(),
-        x2: Vec::new(),
-        x2_err: Vec::new(),
-        alpha: Vec::new(),
-        cells_finest: o.cells << (o.levels - 1),
-        steps,
-    };
-    for (k, &t) in times.iter().enumerate() {
-        let at0 = t == 0.0;
-        let c = |j: usize| {
-            if at0 {
-                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0][j]
-            } else {
-                col(k, j)
-            }
-        };
-        out.mass.push(c(0));
-        out.v_mean.push(c(1));
-        out.v2.push(c(2));
-        out.x_mean.push(c(3));
-        out.xv.push(c(4));
-        out.x2.push(c(5));
-        out.x2_err.push(match levels.len() {
-            _ if at0 => 0.0,
-            1 => f64::INFINITY,
-            n => {
-                let coarser: Vec<f64> = levels[..n - 1].iter().map(|r| r[k][5]).collect();
-                (c(5) - super::super::moments::richardson(&coarser)).abs()
-            }
-        });
-        out.alpha
-            .push(if at0 { 4.0 } else { 2.0 * t * c(4) / c(5) });
-    }
-    Ok(out)
+    let mut rows = vec![[0.0; 6]; times.len()];
+    let (steps, _) = run(p, o.cells, refine, 3, times, &tol, |k, v, u| {
+        rows[k] = observe(v, 3, u);
+        Ok(())
+    })?;
+    Ok((rows, steps))
 }
