@@ -243,10 +243,11 @@ pub(crate) struct Operator {
     pub(crate) absorbed: Vec<bool>,
 }
 
-/// The band matrix's bytes: N (cells + 1) rows of 3(2N - 1) + 1 entries.
-fn band_bytes(states: usize, cells: usize) -> f64 {
+/// The band matrix's bytes: N (cells + 1) rows of 3 k + 1 entries (k the
+/// half bandwidth: 2N - 1 for a chain, 2 for the paper's noise).
+fn band_bytes(states: usize, bandwidth: usize, cells: usize) -> f64 {
     let n = states as f64;
-    8.0 * n * (cells as f64 + 1.0) * (3.0 * (2.0 * n - 1.0) + 1.0)
+    8.0 * n * (cells as f64 + 1.0) * (3.0 * bandwidth as f64 + 1.0)
 }
 
 /// The memory budget of the band: that of the paper's noise at its largest
@@ -269,7 +270,7 @@ pub(crate) fn setup(
     let (p, swapped) = problem.canonical();
     let space = space_of(&p)?;
     let chain = space.chain();
-    if band_bytes(chain.states(), cells) > MAX_BAND_BYTES {
+    if band_bytes(chain.states(), space.bandwidth(), cells) > MAX_BAND_BYTES {
         return Err(Error::invalid(
             "cells",
             cells,
@@ -417,15 +418,6 @@ impl Setup {
         }
     }
 
-    /// The drift of state s at v (the paper's printed sign flips g's).
-    fn drift(&self, s: usize, v: f64) -> f64 {
-        let (a, f) = (self.chain().levels[s], self.p.params().drag().force(v));
-        match self.sign {
-            DriftSign::Simulated => a - f,
-            DriftSign::PaperPrinted => f + a,
-        }
-    }
-
     fn empty(&self, kl: usize) -> Operator {
         let (ns, n) = (self.states(), self.mesh.v.len());
         Operator {
@@ -437,45 +429,85 @@ impl Setup {
     }
 
     /// The box-scheme operator at T = 0 (Eqs. (N30)-(N31)); `src` gives the
-    /// source at each (node, state) of "L x = -src".
+    /// source at each (node, state) of "L x = -src". Every entry is written
+    /// once: on the row of state s at cell c, ∓b + (h/2)(Q_ss - r) on its
+    /// own unknowns at c and c + 1, (h/2) Q_ss' on state s' there.
     fn athermal(&self, rate: f64, src: &dyn Fn(usize, usize) -> f64) -> Operator {
         let ns = self.states();
         let v = &self.mesh.v;
         let n = v.len();
         let mut op = self.empty(self.space.bandwidth());
-        for s in 0..ns {
-            let (k, slot) = match self.cond[s] {
-                Cond::Absorbed => (n - 1, self.space.slot(s)),
-                Cond::Regular(k) => (k, self.space.slot(s)),
-            };
-            for i in 0..n {
-                let row = ns * i + slot;
+        let chain = self.chain();
+        // The drag at each cell's midpoint (shared by the states).
+        let g = self.p.params().drag();
+        let force: Vec<f64> = v.windows(2).map(|c| g.force(0.5 * (c[0] + c[1]))).collect();
+        let slots: Vec<usize> = (0..ns).map(|s| self.space.slot(s)).collect();
+        let reset = self.reset_weights();
+        for i in 0..n {
+            for s in 0..ns {
+                let row = ns * i + slots[s];
+                let (k, absorbed) = match self.cond[s] {
+                    Cond::Absorbed => (n - 1, true),
+                    Cond::Regular(k) => (k, false),
+                };
+                if i == k && absorbed {
+                    op.band.set(row, ns * i + s, 1.0);
+                    op.absorbed[row] = true;
+                    continue;
+                }
                 if i == k {
-                    if self.cond[s] == Cond::Absorbed {
-                        op.band.set(row, ns * i + s, 1.0);
-                        op.absorbed[row] = true;
-                    } else {
-                        // Minus the generator, as the regularity relation.
-                        self.coupling(&mut op.band, row, s, i, -1.0, rate);
-                        self.reset_term(&mut op.border, row, s, -1.0, rate);
-                        op.rhs[row] = src(i, s);
+                    // Minus the generator, as the regularity relation.
+                    for (j, &q) in chain.q[s].iter().enumerate() {
+                        let d = if j == s { q - rate } else { q };
+                        if d != 0.0 {
+                            op.band.set(row, ns * i + j, -1.0 * d);
+                        }
                     }
+                    for (j, &w) in reset[s].iter().enumerate().filter(|e| *e.1 != 0.0) {
+                        op.border[j][row] = -1.0 * rate * w;
+                    }
+                    op.rhs[row] = src(i, s);
                     continue;
                 }
                 // The cell on the side away from the condition node.
                 let c = if i < k { i } else { i - 1 };
                 let h = v[c + 1] - v[c];
-                let b = self.drift(s, 0.5 * (v[c] + v[c + 1]));
-                let (l, u) = (ns * c + s, ns * (c + 1) + s);
-                op.band.set(row, l, -b);
-                op.band.set(row, u, b);
-                self.coupling(&mut op.band, row, s, c, 0.5 * h, rate);
-                self.coupling(&mut op.band, row, s, c + 1, 0.5 * h, rate);
-                self.reset_term(&mut op.border, row, s, h, rate);
+                let b = match self.sign {
+                    DriftSign::Simulated => chain.levels[s] - force[c],
+                    DriftSign::PaperPrinted => force[c] + chain.levels[s],
+                };
+                let hh = 0.5 * h;
+                for (j, &q) in chain.q[s].iter().enumerate() {
+                    let (l, u) = (ns * c + j, ns * (c + 1) + j);
+                    if j == s {
+                        let d = hh * (q - rate);
+                        op.band.set(row, l, -b + d);
+                        op.band.set(row, u, b + d);
+                    } else if q != 0.0 {
+                        op.band.set(row, l, hh * q);
+                        op.band.set(row, u, hh * q);
+                    }
+                }
+                for (j, &w) in reset[s].iter().enumerate().filter(|e| *e.1 != 0.0) {
+                    op.border[j][row] = h * rate * w;
+                }
                 op.rhs[row] = -0.5 * h * (src(c, s) + src(c + 1, s));
             }
         }
         op
+    }
+
+    /// Per state s, the weight of each R_j in the reset value s returns to
+    /// (kept: R_s alone, re-drawn: Σ_j π_j R_j; Eq. (N30)); a border entry
+    /// is (coefficient · r) · weight, the weight 1 dropped.
+    fn reset_weights(&self) -> Vec<Vec<f64>> {
+        let ns = self.states();
+        match self.p.params().reset().noise() {
+            NoiseAtReset::Kept => (0..ns)
+                .map(|s| (0..ns).map(|j| if j == s { 1.0 } else { 0.0 }).collect())
+                .collect(),
+            NoiseAtReset::Redrawn => vec![self.chain().pi.clone(); ns],
+        }
     }
 
     /// The exponentially fitted operator with T > 0 (Eqs. (N32)-(N34)):
