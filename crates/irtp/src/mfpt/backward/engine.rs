@@ -460,11 +460,11 @@ impl Setup {
                     for (j, &q) in chain.q[s].iter().enumerate() {
                         let d = if j == s { q - rate } else { q };
                         if d != 0.0 {
-                            op.band.set(row, ns * i + j, -1.0 * d);
+                            op.band.set(row, ns * i + j, -d);
                         }
                     }
                     for (j, &w) in reset[s].iter().enumerate().filter(|e| *e.1 != 0.0) {
-                        op.border[j][row] = -1.0 * rate * w;
+                        op.border[j][row] = -rate * w;
                     }
                     op.rhs[row] = src(i, s);
                     continue;
