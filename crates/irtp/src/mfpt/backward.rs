@@ -346,19 +346,6 @@ fn drifts<D: Drag>(g: D, sigma: f64, v: f64, sign: DriftSign) -> (f64, f64) {
     }
 }
 
-/// The box-scheme operator on a mesh of the paper's noise, before any
-/// right-hand side: the band part (unknowns interleaved tau+_0, tau-_0,
-/// tau+_1, ...) and the two border columns multiplying the reset values
-/// x±(v_r) (the upwind scheme of the distribution, [`super::upwind`]).
-pub(super) struct Assembly {
-    /// The band part (unfactored).
-    pub(super) band: Band,
-    /// Border column of x+(v_r).
-    pub(super) cp: Vec<f64>,
-    /// Border column of x-(v_r).
-    pub(super) cm: Vec<f64>,
-}
-
 /// The probability that a reset of `p` (canonical frame) lands at or
 /// beyond v_t, where it is the passage: 1 - Σ_j w_j in exact arithmetic.
 pub(super) fn beyond(p: &Problem) -> f64 {

@@ -64,9 +64,9 @@ pub(crate) trait Space {
     /// points of the levels inside the domain.
     fn fixed_points(&self, g: &dyn Fn(f64) -> f64) -> Vec<f64>;
     /// The slot of state s's equations among a node's N rows of the box
-    /// scheme, and the band's sub-/super-diagonals.
+    /// scheme.
     fn slot(&self, s: usize) -> usize;
-    /// The half bandwidth of the box scheme's band.
+    /// The sub- and super-diagonals of the box scheme's band.
     fn bandwidth(&self) -> usize;
     /// The state of the user's frame that canonical state s is.
     fn user_state(&self, s: usize, swapped: bool) -> usize;
@@ -250,8 +250,8 @@ fn band_bytes(states: usize, bandwidth: usize, cells: usize) -> f64 {
     8.0 * n * (cells as f64 + 1.0) * (3.0 * bandwidth as f64 + 1.0)
 }
 
-/// The memory budget of the band: that of the paper's noise at its largest
-/// mesh ([`super::BackwardOptions::validate`]: 2·10⁶ cells).
+/// The memory budget of the band (256 MB), which the paper's noise at its
+/// largest mesh fits ([`super::BackwardOptions::validate`]: 2·10⁶ cells).
 const MAX_BAND_BYTES: f64 = 2e6 * 2.0 * 8.0 * 8.0;
 
 /// The setup of `problem` on `cells` cells (thermal: truncated at
