@@ -1,10 +1,10 @@
 //! `mfpt --method backward`, `mfpt scan` and `mfpt optimize` with a noise
-//! model (`irtp::mfpt::nstate`, docs/equations.md Eqs. (N30)-(N36)): runs
+//! model (`irtp::mfpt::backward`, docs/equations.md Eqs. (N30)-(N36)): runs
 //! write their outputs with the noise and temperature in the parameters and
 //! give the library's numbers; bad input is refused naming the flag.
 
 use super::common::*;
-use irtp::mfpt::{nstate, BackwardOptions, Problem};
+use irtp::mfpt::{backward, BackwardOptions, Problem};
 use irtp::model::noise::NoiseModel;
 use irtp::{DragLaw, Params};
 
@@ -53,7 +53,7 @@ fn backward_runs_a_noise_model_and_writes_it() {
         let v0: f64 = args[1].parse().unwrap();
         let vt: f64 = args[3].parse().unwrap();
         let rate: f64 = args[5].parse().unwrap();
-        let lib = nstate::solve(
+        let lib = backward::solve_states(
             &problem(drag.parse().unwrap(), spec, t, rate, 0.0, v0, vt),
             &BackwardOptions::with_cells(4000),
         )

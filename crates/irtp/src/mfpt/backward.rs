@@ -20,13 +20,26 @@
 //! tau±(v_r). Those are moved to the right-hand side (bordering): four
 //! band solves with one LU factorisation ([`crate::numerics::band`]) and a
 //! 2×2 system ([`crate::numerics::bordered`]), O(N) in all.
+//!
+//! One engine (the `engine` submodule) runs every noise: the paper's and
+//! any noise model's finite-state chain, at temperature 0 by this box
+//! scheme with N states per node, with thermal noise by an exponentially
+//! fitted scheme (docs/equations.md, Eqs. (N30)-(N36)). The paper's noise
+//! is its two-state case, its rows placed as above and its 2×2 bordering
+//! kept ([`solve`], [`profile`], [`rate_derivative_at_zero`],
+//! [`solve_states`] for every state's mean).
+
+mod engine;
+
+pub use engine::BARRIER;
 
 use super::Problem;
 use crate::error::{Error, Result};
-use crate::model::reset::{Refractory, Reset};
+use crate::model::noise::chain::Chain;
+use crate::model::reset::Reset;
 use crate::model::Drag;
 use crate::numerics::band::Band;
-use crate::numerics::bordered::{responses, Capacitance, LowRank};
+use engine::Setup;
 use serde::{Deserialize, Serialize};
 
 /// Which drift the ± states carry in the backward equations.
@@ -150,8 +163,8 @@ pub(super) fn mesh(p: &Problem, cells: usize) -> Result<Mesh> {
 
 /// [`mesh`] on [v_l, v_t] for the interval (v_l, v_u) of the velocity
 /// (the noise model's, or a truncation with thermal noise), with `extra`
-/// velocities inside (v_l, v_t) as nodes too (the N-state solver's fixed
-/// points, [`super::nstate`]).
+/// velocities inside (v_l, v_t) as nodes too (the fixed points of a noise
+/// model's levels).
 pub(super) fn mesh_on(p: &Problem, vl: f64, vu: f64, extra: &[f64], cells: usize) -> Result<Mesh> {
     let point = p.params().reset().point();
     // A random target's centre is a node too (a narrow target then weighs
@@ -333,221 +346,6 @@ fn drifts<D: Drag>(g: D, sigma: f64, v: f64, sign: DriftSign) -> (f64, f64) {
     }
 }
 
-/// Source terms s± of the equations "... = -s±": 1 for the MFPT itself,
-/// node values for derivatives and higher moments.
-enum Source<'a> {
-    One,
-    Nodes(&'a [f64], &'a [f64]),
-}
-
-/// The box-scheme operator on a mesh, before any right-hand side: the band
-/// part (unknowns interleaved tau+_0, tau-_0, tau+_1, ...) and the two
-/// border columns multiplying the reset values x±(v_r). Row 0 is the
-/// regularity relation at v_l (minus the generator of the - state), rows
-/// 1..n-2 are h·(generator) at the cell midpoints, the last row x+(v_t) = 0.
-pub(super) struct Assembly {
-    /// The band part (unfactored).
-    pub(super) band: Band,
-    /// Border column of x+(v_r).
-    pub(super) cp: Vec<f64>,
-    /// Border column of x-(v_r).
-    pub(super) cm: Vec<f64>,
-}
-
-/// Assemble the operator of the simulated (or printed) drifts at `rate`.
-pub(super) fn assemble(p: &Problem, m: &Mesh, rate: f64, sign: DriftSign) -> Assembly {
-    let par = &p.params();
-    let (g, sigma, lam) = (par.drag(), par.sigma(), par.lambda());
-    // The reset term of state s weighs x±(v_r) by the noise rule's shares
-    // (kept: x_s(v_r) alone; re-drawn: ½ each).
-    let noise = par.reset().noise();
-    let nodes = m.v.len();
-    let n = 2 * nodes;
-    let mut a = Band::new(n, 2, 2);
-    let mut cp = vec![0.0; n];
-    let mut cm = vec![0.0; n];
-    // Row 0: regularity of tau- at v_l.
-    a.set(0, 0, -lam);
-    a.set(0, 1, lam + rate);
-    (cp[0], cm[0]) = noise.mix(0.0, -rate);
-    for i in 0..nodes - 1 {
-        let h = m.v[i + 1] - m.v[i];
-        let mid = 0.5 * (m.v[i] + m.v[i + 1]);
-        let (ap, am) = drifts(g, sigma, mid, sign);
-        let hl = 0.5 * h * lam;
-        let hd = 0.5 * h * (lam + rate);
-        let (rp, rm) = (2 * i + 1, 2 * i + 2);
-        let (pi, mi, pj, mj) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
-        a.set(rp, pi, -ap - hd);
-        a.set(rp, pj, ap - hd);
-        a.set(rp, mi, hl);
-        a.set(rp, mj, hl);
-        (cp[rp], cm[rp]) = noise.mix(h * rate, 0.0);
-        a.set(rm, mi, -am - hd);
-        a.set(rm, mj, am - hd);
-        a.set(rm, pi, hl);
-        a.set(rm, pj, hl);
-        (cp[rm], cm[rm]) = noise.mix(0.0, h * rate);
-    }
-    // Last row: tau+(v_t) = 0.
-    a.set(n - 1, n - 2, 1.0);
-    Assembly { band: a, cp, cm }
-}
-
-/// The right-hand side of "operator · x = -M s" for sources s±: -h times
-/// the cell averages of s on the cell rows, s-(v_l) on row 0, 0 on the
-/// last (M: the mass matrix of the time-dependent equations,
-/// [`super::distribution`]).
-fn rhs(m: &Mesh, src: &Source) -> Vec<f64> {
-    let nodes = m.v.len();
-    let s_at = |i: usize| -> (f64, f64) {
-        match *src {
-            Source::One => (1.0, 1.0),
-            Source::Nodes(sp, sm) => (sp[i], sm[i]),
-        }
-    };
-    let mut b = vec![0.0; 2 * nodes];
-    b[0] = s_at(0).1;
-    for i in 0..nodes - 1 {
-        let h = m.v[i + 1] - m.v[i];
-        let (s0, s1) = (s_at(i), s_at(i + 1));
-        b[2 * i + 1] = -h * 0.5 * (s0.0 + s1.0);
-        b[2 * i + 2] = -h * 0.5 * (s0.1 + s1.1);
-    }
-    b
-}
-
-/// Solve on the canonical (upward) mesh; returns (tau+, tau-) at the nodes,
-/// or `None` when tau exceeds the f64 range (resetting so frequent that the
-/// target is practically never reached).
-fn solve_mesh(
-    p: &Problem,
-    m: &Mesh,
-    rate: f64,
-    sign: DriftSign,
-    src: Source,
-) -> Result<Option<(Vec<f64>, Vec<f64>)>> {
-    let nodes = m.v.len();
-    let Assembly {
-        band: mut a,
-        mut cp,
-        mut cm,
-    } = assemble(p, m, rate, sign);
-    crate::parallel::check_stop()?;
-    let mut b = rhs(m, &src);
-    if rate > 0.0 {
-        refractory(p, m, &src, &mut cp, &mut cm, &mut b)?;
-    }
-    a.factor().map_err(|e| Error::Numerical {
-        method: "mfpt backward solve",
-        reason: e.to_string(),
-    })?;
-    crate::parallel::check_stop()?;
-    a.solve(&mut b);
-    crate::parallel::check_stop()?;
-    let mut x = b;
-    if rate > 0.0 {
-        let corrected = match &m.weights {
-            None => reset_correction(&a, &mut x, cp, cm, m.reset),
-            Some(w) => spread_correction(&a, &mut x, cp, cm, w, beyond(p)),
-        };
-        if !corrected {
-            return Ok(None);
-        }
-    }
-    let tp: Vec<f64> = (0..nodes).map(|i| x[2 * i]).collect();
-    let tm: Vec<f64> = (0..nodes).map(|i| x[2 * i + 1]).collect();
-    if tp.iter().chain(&tm).any(|t| !t.is_finite()) {
-        return Ok(None);
-    }
-    Ok(Some((tp, tm)))
-}
-
-/// An exponential refractory period (docs/equations.md, entry (R6)): the
-/// held phase's values T_R(s) solve
-/// λ (T_R(-s) - T_R(s)) + κ (T(u, s) - T_R(s)) = -1 (u < v_t: no passage
-/// while held), i.e. T_R = P T(u) + 1/κ with P = κ K⁻¹,
-/// K = [[κ + λ, -λ], [-λ, κ + λ]], and the reset term of the flowing
-/// equations takes T_R where it took T(v_r). The reset values R± enter
-/// the rows through the border columns c±, so they become
-/// (c+, c-) P, and the constant moves to the right-hand side:
-/// b -= (c+ + c-) W/κ, W = Σ w_j (1 for a point target; a random
-/// target's mass beyond v_t is a passage at the reset itself). P's rows sum
-/// to 1, so c+ + c- is unchanged (the identity [`reset_correction`] relies
-/// on). Only the mean (source 1): the moments and distributions refuse it.
-fn refractory(
-    p: &Problem,
-    m: &Mesh,
-    src: &Source,
-    cp: &mut [f64],
-    cm: &mut [f64],
-    b: &mut [f64],
-) -> Result<()> {
-    let mean = match p.params().schedule().refractory {
-        None => return Ok(()),
-        Some(Refractory::Exp { mean }) => mean,
-        Some(r @ Refractory::Fixed { .. }) => {
-            return Err(Error::invalid(
-                "refractory",
-                r.spec(),
-                "exp:mean=M for the backward equations",
-            ))
-        }
-    };
-    if !matches!(src, Source::One) {
-        return Err(Error::invalid(
-            "refractory",
-            format!("exp:mean={mean}"),
-            "none for the first-passage moments and distributions (the mean, mfpt --method backward and mfpt scan, runs it)",
-        ));
-    }
-    let (k, l) = (1.0 / mean, p.params().lambda());
-    let det = k + 2.0 * l;
-    let (d, o) = ((k + l) / det, l / det);
-    let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
-    for i in 0..b.len() {
-        let (a, c) = (cp[i], cm[i]);
-        b[i] -= (a + c) * wsum * mean;
-        cp[i] = d * a + o * c;
-        cm[i] = o * a + d * c;
-    }
-    Ok(())
-}
-
-/// The reset terms of the backward equations by two extra solves with the
-/// factored matrix ([`LowRank`]): x = y0 - R+ y1 - R- y2 with y1 = A⁻¹c+,
-/// y2 = A⁻¹c-, and R± = x±(v_r) at the reset node. Returns false when the
-/// 2×2 system is singular or overflows (tau beyond the f64 range).
-fn reset_correction(a: &Band, x: &mut [f64], cp: Vec<f64>, cm: Vec<f64>, reset: usize) -> bool {
-    // With q = A⁻¹e_last (tau+(v_t) = 1, no source) one has exactly
-    // 1 + y1 + y2 = q (A applied to the constant 1 gives -(c+ + c-) + e_last),
-    // so the 2×2 system is rewritten in sums of non-negative terms only:
-    // no cancellation even when tau ~ e^{r T} is astronomically large.
-    let q = unit_response(a, x.len());
-    let z = responses(|y| a.solve(y), [cp, cm]);
-    let (kp, km) = (2 * reset, 2 * reset + 1);
-    let (y1m, y2p) = (z[0][km], z[1][kp]);
-    let (qp, qm) = (q[kp], q[km]);
-    // m11 = 1 + y1p = qp - y2p, m22 = 1 + y2m = qm - y1m, m12 = y2p, m21 = y1m.
-    let (m11, m22) = (qp - y2p, qm - y1m);
-    let det = qp * qm - qp * y1m - qm * y2p;
-    if !(det > 0.0) || !det.is_finite() {
-        return false;
-    }
-    let s = Capacitance::with_det([[m11, y2p], [y1m, m22]], det);
-    let f = [x[kp], x[km]];
-    LowRank::new(z, s).correct(x, f);
-    true
-}
-
-/// q = A⁻¹ e_last: the response to tau+(v_t) = 1 with no source.
-fn unit_response(a: &Band, n: usize) -> Vec<f64> {
-    let mut q = vec![0.0; n];
-    q[n - 1] = 1.0;
-    a.solve(&mut q);
-    q
-}
-
 /// The probability that a reset of `p` (canonical frame) lands at or
 /// beyond v_t, where it is the passage: 1 - Σ_j w_j in exact arithmetic.
 pub(super) fn beyond(p: &Problem) -> f64 {
@@ -556,87 +354,122 @@ pub(super) fn beyond(p: &Problem) -> f64 {
     target.mass(p.vt(), vu) / target.mass(-vu, vu)
 }
 
-/// The reset terms for a random target: as [`reset_correction`], with the
-/// reset values R± = ℓ±(x) = Σ_j w_j x±(v_j) (the dense rank-one term
-/// r (∫ x± q - x±) in bordered form), R from the 2×2 system
-/// R = ℓ(y0) - R+ ℓ(y1) - R- ℓ(y2). As there, 1 + y1 + y2 = q gives
-/// 1 + ℓ+(y1) = b + ℓ+(q) - ℓ+(y2) with b = 1 - Σ_j w_j (`beyond`, the mass
-/// past v_t) and y1, y2 <= 0, so the system is solved in sums of
-/// non-negative terms (no cancellation when tau is astronomically large).
-/// Returns false when it is singular or overflows.
-fn spread_correction(
-    a: &Band,
-    x: &mut [f64],
-    cp: Vec<f64>,
-    cm: Vec<f64>,
-    w: &[f64],
-    beyond: f64,
-) -> bool {
-    let q = unit_response(a, x.len());
-    let z = responses(|y| a.solve(y), [cp, cm]);
-    let ell = |y: &[f64], s: usize| -> f64 {
-        w.iter().enumerate().map(|(j, wj)| wj * y[2 * j + s]).sum()
-    };
-    // -ℓ+(y2), -ℓ-(y1) >= 0; m11 = 1 + ℓ+(y1), m22 = 1 + ℓ-(y2).
-    let (y2p, y1m) = (-ell(&z[1], 0), -ell(&z[0], 1));
-    let (m11, m22) = (beyond + ell(&q, 0) + y2p, beyond + ell(&q, 1) + y1m);
-    let det = (beyond + ell(&q, 0)) * (beyond + ell(&q, 1))
-        + (beyond + ell(&q, 0)) * y1m
-        + (beyond + ell(&q, 1)) * y2p;
-    if !(det > 0.0) || !det.is_finite() {
-        return false;
-    }
-    let s = Capacitance::with_det([[m11, -y2p], [-y1m, m22]], det);
-    let f = [ell(x, 0), ell(x, 1)];
-    LowRank::new(z, s).correct(x, f);
-    true
+/// The mean first-passage time per noise state at v_0 (any noise: the
+/// paper's has the states (+Sigma, -Sigma)).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseSolution {
+    /// τ = Σ_s π_s T_s(v_0): the initial state drawn from the stationary law.
+    pub tau: f64,
+    /// T_s(v_0) for each state s (in the noise's order).
+    pub per_state: Vec<f64>,
+    /// The noise levels a_s.
+    pub levels: Vec<f64>,
+    /// The stationary law π.
+    pub pi: Vec<f64>,
+    /// Cells used.
+    pub cells: usize,
+    /// Error estimate of τ: |τ_N - τ_{N/2}| / 3 at T = 0 (box scheme,
+    /// second order), |τ_N - τ_{N/2}| with thermal noise (the fitted
+    /// scheme is between first and second order); NaN where not computed.
+    pub error_estimate: f64,
+    /// The truncation point of a thermal problem (user's frame); NaN at
+    /// T = 0.
+    pub truncation: f64,
 }
 
-/// tau±(v) on the whole mesh, in the user's frame (a point or a random
-/// reset target).
-pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
+impl NoiseSolution {
+    /// As a [`BackwardSolution`]: tau_plus starts in the state of highest
+    /// level, tau_minus in the state of lowest level.
+    pub fn summary(&self) -> BackwardSolution {
+        let (hi, lo) = extreme_states(&self.levels);
+        BackwardSolution {
+            tau: self.tau,
+            tau_plus: self.per_state[hi],
+            tau_minus: self.per_state[lo],
+            cells: self.cells,
+            error_estimate: self.error_estimate,
+        }
+    }
+}
+
+/// Indices of the highest and lowest level (first of equals).
+pub(super) fn extreme_states(levels: &[f64]) -> (usize, usize) {
+    let mut hi = 0;
+    let mut lo = 0;
+    for (s, &a) in levels.iter().enumerate() {
+        if a > levels[hi] {
+            hi = s;
+        }
+        if a < levels[lo] {
+            lo = s;
+        }
+    }
+    (hi, lo)
+}
+
+/// The setup of `problem` on `cells` cells: the noise a method runs
+/// ([`crate::capability::check_noise`]; with a noise model also the
+/// protocol, [`crate::capability::check`]), the cells in range.
+fn setup_checked(problem: &Problem, cells: usize, barrier: f64, sign: DriftSign) -> Result<Setup> {
     // A noise model the backward equations do not run is refused here,
     // for every caller (scans, default t-max estimates), by name.
     crate::capability::check_noise(crate::capability::Solver::Backward, problem.params())?;
-    opts.validate()?;
-    if problem.params().noise().is_some() {
-        return super::nstate::profile(problem, opts.cells, super::nstate::BARRIER);
-    }
-    let (cp, swapped) = problem.canonical();
-    crate::parallel::check_stop()?;
-    let m = mesh(&cp, opts.cells)?;
-    crate::parallel::check_stop()?;
-    let (tp, tm) =
-        solve_mesh(&cp, &m, cp.params().rate(), opts.drift, Source::One)?.ok_or_else(overflow)?;
-    non_negative(&m.v, &tp, &tm)?;
-    Ok(to_user_frame(m, tp, tm, swapped))
+    BackwardOptions::with_cells(cells).validate()?;
+    engine::setup(problem, cells, barrier, sign)
 }
 
-/// Refuse a profile with a negative (or NaN) mean first-passage time
-/// beyond rounding (1e-12 of the largest value; tau+ at v_t is 0 up to
-/// it): the mesh did not resolve the solution (e.g. at a velocity scale
-/// far beyond the drag's, where the band's entries lose all their digits).
-fn non_negative(v: &[f64], tp: &[f64], tm: &[f64]) -> Result<()> {
-    let scale = tp.iter().chain(tm).fold(0.0f64, |m, t| m.max(t.abs()));
-    let floor = -1e-12 * scale;
-    let bad = (0..v.len()).find(|&i| !(tp[i] >= floor && tm[i] >= floor));
-    match bad {
-        None => Ok(()),
-        Some(i) => Err(Error::Numerical {
-            method: "mfpt backward solve",
-            reason: format!(
-                "tau(v) = ({:e}, {:e}) at v = {:e} is not >= 0: the mesh does not resolve \
-                 the solution; refused",
-                tp[i], tm[i], v[i]
-            ),
-        }),
+/// The mean's nodal solution (source 1), refused where negative beyond
+/// rounding (the mesh does not resolve the solution, e.g. at a velocity
+/// scale far beyond the drag's, where the band's entries lose their digits).
+fn mean_nodes(set: &Setup) -> Result<Vec<f64>> {
+    let x = set
+        .solve(set.p.params().rate(), true, &|_, _| 1.0)?
+        .ok_or_else(overflow)?;
+    set.non_negative(&x)?;
+    Ok(x)
+}
+
+/// The levels in the user's frame and, per user state, its canonical state.
+fn user_states(problem: &Problem, set: &Setup) -> Result<(Vec<f64>, Vec<usize>)> {
+    let levels = problem.params().chain()?.levels;
+    let map = (0..set.states())
+        .map(|u| set.space.user_state(u, set.swapped))
+        .collect();
+    Ok((levels, map))
+}
+
+/// tau±(v) on the whole mesh, in the user's frame (a point or a random
+/// reset target; any noise: tau_plus / tau_minus the states of highest /
+/// lowest level, tau the mean over π).
+pub fn profile(problem: &Problem, opts: &BackwardOptions) -> Result<Profile> {
+    let set = setup_checked(problem, opts.cells, BARRIER, opts.drift)?;
+    let x = mean_nodes(&set)?;
+    let (levels, map) = user_states(problem, &set)?;
+    let (hi, lo) = extreme_states(&levels);
+    let n = set.mesh.v.len();
+    let ns = set.states();
+    let tau: Vec<f64> = (0..n).map(|k| set.mean(&x[ns * k..ns * (k + 1)])).collect();
+    let mut out = Profile {
+        v: set.mesh.v.clone(),
+        tau,
+        tau_plus: set.column(&x, map[hi]),
+        tau_minus: set.column(&x, map[lo]),
+        start: set.mesh.start,
+    };
+    if set.swapped {
+        out.v = out.v.iter().rev().map(|x| -x).collect();
+        out.tau.reverse();
+        out.tau_plus.reverse();
+        out.tau_minus.reverse();
+        out.start = n - 1 - out.start;
     }
+    Ok(out)
 }
 
 /// The [`Error::Overflow`] of the backward solve: tau exceeds the f64 range.
 fn overflow() -> Error {
     Error::Overflow {
-        method: "mfpt backward solve",
+        method: engine::METHOD,
         quantity: "the mean first-passage time",
         meaning: "the target is practically never reached",
     }
@@ -647,31 +480,37 @@ pub fn at_start_or_overflow(
     problem: &Problem,
     opts: &BackwardOptions,
 ) -> Result<Option<BackwardSolution>> {
-    let solved = if problem.params().noise().is_some() {
-        super::nstate::solve_on(problem, opts.cells, super::nstate::BARRIER).map(|s| s.summary())
-    } else {
-        profile(problem, opts).and_then(|p| verified(problem, p.at_start()))
-    };
-    match solved {
+    match solve_signed(problem, opts.cells, BARRIER, opts.drift).map(|s| s.summary()) {
         Ok(s) => Ok(Some(s)),
         Err(Error::Overflow { .. }) => Ok(None),
         Err(e) => Err(e),
     }
 }
 
-/// A rigorous lower bound on tau. Reaching v_t takes a reset-free stretch
-/// (since the start, or since the last reset) at least as long as the
-/// fastest flow (noise +Sigma throughout, in the upward frame) from v_0, or
-/// from v_r, to v_t; with T* the shorter of the two flow times, the first
-/// time the time since the last reset reaches T* has mean (e^{r T*} - 1)/r
-/// (T* at r = 0). +∞ when that exceeds the f64 range.
+/// A rigorous lower bound on tau (Eq. (N36)). No state drives faster than
+/// the highest level (+Sigma for the paper's noise), so reaching v_t takes
+/// a reset-free stretch (since the start, or since the last reset) at
+/// least as long as that level's flow (canonical frame) from v_0, or from
+/// the highest reset velocity, to v_t; with T* the shorter of the two flow
+/// times, the first time the time since the last reset reaches T* has mean
+/// (e^{r T*} - 1)/r (T* at r = 0). +∞ when that exceeds the f64 range; 0
+/// with thermal noise (diffusion has no speed limit).
 pub fn lower_bound(problem: &Problem) -> f64 {
-    if problem.params().noise().is_some() {
-        return super::nstate::lower_bound(problem).unwrap_or(0.0);
-    }
     let (cp, _) = problem.canonical();
+    let Ok(space) = engine::space_of(&cp) else {
+        return 0.0;
+    };
+    let chain = space.chain();
+    if chain.temperature > 0.0 {
+        return 0.0;
+    }
+    let amax = chain
+        .levels
+        .iter()
+        .cloned()
+        .fold(f64::NEG_INFINITY, f64::max);
     let p = cp.params();
-    let flow = |from: f64| p.drag().flow_time(p.sigma(), from, cp.vt());
+    let flow = |from: f64| p.drag().flow_time(amax, from, cp.vt());
     let r = p.rate();
     // The highest velocity a reset can land on (a random target's top; at
     // or beyond v_t the reset is the passage: flow time 0).
@@ -684,69 +523,96 @@ pub fn lower_bound(problem: &Problem) -> f64 {
     }
 }
 
-/// The solution, if tau respects [`lower_bound`]: an overflowing bound is
+/// `tau`, if it respects [`lower_bound`]: an overflowing bound is
 /// [`Error::Overflow`] (the target is practically never reached), a violated
 /// one a numerical failure (the mesh does not resolve the solution).
-fn verified(problem: &Problem, s: BackwardSolution) -> Result<BackwardSolution> {
+fn verified(problem: &Problem, tau: f64) -> Result<()> {
     let bound = lower_bound(problem);
     if !bound.is_finite() {
         return Err(overflow());
     }
-    if !(s.tau >= bound * (1.0 - 1e-9)) {
+    if !(tau >= bound * (1.0 - 1e-9)) {
         return Err(Error::Numerical {
-            method: "mfpt backward solve",
+            method: engine::METHOD,
             reason: format!(
-                "tau = {:e} is below its lower bound {bound:e} (r = {}): the mesh does not resolve \
-                 the solution at this reset rate; refused (more --cells, or a smaller rate)",
-                s.tau,
+                "tau = {tau:e} is below its lower bound {bound:e} (r = {}): the mesh does not \
+                 resolve the solution at this reset rate; refused (more --cells, or a smaller rate)",
                 problem.params().rate()
             ),
         });
     }
-    Ok(s)
+    Ok(())
 }
 
-fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
-    let tau = tp.iter().zip(&tm).map(|(p, m)| 0.5 * (p + m)).collect();
-    if !swapped {
-        return Profile {
-            v: m.v,
-            tau,
-            tau_plus: tp,
-            tau_minus: tm,
-            start: m.start,
-        };
-    }
-    let n = m.v.len();
-    Profile {
-        v: m.v.iter().rev().map(|x| -x).collect(),
-        tau: tau.into_iter().rev().collect(),
-        tau_plus: tm.into_iter().rev().collect(),
-        tau_minus: tp.into_iter().rev().collect(),
-        start: n - 1 - m.start,
-    }
+/// T_s(v_0) per state on the mesh of `cells` cells, the truncation barrier
+/// `barrier` (thermal only): the solve behind [`solve_states`], verified
+/// (finite, ≥ 0, τ ≥ [`lower_bound`]).
+pub fn solve_on(problem: &Problem, cells: usize, barrier: f64) -> Result<NoiseSolution> {
+    solve_signed(problem, cells, barrier, DriftSign::Simulated)
+}
+
+/// [`solve_on`] with the drift convention `sign`.
+fn solve_signed(
+    problem: &Problem,
+    cells: usize,
+    barrier: f64,
+    sign: DriftSign,
+) -> Result<NoiseSolution> {
+    let set = setup_checked(problem, cells, barrier, sign)?;
+    let x = mean_nodes(&set)?;
+    let (tau, per) = set.at_start(&x);
+    verified(problem, tau)?;
+    let (levels, map) = user_states(problem, &set)?;
+    let thermal = set.chain().temperature > 0.0;
+    Ok(NoiseSolution {
+        tau,
+        per_state: map.iter().map(|&c| per[c]).collect(),
+        levels,
+        pi: set.chain().pi.clone(),
+        cells: set.mesh.v.len() - 1,
+        error_estimate: f64::NAN,
+        truncation: match (thermal, set.swapped) {
+            (false, _) => f64::NAN,
+            (true, true) => -set.lower,
+            (true, false) => set.lower,
+        },
+    })
 }
 
 /// MFPT at v_0 with a Richardson error estimate (solves on N and N/2 cells).
 /// Errors with [`Error::Overflow`] if tau overflows f64.
 pub fn solve(problem: &Problem, opts: &BackwardOptions) -> Result<BackwardSolution> {
-    if problem.params().noise().is_some() {
-        return super::nstate::solve(problem, opts).map(|s| s.summary());
-    }
-    let fine = verified(problem, profile(problem, opts)?.at_start())?;
+    solve_states(problem, opts).map(|s| s.summary())
+}
+
+/// The mean first-passage time per noise state at v_0, with the error
+/// estimate of a second solve on half the cells (see
+/// [`NoiseSolution::error_estimate`]).
+pub fn solve_states(problem: &Problem, opts: &BackwardOptions) -> Result<NoiseSolution> {
+    let fine = solve_signed(problem, opts.cells, BARRIER, opts.drift)?;
     crate::parallel::check_stop()?;
-    let half = BackwardOptions {
-        cells: (opts.cells / 2).max(8),
-        ..*opts
-    };
-    let coarse = profile(problem, &half)?.at_start();
+    let coarse = solve_signed(problem, (opts.cells / 2).max(8), BARRIER, opts.drift)?;
+    let diff = (fine.tau - coarse.tau).abs();
+    // Two meshes that disagree by more than 10 % resolve nothing (e.g. a
+    // target beyond g⁻¹(max a) at a tiny temperature, τ ~ e^{ΔU/T}).
+    if !(diff <= 0.1 * fine.tau) {
+        return Err(Error::Numerical {
+            method: engine::METHOD,
+            reason: format!(
+                "tau = {:e} on {} cells but {:e} on {}: not resolved; refused (more --cells)",
+                fine.tau, fine.cells, coarse.tau, coarse.cells
+            ),
+        });
+    }
     // On the smallest meshes the halved mesh can be the same mesh: no estimate.
-    let error_estimate = if coarse.cells < fine.cells {
-        (fine.tau - coarse.tau).abs() / 3.0
-    } else {
+    let error_estimate = if coarse.cells >= fine.cells {
         f64::NAN
+    } else if problem.params().chain()?.temperature > 0.0 {
+        diff
+    } else {
+        diff / 3.0
     };
-    Ok(BackwardSolution {
+    Ok(NoiseSolution {
         error_estimate,
         ..fine
     })
@@ -812,78 +678,122 @@ impl Moments {
     }
 }
 
-/// T1± and T2± on the canonical mesh `m` (see [`Moments`]).
-pub(super) fn moment_nodes(
-    cp: &Problem,
-    m: &Mesh,
-    sign: DriftSign,
-) -> Result<[(Vec<f64>, Vec<f64>); 2]> {
-    let rate = cp.params().rate();
-    let (tp, tm) = solve_mesh(cp, m, rate, sign, Source::One)?.ok_or_else(overflow)?;
-    let (sp, sm): (Vec<f64>, Vec<f64>) = (
-        tp.iter().map(|t| 2.0 * t).collect(),
-        tm.iter().map(|t| 2.0 * t).collect(),
-    );
-    let second = solve_mesh(cp, m, rate, sign, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
-    Ok([(tp, tm), second])
-}
-
 /// The first two moments of the first-passage time at v_0 (see
 /// [`Moments`]); [`Error::Overflow`] when E(T²) exceeds the f64 range.
 pub fn moments(problem: &Problem, opts: &BackwardOptions) -> Result<Moments> {
     opts.validate()?;
     two_state_only(problem, "the first-passage moments")?;
-    let (cp, swapped) = problem.canonical();
-    let m = mesh(&cp, opts.cells)?;
-    let [(tp, tm), (qp, qm)] = moment_nodes(&cp, &m, opts.drift)?;
-    let i = m.start;
-    let (t1, t2) = if swapped {
-        ((tm[i], tp[i]), (qm[i], qp[i]))
-    } else {
-        ((tp[i], tm[i]), (qp[i], qm[i]))
-    };
-    let out = Moments::new(t1, t2, m.v.len() - 1);
-    verified(problem, out.at_start())?;
+    let set = setup_checked(problem, opts.cells, BARRIER, opts.drift)?;
+    let [(t1, _), (t2, _)] = moment_nodes(&set)?;
+    let (_, map) = user_states(problem, &set)?;
+    let at = |x: &[f64]| (x[map[0]], x[map[1]]);
+    let out = Moments::new(at(&t1), at(&t2), set.mesh.v.len() - 1);
+    verified(problem, out.tau)?;
     Ok(out)
 }
 
-impl Moments {
-    fn at_start(&self) -> BackwardSolution {
-        BackwardSolution {
-            tau: self.tau,
-            tau_plus: self.tau_plus,
-            tau_minus: self.tau_minus,
-            cells: self.cells,
-            error_estimate: f64::NAN,
-        }
-    }
+/// T1_s and T2_s at v_0 per canonical state, and at the nodes, from
+/// L T1 = -1 and L T2 = -2 T1 (the same operator, a new source).
+fn moment_nodes(set: &Setup) -> Result<[(Vec<f64>, Vec<f64>); 2]> {
+    let rate = set.p.params().rate();
+    let x = set.solve(rate, true, &|_, _| 1.0)?.ok_or_else(overflow)?;
+    let ns = set.states();
+    let y = set
+        .solve(rate, false, &|k, s| 2.0 * x[ns * k + s])?
+        .ok_or_else(overflow)?;
+    Ok([(set.at_start(&x).1, x), (set.at_start(&y).1, y)])
+}
+
+/// The first two moments of the first-passage time per state at v_0 on
+/// `cells` cells (states in the noise's order), verified non-negative, and
+/// the cells used: an independent discretisation (the box scheme) for the
+/// distribution of `mfpt::distribution` with a noise model to agree with.
+pub(super) fn moments_at_start(
+    problem: &Problem,
+    cells: usize,
+) -> Result<(Vec<f64>, Vec<f64>, usize)> {
+    let set = setup_checked(problem, cells, BARRIER, DriftSign::Simulated)?;
+    let [(t1, x), (t2, y)] = moment_nodes(&set)?;
+    set.non_negative(&x)?;
+    set.non_negative(&y)?;
+    let (_, map) = user_states(problem, &set)?;
+    let user = |t: &[f64]| map.iter().map(|&c| t[c]).collect();
+    Ok((user(&t1), user(&t2), set.mesh.v.len() - 1))
 }
 
 /// tau(v_0) at r = 0 and its derivative d tau / d r at r = 0 (the rate in
-/// `problem` is ignored). Differentiating the backward equations in r gives
-/// the r = 0 operator acting on sigma± = d tau± / dr with source
-/// tau±(v_r) - tau±(v) (evaluated with the r = 0 solution). Negative
-/// derivative: a little resetting shortens the search.
+/// `problem` is ignored). Differentiating the backward equations in r
+/// (Eq. (N30)) gives the r = 0 operator acting on sigma_s = d T_s / dr with
+/// source T_mix,s - T_s(v) (the reset value state s returns to, evaluated
+/// with the r = 0 solution). Negative derivative: a little resetting
+/// shortens the search.
 pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Result<(f64, f64)> {
     opts.validate()?;
-    if problem.params().noise().is_some() {
-        return super::nstate::rate_derivative_at_zero(problem, opts);
+    let set = setup_checked(problem, opts.cells, BARRIER, opts.drift)?;
+    let ns = set.states();
+    let x = set.solve(0.0, true, &|_, _| 1.0)?.ok_or_else(overflow)?;
+    let mix = set.returns(&x);
+    let d = set
+        .solve(0.0, false, &|k, s| mix[s] - x[ns * k + s])?
+        .ok_or_else(overflow)?;
+    Ok((set.at_start(&x).0, set.at_start(&d).0))
+}
+
+/// T_s(v) of every state on the mesh of the canonical (upward) problem of
+/// `problem` ([`Problem::canonical`], its states in the noise's order):
+/// (nodes, T_s at the nodes per state), verified non-negative.
+pub(super) fn canonical_states(
+    problem: &Problem,
+    cells: usize,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+    let set = setup_checked(problem, cells, BARRIER, DriftSign::Simulated)?;
+    let x = mean_nodes(&set)?;
+    let per_state = (0..set.states()).map(|s| set.column(&x, s)).collect();
+    Ok((set.mesh.v.clone(), per_state))
+}
+
+/// What the backward equations refuse for `problem` (canonical frame): the
+/// capability table's ([`crate::capability::check`]).
+pub(super) fn admissible(problem: &Problem) -> Result<()> {
+    crate::capability::check(crate::capability::Solver::Backward, problem.params())
+}
+
+/// The thermal generator on one mesh, for the survival equations of
+/// `mfpt::ndist` (Eq. (N49)): the band and border of the fitted operator
+/// of Eqs. (N32)-(N34) (source 0), and per unknown whether it is absorbed
+/// (S_s(v_t) = 0, an algebraic row whose band entry is 1).
+pub(super) struct Generator {
+    pub(super) band: Band,
+    pub(super) border: Vec<Vec<f64>>,
+    pub(super) absorbed: Vec<bool>,
+}
+
+/// The mesh of a thermal problem on `cells` cells, truncated at the
+/// barrier [`BARRIER`] (Eq. (N33)), in the canonical frame, as the mean
+/// solver builds it.
+pub(super) fn thermal_mesh(problem: &Problem, cells: usize) -> Result<Mesh> {
+    let set = setup_checked(problem, cells, BARRIER, DriftSign::Simulated)?;
+    if !(set.chain().temperature > 0.0) {
+        return Err(Error::invalid(
+            "temperature",
+            set.chain().temperature,
+            "temperature > 0 for the thermal backward operator",
+        ));
     }
-    let (cp, _) = problem.canonical();
-    let m = mesh(&cp, opts.cells)?;
-    let (tp, tm) = solve_mesh(&cp, &m, 0.0, opts.drift, Source::One)?.ok_or_else(overflow)?;
-    // The reset values each state returns to (kept: its own, re-drawn: the mean).
-    let (rp, rm) = cp
-        .params()
-        .reset()
-        .noise()
-        .mix(m.reset_value(|j| tp[j]), m.reset_value(|j| tm[j]));
-    let sp: Vec<f64> = tp.iter().map(|t| rp - t).collect();
-    let sm: Vec<f64> = tm.iter().map(|t| rm - t).collect();
-    let (dp, dm) =
-        solve_mesh(&cp, &m, 0.0, opts.drift, Source::Nodes(&sp, &sm))?.ok_or_else(overflow)?;
-    let i = m.start;
-    Ok((0.5 * (tp[i] + tm[i]), 0.5 * (dp[i] + dm[i])))
+    Ok(set.mesh)
+}
+
+/// The thermal generator (Eqs. (N32)-(N34)) of the canonical problem `cp`
+/// with its chain on `mesh` (node 0 the truncation, the last v_t; from
+/// [`thermal_mesh`] or its refinement).
+pub(super) fn thermal_generator(cp: &Problem, chain: &Chain, mesh: &Mesh) -> Generator {
+    let set = Setup::on_mesh(cp, chain, mesh);
+    let op = set.operator(cp.params().rate(), &|_, _| 0.0);
+    Generator {
+        band: op.band,
+        border: op.border,
+        absorbed: op.absorbed,
+    }
 }
 
 /// The paper's method (Sec. 3): first-order upwind differences iterated to a
@@ -950,11 +860,33 @@ pub fn fixed_point_upwind(
     })
 }
 
-/// Refuse a noise model in a two-state-only routine `what` (the N-state
-/// solver, [`super::nstate`], runs the mean, its profile and dτ/dr at 0).
+/// Refuse a noise model in a two-state-only routine `what` (the engine
+/// runs any noise for the mean, its profile and dτ/dr at 0).
 fn two_state_only(problem: &Problem, what: &str) -> Result<()> {
     match problem.params().noise() {
         Some(m) => crate::model::noise::support::refuse(what, m),
         None => Ok(()),
+    }
+}
+
+/// (tau+, tau-) on the canonical mesh as a [`Profile`] in the user's frame.
+fn to_user_frame(m: Mesh, tp: Vec<f64>, tm: Vec<f64>, swapped: bool) -> Profile {
+    let tau = tp.iter().zip(&tm).map(|(p, m)| 0.5 * (p + m)).collect();
+    if !swapped {
+        return Profile {
+            v: m.v,
+            tau,
+            tau_plus: tp,
+            tau_minus: tm,
+            start: m.start,
+        };
+    }
+    let n = m.v.len();
+    Profile {
+        v: m.v.iter().rev().map(|x| -x).collect(),
+        tau: tau.into_iter().rev().collect(),
+        tau_plus: tm.into_iter().rev().collect(),
+        tau_minus: tp.into_iter().rev().collect(),
+        start: n - 1 - m.start,
     }
 }

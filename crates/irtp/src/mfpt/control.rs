@@ -524,7 +524,7 @@ fn run_states(
 ) -> Result<ControlledStats> {
     super::exact::check_problem(problem)?;
     let (cp, _) = problem.canonical();
-    let (v, per_state) = super::nstate::canonical_states(problem, backward_cells)?;
+    let (v, per_state) = super::backward::canonical_states(problem, backward_cells)?;
     let (vl, _) = cp.params().bounds();
     let u = |x: f64, s: usize| interpolate(&v, &per_state[s], x);
     crate::with_drag!(cp.params().drag(), |d| {

@@ -20,9 +20,9 @@
 //! One home for the first-passage problem: [`Problem`], the estimators and
 //! all three methods behind one entry point, [`solve`] with a [`Method`].
 //!
-//! - [`backward`]: direct O(N) second-order solve of the backward equations.
-//! - [`nstate`]: the backward equations for a noise model (N states, thermal
-//!   noise), behind the same entry points of [`backward`].
+//! - [`backward`]: direct O(N) second-order solve of the backward equations,
+//!   one engine for the paper's noise and a noise model (N states, thermal
+//!   noise).
 //! - [`exact`]: exact event-driven particles (the sampler of [`crate::sim::exact`]).
 //! - [`control`]: the martingale control variate of exact passages, from an
 //!   approximate backward solution.
@@ -40,7 +40,6 @@ pub mod euler;
 pub mod exact;
 pub mod method;
 mod ndist;
-pub mod nstate;
 pub mod optimize;
 pub mod survival;
 mod upwind;

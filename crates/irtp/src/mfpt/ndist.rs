@@ -46,8 +46,8 @@
 //! state (diffusion reaches the target continuously: no atoms, no
 //! forcing) and reflecting at the truncation of the mean solver (Eq.
 //! (N33)). The rows are the mean
-//! solver's exponentially fitted generator (`nstate::thermal_generator`,
-//! Eq. (N34)) on its mesh of cells / 2 (`nstate::thermal_mesh`) and the
+//! solver's exponentially fitted generator (`backward::thermal_generator`,
+//! Eq. (N34)) on its mesh of cells / 2 (`backward::thermal_mesh`) and the
 //! midpoint refinement; the v_t rows are algebraic (S_s = 0). On each mesh
 //! the semi-discrete E(T) is the mean solver's τ on that mesh (Eq. (N50));
 //! the extrapolated E(T) is checked against τ on `cells` cells within
@@ -239,11 +239,11 @@ fn upwind_rows(cp: &Problem, m: &Mesh, chain: &Chain, absorbed: &[bool]) -> Rows
 }
 
 /// The thermal rows (Eq. (N49)) on mesh `m`: the fitted generator of
-/// `mfpt::nstate` (Eqs. (N32)-(N34), one code with the mean solver), its
+/// `mfpt::backward` (Eqs. (N32)-(N34), one code with the mean solver), its
 /// band copied into bandwidth N (its stencil couples node i to i ± 1 and
 /// the states of node i only).
 fn thermal_rows(cp: &Problem, m: &Mesh, chain: &Chain) -> Rows {
-    let gen = super::nstate::thermal_generator(cp, chain, m);
+    let gen = super::backward::thermal_generator(cp, chain, m);
     let ns = chain.states();
     let n = gen.band.dim();
     let mut band = Band::new(n, ns, ns);
@@ -261,7 +261,7 @@ fn thermal_rows(cp: &Problem, m: &Mesh, chain: &Chain) -> Rows {
 
 impl Survival {
     /// Assemble the rows on mesh `m`: the upwind rows of Eq. (N37) at
-    /// T = 0, the fitted thermal generator of `mfpt::nstate` with T > 0
+    /// T = 0, the fitted thermal generator of `mfpt::backward` with T > 0
     /// (Eq. (N49)).
     fn new(cp: &Problem, m: &Mesh, chain: &Chain, scales: (f64, f64)) -> Self {
         let par = cp.params();
@@ -634,7 +634,7 @@ fn run(
     })
 }
 
-/// The box scheme's moments (`mfpt::nstate`) as [`Moments`]: the mixture
+/// The box scheme's moments (`mfpt::backward`) as [`Moments`]: the mixture
 /// over π, `tau_plus` / `tau_minus` the states `hi` / `lo`.
 fn box_moments(
     problem: &Problem,
@@ -643,7 +643,7 @@ fn box_moments(
     hi: usize,
     lo: usize,
 ) -> Result<Moments> {
-    let (t1, t2, cells) = super::nstate::moments_at_start(problem, cells)?;
+    let (t1, t2, cells) = super::backward::moments_at_start(problem, cells)?;
     let mix = |x: &[f64]| -> f64 { x.iter().zip(pi).map(|(a, b)| a * b).sum() };
     let (tau, second) = (mix(&t1), mix(&t2));
     let var = |m2: f64, m: f64| m2 - m * m;
@@ -671,7 +671,7 @@ fn box_moments(
 /// refinement, for the canonical problem `cp`.
 fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
     if chain.temperature > 0.0 {
-        let coarse = super::nstate::thermal_mesh(cp, (cells / 2).max(8))?;
+        let coarse = super::backward::thermal_mesh(cp, (cells / 2).max(8))?;
         let fine = refine(cp, &coarse);
         return Ok((coarse, fine));
     }
@@ -714,7 +714,7 @@ fn both_runs(
 pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
     let chain = problem.params().chain()?;
     let (cp, _) = problem.canonical();
-    super::nstate::admissible(&cp, &cp.params().chain()?)?;
+    super::backward::admissible(&cp)?;
     Ok(chain)
 }
 
@@ -794,7 +794,7 @@ fn earliest_atom(atoms: &[Atom], thermal: bool) -> Result<(f64, f64)> {
 /// The first-passage-time distribution of `problem` (a noise model, at
 /// T = 0 or with thermal noise) at the output `times` (see the module
 /// doc); options and times validated by the caller
-/// ([`super::distribution()`]). Errors: what [`super::nstate`] refuses
+/// ([`super::distribution()`]). Errors: what [`super::backward`] refuses
 /// (with T > 0 a drag other than linear, tanh, tan, naming `drag`), a
 /// numerical failure of the time integration or of the checks.
 pub(super) fn distribution(
@@ -803,7 +803,7 @@ pub(super) fn distribution(
     opts: &DistributionOptions,
 ) -> Result<Distribution> {
     let user = admissible(problem)?;
-    let (hi, lo) = super::nstate::extreme_states(&user.levels);
+    let (hi, lo) = super::backward::extreme_states(&user.levels);
     let moments = box_moments(problem, opts.backward.cells, &user.pi, hi, lo)?;
     let (cp, _) = problem.canonical();
     let chain = cp.params().chain()?;

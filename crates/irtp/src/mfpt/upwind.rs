@@ -36,7 +36,7 @@
 //! ([`UpwindOperator::set_reset_atom`]).
 //! First order in h: [`super::distribution`] extrapolates two nested meshes.
 
-use super::backward::{Assembly, Mesh};
+use super::backward::Mesh;
 use super::Problem;
 use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Drag;
@@ -362,6 +362,19 @@ fn node_forces<D: Drag>(g: D, v: f64) -> (f64, f64) {
         let f = g.force(v);
         (f, f)
     }
+}
+
+/// The upwind operator on a mesh of the paper's noise, before any
+/// right-hand side: the band part (unknowns interleaved tau+_0, tau-_0,
+/// tau+_1, ...) and the two border columns multiplying the reset values
+/// x±(v_r).
+struct Assembly {
+    /// The band part (unfactored).
+    band: Band,
+    /// Border column of x+(v_r).
+    cp: Vec<f64>,
+    /// Border column of x-(v_r).
+    cm: Vec<f64>,
 }
 
 /// Upwind rows at the nodes: + rows look up the mesh, - rows down; the

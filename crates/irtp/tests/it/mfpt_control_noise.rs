@@ -2,7 +2,7 @@
 //! model (`irtp::mfpt::control::run`, any finite-state noise at T = 0):
 //! the compensator J u(v, s) = Σ_j q_sj [u(v, j) - u(v, s)] + r [E u(v_r',
 //! s') - u(v, s)] with u the N-state backward solution T_s
-//! (`mfpt::nstate`, Eqs. (N30)-(N31)). The controlled estimate agrees with
+//! (`mfpt::backward`, Eqs. (N30)-(N31)). The controlled estimate agrees with
 //! the backward τ (Bonferroni-raised 4 standard errors, the backward error
 //! estimate in quadrature) and is worth many plain passages; its passage
 //! times are the plain sampler's; thermal noise is refused naming

@@ -1,12 +1,12 @@
 //! The backward equations of first passage in velocity with a noise model
-//! (`irtp::mfpt::nstate`, docs/equations.md Eqs. (N30)-(N36)), checked once
+//! (`irtp::mfpt::backward`, docs/equations.md Eqs. (N30)-(N36)), checked once
 //! over `irtp_testkit::noises::NOISE_CASES`: the paper's noise spelt as a
 //! generator against the two-state solver, pure Ornstein-Uhlenbeck against
 //! the Siegert formula and its renewal formula with resetting, T → 0
 //! continuity, the truncation of the thermal domain moved, the lower bound
 //! and monotonicity in v_t, and dτ/dr at 0 against a difference quotient.
 
-use irtp::mfpt::nstate::{self, NoiseSolution};
+use irtp::mfpt::backward::{self, NoiseSolution};
 use irtp::mfpt::{BackwardOptions, Problem};
 use irtp::model::noise::NoiseModel;
 use irtp::numerics::quad;
@@ -35,7 +35,7 @@ fn downward(c: &NoiseCase) -> Problem {
 }
 
 fn solve(p: &Problem, cells: usize) -> NoiseSolution {
-    nstate::solve(p, &BackwardOptions::with_cells(cells)).expect("nstate solve")
+    backward::solve_states(p, &BackwardOptions::with_cells(cells)).expect("backward solve")
 }
 
 /// The paper's noise spelt as a 2-state generator runs the N-state solver
@@ -199,8 +199,8 @@ fn thermal_truncation_does_not_matter() {
         for p in [upward(c), downward(c)] {
             let base = solve(&p, 20_000);
             for b in [30.0, 50.0] {
-                let fine = nstate::solve_on(&p, 20_000, b).unwrap();
-                let coarse = nstate::solve_on(&p, 10_000, b).unwrap();
+                let fine = backward::solve_on(&p, 20_000, b).unwrap();
+                let coarse = backward::solve_on(&p, 10_000, b).unwrap();
                 let estimate = (fine.tau - coarse.tau).abs();
                 let rel = (fine.tau - base.tau).abs() / base.tau;
                 eprintln!(
@@ -264,7 +264,7 @@ fn bounds_monotonicity_and_estimates() {
             let vt = p.v0() + frac * (hi - p.v0());
             let q = p.with_target(vt).unwrap();
             let s = solve(&q, 4_000);
-            let bound = nstate::lower_bound(&q).unwrap();
+            let bound = backward::lower_bound(&q);
             assert!(s.tau >= bound, "{} {vt}", c.name);
             assert!(s.per_state.iter().all(|&t| t >= 0.0), "{}", c.name);
             assert!(s.tau > last, "{}: not increasing at {vt}", c.name);
@@ -293,12 +293,12 @@ fn rate_derivative_matches_difference_quotient() {
         let v0 = c.reset_velocity;
         let p = Problem::new(c.at_rate(0.0).params(), v0, v0 + 0.3 * (hi - v0)).unwrap();
         let opts = BackwardOptions::with_cells(4_000);
-        let (tau0, slope) = nstate::rate_derivative_at_zero(&p, &opts).unwrap();
-        let zero = nstate::solve_on(&p, 4_000, nstate::BARRIER).unwrap();
+        let (tau0, slope) = backward::rate_derivative_at_zero(&p, &opts).unwrap();
+        let zero = backward::solve_on(&p, 4_000, backward::BARRIER).unwrap();
         assert!((zero.tau - tau0).abs() <= 1e-12 * tau0, "{}", c.name);
         let h = (1e-4 * tau0 / slope.abs()).min(1e-2 / tau0);
         let at = |r: f64| {
-            nstate::solve_on(&p.with_rate(r).unwrap(), 4_000, nstate::BARRIER)
+            backward::solve_on(&p.with_rate(r).unwrap(), 4_000, backward::BARRIER)
                 .unwrap()
                 .tau
         };

@@ -2,7 +2,7 @@
 //! (`mfpt::solve` with `Method::Exact`, docs/equations.md Eqs.
 //! (N46)-(N48)): the paper's noise spelt as a generator against the
 //! two-state sampler, the π-averaged τ against the N-state backward
-//! equations (`mfpt::nstate`, Eqs. (N30)-(N31)) over
+//! equations (`mfpt::backward`, Eqs. (N30)-(N31)) over
 //! `irtp_testkit::noises::NOISE_CASES` at T = 0, bit-identical runs for
 //! any thread count and shard split, and the refusals by name. Tolerances:
 //! 4 standard errors raised to the Bonferroni bound over each test's
