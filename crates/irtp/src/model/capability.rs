@@ -136,7 +136,7 @@ impl Solver {
     }
 
     /// Whether it solves the N-state backward equations of the velocity
-    /// (crate::mfpt::nstate), whose thermal operator needs a drag with
+    /// (`crate::mfpt::backward` over a noise model's chain), whose thermal operator needs a drag with
     /// [`Drag::thermal_backward`].
     fn velocity_backward(&self) -> bool {
         matches!(
