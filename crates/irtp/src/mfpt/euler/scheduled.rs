@@ -170,7 +170,7 @@ impl<N: Begin + Sync> Passage<'_, N> {
         let mut clock = Clock::start(fr, &mut rng);
         let mut v = self.v0;
         let sample = |steps: u64, arrived: bool| FptSample {
-            time: arrived.then(|| steps as f64 * plan.dt),
+            time: arrived.then_some(steps as f64 * plan.dt),
             work: steps,
         };
         for n in 0..plan.steps {
