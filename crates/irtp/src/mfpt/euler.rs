@@ -354,43 +354,67 @@ impl Chain {
         }
     }
 
-    /// Particles lo..hi, `LANES` in flight, added to `acc` in index order.
+    /// Particles lo..hi, `LANES` in flight ([`in_lanes`]).
     fn chunk<D: Drag>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
-        let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
-        let mut next = lo;
-        let mut lanes: Vec<Lane> = Vec::with_capacity(LANES);
-        while lanes.len() < LANES && next < hi {
-            lanes.push(self.start(next));
-            next += 1;
+        in_lanes(
+            lo,
+            hi,
+            acc,
+            |i| self.start(i),
+            |l| self.advance(drag, l),
+            |l| l.i,
+        );
+    }
+}
+
+/// Particles lo..hi, `LANES` in flight: `start(i)` is particle i's lane,
+/// `advance` one step of a lane (its sample once the particle has arrived
+/// or reached t_max), `index` a lane's particle; a lane that finishes
+/// takes the chunk's next particle, and the samples are added to `acc` in
+/// index order (the same statistics as one particle at a time).
+#[inline(always)]
+fn in_lanes<L>(
+    lo: u64,
+    hi: u64,
+    acc: &mut FptStats,
+    start: impl Fn(u64) -> L,
+    mut advance: impl FnMut(&mut L) -> Option<FptSample>,
+    index: impl Fn(&L) -> u64,
+) {
+    let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
+    let mut next = lo;
+    let mut lanes: Vec<L> = Vec::with_capacity(LANES);
+    while lanes.len() < LANES && next < hi {
+        lanes.push(start(next));
+        next += 1;
+    }
+    let mut rounds = 0u64;
+    while !lanes.is_empty() {
+        rounds += 1;
+        // A stopped chunk is discarded by the cancelled reduction.
+        if parallel::stop_due(rounds) {
+            return;
         }
-        let mut rounds = 0u64;
-        while !lanes.is_empty() {
-            rounds += 1;
-            // A stopped chunk is discarded by the cancelled reduction.
-            if parallel::stop_due(rounds) {
-                return;
-            }
-            let mut k = 0;
-            while k < lanes.len() {
-                if let Some(sample) = self.advance(drag, &mut lanes[k]) {
-                    out[(lanes[k].i - lo) as usize] = Some(sample);
-                    if next < hi {
-                        lanes[k] = self.start(next);
-                        next += 1;
-                    } else {
-                        lanes.swap_remove(k);
-                        continue;
-                    }
+        let mut k = 0;
+        while k < lanes.len() {
+            if let Some(sample) = advance(&mut lanes[k]) {
+                out[(index(&lanes[k]) - lo) as usize] = Some(sample);
+                if next < hi {
+                    lanes[k] = start(next);
+                    next += 1;
+                } else {
+                    lanes.swap_remove(k);
+                    continue;
                 }
-                k += 1;
             }
+            k += 1;
         }
-        for (k, sample) in out.into_iter().enumerate() {
-            acc.push(
-                (lo + k as u64) % 2 == 0,
-                sample.expect("every particle ran"),
-            );
-        }
+    }
+    for (k, sample) in out.into_iter().enumerate() {
+        acc.push(
+            (lo + k as u64) % 2 == 0,
+            sample.expect("every particle ran"),
+        );
     }
 }
 

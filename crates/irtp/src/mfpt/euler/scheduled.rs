@@ -138,68 +138,92 @@ impl<'a> Passage<'a, ()> {
     }
 }
 
+/// One particle in flight: its index, stream, velocity, noise state,
+/// event sampler, schedule clock and steps done.
+struct Lane<S> {
+    i: u64,
+    rng: Rng,
+    v: f64,
+    st: S,
+    ev: Geometric,
+    clock: Clock,
+    n: u64,
+}
+
 impl<N: Begin + Sync> Passage<'_, N> {
     /// The unit totals of units `units` of a run of `n` particles, each
-    /// chunk's particles added in index order.
+    /// chunk's particles run in lanes ([`super::in_lanes`]).
     fn reduce(&self, n: u64, units: Range<u64>, progress: &dyn Progress) -> Vec<FptStats> {
         parallel::reduce_units(
             n,
             units,
             || FptStats::new(self.t_max),
             |lo, hi, acc| {
-                for i in lo..hi {
-                    acc.push(i % 2 == 0, self.particle(i));
-                }
+                super::in_lanes(lo, hi, acc, |i| self.start(i), |l| self.advance(l), |l| l.i)
             },
             |a, b| a.merge(&b),
             progress,
         )
     }
 
-    /// Particle i (module docs): its stream gives the noise's start, the
-    /// first scheduled reset time; per step the Poisson decision, a
-    /// reset's draws (velocity, noise state, refractory period, next
-    /// scheduled time) or the velocity step's and the bridge uniform, then
-    /// step 4's draws.
-    fn particle(&self, i: u64) -> FptSample {
+    /// Particle i at t = 0 (module docs): its stream gives the noise's
+    /// start, then the first scheduled reset time.
+    fn start(&self, i: u64) -> Lane<N::State> {
         let fr = &self.frame;
-        let plan = fr.plan;
         let mut rng = rng::stream(fr.seed, i);
         let plus = (i % 2 == 0) != self.swapped;
-        let (mut st, mut ev) = self.noise.begin(plus, &mut rng, plan);
-        let mut clock = Clock::start(fr, &mut rng);
-        let mut v = self.v0;
+        let (st, ev) = self.noise.begin(plus, &mut rng, fr.plan);
+        let clock = Clock::start(fr, &mut rng);
+        Lane {
+            i,
+            rng,
+            v: self.v0,
+            st,
+            ev,
+            clock,
+            n: 0,
+        }
+    }
+
+    /// Step n of a lane: the Poisson decision, a reset's draws (velocity,
+    /// noise state, refractory period, next scheduled time) or the
+    /// velocity step's and the bridge uniform, then step 4's draws; the
+    /// sample once the particle has arrived or reached t_max.
+    #[inline(always)]
+    fn advance(&self, l: &mut Lane<N::State>) -> Option<FptSample> {
+        let fr = &self.frame;
+        let plan = fr.plan;
+        let n = l.n;
         let sample = |steps: u64, arrived: bool| FptSample {
             time: arrived.then_some(steps as f64 * plan.dt),
             work: steps,
         };
-        for n in 0..plan.steps {
-            // Stopped: censored, in a chunk the cancelled reduction discards.
-            if parallel::stop_due(n + 1) {
-                return sample(n, false);
-            }
-            let poisson = ev.reset(n, &mut rng);
-            match clock.step3(n, poisson) {
-                Step3::Hold => {}
-                Step3::Reset => {
-                    v = fr.reset.draw_velocity(&mut rng);
-                    self.noise.reset(&mut st, n, &mut rng);
-                    if v >= self.vt {
-                        return sample(n + 1, true);
-                    }
-                    clock.rearm(fr, &mut rng);
-                }
-                Step3::Drift => {
-                    let w = self.noise.drift(v, &st, &mut rng);
-                    if w >= self.vt || self.crossed(v, w, &mut rng) {
-                        return sample(n + 1, true);
-                    }
-                    v = w;
-                }
-            }
-            self.noise.jump(&mut st, &mut ev, n, &mut rng);
+        if n >= plan.steps {
+            return Some(sample(n, false));
         }
-        sample(plan.steps, false)
+        l.n += 1;
+        let rng = &mut l.rng;
+        let poisson = l.ev.reset(n, rng);
+        match l.clock.step3(n, poisson) {
+            Step3::Hold => {}
+            Step3::Reset => {
+                l.v = fr.reset.draw_velocity(rng);
+                self.noise.reset(&mut l.st, n, rng);
+                if l.v >= self.vt {
+                    return Some(sample(n + 1, true));
+                }
+                l.clock.rearm(fr, rng);
+            }
+            Step3::Drift => {
+                let w = self.noise.drift(l.v, &l.st, rng);
+                if w >= self.vt || self.crossed(l.v, w, rng) {
+                    return Some(sample(n + 1, true));
+                }
+                l.v = w;
+            }
+        }
+        self.noise.jump(&mut l.st, &mut l.ev, n, rng);
+        None
     }
 
     /// Whether the thermal path crossed v_t between v and w (both below):
