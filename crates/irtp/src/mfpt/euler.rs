@@ -8,7 +8,7 @@
 //! The paper's noise under Poisson resetting runs the lane kernel below.
 //! A clock or a refractory period, and any noise model (finite-state
 //! noise, thermal noise with the Brownian-bridge crossing check, Eq.
-//! (N19)) with or without them, run the one scalar loop of the `scheduled`
+//! (N19)) with or without them, run the one loop of the `scheduled`
 //! submodule over the Euler sampler's noise steps and schedule
 //! ([`crate::sim::euler`]): the periodic reset at kT in the step from n·dt
 //! to (n+1)·dt with n = round(kT/dt) (O(dt) timing; a renewal clock's

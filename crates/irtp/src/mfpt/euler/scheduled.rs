@@ -1,4 +1,4 @@
-//! The Euler first passage one particle at a time, written once over the
+//! The Euler first passage with [`super`]'s lanes in flight, written once over the
 //! noise's steps of the Euler sampler ([`NoiseSteps`]: the paper's
 //! [`Telegraph`], or any finite-state noise and thermal noise in
 //! [`NoiseKernel`], docs/equations.md Eqs. (N15)-(N19)) and its schedule
