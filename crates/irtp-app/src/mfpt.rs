@@ -458,7 +458,7 @@ impl SimArgs {
 /// Work and memory of one problem. Backward equations: about 100 operations
 /// and 200 bytes per cell (measured: 2e6 cells, 6.6 s, 396 MB). Particles:
 /// each runs until its first passage, on average tau (from the backward
-/// equations on a coarse mesh, or t_max where they fail), at most t_max;
+/// equations on a coarse mesh: [`coarse_tau`]), at most t_max;
 /// exact events come at rate lambda + r (with a periodic clock or a
 /// refractory period, their bound `Schedule::event_rate_bound`; with a
 /// noise model at most max_s q_s + r: `Params::event_rate_bound`), Euler
@@ -468,8 +468,7 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
     let Some(run) = method.particles() else {
         return backward.per_drag_evaluation(&p.params().drag());
     };
-    let coarse = mfpt::backward::solve(p, &BackwardOptions::with_cells(1000));
-    let t = coarse.map_or(run.t_max, |s| s.tau.min(run.t_max));
+    let t = coarse_tau(p).map_or(run.t_max, |tau| tau.min(run.t_max));
     let params = p.params();
     let (per, unit, mut drivers) = match method {
         mfpt::Method::Euler { dt, .. } => (
@@ -490,6 +489,24 @@ fn method_cost(method: &mfpt::Method, p: &Problem, cells: usize) -> super::budge
         mfpt::Method::Euler { .. } => cost.per_drag_evaluation(&params.drag()),
         _ => cost,
     }
+}
+
+/// tau from the backward equations on a coarse mesh (1000 cells), for the
+/// cost estimate: of the problem, or where they do not run its schedule's
+/// modifiers (a noise model, a fixed refractory period) of the problem
+/// under its Poisson resetting alone, as the paper's noise is estimated
+/// with a periodic clock; None where that fails too.
+fn coarse_tau(p: &Problem) -> Option<f64> {
+    let opts = BackwardOptions::with_cells(1000);
+    if let Ok(s) = mfpt::backward::solve(p, &opts) {
+        return Some(s.tau);
+    }
+    if p.params().schedule().is_plain() {
+        return None;
+    }
+    let params = p.params().with_schedule(Default::default()).ok()?;
+    let poisson = Problem::new(params, p.v0(), p.vt()).ok()?;
+    mfpt::backward::solve(&poisson, &opts).ok().map(|s| s.tau)
 }
 
 /// tau of one problem by `method`, with a progress stage for particles.

@@ -25,6 +25,7 @@ mod hostile;
 mod interrupt;
 mod messages;
 mod mfpt_cli;
+mod mfpt_euler_noise_schedule_cli;
 mod noise_backward_cli;
 mod noise_cli;
 mod noise_euler_cli;

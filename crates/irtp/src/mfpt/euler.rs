@@ -5,23 +5,22 @@
 //! with the law's fast g, [`geometric_gap`]). The entry point is
 //! [`super::solve`] with [`super::Method::Euler`].
 //!
-//! The modifiers of the resetting rule run as in [`crate::sim::euler`]
-//! (one kernel per run, chosen outside the step): the periodic reset at kT
-//! in the step from n·dt to (n+1)·dt with n = round(kT/dt) (O(dt) timing;
-//! a renewal clock's drawn times likewise),
-//! a refractory
-//! period as round(D/dt) held steps (no drift, Poisson resets discarded,
-//! flips on, periodic times up to its end skipped). A reset at or above
-//! v_t is the passage at that step.
-//!
-//! A noise model other than the paper's (any finite-state noise, thermal
-//! noise with the Brownian-bridge crossing check, Eq. (N19)) runs in the
-//! scalar kernel of the `noise` submodule, started in a state drawn from π.
+//! The paper's noise under Poisson resetting runs the lane kernel below.
+//! A clock or a refractory period, and any noise model (finite-state
+//! noise, thermal noise with the Brownian-bridge crossing check, Eq.
+//! (N19)) with or without them, run the one loop of the `scheduled`
+//! submodule over the Euler sampler's noise steps and schedule
+//! ([`crate::sim::euler`]): the periodic reset at kT in the step from n·dt
+//! to (n+1)·dt with n = round(kT/dt) (O(dt) timing; a renewal clock's
+//! drawn times likewise), a refractory period as round(D/dt) held steps
+//! (no drift, Poisson resets discarded, the noise moving on, periodic
+//! times up to its end skipped). A reset at or above v_t is the passage at
+//! that step. A position reset does not touch the velocity process.
 
 use super::estimator::{merge_units, FptSample, FptStats, FptSummary};
 use super::Problem;
 use crate::error::{finite, Error, Result};
-use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
+use crate::model::reset::{Reset, ResetRule};
 use crate::model::Drag;
 use crate::parallel::{self, Progress};
 use crate::rng::{self, Rng};
@@ -29,7 +28,7 @@ use crate::sim::euler::{euler_step, geometric_gap};
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 
-mod noise;
+mod scheduled;
 
 /// Euler first-passage sampler (paper Eqs. (30)-(32)), step order as in
 /// [`crate::sim::euler`]: with probability r dt, v ← v_r (noise kept),
@@ -62,7 +61,6 @@ impl EulerFpt {
             None => par.check_dt(dt)?,
             Some(_) => {
                 par.require(crate::model::reset::Solver::MfptEuler)?;
-                crate::sim::euler::refuse_schedule(par)?;
                 crate::sim::euler::noise::check_noise_dt(par, dt)?
             }
         };
@@ -128,23 +126,18 @@ impl EulerFpt {
         seed: u64,
         progress: &dyn Progress,
     ) -> Vec<FptStats> {
-        if self.problem.params().noise().is_some() {
-            return noise::units(self, n, units, seed, progress);
+        let par = self.problem.params();
+        let schedule = par.schedule();
+        if par.noise().is_some() || schedule.scheduled_clock() || schedule.refractory.is_some() {
+            return scheduled::units(self, n, units, seed, progress);
         }
         let c = Chain::new(self, seed);
-        let scheduled = c.schedule.scheduled_clock() || c.refractory.is_some();
-        crate::with_drag!(self.problem.params().drag(), |d| {
+        crate::with_drag!(par.drag(), |d| {
             parallel::reduce_units(
                 n,
                 units.clone(),
                 || FptStats::new(self.t_max),
-                |lo, hi, acc| {
-                    if scheduled {
-                        c.chunk::<_, true>(d, lo, hi, acc)
-                    } else {
-                        c.chunk::<_, false>(d, lo, hi, acc)
-                    }
-                },
+                |lo, hi, acc| c.chunk(d, lo, hi, acc),
                 |a, b| a.merge(&b),
                 progress,
             )
@@ -253,7 +246,8 @@ pub fn verify_extrapolation(coarse: &FptSummary, fine: &FptSummary, least: f64) 
 /// Particles in flight per thread.
 const LANES: usize = 4;
 
-/// The constants of one run, in the canonical (upward) frame.
+/// The constants of one run of the lane kernel (the paper's noise, Poisson
+/// resetting), in the canonical (upward) frame.
 struct Chain {
     dt: f64,
     /// ln(1 - q) and ln(1 - r dt): the geometric gaps of flips and resets.
@@ -267,8 +261,6 @@ struct Chain {
     max_steps: u64,
     reset: ResetRule,
     seed: u64,
-    schedule: Schedule,
-    refractory: Option<Refractory>,
 }
 
 /// One particle in flight.
@@ -282,19 +274,6 @@ struct Lane {
     next_flip: u64,
     next_reset: u64,
     step: u64,
-    /// Held steps left of a refractory period.
-    hold: u64,
-    /// The next periodic reset time (∞ without a periodic clock).
-    next_periodic: f64,
-}
-
-impl Lane {
-    /// Whether the step just counted (from (step-1)·dt to step·dt) holds
-    /// the next periodic reset: step - 1 = round(kT/dt).
-    #[inline]
-    fn periodic_now(&self, dt: f64) -> bool {
-        (self.step - 1) as f64 >= (self.next_periodic / dt).round()
-    }
 }
 
 impl Chain {
@@ -313,8 +292,6 @@ impl Chain {
             max_steps: (e.t_max / dt).floor() as u64,
             reset: *par.reset(),
             seed,
-            schedule: *par.schedule(),
-            refractory: par.schedule().refractory,
         }
     }
 
@@ -324,7 +301,6 @@ impl Chain {
         let plus = (i % 2 == 0) != self.swapped;
         let next_flip = geometric_gap(&mut rng, self.ln_flip);
         let next_reset = geometric_gap(&mut rng, self.ln_reset);
-        let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             i,
             rng,
@@ -333,16 +309,13 @@ impl Chain {
             next_flip,
             next_reset,
             step: 0,
-            hold: 0,
-            next_periodic,
         }
     }
 
     /// One Euler step of a lane (reset or drift, arrival check, then flip);
-    /// the sample once the particle has arrived or reached t_max. `S`: with
-    /// the schedule's modifiers (module docs).
+    /// the sample once the particle has arrived or reached t_max.
     #[inline(always)]
-    fn advance<D: Drag, const S: bool>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
+    fn advance<D: Drag>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
         if l.step >= self.max_steps {
             return Some(FptSample {
                 time: None,
@@ -350,9 +323,6 @@ impl Chain {
             });
         }
         l.step += 1;
-        if S {
-            return self.advance_scheduled(drag, l);
-        }
         if l.step == l.next_reset {
             l.v = self.reset.draw_velocity(&mut l.rng);
             let plus = self.reset.draw_noise(l.s > 0.0, &mut l.rng);
@@ -384,86 +354,67 @@ impl Chain {
         }
     }
 
-    /// [`Chain::advance`]'s step with the schedule's modifiers (module
-    /// docs), after the step count: a held step of a refractory period (a
-    /// Poisson reset discarded), a reset (Poisson or periodic; passage if
-    /// the reset velocity is at or above v_t, else a refractory period if
-    /// any), or the drift and its arrival check; then the flip.
-    fn advance_scheduled<D: Drag>(&self, drag: &D, l: &mut Lane) -> Option<FptSample> {
-        let t = l.step as f64 * self.dt;
-        let poisson = l.step == l.next_reset;
-        if poisson {
-            l.next_reset = l
-                .step
-                .saturating_add(geometric_gap(&mut l.rng, self.ln_reset));
-        }
-        let arrived = Some(FptSample {
-            time: Some(t),
-            work: l.step,
-        });
-        if l.hold > 0 {
-            l.hold -= 1;
-        } else if poisson || l.periodic_now(self.dt) {
-            l.v = self.reset.draw_velocity(&mut l.rng);
-            let plus = self.reset.draw_noise(l.s > 0.0, &mut l.rng);
-            l.s = if plus { self.sigma } else { -self.sigma };
-            if l.v >= self.vt {
-                return arrived;
-            }
-            if let Some(r) = self.refractory {
-                l.hold = (r.draw(&mut l.rng) / self.dt).round() as u64;
-            }
-            if self.schedule.scheduled_clock() {
-                let free = l.next_periodic + l.hold as f64 * self.dt;
-                l.next_periodic = self.schedule.next_reset(free, &mut l.rng);
-            }
-        } else {
-            l.v = euler_step(drag, l.v, l.s, self.dt);
-            if l.v >= self.vt {
-                return arrived;
-            }
-        }
-        self.flip(l);
-        None
+    /// Particles lo..hi, `LANES` in flight ([`in_lanes`]).
+    fn chunk<D: Drag>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
+        in_lanes(
+            lo,
+            hi,
+            acc,
+            |i| self.start(i),
+            |l| self.advance(drag, l),
+            |l| l.i,
+        );
     }
+}
 
-    /// Particles lo..hi, `LANES` in flight, added to `acc` in index order.
-    fn chunk<D: Drag, const S: bool>(&self, drag: &D, lo: u64, hi: u64, acc: &mut FptStats) {
-        let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
-        let mut next = lo;
-        let mut lanes: Vec<Lane> = Vec::with_capacity(LANES);
-        while lanes.len() < LANES && next < hi {
-            lanes.push(self.start(next));
-            next += 1;
+/// Particles lo..hi, `LANES` in flight: `start(i)` is particle i's lane,
+/// `advance` one step of a lane (its sample once the particle has arrived
+/// or reached t_max), `index` a lane's particle; a lane that finishes
+/// takes the chunk's next particle, and the samples are added to `acc` in
+/// index order (the same statistics as one particle at a time).
+#[inline(always)]
+fn in_lanes<L>(
+    lo: u64,
+    hi: u64,
+    acc: &mut FptStats,
+    start: impl Fn(u64) -> L,
+    mut advance: impl FnMut(&mut L) -> Option<FptSample>,
+    index: impl Fn(&L) -> u64,
+) {
+    let mut out: Vec<Option<FptSample>> = vec![None; (hi - lo) as usize];
+    let mut next = lo;
+    let mut lanes: Vec<L> = Vec::with_capacity(LANES);
+    while lanes.len() < LANES && next < hi {
+        lanes.push(start(next));
+        next += 1;
+    }
+    let mut rounds = 0u64;
+    while !lanes.is_empty() {
+        rounds += 1;
+        // A stopped chunk is discarded by the cancelled reduction.
+        if parallel::stop_due(rounds) {
+            return;
         }
-        let mut rounds = 0u64;
-        while !lanes.is_empty() {
-            rounds += 1;
-            // A stopped chunk is discarded by the cancelled reduction.
-            if parallel::stop_due(rounds) {
-                return;
-            }
-            let mut k = 0;
-            while k < lanes.len() {
-                if let Some(sample) = self.advance::<D, S>(drag, &mut lanes[k]) {
-                    out[(lanes[k].i - lo) as usize] = Some(sample);
-                    if next < hi {
-                        lanes[k] = self.start(next);
-                        next += 1;
-                    } else {
-                        lanes.swap_remove(k);
-                        continue;
-                    }
+        let mut k = 0;
+        while k < lanes.len() {
+            if let Some(sample) = advance(&mut lanes[k]) {
+                out[(index(&lanes[k]) - lo) as usize] = Some(sample);
+                if next < hi {
+                    lanes[k] = start(next);
+                    next += 1;
+                } else {
+                    lanes.swap_remove(k);
+                    continue;
                 }
-                k += 1;
             }
+            k += 1;
         }
-        for (k, sample) in out.into_iter().enumerate() {
-            acc.push(
-                (lo + k as u64) % 2 == 0,
-                sample.expect("every particle ran"),
-            );
-        }
+    }
+    for (k, sample) in out.into_iter().enumerate() {
+        acc.push(
+            (lo + k as u64) % 2 == 0,
+            sample.expect("every particle ran"),
+        );
     }
 }
 
@@ -560,8 +511,7 @@ mod tests {
                 for i in lo..(lo + parallel::CHUNK).min(n) {
                     let mut lane = c.start(i);
                     let sample = loop {
-                        if let Some(s) = c.advance::<_, false>(&crate::model::drag::Tan, &mut lane)
-                        {
+                        if let Some(s) = c.advance(&crate::model::drag::Tan, &mut lane) {
                             break s;
                         }
                     };

@@ -293,17 +293,17 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// with noise of class `noise` too. The particle samplers run them with
 /// any finite-state noise at T = 0, one event loop over the noise's states
 /// each (the exact samplers of `simulate`, `mfpt` and `mfpt distribution`,
-/// the Euler scheme of `simulate`, which also runs them at T > 0); the
-/// search's methods run every protocol they run. The N-state Fokker-Planck
-/// and backward equations, the exact sampler's Ornstein-Uhlenbeck loop
-/// (T > 0) and `mfpt --method euler`'s noise kernel run a noise model with
-/// Poisson resetting only (any target, noise kept or re-drawn).
+/// the Euler schemes of `simulate` and `mfpt`, which also run them at
+/// T > 0); the search's methods run every protocol they run. The N-state
+/// Fokker-Planck and backward equations and the exact sampler's
+/// Ornstein-Uhlenbeck loop (T > 0) run a noise model with Poisson
+/// resetting only (any target, noise kept or re-drawn).
 pub fn modifiers_with_noise(solver: Solver, noise: NoiseClass) -> bool {
     use NoiseClass as N;
     use Solver as S;
     match solver {
         S::Exact | S::MfptExact | S::FptDistributionExact => noise == N::FiniteState,
-        S::Euler => true,
+        S::Euler | S::MfptEuler => true,
         S::SearchBackward
         | S::SearchRenewal
         | S::SearchExact

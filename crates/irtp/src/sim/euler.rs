@@ -190,22 +190,6 @@ impl EulerPlan {
     }
 }
 
-/// The Euler first passage with a noise model runs the paper's protocol
-/// only: a modifier of the resetting rule is refused by its flag.
-pub(crate) fn refuse_schedule(params: &Params) -> Result<()> {
-    if let Some(&f) = params.schedule().features().first() {
-        return Err(Error::invalid(
-            f.flag(),
-            params.schedule().spec_of(f),
-            format!(
-                "no {} with a noise model in the Euler first passage (Poisson resetting only)",
-                f.describe()
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// Simulate `spec.particles` particles with the Euler scheme and geometric
 /// waiting times. Bit-identical for any thread count.
 pub fn simulate(
@@ -355,7 +339,7 @@ pub(crate) fn template(params: &Params, spec: &SimSpec, plan: &EulerPlan) -> Obs
 }
 
 /// Reset / flip decisions of one particle (steps 3 and 4 of the module docs).
-trait Events: Sized {
+pub(crate) trait Events: Sized {
     fn new(rng: &mut Rng, plan: &EulerPlan) -> Self;
     /// Does a reset happen in step n?
     fn reset(&mut self, n: u64, rng: &mut Rng) -> bool;
@@ -368,11 +352,28 @@ trait Events: Sized {
 }
 
 /// Geometric waiting times: step indices of the next reset and flip.
-struct Geometric {
+pub(crate) struct Geometric {
     next_reset: u64,
     next_flip: u64,
     ln_reset: f64,
     ln_flip: f64,
+}
+
+impl Geometric {
+    /// [`Events::new`] with the first flip gap drawn before the first
+    /// reset gap (the first passage's stream).
+    pub(crate) fn flip_first(rng: &mut Rng, plan: &EulerPlan) -> Self {
+        let ln_reset = (-plan.p_reset).ln_1p();
+        let ln_flip = (-plan.q_flip).ln_1p();
+        let next_flip = geometric_gap(rng, ln_flip) - 1;
+        let next_reset = geometric_gap(rng, ln_reset) - 1;
+        Geometric {
+            next_reset,
+            next_flip,
+            ln_reset,
+            ln_flip,
+        }
+    }
 }
 
 impl Events for Geometric {
@@ -486,8 +487,14 @@ fn run<D: Drag, E: Events>(
             let mut occ = vec![0.0; LANES * spec.bins];
             let mut i = lo;
             if !kernel.schedule.is_plain() {
+                let telegraph = Telegraph {
+                    f,
+                    sigma: kernel.sigma,
+                    dt: plan.dt,
+                    reset: kernel.reset,
+                };
                 for i in lo..hi {
-                    scheduled::<_, E>(&kernel, &frame, first + i, obs, &mut occ[..spec.bins]);
+                    scheduled::<_, E>(&telegraph, &frame, first + i, obs, &mut occ[..spec.bins]);
                 }
                 return;
             }
@@ -722,18 +729,32 @@ impl<D: Drag> Kernel<'_, D> {
 
 /// What the scheduled loop ([`scheduled`]) reads of a run besides the
 /// noise: the plan, seed, resetting rule and its modifiers, the bins.
-struct Frame<'a> {
-    plan: &'a EulerPlan,
-    seed: u64,
-    reset: ResetRule,
-    schedule: Schedule,
+pub(crate) struct Frame<'a> {
+    pub(crate) plan: &'a EulerPlan,
+    pub(crate) seed: u64,
+    pub(crate) reset: ResetRule,
+    pub(crate) schedule: Schedule,
     /// The histogram's lower edge, bins per unit velocity, bin count.
     lo: f64,
     scale: f64,
     bins: usize,
 }
 
-impl Frame<'_> {
+impl<'a> Frame<'a> {
+    /// The frame of a run of `params` that keeps no histogram (one bin):
+    /// the first passage's loop.
+    pub(crate) fn unbinned(plan: &'a EulerPlan, seed: u64, params: &Params) -> Self {
+        Frame {
+            plan,
+            seed,
+            reset: *params.reset(),
+            schedule: *params.schedule(),
+            lo: 0.0,
+            scale: 0.0,
+            bins: 1,
+        }
+    }
+
     #[inline]
     fn bin(&self, v: f64) -> usize {
         let i = ((v - self.lo) * self.scale) as isize;
@@ -741,10 +762,81 @@ impl Frame<'_> {
     }
 }
 
+/// What step 3 does in one step of a scheduled loop ([`Clock::step3`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Step3 {
+    /// A held step of a refractory period: v stays put.
+    Hold,
+    /// A reset (Poisson, periodic or renewal).
+    Reset,
+    /// The velocity step.
+    Drift,
+}
+
+/// The schedule's modifiers of one particle (module docs): the next
+/// periodic or renewal reset time, its step, and the held steps left of a
+/// refractory period.
+pub(crate) struct Clock {
+    next: f64,
+    /// round(next/dt): the step of the next scheduled reset (∞ without one).
+    step: f64,
+    hold: u64,
+}
+
+impl Clock {
+    /// The clock at t = 0: the first scheduled reset time drawn from `rng`
+    /// (no draw without a clock).
+    #[inline]
+    pub(crate) fn start(fr: &Frame, rng: &mut Rng) -> Self {
+        let next = fr.schedule.first_reset(rng);
+        Clock {
+            next,
+            step: (next / fr.plan.dt).round(),
+            hold: 0,
+        }
+    }
+
+    /// Whether the particle is held (a refractory period).
+    #[inline]
+    pub(crate) fn holding(&self) -> bool {
+        self.hold > 0
+    }
+
+    /// Step 3 in step n with the Poisson decision `poisson`: a held step
+    /// (counted), a reset (Poisson, or the scheduled one of step n), or the
+    /// drift.
+    #[inline]
+    pub(crate) fn step3(&mut self, n: u64, poisson: bool) -> Step3 {
+        if self.hold > 0 {
+            self.hold -= 1;
+            Step3::Hold
+        } else if poisson || n as f64 >= self.step {
+            Step3::Reset
+        } else {
+            Step3::Drift
+        }
+    }
+
+    /// After a reset: the refractory period's held steps round(D/dt), then
+    /// the next scheduled reset time, the clock restarted at the hold's end.
+    #[inline]
+    pub(crate) fn rearm(&mut self, fr: &Frame, rng: &mut Rng) {
+        let dt = fr.plan.dt;
+        if let Some(r) = fr.schedule.refractory {
+            self.hold = (r.draw(rng) / dt).round() as u64;
+        }
+        if fr.schedule.scheduled_clock() {
+            let free = self.next + self.hold as f64 * dt;
+            self.next = fr.schedule.next_reset(free, rng);
+            self.step = (self.next / dt).round();
+        }
+    }
+}
+
 /// The noise's part of one Euler step in the scheduled loop: the paper's
-/// η = ±Σ flipped by the event sampler ([`Kernel`]) or a finite-state
+/// η = ±Σ flipped by the event sampler ([`Telegraph`]) or a finite-state
 /// chain with its thermal kick ([`noise::NoiseKernel`]).
-trait NoiseSteps {
+pub(crate) trait NoiseSteps {
     /// The noise state of one particle.
     type State;
     /// The start state and the event sampler, drawn from `rng`.
@@ -760,7 +852,17 @@ trait NoiseSteps {
     fn rests(&self, v: f64, st: &Self::State, obs: &Observables) -> bool;
 }
 
-impl<D: Drag> NoiseSteps for Kernel<'_, D> {
+/// The paper's noise η = ±Σ in the scheduled loop: the step of
+/// [`euler_step`], a reset keeping or re-drawing η, the flips of the event
+/// sampler.
+pub(crate) struct Telegraph<'a, D> {
+    pub(crate) f: &'a D,
+    pub(crate) sigma: f64,
+    pub(crate) dt: f64,
+    pub(crate) reset: ResetRule,
+}
+
+impl<D: Drag> NoiseSteps for Telegraph<'_, D> {
     type State = f64;
     fn start<E: Events>(&self, rng: &mut Rng, plan: &EulerPlan) -> (f64, E) {
         let eta = if rng.gen::<f64>() < 0.5 {
@@ -770,13 +872,16 @@ impl<D: Drag> NoiseSteps for Kernel<'_, D> {
         };
         (eta, E::new(rng, plan))
     }
+    #[inline]
     fn drift(&self, v: f64, eta: &f64, _rng: &mut Rng) -> f64 {
-        euler_step(self.f, v, *eta, self.plan.dt)
+        euler_step(self.f, v, *eta, self.dt)
     }
+    #[inline]
     fn reset(&self, eta: &mut f64, _n: u64, rng: &mut Rng) {
         let plus = self.reset.draw_noise(*eta > 0.0, rng);
         *eta = if plus { self.sigma } else { -self.sigma };
     }
+    #[inline]
     fn jump<E: Events>(&self, eta: &mut f64, ev: &mut E, n: u64, rng: &mut Rng) {
         if ev.flip(n, rng) {
             *eta = -*eta;
@@ -805,10 +910,8 @@ fn scheduled<N: NoiseSteps, E: Events>(
     let dt = plan.dt;
     let mut rng = rng::stream(fr.seed, i);
     let (mut st, mut ev) = noise.start::<E>(&mut rng, plan);
-    let mut next_periodic = fr.schedule.first_reset(&mut rng);
-    // The step of the next periodic or renewal reset (∞ without one).
-    let mut periodic_step = (next_periodic / dt).round();
-    let (mut v, mut x, mut hold) = (0.0f64, 0.0f64, 0u64);
+    let mut clock = Clock::start(fr, &mut rng);
+    let (mut v, mut x) = (0.0f64, 0.0f64);
     let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     // Steps at the law's atom (held at the reset velocity, or resting at
     // a state's fixed point), in no bin.
@@ -826,7 +929,7 @@ fn scheduled<N: NoiseSteps, E: Events>(
         if n >= plan.burn_in_step {
             sv += v;
             sv2 += v * v;
-            if (hold > 0 && obs.is_atom(v)) || noise.rests(v, &st, obs) {
+            if (clock.holding() && obs.is_atom(v)) || noise.rests(v, &st, obs) {
                 at_atom += 1.0;
             } else {
                 occ[fr.bin(v)] += 1.0;
@@ -834,24 +937,17 @@ fn scheduled<N: NoiseSteps, E: Events>(
         }
         x += v * dt;
         let poisson = ev.reset(n, &mut rng);
-        if hold > 0 {
-            hold -= 1;
-        } else if poisson || n as f64 >= periodic_step {
-            v = fr.reset.draw_velocity(&mut rng);
-            noise.reset(&mut st, n, &mut rng);
-            if let Some(p) = fr.schedule.position {
-                x = p.x;
+        match clock.step3(n, poisson) {
+            Step3::Hold => {}
+            Step3::Reset => {
+                v = fr.reset.draw_velocity(&mut rng);
+                noise.reset(&mut st, n, &mut rng);
+                if let Some(p) = fr.schedule.position {
+                    x = p.x;
+                }
+                clock.rearm(fr, &mut rng);
             }
-            if let Some(r) = fr.schedule.refractory {
-                hold = (r.draw(&mut rng) / dt).round() as u64;
-            }
-            if fr.schedule.scheduled_clock() {
-                let free = next_periodic + hold as f64 * dt;
-                next_periodic = fr.schedule.next_reset(free, &mut rng);
-                periodic_step = (next_periodic / dt).round();
-            }
-        } else {
-            v = noise.drift(v, &st, &mut rng);
+            Step3::Drift => v = noise.drift(v, &st, &mut rng),
         }
         noise.jump(&mut st, &mut ev, n, &mut rng);
     }

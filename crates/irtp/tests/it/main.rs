@@ -23,6 +23,7 @@ mod fp_transient;
 mod mfpt_backward;
 mod mfpt_control;
 mod mfpt_control_noise;
+mod mfpt_euler_noise_schedule;
 mod mfpt_sim;
 mod models;
 mod msd_fit;

@@ -285,7 +285,7 @@ pub fn max_noise_dt(params: &Params) -> Result<f64> {
 
 /// The constants of one N-state run: the noise's steps of the scheduled
 /// loop ([`super::scheduled`]) and its frame.
-pub(super) struct NoiseKernel<'a, D> {
+pub(crate) struct NoiseKernel<'a, D> {
     f: &'a D,
     chain: StepChain,
     step: ThermalStep,
@@ -295,7 +295,7 @@ pub(super) struct NoiseKernel<'a, D> {
 }
 
 /// The noise state of one particle and its next jump step.
-pub(super) struct State {
+pub(crate) struct State {
     s: usize,
     next_jump: u64,
 }
@@ -310,19 +310,31 @@ impl<D: Drag> NoiseKernel<'_, D> {
         obs: &Observables,
         geometric: bool,
     ) -> Result<NoiseKernel<'a, D>> {
+        let frame = Frame {
+            plan,
+            seed: spec.seed,
+            reset: *params.reset(),
+            schedule: *params.schedule(),
+            lo: obs.v_lo,
+            scale: spec.bins as f64 / (obs.v_hi - obs.v_lo),
+            bins: spec.bins,
+        };
+        Self::with_frame(f, params, frame, geometric)
+    }
+
+    /// The kernel of `params` (a noise model) in the frame `frame`.
+    pub(crate) fn with_frame<'a>(
+        f: &'a D,
+        params: &Params,
+        frame: Frame<'a>,
+        geometric: bool,
+    ) -> Result<NoiseKernel<'a, D>> {
+        let dt = frame.plan.dt;
         Ok(NoiseKernel {
             f,
-            chain: StepChain::new(&params.chain()?, plan.dt)?,
-            step: ThermalStep::new(params, plan.dt),
-            frame: Frame {
-                plan,
-                seed: spec.seed,
-                reset: *params.reset(),
-                schedule: *params.schedule(),
-                lo: obs.v_lo,
-                scale: spec.bins as f64 / (obs.v_hi - obs.v_lo),
-                bins: spec.bins,
-            },
+            chain: StepChain::new(&params.chain()?, dt)?,
+            step: ThermalStep::new(params, dt),
+            frame,
             geometric,
         })
     }
