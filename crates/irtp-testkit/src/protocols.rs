@@ -407,11 +407,6 @@ pub const PROTOCOL_CASES: [ProtocolCase; 17] = [
         periodic(1.0, None),
         // v_u = atan 3.
         passage(1.249_045_772_398_254_4),
-    )
-    .single(
-        "a noise model with a schedule modifier: of the core's velocity passages only \
-         mfpt --method exact runs it (mfpt distribution --method exact is the same kernel, \
-         in irtp-app)",
     ),
     case(
         "tan-thermal-refr-exp-passage",
@@ -422,9 +417,9 @@ pub const PROTOCOL_CASES: [ProtocolCase; 17] = [
         passage(TAN_VU),
     )
     .single(
-        "thermal noise with a schedule modifier: no velocity passage runs it (the N-state \
-         backward equations and mfpt --method euler's noise kernel run Poisson resetting only, \
-         the exact samplers T = 0 only)",
+        "thermal noise with a schedule modifier: of the velocity passages only mfpt --method \
+         euler runs it (the N-state backward equations run Poisson resetting only, the exact \
+         samplers T = 0 only)",
     ),
     case(
         "linear-search-poisson",

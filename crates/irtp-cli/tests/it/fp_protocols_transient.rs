@@ -310,7 +310,7 @@ fn paper_scheme_refuses_a_refractory_period() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("refractory") && e.contains("reset-period"),
+        e.contains("refractory") && e.contains("periodic resetting"),
         "{e}"
     );
 }

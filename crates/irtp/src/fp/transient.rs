@@ -393,8 +393,8 @@ fn periodic_reset(g: &Grid, u: &mut [f64]) {
 }
 
 /// The exponential refractory period runs in [`Scheme::TrBdf2`] only (the
-/// held pairs of [`ForwardOperator`]), and not together with periodic
-/// resetting.
+/// held pairs of [`ForwardOperator`]; with periodic resetting it is refused
+/// before, by `capability::combination_runs`).
 fn require_held(params: &Params, scheme: Scheme) -> Result<()> {
     let Some(r) = params.schedule().refractory else {
         return Ok(());
@@ -404,13 +404,6 @@ fn require_held(params: &Params, scheme: Scheme) -> Result<()> {
             "refractory",
             r.spec(),
             "none with --scheme paper (the refractory period runs in --scheme trbdf2)",
-        ));
-    }
-    if params.schedule().periodic.is_some() {
-        return Err(Error::invalid(
-            "refractory",
-            r.spec(),
-            "none together with --reset-period in fp transient",
         ));
     }
     Ok(())

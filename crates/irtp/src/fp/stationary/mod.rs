@@ -175,8 +175,8 @@ fn check_cells<S: StationarySpace>(o: &StationaryOptions) -> Result<()> {
 
 /// Solve the stationary forward equations directly (no time stepping).
 ///
-/// The paper's noise runs the two-state space ([`two_state`]); a noise
-/// model (`params.noise()` is Some) the chain ([`chain`], Eqs.
+/// The paper's noise runs the two-state space (`two_state`); a noise
+/// model (`params.noise()` is Some) the chain (`chain`, Eqs.
 /// (N20)-(N27)): N coupled densities, thermal noise, `noise` filled in and
 /// `p_plus`, `p_minus` empty.
 pub fn stationary(params: &Params, opts: &StationaryOptions) -> Result<Stationary> {
