@@ -32,6 +32,7 @@
 mod engine;
 
 pub use engine::BARRIER;
+pub(super) use engine::{Finite, Space, Telegraph};
 
 use super::Problem;
 use crate::error::{Error, Result};

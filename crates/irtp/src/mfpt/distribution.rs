@@ -37,10 +37,15 @@
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
 
-use super::backward::{self, mesh, target_weights, BackwardOptions, DriftSign, Mesh, Moments};
+mod finite;
+
+use super::backward::{
+    self, mesh, target_weights, BackwardOptions, DriftSign, Finite, Mesh, Moments, Space, Telegraph,
+};
 use super::upwind::{exp_moments, AtomProbe, UpwindOperator};
 use super::Problem;
 use crate::error::{Error, Result};
+use crate::model::noise::chain::Chain;
 use crate::model::reset::Solver;
 use crate::model::Drag;
 use crate::numerics::trbdf2::{self, Stats, Tolerances};
@@ -238,7 +243,7 @@ pub(super) fn refine(cp: &Problem, m: &Mesh) -> Mesh {
     }
 }
 
-/// Where a run stops: past the grid until the survival is below `tail`
+/// Where a run stops: past the grid until every S_s(v_0) is below `tail`
 /// (or at `t_stop`), or at a given time.
 #[derive(Clone, Copy)]
 enum Stop {
@@ -246,24 +251,158 @@ enum Stop {
     At(f64),
 }
 
-/// One mesh's run, canonical frame (+ state first).
-struct Run {
-    /// S± and f± at v_0 at the output times (the atom included in S+,
-    /// excluded from f+).
-    s: Vec<(f64, f64)>,
-    f: Vec<(f64, f64)>,
-    /// ∫_0^t_end S± dt and 2 ∫_0^t_end t S± dt from the time integration.
-    mean: (f64, f64),
-    second: (f64, f64),
-    /// E(T±) and E(T±²) of the semi-discrete system, exactly in time.
-    exact_mean: (f64, f64),
-    exact_second: (f64, f64),
-    t_end: f64,
-    /// S±(v_0, t_end).
-    tail: (f64, f64),
-    stats: Stats,
-    /// The scheme's spread of the atom's arrival ([`AtomProbe::spread`]).
+impl Stop {
+    /// Integrate on from t, the end of the grid: `top` is the largest
+    /// S_s(v_0) at a time, `step` integrates from a time to the next; the
+    /// first window past the grid reaches `horizon`, then they double.
+    /// Returns where it stopped.
+    fn finish<C>(
+        self,
+        ctx: &mut C,
+        mut t: f64,
+        horizon: f64,
+        top: impl Fn(&C, f64) -> f64,
+        mut step: impl FnMut(&mut C, f64, f64) -> Result<Stats>,
+    ) -> Result<(f64, Stats)> {
+        let mut stats = Stats::default();
+        match self {
+            Stop::Tail { tail, t_stop } => {
+                let t_stop = t_stop.max(t);
+                while top(ctx, t) >= tail && t < t_stop {
+                    let next = (2.0 * t)
+                        .max(horizon.min(t_stop))
+                        .min(t_stop)
+                        .max(t + f64::EPSILON * t);
+                    stats += step(ctx, t, next)?;
+                    t = next;
+                }
+            }
+            Stop::At(end) if end > t => {
+                stats += step(ctx, t, end)?;
+                t = end;
+            }
+            Stop::At(_) => {}
+        }
+        Ok((t, stats))
+    }
+}
+
+/// An atom of one mesh's run: started in state `s`, the flow reaches v_t
+/// at `time` with no jump and no reset before (decay `kill` = q_s + r);
+/// `spread`: the scheme's spread of that arrival on the mesh.
+struct RunAtom {
+    s: usize,
+    time: f64,
+    kill: f64,
     spread: f64,
+}
+
+/// One mesh's run, per state: S_s(v_0) (atoms included) and f_s(v_0) at
+/// the output times, the moments of the time integration and of the
+/// semi-discrete system exactly in time (the time integration's where a
+/// space computes no other), the end, the survival left there.
+struct Run {
+    s: Vec<Vec<f64>>,
+    f: Vec<Vec<f64>>,
+    mean: Vec<f64>,
+    second: Vec<f64>,
+    exact_mean: Vec<f64>,
+    exact_second: Vec<f64>,
+    t_end: f64,
+    tail: Vec<f64>,
+    stats: Stats,
+    atoms: Vec<RunAtom>,
+}
+
+impl Run {
+    /// The states renumbered by `to` (canonical to user's frame).
+    fn renumber(mut self, to: impl Fn(usize) -> usize) -> Run {
+        let order = |x: &mut Vec<f64>| {
+            let mut y = x.clone();
+            for (s, v) in x.iter().enumerate() {
+                y[to(s)] = *v;
+            }
+            *x = y;
+        };
+        self.s.iter_mut().chain(self.f.iter_mut()).for_each(order);
+        for x in [
+            &mut self.mean,
+            &mut self.second,
+            &mut self.exact_mean,
+            &mut self.exact_second,
+            &mut self.tail,
+        ] {
+            order(x);
+        }
+        self.atoms.iter_mut().for_each(|a| a.s = to(a.s));
+        self
+    }
+}
+
+/// The survival equations as a state space runs them: the paper's noise
+/// ([`Telegraph`], the two-state upwind scheme of `mfpt/upwind.rs`) or a
+/// noise model's chain ([`Finite`], `distribution/finite.rs`). The driver
+/// ([`distribution`]) is one for both.
+trait Survival: Space {
+    /// The box scheme's moments; the mixture over the `user` chain's π,
+    /// ± the states `hi`, `lo`.
+    fn moments(
+        &self,
+        p: &Problem,
+        opts: &BackwardOptions,
+        user: &Chain,
+        hi: usize,
+        lo: usize,
+    ) -> Result<Moments>;
+    /// The coarse mesh on `cells` cells of the canonical problem `cp`.
+    fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh>;
+    /// One mesh's run (canonical frame, the chain's state order).
+    fn run(
+        &self,
+        cp: &Problem,
+        m: &Mesh,
+        times: &[f64],
+        tol: &Tolerances,
+        stop: Stop,
+        scales: (f64, f64),
+    ) -> Result<Run>;
+    /// Whether [`Distribution::atoms`] lists the atoms.
+    fn lists_atoms(&self) -> bool;
+    /// How far E(T) may lie from the box scheme's τ.
+    fn mean_tolerance(&self, d: &Distribution) -> f64;
+}
+
+impl Survival for Telegraph {
+    fn moments(
+        &self,
+        p: &Problem,
+        opts: &BackwardOptions,
+        _: &Chain,
+        _: usize,
+        _: usize,
+    ) -> Result<Moments> {
+        backward::moments(p, opts)
+    }
+    fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh> {
+        mesh(cp, cells)
+    }
+    fn run(
+        &self,
+        cp: &Problem,
+        m: &Mesh,
+        times: &[f64],
+        tol: &Tolerances,
+        stop: Stop,
+        scales: (f64, f64),
+    ) -> Result<Run> {
+        run(cp, m, times, tol, stop, scales)
+    }
+    fn lists_atoms(&self) -> bool {
+        false
+    }
+    fn mean_tolerance(&self, d: &Distribution) -> f64 {
+        1e-3 * d.moments.tau
+    }
 }
 
 /// The atom's part of S+(v_0, t): e^{-k t} for t < T_f.
@@ -352,18 +491,8 @@ fn run(
     // is resolved in time whatever the output grid, by both integrations.
     let probe = AtomProbe::new(cp, m);
     let spread = probe.spread();
-    let last = positive.last().copied().unwrap_or(0.0);
-    let mut all: Vec<(f64, bool)> = positive.iter().map(|&t| (t, true)).collect();
-    let even = (1..=HIDDEN).map(|j| 2.0 * tf * j as f64 / HIDDEN as f64);
     let kink = (0..=2 * HIDDEN).map(|j| tf + 6.0 * spread * (j as f64 / HIDDEN as f64 - 1.0));
-    all.extend(
-        even.chain(kink)
-            .filter(|&t| t > 0.0 && t < last)
-            .filter(|&t| positive.binary_search_by(|x| x.total_cmp(&t)).is_err())
-            .map(|t| (t, false)),
-    );
-    all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    all.dedup_by(|a, b| a.0 == b.0);
+    let all = landing_points(&positive, hidden(tf).chain(kink));
     let targets: Vec<f64> = all.iter().map(|a| a.0).collect();
     let mut shown = all.iter().map(|a| a.1);
     let mut observe = |t: f64, v: &UpwindOperator, x: &[f64]| {
@@ -389,52 +518,57 @@ fn run(
     for (fi, a) in f[zeros..].iter_mut().zip(smeared) {
         fi.0 += a;
     }
-    let mut t = op.t0;
     let survival = |u: &[f64], t: f64| (u[p] + atom_survival(k, tf, t), u[q]);
-    match stop {
-        Stop::Tail { tail, t_stop } => {
-            let t_stop = t_stop.max(t);
-            loop {
-                let (a, b) = survival(&u, t);
-                if !(a.max(b) >= tail && t < t_stop) {
-                    break;
-                }
-                let next = (2.0 * t)
-                    .max(tf.min(t_stop))
-                    .min(t_stop)
-                    .max(t + f64::EPSILON * t);
-                let st = advance(&mut op, &mut view, &mut u, &[next], tol, &mut |_, _, _| {})?;
-                stats += st;
-                t = next;
-            }
-        }
-        Stop::At(end) if end > t => {
-            let st = advance(&mut op, &mut view, &mut u, &[end], tol, &mut |_, _, _| {})?;
-            stats += st;
-            t = end;
-        }
-        Stop::At(_) => {}
-    }
+    let t = op.t0;
+    let mut ctx = (op, view, u);
+    let (t, st) = stop.finish(
+        &mut ctx,
+        t,
+        tf,
+        |c, t| {
+            let (a, b) = survival(&c.2, t);
+            a.max(b)
+        },
+        |c, _, next| {
+            advance(
+                &mut c.0,
+                &mut c.1,
+                &mut c.2,
+                &[next],
+                tol,
+                &mut |_, _, _| {},
+            )
+        },
+    )?;
+    stats += st;
+    let (op, _, u) = ctx;
     let n = op.n;
     // The atom's share of ∫ S+ and ∫ t S+, in closed form.
     let (ia, ja) = exp_moments(k, tf.min(t));
     let (xa, ya) = exp_moments(k, tf);
     let (x1, x2) = op.stationary_integrals()?;
     let second = |i: f64, j: f64| 2.0 * (t * i - j);
+    let pairs = |x: Vec<(f64, f64)>| x.into_iter().map(|(a, b)| vec![a, b]).collect();
+    let tail = survival(&u, t);
     Ok(Run {
-        s,
-        f,
-        mean: (u[n] + ia, u[n + 1]),
-        second: (
+        s: pairs(s),
+        f: pairs(f),
+        mean: vec![u[n] + ia, u[n + 1]],
+        second: vec![
             second(u[n], u[n + 2]) + 2.0 * ja,
             second(u[n + 1], u[n + 3]),
-        ),
-        exact_mean: (x1.0 + xa, x1.1),
-        exact_second: (2.0 * (x2.0 + ya), 2.0 * x2.1),
+        ],
+        exact_mean: vec![x1.0 + xa, x1.1],
+        exact_second: vec![2.0 * (x2.0 + ya), 2.0 * x2.1],
         t_end: t,
-        tail: survival(&u, t),
+        tail: vec![tail.0, tail.1],
         stats,
-        spread,
+        atoms: vec![RunAtom {
+            s: 0,
+            time: tf,
+            kill: k,
+            spread,
+        }],
     })
 }
 
@@ -442,12 +576,28 @@ fn run(
 /// f is smeared ([`Distribution::atom_spread`]).
 pub const ATOM_WINDOW: f64 = 6.0;
 
-/// Hidden landing points of the time stepping across [0, 2 T_f].
+/// Hidden landing points of the time stepping across [0, 2 max T_f,s].
 const HIDDEN: usize = 64;
 
-/// 2 fine - coarse.
-fn extrapolate(fine: f64, coarse: f64) -> f64 {
-    2.0 * fine - coarse
+/// [`HIDDEN`] points evenly across (0, 2 `tf`].
+fn hidden(tf: f64) -> impl Iterator<Item = f64> {
+    (1..=HIDDEN).map(move |j| 2.0 * tf * j as f64 / HIDDEN as f64)
+}
+
+/// The output times (flagged true) merged with the `extra` points inside
+/// (0, last time) that are none of them (flagged false), sorted.
+fn landing_points(times: &[f64], extra: impl Iterator<Item = f64>) -> Vec<(f64, bool)> {
+    let last = times.last().copied().unwrap_or(0.0);
+    let mut all: Vec<(f64, bool)> = times.iter().map(|&t| (t, true)).collect();
+    all.extend(
+        extra
+            .filter(|&t| t > 0.0 && t < last)
+            .filter(|&t| times.binary_search_by(|x| x.total_cmp(&t)).is_err())
+            .map(|t| (t, false)),
+    );
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    all.dedup_by(|a, b| a.0 == b.0);
+    all
 }
 
 /// What [`distribution`] refuses in the problem itself, before any solve
@@ -458,16 +608,18 @@ fn extrapolate(fine: f64, coarse: f64) -> f64 {
 pub fn check_problem(problem: &Problem) -> Result<()> {
     problem.params().require(Solver::FptDistribution)?;
     if problem.params().noise().is_some() {
-        super::ndist::admissible(problem)?;
+        finite::admissible(problem)?;
     }
     Ok(())
 }
 
 /// The first-passage-time distribution of `problem` at the output `times`
 /// (see the module doc). Errors: invalid options or times; the paper's
-/// printed drift (only the simulated process has a distribution);
-/// [`Error::Overflow`] where the moments exceed the f64 range; a numerical
-/// failure of the time integration.
+/// printed drift (only the simulated process has a distribution); with a
+/// noise model what [`super::backward`] refuses (with T > 0 a drag other
+/// than linear, tanh, tan, naming `drag`); [`Error::Overflow`] where the
+/// moments exceed the f64 range; a numerical failure of the time
+/// integration or of the checks.
 pub fn distribution(
     problem: &Problem,
     times: &[f64],
@@ -483,12 +635,29 @@ pub fn distribution(
             "the simulated drift",
         ));
     }
+    let (cp, _) = problem.canonical();
     if problem.params().noise().is_some() {
-        return super::ndist::distribution(problem, times, opts);
+        let user = finite::admissible(problem)?;
+        return drive(&Finite(cp.params().chain()?), problem, times, opts, &user);
     }
-    let moments = backward::moments(problem, &opts.backward)?;
+    let user = Telegraph::of(problem).chain().clone();
+    drive(&Telegraph::of(&cp), problem, times, opts, &user)
+}
+
+/// The two meshes' runs of `space` and what they report (the states in
+/// the `user` chain's order; `survival_plus` / `survival_minus` the states
+/// of highest / lowest level), checked by [`verify`].
+fn drive(
+    space: &dyn Survival,
+    problem: &Problem,
+    times: &[f64],
+    opts: &DistributionOptions,
+    user: &Chain,
+) -> Result<Distribution> {
+    let (hi, lo) = backward::extreme_states(&user.levels);
+    let moments = space.moments(problem, &opts.backward, user, hi, lo)?;
     let (cp, swapped) = problem.canonical();
-    let coarse = mesh(&cp, (opts.backward.cells / 2).max(8))?;
+    let coarse = space.coarse(&cp, (opts.backward.cells / 2).max(8))?;
     let fine_mesh = refine(&cp, &coarse);
     let tol = Tolerances {
         rtol: opts.rtol,
@@ -500,76 +669,134 @@ pub fn distribution(
         tail: opts.tail,
         t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
     };
-    let fine = run(&cp, &fine_mesh, times, &tol, stop, scales)?;
-    let rough = run(&cp, &coarse, times, &tol, Stop::At(fine.t_end), scales)?;
-    let sw = |p: (f64, f64)| if swapped { (p.1, p.0) } else { p };
-    let ex = |a: (f64, f64), b: (f64, f64)| sw((extrapolate(a.0, b.0), extrapolate(a.1, b.1)));
-    // S extrapolated; f from the finer mesh only: the scheme smears the
-    // kinks of S_c over widths that differ between the meshes, and the
-    // derivative of 2 fine - coarse overshoots there (f < 0).
-    let (sp, sm): (Vec<f64>, Vec<f64>) =
-        fine.s.iter().zip(&rough.s).map(|(a, b)| ex(*a, *b)).unzip();
-    let (fp, fm): (Vec<f64>, Vec<f64>) = fine.f.iter().map(|&a| sw(a)).unzip();
-    let mesh_error = fine
-        .s
-        .iter()
-        .zip(&rough.s)
-        .map(|(a, b)| (a.0 - b.0).abs().max((a.1 - b.1).abs()))
-        .fold(0.0, f64::max);
-    let par = cp.params();
-    let atom_time = par.drag().flow_time(par.sigma(), cp.v0(), cp.vt());
-    let smeared = |t: f64| (t - atom_time).abs() < ATOM_WINDOW * rough.spread;
-    let mesh_error_density = (0..times.len())
-        .filter(|&i| !smeared(times[i]))
-        .map(|i| {
-            let (a, b) = (fine.f[i], rough.f[i]);
-            (a.0 - b.0).abs().max((a.1 - b.1).abs())
-        })
-        .fold(0.0, f64::max);
-    let (mean, second, tail) = (
-        ex(fine.exact_mean, rough.exact_mean),
-        ex(fine.exact_second, rough.exact_second),
-        sw(fine.tail),
-    );
-    let (mean_t, second_t) = (ex(fine.mean, rough.mean), ex(fine.second, rough.second));
-    let atom = sw(((-(par.lambda() + par.rate()) * atom_time).exp(), 0.0));
-    let avg = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
-    let d = Distribution {
-        survival: avg(&sp, &sm),
-        density: avg(&fp, &fm),
-        t: times.to_vec(),
-        survival_plus: sp,
-        survival_minus: sm,
-        density_plus: fp,
-        density_minus: fm,
-        moments,
-        mean: 0.5 * (mean.0 + mean.1),
-        mean_plus: mean.0,
-        mean_minus: mean.1,
-        second: 0.5 * (second.0 + second.1),
-        t_end: fine.t_end,
-        tail_mass: 0.5 * (tail.0 + tail.1),
-        atom_time,
-        atom_mass: 0.5 * (atom.0 + atom.1),
-        atom_mass_plus: atom.0,
-        atom_mass_minus: atom.1,
-        steps: fine.stats.steps + rough.stats.steps,
-        rejected: fine.stats.rejected + rough.stats.rejected,
-        mesh_error,
-        mesh_error_density,
-        atom_spread: fine.spread,
-        mean_time_integral: 0.5 * (mean_t.0 + mean_t.1),
-        second_time_integral: 0.5 * (second_t.0 + second_t.1),
-        mean_error: 0.5
-            * ((fine.exact_mean.0 + fine.exact_mean.1) - (rough.exact_mean.0 + rough.exact_mean.1))
-                .abs(),
-        atoms: Vec::new(),
-    };
-    let tol = 1e-3 * d.moments.tau;
-    verify(&d, opts.rtol, tol)?;
+    let to = |s| space.user_state(s, swapped);
+    let fine = space
+        .run(&cp, &fine_mesh, times, &tol, stop, scales)?
+        .renumber(to);
+    let end = Stop::At(fine.t_end);
+    let rough = space
+        .run(&cp, &coarse, times, &tol, end, scales)?
+        .renumber(to);
+    let thermal = space.chain().temperature > 0.0;
+    let mut d = report(times, user, (hi, lo), moments, &fine, &rough, thermal)?;
+    verify(&d, opts.rtol, space.mean_tolerance(&d))?;
+    if !space.lists_atoms() {
+        d.atoms.clear();
+    }
     Ok(d)
 }
 
+/// Per output time, the π-mixture and the states `hi`, `lo` of a per-state
+/// table.
+fn columns(rows: &[Vec<f64>], pi: &[f64], hi: usize, lo: usize) -> [Vec<f64>; 3] {
+    let mix = rows
+        .iter()
+        .map(|r| r.iter().zip(pi).map(|(a, b)| a * b).sum())
+        .collect();
+    [
+        mix,
+        rows.iter().map(|r| r[hi]).collect(),
+        rows.iter().map(|r| r[lo]).collect(),
+    ]
+}
+
+/// max over rows and states of |a - b|, over the rows `keep` admits.
+fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>], keep: impl Fn(usize) -> bool) -> f64 {
+    (0..a.len())
+        .filter(|&i| keep(i))
+        .flat_map(|i| a[i].iter().zip(&b[i]).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// The earliest atom's (time, spread): (0, 0) with T > 0, where there is
+/// none (as [`Distribution::smeared`] then flags no time); at T = 0 an
+/// error where no state's flow reaches the target.
+fn earliest_atom(atoms: &[Atom], thermal: bool) -> Result<(f64, f64)> {
+    match atoms.iter().min_by(|a, b| a.time.total_cmp(&b.time)) {
+        Some(a) => Ok((a.time, a.spread)),
+        None if thermal => Ok((0.0, 0.0)),
+        None => Err(Error::Numerical {
+            method: "first-passage distribution",
+            reason: "no state's flow reaches the target".into(),
+        }),
+    }
+}
+
+/// The distribution from the runs on the finer and the coarser mesh (user's
+/// state order): S and the moments extrapolated 2 fine - coarse, f the
+/// finer mesh's (the scheme smears the kinks of S_c over widths that
+/// differ between the meshes, and the derivative of 2 fine - coarse
+/// overshoots there, f < 0); the atoms the finer mesh's.
+fn report(
+    times: &[f64],
+    user: &Chain,
+    (hi, lo): (usize, usize),
+    moments: Moments,
+    fine: &Run,
+    rough: &Run,
+    thermal: bool,
+) -> Result<Distribution> {
+    let ex =
+        |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect() };
+    let s: Vec<Vec<f64>> = fine.s.iter().zip(&rough.s).map(|(a, b)| ex(a, b)).collect();
+    let [survival, survival_plus, survival_minus] = columns(&s, &user.pi, hi, lo);
+    let [density, density_plus, density_minus] = columns(&fine.f, &user.pi, hi, lo);
+    let mean = ex(&fine.exact_mean, &rough.exact_mean);
+    let second = ex(&fine.exact_second, &rough.exact_second);
+    let (mean_t, second_t) = (ex(&fine.mean, &rough.mean), ex(&fine.second, &rough.second));
+    let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
+    let atoms: Vec<Atom> = fine
+        .atoms
+        .iter()
+        .map(|a| Atom {
+            state: a.s,
+            level: user.levels[a.s],
+            time: a.time,
+            mass: (-a.kill * a.time).exp(),
+            weight: user.pi[a.s],
+            spread: a.spread,
+        })
+        .collect();
+    let smeared = |i: usize| {
+        let t = times[i];
+        atoms
+            .iter()
+            .zip(&rough.atoms)
+            .any(|(a, w)| (t - a.time).abs() < ATOM_WINDOW * w.spread)
+    };
+    let mass_of = |s: usize| atoms.iter().find(|a| a.state == s).map_or(0.0, |a| a.mass);
+    let (atom_time, atom_spread) = earliest_atom(&atoms, thermal)?;
+    Ok(Distribution {
+        t: times.to_vec(),
+        survival,
+        survival_plus,
+        survival_minus,
+        density,
+        density_plus,
+        density_minus,
+        mean: mix(&mean),
+        mean_plus: mean[hi],
+        mean_minus: mean[lo],
+        second: mix(&second),
+        t_end: fine.t_end,
+        tail_mass: mix(&fine.tail),
+        atom_time,
+        // A fold from +0 (an empty f64 sum is -0): 0 where there is no atom.
+        atom_mass: atoms.iter().fold(0.0, |m, a| m + a.weight * a.mass),
+        atom_mass_plus: mass_of(hi),
+        atom_mass_minus: mass_of(lo),
+        steps: fine.stats.steps + rough.stats.steps,
+        rejected: fine.stats.rejected + rough.stats.rejected,
+        mesh_error: max_diff(&fine.s, &rough.s, |_| true),
+        mesh_error_density: max_diff(&fine.f, &rough.f, |i| !smeared(i)),
+        atom_spread,
+        mean_time_integral: mix(&mean_t),
+        second_time_integral: mix(&second_t),
+        mean_error: (mix(&fine.exact_mean) - mix(&rough.exact_mean)).abs(),
+        moments,
+        atoms,
+    })
+}
 /// The invariants of a survival function, to the accuracy the run reports:
 /// 0 <= S <= 1 and S non-increasing (each within 10 rtol + mesh_error),
 /// f >= 0 outside the smeared window around the atom's flow time (within

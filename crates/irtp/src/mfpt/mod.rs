@@ -39,7 +39,6 @@ pub mod estimator;
 pub mod euler;
 pub mod exact;
 pub mod method;
-mod ndist;
 pub mod optimize;
 pub mod survival;
 mod upwind;

@@ -54,11 +54,11 @@
 //! 1e-3 τ + 2 `mean_error`. `atoms` is empty and `atom_time`, `atom_mass`
 //! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
 
-use super::backward::{mesh_on, Mesh, Moments};
-use super::distribution::{refine, Atom, Distribution, DistributionOptions};
-use super::upwind::exp_moments;
-use super::Problem;
-use crate::error::{Error, Result};
+use super::super::backward::{mesh_on, BackwardOptions, Finite, Mesh, Moments};
+use super::super::upwind::exp_moments;
+use super::super::Problem;
+use super::{hidden, landing_points, Distribution, Run, RunAtom, Stop};
+use crate::error::Result;
 use crate::model::noise::chain::{self, Chain};
 use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::Drag;
@@ -243,7 +243,7 @@ fn upwind_rows(cp: &Problem, m: &Mesh, chain: &Chain, absorbed: &[bool]) -> Rows
 /// band copied into bandwidth N (its stencil couples node i to i ± 1 and
 /// the states of node i only).
 fn thermal_rows(cp: &Problem, m: &Mesh, chain: &Chain) -> Rows {
-    let gen = super::backward::thermal_generator(cp, chain, m);
+    let gen = super::super::backward::thermal_generator(cp, chain, m);
     let ns = chain.states();
     let n = gen.band.dim();
     let mut band = Band::new(n, ns, ns);
@@ -518,49 +518,6 @@ impl ShiftedLinear for Survival {
     }
 }
 
-/// Where a run stops: past the grid until every S_s(v_0) is below `tail`
-/// (or at `t_stop`), or at a given time.
-#[derive(Clone, Copy)]
-enum Stop {
-    Tail { tail: f64, t_stop: f64 },
-    At(f64),
-}
-
-/// One mesh's run: per output time and state, S_s(v_0) (atoms included)
-/// and f_s(v_0); per state the moments of the time integration.
-struct Run {
-    s: Vec<Vec<f64>>,
-    f: Vec<Vec<f64>>,
-    mean: Vec<f64>,
-    second: Vec<f64>,
-    t_end: f64,
-    tail: Vec<f64>,
-    stats: Stats,
-    /// Per absorbed state: its atom's spread on this mesh.
-    spreads: Vec<f64>,
-}
-
-/// Hidden landing points of the time stepping across [0, 2 max T_f,s].
-const HIDDEN: usize = 64;
-
-/// The output times merged with the hidden points (flagged false; none
-/// without atoms, `tf` = 0).
-fn landing_points(times: &[f64], tf: f64) -> Vec<(f64, bool)> {
-    let last = times.last().copied().unwrap_or(0.0);
-    let mut all: Vec<(f64, bool)> = times.iter().map(|&t| (t, true)).collect();
-    all.extend(
-        (1..=HIDDEN)
-            .map(|j| 2.0 * tf * j as f64 / HIDDEN as f64)
-            .filter(|&t| {
-                t > 0.0 && t < last && times.binary_search_by(|x| x.total_cmp(&t)).is_err()
-            })
-            .map(|t| (t, false)),
-    );
-    all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    all.dedup_by(|a, b| a.0 == b.0);
-    all
-}
-
 /// Integrate `op` from absolute time t to `next` (no observation).
 fn advance(op: &mut Survival, u: &mut [f64], t: f64, next: f64, tol: &Tolerances) -> Result<Stats> {
     op.t0 = t;
@@ -581,7 +538,7 @@ fn run(
     let view = Survival::new(cp, m, chain, scales);
     let mut u = op.initial();
     let tf = op.atoms.iter().map(|a| a.time).fold(0.0, f64::max);
-    let all = landing_points(times, tf);
+    let all = landing_points(times, hidden(tf));
     // The first window past the grid: the latest atom, or τ without atoms.
     let horizon = if tf > 0.0 { tf } else { scales.0 };
     let targets: Vec<f64> = all.iter().map(|a| a.0).collect();
@@ -594,25 +551,16 @@ fn run(
         }
         Ok(())
     })?;
-    let mut t = targets.last().copied().unwrap_or(0.0);
-    match stop {
-        Stop::Tail { tail, t_stop } => {
-            let t_stop = t_stop.max(t);
-            while view.observe(&u, t).0.iter().any(|&x| x >= tail) && t < t_stop {
-                let next = (2.0 * t)
-                    .max(horizon.min(t_stop))
-                    .min(t_stop)
-                    .max(t + f64::EPSILON * t);
-                stats += advance(&mut op, &mut u, t, next, tol)?;
-                t = next;
-            }
-        }
-        Stop::At(end) if end > t => {
-            stats += advance(&mut op, &mut u, t, end, tol)?;
-            t = end;
-        }
-        Stop::At(_) => {}
-    }
+    let t = targets.last().copied().unwrap_or(0.0);
+    let top = |c: &(Survival, Vec<f64>), t: f64| {
+        let s = view.observe(&c.1, t).0;
+        s.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+    };
+    let mut ctx = (op, u);
+    let step = |c: &mut (Survival, Vec<f64>), t, next| advance(&mut c.0, &mut c.1, t, next, tol);
+    let (t, st) = stop.finish(&mut ctx, t, horizon, top, step)?;
+    stats += st;
+    let (op, u) = ctx;
     let (n, ns) = (op.n, op.ns);
     let (mut mean, mut second): (Vec<f64>, Vec<f64>) = (0..ns)
         .map(|s| (u[n + s], 2.0 * (t * u[n + s] - u[n + ns + s])))
@@ -625,12 +573,23 @@ fn run(
     Ok(Run {
         s,
         f,
+        exact_mean: mean.clone(),
+        exact_second: second.clone(),
         mean,
         second,
         t_end: t,
         tail: view.observe(&u, t).0,
         stats,
-        spreads: op.atoms.iter().map(|a| a.spread).collect(),
+        atoms: op
+            .atoms
+            .iter()
+            .map(|a| RunAtom {
+                s: a.s,
+                time: a.time,
+                kill: a.kill,
+                spread: a.spread,
+            })
+            .collect(),
     })
 }
 
@@ -643,7 +602,7 @@ fn box_moments(
     hi: usize,
     lo: usize,
 ) -> Result<Moments> {
-    let (t1, t2, cells) = super::backward::moments_at_start(problem, cells)?;
+    let (t1, t2, cells) = super::super::backward::moments_at_start(problem, cells)?;
     let mix = |x: &[f64]| -> f64 { x.iter().zip(pi).map(|(a, b)| a * b).sum() };
     let (tau, second) = (mix(&t1), mix(&t2));
     let var = |m2: f64, m: f64| m2 - m * m;
@@ -666,55 +625,12 @@ fn box_moments(
     })
 }
 
-/// The coarse mesh (cells / 2, every fixed point inside a node; with
-/// T > 0 the mean solver's, truncated as Eq. (N33)) and its midpoint
-/// refinement, for the canonical problem `cp`.
-fn meshes(cp: &Problem, chain: &Chain, cells: usize) -> Result<(Mesh, Mesh)> {
-    if chain.temperature > 0.0 {
-        let coarse = super::backward::thermal_mesh(cp, (cells / 2).max(8))?;
-        let fine = refine(cp, &coarse);
-        return Ok((coarse, fine));
-    }
-    let g = cp.params().drag();
-    let (vl, vu) = cp.params().bounds();
-    let stars: Vec<f64> = chain.levels.iter().map(|&a| g.inverse(a)).collect();
-    let coarse = mesh_on(cp, vl, vu, &stars, (cells / 2).max(8))?;
-    let fine = refine(cp, &coarse);
-    Ok((coarse, fine))
-}
-
-/// The runs on the finer mesh (to the tail) and on the coarser one (to the
-/// same end), and the finer mesh.
-fn both_runs(
-    cp: &Problem,
-    chain: &Chain,
-    times: &[f64],
-    opts: &DistributionOptions,
-    moments: &Moments,
-) -> Result<(Mesh, Run, Run)> {
-    let (coarse, fine_mesh) = meshes(cp, chain, opts.backward.cells)?;
-    let tol = Tolerances {
-        rtol: opts.rtol,
-        atol: opts.atol,
-        ..Tolerances::default()
-    };
-    let scales = (moments.tau, moments.second);
-    let stop = Stop::Tail {
-        tail: opts.tail,
-        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
-    };
-    let fine = run(cp, &fine_mesh, chain, times, &tol, stop, scales)?;
-    let end = Stop::At(fine.t_end);
-    let rough = run(cp, &coarse, chain, times, &tol, end, scales)?;
-    Ok((fine_mesh, fine, rough))
-}
-
 /// What the backward equations of a noise model refuse (with T > 0: a
 /// drag other than linear, tanh, tan, and tan with T > 1, by name).
 pub(super) fn admissible(problem: &Problem) -> Result<Chain> {
     let chain = problem.params().chain()?;
     let (cp, _) = problem.canonical();
-    super::backward::admissible(&cp)?;
+    super::super::backward::admissible(&cp)?;
     Ok(chain)
 }
 
@@ -734,140 +650,54 @@ fn absorbed(cp: &Problem, chain: &Chain) -> Vec<bool> {
         .collect()
 }
 
-/// The atoms on mesh `m` (their spreads the mesh's), levels and weights
-/// from the user's chain (the same state order).
-fn atom_list(cp: &Problem, m: &Mesh, chain: &Chain, user: &Chain) -> Vec<Atom> {
-    let rate = cp.params().rate();
-    let absorbed = absorbed(cp, chain);
-    (0..chain.states())
-        .filter(|&s| absorbed[s])
-        .map(|s| {
-            let a = atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate);
-            Atom {
-                state: s,
-                level: user.levels[s],
-                time: a.time,
-                mass: (-a.kill * a.time).exp(),
-                weight: user.pi[s],
-                spread: a.spread,
-            }
-        })
-        .collect()
-}
-
-/// Per output time, the π-mixture and the states `hi`, `lo` of a per-state
-/// table.
-fn columns(rows: &[Vec<f64>], pi: &[f64], hi: usize, lo: usize) -> [Vec<f64>; 3] {
-    let mix = rows
-        .iter()
-        .map(|r| r.iter().zip(pi).map(|(a, b)| a * b).sum())
-        .collect();
-    [
-        mix,
-        rows.iter().map(|r| r[hi]).collect(),
-        rows.iter().map(|r| r[lo]).collect(),
-    ]
-}
-
-/// max over rows and states of |a - b|, over the rows `keep` admits.
-fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>], keep: impl Fn(usize) -> bool) -> f64 {
-    (0..a.len())
-        .filter(|&i| keep(i))
-        .flat_map(|i| a[i].iter().zip(&b[i]).map(|(x, y)| (x - y).abs()))
-        .fold(0.0, f64::max)
-}
-
-/// The earliest atom's (time, spread): (0, 0) with T > 0, where there is
-/// none (as [`Distribution::smeared`] then flags no time); at T = 0 an
-/// error where no state's flow reaches the target.
-fn earliest_atom(atoms: &[Atom], thermal: bool) -> Result<(f64, f64)> {
-    match atoms.iter().min_by(|a, b| a.time.total_cmp(&b.time)) {
-        Some(a) => Ok((a.time, a.spread)),
-        None if thermal => Ok((0.0, 0.0)),
-        None => Err(Error::Numerical {
-            method: METHOD,
-            reason: "no state's flow reaches the target".into(),
-        }),
+/// The coarse mesh on `cells` cells, every fixed point inside a node
+/// (with T > 0 the mean solver's, truncated as Eq. (N33)), for the
+/// canonical problem `cp`.
+fn coarse(cp: &Problem, chain: &Chain, cells: usize) -> Result<Mesh> {
+    if chain.temperature > 0.0 {
+        return super::super::backward::thermal_mesh(cp, cells);
     }
+    let g = cp.params().drag();
+    let (vl, vu) = cp.params().bounds();
+    let stars: Vec<f64> = chain.levels.iter().map(|&a| g.inverse(a)).collect();
+    mesh_on(cp, vl, vu, &stars, cells)
 }
 
-/// The first-passage-time distribution of `problem` (a noise model, at
-/// T = 0 or with thermal noise) at the output `times` (see the module
-/// doc); options and times validated by the caller
-/// ([`super::distribution()`]). Errors: what [`super::backward`] refuses
-/// (with T > 0 a drag other than linear, tanh, tan, naming `drag`), a
-/// numerical failure of the time integration or of the checks.
-pub(super) fn distribution(
-    problem: &Problem,
-    times: &[f64],
-    opts: &DistributionOptions,
-) -> Result<Distribution> {
-    let user = admissible(problem)?;
-    let (hi, lo) = super::backward::extreme_states(&user.levels);
-    let moments = box_moments(problem, opts.backward.cells, &user.pi, hi, lo)?;
-    let (cp, _) = problem.canonical();
-    let chain = cp.params().chain()?;
-    let thermal = chain.temperature > 0.0;
-    let (fine_mesh, fine, rough) = both_runs(&cp, &chain, times, opts, &moments)?;
-    let ex =
-        |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 2.0 * x - y).collect() };
-    let s: Vec<Vec<f64>> = fine.s.iter().zip(&rough.s).map(|(a, b)| ex(a, b)).collect();
-    let [survival, survival_plus, survival_minus] = columns(&s, &user.pi, hi, lo);
-    let [density, density_plus, density_minus] = columns(&fine.f, &user.pi, hi, lo);
-    let (mean, second) = (ex(&fine.mean, &rough.mean), ex(&fine.second, &rough.second));
-    let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
-    let atoms = atom_list(&cp, &fine_mesh, &chain, &user);
-    let smeared = |i: usize| {
-        let t = times[i];
-        atoms
-            .iter()
-            .zip(&rough.spreads)
-            .any(|(a, w)| (t - a.time).abs() < super::distribution::ATOM_WINDOW * w)
-    };
-    let mass_of = |s: usize| atoms.iter().find(|a| a.state == s).map_or(0.0, |a| a.mass);
-    let (atom_time, atom_spread) = earliest_atom(&atoms, thermal)?;
-    let mean_error = (mix(&fine.mean) - mix(&rough.mean)).abs();
-    let d = Distribution {
-        t: times.to_vec(),
-        survival,
-        survival_plus,
-        survival_minus,
-        density,
-        density_plus,
-        density_minus,
-        mean: mix(&mean),
-        mean_plus: mean[hi],
-        mean_minus: mean[lo],
-        second: mix(&second),
-        t_end: fine.t_end,
-        tail_mass: mix(&fine.tail),
-        atom_time,
-        // A fold from +0 (an empty f64 sum is -0): 0 where there is no atom.
-        atom_mass: atoms.iter().fold(0.0, |m, a| m + a.weight * a.mass),
-        atom_mass_plus: mass_of(hi),
-        atom_mass_minus: mass_of(lo),
-        steps: fine.stats.steps + rough.stats.steps,
-        rejected: fine.stats.rejected + rough.stats.rejected,
-        mesh_error: max_diff(&fine.s, &rough.s, |_| true),
-        mesh_error_density: max_diff(&fine.f, &rough.f, |i| !smeared(i)),
-        atom_spread,
-        mean_time_integral: mix(&mean),
-        second_time_integral: mix(&second),
-        mean_error,
-        moments,
-        atoms,
-    };
-    super::distribution::verify(&d, opts.rtol, mean_tolerance(&d, thermal))?;
-    Ok(d)
-}
-
-/// How far E(T) may lie from the box scheme's τ: 1e-3 τ plus the mesh
-/// error of E(T) at T = 0 (the box scheme is second order, its τ nearer
-/// the limit than the extrapolated E(T)); with T > 0 twice that error (the
-/// fitted scheme is between first and second order in the mesh, so both
-/// the extrapolated E(T) and τ on `cells` cells are within `mean_error`
-/// of the limit).
-fn mean_tolerance(d: &Distribution, thermal: bool) -> f64 {
-    let k = if thermal { 2.0 } else { 1.0 };
-    1e-3 * d.moments.tau + k * d.mean_error
+impl super::Survival for Finite {
+    fn moments(
+        &self,
+        p: &Problem,
+        opts: &BackwardOptions,
+        user: &Chain,
+        hi: usize,
+        lo: usize,
+    ) -> Result<Moments> {
+        box_moments(p, opts.cells, &user.pi, hi, lo)
+    }
+    fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh> {
+        coarse(cp, &self.0, cells)
+    }
+    fn run(
+        &self,
+        cp: &Problem,
+        m: &Mesh,
+        times: &[f64],
+        tol: &Tolerances,
+        stop: Stop,
+        scales: (f64, f64),
+    ) -> Result<Run> {
+        run(cp, m, &self.0, times, tol, stop, scales)
+    }
+    fn lists_atoms(&self) -> bool {
+        true
+    }
+    /// 1e-3 τ plus the mesh error of E(T) at T = 0 (the box scheme is
+    /// second order, its τ nearer the limit than the extrapolated E(T));
+    /// with T > 0 twice that error (the fitted scheme is between first and
+    /// second order in the mesh, so both the extrapolated E(T) and τ on
+    /// `cells` cells are within `mean_error` of the limit).
+    fn mean_tolerance(&self, d: &Distribution) -> f64 {
+        let k = if self.0.temperature > 0.0 { 2.0 } else { 1.0 };
+        1e-3 * d.moments.tau + k * d.mean_error
+    }
 }
