@@ -760,7 +760,7 @@ pub(super) fn admissible(problem: &Problem) -> Result<()> {
 }
 
 /// The thermal generator on one mesh, for the survival equations of
-/// `mfpt::ndist` (Eq. (N49)): the band and border of the fitted operator
+/// `mfpt::distribution` with a noise model (Eq. (N49)): the band and border of the fitted operator
 /// of Eqs. (N32)-(N34) (source 0), and per unknown whether it is absorbed
 /// (S_s(v_t) = 0, an algebraic row whose band entry is 1).
 pub(super) struct Generator {

@@ -36,6 +36,14 @@
 //! After the output grid the integration continues, in doubling windows,
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
+//!
+//! One driver runs every noise over its state space (the `Space`s of
+//! [`super::backward`]): the paper's `Telegraph` by the two-state upwind
+//! operator above, a noise model's `Finite` chain by the N-state
+//! operator of `distribution/finite.rs` (Eqs. (N37)-(N39), (N49)). Each
+//! space supplies its moments, coarse mesh and one mesh's run (the trait
+//! `Survival`); the refinement, the time loop past the grid, the
+//! extrapolation, the π-mixture and the checks are shared.
 
 mod finite;
 
@@ -168,7 +176,7 @@ pub struct Distribution {
     /// [`Distribution::mean`]'s.
     #[serde(default)]
     pub mean_error: f64,
-    /// With a noise model (`mfpt::ndist`): one atom per state whose flow
+    /// With a noise model (`distribution/finite.rs`): one atom per state whose flow
     /// reaches v_t, each at its own flow time. Empty for the paper's noise,
     /// whose one atom is [`Distribution::atom_time`],
     /// [`Distribution::atom_mass`].

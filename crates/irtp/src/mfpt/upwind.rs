@@ -350,17 +350,21 @@ impl UpwindOperator {
     }
 }
 
-/// g at node v as the + state (moving up) and the - state (moving down)
-/// see it: g(v) itself, except at a jump of g at v = 0, where they see
-/// g(0+) = mu and g(0-) = -mu.
-#[inline]
-fn node_forces<D: Drag>(g: D, v: f64) -> (f64, f64) {
+/// The drift of level `a` at node v: a - g(v), except at a jump of g at
+/// v = 0, where a state moving up sees g(0+) and one moving down g(0-)
+/// (and one held by static friction none).
+pub(super) fn node_drift<D: Drag>(g: D, a: f64, v: f64) -> f64 {
     let jump = g.static_friction();
     if jump > 0.0 && v == 0.0 {
-        (jump, -jump)
+        if a - jump > 0.0 {
+            a - jump
+        } else if a + jump < 0.0 {
+            a + jump
+        } else {
+            0.0
+        }
     } else {
-        let f = g.force(v);
-        (f, f)
+        a - g.force(v)
     }
 }
 
@@ -392,9 +396,8 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         let (p, q) = (2 * i, 2 * i + 1);
         // Where g jumps at a node v = 0 (Coulomb friction), each state's
         // drift is its limit on the side it moves to: g(0+) for +, g(0-) for -.
-        let (f, f_minus) = node_forces(g, m.v[i]);
         if i + 1 < nodes {
-            let w = (sigma - f) / (m.v[i + 1] - m.v[i]);
+            let w = node_drift(g, sigma, m.v[i]) / (m.v[i + 1] - m.v[i]);
             a.set(p, p + 2, w);
             a.set(p, p, -w - lam - rate);
             a.set(p, q, lam);
@@ -404,7 +407,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         }
         // The - drift -(Sigma + g) vanishes at v_l = -v_u (i = 0).
         let w = if i > 0 {
-            (sigma + f_minus).max(0.0) / (m.v[i] - m.v[i - 1])
+            (-node_drift(g, -sigma, m.v[i])).max(0.0) / (m.v[i] - m.v[i - 1])
         } else {
             0.0
         };
@@ -537,7 +540,7 @@ impl AtomProbe {
         let par = cp.params();
         let (g, sigma) = (par.drag(), par.sigma());
         let w = (m.start..m.v.len() - 1)
-            .map(|i| (sigma - node_forces(g, m.v[i]).0) / (m.v[i + 1] - m.v[i]))
+            .map(|i| node_drift(g, sigma, m.v[i]) / (m.v[i + 1] - m.v[i]))
             .collect();
         AtomProbe { w }
     }

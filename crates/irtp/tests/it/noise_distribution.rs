@@ -1,5 +1,5 @@
 //! The first-passage-time distribution with a noise model
-//! (`mfpt::distribution` through `mfpt::ndist`, docs/equations.md Eqs.
+//! (`mfpt::distribution` over a noise model's `Finite` chain, docs/equations.md Eqs.
 //! (N37)-(N39)):
 //!
 //! (1) over the athermal cases of `NOISE_CASES`: the atoms and the density

@@ -55,7 +55,7 @@
 //! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
 
 use super::super::backward::{mesh_on, BackwardOptions, Finite, Mesh, Moments};
-use super::super::upwind::exp_moments;
+use super::super::upwind::{exp_moments, node_drift};
 use super::super::Problem;
 use super::{hidden, landing_points, Distribution, Run, RunAtom, Stop};
 use crate::error::Result;
@@ -92,24 +92,6 @@ impl AtomState {
         } else {
             (lo - t) / (lo - up)
         }
-    }
-}
-
-/// The drift of level `a` at node v: a - g(v), except at a jump of g at
-/// v = 0, where a state moving up sees g(0+) and one moving down g(0-)
-/// (and one held by static friction none).
-fn node_drift<D: Drag>(g: D, a: f64, v: f64) -> f64 {
-    let jump = g.static_friction();
-    if jump > 0.0 && v == 0.0 {
-        if a - jump > 0.0 {
-            a - jump
-        } else if a + jump < 0.0 {
-            a + jump
-        } else {
-            0.0
-        }
-    } else {
-        a - g.force(v)
     }
 }
 
