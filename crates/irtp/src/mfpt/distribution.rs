@@ -295,6 +295,16 @@ impl Stop {
     }
 }
 
+/// What one mesh's run integrates: the output times, the tolerances,
+/// where it stops and the scales (τ, E(T²)) of the integrals' errors.
+#[derive(Clone, Copy)]
+struct Plan<'a> {
+    times: &'a [f64],
+    tol: &'a Tolerances,
+    stop: Stop,
+    scales: (f64, f64),
+}
+
 /// An atom of one mesh's run: started in state `s`, the flow reaches v_t
 /// at `time` with no jump and no reset before (decay `kill` = q_s + r);
 /// `spread`: the scheme's spread of that arrival on the mesh.
@@ -353,27 +363,12 @@ impl Run {
 /// ([`distribution`]) is one for both.
 trait Survival: Space {
     /// The box scheme's moments; the mixture over the `user` chain's π,
-    /// ± the states `hi`, `lo`.
-    fn moments(
-        &self,
-        p: &Problem,
-        opts: &BackwardOptions,
-        user: &Chain,
-        hi: usize,
-        lo: usize,
-    ) -> Result<Moments>;
+    /// ± its states of highest and lowest level.
+    fn moments(&self, p: &Problem, opts: &BackwardOptions, user: &Chain) -> Result<Moments>;
     /// The coarse mesh on `cells` cells of the canonical problem `cp`.
     fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh>;
     /// One mesh's run (canonical frame, the chain's state order).
-    fn run(
-        &self,
-        cp: &Problem,
-        m: &Mesh,
-        times: &[f64],
-        tol: &Tolerances,
-        stop: Stop,
-        scales: (f64, f64),
-    ) -> Result<Run>;
+    fn run(&self, cp: &Problem, m: &Mesh, plan: &Plan) -> Result<Run>;
     /// Whether [`Distribution::atoms`] lists the atoms.
     fn lists_atoms(&self) -> bool;
     /// How far E(T) may lie from the box scheme's τ.
@@ -381,29 +376,14 @@ trait Survival: Space {
 }
 
 impl Survival for Telegraph {
-    fn moments(
-        &self,
-        p: &Problem,
-        opts: &BackwardOptions,
-        _: &Chain,
-        _: usize,
-        _: usize,
-    ) -> Result<Moments> {
+    fn moments(&self, p: &Problem, opts: &BackwardOptions, _: &Chain) -> Result<Moments> {
         backward::moments(p, opts)
     }
     fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh> {
         mesh(cp, cells)
     }
-    fn run(
-        &self,
-        cp: &Problem,
-        m: &Mesh,
-        times: &[f64],
-        tol: &Tolerances,
-        stop: Stop,
-        scales: (f64, f64),
-    ) -> Result<Run> {
-        run(cp, m, times, tol, stop, scales)
+    fn run(&self, cp: &Problem, m: &Mesh, plan: &Plan) -> Result<Run> {
+        run(cp, m, plan)
     }
     fn lists_atoms(&self) -> bool {
         false
@@ -471,14 +451,13 @@ fn advance(
 }
 
 /// The survival equations on one mesh (see the module doc).
-fn run(
-    cp: &Problem,
-    m: &Mesh,
-    times: &[f64],
-    tol: &Tolerances,
-    stop: Stop,
-    scales: (f64, f64),
-) -> Result<Run> {
+fn run(cp: &Problem, m: &Mesh, plan: &Plan) -> Result<Run> {
+    let Plan {
+        times,
+        tol,
+        stop,
+        scales,
+    } = *plan;
     let par = cp.params();
     let k = par.lambda() + par.rate();
     let tf = par.drag().flow_time(par.sigma(), cp.v0(), cp.vt());
@@ -663,7 +642,7 @@ fn drive(
     user: &Chain,
 ) -> Result<Distribution> {
     let (hi, lo) = backward::extreme_states(&user.levels);
-    let moments = space.moments(problem, &opts.backward, user, hi, lo)?;
+    let moments = space.moments(problem, &opts.backward, user)?;
     let (cp, swapped) = problem.canonical();
     let coarse = space.coarse(&cp, (opts.backward.cells / 2).max(8))?;
     let fine_mesh = refine(&cp, &coarse);
@@ -672,19 +651,19 @@ fn drive(
         atol: opts.atol,
         ..Tolerances::default()
     };
-    let scales = (moments.tau, moments.second);
-    let stop = Stop::Tail {
-        tail: opts.tail,
-        t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
+    let mut plan = Plan {
+        times,
+        tol: &tol,
+        stop: Stop::Tail {
+            tail: opts.tail,
+            t_stop: opts.t_stop.unwrap_or(1e3 * moments.tau),
+        },
+        scales: (moments.tau, moments.second),
     };
     let to = |s| space.user_state(s, swapped);
-    let fine = space
-        .run(&cp, &fine_mesh, times, &tol, stop, scales)?
-        .renumber(to);
-    let end = Stop::At(fine.t_end);
-    let rough = space
-        .run(&cp, &coarse, times, &tol, end, scales)?
-        .renumber(to);
+    let fine = space.run(&cp, &fine_mesh, &plan)?.renumber(to);
+    plan.stop = Stop::At(fine.t_end);
+    let rough = space.run(&cp, &coarse, &plan)?.renumber(to);
     let thermal = space.chain().temperature > 0.0;
     let mut d = report(times, user, (hi, lo), moments, &fine, &rough, thermal)?;
     verify(&d, opts.rtol, space.mean_tolerance(&d))?;

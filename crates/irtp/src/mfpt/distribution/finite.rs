@@ -54,10 +54,12 @@
 //! 1e-3 τ + 2 `mean_error`. `atoms` is empty and `atom_time`, `atom_mass`
 //! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
 
-use super::super::backward::{mesh_on, BackwardOptions, Finite, Mesh, Moments};
+use super::super::backward::{
+    extreme_states, mesh_on, moments_at_start, BackwardOptions, Finite, Mesh, Moments,
+};
 use super::super::upwind::{exp_moments, node_drift};
 use super::super::Problem;
-use super::{hidden, landing_points, Distribution, Run, RunAtom, Stop};
+use super::{hidden, landing_points, Distribution, Plan, Run, RunAtom};
 use crate::error::Result;
 use crate::model::noise::chain::{self, Chain};
 use crate::model::reset::{NoiseAtReset, Reset};
@@ -507,15 +509,13 @@ fn advance(op: &mut Survival, u: &mut [f64], t: f64, next: f64, tol: &Tolerances
 }
 
 /// The survival equations on one mesh (see the module doc).
-fn run(
-    cp: &Problem,
-    m: &Mesh,
-    chain: &Chain,
-    times: &[f64],
-    tol: &Tolerances,
-    stop: Stop,
-    scales: (f64, f64),
-) -> Result<Run> {
+fn run(cp: &Problem, m: &Mesh, chain: &Chain, plan: &Plan) -> Result<Run> {
+    let Plan {
+        times,
+        tol,
+        stop,
+        scales,
+    } = *plan;
     let mut op = Survival::new(cp, m, chain, scales);
     let view = Survival::new(cp, m, chain, scales);
     let mut u = op.initial();
@@ -576,16 +576,12 @@ fn run(
 }
 
 /// The box scheme's moments (`mfpt::backward`) as [`Moments`]: the mixture
-/// over π, `tau_plus` / `tau_minus` the states `hi` / `lo`.
-fn box_moments(
-    problem: &Problem,
-    cells: usize,
-    pi: &[f64],
-    hi: usize,
-    lo: usize,
-) -> Result<Moments> {
-    let (t1, t2, cells) = super::super::backward::moments_at_start(problem, cells)?;
-    let mix = |x: &[f64]| -> f64 { x.iter().zip(pi).map(|(a, b)| a * b).sum() };
+/// over the `user` chain's π, `tau_plus` / `tau_minus` its states of
+/// highest / lowest level.
+fn box_moments(problem: &Problem, cells: usize, user: &Chain) -> Result<Moments> {
+    let (hi, lo) = extreme_states(&user.levels);
+    let (t1, t2, cells) = moments_at_start(problem, cells)?;
+    let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
     let (tau, second) = (mix(&t1), mix(&t2));
     let var = |m2: f64, m: f64| m2 - m * m;
     let (variance, variance_plus, variance_minus) =
@@ -646,29 +642,14 @@ fn coarse(cp: &Problem, chain: &Chain, cells: usize) -> Result<Mesh> {
 }
 
 impl super::Survival for Finite {
-    fn moments(
-        &self,
-        p: &Problem,
-        opts: &BackwardOptions,
-        user: &Chain,
-        hi: usize,
-        lo: usize,
-    ) -> Result<Moments> {
-        box_moments(p, opts.cells, &user.pi, hi, lo)
+    fn moments(&self, p: &Problem, opts: &BackwardOptions, user: &Chain) -> Result<Moments> {
+        box_moments(p, opts.cells, user)
     }
     fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh> {
         coarse(cp, &self.0, cells)
     }
-    fn run(
-        &self,
-        cp: &Problem,
-        m: &Mesh,
-        times: &[f64],
-        tol: &Tolerances,
-        stop: Stop,
-        scales: (f64, f64),
-    ) -> Result<Run> {
-        run(cp, m, &self.0, times, tol, stop, scales)
+    fn run(&self, cp: &Problem, m: &Mesh, plan: &Plan) -> Result<Run> {
+        run(cp, m, &self.0, plan)
     }
     fn lists_atoms(&self) -> bool {
         true
