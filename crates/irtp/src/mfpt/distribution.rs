@@ -333,25 +333,18 @@ struct Run {
 }
 
 impl Run {
-    /// The states renumbered by `to` (canonical to user's frame).
+    /// The states renumbered by `to` (canonical to user's frame; its own
+    /// inverse: a reflection swaps ±Sigma, a chain keeps its order).
     fn renumber(mut self, to: impl Fn(usize) -> usize) -> Run {
-        let order = |x: &mut Vec<f64>| {
-            let mut y = x.clone();
-            for (s, v) in x.iter().enumerate() {
-                y[to(s)] = *v;
-            }
-            *x = y;
-        };
-        self.s.iter_mut().chain(self.f.iter_mut()).for_each(order);
-        for x in [
+        let order = |x: &mut Vec<f64>| *x = (0..x.len()).map(|u| x[to(u)]).collect();
+        let (m, m2, e, e2) = (
             &mut self.mean,
             &mut self.second,
             &mut self.exact_mean,
             &mut self.exact_second,
-            &mut self.tail,
-        ] {
-            order(x);
-        }
+        );
+        let rows = self.s.iter_mut().chain(self.f.iter_mut());
+        rows.chain([m, m2, e, e2, &mut self.tail]).for_each(order);
         self.atoms.iter_mut().for_each(|a| a.s = to(a.s));
         self
     }
@@ -594,10 +587,23 @@ fn landing_points(times: &[f64], extra: impl Iterator<Item = f64>) -> Vec<(f64, 
 /// and tan above T = 1, naming `temperature`).
 pub fn check_problem(problem: &Problem) -> Result<()> {
     problem.params().require(Solver::FptDistribution)?;
-    if problem.params().noise().is_some() {
-        finite::admissible(problem)?;
-    }
-    Ok(())
+    space_of(problem).map(|_| ())
+}
+
+/// The state space of `problem` (canonical frame) and its chain in the
+/// user's frame; with a noise model what the backward equations refuse.
+fn space_of(problem: &Problem) -> Result<(Box<dyn Survival>, Chain)> {
+    let (cp, _) = problem.canonical();
+    Ok(match problem.params().noise() {
+        None => (
+            Box::new(Telegraph::of(&cp)),
+            Telegraph::of(problem).chain().clone(),
+        ),
+        Some(_) => {
+            let user = finite::admissible(problem)?;
+            (Box::new(Finite(cp.params().chain()?)), user)
+        }
+    })
 }
 
 /// The first-passage-time distribution of `problem` at the output `times`
@@ -622,13 +628,8 @@ pub fn distribution(
             "the simulated drift",
         ));
     }
-    let (cp, _) = problem.canonical();
-    if problem.params().noise().is_some() {
-        let user = finite::admissible(problem)?;
-        return drive(&Finite(cp.params().chain()?), problem, times, opts, &user);
-    }
-    let user = Telegraph::of(problem).chain().clone();
-    drive(&Telegraph::of(&cp), problem, times, opts, &user)
+    let (space, user) = space_of(problem)?;
+    drive(&*space, problem, times, opts, &user)
 }
 
 /// The two meshes' runs of `space` and what they report (the states in

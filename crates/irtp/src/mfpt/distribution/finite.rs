@@ -28,17 +28,10 @@
 //! by the adaptive TR-BDF2 of [`crate::numerics::trbdf2`] (the reset values
 //! by an N×N bordering, as Eq. (N35)). 2N extra unknowns carry
 //! I_s = ∫_0^t C_s(v_0) ds and J_s = ∫_0^t I_s ds, so E(T_s) and E(T_s²)
-//! follow from the time integration (the atoms' shares in closed form).
-//! As the two-state code, it runs on a mesh of cells / 2 cells and on its
-//! midpoint refinement and extrapolates S and the moments (first order);
-//! f is the finer mesh's. [`Distribution::mean`] and
-//! [`Distribution::mean_time_integral`] are here the same number (the
-//! time integration's, which misses about `tail_mass` times the decay
-//! time), [`Distribution::mean_error`] its mesh error; it is checked
-//! against the box scheme's τ of Eq. (N30) ([`Distribution::moments`]).
-//! `survival_plus` / `survival_minus` are the states of highest / lowest
-//! level, `atom_time` the earliest atom and `atom_mass` the π-weighted sum
-//! of [`Distribution::atoms`].
+//! follow from the time integration (the atoms' shares in closed form):
+//! [`Distribution::mean`] and [`Distribution::mean_time_integral`] are
+//! here the same number. The meshes, extrapolation, mixture and checks
+//! are the driver's ([`super::distribution`]).
 //!
 //! With thermal noise (T > 0, Eq. (N49)) the same time loop runs the
 //! second-order equations dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s +
