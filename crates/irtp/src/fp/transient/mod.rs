@@ -1,25 +1,32 @@
 //! Time-dependent forward equations from the paper's initial condition
-//! P±(v, 0) = ½ δ(v), two schemes on the same upwind finite volumes
-//! (no-flux edges):
+//! P±(v, 0) = ½ δ(v) on upwind finite volumes (no-flux edges): one
+//! TR-BDF2 engine ([`integrate_levels`]) over the noise's state space
+//! ([`TransientSpace`]), dispatched once at the entry, and the paper's
+//! explicit scheme for the paper's noise:
 //!
 //! - [`Scheme::TrBdf2`] (default): the singularity-graded mesh of the
 //!   stationary solver and adaptive TR-BDF2 time stepping (Bank et al., IEEE
 //!   Trans. Electron Devices 32, 1985; as the ESDIRK of Hosea & Shampine,
 //!   Appl. Numer. Math. 20, 1996; see [`crate::numerics::trbdf2`]) of the
-//!   discrete generator [`ForwardOperator`]. The method is L-stable, so the
-//!   step is set by the requested accuracy (`rtol`, `atol` on the cell
-//!   masses), not by the smallest cell; every stage is an exact O(N) solve.
-//!   `<v>` and `<v²>` are Richardson-extrapolated twice over the nested
-//!   meshes of N, N/2 and N/4 cells (removing the 1/N and 1/N² terms of the
-//!   first-order fluxes), with the change made by the second extrapolation
-//!   reported as the error estimate; the density is the fine mesh's.
+//!   discrete generator of the space: the paper's two states
+//!   ([`two_state`], [`crate::fp::ForwardOperator`]) or a finite-state chain
+//!   with thermal noise ([`chain`], [`crate::fp::NoiseOperator`]). The
+//!   method is L-stable, so the step is set by the requested accuracy
+//!   (`rtol`, `atol` on the cell masses), not by the smallest cell; every
+//!   stage is an exact O(N) solve. `<v>` and `<v²>` are
+//!   Richardson-extrapolated over the nested meshes of N, N/2 and N/4
+//!   cells (two states: twice, removing the 1/N and 1/N² terms of the
+//!   first-order fluxes, with the change made by the second extrapolation
+//!   reported as the error estimate; a chain: with the observed order,
+//!   Eq. (N27)); the density is the fine mesh's.
 //! - [`Scheme::Paper`]: the paper's way (Sec. 3): explicit upwind on a
-//!   uniform mesh, the step set by the CFL limit.
+//!   uniform mesh, the step set by the CFL limit (the paper's noise only).
 //!
 //! An exponential refractory period (docs/equations.md, (R7)) runs in
-//! [`Scheme::TrBdf2`]: the held pairs of [`ForwardOperator`] are unknowns
-//! next to the cell masses, and [`Transient::refractory_mass`] reports
-//! their mass; the paper scheme refuses it.
+//! [`Scheme::TrBdf2`] with the paper's noise: the held pairs of
+//! [`crate::fp::ForwardOperator`] are unknowns next to the cell masses,
+//! and [`Transient::refractory_mass`] reports their mass; the paper
+//! scheme refuses it.
 
 mod chain;
 mod two_state;
@@ -363,8 +370,8 @@ pub fn transient(params: &Params, opts: &TransientOptions) -> Result<Transient> 
 }
 
 /// [`transient`] reporting steps done to `progress`: dispatched once, by
-/// the noise's state space, to the paper's two states ([`two_state`]) or
-/// a finite-state chain with thermal noise ([`chain`]).
+/// the noise's state space, to the paper's two states or a finite-state
+/// chain with thermal noise.
 pub fn transient_with_progress(
     params: &Params,
     opts: &TransientOptions,

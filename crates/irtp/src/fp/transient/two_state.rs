@@ -121,26 +121,14 @@ pub(super) fn paper(
     m[i0m][1] += 0.5;
     let mut next = vec![[0.0f64; 2]; n];
 
-    let mut out = Transient {
-        params: *params,
-        scheme: Scheme::Paper,
-        mesh: Mesh::Uniform,
-        cells: n,
-        dt: Some(dt),
-        steps: 0,
-        rejected: 0,
-        extrapolated: false,
-        v: g.centres.clone(),
-        times: Vec::with_capacity(times.len()),
-        v_mean: Vec::with_capacity(times.len()),
-        v2: Vec::with_capacity(times.len()),
-        v2_mesh_error: Vec::new(),
-        mass: Vec::with_capacity(times.len()),
-        refractory_mass: Vec::with_capacity(times.len()),
-        atoms: Vec::with_capacity(times.len()),
-        mass_error_max: 0.0,
-        snapshots: Vec::with_capacity(snaps.len()),
-    };
+    let mut out = Transient::empty(
+        params,
+        Scheme::Paper,
+        Some(dt),
+        &g,
+        times.len(),
+        snaps.len(),
+    );
     let resets = reset_times(params, times, snaps);
     let (mut ti, mut si) = (0usize, 0usize);
     let mut t = 0.0f64;
@@ -349,26 +337,7 @@ impl TransientSpace for TwoState<'_> {
         let u = op.point_mass(0.0);
         let (nt, ns) = (self.times.len(), self.snaps.len());
         self.runs.push(MeshRun {
-            t: Transient {
-                params: *self.params,
-                scheme: Scheme::TrBdf2,
-                mesh: Mesh::Graded,
-                cells: op.cells(),
-                dt: None,
-                steps: 0,
-                rejected: 0,
-                extrapolated: false,
-                v: op.centres().to_vec(),
-                times: Vec::with_capacity(nt),
-                v_mean: Vec::with_capacity(nt),
-                v2: Vec::with_capacity(nt),
-                v2_mesh_error: Vec::new(),
-                mass: Vec::with_capacity(nt),
-                refractory_mass: Vec::with_capacity(nt),
-                atoms: Vec::with_capacity(nt),
-                mass_error_max: 0.0,
-                snapshots: Vec::with_capacity(ns),
-            },
+            t: Transient::empty(self.params, Scheme::TrBdf2, None, op.grid(), nt, ns),
             g: op.grid().clone(),
             pair_v: op.velocities().iter().step_by(2).copied().collect(),
         });
@@ -396,6 +365,38 @@ impl TransientSpace for TwoState<'_> {
 }
 
 impl Transient {
+    /// The record of one run of `scheme` (time step `dt`) on the grid `g`,
+    /// before any time: room for `nt` recording and `ns` snapshot times.
+    fn empty(
+        params: &Params,
+        scheme: Scheme,
+        dt: Option<f64>,
+        g: &Grid,
+        nt: usize,
+        ns: usize,
+    ) -> Self {
+        Transient {
+            params: *params,
+            scheme,
+            mesh: scheme.mesh(),
+            cells: g.cells(),
+            dt,
+            steps: 0,
+            rejected: 0,
+            extrapolated: false,
+            v: g.centres.clone(),
+            times: Vec::with_capacity(nt),
+            v_mean: Vec::with_capacity(nt),
+            v2: Vec::with_capacity(nt),
+            v2_mesh_error: Vec::new(),
+            mass: Vec::with_capacity(nt),
+            refractory_mass: Vec::with_capacity(nt),
+            atoms: Vec::with_capacity(nt),
+            mass_error_max: 0.0,
+            snapshots: Vec::with_capacity(ns),
+        }
+    }
+
     /// Record mass, `<v>` and `<v²>` of the pairs `m` (the cell masses,
     /// then from index `cells` on the held pairs) at velocities `v` at time
     /// t, and the held mass.
