@@ -118,8 +118,7 @@ pub(super) fn transient(
         cells: Vec::new(),
         op: None,
     };
-    let efforts = integrate_levels(&mut c, &tol, &times, &[], progress)?;
-    let steps = efforts.iter().map(|e| e.steps).sum();
+    let steps = integrate_levels(&mut c, &tol, &times, &[], progress)?.steps as u64;
     let mass_err = c
         .obs
         .iter()

@@ -36,7 +36,7 @@ use super::stationary::{MAX_CELLS, MIN_CELLS};
 use crate::error::{finite, Error, Result};
 use crate::model::reset::Solver;
 use crate::model::{Drag, Params, VelocityAtom};
-use crate::numerics::trbdf2::{self, ShiftedLinear, Tolerances};
+use crate::numerics::trbdf2::{self, ShiftedLinear, Stats, Tolerances};
 use crate::parallel::{NoProgress, Progress};
 use serde::{Deserialize, Serialize};
 
@@ -408,37 +408,32 @@ pub(super) trait TransientSpace {
     fn observe(&mut self, level: usize, k: usize, u: &[f64]) -> Result<()>;
 }
 
-/// Steps taken on one mesh.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Effort {
-    pub steps: u64,
-    pub rejected: u64,
-}
-
 /// TR-BDF2 on the [`MESH_LEVELS`] nested meshes of `space`, each from its
 /// initial state to every time of `all` (sorted), recorded there by
 /// [`TransientSpace::observe`]. With periodic resetting each mesh's run
 /// is split at `resets` (hidden stops, see [`reset_times`]): each piece
 /// is integrated from its start to the next reset, where the state is
 /// reset and then recorded if asked. `progress` counts the outputs done
-/// over the meshes.
+/// over the meshes. Returns the steps taken over the meshes.
 pub(super) fn integrate_levels<S: TransientSpace>(
     space: &mut S,
     tol: &Tolerances,
     all: &[f64],
     resets: &[f64],
     progress: &dyn Progress,
-) -> Result<Vec<Effort>> {
+) -> Result<Stats> {
     let total = (MESH_LEVELS * all.len()) as u64;
-    let mut efforts = Vec::with_capacity(MESH_LEVELS);
+    let mut effort = Stats::default();
     for level in 0..MESH_LEVELS {
         let done = (level * all.len()) as u64;
-        efforts.push(integrate_mesh(space, level, tol, all, resets, |k| {
+        let mesh = integrate_mesh(space, level, tol, all, resets, |k| {
             report(progress, done + k, total)
-        })?);
+        })?;
+        effort.steps += mesh.steps;
+        effort.rejected += mesh.rejected;
     }
     progress.update(total, total);
-    Ok(efforts)
+    Ok(effort)
 }
 
 /// One mesh of [`integrate_levels`]; `report(k)` after k outputs.
@@ -449,9 +444,9 @@ fn integrate_mesh<S: TransientSpace>(
     all: &[f64],
     resets: &[f64],
     mut report: impl FnMut(u64) -> Result<()>,
-) -> Result<Effort> {
+) -> Result<Stats> {
     let (mut op, mut u) = space.mesh(level)?;
-    let mut effort = Effort::default();
+    let mut effort = Stats::default();
     let mut done = 0u64;
     let mut observe = |space: &mut S, t: f64, u: &[f64]| -> Result<()> {
         let Ok(k) = all.binary_search_by(|x| x.total_cmp(&t)) else {
@@ -477,9 +472,7 @@ fn integrate_mesh<S: TransientSpace>(
         if !stops.is_empty() {
             let rel: Vec<f64> = stops.iter().map(|&s| s - t0).collect();
             let piece = Tolerances {
-                max_steps: tol
-                    .max_steps
-                    .saturating_sub((effort.steps + effort.rejected) as usize),
+                max_steps: tol.max_steps.saturating_sub(effort.steps + effort.rejected),
                 ..*tol
             };
             let stats = trbdf2::integrate(&mut op, &mut u, &rel, &piece, |k, _, u| {
@@ -489,8 +482,8 @@ fn integrate_mesh<S: TransientSpace>(
                     _ => observe(space, stops[k], u),
                 }
             })?;
-            effort.steps += stats.steps as u64;
-            effort.rejected += stats.rejected as u64;
+            effort.steps += stats.steps;
+            effort.rejected += stats.rejected;
         }
         if let Some(e) = end {
             space.reset(&mut u);

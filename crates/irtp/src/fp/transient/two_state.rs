@@ -194,12 +194,8 @@ pub(super) fn trbdf2(
         runs: Vec::with_capacity(MESH_LEVELS),
     };
     let resets = reset_times(params, times, snaps);
-    let efforts = integrate_levels(&mut space, &tol, &all, &resets, progress)?;
+    let effort = integrate_levels(&mut space, &tol, &all, &resets, progress)?;
     let mut runs: Vec<Transient> = space.runs.into_iter().map(|r| r.t).collect();
-    for (run, e) in runs.iter_mut().zip(&efforts) {
-        run.steps = e.steps;
-        run.rejected = e.rejected;
-    }
     let fine = runs.pop().expect("three meshes");
     let (half, quarter) = (&runs[1], &runs[0]);
     let (v2, v2_mesh_error) = extrapolate(times, &fine.v2, &half.v2, &quarter.v2);
@@ -210,8 +206,8 @@ pub(super) fn trbdf2(
         mesh: Mesh::Graded,
         cells: opts.cells,
         dt: None,
-        steps: fine.steps + half.steps + quarter.steps,
-        rejected: fine.rejected + half.rejected + quarter.rejected,
+        steps: effort.steps as u64,
+        rejected: effort.rejected as u64,
         extrapolated: true,
         v: fine.v,
         times: times.to_vec(),
