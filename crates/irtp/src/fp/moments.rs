@@ -36,6 +36,7 @@
 //! first-order upwind scheme).
 
 use super::grid::Mesh;
+use super::nstate::{observe as observe_blocks, operator, Blocks};
 use super::operator::ForwardOperator;
 use super::stationary::MIN_CELLS;
 use crate::error::{finite, Error, Result};
@@ -351,7 +352,7 @@ pub fn moments(
     let chain = params.noise().is_some();
     let mut level = |refine: usize| {
         if chain {
-            super::nstate::msd_level(params, opts, &times, refine)
+            chain_level(params, opts, &times, refine)
         } else {
             one_mesh(params, opts, &times, refine, progress, &mut done, total)
         }
@@ -444,6 +445,31 @@ fn verify(params: &Params, s: &MomentSeries) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// One level of [`moments`] for a noise model: the moment chain on the
+/// N-state mesh refined `refine` times ([`Blocks`] of 3 blocks), the rows
+/// of [`observe_blocks`] at `times` and the number of accepted steps.
+fn chain_level(
+    p: &Params,
+    o: &MsdOptions,
+    times: &[f64],
+    refine: usize,
+) -> Result<(Vec<[f64; 6]>, usize)> {
+    let tol = Tolerances {
+        rtol: o.rtol,
+        atol: o.rtol,
+        ..Tolerances::default()
+    };
+    let mut b = Blocks::new(operator(p, o.cells, refine, true)?, 3);
+    let mut u = b.initial()?;
+    let v = b.v.clone();
+    let mut rows = vec![[0.0; 6]; times.len()];
+    let stats = integrate(&mut b, &mut u, times, &tol, |k, _, u| {
+        rows[k] = observe_blocks(&v, 3, u);
+        Ok(())
+    })?;
+    Ok((rows, stats.steps))
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
-//! The N-state forward operator and its time stepping for any
-//! finite-state noise and thermal noise (docs/equations.md, "Fokker-Planck
-//! with N states", Eqs. (N20)-(N29)); its stationary solve is the
-//! stationary engine's chain space ([`super::stationary`]).
+//! The N-state forward operator for any finite-state noise and thermal
+//! noise (docs/equations.md, "Fokker-Planck with N states", Eqs.
+//! (N20)-(N29)): the chain space of the stationary and transient engines
+//! ([`super::stationary`], [`super::transient`]) and of the moment chain
+//! of [`super::msd`].
 //!
 //! Forward equations of N coupled densities p_s(v, t) (Eq. (N20)):
 //!   ∂_t p_s = -∂_v[(a_s - g) p_s] + T ∂_v² p_s + Σ_s' Q_s's p_s' - r p_s
@@ -15,8 +16,6 @@
 
 mod mesh;
 mod operator;
-mod time;
 
-pub(crate) use operator::operator;
 pub use operator::NoiseOperator;
-pub(crate) use time::{msd_level, transient};
+pub(crate) use operator::{observe, operator, Blocks};

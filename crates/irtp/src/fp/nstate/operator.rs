@@ -16,6 +16,7 @@ use crate::model::reset::{NoiseAtReset, Reset};
 use crate::model::DragLaw;
 use crate::model::Params;
 use crate::numerics::band::Band;
+use crate::numerics::trbdf2::ShiftedLinear;
 use crate::numerics::Failure;
 
 /// The N-state forward operator.
@@ -237,4 +238,108 @@ pub(crate) fn operator(p: &Params, n: usize, refine: usize, graded: bool) -> Res
         p.rate(),
         p.reset().noise(),
     ))
+}
+
+/// `blocks` copies of the operator coupled by the moment chain.
+pub(crate) struct Blocks {
+    pub op: NoiseOperator,
+    pub blocks: usize,
+    /// The velocity of every unknown (its cell centre).
+    pub v: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl Blocks {
+    pub(crate) fn new(op: NoiseOperator, blocks: usize) -> Self {
+        let ns = op.mesh.states;
+        let v: Vec<f64> = op
+            .mesh
+            .centres
+            .iter()
+            .flat_map(|&c| std::iter::repeat(c).take(ns))
+            .collect();
+        let tmp = vec![0.0; v.len()];
+        Blocks { op, blocks, v, tmp }
+    }
+
+    /// Mass at v = 0 in the states drawn from π (Eq. (N28)), later blocks 0.
+    pub(crate) fn initial(&self) -> Result<Vec<f64>> {
+        let m = &self.op.mesh;
+        if m.origin.is_empty() {
+            return Err(Error::invalid(
+                "noise",
+                format!("levels {:?}", self.op.chain.levels),
+                "a velocity interval containing v = 0 (the initial velocity of fp transient and fp msd)",
+            ));
+        }
+        let mut u = vec![0.0; self.blocks * self.v.len()];
+        for (s, cells) in m.origin.iter().enumerate() {
+            for &(i, w) in cells {
+                u[i * m.states + s] += w * self.op.chain.pi[s];
+            }
+        }
+        Ok(u)
+    }
+}
+
+impl ShiftedLinear for Blocks {
+    fn dim(&self) -> usize {
+        self.blocks * self.v.len()
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        let d = self.v.len();
+        for k in 0..self.blocks {
+            self.op
+                .apply(&u[k * d..(k + 1) * d], &mut out[k * d..(k + 1) * d]);
+            if k > 0 {
+                for i in 0..d {
+                    out[k * d + i] += k as f64 * self.v[i] * u[(k - 1) * d + i];
+                }
+            }
+        }
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        // Block lower triangular: forward substitution, block k with the
+        // source c k v∘x_{k-1} moved to its right side.
+        let d = self.v.len();
+        for k in 0..self.blocks {
+            self.tmp.copy_from_slice(&b[k * d..(k + 1) * d]);
+            let (prev, rest) = x.split_at_mut(k * d);
+            if k > 0 {
+                let ck = c * k as f64;
+                for (i, t) in self.tmp.iter_mut().enumerate() {
+                    *t += ck * self.v[i] * prev[(k - 1) * d + i];
+                }
+            }
+            self.op.solve_shifted(c, &self.tmp, &mut rest[..d])?;
+        }
+        Ok(())
+    }
+}
+
+/// Observables at one time of `blocks` blocks with unknown velocities
+/// `v`: mass, `<v>`, `<v²>`, then `<x>`, `<x v>`, `<x²>` (3 blocks).
+pub(crate) fn observe(v: &[f64], blocks: usize, u: &[f64]) -> [f64; 6] {
+    let d = v.len();
+    let sum = |k: usize, pow: i32| -> f64 {
+        u[k * d..(k + 1) * d]
+            .iter()
+            .zip(v)
+            .map(|(x, v)| x * v.powi(pow))
+            .sum()
+    };
+    let mut o = [sum(0, 0), sum(0, 1), sum(0, 2), 0.0, 0.0, 0.0];
+    if blocks == 3 {
+        o[3] = sum(1, 0);
+        o[4] = sum(1, 1);
+        o[5] = sum(2, 0);
+    }
+    o
 }
