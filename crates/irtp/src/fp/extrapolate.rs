@@ -29,7 +29,7 @@ pub(crate) fn richardson(x0: f64, x1: f64, x2: f64) -> (f64, f64, f64) {
 /// (6 times the model's error: E₀'s error may pass near 0 where the
 /// density has a kink between nodes, at v_r); otherwise (not yet
 /// asymptotic) 2 |d₁| + 2 |E₁ - E₀|. Never below 1e-14 |x₂|.
-pub(crate) fn extrapolation_error(x0: f64, x1: f64, x2: f64) -> f64 {
+pub fn extrapolation_error(x0: f64, x1: f64, x2: f64) -> f64 {
     let (d0, d1) = (x1 - x0, x2 - x1);
     let gap = ((2.0 * x2 - x1) - (2.0 * x1 - x0)).abs();
     let floor = 1e-14 * x2.abs();

@@ -35,6 +35,7 @@ mod solve;
 mod stationary;
 mod transient;
 
+pub use extrapolate::extrapolation_error;
 pub use grid::Mesh;
 pub use moments::{moments as msd, MomentSeries, MsdOptions, MAX_LEVELS, MAX_MSD_CELLS};
 pub use nstate::NoiseOperator;

@@ -401,6 +401,18 @@ fn trbdf2_long_time_limit_is_the_stationary_solution_on_the_same_mesh() {
         .unwrap()
     };
     let (fine, coarse) = (st(n), st(n / 2));
+    let st_raw = |cells| {
+        stationary(
+            &p,
+            &StationaryOptions {
+                cells,
+                mesh: Mesh::Graded,
+                extrapolate: false,
+            },
+        )
+        .unwrap()
+        .v2
+    };
     // Same nested meshes (400, 200 and 100 graded cells): the stationary
     // solver extrapolates once over (N, N/2), so extrapolating its N and N/2
     // answers once more is the transient's (8 X_N - 6 X_{N/2} + X_{N/4}) / 3.
@@ -409,10 +421,15 @@ fn trbdf2_long_time_limit_is_the_stationary_solution_on_the_same_mesh() {
     assert_eq!(tr.v, fine.v);
     let v2 = (4.0 * fine.v2 - coarse.v2) / 3.0;
     assert!((tr.v2[0] / v2 - 1.0).abs() < 1e-9, "{} {}", tr.v2[0], v2);
-    // The change made by the second extrapolation is the reported estimate.
+    // The reported estimate is the change made by the second extrapolation
+    // plus the bound on the first extrapolation's error (Eq. (N27)), whose
+    // three meshes are the stationary solver's N, N/2 and N/4: at least
+    // the change, and the bound of the stationary N-mesh answer on top.
+    let (quarter, half, full) = (st_raw(n / 4), st_raw(n / 2), st_raw(n));
+    let bound = irtp::fp::extrapolation_error(quarter, half, full);
     assert!(
-        (tr.v2_mesh_error[0] - (v2 - fine.v2).abs()).abs() < 1e-9 * v2,
-        "{} {}",
+        (tr.v2_mesh_error[0] - ((v2 - fine.v2).abs() + bound)).abs() < 1e-9 * v2,
+        "{} {} {bound}",
         tr.v2_mesh_error[0],
         (v2 - fine.v2).abs()
     );
@@ -505,4 +522,45 @@ fn trbdf2_newtonian_moments_match_closed_form_at_second_order() {
     );
     assert!(e2[1] < 2e-5, "{e2:?}");
     assert!(e1[0] < 1e-8 && e2[0] < 1e-8, "{e1:?} {e2:?}");
+}
+
+/// <v²>(t) of linear drag (g = v, Sigma = 1, lambda = 1/2) from v = 0 with
+/// the noise ±1 equally likely, reset to v_r = 0.2 every T = 1 (noise kept):
+/// before the reset <v²>(t) = (1 - e^{-2t}(1 + 2t))/2 (the noise's
+/// correlation e^{-2 lambda |s - s'|} = e^{-|s - s'|}); after it, with
+/// s = t - 1 and the noise still stationary and symmetric,
+/// v_r² e^{-2s} + (1 - e^{-2s}(1 + 2s))/2. At every time and mesh the
+/// reported mesh error must bound the actual error (plus the time
+/// integration's share, 1e-8 as in `fig1_curve_within_1e6`), including the coarse meshes where the
+/// initial delta's front crosses few cells (200 cells, t = 0.5: the twice
+/// extrapolated value is 7.0e-5 off).
+#[test]
+fn mesh_error_bounds_the_linear_closed_form_at_every_time() {
+    use irtp::model::reset::{Periodic, Schedule};
+    let p = models::linear(1.0, 0.5, 0.0, 0.2)
+        .with_schedule(Schedule {
+            periodic: Some(Periodic::new(1.0).unwrap()),
+            ..Default::default()
+        })
+        .unwrap();
+    let free = |s: f64| (1.0 - (-2.0 * s).exp() * (1.0 + 2.0 * s)) / 2.0;
+    let exact = |t: f64| {
+        if t < 1.0 {
+            free(t)
+        } else {
+            0.04 * (-2.0 * (t - 1.0)).exp() + free(t - 1.0)
+        }
+    };
+    let times = [0.25, 0.5, 0.75, 1.25, 1.5, 1.75];
+    for cells in [200, 400, 800] {
+        let tr = trbdf2_run(&p, cells, &times, 1e-6, 1e-10);
+        for (k, &t) in times.iter().enumerate() {
+            let err = (tr.v2[k] - exact(t)).abs();
+            assert!(
+                err <= tr.v2_mesh_error[k] + 1e-8,
+                "cells = {cells}, t = {t}: error {err:e} > estimate {:e}",
+                tr.v2_mesh_error[k]
+            );
+        }
+    }
 }

@@ -17,7 +17,8 @@
 //!   Richardson-extrapolated over the nested meshes of N, N/2 and N/4
 //!   cells (two states: twice, removing the 1/N and 1/N² terms of the
 //!   first-order fluxes, with the change made by the second extrapolation
-//!   reported as the error estimate; a chain: with the observed order,
+//!   plus the three-mesh bound on the first, Eq. (N27), reported as the
+//!   error estimate; a chain: with the observed order,
 //!   Eq. (N27)); the density is the fine mesh's.
 //! - [`Scheme::Paper`]: the paper's way (Sec. 3): explicit upwind on a
 //!   uniform mesh, the step set by the CFL limit (the paper's noise only).
