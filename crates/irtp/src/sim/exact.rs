@@ -33,13 +33,14 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 //!
 //! The noise's state space is a type parameter of the one event loop
-//! (`Sampler` over `NoiseStates`), dispatched once per run: the paper's
-//! two-state noise (fixed-size per-state arrays, its random draws bit for
-//! bit) or any finite-state noise at T = 0 (docs/equations.md Eqs.
-//! (N10)-(N12), `states`: per level its own segments, fixed point
-//! (possibly interior) and crossing times, events at rate q_s + r in state
-//! s). Both share the segment code (`Segments`, `flow_segment`, the
-//! occupation and crossing times).
+//! (`Sampler` over [`ExactNoise`], shared with the first-passage and
+//! search samplers), dispatched once per run: the paper's two-state noise
+//! ([`Telegraph`], its random draws bit for bit) or any finite-state noise
+//! at T = 0 (docs/equations.md Eqs. (N10)-(N12): per level its own
+//! segments, fixed point (possibly interior) and crossing times, events at
+//! rate q_s + r in state s). Both share the per-state tables (`Tables`)
+//! and the segment code (`Segments`, `flow_segment`, the occupation and
+//! crossing times).
 //!
 //! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
 //! run in a second step function of that loop, chosen once per run (the
@@ -775,8 +776,7 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
 /// The per-state tables as the segment code reads them, by noise state:
 /// its segments, fixed point v*, 1/g'(v*) and the flow potential at the
 /// bin edges, and the recording window ([`Sampler`] reads them from its
-/// [`NoiseStates`]: fixed-size arrays for the paper's noise, vectors for a
-/// chain); each entry is read where the segment code needs it (measured:
+/// `Tables`); each entry is read where the segment code needs it (measured:
 /// building a per-state view up front cost the two-state loop 3 % CPU
 /// time).
 trait StateTables<F> {
