@@ -36,11 +36,12 @@
 //! naming their flags).
 
 use super::backward::{self, BackwardOptions, Profile};
-use super::exact::{FirstPassage, NoiseSpace, StatesPassage, Tally};
+use super::exact::{FirstPassage, Passage, Tally};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::FlowMap;
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::noise::chain::Chain;
+use crate::model::reset::{NoiseAtReset, Reset, Schedule};
 use crate::parallel::{self, Progress};
 use crate::rng;
 use crate::stats::{Controlled, PairAcc};
@@ -72,6 +73,9 @@ pub struct PassageControl {
     influx: Vec<f64>,
     /// π, for the start term of a walk started from it.
     pi: Vec<f64>,
+    /// The walk's start state is drawn from π (a noise model's), so its
+    /// start term enters M_T; the paper's start is stratified (none).
+    drawn_start: bool,
 }
 
 /// The noise state space a [`PassageControl`] is built for: per state its
@@ -89,9 +93,8 @@ struct Space<'a, F, R> {
 
 /// Refuse a periodic, renewal or refractory schedule: the compensator
 /// of the control variate is that of a Poisson reset clock.
-fn poisson_clock<N: NoiseSpace>(fpt: &N) -> Result<()> {
-    let (schedule, refractory) = fpt.schedule();
-    if schedule.scheduled_clock() || refractory.is_some() {
+fn poisson_clock(schedule: &Schedule) -> Result<()> {
+    if schedule.scheduled_clock() || schedule.refractory.is_some() {
         return Err(Error::invalid(
             "reset",
             "periodic, renewal or refractory",
@@ -112,11 +115,11 @@ impl PassageControl {
         cells: usize,
         u: impl Fn(f64, bool) -> f64,
     ) -> Result<Self> {
-        poisson_clock(fpt)?;
+        poisson_clock(fpt.schedule())?;
         let (lambda, r, reset) = fpt.rates();
         // The + flow rises through every cell, the - flow falls to v_l.
         let space = Space {
-            flows: fpt.flows(),
+            flows: fpt.parts().0,
             stars: vec![f64::INFINITY, vl],
             q: vec![vec![0.0, lambda], vec![lambda, 0.0]],
             exit: vec![lambda, lambda],
@@ -124,20 +127,20 @@ impl PassageControl {
             rate: r,
             reset,
         };
-        Self::build(&space, vl, vt, cells, |v, k| u(v, k == 0))
+        Self::build(&space, vl, vt, cells, |v, k| u(v, k == 0), false)
     }
 
     /// Tables for the N-state sampler `fpt` of a noise model (the
     /// canonical problem on [vl, vt]) with u(v, s) = `u(v, s)` at the
     /// midpoints of `cells` uniform cells.
     pub(super) fn for_states<F: FlowMap>(
-        fpt: &StatesPassage<F>,
+        fpt: &Passage<F, Chain>,
         vl: f64,
         vt: f64,
         cells: usize,
         u: impl Fn(f64, usize) -> f64,
     ) -> Result<Self> {
-        poisson_clock(fpt)?;
+        poisson_clock(fpt.schedule())?;
         let (flows, stars, chain, reset) = fpt.parts();
         let space = Space {
             flows,
@@ -148,7 +151,7 @@ impl PassageControl {
             rate: reset.rate(),
             reset,
         };
-        Self::build(&space, vl, vt, cells, u)
+        Self::build(&space, vl, vt, cells, u, true)
     }
 
     fn build<F: FlowMap, R: Reset>(
@@ -157,6 +160,7 @@ impl PassageControl {
         vt: f64,
         cells: usize,
         u: impl Fn(f64, usize) -> f64,
+        drawn_start: bool,
     ) -> Result<Self> {
         if !(2..=1 << 22).contains(&cells) {
             return Err(Error::invalid(
@@ -204,6 +208,7 @@ impl PassageControl {
             t,
             influx: Vec::new(),
             pi: space.pi.clone(),
+            drawn_start,
         };
         ctl.influx = (0..ns)
             .map(|k| space.rate * ctl.reset_mean(space.reset, k))
@@ -258,6 +263,9 @@ impl PassageControl {
     /// Σ_s π_s u(v, s) - u(v, s0): the mean-zero start term of a walk
     /// started in s0 drawn from π.
     fn start_term(&self, v: f64, k: usize) -> f64 {
+        if !self.drawn_start {
+            return 0.0;
+        }
         let i = self.cell(v);
         let mean = (0..self.u.len()).fold(0.0, |a, j| a + self.pi[j] * self.u[j][i]);
         self.u[k][i] - mean
@@ -369,7 +377,7 @@ pub fn controlled_walk<F: FlowMap>(
     (v0, vt, start_plus, t_max): (f64, f64, bool, f64),
     rng: &mut rng::Rng,
 ) -> (Option<f64>, f64, u64) {
-    let mut m = Martingale::new(ctl, fpt.flows());
+    let mut m = Martingale::new(ctl, fpt.parts().0);
     let (time, events) = fpt.walk(v0, vt, start_plus, t_max, rng, &mut m);
     (time, m.jumps - m.compensator, events)
 }
@@ -497,7 +505,7 @@ pub fn run(
     let (cp, swapped) = problem.canonical();
     let (vl, _) = cp.params().bounds();
     crate::with_drag!(cp.params().drag(), |d| {
-        let fpt = FirstPassage::for_drag(d, cp.params(), true);
+        let fpt = FirstPassage::for_drag(d, cp.params());
         let ctl = PassageControl::new(&fpt, vl, cp.vt(), cells, profile_value(&profile, swapped))?;
         let start = (cp.v0(), cp.vt(), swapped);
         Ok(run_with(
@@ -528,12 +536,12 @@ fn run_states(
     let (vl, _) = cp.params().bounds();
     let u = |x: f64, s: usize| interpolate(&v, &per_state[s], x);
     crate::with_drag!(cp.params().drag(), |d| {
-        let fpt = StatesPassage::new(d, cp.params(), cp.vt())?;
+        let fpt = Passage::<_, Chain>::build(d, cp.params())?;
         let ctl = PassageControl::for_states(&fpt, vl, cp.vt(), cells, u)?;
         let (flows, ..) = fpt.parts();
         Ok(reduce(particles, seed, progress, |_, rng| {
             let mut m = Martingale::new(&ctl, flows);
-            let (time, events) = fpt.walk(cp.v0(), t_max, rng, &mut m);
+            let (time, events) = fpt.walk(cp.v0(), cp.vt(), true, t_max, rng, &mut m);
             (time, m.jumps - m.compensator, events)
         }))
     })

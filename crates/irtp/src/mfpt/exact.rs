@@ -18,28 +18,30 @@
 //! its end are skipped. With a finite-state noise the chain runs on alone
 //! during the period (its own holding times and jumps).
 //!
-//! One kernel runs every noise (`walk`, `walk_scheduled`), generic over
-//! the noise state space (`NoiseSpace`): the paper's noise
-//! ([`FirstPassage`], two states, its random draws those of the two-state
-//! sampler bit for bit) and any finite-state noise at T = 0 (the chain of
-//! the `states` submodule, Eqs. (N46)-(N48), its particles started in a
-//! state drawn from π); the noise is dispatched once, at the entry
-//! (`units`).
+//! One kernel runs every noise ([`Passage`]: `walk`, `walk_scheduled`),
+//! generic over the noise state space ([`ExactNoise`]): the paper's noise
+//! ([`FirstPassage`], two states, started stratified: +Sigma for even
+//! particles) and any finite-state noise at T = 0 (docs/equations.md Eqs.
+//! (N46)-(N48): events at rate q_s + r, a fixed point v*_s = g⁻¹(a_s)
+//! possibly interior and approached from either side). In the canonical
+//! (upward) frame a segment crosses v_t iff v*_s > v_t. A chain's particle
+//! starts in a state drawn from π (the stream's first uniform), so τ is
+//! the π-averaged Σ_s π_s T_s(v_0) of the backward equations (Eq. (N47))
+//! and the even and odd particles (the `plus` and `minus` halves of
+//! [`FptStats`]) are two independent halves of the same law. The noise
+//! is dispatched once, at the entry (`units`).
 
 use super::estimator::{first_passage_units, FptSample, FptStats};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
-use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
+use crate::model::noise::chain::Chain;
+use crate::model::reset::{Reset, ResetRule, Schedule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::exp_gap;
+use crate::sim::exact::{exp_gap, ExactNoise, Telegraph};
 use rand::Rng as _;
-
-mod states;
-
-pub(crate) use states::StatesPassage;
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
 /// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
@@ -55,76 +57,101 @@ pub fn first_passage(
     t_max: f64,
     rng: &mut Rng,
 ) -> (Option<f64>, u64) {
-    FirstPassage::for_drag(&params.drag(), params, false).run(v0, vt, start_plus, t_max, rng)
+    FirstPassage::new(params).run(v0, vt, start_plus, t_max, rng)
 }
 
-/// Prepared exact first-passage sampler for one parameter set (flows and
-/// their acceleration tables built once); see [`first_passage`].
+/// The prepared exact first-passage sampler of the paper's noise.
+pub type FirstPassage<F = AnyFlow> = Passage<F, Telegraph>;
+
+/// Prepared exact first-passage sampler for one parameter set and its
+/// noise `N` (flows and their acceleration tables built once, shared
+/// through [`crate::memo`]); see [`first_passage`].
 #[derive(Clone, Debug)]
-pub struct FirstPassage<F = AnyFlow> {
-    flows: [F; 2],
-    lambda: f64,
-    /// Poisson reset rate r.
-    rate: f64,
-    total_rate: f64,
+pub struct Passage<F, N> {
+    /// The flow of each state.
+    flows: Vec<F>,
+    /// Per state: its fixed point v*_s = g⁻¹(a_s); its flow crosses v_t
+    /// iff v*_s > v_t.
+    stars: Vec<f64>,
+    noise: N,
+    /// Per state: q_s + r.
+    total: Vec<f64>,
     /// The resetting rule (target and noise state at a reset).
     reset: ResetRule,
-    /// Periodic reset clock.
+    /// The periodic or renewal clock and the refractory period.
     schedule: Schedule,
-    /// Refractory period after each reset.
-    refractory: Option<Refractory>,
 }
 
 impl FirstPassage {
     /// Prepare for `params` (any law, dispatched per call; engines use
     /// [`FirstPassage::for_drag`] with the law's own type).
     pub fn new(params: &Params) -> Self {
-        Self::for_drag(&params.drag(), params, true)
+        Self::for_drag(&params.drag(), params)
     }
 }
 
 impl<F: FlowMap> FirstPassage<F> {
-    /// Prepare for `params` with the flows of `drag` (accelerated: built
-    /// once for many particles).
-    pub fn for_drag<D: Drag<Flow = F>>(drag: &D, params: &Params, accelerated: bool) -> Self {
-        let flow = |s: f64| {
-            let f = drag.flow(s);
-            if accelerated {
-                f.accelerated()
-            } else {
-                f
-            }
-        };
-        // The flows depend on the law and Sigma alone: shared between the
-        // points of a scan (crate::memo), built once.
-        let sigma = params.sigma();
-        let key = format!("first passage {drag:?} {:x} {accelerated}", sigma.to_bits());
-        let flows = crate::memo::shared(key, || {
-            Ok::<_, std::convert::Infallible>([flow(sigma), flow(-sigma)])
-        })
-        .unwrap_or_else(|never| match never {});
-        FirstPassage {
-            flows: (*flows).clone(),
-            lambda: params.lambda(),
-            rate: params.rate(),
-            total_rate: params.lambda() + params.rate(),
-            reset: *params.reset(),
-            schedule: *params.schedule(),
-            refractory: params.schedule().refractory,
-        }
-    }
-
-    /// The flows of the +Sigma and -Sigma states.
-    pub(super) fn flows(&self) -> &[F; 2] {
-        &self.flows
+    /// Prepare for `params` with the (accelerated) flows of `drag`.
+    pub fn for_drag<D: Drag<Flow = F>>(drag: &D, params: &Params) -> Self {
+        Self::build(drag, params).expect("the paper's flows are built at every Sigma")
     }
 
     /// (lambda, r, the resetting rule).
     pub(super) fn rates(&self) -> (f64, f64, &ResetRule) {
-        (self.lambda, self.rate, &self.reset)
+        (self.noise.exit(0), self.reset.rate(), &self.reset)
+    }
+}
+
+impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
+    /// The sampler of the upward problem under `params` (any schedule
+    /// modifier, run by [`walk_scheduled`]): the flows of [`ExactNoise`],
+    /// memoised per noise kind, law, levels and interval; refused naming
+    /// `temperature` at T > 0 or `noise` where a level's flow is not exact.
+    pub(crate) fn build<D: Drag<Flow = F>>(drag: &D, params: &Params) -> Result<Self> {
+        if let Some(t) = params.noise().map(|m| m.temperature()).filter(|&t| t > 0.0) {
+            return Err(Error::invalid(
+                "temperature",
+                t,
+                "temperature 0 for mfpt --method exact (no exact flow with thermal noise; \
+                 mfpt --method euler runs it)",
+            ));
+        }
+        let noise = N::of(params)?;
+        let bounds = params.bounds();
+        let bits: Vec<String> = noise
+            .levels()
+            .iter()
+            .chain([&bounds.0, &bounds.1])
+            .map(|a| format!("{:x}", a.to_bits()))
+            .collect();
+        let kind = std::any::type_name::<N>();
+        let key = format!("first passage {kind} {drag:?} {}", bits.join(","));
+        let flows = crate::memo::shared(key, || noise.flows(drag, params, "mfpt --method exact"))?;
+        let reset = *params.reset();
+        Ok(Passage {
+            flows: (*flows).clone(),
+            stars: noise.levels().iter().map(|&a| drag.inverse(a)).collect(),
+            total: noise.clocks(reset.rate()),
+            noise,
+            reset,
+            schedule: *params.schedule(),
+        })
     }
 
-    /// One upward first passage, as [`first_passage`].
+    /// The flow and fixed point of each state, the noise and the resetting
+    /// rule (for the control variate of [`super::control`]).
+    pub(crate) fn parts(&self) -> (&[F], &[f64], &N, &ResetRule) {
+        (&self.flows, &self.stars, &self.noise, &self.reset)
+    }
+
+    /// The periodic or renewal clock and the refractory period.
+    pub(crate) fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// One upward first passage, as [`first_passage`] (the start state by
+    /// [`ExactNoise::start`]: the paper's +Sigma where `start_plus`, a
+    /// chain's drawn from π with the stream's first uniform).
     pub fn run(
         &self,
         v0: f64,
@@ -136,10 +163,11 @@ impl<F: FlowMap> FirstPassage<F> {
         self.walk(v0, vt, start_plus, t_max, rng, &mut ())
     }
 
-    /// [`FirstPassage::run`] reporting every flow segment and jump of the
-    /// walk to `tally` (the random stream is consumed exactly as by `run`,
-    /// so the passage time is the same bits). Periodic and refractory
-    /// schedules report nothing: their clock is not a Poisson one.
+    /// [`Passage::run`] reporting the start, every flow segment and jump
+    /// of the walk to `tally` (the random stream is consumed exactly as by
+    /// `run`, so the passage time is the same bits). Periodic and
+    /// refractory schedules report nothing: their clock is not a Poisson
+    /// one.
     #[inline(always)]
     pub fn walk<T: Tally>(
         &self,
@@ -150,80 +178,23 @@ impl<F: FlowMap> FirstPassage<F> {
         rng: &mut Rng,
         tally: &mut T,
     ) -> (Option<f64>, u64) {
+        let s = self.noise.start(Some(state(start_plus)), rng);
         if v0 >= vt {
             return (Some(0.0), 0);
         }
-        if self.schedule.scheduled_clock() || self.refractory.is_some() {
-            return walk_scheduled(self, state(start_plus), v0, vt, t_max, rng);
+        if self.schedule.scheduled_clock() || self.schedule.refractory.is_some() {
+            return walk_scheduled(self, s, v0, vt, t_max, rng);
         }
-        walk(self, state(start_plus), v0, vt, t_max, rng, tally)
+        tally.start(v0, s);
+        walk(self, s, v0, vt, t_max, rng, tally)
     }
-}
 
-/// The noise state space of the exact first-passage kernel ([`walk`],
-/// [`walk_scheduled`]): per state its flow, whether that flow crosses v_t
-/// (its fixed point lies beyond), its event rate q_s + r, what an event
-/// is given a uniform on [0, q_s + r) (a jump of the noise to j, or a
-/// reset), the state after a reset and after a refractory hold. The
-/// paper's noise ([`FirstPassage`]: states 0 = +Sigma, 1 = -Sigma) and a
-/// finite-state chain (the `states` submodule) implement it.
-pub(crate) trait NoiseSpace {
-    /// The flow of each state.
-    type Flow: FlowMap;
-    /// The flow of state `s`.
-    fn flow(&self, s: usize) -> &Self::Flow;
-    /// Whether the flow of `s` reaches v_t.
-    fn crosses(&self, s: usize) -> bool;
-    /// q_s + r.
-    fn total(&self, s: usize) -> f64;
-    /// The event of uniform `u` on [0, q_s + r) in state `s`: Some(j) a
-    /// jump of the noise to j, None a reset.
-    fn event(&self, s: usize, u: f64) -> Option<usize>;
     /// The reset's velocity and the noise state after it (in this order
     /// from `rng`).
-    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize);
-    /// The noise state after holding the velocity for `d` from state `s`
-    /// (a refractory period: the noise runs on, no resets).
-    fn hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize;
-    /// The periodic or renewal clock and the refractory period, if any.
-    fn schedule(&self) -> (&Schedule, Option<Refractory>);
-}
-
-impl<F: FlowMap> NoiseSpace for FirstPassage<F> {
-    type Flow = F;
-    #[inline(always)]
-    fn flow(&self, s: usize) -> &F {
-        &self.flows[s]
-    }
-    #[inline(always)]
-    fn crosses(&self, s: usize) -> bool {
-        s == 0
-    }
-    #[inline(always)]
-    fn total(&self, _: usize) -> f64 {
-        self.total_rate
-    }
-    #[inline(always)]
-    fn event(&self, s: usize, u: f64) -> Option<usize> {
-        (u < self.lambda).then_some(1 - s)
-    }
     #[inline(always)]
     fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize) {
         let w = self.reset.draw_velocity(rng);
-        (w, state(self.reset.draw_noise(s == 0, rng)))
-    }
-    /// Flipped with the probability of an odd number of flips,
-    /// ½(1 - e^{-2 lambda d}) (one uniform).
-    #[inline(always)]
-    fn hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize {
-        if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
-            1 - s
-        } else {
-            s
-        }
-    }
-    fn schedule(&self) -> (&Schedule, Option<Refractory>) {
-        (&self.schedule, self.refractory)
+        (w, self.noise.after_reset(s, &self.reset, rng))
     }
 }
 
@@ -231,8 +202,8 @@ impl<F: FlowMap> NoiseSpace for FirstPassage<F> {
 /// Poisson events (module docs), reporting to `tally`: (passage time, or
 /// None if not reached by `t_max`; number of events).
 #[inline(always)]
-pub(crate) fn walk<N: NoiseSpace, T: Tally>(
-    space: &N,
+pub(crate) fn walk<F: FlowMap, N: ExactNoise, T: Tally>(
+    space: &Passage<F, N>,
     mut s: usize,
     v0: f64,
     vt: f64,
@@ -243,7 +214,7 @@ pub(crate) fn walk<N: NoiseSpace, T: Tally>(
     let (mut t, mut v) = (0.0f64, v0);
     let mut events = 0u64;
     loop {
-        let total = space.total(s);
+        let total = space.total[s];
         let gap = exp_gap(rng, total);
         v = match segment(space, s, v, vt, t, gap, t_max) {
             Segment::Done(hit) => {
@@ -259,7 +230,7 @@ pub(crate) fn walk<N: NoiseSpace, T: Tally>(
         };
         t += gap;
         events += 1;
-        if let Some(j) = space.event(s, rng.gen::<f64>() * total) {
+        if let Some(j) = space.noise.event(s, rng.gen::<f64>() * total) {
             tally.jump(v, s, Some((v, j)));
             s = j;
         } else {
@@ -317,8 +288,8 @@ enum Segment {
 /// crosses v_t within the step (None when that is past t_max), a stop when
 /// the step reaches t_max, else the velocity at its end.
 #[inline(always)]
-fn segment<N: NoiseSpace>(
-    space: &N,
+fn segment<F: FlowMap, N>(
+    space: &Passage<F, N>,
     s: usize,
     v: f64,
     vt: f64,
@@ -326,8 +297,8 @@ fn segment<N: NoiseSpace>(
     step: f64,
     t_max: f64,
 ) -> Segment {
-    let flow = space.flow(s);
-    if space.crosses(s) {
+    let flow = &space.flows[s];
+    if space.stars[s] > vt {
         let tau = flow.time(v, vt);
         if tau <= step {
             let hit = t + tau;
@@ -342,20 +313,20 @@ fn segment<N: NoiseSpace>(
 
 /// [`walk`] with a periodic or renewal clock and/or a refractory period
 /// (module docs); nothing is reported (the clock is not a Poisson one).
-pub(crate) fn walk_scheduled<N: NoiseSpace>(
-    space: &N,
+pub(crate) fn walk_scheduled<F: FlowMap, N: ExactNoise>(
+    space: &Passage<F, N>,
     mut s: usize,
     v0: f64,
     vt: f64,
     t_max: f64,
     rng: &mut Rng,
 ) -> (Option<f64>, u64) {
-    let (schedule, refractory) = space.schedule();
+    let (schedule, refractory) = (&space.schedule, space.schedule.refractory);
     let (mut t, mut v) = (0.0f64, v0);
     let mut next_periodic = schedule.first_reset(rng);
     let mut events = 0u64;
     loop {
-        let total = space.total(s);
+        let total = space.total[s];
         let gap = exp_gap(rng, total);
         let periodic = next_periodic - t <= gap;
         let step = if periodic { next_periodic - t } else { gap };
@@ -366,7 +337,7 @@ pub(crate) fn walk_scheduled<N: NoiseSpace>(
         t = if periodic { next_periodic } else { t + step };
         events += 1;
         if !periodic {
-            if let Some(j) = space.event(s, rng.gen::<f64>() * total) {
+            if let Some(j) = space.noise.event(s, rng.gen::<f64>() * total) {
                 s = j;
                 continue;
             }
@@ -380,7 +351,7 @@ pub(crate) fn walk_scheduled<N: NoiseSpace>(
             if t + d >= t_max {
                 return (None, events);
             }
-            s = space.hold(s, d, rng);
+            s = space.noise.after_hold(s, d, rng);
             t += d;
             events += 1;
         }
@@ -431,7 +402,7 @@ pub(super) fn check_problem(problem: &Problem) -> Result<()> {
         .require(crate::model::reset::Solver::MfptExact)?;
     let (cp, _) = problem.canonical();
     crate::with_drag!(cp.params().drag(), |d| {
-        states::StatesPassage::new(d, cp.params(), cp.vt()).map(|_| ())
+        Passage::<_, Chain>::build(d, cp.params()).map(|_| ())
     })
 }
 
@@ -454,36 +425,30 @@ pub(super) fn units(
     progress: &dyn Progress,
 ) -> Vec<FptStats> {
     let (cp, swapped) = problem.canonical();
-    if cp.params().noise().is_some() {
-        return crate::with_drag!(cp.params().drag(), |d| {
-            let fpt = states::StatesPassage::new(d, cp.params(), cp.vt())
-                .expect("checked by Method::check");
-            first_passage_units(
-                particles,
-                units.clone(),
-                seed,
-                t_max,
-                progress,
-                |_, rng, _| {
-                    let (time, work) = fpt.run(cp.v0(), t_max, rng);
-                    FptSample { time, work }
-                },
-            )
-        });
-    }
     crate::with_drag!(cp.params().drag(), |d| {
-        let fpt = FirstPassage::for_drag(d, cp.params(), true);
-        first_passage_units(
-            particles,
-            units.clone(),
-            seed,
-            t_max,
-            progress,
-            |_, rng, plus| {
-                let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
-                FptSample { time, work }
-            },
-        )
+        let run = (t_max, particles, seed, units.clone());
+        if cp.params().noise().is_some() {
+            noise_units::<_, Chain>(d, &cp, swapped, run, progress)
+        } else {
+            noise_units::<_, Telegraph>(d, &cp, swapped, run, progress)
+        }
+    })
+}
+
+/// [`units`] of the canonical problem `cp` with the noise `N`; the
+/// stratum of particle i is its parity, its state swapped in a mirrored
+/// frame (`swapped`).
+fn noise_units<D: Drag, N: ExactNoise>(
+    d: &D,
+    cp: &Problem,
+    swapped: bool,
+    (t_max, particles, seed, units): (f64, u64, u64, std::ops::Range<u64>),
+    progress: &dyn Progress,
+) -> Vec<FptStats> {
+    let fpt = Passage::<D::Flow, N>::build(d, cp.params()).expect("checked by Method::check");
+    first_passage_units(particles, units, seed, t_max, progress, |_, rng, plus| {
+        let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
+        FptSample { time, work }
     })
 }
 

@@ -1,7 +1,7 @@
 //! Exact first passage in position: the event-driven sampler of
 //! [`crate::sim::exact`] run until x leaves the search region, over the
 //! paper's ±Sigma telegraph noise or any finite-state noise at T = 0
-//! ([`SearchNoise`]: one walk, generic over the noise states).
+//! ([`ExactNoise`]: one walk, generic over the noise states).
 //!
 //! Between events (noise jumps and Poisson resets: a clock of rate
 //! q_s + r in state s, q_s = lambda for the paper's noise; periodic or
@@ -11,7 +11,7 @@
 //! v*_s t - ∫ (v*_s - v) dt (the flow potential tables of the simulation
 //! sampler; for a level whose fixed point v*_s = g⁻¹(a_s) is inside the
 //! velocity interval, such as the pause a_s = 0 of run-pause-tumble, the
-//! tables on each side of v*_s, `level_segments`). Along a segment v
+//! tables on each side of v*_s, [`ExactNoise::segments`]). Along a segment v
 //! moves monotonically towards v*_s, so it changes sign at most once (at
 //! the flow time to v = 0; never where v*_s = 0: v keeps its sign and
 //! tends to 0): x(t) is monotone on at most two pieces. On a
@@ -51,96 +51,14 @@ use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::{
-    check_relaxation, exp_gap, level_kind, level_segments, segments, LevelKind, Segments,
-};
+use crate::sim::exact::{exp_gap, ExactNoise, Segments, Telegraph};
 use rand::Rng as _;
 use std::ops::Range;
-
-/// The noise states of a search walk: the paper's telegraph
-/// ([`Telegraph`], states 0 = +Sigma and 1 = -Sigma) or a finite-state
-/// [`Chain`]. The walk of [`SearchSampler`] is written once over it.
-pub trait SearchNoise: Clone + Send + Sync {
-    /// The start state of a particle (`plus`: an even particle).
-    fn start(&self, plus: bool, rng: &mut Rng) -> usize;
-    /// The exit rate q_s of state s.
-    fn exit(&self, s: usize) -> f64;
-    /// The state a jump from s goes to, given u uniform on [0, q_s).
-    fn jump(&self, s: usize, u: f64) -> usize;
-    /// The state after a reset from s, by the rule's noise option.
-    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize;
-    /// The state after a refractory hold of duration d from s (the noise
-    /// runs on while v is held).
-    fn after_hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize;
-}
-
-/// The paper's noise: ±Sigma flipping at rate lambda (state 0: +Sigma).
-#[derive(Clone, Copy, Debug)]
-pub struct Telegraph {
-    lambda: f64,
-}
-
-impl SearchNoise for Telegraph {
-    #[inline]
-    fn start(&self, plus: bool, _: &mut Rng) -> usize {
-        usize::from(!plus)
-    }
-    #[inline]
-    fn exit(&self, _: usize) -> f64 {
-        self.lambda
-    }
-    #[inline]
-    fn jump(&self, s: usize, _: f64) -> usize {
-        1 - s
-    }
-    #[inline]
-    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
-        usize::from(!rule.draw_noise(s == 0, rng))
-    }
-    /// A flip with the probability ½(1 - e^{-2 lambda d}) of an odd number
-    /// of flips.
-    fn after_hold(&self, s: usize, d: f64, rng: &mut Rng) -> usize {
-        if rng.gen::<f64>() < -0.5 * (-2.0 * self.lambda * d).exp_m1() {
-            1 - s
-        } else {
-            s
-        }
-    }
-}
-
-impl SearchNoise for Chain {
-    /// Drawn from π with one uniform (the stream's first draw).
-    #[inline]
-    fn start(&self, _: bool, rng: &mut Rng) -> usize {
-        self.draw_stationary(rng.gen::<f64>())
-    }
-    #[inline]
-    fn exit(&self, s: usize) -> f64 {
-        self.exit[s]
-    }
-    #[inline]
-    fn jump(&self, s: usize, u: f64) -> usize {
-        Chain::jump(self, s, u)
-    }
-    #[inline]
-    fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
-        rule.draw_noise_state(s, self, rng)
-    }
-    /// The chain's jumps over d, one exponential gap each.
-    fn after_hold(&self, mut s: usize, d: f64, rng: &mut Rng) -> usize {
-        let mut t = exp_gap(rng, self.exit[s]);
-        while t < d {
-            s = Chain::jump(self, s, rng.gen::<f64>() * self.exit[s]);
-            t += exp_gap(rng, self.exit[s]);
-        }
-        s
-    }
-}
 
 /// Prepared exact sampler of one search problem (flow tables built once),
 /// over the noise states `N`.
 #[derive(Clone)]
-pub struct SearchSampler<D: Drag, N: SearchNoise = Telegraph> {
+pub struct SearchSampler<D: Drag, N: ExactNoise = Telegraph> {
     drag: D,
     noise: N,
     /// Flow segments of each noise state (the paper's: +Sigma, -Sigma).
@@ -186,85 +104,38 @@ impl<D: Drag> SearchSampler<D, Telegraph> {
     /// resolve the law (as the simulation sampler).
     pub fn new(drag: &D, problem: &SearchProblem) -> Result<Self> {
         super::noise_gate(problem, super::PAPER_NOISE_ONLY)?;
-        let params = problem.params();
-        let sigma = params.sigma();
-        let (vl, vu) = params.bounds();
-        check_relaxation(drag, sigma, vu)?;
-        let segs = vec![
-            segments(drag, sigma, vl, vu)?,
-            segments(drag, -sigma, vl, vu)?,
-        ];
-        let flows = vec![
-            drag.flow(sigma).accelerated(),
-            drag.flow(-sigma).accelerated(),
-        ];
-        let noise = Telegraph {
-            lambda: params.lambda(),
-        };
-        Ok(Self::assemble(
-            drag,
-            problem,
-            noise,
-            [sigma, -sigma].into(),
-            segs,
-            flows,
-        ))
+        Self::assemble(drag, problem)
     }
 }
 
 impl<D: Drag> SearchSampler<D, Chain> {
     /// Prepare for `problem` with its noise model at T = 0 (the paper's
     /// noise as a two-state chain where it has none): per level the
-    /// segments of `level_segments` and the flow of `level_kind`
-    /// (accelerated at an interval edge); refused naming `noise` where a
-    /// level's flow is not exact (a kink of the drag at v*, an interior
+    /// segments and flows of [`ExactNoise`]; refused naming `noise` where
+    /// a level's flow is not exact (a kink of the drag at v*, an interior
     /// fixed point of a law without closed-form flows), naming
     /// `temperature` at T > 0 (`super::noise_gate`).
     pub fn with_chain(drag: &D, problem: &SearchProblem) -> Result<Self> {
         super::noise_gate(problem, super::EXACT)?;
-        let params = problem.params();
-        let chain = params.chain()?;
-        let spec = params.noise_model()?.spec();
-        let law = (params.drag(), spec.as_str());
-        let bounds = params.bounds();
-        let mut segs = Vec::with_capacity(chain.states());
-        let mut flows = Vec::with_capacity(chain.states());
-        for &a in &chain.levels {
-            segs.push(level_segments(drag, law, a, bounds.0, bounds.1)?);
-            flows.push(
-                match level_kind(drag, law, a, bounds, "the exact sampler")? {
-                    LevelKind::Edge => drag.flow(a).accelerated(),
-                    LevelKind::Interior => drag.flow(a),
-                },
-            );
-        }
-        let levels = chain.levels.clone();
-        Ok(Self::assemble(drag, problem, chain, levels, segs, flows))
+        Self::assemble(drag, problem)
     }
 }
 
-impl<D: Drag, N: SearchNoise> SearchSampler<D, N> {
-    /// The sampler from its noise states and per-state levels, segments
-    /// and flows.
-    fn assemble(
-        drag: &D,
-        problem: &SearchProblem,
-        noise: N,
-        levels: Vec<f64>,
-        segs: Vec<Segments<D::Flow>>,
-        flows: Vec<D::Flow>,
-    ) -> Self {
+impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
+    /// The sampler of `problem` with its noise `N`: per state the
+    /// segments and flows of [`ExactNoise`].
+    fn assemble(drag: &D, problem: &SearchProblem) -> Result<Self> {
         let params = problem.params();
+        let noise = N::of(params)?;
+        let segs = noise.segments(drag, params)?;
+        let flows = noise.flows(drag, params, "the exact sampler")?;
         let (lo, hi) = problem.target().bounds(problem.x0());
         let sched = params.schedule();
-        let total = (0..levels.len())
-            .map(|s| noise.exit(s) + params.rate())
-            .collect();
-        SearchSampler {
+        Ok(SearchSampler {
             drag: drag.clone(),
             vs: flows.iter().map(|f| f.fixed_point()).collect(),
-            s: levels,
-            total,
+            s: noise.levels().to_vec(),
+            total: noise.clocks(params.rate()),
             noise,
             segs,
             flows,
@@ -274,10 +145,10 @@ impl<D: Drag, N: SearchNoise> SearchSampler<D, N> {
             x_reset: sched.position.map(|p| p.x),
             lo,
             hi,
-        }
+        })
     }
 
-    /// One search from (x0, v0), the noise state by [`SearchNoise::start`]
+    /// One search from (x0, v0), the noise state by [`ExactNoise::start`]
     /// (the paper's: +Sigma where `start_plus`, else -Sigma): (the first
     /// time x leaves the search region, or None if not by `t_max`; the
     /// number of events).
@@ -289,7 +160,7 @@ impl<D: Drag, N: SearchNoise> SearchSampler<D, N> {
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
-        let si = self.noise.start(start_plus, rng);
+        let si = self.noise.start(Some(usize::from(!start_plus)), rng);
         let mut w = Walk {
             t: 0.0,
             x: x0,
@@ -316,9 +187,8 @@ impl<D: Drag, N: SearchNoise> SearchSampler<D, N> {
             w.t = if periodic { next_periodic } else { w.t + step };
             events += 1;
             if !periodic {
-                let u = rng.gen::<f64>() * total;
-                if u < self.noise.exit(w.si) {
-                    w.si = self.noise.jump(w.si, u);
+                if let Some(j) = self.noise.event(w.si, rng.gen::<f64>() * total) {
+                    w.si = j;
                     w.a = self.segs[w.si].at(b.v);
                     continue;
                 }

@@ -33,13 +33,14 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 //!
 //! The noise's state space is a type parameter of the one event loop
-//! (`Sampler` over `NoiseStates`), dispatched once per run: the paper's
-//! two-state noise (fixed-size per-state arrays, its random draws bit for
-//! bit) or any finite-state noise at T = 0 (docs/equations.md Eqs.
-//! (N10)-(N12), `states`: per level its own segments, fixed point
-//! (possibly interior) and crossing times, events at rate q_s + r in state
-//! s). Both share the segment code (`Segments`, `flow_segment`, the
-//! occupation and crossing times).
+//! (`Sampler` over [`ExactNoise`], shared with the first-passage and
+//! search samplers), dispatched once per run: the paper's two-state noise
+//! ([`Telegraph`], its random draws bit for bit) or any finite-state noise
+//! at T = 0 (docs/equations.md Eqs. (N10)-(N12): per level its own
+//! segments, fixed point (possibly interior) and crossing times, events at
+//! rate q_s + r in state s). Both share the per-state tables (`Tables`)
+//! and the segment code (`Segments`, `flow_segment`, the occupation and
+//! crossing times).
 //!
 //! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
 //! run in a second step function of that loop, chosen once per run (the
@@ -67,6 +68,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
+use crate::model::noise::chain::Chain;
 use crate::model::reset::{Refractory, Reset, ResetRule, Schedule, Solver};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{
@@ -79,10 +81,10 @@ use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
 use std::ops::Range;
 
+mod noise;
 mod ou;
-mod states;
 
-pub(crate) use states::{level_kind, level_segments, LevelKind};
+pub use noise::{ExactNoise, Telegraph};
 
 /// Antiderivatives Ψ_k(v) = ∫_{lo}^{v} (v* - v')^k / (s - g(v')) dv', k = 1, 2,
 /// for one noise state s on [lo, hi], as piecewise Chebyshev series on
@@ -306,7 +308,7 @@ fn check_cancellation(params: &Params) -> Result<()> {
 /// iterative velocity solve with the deficit table in v (the same answers
 /// to rounding).
 #[derive(Clone)]
-pub(crate) enum Segments<F> {
+pub enum Segments<F> {
     Table(PotentialTable<F>),
     /// A fixed point inside the velocity interval (or a side longer than
     /// the paper's 2 |v*|): one table per side of v*, the one below it
@@ -355,117 +357,66 @@ impl<F: FlowMap> Segments<F> {
     }
 }
 
-/// The part of a [`Sampler`] that the law, Sigma and the number of bins
-/// fix (no rate enters): the flow segments, the bins' crossing times and
-/// edge potentials. Built once per process for each (law, Sigma, bins) and
-/// shared through [`crate::memo`], so the points of a sweep over the rates
-/// do not rebuild the tables (for a law on the generic path, tens of
-/// milliseconds).
+/// The part of a [`Sampler`] that the law, the levels and the number of
+/// bins fix (no rate enters): per state the flow segments, fixed point,
+/// 1/g'(v*), the bins' crossing times and edge potentials. Built once per
+/// process for each (noise kind, law, levels, bins) and shared through
+/// [`crate::memo`], so the points of a sweep over the rates do not rebuild
+/// the tables (for a law on the generic path, tens of milliseconds).
 #[derive(Clone)]
-struct LawSetup<F> {
-    segs: [Segments<F>; 2],
-    tau: [Vec<f64>; 2],
-    phi_edges: [Vec<f64>; 2],
-    vs: [f64; 2],
-    inv_rate: [f64; 2],
+struct Tables<F> {
+    segs: Vec<Segments<F>>,
+    vs: Vec<f64>,
+    inv_rate: Vec<f64>,
+    /// Flow time across bin k in full (0 where never crossed).
+    tau: Vec<Vec<f64>>,
+    /// Flow potential (see [`FlowMap::potential`]) at every edge.
+    phi_edges: Vec<Vec<f64>>,
 }
 
-impl<F: FlowMap> LawSetup<F> {
-    fn new<D: Drag<Flow = F>>(drag: &D, sigma: f64, lo: f64, hi: f64, b: usize) -> Result<Self> {
-        let plus = segments(drag, sigma, lo, hi)?;
-        let minus = match &plus {
-            Segments::Table(t) => Segments::Table(t.mirrored()),
-            _ => segments(drag, -sigma, lo, hi)?,
-        };
+impl<F: FlowMap> Tables<F> {
+    fn new<D: Drag<Flow = F>, N: ExactNoise>(
+        drag: &D,
+        noise: &N,
+        params: &Params,
+        b: usize,
+    ) -> Result<Self> {
+        let (lo, hi) = params.bounds();
         let mut edges: Vec<f64> = (0..=b)
             .map(|k| lo + (hi - lo) * k as f64 / b as f64)
             .collect();
         edges[b] = hi;
-        let tau = [
-            crossing_times(drag, sigma, &edges)?,
-            crossing_times(drag, -sigma, &edges)?,
-        ];
-        let flows = [drag.flow(sigma), drag.flow(-sigma)];
-        let phi_edges = [
-            edges.iter().map(|&e| flows[0].potential(e)).collect(),
-            edges.iter().map(|&e| flows[1].potential(e)).collect(),
-        ];
-        Ok(LawSetup {
-            segs: [plus, minus],
-            tau,
-            phi_edges,
-            vs: [flows[0].fixed_point(), flows[1].fixed_point()],
-            inv_rate: [1.0 / flows[0].rate(), 1.0 / flows[1].rate()],
-        })
+        let mut out = Tables {
+            segs: noise.segments(drag, params)?,
+            vs: Vec::new(),
+            inv_rate: Vec::new(),
+            tau: Vec::new(),
+            phi_edges: Vec::new(),
+        };
+        for &a in noise.levels() {
+            let flow = drag.flow(a);
+            out.vs.push(flow.fixed_point());
+            out.inv_rate.push(1.0 / flow.rate());
+            out.tau.push(crossing_times(drag, a, &edges)?);
+            out.phi_edges
+                .push(edges.iter().map(|&e| flow.potential(e)).collect());
+        }
+        Ok(out)
     }
 }
 
-/// The noise's state space as the one event loop ([`Sampler`]) reads it:
-/// per state its tables (segments, fixed point, 1/g'(v*), edge
-/// potentials, bin crossing times), its event clock and what an event
-/// does. Two implementations, chosen once per run ([`simulate_drag`]): the
-/// paper's two-state noise ([`Paper`], fixed-size arrays, its random draws
-/// kept bit for bit) and a finite-state chain (`states::ChainStates`,
-/// Eqs. (N10)-(N12)); the loop is monomorphised over each.
-trait NoiseStates: Sized + Sync {
-    type Flow: FlowMap;
-    /// Per-state crossing difference arrays of a chunk.
-    type Cross: AsMut<[Vec<i64>]> + Send;
-    /// The tables of `params`'s noise (the caller has checked the solver's
-    /// support line and the recording window).
-    fn build<D: Drag<Flow = Self::Flow>>(drag: &D, params: &Params, spec: &SimSpec)
-        -> Result<Self>;
-    fn seg(&self, si: usize) -> &Segments<Self::Flow>;
-    fn fixed_point(&self, si: usize) -> f64;
-    fn inv_rate(&self, si: usize) -> f64;
-    fn phi_edges(&self, si: usize) -> &[f64];
-    /// Flow time across each bin in full (0 where never crossed).
-    fn tau(&self, si: usize) -> &[f64];
-    /// Empty crossing arrays for `bins` bins.
-    fn cross(&self, bins: usize) -> Self::Cross;
-    /// The state of a particle at t = 0 (its stream's first draw).
-    fn start(&self, rng: &mut Rng) -> usize;
-    /// The event clock in state s outside a refractory period: (q_s + r,
-    /// its inverse).
-    fn clock(&self, si: usize) -> (f64, f64);
-    /// The clock inside a refractory period, jumps only: (q_s, its
-    /// inverse, 0 where q_s = 0).
-    fn jump_clock(&self, si: usize) -> (f64, f64);
-    /// The event of the clock in state s, given u uniform on [0, 1): a
-    /// jump to the returned state, or a reset (None).
-    fn event(&self, si: usize, u: f64) -> Option<usize>;
-    /// The state after a jump of the clock inside a refractory period.
-    fn jump_held(&self, si: usize, rng: &mut Rng) -> usize;
-    /// The state after a reset from s, by the rule's noise option.
-    fn after_reset(&self, si: usize, rule: &ResetRule, rng: &mut Rng) -> usize;
-    /// The segment start in state s after a reset to velocity v.
-    fn reset_point(&self, si: usize, v: f64) -> FlowPoint;
-}
-
-/// The paper's noise ±Sigma flipping at rate lambda (state 0: +Sigma).
-struct Paper<F> {
-    /// Flow segments for s = +Sigma (index 0) and s = -Sigma (index 1).
-    segs: [Segments<F>; 2],
-    /// Fixed points and inverse relaxation rates 1/g'(v*), per noise state.
-    vs: [f64; 2],
-    inv_rate: [f64; 2],
-    lambda: f64,
-    total_rate: f64,
-    inv_total_rate: f64,
-    /// 1/lambda (0 where lambda = 0): the clock of a refractory period.
-    inv_lambda: f64,
-    /// The segment start at the point target v_r, per noise state.
-    at_vr: Option<[FlowPoint; 2]>,
-    /// Flow time across bin k in full, per noise state (0 where never crossed).
-    tau: [Vec<f64>; 2],
-    /// Flow potential (see [`FlowMap::potential`]) at every edge, per noise state.
-    phi_edges: [Vec<f64>; 2],
-}
-
-/// Everything fixed for a run: the noise's tables and clock, the resetting
-/// protocol, the recording window.
-struct Sampler<N> {
+/// Everything fixed for a run: the noise and its tables and clock, the
+/// resetting protocol, the recording window.
+struct Sampler<F, N> {
     noise: N,
+    tab: Tables<F>,
+    /// Per state: the event clock q_s + r, its inverse, and 1/q_s (0 where
+    /// q_s = 0: the clock of a refractory period).
+    total: Vec<f64>,
+    inv_total: Vec<f64>,
+    inv_exit: Vec<f64>,
+    /// The segment start at the point target v_r, per noise state.
+    at_vr: Option<Vec<FlowPoint>>,
     /// The resetting rule (rate, target, noise state at a reset).
     reset: ResetRule,
     times: Vec<f64>,
@@ -496,9 +447,9 @@ enum Edge {
 /// Per-chunk scratch: occupation times and full-crossing counts
 /// (difference arrays, so a segment crossing many bins costs O(1)), one
 /// per noise state.
-struct Scratch<C> {
+struct Scratch {
     occ: Vec<f64>,
-    cross: C,
+    cross: Vec<Vec<i64>>,
 }
 
 /// The segments of noise value s: tables when they fit, else the solve.
@@ -547,113 +498,65 @@ fn crossing_times<D: Drag>(drag: &D, s: f64, edges: &[f64]) -> Result<Vec<f64>> 
         .collect()
 }
 
-impl<F: FlowMap> NoiseStates for Paper<F> {
-    type Flow = F;
-    type Cross = [Vec<i64>; 2];
-
-    fn build<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
-        let sigma = params.sigma();
-        let (lo, hi) = params.bounds();
-        check_relaxation(drag, sigma, hi)?;
-        check_cancellation(params)?;
-        let key = format!("exact sampler {drag:?} {:x} {}", sigma.to_bits(), spec.bins);
-        let law = crate::memo::shared(key, || LawSetup::new(drag, sigma, lo, hi, spec.bins))?;
-        let LawSetup {
-            segs,
-            tau,
-            phi_edges,
-            vs,
-            inv_rate,
-        } = (*law).clone();
-        let reset = params.reset();
-        let at_vr = reset.point().map(|vr| [segs[0].at(vr), segs[1].at(vr)]);
-        let lambda = params.lambda();
-        Ok(Paper {
-            inv_lambda: if lambda > 0.0 { 1.0 / lambda } else { 0.0 },
-            vs,
-            inv_rate,
-            segs,
-            phi_edges,
-            at_vr,
-            lambda,
-            total_rate: lambda + reset.rate(),
-            inv_total_rate: 1.0 / (lambda + reset.rate()),
-            tau,
-        })
-    }
-    #[inline(always)]
-    fn seg(&self, si: usize) -> &Segments<F> {
-        &self.segs[si]
-    }
-    #[inline(always)]
-    fn fixed_point(&self, si: usize) -> f64 {
-        self.vs[si]
-    }
-    #[inline(always)]
-    fn inv_rate(&self, si: usize) -> f64 {
-        self.inv_rate[si]
-    }
-    #[inline(always)]
-    fn phi_edges(&self, si: usize) -> &[f64] {
-        &self.phi_edges[si]
-    }
-    #[inline(always)]
-    fn tau(&self, si: usize) -> &[f64] {
-        &self.tau[si]
-    }
-    fn cross(&self, bins: usize) -> [Vec<i64>; 2] {
-        [vec![0; bins], vec![0; bins]]
-    }
-    /// ±Sigma with probability ½ each (one boolean).
-    #[inline(always)]
-    fn start(&self, rng: &mut Rng) -> usize {
-        usize::from(!rng.gen::<bool>())
-    }
-    #[inline(always)]
-    fn clock(&self, _: usize) -> (f64, f64) {
-        (self.total_rate, self.inv_total_rate)
-    }
-    #[inline(always)]
-    fn jump_clock(&self, _: usize) -> (f64, f64) {
-        (self.lambda, self.inv_lambda)
-    }
-    #[inline(always)]
-    fn event(&self, si: usize, u: f64) -> Option<usize> {
-        (u * self.total_rate < self.lambda).then_some(1 - si)
-    }
-    /// The flip (no draw: the other state whatever u).
-    #[inline(always)]
-    fn jump_held(&self, si: usize, _: &mut Rng) -> usize {
-        1 - si
-    }
-    #[inline(always)]
-    fn after_reset(&self, si: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
-        usize::from(!rule.draw_noise(si == 0, rng))
-    }
-    #[inline(always)]
-    fn reset_point(&self, si: usize, v: f64) -> FlowPoint {
-        match &self.at_vr {
-            Some(at) => at[si],
-            None => self.segs[si].at(v),
-        }
-    }
-}
-
-impl<N: NoiseStates> Sampler<N> {
-    /// The sampler of `params` with the noise states `N` (its tables built
-    /// or shared through [`crate::memo`]).
-    fn new<D: Drag<Flow = N::Flow>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
+impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
+    /// The sampler of `params` with the noise `N` (its tables built or
+    /// shared through [`crate::memo`]); refused naming `noise` where the
+    /// velocity interval does not hold the start v = 0.
+    fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
         params.require(Solver::Exact)?;
         super::check_period_window(params, spec)?;
-        let noise = N::build(drag, params, spec)?;
+        let noise = N::of(params)?;
+        let (lo, hi) = params.bounds();
+        if !(lo < hi && lo <= 0.0 && 0.0 <= hi) {
+            return Err(Error::invalid(
+                "noise",
+                params.noise_model()?.spec(),
+                format!(
+                    "levels of both signs (or zero) and at least two distinct levels for the \
+                     exact sampler: the particle starts at v = 0 (here the velocity interval is \
+                     [{lo}, {hi}])"
+                ),
+            ));
+        }
+        let bits: Vec<String> = noise
+            .levels()
+            .iter()
+            .map(|a| format!("{:x}", a.to_bits()))
+            .collect();
+        let kind = std::any::type_name::<N>();
+        let key = format!(
+            "exact sampler {kind} {drag:?} {} {}",
+            bits.join(","),
+            spec.bins
+        );
+        let tab =
+            (*crate::memo::shared(key, || Tables::new(drag, &noise, params, spec.bins))?).clone();
+        if params.noise().is_none() {
+            check_cancellation(params)?;
+        }
         let schedule = params.schedule();
+        let reset = *params.reset();
+        let total = noise.clocks(reset.rate());
+        let inv_exit = (0..total.len())
+            .map(|s| match noise.exit(s) {
+                q if q > 0.0 => 1.0 / q,
+                _ => 0.0,
+            })
+            .collect();
         Ok(Sampler {
+            at_vr: reset
+                .point()
+                .map(|vr| tab.segs.iter().map(|s| s.at(vr)).collect()),
+            inv_total: total.iter().map(|t| 1.0 / t).collect(),
+            inv_exit,
+            total,
             noise,
+            tab,
             plain: schedule.is_plain(),
             schedule: *schedule,
             x_reset: schedule.position.map(|p| p.x),
             refractory: schedule.refractory,
-            reset: *params.reset(),
+            reset,
             times: spec.grid.times().to_vec(),
             burn_in: spec.burn_in,
             t_max: spec.grid.t_max(),
@@ -661,23 +564,32 @@ impl<N: NoiseStates> Sampler<N> {
         })
     }
 
+    /// The segment start in state s after a reset to velocity v.
+    #[inline(always)]
+    fn reset_point(&self, si: usize, v: f64) -> FlowPoint {
+        match &self.at_vr {
+            Some(at) => at[si],
+            None => self.tab.segs[si].at(v),
+        }
+    }
+
     /// Empty scratch for `bins` bins.
-    fn scratch(&self, bins: usize) -> Scratch<N::Cross> {
+    fn scratch(&self, bins: usize) -> Scratch {
         Scratch {
             occ: vec![0.0; bins],
-            cross: self.noise.cross(bins),
+            cross: vec![vec![0; bins]; self.total.len()],
         }
     }
 
     /// A particle at t = 0 (v = 0, noise state drawn).
     fn start(&self, i: u64) -> Lane {
         let mut rng = rng::stream(self.seed, i);
-        let si = self.noise.start(&mut rng);
+        let si = self.noise.start(None, &mut rng);
         let next_periodic = self.schedule.first_reset(&mut rng);
         Lane {
             rng,
             si,
-            a: self.noise.seg(si).at(0.0),
+            a: self.tab.segs[si].at(0.0),
             t: 0.0,
             x: 0.0,
             k: 0,
@@ -696,8 +608,8 @@ impl<N: NoiseStates> Sampler<N> {
     /// One flow segment of a particle up to its next event (or t_max), then
     /// the event (the paper's protocol).
     #[inline]
-    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
-        let (rate, inv) = self.noise.clock(p.si);
+    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
+        let (rate, inv) = (self.total[p.si], self.inv_total[p.si]);
         let gap = if rate > 0.0 {
             // Exp(rate) by a product with 1/rate (the division sits on the
             // event's dependency chain).
@@ -712,14 +624,14 @@ impl<N: NoiseStates> Sampler<N> {
             return;
         }
         p.events += 1;
-        match self.noise.event(p.si, p.rng.gen::<f64>()) {
+        match self.noise.event(p.si, p.rng.gen::<f64>() * rate) {
             Some(j) => {
                 p.si = j;
-                p.a = self.noise.seg(j).at(b.v);
+                p.a = self.tab.segs[j].at(b.v);
             }
             None => {
                 let v = self.draw_reset(p);
-                p.a = self.noise.reset_point(p.si, v);
+                p.a = self.reset_point(p.si, v);
             }
         }
     }
@@ -736,12 +648,13 @@ impl<N: NoiseStates> Sampler<N> {
     /// [`Sampler::step`] with the schedule's modifiers (see the module
     /// docs): the segment ends at the exponential clock, the next periodic
     /// reset time or the end of the refractory period, whichever is first.
-    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
+    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
         // Inside a refractory period only the noise's jumps run (rate q_s).
+        let si = p.si;
         let (rate, inv) = if p.held {
-            self.noise.jump_clock(p.si)
+            (self.noise.exit(si), self.inv_exit[si])
         } else {
-            self.noise.clock(p.si)
+            (self.total[si], self.inv_total[si])
         };
         let gap = if rate > 0.0 {
             p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
@@ -771,14 +684,14 @@ impl<N: NoiseStates> Sampler<N> {
         match edge {
             Edge::Release => {
                 p.held = false;
-                p.a = self.noise.seg(p.si).at(p.a.v);
+                p.a = self.tab.segs[p.si].at(p.a.v);
             }
             Edge::Periodic => self.reset_scheduled(p),
-            Edge::Clock if p.held => p.si = self.noise.jump_held(p.si, &mut p.rng),
-            Edge::Clock => match self.noise.event(p.si, p.rng.gen::<f64>()) {
+            Edge::Clock if p.held => p.si = self.noise.draw_jump(si, &mut p.rng),
+            Edge::Clock => match self.noise.event(si, p.rng.gen::<f64>() * rate) {
                 Some(j) => {
                     p.si = j;
-                    p.a = self.noise.seg(j).at(p.a.v);
+                    p.a = self.tab.segs[j].at(p.a.v);
                 }
                 None => self.reset_scheduled(p),
             },
@@ -791,7 +704,7 @@ impl<N: NoiseStates> Sampler<N> {
     /// first one after the reset, or after the refractory period.
     fn reset_scheduled(&self, p: &mut Lane) {
         let v = self.draw_reset(p);
-        p.a = self.noise.reset_point(p.si, v);
+        p.a = self.reset_point(p.si, v);
         if let Some(x) = self.x_reset {
             p.x = x;
         }
@@ -809,7 +722,7 @@ impl<N: NoiseStates> Sampler<N> {
     /// A held segment (refractory period) from p.t to `t_end`: v constant
     /// at p.a.v, x linear in t, the held velocity's bin (or its atom)
     /// occupied.
-    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>, t_end: f64) {
+    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch, t_end: f64) {
         let (t, v) = (p.t, p.a.v);
         while p.k < self.times.len() && self.times[p.k] <= t_end {
             let xk = p.x + v * (self.times[p.k] - t);
@@ -833,9 +746,9 @@ impl<N: NoiseStates> Sampler<N> {
 
     /// Close a particle: full bin crossings (occupation += crossings × tau)
     /// and its contribution to the observables.
-    fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
-        for (si, cross) in sc.cross.as_mut().iter_mut().enumerate() {
-            add_crossings(cross, &mut sc.occ, self.noise.tau(si));
+    fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch) {
+        for (cross, tau) in sc.cross.iter_mut().zip(&self.tab.tau) {
+            add_crossings(cross, &mut sc.occ, tau);
         }
         close_particle(p, obs, &mut sc.occ, self.t_max - self.burn_in);
     }
@@ -843,7 +756,7 @@ impl<N: NoiseStates> Sampler<N> {
     /// Particles `ids` one after the other. (Interleaving four particles
     /// per thread, one event of each in turn, measured no faster: the
     /// event's chain is short next to its instruction count.)
-    fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch<N::Cross>) {
+    fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
         for i in ids {
             let mut p = self.start(i);
             if self.plain {
@@ -863,8 +776,7 @@ impl<N: NoiseStates> Sampler<N> {
 /// The per-state tables as the segment code reads them, by noise state:
 /// its segments, fixed point v*, 1/g'(v*) and the flow potential at the
 /// bin edges, and the recording window ([`Sampler`] reads them from its
-/// [`NoiseStates`]: fixed-size arrays for the paper's noise, vectors for a
-/// chain); each entry is read where the segment code needs it (measured:
+/// `Tables`); each entry is read where the segment code needs it (measured:
 /// building a per-state view up front cost the two-state loop 3 % CPU
 /// time).
 trait StateTables<F> {
@@ -1023,22 +935,22 @@ struct Lane {
     next_periodic: f64,
 }
 
-impl<N: NoiseStates> StateTables<N::Flow> for Sampler<N> {
+impl<F, N> StateTables<F> for Sampler<F, N> {
     #[inline(always)]
-    fn seg(&self, si: usize) -> &Segments<N::Flow> {
-        self.noise.seg(si)
+    fn seg(&self, si: usize) -> &Segments<F> {
+        &self.tab.segs[si]
     }
     #[inline(always)]
     fn fixed_point(&self, si: usize) -> f64 {
-        self.noise.fixed_point(si)
+        self.tab.vs[si]
     }
     #[inline(always)]
     fn inv_rate(&self, si: usize) -> f64 {
-        self.noise.inv_rate(si)
+        self.tab.inv_rate[si]
     }
     #[inline(always)]
     fn phi_edges(&self, si: usize) -> &[f64] {
-        self.noise.phi_edges(si)
+        &self.tab.phi_edges[si]
     }
     #[inline(always)]
     fn window(&self) -> (&[f64], f64) {
@@ -1046,14 +958,14 @@ impl<N: NoiseStates> StateTables<N::Flow> for Sampler<N> {
     }
 }
 
-impl<C: AsMut<[Vec<i64>]>> Occupation for Scratch<C> {
+impl Occupation for Scratch {
     #[inline(always)]
     fn occ(&mut self) -> &mut [f64] {
         &mut self.occ
     }
     #[inline(always)]
     fn cross(&mut self, si: usize) -> &mut [i64] {
-        &mut self.cross.as_mut()[si]
+        &mut self.cross[si]
     }
 }
 
@@ -1114,22 +1026,22 @@ fn simulate_drag<D: Drag>(
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
     if params.noise().is_some() {
-        run_noise::<D, states::ChainStates<D::Flow>>(drag, params, spec, part, progress)
+        run_noise::<D, Chain>(drag, params, spec, part, progress)
     } else {
-        run_noise::<D, Paper<D::Flow>>(drag, params, spec, part, progress)
+        run_noise::<D, Telegraph>(drag, params, spec, part, progress)
     }
 }
 
 /// The run's particles with the noise states `N`. The accumulator carries
 /// the per-chunk [`Scratch`]; only its observables are the result.
-fn run_noise<D: Drag, N: NoiseStates<Flow = D::Flow>>(
+fn run_noise<D: Drag, N: ExactNoise>(
     drag: &D,
     params: &Params,
     spec: &SimSpec,
     part: Part,
     progress: &dyn Progress,
 ) -> Result<Vec<Observables>> {
-    let sampler = Sampler::<N>::new(drag, params, spec)?;
+    let sampler = Sampler::<D::Flow, N>::new(drag, params, spec)?;
     Ok(reduce_particles(
         (params, spec),
         part,
@@ -1187,7 +1099,7 @@ pub(crate) fn simulate_coupled(
 struct CoupledChunk {
     totals: Coupled,
     one: [Observables; 2],
-    sc: Scratch<[Vec<i64>; 2]>,
+    sc: Scratch,
 }
 
 fn coupled_drag<D: Drag>(
@@ -1197,8 +1109,8 @@ fn coupled_drag<D: Drag>(
     spec: &SimSpec,
     progress: &dyn Progress,
 ) -> Result<Coupled> {
-    let target = Sampler::<Paper<D::Flow>>::new(drag, params, spec)?;
-    let linear = Sampler::<Paper<_>>::new(&crate::model::drag::Linear, proxy, spec)?;
+    let target = Sampler::<D::Flow, Telegraph>::new(drag, params, spec)?;
+    let linear = Sampler::<_, Telegraph>::new(&crate::model::drag::Linear, proxy, spec)?;
     let empty = [
         Observables::new(spec, params),
         Observables::new(spec, proxy),
