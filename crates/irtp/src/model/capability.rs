@@ -297,7 +297,7 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// equations run an exponential refractory period, one held state per
 /// noise state (docs/equations.md, (R10), (R11)).
 fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
-    feature == Feature::RefractoryExp && matches!(solver, Solver::FpStationary)
+    feature == Feature::RefractoryExp && matches!(solver, Solver::FpStationary | Solver::Backward)
 }
 
 /// Whether `solver` runs the protocol features it runs ([`supports`])
