@@ -45,7 +45,10 @@ fn noise(spec: &str, rate: f64, vr: f64) -> Params {
 fn paper_as_states_with_a_hold_matches_the_two_state_solver() {
     let (r, m) = (1.0, 0.7);
     let want = r * m / (1.0 + r * m);
-    for rule in [None, Some((Target::uniform(-0.3, 0.5), NoiseAtReset::Redrawn))] {
+    for rule in [
+        None,
+        Some((Target::uniform(-0.3, 0.5), NoiseAtReset::Redrawn)),
+    ] {
         let chain = noise(PAPER_AS_STATES, r, 0.2);
         let two = Params::new(DragLaw::Tan, 1.0, 0.5, r, 0.2).unwrap();
         let (p, q) = match rule {
@@ -60,7 +63,12 @@ fn paper_as_states_with_a_hold_matches_the_two_state_solver() {
         let e = s.noise.as_ref().unwrap().errors.unwrap();
         let e2 = |f: f64, x: f64| (x - f).abs();
         for (what, x, y, est) in [
-            ("<v>", s.v_mean, t.v_mean, e[0] + e2(t.fine.v_mean, t.v_mean)),
+            (
+                "<v>",
+                s.v_mean,
+                t.v_mean,
+                e[0] + e2(t.fine.v_mean, t.v_mean),
+            ),
             ("<v^2>", s.v2, t.v2, e[1] + e2(t.fine.v2, t.v2)),
             ("D_eff", s.d_eff, t.d_eff, e[2] + e2(t.fine.d_eff, t.d_eff)),
         ] {
@@ -100,7 +108,10 @@ fn the_hold_scales_the_plain_density() {
         }
         let top = a.p.iter().fold(0.0f64, |x, &y| x.max(y));
         for (x, y) in a.p.iter().zip(&b.p) {
-            assert!((y - scale * x).abs() <= 1e-12 * top, "{target:?}: {y} vs {x}");
+            assert!(
+                (y - scale * x).abs() <= 1e-12 * top,
+                "{target:?}: {y} vs {x}"
+            );
         }
         if let Some(vr) = plain.reset().point() {
             let plain_atom = a.atoms.first().map_or(0.0, |a| a.mass);
