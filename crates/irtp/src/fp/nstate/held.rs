@@ -82,18 +82,27 @@ impl Hold {
         self.point.unwrap_or(op.mesh.centres[i])
     }
 
-    /// K⁻¹ x with K = κ I - Qᵀ.
-    pub(crate) fn k_inv(&self, op: &NoiseOperator, x: &[f64]) -> Result<Vec<f64>> {
+    /// κ K⁻¹ x with K = κ I - Qᵀ, deflated so that it stays well posed as
+    /// κ → 0: with x = (1ᵀx) π + z (1ᵀ z = 0), κ K⁻¹ π = π and
+    /// K⁻¹ z = (K + π 1ᵀ)⁻¹ z (whose solution has 1ᵀ = 0), K + π 1ᵀ
+    /// nonsingular for every κ ≥ 0 (Q irreducible).
+    pub(crate) fn kappa_k_inv(&self, op: &NoiseOperator, x: &[f64]) -> Result<Vec<f64>> {
         let c = &op.chain;
         let ns = c.states();
         let k: Vec<Vec<f64>> = (0..ns)
             .map(|i| {
                 (0..ns)
-                    .map(|j| f64::from(u8::from(i == j)) * self.kappa - c.q[j][i])
+                    .map(|j| f64::from(u8::from(i == j)) * self.kappa - c.q[j][i] + c.pi[i])
                     .collect()
             })
             .collect();
-        chain::solve(&k, x, METHOD)
+        let total: f64 = x.iter().sum();
+        let z: Vec<f64> = x.iter().zip(&c.pi).map(|(x, p)| x - total * p).collect();
+        let y = chain::solve(&k, &z, METHOD)?;
+        Ok(y.iter()
+            .zip(&c.pi)
+            .map(|(y, p)| total * p + self.kappa * y)
+            .collect())
     }
 
     /// The re-entry κ q at the target: out -= κ q placed as a reset.
@@ -120,11 +129,11 @@ impl Hold {
         for j in 0..ns {
             let mut e = vec![0.0; ns];
             e[j] = 1.0;
-            let back = self.k_inv(op, &op.influx(&e))?;
+            let back = self.kappa_k_inv(op, &op.influx(&e))?;
             let col: Vec<f64> = (0..ns)
                 .map(|i| {
                     let diag = if i == j { op.rate } else { 0.0 };
-                    c.q[j][i] - diag + self.kappa * back[i]
+                    c.q[j][i] - diag + back[i]
                 })
                 .collect();
             cols.push(col);
@@ -148,8 +157,8 @@ impl Hold {
         v_mean: f64,
         out: &mut [f64],
     ) -> Result<()> {
-        let back = self.k_inv(op, &op.influx(y))?;
-        let j: Vec<f64> = back.iter().map(|x| -self.kappa * x).collect();
+        let back = self.kappa_k_inv(op, &op.influx(y))?;
+        let j: Vec<f64> = back.iter().map(|x| -x).collect();
         op.add_target(&j, out);
         let ns = op.mesh.states;
         for (s, cells) in op.mesh.target.iter().enumerate() {

@@ -762,21 +762,25 @@ fn refractory_mean(p: &Problem, mean_only: bool) -> Result<Option<f64>> {
 fn chain_refractory(chain: &Chain, mean: f64, m: &Mesh, op: &mut Operator) -> Result<()> {
     let ns = chain.states();
     let k = 1.0 / mean;
+    // Deflated, well posed as κ → 0: κ I - Q + 1 πᵀ is nonsingular for
+    // every κ ≥ 0, and column c of P is π_c 1 + κ (κ I - Q + 1 πᵀ)⁻¹
+    // (e_c - π_c 1) (P 1 = 1; the solve keeps πᵀ = 0 on πᵀ-free data).
+    let pi = &chain.pi;
     let a: Vec<Vec<f64>> = (0..ns)
         .map(|i| {
             (0..ns)
-                .map(|j| if i == j { k } else { 0.0 } - chain.q[i][j])
+                .map(|j| if i == j { k } else { 0.0 } - chain.q[i][j] + pi[j])
                 .collect()
         })
         .collect();
-    // Column c of P = κ (κ I - Q)⁻¹ e_c.
     let mut p = vec![vec![0.0; ns]; ns];
     for c in 0..ns {
-        let mut e = vec![0.0; ns];
-        e[c] = k;
+        let e: Vec<f64> = (0..ns)
+            .map(|i| f64::from(u8::from(i == c)) - pi[c])
+            .collect();
         let col = crate::model::noise::chain::solve(&a, &e, METHOD)?;
         for (row, x) in p.iter_mut().zip(col) {
-            row[c] = x;
+            row[c] = pi[c] + k * x;
         }
     }
     let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
