@@ -410,7 +410,8 @@ fn noise_density(s: &fp::Stationary, n: &fp::NoiseSummary) -> Table {
 
 /// The N-state solver's additions to `summary.json`: the noise's levels
 /// and π, the computational domain and tail mass, the drift U = <v>, the
-/// per-state means, the error estimates and observed orders.
+/// per-state means, the error estimates and observed orders, and the held
+/// masses per state of an exponential refractory period.
 fn noise_summary(summary: &mut serde_json::Value, n: &fp::NoiseSummary) {
     let obj = summary.as_object_mut().expect("a JSON object");
     obj.remove("edge_exponent");
@@ -430,6 +431,9 @@ fn noise_summary(summary: &mut serde_json::Value, n: &fp::NoiseSummary) {
         ("meshes", json!(n.meshes)),
     ] {
         obj.insert(k.into(), v);
+    }
+    if !n.held.is_empty() {
+        obj.insert("held".into(), json!(n.held));
     }
 }
 

@@ -161,3 +161,35 @@ fn fp_with_a_noise_model_refuses_bad_input_by_flag() {
         assert_rejected(&irtp(&full), flag, &dir);
     }
 }
+
+/// `fp stationary` and `mfpt` (backward) run an exponential refractory
+/// period with a noise model (docs/equations.md (R10), (R11)): the held
+/// mass r M/(1 + r M) (r = 2, M = 0.5) per state as π/2 in `held`, and a
+/// finite τ.
+#[test]
+fn a_refractory_period_runs_with_a_noise_model() {
+    let base = [
+        "--drag",
+        "tan",
+        "--noise",
+        RPT,
+        "--refractory",
+        "exp:mean=0.5",
+    ];
+    let s = json(&irtp(
+        &[&["fp", "stationary"][..], &base, &["--json"]].concat(),
+    ));
+    assert!(
+        (s["refractory_mass"].as_f64().unwrap() - 0.5).abs() < 1e-14,
+        "{s}"
+    );
+    let held: Vec<f64> = serde_json::from_value(s["held"].clone()).unwrap();
+    let pi: Vec<f64> = serde_json::from_value(s["pi"].clone()).unwrap();
+    for (q, p) in held.iter().zip(&pi) {
+        assert!((q - 0.5 * p).abs() < 1e-15, "{held:?} vs {pi:?}");
+    }
+    let vt = ["--v0", "0", "--vt", "0.5", "--json"];
+    let m = json(&irtp(&[&["mfpt"][..], &base, &vt].concat()));
+    let tau = m["tau"].as_f64().unwrap_or(f64::NAN);
+    assert!(tau.is_finite() && tau > 0.0, "{m}");
+}

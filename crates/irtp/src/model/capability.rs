@@ -283,10 +283,21 @@ pub fn noise_runs(solver: Solver, noise: NoiseClass) -> bool {
 /// Whether `solver` runs protocol `feature` with noise of class `noise`
 /// (exactly, or with its stated discretisation error).
 pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> bool {
-    if noise != NoiseClass::Paper && !modifiers_with_noise(solver, noise) {
+    if noise != NoiseClass::Paper
+        && !modifiers_with_noise(solver, noise)
+        && !hold_with_noise(solver, feature)
+    {
         return false;
     }
     supports(solver, feature)
+}
+
+/// Whether `solver` runs `feature` with a noise model although it runs no
+/// other modifier with one: the N-state Fokker-Planck and backward
+/// equations run an exponential refractory period, one held state per
+/// noise state (docs/equations.md, (R10), (R11)).
+fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
+    feature == Feature::RefractoryExp && matches!(solver, Solver::FpStationary | Solver::Backward)
 }
 
 /// Whether `solver` runs the protocol features it runs ([`supports`])
@@ -297,7 +308,8 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// T > 0); the search's methods run every protocol they run. The N-state
 /// Fokker-Planck and backward equations and the exact sampler's
 /// Ornstein-Uhlenbeck loop (T > 0) run a noise model with Poisson
-/// resetting only (any target, noise kept or re-drawn).
+/// resetting only (any target, noise kept or re-drawn), some of them with
+/// an exponential refractory period ([`protocol_runs`]).
 pub fn modifiers_with_noise(solver: Solver, noise: NoiseClass) -> bool {
     use NoiseClass as N;
     use Solver as S;

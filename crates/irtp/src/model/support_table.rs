@@ -45,7 +45,9 @@ fn noise_cell(solver: Solver, noise: NoiseClass) -> String {
 
 /// Whether `solver` runs, with a noise model, every feature it runs with
 /// the paper's noise ([`crate::capability::modifiers_with_noise`]): "yes"
-/// for every class of noise it runs, "T = 0" for finite-state noise only.
+/// for every class of noise it runs, "T = 0" for finite-state noise only;
+/// else Poisson resetting, with an exponential refractory period where it
+/// runs one with finite-state noise.
 fn with_noise(solver: Solver) -> String {
     if !noise_runs(solver, NoiseClass::FiniteState) {
         return "—".into();
@@ -62,6 +64,9 @@ fn with_noise(solver: Solver) -> String {
     ) {
         (true, false) => "yes".into(),
         (true, true) => "T = 0".into(),
+        (false, _) if protocol_runs(solver, Feature::RefractoryExp, NoiseClass::FiniteState) => {
+            "Poisson, exp refractory".into()
+        }
         (false, _) => "Poisson only".into(),
     }
 }

@@ -14,8 +14,10 @@
 //! solver's graded [`super::grid`] pieces, its time stepping the shared
 //! TR-BDF2.
 
+mod held;
 mod mesh;
 mod operator;
 
+pub(crate) use held::Hold;
 pub use operator::NoiseOperator;
 pub(crate) use operator::{observe, operator, Blocks};

@@ -10,7 +10,7 @@ use super::{Moments, Stationary, StationaryOptions, StationarySpace};
 use crate::error::{Error, Result};
 use crate::fp::extrapolate::richardson;
 use crate::fp::grid::Mesh;
-use crate::fp::nstate::{operator, NoiseOperator};
+use crate::fp::nstate::{operator, Hold, NoiseOperator};
 use crate::model::atoms::reset_atom_states;
 use crate::model::noise::chain;
 use crate::model::reset::NoiseAtReset;
@@ -45,6 +45,8 @@ pub struct NoiseMoments {
 /// interleaved by cell), and observables.
 pub(crate) struct MeshSolution {
     pub op: NoiseOperator,
+    /// The held block of an exponential refractory period (Eq. (R10)).
+    pub hold: Option<Hold>,
     pub masses: Vec<f64>,
     pub moments: NoiseMoments,
 }
@@ -57,11 +59,13 @@ pub(crate) fn solve_mesh(
     graded: bool,
 ) -> Result<MeshSolution> {
     let op = operator(p, n, refine, graded)?;
-    let masses = stationary_masses(&op)?;
-    let moments = moments(&op, &masses)?;
+    let hold = Hold::of(p, &op);
+    let masses = stationary_masses(&op, hold.as_ref())?;
+    let moments = moments(&op, hold.as_ref(), &masses)?;
     check(p, &op, &masses, &moments)?;
     Ok(MeshSolution {
         op,
+        hold,
         masses,
         moments,
     })
@@ -106,12 +110,16 @@ fn solve_b(op: &NoiseOperator, b: &mut [f64]) -> Result<()> {
     Ok(())
 }
 
-/// The stationary cell masses, total 1: B m = -R m with R m known, since
-/// the state masses are π (the noise is autonomous and both reset rules
-/// map π to π); at r = 0 the pinned singular system.
-fn stationary_masses(op: &NoiseOperator) -> Result<Vec<f64>> {
+/// The stationary cell masses, total 1 less the held mass: B m = -R m
+/// with R m known, since the state masses are π (the noise is autonomous
+/// and both reset rules map π to π); with a refractory period R m is the
+/// re-entry κ q of the held masses (Eq. (R10)); at r = 0 the pinned
+/// singular system.
+fn stationary_masses(op: &NoiseOperator, hold: Option<&Hold>) -> Result<Vec<f64>> {
     let mut b = vec![0.0; op.dim()];
-    if op.rate > 0.0 {
+    if let Some(h) = hold {
+        h.stationary_source(op, &mut b);
+    } else if op.rate > 0.0 {
         let inf: Vec<f64> = op.influx(&op.chain.pi).iter().map(|x| -x).collect();
         op.add_target(&inf, &mut b);
     } else {
@@ -125,7 +133,8 @@ fn stationary_masses(op: &NoiseOperator) -> Result<Vec<f64>> {
             reason: format!("stationary solve gave total mass {total}"),
         });
     }
-    b.iter_mut().for_each(|x| *x /= total);
+    let continuous = hold.map_or(1.0, |h| 1.0 - h.mass());
+    b.iter_mut().for_each(|x| *x = *x / total * continuous);
     Ok(b)
 }
 
@@ -148,8 +157,10 @@ fn dual_state_sums(op: &NoiseOperator, f: &[f64]) -> Result<Vec<f64>> {
     chain::solve(&a, &b, METHOD)
 }
 
-/// `<v>`, `<v²>`, per-state masses and means, D_eff, tail mass.
-fn moments(op: &NoiseOperator, m: &[f64]) -> Result<NoiseMoments> {
+/// `<v>`, `<v²>`, per-state masses and means, D_eff, tail mass; the
+/// held masses of a refractory period `hold` count at their held
+/// velocities (Eq. (R10)).
+fn moments(op: &NoiseOperator, hold: Option<&Hold>, m: &[f64]) -> Result<NoiseMoments> {
     let ns = op.mesh.states;
     let v = &op.mesh.centres;
     let mut state_means = vec![0.0; ns];
@@ -161,10 +172,25 @@ fn moments(op: &NoiseOperator, m: &[f64]) -> Result<NoiseMoments> {
             v2 += x * vi * vi;
         }
     }
+    let mut state_masses = op.state_sums(m);
+    if let Some(h) = hold {
+        let (u1, u2) = h.velocity_moments();
+        for (s, &q) in h.q.iter().enumerate() {
+            state_means[s] += q * u1;
+            state_masses[s] += q;
+            v1 += q * u1;
+            v2 += q * u2;
+        }
+    }
     let f: Vec<f64> = v.iter().map(|&vi| vi - v1).collect();
     let mut b: Vec<f64> = m.iter().enumerate().map(|(k, x)| -x * f[k / ns]).collect();
-    if op.rate > 0.0 {
-        let big_f: Vec<f64> = op.state_sums(&b).iter().map(|x| -x).collect();
+    let big_f: Vec<f64> = op.state_sums(&b).iter().map(|x| -x).collect();
+    let mut held = 0.0;
+    if let Some(h) = hold {
+        let y = h.dual_state_sums(op, &big_f, h.velocity_moments().0 - v1)?;
+        h.dual_source(op, &y, v1, &mut b)?;
+        held = h.d_eff_share(op, &y, v1);
+    } else if op.rate > 0.0 {
         let y = dual_state_sums(op, &big_f)?;
         let inf: Vec<f64> = op.influx(&y).iter().map(|x| -x).collect();
         op.add_target(&inf, &mut b);
@@ -172,14 +198,19 @@ fn moments(op: &NoiseOperator, m: &[f64]) -> Result<NoiseMoments> {
         b[pinned_row(op)] = 0.0;
     }
     solve_b(op, &mut b)?;
-    let d_eff = b.iter().enumerate().map(|(k, y)| f[k / ns] * y).sum();
+    let d_eff = b
+        .iter()
+        .enumerate()
+        .map(|(k, y)| f[k / ns] * y)
+        .sum::<f64>()
+        + held;
     Ok(NoiseMoments {
         cells: op.mesh.widths.len(),
         v_mean: v1,
         v2,
         d_eff,
         state_means,
-        state_masses: op.state_sums(m),
+        state_masses,
         tail_mass: tail_mass(op, m),
     })
 }
@@ -276,6 +307,10 @@ pub struct NoiseSummary {
     pub density_l1_error: Option<f64>,
     /// Observables on the meshes N/4, N/2, N (or N alone).
     pub meshes: Vec<NoiseMoments>,
+    /// The held masses q_s per state of an exponential refractory period
+    /// (Eq. (R10): r/(κ + r) π); empty without one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<f64>,
 }
 
 impl StationarySpace for MeshSolution {
@@ -315,7 +350,8 @@ impl StationarySpace for MeshSolution {
                     .collect()
             })
             .collect();
-        let (atoms, densities) = split_atoms(params, &sols, densities)?;
+        let held = fine.hold.as_ref().map_or(0.0, Hold::mass);
+        let (atoms, densities) = split_atoms(params, &sols, densities, held)?;
         let p = (0..n)
             .map(|i| densities.iter().map(|d| d[i]).sum())
             .collect();
@@ -325,7 +361,7 @@ impl StationarySpace for MeshSolution {
             v_mean: m.v_mean,
             v2: m.v2,
             d_eff: m.d_eff,
-            refractory_mass: 0.0,
+            refractory_mass: held,
             x_moments: None,
         };
         let extrapolated = opts.extrapolate;
@@ -342,6 +378,7 @@ impl StationarySpace for MeshSolution {
             tail_mass: fine.moments.tail_mass,
             density_l1_error: extrapolated.then(|| l1_change(&sols[1].masses, &fine.masses, ns)),
             meshes: mo.clone(),
+            held: fine.hold.as_ref().map_or_else(Vec::new, |h| h.q.clone()),
         };
         Ok(Stationary {
             params: *params,
@@ -355,12 +392,12 @@ impl StationarySpace for MeshSolution {
             p,
             p_plus: Vec::new(),
             p_minus: Vec::new(),
-            mass: fine.masses.iter().sum(),
+            mass: fine.masses.iter().sum::<f64>() + held,
             v_mean: v_mean.0,
             v2: v2.0,
             d_eff: d_eff.0,
             d_eff_err: extrapolated.then_some(d_eff.1),
-            refractory_mass: 0.0,
+            refractory_mass: held,
             refractory: [0.0; 2],
             atoms,
             x_mean: None,
@@ -375,7 +412,9 @@ impl StationarySpace for MeshSolution {
 }
 
 /// The point mass at v_r of the states that hold one
-/// ([`reset_atom_states`]) and the fine-mesh densities without it. A
+/// ([`reset_atom_states`]) and of a refractory period (its `held` mass,
+/// exact on every mesh: error rounding) and the fine-mesh densities
+/// without it. A
 /// state's atom sits in the two cells beside v_r that receive its resets
 /// (no transport crosses its fixed point); their mass is the atom plus the
 /// density's share of those cells, which vanishes with the mesh: the atom
@@ -387,13 +426,15 @@ fn split_atoms(
     params: &Params,
     sols: &[MeshSolution],
     mut densities: Vec<Vec<f64>>,
+    held: f64,
 ) -> Result<(Vec<VelocityAtom>, Vec<Vec<f64>>)> {
     let states = reset_atom_states(params);
-    let Some(vr) = params.reset().point().filter(|_| !states.is_empty()) else {
+    let atom = !states.is_empty() || held > 0.0;
+    let Some(vr) = params.reset().point().filter(|_| atom) else {
         return Ok((Vec::new(), densities));
     };
     let fine = sols.last().expect("one mesh at least");
-    let (mut mass, mut err) = (0.0, 0.0);
+    let (mut mass, mut err) = (held, 1e-14 * held);
     for &s in &states {
         let x: Vec<f64> = sols.iter().map(|m| target_mass(m, s)).collect();
         let (value, e) = match x.as_slice() {

@@ -108,7 +108,8 @@ pub struct Stationary {
     /// spread as the random target), fine mesh; 0 without a refractory
     /// period. `p` is the continuous part only: Σ p Δv + this = 1.
     pub refractory_mass: f64,
-    /// Its + and - parts.
+    /// Its + and - parts (the paper's noise; 0 with a noise model, whose
+    /// held masses per state are `noise.held`).
     pub refractory: [f64; 2],
     /// The point masses of the stationary law (docs/output-formats.md,
     /// "atoms"): the refractory mass at a point target v_r (exact on every

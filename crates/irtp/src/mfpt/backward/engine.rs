@@ -178,17 +178,11 @@ impl Space for Finite {
     fn rounding(&self) -> f64 {
         1e-9
     }
-    /// Refused before ([`crate::capability::check`]: no schedule modifier
-    /// with a noise model).
-    fn refractory(&self, p: &Problem, _: &Mesh, _: bool, _: &mut Operator) -> Result<()> {
-        match p.params().schedule().refractory {
-            None => Ok(()),
-            Some(r) => Err(Error::invalid(
-                "refractory",
-                r.spec(),
-                "none with a noise model for the backward equations",
-            )),
-        }
+    fn refractory(&self, p: &Problem, m: &Mesh, mean_only: bool, op: &mut Operator) -> Result<()> {
+        let Some(mean) = refractory_mean(p, mean_only)? else {
+            return Ok(());
+        };
+        chain_refractory(&self.0, mean, m, op)
     }
     fn correct(
         &self,
@@ -714,8 +708,30 @@ fn phi(x: f64) -> f64 {
 /// to 1, so c+ + c- is unchanged (the identity [`reset_correction`] relies
 /// on). Only the mean (source 1): the moments and distributions refuse it.
 fn refractory(p: &Problem, m: &Mesh, mean_only: bool, op: &mut Operator) -> Result<()> {
+    let Some(mean) = refractory_mean(p, mean_only)? else {
+        return Ok(());
+    };
+    let (k, l) = (1.0 / mean, p.params().lambda());
+    let det = k + 2.0 * l;
+    let (d, o) = ((k + l) / det, l / det);
+    let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
+    let (b, [cp, cm]) = (&mut op.rhs, &mut op.border[..]) else {
+        unreachable!("the paper's noise has two border columns")
+    };
+    for i in 0..b.len() {
+        let (a, c) = (cp[i], cm[i]);
+        b[i] -= (a + c) * wsum * mean;
+        cp[i] = d * a + o * c;
+        cm[i] = o * a + d * c;
+    }
+    Ok(())
+}
+
+/// The mean M of an exponential refractory period of `p` (None without
+/// one); refused for a fixed one and for another source than the mean's.
+fn refractory_mean(p: &Problem, mean_only: bool) -> Result<Option<f64>> {
     let mean = match p.params().schedule().refractory {
-        None => return Ok(()),
+        None => return Ok(None),
         Some(Refractory::Exp { mean }) => mean,
         Some(r @ Refractory::Fixed { .. }) => {
             return Err(Error::invalid(
@@ -732,18 +748,51 @@ fn refractory(p: &Problem, m: &Mesh, mean_only: bool, op: &mut Operator) -> Resu
             "none for the first-passage moments and distributions (the mean, mfpt --method backward and mfpt scan, runs it)",
         ));
     }
-    let (k, l) = (1.0 / mean, p.params().lambda());
-    let det = k + 2.0 * l;
-    let (d, o) = ((k + l) / det, l / det);
+    Ok(Some(mean))
+}
+
+/// An exponential refractory period with a noise model's chain
+/// (docs/equations.md, entry (R11)): the held values T_R(s) solve
+/// Σ_s' Q_ss' T_R(s') + κ (T(u, s) - T_R(s)) = -1, i.e.
+/// T_R = P T(u) + 1/κ with P = κ (κ I - Q)⁻¹ (non-negative, rows summing
+/// to 1 as Q 1 = 0). The border columns c_j (the coefficient of R_j)
+/// become c'_k = Σ_j c_j P_jk, whose sum is unchanged (the identity
+/// [`chain_correction`] relies on), and b -= (Σ_j c_j) W/κ as for the
+/// paper's noise ([`refractory`]).
+fn chain_refractory(chain: &Chain, mean: f64, m: &Mesh, op: &mut Operator) -> Result<()> {
+    let ns = chain.states();
+    let k = 1.0 / mean;
+    // Deflated, well posed as κ → 0: κ I - Q + 1 πᵀ is nonsingular for
+    // every κ ≥ 0, and column c of P is π_c 1 + κ (κ I - Q + 1 πᵀ)⁻¹
+    // (e_c - π_c 1) (P 1 = 1; the solve keeps πᵀ = 0 on πᵀ-free data).
+    let pi = &chain.pi;
+    let a: Vec<Vec<f64>> = (0..ns)
+        .map(|i| {
+            (0..ns)
+                .map(|j| if i == j { k } else { 0.0 } - chain.q[i][j] + pi[j])
+                .collect()
+        })
+        .collect();
+    let mut p = vec![vec![0.0; ns]; ns];
+    for c in 0..ns {
+        let e: Vec<f64> = (0..ns)
+            .map(|i| f64::from(u8::from(i == c)) - pi[c])
+            .collect();
+        let col = crate::model::noise::chain::solve(&a, &e, METHOD)?;
+        for (row, x) in p.iter_mut().zip(col) {
+            row[c] = pi[c] + k * x;
+        }
+    }
     let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
-    let (b, [cp, cm]) = (&mut op.rhs, &mut op.border[..]) else {
-        unreachable!("the paper's noise has two border columns")
-    };
-    for i in 0..b.len() {
-        let (a, c) = (cp[i], cm[i]);
-        b[i] -= (a + c) * wsum * mean;
-        cp[i] = d * a + o * c;
-        cm[i] = o * a + d * c;
+    let mut c = vec![0.0; ns];
+    for i in 0..op.rhs.len() {
+        for (cj, col) in c.iter_mut().zip(&op.border) {
+            *cj = col[i];
+        }
+        op.rhs[i] -= c.iter().sum::<f64>() * wsum * mean;
+        for (kk, col) in op.border.iter_mut().enumerate() {
+            col[i] = c.iter().zip(&p).map(|(cj, row)| cj * row[kk]).sum();
+        }
     }
     Ok(())
 }
