@@ -46,6 +46,7 @@ mod search_errors;
 mod search_exact;
 mod search_methods;
 mod search_noise;
+mod search_noise_renewal;
 mod search_optimize;
 mod search_reach;
 mod shards;
