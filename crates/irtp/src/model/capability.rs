@@ -365,6 +365,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
+                | S::SearchEuler
                 | S::FpStationary
                 | S::FpTransient
                 | S::FpMsd
@@ -379,6 +380,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
+                | S::SearchEuler
         ),
         F::Periodic => matches!(
             solver,

@@ -22,8 +22,16 @@
 //! reported as the measured step bias. Where the step is not small against
 //! the passage time the expansion fails (a target within a few steps gave
 //! a negative mean): the extrapolated means are verified
-//! ([`crate::mfpt::euler::verify_extrapolation`]) and refused. Refractory periods are refused
-//! (the exact sampler runs them).
+//! ([`crate::mfpt::euler::verify_extrapolation`]) and refused.
+//!
+//! A refractory period (`--refractory`, exp or fixed) follows a reset as in
+//! the exact sampler ([`super::exact`]): its duration D drawn after the
+//! reset's velocity and noise state, held for round(D/dt) steps (the
+//! rounding of [`crate::sim::euler`]'s scheduled loop); in a held step v
+//! stays at the reset velocity, x moves by v dt (a passage if it leaves),
+//! Poisson resets are off (a Poisson reset drawn in a held step is
+//! dropped: the gaps are memoryless), a periodic time inside the hold is
+//! skipped, and the noise keeps jumping.
 //!
 //! With a noise model at T = 0 (docs/equations.md, "Euler schemes with a
 //! noise model") the velocity step uses the level a_s of the current
@@ -38,7 +46,7 @@
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats};
-use crate::model::reset::{Periodic, Reset, ResetRule};
+use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -157,14 +165,16 @@ struct Chain {
     reset: ResetRule,
     periodic: Option<Periodic>,
     x_reset: Option<f64>,
+    refractory: Option<Refractory>,
 }
 
 impl SearchEuler {
     /// Validate: a noise model at T = 0 (`super::noise_gate`) with its
     /// step chain exp(Q dt), dt inside the Euler stability limit with
-    /// r dt < 1, a finite t_max ≥ dt, no refractory period.
+    /// r dt < 1, a finite t_max ≥ dt; the protocol features of
+    /// [`crate::capability`]'s SearchEuler row.
     pub fn new(problem: &SearchProblem, dt: f64, t_max: f64) -> Result<Self> {
-        // The noise and the protocol it runs (no refractory period).
+        // The noise and the protocol it runs.
         crate::capability::check(crate::capability::Solver::SearchEuler, problem.params())?;
         let p = problem.params();
         let dt = p.check_dt(dt)?;
@@ -255,6 +265,7 @@ impl SearchEuler {
             reset: *p.reset(),
             periodic: p.schedule().periodic,
             x_reset: p.schedule().position.map(|r| r.x),
+            refractory: p.schedule().refractory,
         }
     }
 }
@@ -274,6 +285,8 @@ impl Chain {
         let mut next_reset = geometric_gap(rng, self.ln_reset);
         let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
         let mut step = 0u64;
+        // Held steps left of a refractory period.
+        let mut hold = 0u64;
         while step < self.max_steps {
             step += 1;
             // Stopped: reported as censored, in a chunk the cancelled
@@ -287,12 +300,29 @@ impl Chain {
             }
             // The periodic reset at kT falls in the step n = round(kT/dt).
             let periodic = (step - 1) as f64 >= (next_periodic / self.dt).round();
-            if poisson || periodic {
+            if hold > 0 {
+                // A held step: resets off (a periodic time skipped), x
+                // moves at the held velocity.
+                hold -= 1;
+                if let (Some(p), true) = (self.periodic, periodic) {
+                    next_periodic = p.next_after(next_periodic);
+                }
+                x += self.dt * v;
+                if !(x > self.lo && x < self.hi) {
+                    return FptSample {
+                        time: Some(step as f64 * self.dt),
+                        work: step,
+                    };
+                }
+            } else if poisson || periodic {
                 v = self.reset.draw_velocity(rng);
                 (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
                 x = self.x_reset.unwrap_or(x);
                 if let (Some(p), true) = (self.periodic, periodic) {
                     next_periodic = p.next_after(next_periodic);
+                }
+                if let Some(r) = self.refractory {
+                    hold = (r.draw(rng) / self.dt).round() as u64;
                 }
             } else {
                 x += self.dt * v;

@@ -43,6 +43,7 @@ mod search_backward_noise;
 mod search_cost;
 mod search_cross;
 mod search_errors;
+mod search_euler_refractory;
 mod search_exact;
 mod search_methods;
 mod search_noise;

@@ -46,33 +46,46 @@ fn exact(pr: &SearchProblem, seed: u64) -> (f64, f64, irtp::mfpt::SurvivalCurve)
     }
 }
 
-fn cases() -> [(&'static str, PositionTarget); 3] {
-    [
-        (RPT, PositionTarget::Level(1.0)),
-        (RPT, PositionTarget::Interval(-0.7, 0.5)),
-        (THREE, PositionTarget::Level(1.0)),
-    ]
+/// The fast tier's case: an interval (no far stretch, a short search).
+const INTERVAL: (&str, PositionTarget) = (RPT, PositionTarget::Interval(-0.7, 0.5));
+
+/// The slow tier's cases: levels (a far stretch, searches 4 x longer).
+const LEVELS: [(&str, PositionTarget); 2] = [
+    (RPT, PositionTarget::Level(1.0)),
+    (THREE, PositionTarget::Level(1.0)),
+];
+
+/// See [`renewal_check`].
+#[test]
+fn renewal_with_a_noise_model_matches_backward_and_exact() {
+    renewal_check(&[INTERVAL], 300);
+}
+
+/// See [`renewal_check`].
+#[test]
+#[ignore = "slow tier: the renewal route with rpt and three-state noise to a level (~30 s)"]
+fn renewal_with_a_noise_model_matches_backward_and_exact_levels() {
+    renewal_check(&LEVELS, 310);
 }
 
 /// The renewal route's tau against the backward solver's (within the sum
 /// of their error estimates) and the exact sampler's (within z SE plus
-/// the renewal error estimate, z Bonferroni over the 3 cases), with the
+/// the renewal error estimate, z Bonferroni over the cases), with the
 /// per-state values T(x0, v0, s) reported for each of the N states.
-#[test]
-fn renewal_with_a_noise_model_matches_backward_and_exact() {
-    let z = bonferroni_z(3);
+fn renewal_check(cases: &[(&str, PositionTarget)], seed: u64) {
+    let z = bonferroni_z(cases.len());
     let opts = RenewalOptions {
         cells_x: 16,
         cells_v: 8,
         steps: 40,
         ..Default::default()
     };
-    for (k, (noise, target)) in cases().into_iter().enumerate() {
+    for (k, &(noise, target)) in cases.iter().enumerate() {
         let pr = problem(noise, target);
         let waiting = WaitingTime::of(pr.params()).unwrap();
         let r = renewal::solve(&pr, &waiting, &opts).unwrap();
         let b = backward::solve(&pr, &BackwardOptions::with_cells(16, 8)).unwrap();
-        let (tau, se, _) = exact(&pr, 300 + k as u64);
+        let (tau, se, _) = exact(&pr, seed + k as u64);
         eprintln!(
             "{noise} {target:?}: renewal {} ± {}, backward {} ± {}, exact {tau} ± {se}",
             r.tau, r.error_estimate, b.tau, b.error_estimate
@@ -91,20 +104,33 @@ fn renewal_with_a_noise_model_matches_backward_and_exact() {
     }
 }
 
-/// S(t) with a noise model: its mean ∫ S dt (to t_max, where S is below
-/// 1e-4, the tail bounded by S(t_max) t_max) against the backward tau,
-/// and S at t = 2, 10, 20 (times of both the curve's uniform grid and the
-/// Kaplan-Meier grid) against the exact sampler's Kaplan-Meier curve
-/// within z SE + the curve's error estimate (z Bonferroni over 2 x 3).
+/// See [`distribution_check`].
 #[test]
 fn distribution_with_a_noise_model_matches_backward_and_exact() {
-    let z = bonferroni_z(6);
-    for (k, (noise, target)) in [cases()[0], cases()[2]].into_iter().enumerate() {
+    distribution_check(&[INTERVAL], 60.0, 400);
+}
+
+/// See [`distribution_check`].
+#[test]
+#[ignore = "slow tier: S(t) with rpt and three-state noise to a level (~20 s)"]
+fn distribution_with_a_noise_model_matches_backward_and_exact_levels() {
+    distribution_check(&LEVELS, 200.0, 410);
+}
+
+/// S(t) with a noise model: its mean ∫ S dt (to `t_max`, where S is below
+/// 1e-4, the tail bounded by S(t_max) t_max) against the backward tau,
+/// and S at t = 2, 10, 20 (times of both the curve's uniform grid, step
+/// 0.5, and the Kaplan-Meier grid) against the exact sampler's
+/// Kaplan-Meier curve within z SE + the curve's error estimate (z
+/// Bonferroni over the cases x 3 times).
+fn distribution_check(cases: &[(&str, PositionTarget)], t_max: f64, seed: u64) {
+    let z = bonferroni_z(3 * cases.len());
+    for (k, &(noise, target)) in cases.iter().enumerate() {
         let pr = problem(noise, target);
         let opts = DistributionOptions {
             mesh: BackwardOptions::with_cells(16, 8),
-            t_max: 200.0,
-            steps: 400,
+            t_max,
+            steps: (2.0 * t_max) as usize,
         };
         let d = distribution::solve(&pr, &opts).unwrap();
         let b = backward::solve(&pr, &BackwardOptions::with_cells(16, 8)).unwrap();
@@ -128,7 +154,7 @@ fn distribution_with_a_noise_model_matches_backward_and_exact() {
             d.restricted_mean,
             b.tau
         );
-        let (_, _, km) = exact(&pr, 400 + k as u64);
+        let (_, _, km) = exact(&pr, seed + k as u64);
         for t in [2.0, 10.0, 20.0] {
             let i = d.t.iter().position(|&s| s == t).unwrap();
             let j = km.t.iter().position(|&s| s == t).unwrap();
