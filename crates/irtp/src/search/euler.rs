@@ -4,8 +4,11 @@
 //! ([`crate::mfpt::euler::extrapolate`], shared with the velocity target).
 //!
 //! One step from n·dt to (n+1)·dt (the order of [`crate::mfpt::euler`]):
-//! a reset with probability r dt (or the periodic reset at kT in the step
-//! n = round(kT/dt)): v ← v_r drawn from the target, the noise state kept
+//! a reset with probability r dt (or the scheduled reset at time t_k, the
+//! periodic kT or a renewal clock's, in the step n = round(t_k/dt); after
+//! every reset the clock restarts at its time, or at the end of its
+//! refractory period, by [`Schedule::next_reset`], as in the exact
+//! sampler): v ← v_r drawn from the target, the noise state kept
 //! or re-drawn, x ← x_r with full resetting (on the start side: a reset is
 //! never a passage); otherwise x ← x + v dt, v ← v + dt (eta - g(v)), and
 //! the passage is at (n+1)·dt if x is now outside (lo, hi); then eta flips
@@ -46,7 +49,7 @@
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats};
-use crate::model::reset::{Periodic, Refractory, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -163,7 +166,8 @@ struct Chain {
     hi: f64,
     max_steps: u64,
     reset: ResetRule,
-    periodic: Option<Periodic>,
+    /// The scheduled clock (periodic or renewal), if any.
+    schedule: Schedule,
     x_reset: Option<f64>,
     refractory: Option<Refractory>,
 }
@@ -263,7 +267,7 @@ impl SearchEuler {
             hi,
             max_steps: (self.t_max / dt).floor() as u64,
             reset: *p.reset(),
-            periodic: p.schedule().periodic,
+            schedule: *p.schedule(),
             x_reset: p.schedule().position.map(|r| r.x),
             refractory: p.schedule().refractory,
         }
@@ -283,7 +287,8 @@ impl Chain {
         let (mut x, mut v) = (self.x0, self.v0);
         let (mut s, mut next_flip) = noise.start(plus, rng);
         let mut next_reset = geometric_gap(rng, self.ln_reset);
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        // The next scheduled reset time (∞ without a clock; no draw then).
+        let mut next_scheduled = self.schedule.first_reset(rng);
         let mut step = 0u64;
         // Held steps left of a refractory period.
         let mut hold = 0u64;
@@ -298,15 +303,12 @@ impl Chain {
             if poisson {
                 next_reset = step.saturating_add(geometric_gap(rng, self.ln_reset));
             }
-            // The periodic reset at kT falls in the step n = round(kT/dt).
-            let periodic = (step - 1) as f64 >= (next_periodic / self.dt).round();
+            // The scheduled reset at t_k falls in the step n = round(t_k/dt).
+            let scheduled = (step - 1) as f64 >= (next_scheduled / self.dt).round();
             if hold > 0 {
-                // A held step: resets off (a periodic time skipped), x
-                // moves at the held velocity.
+                // A held step: resets off (the clock restarts at the
+                // hold's end), x moves at the held velocity.
                 hold -= 1;
-                if let (Some(p), true) = (self.periodic, periodic) {
-                    next_periodic = p.next_after(next_periodic);
-                }
                 x += self.dt * v;
                 if !(x > self.lo && x < self.hi) {
                     return FptSample {
@@ -314,15 +316,25 @@ impl Chain {
                         work: step,
                     };
                 }
-            } else if poisson || periodic {
+            } else if poisson || scheduled {
                 v = self.reset.draw_velocity(rng);
                 (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
                 x = self.x_reset.unwrap_or(x);
-                if let (Some(p), true) = (self.periodic, periodic) {
-                    next_periodic = p.next_after(next_periodic);
-                }
                 if let Some(r) = self.refractory {
                     hold = (r.draw(rng) / self.dt).round() as u64;
+                }
+                // The clock restarts at the reset (a Poisson one at the
+                // step's start) or at the end of its hold; a periodic clock
+                // is not moved by a Poisson reset without a hold (its next
+                // multiple of T is the same).
+                let at = if scheduled {
+                    next_scheduled
+                } else {
+                    (step - 1) as f64 * self.dt
+                };
+                let restart = scheduled || hold > 0 || self.schedule.clock.is_some();
+                if self.schedule.scheduled_clock() && restart {
+                    next_scheduled = self.schedule.next_reset(at + hold as f64 * self.dt, rng);
                 }
             } else {
                 x += self.dt * v;
