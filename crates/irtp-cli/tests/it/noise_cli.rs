@@ -101,9 +101,9 @@ fn thermal_refused() -> Vec<Vec<&'static str>> {
 }
 
 /// The search with run-pause-tumble noise runs by `--method exact` and
-/// `--method euler` (exit 0, a finite tau with a standard error) and the
-/// default method (backward); `--method renewal` refuses it in one line
-/// naming `--noise` and the methods that run it.
+/// `--method euler` (exit 0, a finite tau with a standard error), the
+/// default method (backward) and `--method renewal` (a finite tau with an
+/// error estimate, the per-state values listed).
 #[test]
 fn a_search_with_a_noise_model_runs_by_the_samplers() {
     let base = [
@@ -151,13 +151,26 @@ fn a_search_with_a_noise_model_runs_by_the_samplers() {
         r["error_estimate"].as_f64().unwrap(),
     );
     assert!(tau > 1.0 && err > 0.0 && err < 0.1 * tau, "backward: {r}");
-    let renewal = ["--method", "renewal", "--out", dir.to_str().unwrap()];
-    let out = irtp(&[&base[..], &renewal[..]].concat());
-    let err = assert_rejected(&out, "--noise", &dir);
-    assert!(
-        err.len() < 200 && err.contains(irtp::search::NOISE_RUNNERS),
-        "{err}"
+    let renewal = [
+        "--method",
+        "renewal",
+        "--cells-x",
+        "16",
+        "--cells-v",
+        "8",
+        "--time-steps",
+        "40",
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ];
+    let r = json(&irtp(&[&base[..], &renewal[..]].concat()));
+    let (tau, err) = (
+        r["tau"].as_f64().unwrap(),
+        r["error_estimate"].as_f64().unwrap(),
     );
+    assert!(tau > 1.0 && err > 0.0 && err < 0.1 * tau, "renewal: {r}");
+    assert_eq!(r["tau_states"].as_array().map(Vec::len), Some(3), "{r}");
 }
 
 #[test]
@@ -173,21 +186,19 @@ fn every_command_refuses_a_noise_it_does_not_run() {
             (vec!["--noise", RPT], "--noise"),
             (vec!["--temperature", "0.5"], "--temperature"),
         ] {
-            // The search's backward solver and samplers, and `mfpt
-            // distribution --method exact`, run a noise model at T = 0.
+            // Every search method, and `mfpt distribution --method
+            // exact`, run a noise model at T = 0.
             let search = cmd.contains(&"--xt") || cmd.contains(&"--interval=-1,1");
             let dist = cmd.contains(&"distribution");
-            let runs = (search && !cmd.contains(&"renewal") && !dist) || (!search && dist);
+            let runs = search || dist;
             if flag == "--noise" && (!with_noise || runs) {
                 continue;
             }
             let args = [&fit(&cmd)[..], &extra[..], &["--out", d][..]].concat();
             let out = irtp(&args);
             let err = assert_rejected(&out, flag, &dir);
-            let runners = if search && flag == "--temperature" {
+            let runners = if search {
                 "no search method runs thermal noise"
-            } else if search {
-                irtp::search::NOISE_RUNNERS
             } else {
                 "simulate, fp"
             };

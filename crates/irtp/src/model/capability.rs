@@ -260,10 +260,24 @@ pub fn noise_runs(solver: Solver, noise: NoiseClass) -> bool {
         // The exact first-passage kernel: any finite-state noise at T = 0.
         (S::FptDistributionExact, N::FiniteState) => true,
         (S::FptDistributionExact, N::Thermal) => false,
-        // The search: its backward equation and samplers at T = 0.
-        (S::SearchBackward | S::SearchExact | S::SearchEuler, N::FiniteState) => true,
-        (S::SearchBackward | S::SearchExact | S::SearchEuler, N::Thermal) => false,
-        (S::SearchRenewal | S::SearchDistribution, _) => false,
+        // The search: its backward equations (mean, renewal route,
+        // distribution) and samplers at T = 0.
+        (
+            S::SearchBackward
+            | S::SearchRenewal
+            | S::SearchDistribution
+            | S::SearchExact
+            | S::SearchEuler,
+            N::FiniteState,
+        ) => true,
+        (
+            S::SearchBackward
+            | S::SearchRenewal
+            | S::SearchDistribution
+            | S::SearchExact
+            | S::SearchEuler,
+            N::Thermal,
+        ) => false,
         (
             S::Exact
             | S::Euler
@@ -363,6 +377,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
+                | S::SearchEuler
                 | S::FpStationary
                 | S::FpTransient
                 | S::FpMsd
@@ -377,6 +392,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptEuler
                 | S::FptDistributionExact
                 | S::SearchExact
+                | S::SearchEuler
         ),
         F::Periodic => matches!(
             solver,

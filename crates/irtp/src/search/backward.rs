@@ -392,13 +392,6 @@ impl Setup {
         v
     }
 
-    /// The noise rule at a reset of the paper's noise (after
-    /// [`super::noise_gate`] refused a noise model): mix[s][s'] for s, s'
-    /// in (+, -).
-    pub fn mix2(&self) -> [[f64; 2]; 2] {
-        [0, 1].map(|s| [0, 1].map(|t| self.mix[s][t]))
-    }
-
     /// Whether the x-domain has a truncated side.
     pub fn truncated(&self) -> bool {
         self.sides.0 == Side::Truncated || self.sides.1 == Side::Truncated
@@ -1037,7 +1030,12 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
 /// the escape chances updated as e_i + l e_k with l ≥ 0 (sums of
 /// non-negative terms, no cancellation when the target is rarely reached
 /// first, so R ≥ 0); refused alike unless every e_s > 0.
-fn renew(m: &[Vec<f64>], e: &[f64], u: &[f64], method: &'static str) -> Result<Vec<f64>> {
+pub(crate) fn renew(
+    m: &[Vec<f64>],
+    e: &[f64],
+    u: &[f64],
+    method: &'static str,
+) -> Result<Vec<f64>> {
     if m.len() == 2 {
         let m2 = [[m[0][0], m[0][1]], [m[1][0], m[1][1]]];
         let tr = capacitance(m2, [e[0], e[1]], method)?.solve([u[0], u[1]]);

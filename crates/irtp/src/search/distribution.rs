@@ -5,8 +5,8 @@
 //! `∂t S = L S` with the generator (S1) of the process WITH its resets,
 //! `S(0) = 1` off the target and `S = 0` on it (backward Kolmogorov
 //! equation of the killed process). With full resetting the reset term is
-//! `r [Σ_s'' mix(s, s'') Σ_j w_j S(x_r, v_j, s'', t) - S]`: two scalars per
-//! time, the reset point's survival in each noise state, weighed by the
+//! `r [Σ_s'' mix(s, s'') Σ_j w_j S(x_r, v_j, s'', t) - S]`: N scalars per
+//! time (N noise states), the reset point's survival in each, weighed by the
 //! target's node weights (a point target: one node). Velocity-only resetting
 //! (an interval target) is a jump in v at fixed x, inside the band (as the
 //! stationary solver). The density is f = -dS/dt = -(L S)(start), exact for
@@ -15,8 +15,10 @@
 //! Discretisation: the upwind mesh and generator of [`super::backward`];
 //! in time TR-BDF2 with a fixed step (this module's stepper, shared with
 //! the renewal route), each implicit stage `(I - d dt B) y = b` solved by one banded LU
-//! of `(1 + d dt r) I - d dt A` and a rank-2 correction for the two reset
-//! values ([`crate::numerics::bordered::LowRank`]). Runs on the steps dt and
+//! of `(1 + d dt r) I - d dt A` and a rank-N correction for the N reset
+//! values (the paper's noise: [`crate::numerics::bordered::LowRank`];
+//! more states: [`RankN`]). The start's noise state is drawn from the
+//! stationary law π (the paper's noise: ±Sigma with 1/2 each). Runs on the steps dt and
 //! dt/2 (second order: `(4 S_{dt/2} - S_dt)/3`, error `|S_{dt/2} - S_dt|/3`)
 //! and on the meshes h and h/2 (first order: `2 S_{h/2} - S_h`, error
 //! `|S_{h/2} - S_h|`), and a truncated level again at 1.5 X. Invariants
@@ -139,12 +141,17 @@ pub struct SearchDistribution {
     pub mesh: MeshInfo,
 }
 
-/// Work of [`solve`]: per mesh two factorisations, (2 stages + 2 reset
-/// responses) band solves per step on dt and dt/2.
+/// Work of [`solve`]: per mesh two factorisations, 2 stages per step on
+/// dt and dt/2 (6 band solves per step of `steps`) and N reset responses
+/// on each.
 pub fn estimate(problem: &SearchProblem, opts: &DistributionOptions) -> Result<Cost> {
     opts.validate()?;
     let setup = Setup::new(problem, super::DISTRIBUTION, false)?;
-    let c = cost_of(&meshes(&setup, &opts.mesh), 6.0 * opts.steps as f64 + 4.0);
+    let responses = 2.0 * setup.noise.states() as f64;
+    let c = cost_of(
+        &meshes(&setup, &opts.mesh),
+        6.0 * opts.steps as f64 + responses,
+    );
     // The curves kept: S, f and their errors, on the steps and half steps.
     let curves = 8.0 * 12.0 * (2.0 * opts.steps as f64 + 1.0);
     Ok(Cost {
@@ -286,46 +293,109 @@ fn check_curve(s: &[f64], tol: &[f64], method: &'static str) -> Result<()> {
 /// The operator B of the survival equation on one mesh: the generator A
 /// (with velocity-only resetting inside it) and, with full resetting, the
 /// reset term `r [Σ_s'' mix(s, s'') R_s''(S) - S]`, R_s'' the weighed reset
-/// point values.
+/// point values (N noise states).
 struct Operator<'a> {
     g: &'a Generator,
     /// Full-resetting rate (0 otherwise).
     r: f64,
-    /// (unknown, weight) of R_+ and R_-.
-    reset: [Vec<(usize, f64)>; 2],
-    mix: [[f64; 2]; 2],
+    /// (unknown, weight) of R_s for each state s (empty without full
+    /// resetting).
+    reset: Vec<Vec<(usize, f64)>>,
+    /// mix[s][s'']: the noise rule at a reset (N × N).
+    mix: Vec<Vec<f64>>,
 }
 
 impl Operator<'_> {
-    /// R_+(u), R_-(u).
-    fn reset_values(&self, u: &[f64]) -> [f64; 2] {
-        [0, 1].map(|s| self.reset[s].iter().map(|&(k, w)| w * u[k]).sum())
+    /// R_s(u) for each state s.
+    fn reset_values(&self, u: &[f64]) -> Vec<f64> {
+        self.reset
+            .iter()
+            .map(|r| r.iter().map(|&(k, w)| w * u[k]).sum())
+            .collect()
+    }
+    /// R_+(u), R_-(u) of the paper's noise (two states).
+    fn reset_pair(&self, u: &[f64]) -> [f64; 2] {
+        let rv = self.reset_values(u);
+        [rv[0], rv[1]]
     }
     /// out = B u (0 on the target).
     fn apply(&self, u: &[f64], out: &mut [f64]) {
         self.g.apply(u, out);
         if self.r > 0.0 {
             let rv = self.reset_values(u);
+            let ns = self.mix.len();
             for (k, o) in out.iter_mut().enumerate() {
                 if !self.g.absorbing[k] {
-                    let m = &self.mix[k % 2];
-                    *o += self.r * (m[0] * rv[0] + m[1] * rv[1] - u[k]);
+                    let m = &self.mix[k % ns];
+                    let back = (1..ns).fold(m[0] * rv[0], |a, s| a + m[s] * rv[s]);
+                    *o += self.r * (back - u[k]);
                 }
             }
         }
     }
     /// The column U_s'' of the reset coupling, scaled by `c`.
     fn column(&self, s2: usize, c: f64) -> Vec<f64> {
+        let ns = self.mix.len();
         (0..self.g.dim())
             .map(|k| {
                 if self.g.absorbing[k] {
                     0.0
                 } else {
-                    c * self.mix[k % 2][s2]
+                    c * self.mix[k % ns][s2]
                 }
             })
             .collect()
     }
+}
+
+/// The rank-N correction of a base solve w = A⁻¹ b into the solve of
+/// (A + U Vᵀ) x = b (Sherman-Morrison-Woodbury, as
+/// [`crate::numerics::bordered::LowRank`] for N = 2): Z = A⁻¹ U, the
+/// capacitance S = I + Vᵀ Z factorised once (LU with partial pivoting),
+/// x ← x - Z S⁻¹ Vᵀ x.
+struct RankN {
+    z: Vec<Vec<f64>>,
+    s: Band,
+}
+
+impl RankN {
+    /// From the responses Z = A⁻¹ U and `v` mapping y to Vᵀ y; a singular
+    /// capacitance is refused (typed) naming `method`.
+    fn new(z: Vec<Vec<f64>>, v: impl Fn(&[f64]) -> Vec<f64>, method: &'static str) -> Result<Self> {
+        let n = z.len();
+        let k = n.saturating_sub(1);
+        let mut s = Band::new(n, k, k);
+        for (j, zj) in z.iter().enumerate() {
+            for (i, x) in v(zj).into_iter().enumerate() {
+                s.set(i, j, x + f64::from(u8::from(i == j)));
+            }
+        }
+        s.factor().map_err(|e| Error::Numerical {
+            method,
+            reason: format!("singular {n}×{n} reset capacitance ({e})"),
+        })?;
+        Ok(RankN { z, s })
+    }
+
+    /// x ← (A + U Vᵀ)⁻¹ x, with `base` the solve by A (in place).
+    fn solve(&self, base: impl Fn(&mut [f64]), x: &mut [f64], v: impl Fn(&[f64]) -> Vec<f64>) {
+        base(x);
+        let mut a = v(x);
+        self.s.solve(&mut a);
+        for (zs, a) in self.z.iter().zip(&a) {
+            for (xi, y) in x.iter_mut().zip(zs) {
+                *xi -= a * y;
+            }
+        }
+    }
+}
+
+/// The reset coupling's correction of the base solve: none (no full
+/// resetting), rank 2 (the paper's noise), rank N.
+enum Coupling {
+    None,
+    Two(LowRank),
+    Many(RankN),
 }
 
 /// One run on `mesh` with `steps` steps to `t_max`.
@@ -346,28 +416,42 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
             let ir = mesh.node(x, v)?.0;
             let w = mesh.target_weights(p)?;
             let at = |s| w.iter().map(|&(j, wj)| (mesh.idx(ir, j, s), wj)).collect();
-            (p.rate(), [at(0), at(1)])
+            (p.rate(), (0..mesh.states).map(at).collect())
         }
-        _ => (0.0, [vec![], vec![]]),
+        _ => (0.0, vec![]),
     };
     let op = Operator {
         g: &g,
         r,
         reset,
-        mix: setup.mix2(),
+        mix: setup.mix.clone(),
     };
     let stepper = Stepper::new(t_max / steps as f64);
     let d = stepper.d();
-    // (1 + d r) I - d A, and the rank-2 term -d r U Rᵀ of the reset values.
+    // (1 + d r) I - d A, and the rank-N term -d r U Rᵀ of the reset values.
     let band: Band = factor(&g, 1.0 + d * r, d, METHOD)?;
     let base = |y: &mut [f64]| band.solve(y);
-    let low = (r > 0.0).then(|| {
-        let z = responses(base, [op.column(0, -d * r), op.column(1, -d * r)]);
-        LowRank::standard(z, |y| op.reset_values(y))
-    });
-    let solve = |y: &mut [f64]| match &low {
-        Some(l) => l.solve(base, y, |y| op.reset_values(y)),
-        None => base(y),
+    let coupling = match (r > 0.0, mesh.states) {
+        (false, _) => Coupling::None,
+        (true, 2) => {
+            let z = responses(base, [op.column(0, -d * r), op.column(1, -d * r)]);
+            Coupling::Two(LowRank::standard(z, |y| op.reset_pair(y)))
+        }
+        (true, ns) => {
+            let z = (0..ns)
+                .map(|s2| {
+                    let mut col = op.column(s2, -d * r);
+                    base(&mut col);
+                    col
+                })
+                .collect();
+            Coupling::Many(RankN::new(z, |y| op.reset_values(y), METHOD)?)
+        }
+    };
+    let solve = |y: &mut [f64]| match &coupling {
+        Coupling::Two(l) => l.solve(base, y, |y| op.reset_pair(y)),
+        Coupling::Many(l) => l.solve(base, y, |y| op.reset_values(y)),
+        Coupling::None => base(y),
     };
     record_run(setup, mesh, &op, &stepper, steps, solve)
 }
@@ -385,7 +469,15 @@ fn record_run(
     const METHOD: &str = "mfpt distribution --xt";
     let n = op.g.dim();
     let (i0, j0) = mesh.node(setup.x0, setup.v0)?;
-    let start = [mesh.idx(i0, j0, 0), mesh.idx(i0, j0, 1)];
+    let start: Vec<usize> = (0..mesh.states).map(|s| mesh.idx(i0, j0, s)).collect();
+    let pi = &setup.noise.pi;
+    // Σ_s π_s x(start, s), summed in state order (the paper's noise:
+    // 0.5 x+ + 0.5 x-, which is (x+ + x-)/2 to the bit: halving is exact).
+    let at_start = |x: &[f64]| {
+        let mut terms = start.iter().zip(pi).map(|(&k, p)| p * x[k]);
+        let first = terms.next().unwrap_or(0.0);
+        terms.fold(first, |a, b| a + b)
+    };
     let mut u: Vec<f64> = (0..n)
         .map(|k| if op.g.absorbing[k] { 0.0 } else { 1.0 })
         .collect();
@@ -400,8 +492,8 @@ fn record_run(
             stepper.step(&mut u, (&mut au, &mut star), |x, y| op.apply(x, y), &solve);
         }
         op.apply(&u, &mut au);
-        curve.s.push(0.5 * (u[start[0]] + u[start[1]]));
-        curve.f.push(-0.5 * (au[start[0]] + au[start[1]]));
+        curve.s.push(at_start(&u));
+        curve.f.push(-at_start(&au));
         if u.iter().any(|x| !x.is_finite()) {
             return Err(Error::NonFinite {
                 method: METHOD,

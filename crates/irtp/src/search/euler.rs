@@ -4,8 +4,11 @@
 //! ([`crate::mfpt::euler::extrapolate`], shared with the velocity target).
 //!
 //! One step from n·dt to (n+1)·dt (the order of [`crate::mfpt::euler`]):
-//! a reset with probability r dt (or the periodic reset at kT in the step
-//! n = round(kT/dt)): v ← v_r drawn from the target, the noise state kept
+//! a reset with probability r dt (or the scheduled reset at time t_k, the
+//! periodic kT or a renewal clock's, in the step n = round(t_k/dt); after
+//! every reset the clock restarts at its time, or at the end of its
+//! refractory period, by [`Schedule::next_reset`], as in the exact
+//! sampler): v ← v_r drawn from the target, the noise state kept
 //! or re-drawn, x ← x_r with full resetting (on the start side: a reset is
 //! never a passage); otherwise x ← x + v dt, v ← v + dt (eta - g(v)), and
 //! the passage is at (n+1)·dt if x is now outside (lo, hi); then eta flips
@@ -22,8 +25,16 @@
 //! reported as the measured step bias. Where the step is not small against
 //! the passage time the expansion fails (a target within a few steps gave
 //! a negative mean): the extrapolated means are verified
-//! ([`crate::mfpt::euler::verify_extrapolation`]) and refused. Refractory periods are refused
-//! (the exact sampler runs them).
+//! ([`crate::mfpt::euler::verify_extrapolation`]) and refused.
+//!
+//! A refractory period (`--refractory`, exp or fixed) follows a reset as in
+//! the exact sampler ([`super::exact`]): its duration D drawn after the
+//! reset's velocity and noise state, held for round(D/dt) steps (the
+//! rounding of [`crate::sim::euler`]'s scheduled loop); in a held step v
+//! stays at the reset velocity, x moves by v dt (a passage if it leaves),
+//! Poisson resets are off (a Poisson reset drawn in a held step is
+//! dropped: the gaps are memoryless), a periodic time inside the hold is
+//! skipped, and the noise keeps jumping.
 //!
 //! With a noise model at T = 0 (docs/equations.md, "Euler schemes with a
 //! noise model") the velocity step uses the level a_s of the current
@@ -38,7 +49,7 @@
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats};
-use crate::model::reset::{Periodic, Reset, ResetRule};
+use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
@@ -155,16 +166,19 @@ struct Chain {
     hi: f64,
     max_steps: u64,
     reset: ResetRule,
-    periodic: Option<Periodic>,
+    /// The scheduled clock (periodic or renewal), if any.
+    schedule: Schedule,
     x_reset: Option<f64>,
+    refractory: Option<Refractory>,
 }
 
 impl SearchEuler {
     /// Validate: a noise model at T = 0 (`super::noise_gate`) with its
     /// step chain exp(Q dt), dt inside the Euler stability limit with
-    /// r dt < 1, a finite t_max ≥ dt, no refractory period.
+    /// r dt < 1, a finite t_max ≥ dt; the protocol features of
+    /// [`crate::capability`]'s SearchEuler row.
     pub fn new(problem: &SearchProblem, dt: f64, t_max: f64) -> Result<Self> {
-        // The noise and the protocol it runs (no refractory period).
+        // The noise and the protocol it runs.
         crate::capability::check(crate::capability::Solver::SearchEuler, problem.params())?;
         let p = problem.params();
         let dt = p.check_dt(dt)?;
@@ -253,8 +267,9 @@ impl SearchEuler {
             hi,
             max_steps: (self.t_max / dt).floor() as u64,
             reset: *p.reset(),
-            periodic: p.schedule().periodic,
+            schedule: *p.schedule(),
             x_reset: p.schedule().position.map(|r| r.x),
+            refractory: p.schedule().refractory,
         }
     }
 }
@@ -272,8 +287,11 @@ impl Chain {
         let (mut x, mut v) = (self.x0, self.v0);
         let (mut s, mut next_flip) = noise.start(plus, rng);
         let mut next_reset = geometric_gap(rng, self.ln_reset);
-        let mut next_periodic = self.periodic.map_or(f64::INFINITY, |p| p.next_after(0.0));
+        // The next scheduled reset time (∞ without a clock; no draw then).
+        let mut next_scheduled = self.schedule.first_reset(rng);
         let mut step = 0u64;
+        // Held steps left of a refractory period.
+        let mut hold = 0u64;
         while step < self.max_steps {
             step += 1;
             // Stopped: reported as censored, in a chunk the cancelled
@@ -285,14 +303,38 @@ impl Chain {
             if poisson {
                 next_reset = step.saturating_add(geometric_gap(rng, self.ln_reset));
             }
-            // The periodic reset at kT falls in the step n = round(kT/dt).
-            let periodic = (step - 1) as f64 >= (next_periodic / self.dt).round();
-            if poisson || periodic {
+            // The scheduled reset at t_k falls in the step n = round(t_k/dt).
+            let scheduled = (step - 1) as f64 >= (next_scheduled / self.dt).round();
+            if hold > 0 {
+                // A held step: resets off (the clock restarts at the
+                // hold's end), x moves at the held velocity.
+                hold -= 1;
+                x += self.dt * v;
+                if !(x > self.lo && x < self.hi) {
+                    return FptSample {
+                        time: Some(step as f64 * self.dt),
+                        work: step,
+                    };
+                }
+            } else if poisson || scheduled {
                 v = self.reset.draw_velocity(rng);
                 (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
                 x = self.x_reset.unwrap_or(x);
-                if let (Some(p), true) = (self.periodic, periodic) {
-                    next_periodic = p.next_after(next_periodic);
+                if let Some(r) = self.refractory {
+                    hold = (r.draw(rng) / self.dt).round() as u64;
+                }
+                // The clock restarts at the reset (a Poisson one at the
+                // step's start) or at the end of its hold; a periodic clock
+                // is not moved by a Poisson reset without a hold (its next
+                // multiple of T is the same).
+                let at = if scheduled {
+                    next_scheduled
+                } else {
+                    (step - 1) as f64 * self.dt
+                };
+                let restart = scheduled || hold > 0 || self.schedule.clock.is_some();
+                if self.schedule.scheduled_clock() && restart {
+                    next_scheduled = self.schedule.next_reset(at + hold as f64 * self.dt, rng);
                 }
             } else {
                 x += self.dt * v;

@@ -439,8 +439,9 @@ impl SearchProblem {
 }
 
 /// The search methods that run a noise model other than the paper's at
-/// T = 0, as a refusal lists them ([`crate::capability::runners_where`]).
-pub const NOISE_RUNNERS: &str = "mfpt --xt (backward, exact, euler)";
+/// T = 0, as a refusal lists them ([`crate::capability::runners_where`]):
+/// every one.
+pub const NOISE_RUNNERS: &str = "mfpt --xt, mfpt distribution --xt";
 /// The backward solver's name in [`noise_gate`].
 pub(crate) const BACKWARD: &str = "--method backward";
 /// The exact sampler's name in [`noise_gate`].
@@ -457,8 +458,8 @@ pub(crate) const PAPER_NOISE_ONLY: &str =
 
 /// The noise gate of the search: the method's name mapped to its
 /// [`crate::capability::Solver`], whose table decides
-/// ([`crate::capability::check_noise`]: a noise model at T = 0 runs in the
-/// backward solver and the samplers, [`NOISE_RUNNERS`]); a routine of the
+/// ([`crate::capability::check_noise`]: a noise model at T = 0 runs in
+/// every search method, [`NOISE_RUNNERS`]); a routine of the
 /// paper's noise only ([`PAPER_NOISE_ONLY`]) refuses every noise model.
 pub(crate) fn noise_gate(problem: &SearchProblem, method: &str) -> Result<()> {
     match solver_of(method) {

@@ -14,12 +14,16 @@
 //! the Poisson clock is `exp:rate=r`, periodic resetting `fixed:t=T`, a
 //! point mass), with S and P(...) those of the
 //! reset-free search started from (x_r, v_r, s) (from (x0, v0, s) for the
-//! first period). mix is the noise rule (identity when kept). A random
-//! velocity target weighs the reset-point quantities by its node weights.
+//! first period). mix is the noise rule (identity when kept, every row π
+//! when re-drawn). A finite-state noise model runs alike over its N states
+//! (B is N × N, solved by the elimination of [`super::backward`]); tau is
+//! Σ_s π_s T_s, the start's state drawn from the stationary law π (the
+//! paper's noise: π = (1/2, 1/2)). A random velocity target weighs the
+//! reset-point quantities by its node weights.
 //!
 //! P(T0 > t, eta(t) = s' | start) = Q_s'(t) solves the reset-free backward
 //! equation ∂t Q = L0 Q with Q(0) = 1[eta = s'] and Q = 0 on the target:
-//! integrated for both s' on the upwind mesh of the direct solver
+//! integrated for every s' on the upwind mesh of the direct solver
 //! ([`super::backward`]) by TR-BDF2 with a fixed step (the stepper of
 //! [`super::distribution`]; one factorisation of
 //! `I - (γ/2) dt A`, γ = 2 - √2), on the steps dt and dt/2 (Richardson,
@@ -37,8 +41,8 @@
 //! reached between resets (about 2e-3 at r = 3 in the tests).
 
 use super::backward::{
-    build, capacitance, check_budget, cost_of, factor, mesh_drivers, mesh_info, truncation_factor,
-    verify, with_check, Cost, Ladder, MeshInfo, Plan, Resetting, Setup, Watch,
+    build, check_budget, cost_of, factor, mesh_drivers, mesh_info, renew as renew_states,
+    truncation_factor, verify, with_check, Cost, Ladder, MeshInfo, Plan, Resetting, Setup, Watch,
 };
 use super::distribution::Stepper;
 use super::mesh::{Generator, Mesh};
@@ -218,16 +222,28 @@ impl RenewalOptions {
 }
 
 /// Mean first-passage time by the renewal route.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenewalSolution {
-    /// tau = (tau+ + tau-)/2 at (x0, v0): the random noise start.
+    /// tau = Σ_s π_s T(x0, v0, s): the noise state at the start drawn from
+    /// the stationary law π (the paper's noise: (tau+ + tau-)/2).
     pub tau: f64,
-    /// Start in the +Sigma state.
+    /// Start in the +Sigma state (the paper's noise; NaN for another noise
+    /// model: see `tau_states`).
     pub tau_plus: f64,
-    /// Start in the -Sigma state.
+    /// Start in the -Sigma state (the paper's noise; NaN for another noise
+    /// model: see `tau_states`).
     pub tau_minus: f64,
-    /// T(x_r, v_r, ±).
+    /// T(x0, v0, s) for each state s of a noise model other than the
+    /// paper's, in the model's state order; absent for the paper's noise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tau_states: Option<Vec<f64>>,
+    /// T(x_r, v_r, ±) (the paper's noise; NaN for another noise model: see
+    /// `reset_states`).
     pub reset_values: [f64; 2],
+    /// T(x_r, v_r, s) for each state s of a noise model other than the
+    /// paper's; absent for the paper's noise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset_states: Option<Vec<f64>>,
     /// Error estimate of tau: mesh + time + truncation + tail (NaN without
     /// refinement).
     pub error_estimate: f64,
@@ -267,7 +283,9 @@ impl RenewalSolution {
             tau: inf,
             tau_plus: inf,
             tau_minus: inf,
+            tau_states: None,
             reset_values: [inf; 2],
+            reset_states: None,
             error_estimate: nan,
             mesh_error: nan,
             time_error: nan,
@@ -283,41 +301,49 @@ impl RenewalSolution {
 }
 
 /// The renewal quantities at (x_r, v_r) and at (x0, v0) on one mesh and
-/// time step.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// time step, for N noise states.
+#[derive(Clone, Debug, PartialEq)]
 struct Periods {
     /// a_s at the reset point, then at the start.
-    a: [[f64; 2]; 2],
-    /// B_ss' at the reset point, then at the start.
-    b: [[[f64; 2]; 2]; 2],
+    a: [Vec<f64>; 2],
+    /// B_ss' (N × N) at the reset point, then at the start.
+    b: [Vec<Vec<f64>>; 2],
     /// e_s = 1 - Σ_s' B_ss' = P(T0 < R), integrated as ∫ rho (1 - S) dt +
     /// P(R > t_max) (no cancellation when it is small), at the reset point.
-    e: [f64; 2],
+    e: Vec<f64>,
 }
 
-/// The answer of one mesh and step: tau±, T_r±, textbook, tail bound.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The answer of one mesh and step: T(x0, v0, s), T(x_r, v_r, s), the
+/// stationary law π, textbook, tail bound.
+#[derive(Clone, Debug, PartialEq)]
 struct Answer {
-    tau: [f64; 2],
-    reset: [f64; 2],
+    tau: Vec<f64>,
+    reset: Vec<f64>,
+    pi: Vec<f64>,
     textbook: f64,
     tail: f64,
 }
 
+/// Σ_s π_s x_s, summed in state order (the paper's noise: 0.5 x+ + 0.5 x-,
+/// which is (x+ + x-)/2 to the bit: halving is exact).
+fn weighed(pi: &[f64], x: &[f64]) -> f64 {
+    let mut terms = pi.iter().zip(x).map(|(p, x)| p * x);
+    let first = terms.next().unwrap_or(0.0);
+    terms.fold(first, |a, b| a + b)
+}
+
 impl Answer {
     fn mean(&self) -> f64 {
-        0.5 * (self.tau[0] + self.tau[1])
+        weighed(&self.pi, &self.tau)
     }
     /// c0 self + c1 other, componentwise.
     fn combine(&self, c0: f64, other: &Answer, c1: f64) -> Answer {
-        let f = |x: f64, y: f64| c0 * x + c1 * y;
+        let f = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(x, y)| c0 * x + c1 * y).collect();
         Answer {
-            tau: [f(self.tau[0], other.tau[0]), f(self.tau[1], other.tau[1])],
-            reset: [
-                f(self.reset[0], other.reset[0]),
-                f(self.reset[1], other.reset[1]),
-            ],
-            textbook: f(self.textbook, other.textbook),
+            tau: f(&self.tau, &other.tau),
+            reset: f(&self.reset, &other.reset),
+            pi: self.pi.clone(),
+            textbook: c0 * self.textbook + c1 * other.textbook,
             tail: self.tail.max(other.tail),
         }
     }
@@ -378,7 +404,7 @@ fn finite_under(problem: &SearchProblem, waiting: &WaitingTime) -> bool {
 }
 
 /// Estimated cost of [`solve`]: per mesh two factorisations (steps dt and
-/// dt/2) and 2 × 2 × 3 `steps` band solves (two stages, two final states).
+/// dt/2) and 2 × N × 3 `steps` band solves (two stages, N final states).
 pub fn estimate(
     problem: &SearchProblem,
     waiting: &WaitingTime,
@@ -391,7 +417,7 @@ pub fn estimate(
     }
     waiting.validate(opts.tail)?;
     let m = with_check(&setup, meshes(&setup, waiting, opts), opts.refine);
-    let solves = cost_of(&m, 12.0 * opts.steps as f64);
+    let solves = cost_of(&m, per_step(&setup) * opts.steps as f64);
     // The clock's product-integration weights: two series of 2 steps + 1.
     let weights = 2.0 * 8.0 * (2.0 * opts.steps as f64 + 1.0);
     Ok(Cost {
@@ -445,7 +471,7 @@ pub fn solve_watched(
     let (best, mesh_error, time_error, finest, asymptotic) = if opts.refine {
         let rungs = vec![
             in_time(&meshes[meshes.len() - 1])?,
-            (coarse, coarse_time),
+            (coarse.clone(), coarse_time),
             in_time(&meshes[1])?,
         ];
         let ladder = Ladder {
@@ -463,7 +489,7 @@ pub fn solve_watched(
             meshes[1].clone(),
             in_time,
             |(a, time)| (a.mean(), 3.0 * time),
-            |p| level_cost(p, opts.steps),
+            |p| level_cost(p, per_step(&setup) * opts.steps as f64),
         )?;
         let ((c, _), (f, fine_time)) = top.last_two();
         let e = top.factor.unwrap_or(1.0) * (f.mean() - c.mean()).abs();
@@ -497,11 +523,16 @@ pub fn solve_watched(
         "the renewal route (--method renewal, extrapolated)",
     )?;
     let error_estimate = mesh_error + time_error + truncation_error + best.tail;
+    let paper = problem.params().noise().is_none();
+    let pair = |v: &[f64]| if paper { [v[0], v[1]] } else { [f64::NAN; 2] };
+    let [tau_plus, tau_minus] = pair(&best.tau);
     Ok(RenewalSolution {
         tau: best.mean(),
-        tau_plus: best.tau[0],
-        tau_minus: best.tau[1],
-        reset_values: best.reset,
+        tau_plus,
+        tau_minus,
+        tau_states: (!paper).then(|| best.tau.clone()),
+        reset_values: pair(&best.reset),
+        reset_states: (!paper).then(|| best.reset.clone()),
         error_estimate: if opts.refine && asymptotic {
             error_estimate
         } else {
@@ -519,11 +550,17 @@ pub fn solve_watched(
     })
 }
 
+/// Band solves per time step of `steps`: 2 × N × 3 (two stages, N final
+/// states, the runs at dt and dt/2: 3 steps for each of `steps`).
+fn per_step(setup: &Setup) -> f64 {
+    6.0 * setup.noise.states() as f64
+}
+
 /// The cost of one more level of the ladder: the answers at `steps` and
-/// twice as many time steps (two factorisations, 12 × steps solves).
-fn level_cost(plan: &Plan, steps: usize) -> Cost {
+/// twice as many time steps (two factorisations, `solves` band solves).
+fn level_cost(plan: &Plan, solves: f64) -> Cost {
     let plan = std::slice::from_ref(plan);
-    let c = cost_of(plan, 12.0 * steps as f64);
+    let c = cost_of(plan, solves);
     Cost {
         work: c.work + cost_of(plan, 0.0).work,
         memory: c.memory,
@@ -555,23 +592,27 @@ fn answer(
         .collect();
     let g = Generator::assemble(mesh, &setup.params, &setup.noise, None);
     let (wq, rq, beyond) = waiting.weights(t_max, steps);
+    let ns = mesh.states;
     let mut p = Periods {
-        a: [[0.0; 2]; 2],
-        b: [[[0.0; 2]; 2]; 2],
-        e: [beyond; 2],
+        a: [vec![0.0; ns], vec![0.0; ns]],
+        b: [vec![vec![0.0; ns]; ns], vec![vec![0.0; ns]; ns]],
+        e: vec![beyond; ns],
     };
-    survival_series(&g, t_max, steps, |n, q| {
+    survival_series(&g, ns, t_max, steps, |n, q| {
         watch.tick();
         for (at, points) in [&target, &start].into_iter().enumerate() {
-            for s in 0..2 {
+            for s in 0..ns {
                 for &(i, j, w) in points {
                     let k = mesh.idx(i, j, s);
-                    let (qp, qm) = (q[0][k], q[1][k]);
-                    p.a[at][s] += w * wq[n] * (qp + qm);
-                    p.b[at][s][0] += w * rq[n] * qp;
-                    p.b[at][s][1] += w * rq[n] * qm;
+                    // S_s = Σ_s' Q_s' and 1 - S_s, summed in state order.
+                    let survival = (1..ns).fold(q[0][k], |acc, s2| acc + q[s2][k]);
+                    p.a[at][s] += w * wq[n] * survival;
+                    for (s2, qs) in q.iter().enumerate() {
+                        p.b[at][s][s2] += w * rq[n] * qs[k];
+                    }
                     if at == 0 {
-                        p.e[s] += w * rq[n] * (1.0 - qp - qm);
+                        let hit = q.iter().fold(1.0, |acc, qs| acc - qs[k]);
+                        p.e[s] += w * rq[n] * hit;
                     }
                 }
             }
@@ -586,59 +627,84 @@ const METHOD: &str = "the renewal route (--method renewal)";
 /// Solve the renewal equations (module docs) from the period integrals,
 /// with the bound on the cut-off tail `(tail_a, tail_b)`, verified.
 fn renew(setup: &Setup, p: &Periods, (tail_a, tail_b): (f64, f64)) -> Result<Answer> {
-    let mix = setup.mix2();
+    let mix = &setup.mix;
+    let ns = p.e.len();
     // M = B(x_r) mix: T_r = a_r + M T_r; mix keeps the rows' sums, so the
     // escape chances of M are those of B.
-    let m =
-        [0, 1].map(|s| [0, 1].map(|u| (0..2).map(|s2| p.b[0][s][s2] * mix[s2][u]).sum::<f64>()));
-    let system = capacitance(m, p.e, METHOD)?;
-    let reset = system.solve(p.a[0]);
-    let next = [0, 1].map(|u| (0..2).map(|s2| mix[u][s2] * reset[s2]).sum::<f64>());
-    let tau = [0, 1].map(|s| p.a[1][s] + p.b[1][s][0] * next[0] + p.b[1][s][1] * next[1]);
-    let a_bar = 0.5 * (p.a[0][0] + p.a[0][1]);
-    let e_bar = 0.5 * (p.e[0] + p.e[1]);
+    let m: Vec<Vec<f64>> = (0..ns)
+        .map(|s| {
+            (0..ns)
+                .map(|u| (0..ns).map(|s2| p.b[0][s][s2] * mix[s2][u]).sum::<f64>())
+                .collect()
+        })
+        .collect();
+    // (I - M)⁻¹ f: the 2 × 2 capacitance, or the N-state elimination
+    // (non-negative terms; refused unless every e_s > 0).
+    let solve = |f: &[f64]| renew_states(&m, &p.e, f, METHOD);
+    let reset = solve(&p.a[0])?;
+    let next: Vec<f64> = (0..ns)
+        .map(|u| (0..ns).map(|s2| mix[u][s2] * reset[s2]).sum::<f64>())
+        .collect();
+    let tau: Vec<f64> = (0..ns)
+        .map(|s| (0..ns).fold(p.a[1][s], |acc, s2| acc + p.b[1][s][s2] * next[s2]))
+        .collect();
+    let pi = &setup.noise.pi;
+    let (a_bar, e_bar) = (weighed(pi, &p.a[0]), weighed(pi, &p.e));
     // ‖(I - M)⁻¹‖∞ from its columns: the tail's effect on T_r.
-    let cols = [system.solve([1.0, 0.0]), system.solve([0.0, 1.0])];
-    let norm = (0..2)
-        .map(|i| cols[0][i].abs() + cols[1][i].abs())
+    let cols = (0..ns)
+        .map(|c| {
+            solve(
+                &(0..ns)
+                    .map(|i| f64::from(u8::from(i == c)))
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let norm = (0..ns)
+        .map(|i| (1..ns).fold(cols[0][i].abs(), |a, c| a + cols[c][i].abs()))
         .fold(0.0, f64::max);
-    let per = tail_a + tail_b * reset[0].max(reset[1]);
+    let largest = reset.iter().copied().fold(reset[0], f64::max);
+    let per = tail_a + tail_b * largest;
     let tail = per + norm * per;
-    let all = [tau[0], tau[1], reset[0], reset[1]];
+    let all: Vec<f64> = tau.iter().chain(&reset).copied().collect();
     verify(&all, &tau, setup, METHOD)?;
     Ok(Answer {
         tau,
         reset,
+        pi: pi.clone(),
         textbook: a_bar / e_bar,
         tail,
     })
 }
 
-/// Q_s'(t_n), n = 0..=steps, for s' = ± (Q(0) = 1 in state s' off the
-/// target), handed to `record(n, [Q+, Q-])`: TR-BDF2 with a fixed step on
-/// `I - d dt A`.
+/// Q_s'(t_n), n = 0..=steps, for each of the `ns` states s' (Q(0) = 1 in
+/// state s' off the target), handed to `record(n, [Q_0, .., Q_{N-1}])`:
+/// TR-BDF2 with a fixed step on `I - d dt A`.
 fn survival_series(
     g: &Generator,
+    ns: usize,
     t_max: f64,
     steps: usize,
-    mut record: impl FnMut(usize, &[Vec<f64>; 2]),
+    mut record: impl FnMut(usize, &[Vec<f64>]),
 ) -> Result<()> {
     const METHOD: &str = "the renewal route (--method renewal, reset-free survival)";
     let dt = t_max / steps as f64;
     let stepper = Stepper::new(dt);
     let band = factor(g, 1.0, stepper.d(), METHOD)?;
     let n = g.dim();
-    let mut q: [Vec<f64>; 2] = [0, 1].map(|s2| {
-        (0..n)
-            .map(|k| {
-                if !g.absorbing[k] && k % 2 == s2 {
-                    1.0
-                } else {
-                    0.0
-                }
-            })
-            .collect()
-    });
+    let mut q: Vec<Vec<f64>> = (0..ns)
+        .map(|s2| {
+            (0..n)
+                .map(|k| {
+                    if !g.absorbing[k] && k % ns == s2 {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
     record(0, &q);
     let (mut au, mut star) = (vec![0.0; n], vec![0.0; n]);
     for step in 1..=steps {

@@ -80,8 +80,8 @@ fn euler_search_extrapolates_to_the_exact_sampler() {
     }
 }
 
-/// The Euler sampler refuses a step beyond its limits and a refractory
-/// period by name.
+/// The Euler sampler refuses a step beyond its limits by name (it runs
+/// refractory periods: `search_euler_refractory`).
 #[test]
 fn euler_search_refuses_by_name() {
     let pr = SearchProblem::new(
@@ -106,11 +106,6 @@ fn euler_search_refuses_by_name() {
     assert_eq!(name(euler(-0.1, 10.0), &pr), "dt");
     assert_eq!(name(euler(3.0, 10.0), &pr), "dt");
     assert_eq!(name(euler(0.01, f64::INFINITY), &pr), "t_max");
-    let held = full(DragLaw::Linear, 1.0, 0.5)
-        .with_schedule(Schedule::parse(None, Some(0.0), Some("fixed:t=0.1")).unwrap())
-        .unwrap();
-    let pr = SearchProblem::new(held, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
-    assert_eq!(name(euler(0.01, 10.0), &pr), "refractory");
 }
 
 /// Unit ranges for `parts` parts of `units` units.

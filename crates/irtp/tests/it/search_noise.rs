@@ -3,8 +3,8 @@
 //! states with a hidden duplicate level, lumpable to the telegraph) by the
 //! exact sampler against the paper's backward solver; run-pause-tumble
 //! noise by the exact sampler against the Euler scheme extrapolated to
-//! dt → 0 and against the 2-D backward equation (Eq. (S12)); the noise
-//! gate of the methods that do not run a noise model.
+//! dt → 0 and against the 2-D backward equation (Eq. (S12)); thermal
+//! noise refused by every search method.
 
 use irtp::mfpt::ParticleOptions;
 use irtp::model::noise::NoiseModel;
@@ -167,50 +167,22 @@ fn rpt_exact_agrees_with_euler_extrapolated() {
     }
 }
 
-/// The deterministic methods refuse a noise model in one line naming
-/// `--noise` and the samplers that run it; the samplers refuse thermal
-/// noise.
+/// Every search method runs a noise model at T = 0 (the renewal route and
+/// the distribution: `search_noise_renewal`); thermal noise is refused
+/// with the problem, naming `temperature`, in one line.
 #[test]
-fn deterministic_methods_refuse_a_noise_model() {
-    let pr = SearchProblem::new(
-        noisy(DragLaw::Linear, "rpt:sigma=1,alpha=1,beta=2", 0.5),
-        0.0,
-        0.0,
-        PositionTarget::Level(1.0),
-    )
-    .unwrap();
+fn thermal_noise_is_refused_by_every_search_method() {
     let named = |e: Error| match e.parameter() {
         Some(name) => (name, e.to_string()),
         None => panic!("not an invalid parameter: {e:?}"),
     };
-    let refusals = [
-        search::distribution::estimate(
-            &pr,
-            &search::distribution::DistributionOptions {
-                mesh: BackwardOptions::default(),
-                t_max: 10.0,
-                steps: 100,
-            },
-        )
-        .map(drop),
-        search::solve(&pr, &SearchMethod::Renewal(Default::default()), &NoProgress).map(drop),
-    ];
-    for r in refusals {
-        let (name, msg) = named(r.unwrap_err());
-        assert_eq!(name, "noise", "{msg}");
-        assert!(
-            msg.len() < 200 && !msg.contains('\n'),
-            "{} chars: {msg}",
-            msg.len()
-        );
-        assert!(msg.contains(search::NOISE_RUNNERS), "{msg}");
-    }
     let thermal = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=2", 0.5).unwrap();
     let hot = full(Params::with_noise(DragLaw::Linear, thermal, 0.5, 0.0).unwrap());
     // Thermal noise: no search method runs it, refused with the problem.
     let (name, msg) =
         named(SearchProblem::new(hot, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap_err());
     assert_eq!(name, "temperature", "{msg}");
+    assert!(msg.len() < 200 && !msg.contains('\n'), "{msg}");
 }
 
 const RPT: &str = "rpt:sigma=1,alpha=1,beta=2";
