@@ -17,7 +17,7 @@
 //! the renewal route), each implicit stage `(I - d dt B) y = b` solved by one banded LU
 //! of `(1 + d dt r) I - d dt A` and a rank-N correction for the N reset
 //! values (the paper's noise: [`crate::numerics::bordered::LowRank`];
-//! more states: [`RankN`]). The start's noise state is drawn from the
+//! more states: `RankN`). The start's noise state is drawn from the
 //! stationary law π (the paper's noise: ±Sigma with 1/2 each). Runs on the steps dt and
 //! dt/2 (second order: `(4 S_{dt/2} - S_dt)/3`, error `|S_{dt/2} - S_dt|/3`)
 //! and on the meshes h and h/2 (first order: `2 S_{h/2} - S_h`, error

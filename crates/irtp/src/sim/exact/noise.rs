@@ -123,7 +123,7 @@ impl ExactNoise for Telegraph {
         }
     }
     /// The paper's tables (the -Sigma table the +Sigma one mirrored),
-    /// refused where g'(v_u) is too small ([`check_relaxation`]).
+    /// refused where g'(v_u) is too small (`check_relaxation`).
     fn segments<D: Drag>(&self, drag: &D, params: &Params) -> Result<Vec<Segments<D::Flow>>> {
         let (sigma, (lo, hi)) = (self.levels[0], params.bounds());
         check_relaxation(drag, sigma, hi)?;
@@ -178,7 +178,7 @@ impl ExactNoise for Chain {
         }
         s
     }
-    /// Per level the segments of [`level_segments`].
+    /// Per level the segments of `level_segments`.
     fn segments<D: Drag>(&self, drag: &D, params: &Params) -> Result<Vec<Segments<D::Flow>>> {
         let (lo, hi) = params.bounds();
         let spec = params.noise_model()?.spec();
@@ -189,7 +189,7 @@ impl ExactNoise for Chain {
             .collect()
     }
     /// Accelerated at an interval edge, the plain closed form at an
-    /// interior fixed point ([`level_kind`]).
+    /// interior fixed point (`level_kind`).
     fn flows<D: Drag>(&self, drag: &D, params: &Params, method: &str) -> Result<Vec<D::Flow>> {
         let spec = params.noise_model()?.spec();
         let law = (params.drag(), spec.as_str());
