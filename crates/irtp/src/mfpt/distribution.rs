@@ -37,6 +37,11 @@
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
 //!
+//! An exponential refractory period (paper's noise, docs/equations.md,
+//! (R12)) adds the held survival H± to the upwind system
+//! (`mfpt/upwind.rs`); the box scheme then gives the mean only (R6), the
+//! reported second moments are the distribution's own.
+//!
 //! One driver runs every noise over its state space (the `Space`s of
 //! [`super::backward`]): the paper's `Telegraph` by the two-state upwind
 //! operator above, a noise model's `Finite` chain by the N-state
