@@ -226,8 +226,8 @@ impl UpwindOperator {
             ]
         };
         let z = kb([b[h], b[h + 1]]);
-        for i in 0..n {
-            x[i] += c * (self.a.cp[i] * z[0] + self.a.cm[i] * z[1]);
+        for ((xi, a), b) in x[..n].iter_mut().zip(&self.a.cp).zip(&self.a.cm) {
+            *xi += c * (a * z[0] + b * z[1]);
         }
         band.solve(&mut x[..n]);
         self.remove_borders(&mut x[..n], low);
