@@ -37,6 +37,11 @@
 //! until S±(v_0) < `tail` or [`DistributionOptions::t_stop`]; the survival
 //! left there, `tail_mass`, is the unresolved probability (reported).
 //!
+//! An exponential refractory period (paper's noise, docs/equations.md,
+//! (R12)) adds the held survival H± to the upwind system
+//! (`mfpt/upwind.rs`); the box scheme then gives the mean only (R6), the
+//! reported second moments are the distribution's own.
+//!
 //! One driver runs every noise over its state space (the `Space`s of
 //! [`super::backward`]): the paper's `Telegraph` by the two-state upwind
 //! operator above, a noise model's `Finite` chain by the N-state
@@ -370,6 +375,9 @@ trait Survival: Space {
 
 impl Survival for Telegraph {
     fn moments(&self, p: &Problem, opts: &BackwardOptions, _: &Chain) -> Result<Moments> {
+        if p.params().schedule().refractory.is_some() {
+            return held_moments(p, opts);
+        }
         backward::moments(p, opts)
     }
     fn coarse(&self, cp: &Problem, cells: usize) -> Result<Mesh> {
@@ -383,6 +391,58 @@ impl Survival for Telegraph {
     }
     fn mean_tolerance(&self, d: &Distribution) -> f64 {
         1e-3 * d.moments.tau
+    }
+}
+
+/// The box scheme's moments with an exponential refractory period: it
+/// gives the mean only (docs/equations.md, (R6)); the second moments are
+/// set from the means by [`with_second`] (2 tau², the exponential law's,
+/// the scale of the integrals' error weights) until the distribution's
+/// own replace them ([`drive`]).
+fn held_moments(p: &Problem, opts: &BackwardOptions) -> Result<Moments> {
+    let b = backward::solve(p, opts)?;
+    let t = [b.tau, b.tau_plus, b.tau_minus];
+    Ok(with_second(
+        Moments {
+            tau: b.tau,
+            tau_plus: b.tau_plus,
+            tau_minus: b.tau_minus,
+            cells: b.cells,
+            // All set by with_second.
+            second: f64::NAN,
+            second_plus: f64::NAN,
+            second_minus: f64::NAN,
+            variance: f64::NAN,
+            variance_plus: f64::NAN,
+            variance_minus: f64::NAN,
+            cv: f64::NAN,
+            cv_plus: f64::NAN,
+            cv_minus: f64::NAN,
+        },
+        t.map(|x| 2.0 * x * x),
+    ))
+}
+
+/// `m` with the second moments (mixture, +, -) `t2` and the variances and
+/// coefficients of variation that follow.
+fn with_second(m: Moments, t2: [f64; 3]) -> Moments {
+    let var = |m2: f64, t: f64| m2 - t * t;
+    let (v, vp, vm) = (
+        var(t2[0], m.tau),
+        var(t2[1], m.tau_plus),
+        var(t2[2], m.tau_minus),
+    );
+    Moments {
+        second: t2[0],
+        second_plus: t2[1],
+        second_minus: t2[2],
+        variance: v,
+        variance_plus: vp,
+        variance_minus: vm,
+        cv: v.sqrt() / m.tau,
+        cv_plus: vp.sqrt() / m.tau_plus,
+        cv_minus: vm.sqrt() / m.tau_minus,
+        ..m
     }
 }
 
@@ -667,6 +727,12 @@ fn drive(
     let rough = space.run(&cp, &coarse, &plan)?.renumber(to);
     let thermal = space.chain().temperature > 0.0;
     let mut d = report(times, user, (hi, lo), moments, &fine, &rough, thermal)?;
+    if problem.params().schedule().refractory.is_some() {
+        // The box scheme gave the mean only: the second moments are the
+        // distribution's own (exact in time, extrapolated in the mesh).
+        let ex = |s: usize| 2.0 * fine.exact_second[s] - rough.exact_second[s];
+        d.moments = with_second(d.moments, [d.second, ex(hi), ex(lo)]);
+    }
     verify(&d, opts.rtol, space.mean_tolerance(&d))?;
     if !space.lists_atoms() {
         d.atoms.clear();

@@ -35,10 +35,20 @@
 //! T_f(v_r); the integrator lands on that time
 //! ([`UpwindOperator::set_reset_atom`]).
 //! First order in h: [`super::distribution`] extrapolates two nested meshes.
+//!
+//! An exponential refractory period of mean 1/κ (docs/equations.md,
+//! (R12)) adds two unknowns H± after the integrals: the survival of a
+//! particle held at its reset velocity u (averaged over a random target's
+//! nodes below v_t; a landing at or beyond v_t is a passage at the reset),
+//! in the noise state ±. The reset terms of the free rows take H where
+//! they took S(v_r) (through the same border columns), and
+//! dH±/dt = κ (R±(S) - H±) + λ (H∓ - H±), H±(0) = W = Σ w_j (1 for a
+//! point target), R± the reset values of S = S_a + S_c: the atom's share
+//! enters the H+ row as the forcing κ S_a+(u, t), not the free rows.
 
 use super::backward::Mesh;
 use super::Problem;
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::Drag;
 use crate::numerics::band::Band;
 use crate::numerics::bordered::{responses, LowRank};
@@ -91,6 +101,9 @@ pub(super) struct UpwindOperator {
     pub(super) scales: (f64, f64),
     /// The reported unknowns: S_c± at v_0 and the four integrals.
     reported: [usize; 2 + EXTRA],
+    /// An exponential refractory period: (κ, W), the held unknowns H±
+    /// at n + EXTRA (see the module doc).
+    hold: Option<(f64, f64)>,
 }
 
 impl UpwindOperator {
@@ -137,7 +150,90 @@ impl UpwindOperator {
                 2 * nodes + 2,
                 2 * nodes + 3,
             ],
+            hold: match par.schedule().refractory {
+                Some(Refractory::Exp { mean }) if par.rate() > 0.0 => Some((
+                    1.0 / mean,
+                    m.weights.as_ref().map_or(1.0, |w| w.iter().sum()),
+                )),
+                _ => None,
+            },
         }
+    }
+
+    /// Index of H+ (H- follows).
+    fn held(&self) -> usize {
+        self.n + EXTRA
+    }
+
+    /// What the border columns multiply: the held values H± with a
+    /// refractory period, else the reset values of the mesh unknowns.
+    fn reset_inputs(&self, u: &[f64]) -> (f64, f64) {
+        match self.hold {
+            Some(_) => (u[self.held()], u[self.held() + 1]),
+            None => self.reset_values(u),
+        }
+    }
+
+    /// K⁻¹ with K = m I + c (κ I - Q) the held rows of M - cA without
+    /// their coupling to S (m = 1 with the mass, 0 without), Q the flips:
+    /// K = [[a, -b], [-b, a]], a = m + c (κ + λ), b = c λ.
+    fn held_inverse(&self, kappa: f64, c: f64, mass: bool) -> [[f64; 2]; 2] {
+        let m = f64::from(u8::from(mass));
+        let (a, b) = (m + c * (kappa + self.lam), c * self.lam);
+        let det = (m + c * kappa) * (m + c * kappa + 2.0 * b);
+        [[a / det, b / det], [b / det, a / det]]
+    }
+
+    /// The border columns the factored system sees, times -c: with a
+    /// refractory period H = K⁻¹ (b_H + c κ R) eliminated, (c+, c-) c κ K⁻¹.
+    fn border_columns(&self, c: f64, mass: bool) -> [Vec<f64>; 2] {
+        let (cp, cm) = (&self.a.cp, &self.a.cm);
+        let col = |x: f64, y: f64| -> Vec<f64> {
+            cp.iter()
+                .zip(cm)
+                .map(|(a, b)| -c * (a * x + b * y))
+                .collect()
+        };
+        let scaled = |col: &[f64]| col.iter().map(|x| -c * x).collect::<Vec<f64>>();
+        match self.hold {
+            None => [scaled(cp), scaled(cm)],
+            Some((kappa, _)) => {
+                let k = self.held_inverse(kappa, c, mass);
+                let ck = c * kappa;
+                [
+                    col(ck * k[0][0], ck * k[1][0]),
+                    col(ck * k[0][1], ck * k[1][1]),
+                ]
+            }
+        }
+    }
+
+    /// Solve (M - cA) x = b on the mesh unknowns and the held ones (the
+    /// integrals' rows excluded), `b` and `x` of the full dimension.
+    fn solve_mesh(&self, c: f64, mass: bool, band: &Band, low: &LowRank, b: &[f64], x: &mut [f64]) {
+        let n = self.n;
+        x[..n].copy_from_slice(&b[..n]);
+        let Some((kappa, _)) = self.hold else {
+            band.solve(&mut x[..n]);
+            self.remove_borders(&mut x[..n], low);
+            return;
+        };
+        let (h, k) = (self.held(), self.held_inverse(kappa, c, mass));
+        let kb = |y: [f64; 2]| {
+            [
+                k[0][0] * y[0] + k[0][1] * y[1],
+                k[1][0] * y[0] + k[1][1] * y[1],
+            ]
+        };
+        let z = kb([b[h], b[h + 1]]);
+        for ((xi, a), b) in x[..n].iter_mut().zip(&self.a.cp).zip(&self.a.cm) {
+            *xi += c * (a * z[0] + b * z[1]);
+        }
+        band.solve(&mut x[..n]);
+        self.remove_borders(&mut x[..n], low);
+        let (rp, rm) = self.reset_values(x);
+        let y = kb([b[h] + c * kappa * rp, b[h + 1] + c * kappa * rm]);
+        (x[h], x[h + 1]) = (y[0], y[1]);
     }
 
     /// T_f(v_r), where the + forcing switches off.
@@ -152,9 +248,13 @@ impl UpwindOperator {
 
     /// The initial state: S_c+ = 0, S_c- = 1, integrals 0.
     pub(super) fn initial(&self) -> Vec<f64> {
-        let mut u = vec![0.0; self.n + EXTRA];
+        let mut u = vec![0.0; self.dim()];
         for k in (1..self.n).step_by(2) {
             u[k] = 1.0;
+        }
+        if let Some((_, w)) = self.hold {
+            u[self.held()] = w;
+            u[self.held() + 1] = w;
         }
         u
     }
@@ -164,7 +264,7 @@ impl UpwindOperator {
         let (p, m) = (2 * self.start, 2 * self.start + 1);
         let share = self.reset_atom_share(t);
         let (fp, fm) = self.forcing_rows((-self.kill * t).exp(), t, self.start, share);
-        let at = self.reset_values(u);
+        let at = self.reset_inputs(u);
         (self.row(u, p, at) + fp, self.row(u, m, at) + fm)
     }
 
@@ -210,7 +310,8 @@ impl UpwindOperator {
     /// t, with decay = e^{-(lambda + r) t} and the target's atom `share`
     /// ([`UpwindOperator::reset_atom_share`]).
     fn forcing_rows(&self, decay: f64, t: f64, i: usize, share: f64) -> (f64, f64) {
-        let (plus, minus) = if share > 0.0 {
+        // With a hold the atom's reset share forces the H+ row instead.
+        let (plus, minus) = if share > 0.0 && self.hold.is_none() {
             self.noise.mix(self.rate * decay * share, 0.0)
         } else {
             (0.0, 0.0)
@@ -232,7 +333,7 @@ impl UpwindOperator {
 
     /// out = A s on the mesh unknowns.
     fn apply_mesh(&self, s: &[f64], out: &mut [f64]) {
-        let at = self.reset_values(s);
+        let at = self.reset_inputs(s);
         for (i, o) in out.iter_mut().enumerate().take(self.n) {
             *o = self.row(s, i, at);
         }
@@ -243,23 +344,20 @@ impl UpwindOperator {
     /// A X1 = -M S_c(0) - ∫F dt and A X2 = -M X1 - ∫t F dt with X1 = ∫S_c dt,
     /// X2 = ∫ t S_c dt (F in closed form). Returns ((X1+, X1-), (X2+, X2-)).
     pub(super) fn stationary_integrals(&self) -> std::result::Result<(Pair, Pair), Failure> {
-        let n = self.n;
+        let dim = self.dim();
         let (f1, f2) = self.forcing_integrals();
-        let mut mass = vec![0.0; n + EXTRA];
+        let mut mass = vec![0.0; dim];
         self.apply_mass(&self.initial(), &mut mass);
-        // (0·M - 1·A) x = b solves -A x = b.
+        // (0·M - 1·A) x = b solves -A x = b (the integrals' rows unused).
         let (band, low) = self.factor(1.0, false)?;
-        let solve = |mut x: Vec<f64>| {
-            band.solve(&mut x);
-            self.remove_borders(&mut x, &low);
+        let solve = |b: Vec<f64>| {
+            let mut x = vec![0.0; dim];
+            self.solve_mesh(1.0, false, &band, &low, &b, &mut x);
             x
         };
-        let x1 = solve((0..n).map(|i| mass[i] + f1[i]).collect());
-        self.apply_mass(
-            &x1.iter().copied().chain([0.0; EXTRA]).collect::<Vec<_>>(),
-            &mut mass,
-        );
-        let x2 = solve((0..n).map(|i| mass[i] + f2[i]).collect());
+        let x1 = solve((0..dim).map(|i| mass[i] + f1[i]).collect());
+        self.apply_mass(&x1, &mut mass);
+        let x2 = solve((0..dim).map(|i| mass[i] + f2[i]).collect());
         let (p, q) = (2 * self.start, 2 * self.start + 1);
         if !x1.iter().chain(&x2).all(|x| x.is_finite()) {
             return Err(Failure::NonFinite {
@@ -273,7 +371,7 @@ impl UpwindOperator {
     /// ∫_0^∞ F dt and ∫_0^∞ t F dt, row by row.
     fn forcing_integrals(&self) -> (Vec<f64>, Vec<f64>) {
         let k = self.kill;
-        let (mut f1, mut f2) = (vec![0.0; self.n], vec![0.0; self.n]);
+        let (mut f1, mut f2) = (vec![0.0; self.dim()], vec![0.0; self.dim()]);
         // Per node: ∫ e^{-k t} H_i(t) t^m dt, m = 0, 1 (H_i: the atom's step
         // averaged over the dual cell, [`UpwindOperator::ramp`]).
         let atom: Vec<(f64, f64)> = self
@@ -299,8 +397,13 @@ impl UpwindOperator {
                 .zip(&atom)
                 .fold((0.0, 0.0), |(x, y), (wj, h)| (x + wj * h.0, y + wj * h.1)),
         };
-        let (p0, m0) = self.noise.mix(self.rate * r0, 0.0);
-        let (p1, m1) = self.noise.mix(self.rate * r1, 0.0);
+        let (mut p0, mut m0) = self.noise.mix(self.rate * r0, 0.0);
+        let (mut p1, mut m1) = self.noise.mix(self.rate * r1, 0.0);
+        if let Some((kappa, _)) = self.hold {
+            // The atom's reset share forces the H+ row ([`ShiftedLinear::forcing`]).
+            (f1[self.held()], f2[self.held()]) = (kappa * r0, kappa * r1);
+            (p0, m0, p1, m1) = (0.0, 0.0, 0.0, 0.0);
+        }
         for (i, h) in atom.iter().enumerate() {
             if 2 * i + 2 < self.n {
                 f1[2 * i] = p0;
@@ -340,8 +443,7 @@ impl UpwindOperator {
             method: METHOD,
             at: c,
         })?;
-        let scaled = |col: &[f64]| col.iter().map(|x| -c * x).collect::<Vec<f64>>();
-        let z = responses(|y| b.solve(y), [scaled(&self.a.cp), scaled(&self.a.cm)]);
+        let z = responses(|y| b.solve(y), self.border_columns(c, mass));
         let low = LowRank::standard(z, |y| {
             let (p, m) = self.reset_values(y);
             [p, m]
@@ -427,7 +529,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
 
 impl ShiftedLinear for UpwindOperator {
     fn dim(&self) -> usize {
-        self.n + EXTRA
+        self.n + EXTRA + if self.hold.is_some() { 2 } else { 0 }
     }
 
     fn apply(&self, u: &[f64], out: &mut [f64]) {
@@ -437,6 +539,12 @@ impl ShiftedLinear for UpwindOperator {
         out[n + 1] = u[2 * self.start + 1];
         out[n + 2] = u[n];
         out[n + 3] = u[n + 1];
+        if let Some((kappa, _)) = self.hold {
+            let (h, (rp, rm)) = (self.held(), self.reset_values(u));
+            let (hp, hm) = (u[h], u[h + 1]);
+            out[h] = kappa * (rp - hp) + self.lam * (hm - hp);
+            out[h + 1] = kappa * (rm - hm) + self.lam * (hp - hm);
+        }
     }
 
     fn apply_mass(&self, u: &[f64], out: &mut [f64]) {
@@ -460,9 +568,7 @@ impl ShiftedLinear for UpwindOperator {
         }
         let (_, f, low) = self.cache.as_ref().expect("factored above");
         let n = self.n;
-        x[..n].copy_from_slice(&b[..n]);
-        f.solve(&mut x[..n]);
-        self.remove_borders(&mut x[..n], low);
+        self.solve_mesh(c, true, f, low, b, x);
         // I - c S_c(v_0) = b_I, J - c I = b_J.
         x[n] = b[n] + c * x[2 * self.start];
         x[n + 1] = b[n + 1] + c * x[2 * self.start + 1];
@@ -482,7 +588,8 @@ impl ShiftedLinear for UpwindOperator {
         match i.checked_sub(self.n) {
             None => atol,
             Some(k) if k < 2 => atol * self.scales.0,
-            Some(_) => atol * self.scales.1,
+            Some(k) if k < EXTRA => atol * self.scales.1,
+            Some(_) => atol,
         }
     }
 
@@ -500,6 +607,10 @@ impl ShiftedLinear for UpwindOperator {
             (out[2 * i], out[2 * i + 1]) = self.forcing_rows(decay, t, i, share);
         }
         out[self.n..].fill(0.0);
+        if let Some((kappa, _)) = self.hold {
+            // κ S_a+(u, t): the atom's share of the held particle's release.
+            out[self.held()] = kappa * decay * share;
+        }
         true
     }
 }

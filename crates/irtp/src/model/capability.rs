@@ -376,6 +376,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::MfptExact
                 | S::MfptEuler
                 | S::FptDistributionExact
+                | S::FptDistribution
                 | S::SearchExact
                 | S::SearchEuler
                 | S::FpStationary

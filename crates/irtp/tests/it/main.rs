@@ -8,6 +8,7 @@ mod clock;
 mod common;
 mod conformance;
 mod control_variate;
+mod distribution_refractory;
 mod euler_noise_schedule;
 mod exact_flow;
 mod exact_fp;
