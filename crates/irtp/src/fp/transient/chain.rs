@@ -3,7 +3,8 @@
 //! the noise state drawn from π, on the N-state operator
 //! ([`crate::fp::nstate`]); `<v>` and `<v²>` extrapolated with their
 //! observed order (Eq. (N27)), the held atoms (Eq. (N52)) split off the
-//! fine mesh's cells.
+//! fine mesh's cells. Periodic resetting moves all mass to the reset
+//! target at every kT ([`TransientSpace::reset`]).
 
 use super::{
     integrate_levels, Scheme, Snapshot, Transient, TransientOptions, TransientSpace,
@@ -53,10 +54,16 @@ impl TransientSpace for ChainSpace<'_> {
         Ok((b, u))
     }
 
-    /// Never called: periodic resetting with a noise model is refused by
-    /// the capability check before ([`Params::require`]).
-    fn reset(&self, _u: &mut [f64]) {
-        unreachable!("periodic resetting with a noise model is refused before fp transient")
+    /// A periodic reset at kT: each state's mass goes to the reset
+    /// target's cells of the state the noise rule gives (kept: the same
+    /// state; re-drawn: spread by π), as the Poisson reset re-injects it
+    /// (Eq. (N20)).
+    fn reset(&self, u: &mut [f64]) {
+        let op = self.op.as_ref().expect("a reset comes after the mesh");
+        let sums = op.state_sums(u);
+        let mixed = op.noise.mix_states(&sums, &op.chain.pi);
+        u.fill(0.0);
+        op.add_target(&mixed, u);
     }
 
     fn observe(&mut self, level: usize, k: usize, u: &[f64]) -> Result<()> {
@@ -118,7 +125,8 @@ pub(super) fn transient(
         cells: Vec::new(),
         op: None,
     };
-    let steps = integrate_levels(&mut c, &tol, &times, &[], progress)?.steps as u64;
+    let resets = super::reset_times(p, rec, snaps);
+    let steps = integrate_levels(&mut c, &tol, &times, &resets, progress)?.steps as u64;
     let mass_err = c
         .obs
         .iter()
