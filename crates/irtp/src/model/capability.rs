@@ -295,12 +295,15 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// Whether `solver` runs `feature` with a noise model although it runs no
 /// other modifier with one: the N-state Fokker-Planck and backward
 /// equations run an exponential refractory period, one held state per
-/// noise state (docs/equations.md, (R10), (R11)); the time-dependent
-/// N-state Fokker-Planck solver runs periodic resetting (all mass to the
-/// target at every kT).
+/// noise state (docs/equations.md, (R10), (R11)), the time-dependent one
+/// too; it also runs periodic resetting (all mass to the target at every
+/// kT).
 fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
     match feature {
-        Feature::RefractoryExp => matches!(solver, Solver::FpStationary | Solver::Backward),
+        Feature::RefractoryExp => matches!(
+            solver,
+            Solver::FpStationary | Solver::FpTransient | Solver::Backward
+        ),
         Feature::Periodic => solver == Solver::FpTransient,
         _ => false,
     }

@@ -5,9 +5,9 @@
 
 use irtp::fp::{self, Transient, TransientOptions};
 use irtp::model::noise::NoiseModel;
-use irtp::model::reset::{Periodic, Schedule};
+use irtp::model::reset::{Periodic, Refractory, Schedule};
 use irtp::{DragLaw, Params};
-use irtp_testkit::noises::PAPER_AS_STATES;
+use irtp_testkit::noises::{PAPER_AS_STATES, RPT};
 
 /// Reset to v_r every T = 1 (Poisson rate 0).
 fn periodic(p: Params) -> Params {
@@ -98,6 +98,81 @@ fn chain_periodic_resetting_matches_the_two_state_solver() {
         assert!(
             (a - b).abs() <= est + 1e-8,
             "t = {t}: chain {a} vs two-state {b}, estimate {est:e}"
+        );
+    }
+}
+
+/// Reset at rate 1 into an exponential refractory period of mean 1/2.
+fn with_hold(p: Params) -> Params {
+    p.with_schedule(Schedule {
+        refractory: Some(Refractory::Exp { mean: 0.5 }),
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// The total held mass from a start with nothing held obeys dq/dt =
+/// r (1 − q) − κ q whatever the noise (each noise state's phases sum to
+/// the chain's law): q(t) = r/(r + κ) (1 − e^{−(r + κ) t}); the chain's
+/// `refractory_mass` follows it within the time integration's tolerance
+/// (rtol = 1e-6).
+#[test]
+fn chain_refractory_mass_follows_the_hold_fraction() {
+    let noise = NoiseModel::parse(RPT, 0.0).unwrap();
+    let p = with_hold(Params::with_noise("tan".parse().unwrap(), noise, 1.0, 0.2).unwrap());
+    let times = [0.25, 0.5, 1.0, 2.0];
+    let tr = run(&p, 200, &times);
+    let (r, kappa) = (1.0, 2.0);
+    assert!(
+        tr.mass_error_max < 1e-10,
+        "mass error {}",
+        tr.mass_error_max
+    );
+    for (k, &t) in times.iter().enumerate() {
+        let want = r / (r + kappa) * (1.0 - (-(r + kappa) * t).exp());
+        let err = (tr.refractory_mass[k] - want).abs();
+        println!(
+            "t = {t}: held {:.10} want {want:.10} error {err:.2e}",
+            tr.refractory_mass[k]
+        );
+        assert!(
+            err <= 1e-5,
+            "t = {t}: held {} vs {want}",
+            tr.refractory_mass[k]
+        );
+    }
+}
+
+/// The paper's noise spelt as a generator with an exponential refractory
+/// period agrees with the two-state solver's held pairs within the sum of
+/// both mesh error estimates (plus 1e-8 for the time integration).
+#[test]
+fn chain_refractory_matches_the_two_state_solver() {
+    let times = [0.5, 1.0, 2.0];
+    let noise = NoiseModel::parse(PAPER_AS_STATES, 0.0).unwrap();
+    let drag: DragLaw = "tan".parse().unwrap();
+    let chain = run(
+        &with_hold(Params::with_noise(drag, noise, 1.0, 0.2).unwrap()),
+        400,
+        &times,
+    );
+    let two = run(
+        &with_hold(Params::new(drag, 1.0, 0.5, 1.0, 0.2).unwrap()),
+        400,
+        &times,
+    );
+    for (k, &t) in times.iter().enumerate() {
+        let (a, b) = (chain.v2[k], two.v2[k]);
+        let est = chain.v2_mesh_error[k] + two.v2_mesh_error[k];
+        println!("t = {t}: chain {a:.10} two-state {b:.10} estimate {est:.2e}");
+        assert!(
+            (a - b).abs() <= est + 1e-8,
+            "t = {t}: chain {a} vs two-state {b}, estimate {est:e}"
+        );
+        let (ha, hb) = (chain.refractory_mass[k], two.refractory_mass[k]);
+        assert!(
+            (ha - hb).abs() <= 1e-5,
+            "t = {t}: held {ha} vs two-state {hb}"
         );
     }
 }
