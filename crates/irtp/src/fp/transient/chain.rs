@@ -4,7 +4,9 @@
 //! ([`crate::fp::nstate`]); `<v>` and `<v²>` extrapolated with their
 //! observed order (Eq. (N27)), the held atoms (Eq. (N52)) split off the
 //! fine mesh's cells. Periodic resetting moves all mass to the reset
-//! target at every kT ([`TransientSpace::reset`]).
+//! target at every kT ([`TransientSpace::reset`]); an exponential
+//! refractory period adds one held mass per noise state after the cells
+//! ([`ChainOp`], docs/equations.md (R10)).
 
 use super::{
     integrate_levels, Scheme, Snapshot, Transient, TransientOptions, TransientSpace,
