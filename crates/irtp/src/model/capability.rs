@@ -309,9 +309,18 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// Whether `solver` runs `feature` with a noise model although it runs no
 /// other modifier with one: the N-state Fokker-Planck and backward
 /// equations run an exponential refractory period, one held state per
-/// noise state (docs/equations.md, (R10), (R11)).
+/// noise state (docs/equations.md, (R10), (R11)), the time-dependent one
+/// too; it also runs periodic resetting (all mass to the target at every
+/// kT).
 fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
-    feature == Feature::RefractoryExp && matches!(solver, Solver::FpStationary | Solver::Backward)
+    match feature {
+        Feature::RefractoryExp => matches!(
+            solver,
+            Solver::FpStationary | Solver::FpTransient | Solver::Backward
+        ),
+        Feature::Periodic => solver == Solver::FpTransient,
+        _ => false,
+    }
 }
 
 /// Whether `solver` runs the protocol features it runs ([`supports`])
@@ -323,7 +332,8 @@ fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
 /// Fokker-Planck and backward equations and the exact sampler's
 /// Ornstein-Uhlenbeck loop (T > 0) run a noise model with Poisson
 /// resetting only (any target, noise kept or re-drawn), some of them with
-/// an exponential refractory period ([`protocol_runs`]).
+/// an exponential refractory period, the time-dependent Fokker-Planck
+/// solver with periodic resetting ([`protocol_runs`]).
 pub fn modifiers_with_noise(solver: Solver, noise: NoiseClass) -> bool {
     use NoiseClass as N;
     use Solver as S;

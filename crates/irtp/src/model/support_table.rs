@@ -46,8 +46,8 @@ fn noise_cell(solver: Solver, noise: NoiseClass) -> String {
 /// Whether `solver` runs, with a noise model, every feature it runs with
 /// the paper's noise ([`crate::capability::modifiers_with_noise`]): "yes"
 /// for every class of noise it runs, "T = 0" for finite-state noise only;
-/// else Poisson resetting, with an exponential refractory period where it
-/// runs one with finite-state noise.
+/// else Poisson resetting, with an exponential refractory period and
+/// periodic resetting where it runs them with finite-state noise.
 fn with_noise(solver: Solver) -> String {
     if !noise_runs(solver, NoiseClass::FiniteState) {
         return "—".into();
@@ -64,10 +64,20 @@ fn with_noise(solver: Solver) -> String {
     ) {
         (true, false) => "yes".into(),
         (true, true) => "T = 0".into(),
-        (false, _) if protocol_runs(solver, Feature::RefractoryExp, NoiseClass::FiniteState) => {
-            "Poisson, exp refractory".into()
+        (false, _) => {
+            let extra: Vec<&str> = [
+                (Feature::RefractoryExp, "exp refractory"),
+                (Feature::Periodic, "periodic"),
+            ]
+            .into_iter()
+            .filter(|&(f, _)| protocol_runs(solver, f, NoiseClass::FiniteState))
+            .map(|(_, name)| name)
+            .collect();
+            match extra.is_empty() {
+                true => "Poisson only".into(),
+                false => format!("Poisson, {}", extra.join(", ")),
+            }
         }
-        (false, _) => "Poisson only".into(),
     }
 }
 

@@ -38,6 +38,7 @@ mod noise_exact_ou;
 mod noise_fp;
 mod noise_fpt_exact;
 mod noise_refractory;
+mod noise_transient_protocol;
 mod power_kink;
 mod protocol_conformance;
 mod search_backward;

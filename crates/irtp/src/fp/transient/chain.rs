@@ -3,7 +3,10 @@
 //! the noise state drawn from π, on the N-state operator
 //! ([`crate::fp::nstate`]); `<v>` and `<v²>` extrapolated with their
 //! observed order (Eq. (N27)), the held atoms (Eq. (N52)) split off the
-//! fine mesh's cells.
+//! fine mesh's cells. Periodic resetting moves all mass to the reset
+//! target at every kT ([`TransientSpace::reset`]); an exponential
+//! refractory period adds one held mass per noise state after the cells
+//! ([`ChainOp`], docs/equations.md (R10)).
 
 use super::{
     integrate_levels, Scheme, Snapshot, Transient, TransientOptions, TransientSpace,
@@ -11,12 +14,15 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::fp::extrapolate::richardson;
-use crate::fp::nstate::{observe, operator, Blocks, NoiseOperator};
+use crate::fp::nstate::{observe, operator, Blocks, Hold, NoiseOperator};
 use crate::fp::Mesh;
 use crate::model::atoms::transient_atom_states;
+use crate::model::noise::chain;
 use crate::model::reset::Reset;
 use crate::model::{Params, VelocityAtom};
-use crate::numerics::trbdf2::Tolerances;
+use crate::numerics::band::Band;
+use crate::numerics::trbdf2::{ShiftedLinear, Tolerances};
+use crate::numerics::Failure;
 use crate::parallel::Progress;
 
 /// The chain on the nested meshes of `base` << level cells: per mesh the
@@ -37,30 +43,64 @@ struct ChainSpace<'a> {
     cells: Vec<Vec<(usize, f64)>>,
     /// The current mesh's operator (for the fine mesh's densities).
     op: Option<NoiseOperator>,
+    /// The current mesh's held block (an exponential refractory period).
+    hold: Option<Hold>,
 }
 
 impl TransientSpace for ChainSpace<'_> {
-    type Op = Blocks;
+    type Op = ChainOp;
 
-    fn mesh(&mut self, level: usize) -> Result<(Blocks, Vec<f64>)> {
-        let b = Blocks::new(operator(self.p, self.base, level, true)?, 1);
+    /// The mesh's operator and initial state: mass at v = 0 by π, nothing
+    /// held.
+    fn mesh(&mut self, level: usize) -> Result<(ChainOp, Vec<f64>)> {
+        let op = operator(self.p, self.base, level, true)?;
+        self.hold = Hold::of(self.p, &op);
+        let b = Blocks::new(op, 1);
         self.cells = atom_cells(self.p, &b.op, &self.held);
-        let u = b.initial()?;
+        let mut u = b.initial()?;
+        let held = self.hold.as_ref().map_or(0, |h| h.q.len());
+        u.resize(u.len() + held, 0.0);
         self.v = b.v.clone();
         self.op = Some(b.op.clone());
         self.obs.push(vec![[0.0; 6]; self.all.len()]);
         self.atom_rows.push(vec![Vec::new(); self.all.len()]);
-        Ok((b, u))
+        let hold = self.hold.clone();
+        Ok((
+            ChainOp {
+                b,
+                hold,
+                factor: None,
+            },
+            u,
+        ))
     }
 
-    /// Never called: periodic resetting with a noise model is refused by
-    /// the capability check before ([`Params::require`]).
-    fn reset(&self, _u: &mut [f64]) {
-        unreachable!("periodic resetting with a noise model is refused before fp transient")
+    /// A periodic reset at kT: each state's mass goes to the reset
+    /// target's cells of the state the noise rule gives (kept: the same
+    /// state; re-drawn: spread by π), as the Poisson reset re-injects it
+    /// (Eq. (N20)).
+    fn reset(&self, u: &mut [f64]) {
+        let op = self.op.as_ref().expect("a reset comes after the mesh");
+        let u = &mut u[..self.v.len()];
+        let sums = op.state_sums(u);
+        let mixed = op.noise.mix_states(&sums, &op.chain.pi);
+        u.fill(0.0);
+        op.add_target(&mixed, u);
     }
 
+    /// Mass, `<v>`, `<v²>` with the held masses at their velocities, and
+    /// the held mass (entry 3).
     fn observe(&mut self, level: usize, k: usize, u: &[f64]) -> Result<()> {
-        self.obs[level][k] = observe(&self.v, 1, u);
+        let (u, q) = u.split_at(self.v.len());
+        let mut o = observe(&self.v, 1, u);
+        if let Some(h) = &self.hold {
+            let (m, (a, b)) = (q.iter().sum::<f64>(), h.velocity_moments());
+            o[0] += m;
+            o[1] += m * a;
+            o[2] += m * b;
+            o[3] = m;
+        }
+        self.obs[level][k] = o;
         let arow: Vec<f64> = self.cells.iter().map(|c| held_mass(u, c)).collect();
         if level + 1 == MESH_LEVELS {
             let x: Vec<[f64; 3]> = (0..self.held.len())
@@ -69,7 +109,7 @@ impl TransientSpace for ChainSpace<'_> {
             let (split, rest) = split_held(u, &self.cells, &x);
             self.fine_rows[k] = FineAtoms {
                 split,
-                total: rest.iter().sum(),
+                total: rest.iter().sum::<f64>() + o[3],
             };
             if self.snaps.contains(&self.all[k]) {
                 self.snapshots.push((self.all[k], rest));
@@ -117,8 +157,10 @@ pub(super) fn transient(
         v: Vec::new(),
         cells: Vec::new(),
         op: None,
+        hold: None,
     };
-    let steps = integrate_levels(&mut c, &tol, &times, &[], progress)?.steps as u64;
+    let resets = super::reset_times(p, rec, snaps);
+    let steps = integrate_levels(&mut c, &tol, &times, &resets, progress)?.steps as u64;
     let mass_err = c
         .obs
         .iter()
@@ -156,7 +198,7 @@ pub(super) fn transient(
         v2: idx.iter().map(|&k| pick(k, 2).0).collect(),
         v2_mesh_error: idx.iter().map(|&k| pick(k, 2).1).collect(),
         mass: idx.iter().map(|&k| obs[2][k][0]).collect(),
-        refractory_mass: vec![0.0; idx.len()],
+        refractory_mass: idx.iter().map(|&k| obs[2][k][3]).collect(),
         atoms: idx.iter().map(|&k| atoms(k)).collect(),
         mass_error_max: mass_err,
         snapshots: snaps,
@@ -292,4 +334,182 @@ fn snapshot(op: &NoiseOperator, t: f64, u: &[f64], atoms: Vec<VelocityAtom>) -> 
         states,
         atoms,
     })
+}
+
+/// The chain's operator: the N-state operator ([`Blocks`], one block)
+/// and, with an exponential refractory period, one held mass q_s per
+/// noise state after the cells (docs/equations.md, (R10)):
+/// dq/dt = W r M − K q, K = κI − Qᵀ, the cells gaining κ q_s at state s's
+/// target cells instead of the reset influx.
+pub(super) struct ChainOp {
+    b: Blocks,
+    hold: Option<Hold>,
+    factor: Option<HeldFactor>,
+}
+
+/// (I − cB)'s band factors (B without the re-injection), Z_s = (I − cB)⁻¹
+/// E_s, I + cK, and the capacitance I − c G S Z, G = cκ (I + cK)⁻¹ r W.
+struct HeldFactor {
+    c: f64,
+    band: Band,
+    z: Vec<Vec<f64>>,
+    ik: Vec<Vec<f64>>,
+    cap: Vec<Vec<f64>>,
+}
+
+impl ChainOp {
+    fn ns(&self) -> usize {
+        self.b.op.mesh.states
+    }
+
+    /// K q = κ q − Qᵀ q.
+    fn k_times(&self, kappa: f64, q: &[f64]) -> Vec<f64> {
+        let ch = &self.b.op.chain;
+        (0..q.len())
+            .map(|s| {
+                let inflow: f64 = (0..q.len())
+                    .filter(|&t| t != s)
+                    .map(|t| ch.q[t][s] * q[t])
+                    .sum();
+                (kappa + ch.exit[s]) * q[s] - inflow
+            })
+            .collect()
+    }
+
+    /// G y = cκ (I + cK)⁻¹ r W y.
+    fn g_times(f: &HeldFactor, op: &NoiseOperator, kappa: f64, y: &[f64]) -> Result<Vec<f64>> {
+        let l = chain::solve(&f.ik, &op.influx(y), "fp transient (held masses)")?;
+        Ok(l.iter().map(|x| f.c * kappa * x).collect())
+    }
+
+    fn factorise(&self, c: f64, kappa: f64) -> Result<HeldFactor> {
+        let (op, ns) = (&self.b.op, self.ns());
+        let mut band = op.band(Some(c));
+        band.factor().map_err(|e| Error::Numerical {
+            method: "fp transient (held masses)",
+            reason: e.to_string(),
+        })?;
+        let z: Vec<Vec<f64>> = (0..ns)
+            .map(|s| {
+                let mut e = vec![0.0; op.dim()];
+                let mut w = vec![0.0; ns];
+                w[s] = 1.0;
+                op.add_target(&w, &mut e);
+                band.solve(&mut e);
+                e
+            })
+            .collect();
+        let ik: Vec<Vec<f64>> = (0..ns)
+            .map(|i| {
+                (0..ns)
+                    .map(|j| match i == j {
+                        true => 1.0 + c * (kappa + op.chain.exit[i]),
+                        false => -c * op.chain.q[j][i],
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut f = HeldFactor {
+            c,
+            band,
+            z,
+            ik,
+            cap: Vec::new(),
+        };
+        let cols =
+            f.z.iter()
+                .map(|zs| Self::g_times(&f, op, kappa, &op.state_sums(zs)))
+                .collect::<Result<Vec<_>>>()?;
+        f.cap = (0..ns)
+            .map(|i| {
+                (0..ns)
+                    .map(|j| f64::from(u8::from(i == j)) - c * cols[j][i])
+                    .collect()
+            })
+            .collect();
+        Ok(f)
+    }
+
+    /// The held masses of `u` (after the cells) and the cells.
+    fn split<'u>(&self, u: &'u [f64]) -> (&'u [f64], &'u [f64]) {
+        u.split_at(self.b.op.dim())
+    }
+
+    fn solve_held(&mut self, kappa: f64, c: f64, b: &[f64], x: &mut [f64]) -> Result<()> {
+        if !matches!(&self.factor, Some(f) if f.c == c) {
+            self.factor = Some(self.factorise(c, kappa)?);
+        }
+        let (op, f) = (&self.b.op, self.factor.as_ref().expect("factorised above"));
+        let d = op.dim();
+        let (bx, bq) = b.split_at(d);
+        let mut rhs = bx.to_vec();
+        let lq = chain::solve(&f.ik, bq, "fp transient (held masses)")?;
+        op.add_target(
+            &lq.iter().map(|y| c * kappa * y).collect::<Vec<_>>(),
+            &mut rhs,
+        );
+        f.band.solve(&mut rhs);
+        let t = Self::g_times(f, op, kappa, &op.state_sums(&rhs))?;
+        let u = chain::solve(
+            &f.cap,
+            &t.iter().map(|y| c * y).collect::<Vec<_>>(),
+            "fp transient (capacitance)",
+        )?;
+        for (zs, us) in f.z.iter().zip(&u) {
+            for (xi, zi) in rhs.iter_mut().zip(zs) {
+                *xi += zi * us;
+            }
+        }
+        let inf = op.influx(&op.state_sums(&rhs));
+        let dq: Vec<f64> = bq.iter().zip(&inf).map(|(d, r)| d + c * r).collect();
+        let q = chain::solve(&f.ik, &dq, "fp transient (held masses)")?;
+        x[..d].copy_from_slice(&rhs);
+        x[d..].copy_from_slice(&q);
+        Ok(())
+    }
+}
+
+impl ShiftedLinear for ChainOp {
+    fn dim(&self) -> usize {
+        self.b.dim() + if self.hold.is_some() { self.ns() } else { 0 }
+    }
+
+    fn apply(&self, u: &[f64], out: &mut [f64]) {
+        let Some(h) = &self.hold else {
+            return self.b.apply(u, out);
+        };
+        let op = &self.b.op;
+        let (x, q) = self.split(u);
+        let d = x.len();
+        op.apply(x, &mut out[..d]);
+        let inf = op.influx(&op.state_sums(x));
+        let back: Vec<f64> = q.iter().zip(&inf).map(|(q, r)| h.kappa * q - r).collect();
+        op.add_target(&back, &mut out[..d]);
+        let kq = self.k_times(h.kappa, q);
+        for (s, o) in out[d..].iter_mut().enumerate() {
+            *o = inf[s] - kq[s];
+        }
+    }
+
+    fn solve_shifted(
+        &mut self,
+        c: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> std::result::Result<(), Failure> {
+        let Some(kappa) = self.hold.as_ref().map(|h| h.kappa) else {
+            return self.b.solve_shifted(c, b, x);
+        };
+        let fail = Failure::NonFinite {
+            method: "fp shifted solve (I - cA) x = b (N states, held masses)",
+            at: c,
+        };
+        if !(c > 0.0 && c.is_finite()) {
+            return Err(fail);
+        }
+        match self.solve_held(kappa, c, b, x) {
+            Ok(()) if x.iter().all(|v| v.is_finite()) => Ok(()),
+            _ => Err(fail),
+        }
+    }
 }

@@ -24,10 +24,11 @@
 //!   uniform mesh, the step set by the CFL limit (the paper's noise only).
 //!
 //! An exponential refractory period (docs/equations.md, (R7)) runs in
-//! [`Scheme::TrBdf2`] with the paper's noise: the held pairs of
+//! [`Scheme::TrBdf2`]: with the paper's noise the held pairs of
 //! [`crate::fp::ForwardOperator`] are unknowns next to the cell masses,
-//! and [`Transient::refractory_mass`] reports their mass; the paper
-//! scheme refuses it.
+//! with a noise model one held mass per noise state ([`chain`], (R10));
+//! [`Transient::refractory_mass`] reports their mass; the paper scheme
+//! refuses it.
 
 mod chain;
 mod two_state;
