@@ -691,7 +691,7 @@ mod tests {
     fn runners_group_by_command() {
         assert_eq!(
             runners(Feature::RefractoryFixed),
-            "simulate, mfpt (exact, euler), mfpt distribution (exact), mfpt --xt (exact)"
+            "simulate, mfpt (exact, euler), mfpt distribution (exact), mfpt --xt (exact, euler)"
         );
         let e = fitted(
             "noise",

@@ -199,7 +199,13 @@ pub(super) fn trbdf2(
     let mut runs: Vec<Transient> = space.runs.into_iter().map(|r| r.t).collect();
     let fine = runs.pop().expect("three meshes");
     let (half, quarter) = (&runs[1], &runs[0]);
-    let (v2, v2_mesh_error) = extrapolate(times, &fine.v2, &half.v2, &quarter.v2);
+    // The times where the state is a reset law placed on the mesh (t = 0,
+    // and a periodic reset's kT, recorded just after it).
+    let fresh: Vec<Option<bool>> = times
+        .iter()
+        .map(|&t| (t == 0.0 || resets.contains(&t)).then_some(t == 0.0))
+        .collect();
+    let (v2, v2_mesh_error) = extrapolate(&fresh, &fine.v2, &half.v2, &quarter.v2);
     check_resolved(params, times, &v2)?;
     Ok(Transient {
         params: *params,
@@ -212,7 +218,7 @@ pub(super) fn trbdf2(
         extrapolated: true,
         v: fine.v,
         times: times.to_vec(),
-        v_mean: extrapolate(times, &fine.v_mean, &half.v_mean, &quarter.v_mean).0,
+        v_mean: extrapolate(&fresh, &fine.v_mean, &half.v_mean, &quarter.v_mean).0,
         v2,
         v2_mesh_error,
         mass: fine.mass,
@@ -267,22 +273,30 @@ fn held_errors(fine: Vec<Vec<VelocityAtom>>, half: &[Vec<VelocityAtom>]) -> Vec<
 /// At t = 0 the moments are those of the initial delta placed in a cell
 /// (O(Δv²), not a first-order mesh error): reported from the fine mesh, not
 /// extrapolated (2 X_N - X_{N/2} would give <v²> = -Δv²/2 < 0 there). The
-/// same holds while the front of the delta has crossed few cells; an
-/// extrapolated <v²> outside its range there is refused by
-/// [`check_resolved`].
-fn extrapolate(times: &[f64], n: &[f64], half: &[f64], quarter: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    times
+/// same at a periodic reset's time kT (the reset law placed on the mesh,
+/// recorded just after the reset), with the change from the mesh of N/2 as
+/// its estimate. `fresh[k]`: None where the moments are extrapolated,
+/// Some(true) at t = 0, Some(false) at a reset's time. While the front
+/// of a delta has crossed few cells an extrapolated <v²> may leave its
+/// range; that is refused by [`check_resolved`].
+fn extrapolate(
+    fresh: &[Option<bool>],
+    n: &[f64],
+    half: &[f64],
+    quarter: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    fresh
         .iter()
         .enumerate()
-        .map(|(k, &t)| {
-            if t > 0.0 {
+        .map(|(k, &f)| match f {
+            None => {
                 let x2 = 2.0 * n[k] - half[k];
                 let x3 = (8.0 * n[k] - 6.0 * half[k] + quarter[k]) / 3.0;
                 let bound = extrapolation_error(quarter[k], half[k], n[k]);
                 (x3, (x3 - x2).abs() + bound)
-            } else {
-                (n[k], 0.0)
             }
+            Some(true) => (n[k], 0.0),
+            Some(false) => (n[k], (n[k] - half[k]).abs()),
         })
         .unzip()
 }
