@@ -415,11 +415,6 @@ pub const PROTOCOL_CASES: [ProtocolCase; 17] = [
         1.5,
         refractory("exp:mean=0.3"),
         passage(TAN_VU),
-    )
-    .single(
-        "thermal noise with a schedule modifier: of the velocity passages only mfpt --method \
-         euler runs it (the N-state backward equations run Poisson resetting only, the exact \
-         samplers T = 0 only)",
     ),
     case(
         "linear-search-poisson",

@@ -606,11 +606,11 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
         ),
         (
             [
-                &["mfpt", "--method", "renewal", "--noise", RPT][..],
+                &["mfpt", "--method", "renewal", "--refractory", "exp:mean=1"][..],
                 &search,
             ]
             .concat(),
-            "--noise",
+            "--refractory",
         ),
         (
             [
@@ -622,15 +622,15 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
         ),
         (
             [
-                &["mfpt", "--method", "euler", "--refractory", "fixed:t=1"][..],
+                &["mfpt", "--method", "backward", "--refractory", "fixed:t=1"][..],
                 &search,
             ]
             .concat(),
             "--refractory",
         ),
         (
-            [&["mfpt", "distribution", "--noise", RPT][..], &search].concat(),
-            "--noise",
+            [&["mfpt", "distribution", "--refractory", "exp:mean=1"][..], &search].concat(),
+            "--refractory",
         ),
     ];
     let tmp = tempfile::tempdir().unwrap();

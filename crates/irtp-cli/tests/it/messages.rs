@@ -29,8 +29,8 @@ const REFUSED: &[(&str, &str)] = &[
     ("mfpt distribution --v0 0 --vt 1 --t-min 0.1", "--t-min"),
     ("mfpt distribution --v0 0 --vt 1 --method exact --rtol 0.1", "--rtol"),
     (
-        "mfpt --xt 1 --v0 0 --reset-position 0 --drag linear --noise rpt:sigma=1,alpha=1,beta=2 --rate 0.5 --method renewal",
-        "--noise",
+        "mfpt --xt 1 --v0 0 --reset-position 0 --drag linear --temperature 0.3 --rate 0.5 --method renewal",
+        "--temperature",
     ),
     ("simulate --t-min 0.1", "--t-min"),
     ("simulate --dt 0.01", "--dt"),
