@@ -629,7 +629,11 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
             "--refractory",
         ),
         (
-            [&["mfpt", "distribution", "--refractory", "exp:mean=1"][..], &search].concat(),
+            [
+                &["mfpt", "distribution", "--refractory", "exp:mean=1"][..],
+                &search,
+            ]
+            .concat(),
             "--refractory",
         ),
     ];
