@@ -565,14 +565,13 @@ fn mesh_error_bounds_the_linear_closed_form_at_every_time() {
     }
 }
 
-/// Periodic resetting to v_r = 0 (tan, r = 0, T = 1): at every kT the state
-/// is the reset's delta placed in the cell of v = 0, as at t = 0, so <v²>
-/// there is the fine mesh's value of t = 0 (not extrapolated: the first
-/// extrapolation of a delta in a cell is -Δv²/2 < 0, which the range check
-/// refused, exit 4), with its change from the mesh of N/2 as the estimate;
-/// between the resets the moments are extrapolated and stay in range.
+/// Periodic resetting to v_r = 0 (tan, r = 0, T = 1): just after every kT
+/// the state is the reset's delta placed in the cell of v = 0, as at t = 0.
+/// The twice-extrapolated <v²> cancels its Δv² to rounding (it was
+/// -5.6e-11 and refused by the range check, exit 4); it is now 0 within
+/// its error estimate, and between the resets the moments stay in range.
 #[test]
-fn a_periodic_reset_time_reports_the_reset_delta_not_an_extrapolation() {
+fn a_periodic_reset_to_zero_reports_zero_within_its_estimate() {
     use irtp::model::reset::{Periodic, Schedule};
     let p = models::tan(0.5, 0.0)
         .with_reset_velocity(0.0)
@@ -585,11 +584,14 @@ fn a_periodic_reset_time_reports_the_reset_delta_not_an_extrapolation() {
     let times = [0.0, 0.5, 1.0, 1.5, 2.0];
     let tr = trbdf2_run(&p, 400, &times, 1e-6, 1e-10);
     for k in [2, 4] {
-        // The same delta, carrying the total mass (1 to rounding).
-        let same = (tr.v2[k] / tr.v2[0] - 1.0).abs() < 1e-12;
-        assert!(same, "t = {}: {:?}", times[k], tr.v2);
-        assert!(tr.v2_mesh_error[k] > 0.0 && tr.v2_mesh_error[k] < 1e-4);
+        let (x, e) = (tr.v2[k], tr.v2_mesh_error[k]);
+        assert!(
+            x >= 0.0 && x <= e && e < 1e-3,
+            "t = {}: {x:e} ± {e:e}",
+            times[k]
+        );
     }
     assert!(tr.v2.iter().all(|&x| x >= 0.0), "{:?}", tr.v2);
-    assert!((tr.v2[1] - tr.v2[3]).abs() < 10.0 * (tr.v2_mesh_error[1] + tr.v2_mesh_error[3]));
+    let far = (tr.v2[1] - tr.v2[3]).abs();
+    assert!(far < 10.0 * (tr.v2_mesh_error[1] + tr.v2_mesh_error[3]));
 }
