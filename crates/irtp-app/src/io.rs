@@ -373,12 +373,13 @@ impl OutputDir {
         Ok(out)
     }
 
-    /// The checksums of the files staged so far (`sha256:<hex>` by name).
+    /// The checksums of the files staged so far (`sha256:<hex>` by name);
+    /// a stop request ends it with [`irtp::Error::Interrupted`].
     pub fn checksums(&self) -> Result<BTreeMap<String, String>> {
         self.files
             .iter()
             .filter(|f| *f != "run.json")
-            .map(|f| Ok((f.clone(), checksum_file(&self.staging.join(f))?)))
+            .map(|f| Ok((f.clone(), hash_file(&self.staging.join(f), true)?)))
             .collect()
     }
 }
@@ -411,15 +412,42 @@ fn remove_ours(dir: &Path, f: &str) -> Result<()> {
 
 /// `sha256:<hex>` of `bytes`.
 pub fn checksum_bytes(bytes: &[u8]) -> String {
-    let digest = Sha256::digest(bytes);
+    named_digest(Sha256::digest(bytes).as_slice())
+}
+
+/// `sha256:<hex>` of a SHA-256 digest.
+fn named_digest(digest: &[u8]) -> String {
     let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
     format!("sha256:{hex}")
 }
 
 /// `sha256:<hex>` of the file at `path`.
 pub fn checksum_file(path: &Path) -> Result<String> {
-    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
-    Ok(checksum_bytes(&bytes))
+    hash_file(path, false)
+}
+
+/// `sha256:<hex>` of the file at `path`, read in chunks of 1 MiB (a table
+/// can be hundreds of MB). With `poll` a stop request
+/// ([`irtp::parallel::check_stop`], polled once per chunk) ends it with
+/// [`irtp::Error::Interrupted`]: hashing 200 MB takes a second in a test
+/// build.
+fn hash_file(path: &Path, poll: bool) -> Result<String> {
+    use std::io::Read;
+    let mut file = fs::File::open(path).map_err(|e| io_err(path, e))?;
+    let mut hasher = Sha256::new();
+    let mut chunk = vec![0u8; 1 << 20];
+    loop {
+        if poll {
+            irtp::parallel::check_stop()?;
+        }
+        match file.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(k) => hasher.update(&chunk[..k]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(io_err(path, e)),
+        }
+    }
+    Ok(named_digest(hasher.finalize().as_slice()))
 }
 
 impl Drop for OutputDir {

@@ -452,12 +452,18 @@ impl HalfMap {
         self.len + self.k * self.len.powf(1.0 / self.q) + self.log_term(self.len)
     }
 
-    /// Distances 0 = x_0 < x_1 < ... < x_n = len at equally spaced s.
+    /// Distances 0 = x_0 < x_1 < ... < x_n = len at equally spaced s. A
+    /// Newton solve per node is a second's work at millions of cells, so a
+    /// stop request is polled every `STOP_POLL_NODES` nodes.
     fn distances(&self, n: usize) -> Result<Vec<f64>> {
+        const STOP_POLL_NODES: usize = 1 << 14;
         let s_tot = self.s_total();
         let mut out = Vec::with_capacity(n + 1);
         out.push(0.0);
         for k in 1..n {
+            if k % STOP_POLL_NODES == 0 {
+                crate::stop::check_stop()?;
+            }
             out.push(self.distance_at(s_tot * k as f64 / n as f64)?);
         }
         out.push(self.len);

@@ -60,6 +60,7 @@ impl StationarySpace for TwoState {
 
     fn solve(p: &Params, mesh: Mesh, n: usize, refine: usize) -> Result<Self> {
         let g = make_grid(p, mesh, n, refine)?;
+        crate::parallel::check_stop()?;
         let held = Held::new(&g, p);
         let (m, q) = stationary_masses(&g, p, held.as_ref())?;
         crate::parallel::check_stop()?;
