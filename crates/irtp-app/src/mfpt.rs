@@ -713,7 +713,7 @@ impl DirectArgs {
         let vt = self.target.velocity()?;
         self.reject_renewal_flags()?;
         let (problem, backward) = self.problem.config(vt)?;
-        let method = self.sim.config(&[problem], backward, &self.output)?;
+        let method = self.sim.config(std::slice::from_ref(&problem), backward, &self.output)?;
         Ok(DirectConfig {
             problem,
             backward,
@@ -745,7 +745,7 @@ fn write_direct(
         MfptResult::Backward(s) => {
             let prof = profile(&c.problem, &c.backward)?;
             (
-                Report::backward(c.problem, &s),
+                Report::backward(c.problem.clone(), &s),
                 profile_table(&prof),
                 String::new(),
             )
@@ -753,7 +753,7 @@ fn write_direct(
         MfptResult::Particles(st) => {
             let s = st.summary();
             (
-                Report::particles(a.sim.method, c.problem, &c.method, &s),
+                Report::particles(a.sim.method, c.problem.clone(), &c.method, &s),
                 survival_table(&st.survival()),
                 censoring_note(&s),
             )

@@ -211,7 +211,7 @@ pub const MFPT_CELLS: usize = 20_000;
 /// MFPT from the backward equations of the simulated process; +∞ where
 /// tau overflows f64.
 pub fn mfpt(params: &Params, v0: f64, vt: f64) -> Result<f64> {
-    let pr = Problem::new(*params, v0, vt)?;
+    let pr = Problem::new(params.clone(), v0, vt)?;
     let s = mfpt::backward::at_start_or_overflow(&pr, &BackwardOptions::with_cells(MFPT_CELLS))?;
     Ok(s.map_or(f64::INFINITY, |s| s.tau))
 }
@@ -219,7 +219,7 @@ pub fn mfpt(params: &Params, v0: f64, vt: f64) -> Result<f64> {
 /// MFPT from the backward equations and its discretisation error estimate
 /// (Richardson, [`MFPT_CELLS`] vs half as many cells).
 pub fn mfpt_with_error(params: &Params, v0: f64, vt: f64) -> Result<(f64, f64)> {
-    let pr = Problem::new(*params, v0, vt)?;
+    let pr = Problem::new(params.clone(), v0, vt)?;
     let s = mfpt::backward::solve(&pr, &BackwardOptions::with_cells(MFPT_CELLS))?;
     Ok((s.tau, s.error_estimate))
 }
@@ -236,7 +236,7 @@ pub fn mfpt_sim_controlled(
     cells: usize,
     progress: &dyn Progress,
 ) -> Result<mfpt::control::ControlledPassage> {
-    let pr = Problem::new(*params, v0, vt)?;
+    let pr = Problem::new(params.clone(), v0, vt)?;
     mfpt::control::run(&pr, (particles, seed, t_cap), cells, MFPT_CELLS, progress)?.summary()
 }
 

@@ -195,7 +195,7 @@ pub fn linear_cases() -> Vec<(Params, LinearAnswer)> {
         .iter()
         .map(|&(s, l, r, vr)| {
             let p = linear(s, l, r, vr);
-            (p, linear_answer(&p))
+            (p.clone(), linear_answer(&p))
         })
         .collect()
 }

@@ -256,7 +256,7 @@ impl SearchReport {
         let mean = |x: f64| if finite { x } else { f64::NAN };
         SearchReport {
             method: c.method.name(),
-            problem: c.problem,
+            problem: c.problem.clone(),
             tau: mean(s.tau),
             tau_plus: mean(s.tau_plus),
             tau_minus: mean(s.tau_minus),
@@ -406,7 +406,7 @@ fn euler_report(c: &SearchConfig, e: search::EulerSearch) -> (EulerReport, Table
     let notes = [&coarse, &fine].map(|s| note(&SearchReport::new(c, s, e.mean_is_finite, e.tail)));
     let report = EulerReport {
         method: c.method.name(),
-        problem: c.problem,
+        problem: c.problem.clone(),
         tau,
         tau_err,
         tau_plus,
@@ -437,7 +437,7 @@ pub(crate) fn report_of(
     c: &SearchConfig,
     result: SearchResult,
 ) -> (serde_json::Value, Option<u64>, Vec<Table>, String) {
-    let (method, problem) = (c.method.name(), c.problem);
+    let (method, problem) = (c.method.name(), c.problem.clone());
     match result {
         SearchResult::Particles(r) => {
             let report = SearchReport::new(c, &r.stats.summary(), r.mean_is_finite, r.tail);
@@ -455,27 +455,29 @@ pub(crate) fn report_of(
         }
         SearchResult::Backward(solution) => {
             let inf = solution.infinite_mean;
+            let note = mesh_note(&problem, inf);
             let report = BackwardReport {
                 method,
-                problem,
                 infinite_mean_reason: inf.then(|| reason_of(&problem)),
+                problem,
                 solution,
             };
-            (to_value(&report), None, vec![], mesh_note(&problem, inf))
+            (to_value(&report), None, vec![], note)
         }
         SearchResult::Renewal(solution) => {
             let SearchMethod::Renewal(options) = c.method else {
                 unreachable!("the renewal route gives a renewal solution")
             };
             let inf = solution.infinite_mean;
+            let note = mesh_note(&problem, inf);
             let report = RenewalReport {
                 method,
+                infinite_mean_reason: inf.then(|| reason_of(&problem)),
                 problem,
                 options,
-                infinite_mean_reason: inf.then(|| reason_of(&problem)),
                 solution,
             };
-            (to_value(&report), None, vec![], mesh_note(&problem, inf))
+            (to_value(&report), None, vec![], note)
         }
     }
 }

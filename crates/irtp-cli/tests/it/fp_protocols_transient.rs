@@ -122,7 +122,7 @@ fn msd_protocols_match_linear_moments() {
     let cases = |pos, held, pick: &[usize]| {
         let all = linear_cases(-0.25, pos, held);
         pick.iter()
-            .map(|&i| (pos, held, all[i]))
+            .map(|&i| (pos, held, all[i].clone()))
             .collect::<Vec<_>>()
     };
     // Point target noise kept (0), re-drawn (1), uniform target (2).

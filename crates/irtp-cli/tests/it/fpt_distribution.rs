@@ -252,7 +252,7 @@ fn survival_converges_with_the_mesh() {
 #[test]
 fn downward_target_mirrors_the_upward_one() {
     let p = Params::new(DragLaw::Tanh, 0.6, 0.5, 0.2, 0.0).unwrap();
-    let up = Problem::new(p, -0.249, 0.5).unwrap();
+    let up = Problem::new(p.clone(), -0.249, 0.5).unwrap();
     let down = Problem::new(p, 0.249, -0.5).unwrap();
     let times = linear(4.0, 9);
     let (a, b) = (solve(&up, &times), solve(&down, &times));

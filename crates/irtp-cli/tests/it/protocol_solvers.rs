@@ -75,7 +75,7 @@ fn fp_refractory_matches_linear_closed_forms() {
 #[test]
 fn refractory_mean_to_zero_is_the_plain_protocol() {
     for plain in [linear(1.0, 0.6, 1.5, 0.2), tan(0.5, 2.0)] {
-        let held = with_schedule(plain, None, None, Some("exp:mean=1e-9"));
+        let held = with_schedule(plain.clone(), None, None, Some("exp:mean=1e-9"));
         let a = fp::stationary(&plain, &fp_opts(2000)).unwrap();
         let b = fp::stationary(&held, &fp_opts(2000)).unwrap();
         close(b.v2, a.v2, 1e-7, "<v2>");
@@ -83,7 +83,7 @@ fn refractory_mean_to_zero_is_the_plain_protocol() {
         assert!(b.refractory_mass < 1e-8);
     }
     let plain = linear(1.0, 0.6, 1.5, 0.2);
-    let held = with_schedule(plain, None, None, Some("exp:mean=1e-9"));
+    let held = with_schedule(plain.clone(), None, None, Some("exp:mean=1e-9"));
     close(
         lin::d_eff(&held).unwrap(),
         lin::d_eff(&plain).unwrap(),
@@ -99,7 +99,7 @@ fn refractory_mean_to_zero_is_the_plain_protocol() {
 fn position_resetting_moments() {
     let plain = linear(1.0, 0.6, 1.5, 0.2);
     for refr in [None, Some("exp:mean=0.4")] {
-        let p = with_schedule(plain, None, Some(-0.3), refr);
+        let p = with_schedule(plain.clone(), None, Some(-0.3), refr);
         let (x1, x2) = lin::position_moments(&p).unwrap();
         let s = fp::stationary(&p, &fp_opts(4000)).unwrap();
         close(s.x_mean.unwrap(), x1, 2e-5, "<x>");
@@ -121,7 +121,7 @@ fn position_resetting_moments() {
 #[test]
 fn periodic_linear_moments_jump_and_relax() {
     let free = linear(1.0, 0.6, 0.0, 0.2);
-    let p = with_schedule(free, Some(1.5), None, None);
+    let p = with_schedule(free.clone(), Some(1.5), None, None);
     let ts = [0.5, 1.4999, 1.5, 2.0, 3.0, 3.7];
     let m = linear_moments::moments(&p, &ts).unwrap();
     let f = linear_moments::moments(&free, &ts).unwrap();
@@ -156,8 +156,8 @@ fn backward_refractory_identities() {
         let plain = base
             .with_reset(base.reset().target(), NoiseAtReset::Redrawn)
             .unwrap();
-        let held = with_schedule(plain, None, None, Some("exp:mean=0.3"));
-        let t0 = backward::solve(&Problem::new(plain, v0, vt).unwrap(), &opts).unwrap();
+        let held = with_schedule(plain.clone(), None, None, Some("exp:mean=0.3"));
+        let t0 = backward::solve(&Problem::new(plain.clone(), v0, vt).unwrap(), &opts).unwrap();
         let t1 = backward::solve(&Problem::new(held, v0, vt).unwrap(), &opts).unwrap();
         let factor = 1.0 + plain.rate() * 0.3;
         close(t1.tau_plus, factor * t0.tau_plus, 1e-11, "tau+");
@@ -165,18 +165,18 @@ fn backward_refractory_identities() {
         // The same for a random target below v_t (node weights summing to 1).
         let uni = Target::uniform(-0.3, 0.3);
         let plain = plain.with_reset(uni, NoiseAtReset::Redrawn).unwrap();
-        let held = with_schedule(plain, None, None, Some("exp:mean=0.3"));
+        let held = with_schedule(plain.clone(), None, None, Some("exp:mean=0.3"));
         let t0 = backward::solve(&Problem::new(plain, v0, vt).unwrap(), &opts).unwrap();
         let t1 = backward::solve(&Problem::new(held, v0, vt).unwrap(), &opts).unwrap();
         close(t1.tau, factor * t0.tau, 1e-10, "tau, uniform target");
         // Kept noise: mean -> 0 is the plain protocol.
-        let tiny = with_schedule(base, None, None, Some("exp:mean=1e-10"));
-        let a = backward::solve(&Problem::new(base, v0, vt).unwrap(), &opts).unwrap();
+        let tiny = with_schedule(base.clone(), None, None, Some("exp:mean=1e-10"));
+        let a = backward::solve(&Problem::new(base.clone(), v0, vt).unwrap(), &opts).unwrap();
         let b = backward::solve(&Problem::new(tiny, v0, vt).unwrap(), &opts).unwrap();
         close(b.tau, a.tau, 1e-8, "mean -> 0");
         // r -> 0: refractory never entered.
         let r0 = base.with_rate(0.0).unwrap();
-        let r0h = with_schedule(r0, None, None, Some("exp:mean=5"));
+        let r0h = with_schedule(r0.clone(), None, None, Some("exp:mean=5"));
         let a = backward::solve(&Problem::new(r0, v0, vt).unwrap(), &opts).unwrap();
         let b = backward::solve(&Problem::new(r0h, v0, vt).unwrap(), &opts).unwrap();
         assert_eq!(a.tau, b.tau);

@@ -289,7 +289,7 @@ fn optimize_finds_the_minimum_of_a_fine_scan() {
     let narrow = params(DragLaw::Tan, 3.0, 1.0, gauss(0.0, 0.1), NoiseAtReset::Kept);
     let sets = [
         (Problem::new(narrow, -0.249, 0.5).unwrap(), true),
-        (cases()[3], false),
+        (cases()[3].clone(), false),
     ];
     let n = 400;
     let step = (opts.r_max / opts.r_min).ln() / (n - 1) as f64;
@@ -435,7 +435,7 @@ fn narrow_gaussian_target_reproduces_the_point_target() {
 fn euler_matches_the_exact_sampler_for_a_gaussian_target() {
     let z = bonferroni_z(5);
     let p = params(DragLaw::Tan, 3.0, 2.0, gauss(0.1, 0.3), NoiseAtReset::Kept);
-    let pr = Problem::new(p, -0.249, 0.5).unwrap();
+    let pr = Problem::new(p.clone(), -0.249, 0.5).unwrap();
     let run = |seed: u64| ParticleOptions {
         particles: 10_000,
         t_max: 1e3,

@@ -530,7 +530,7 @@ fn random_target_backward_mfpt_matches_exact_sampler() {
     let z = bonferroni_z(3 * cases.len());
     for (i, (t, n)) in cases.into_iter().enumerate() {
         let p = with_target(DragLaw::Tan, 3.0, 0.9, 2.0, t, n);
-        let prob = Problem::new(p, -0.249, 0.5).unwrap();
+        let prob = Problem::new(p.clone(), -0.249, 0.5).unwrap();
         let ode = mfpt::backward::solve(&prob, &BackwardOptions::with_cells(4000)).unwrap();
         let run = ParticleOptions {
             particles: 40_000,

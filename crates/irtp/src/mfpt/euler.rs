@@ -38,7 +38,7 @@ mod scheduled;
 /// Flip and reset steps are drawn as geometric waiting times — the same
 /// Markov chain as a Bernoulli trial every step, with one random number per
 /// event instead of two per step. Targets below v_0 run in the reflected frame.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EulerFpt {
     problem: Problem,
     dt: f64,

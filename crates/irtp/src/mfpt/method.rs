@@ -83,7 +83,7 @@ impl Method {
                 exact::check_t_max(run.t_max)?;
                 exact::check_problem(problem)
             }
-            Method::Euler { dt, run } => EulerFpt::new(*problem, dt, run.t_max).map(|_| ()),
+            Method::Euler { dt, run } => EulerFpt::new(problem.clone(), dt, run.t_max).map(|_| ()),
         }
     }
 }
@@ -195,7 +195,7 @@ pub fn particle_units(
             exact::units(problem, run.t_max, run.particles, run.seed, units, progress)
         }
         Method::Euler { dt, run } => {
-            EulerFpt::new(*problem, dt, run.t_max)?.units(run.particles, units, run.seed, progress)
+            EulerFpt::new(problem.clone(), dt, run.t_max)?.units(run.particles, units, run.seed, progress)
         }
     })
 }
@@ -330,7 +330,7 @@ mod tests {
             run: run(20, 1e4),
         };
         let a = solve(&pr, &e, &NoProgress).unwrap();
-        let b = EulerFpt::new(pr, 1e-2, 1e4)
+        let b = EulerFpt::new(pr.clone(), 1e-2, 1e4)
             .unwrap()
             .stats(20, 7, &NoProgress);
         assert_eq!(a.stats(), Some(&b));

@@ -59,7 +59,7 @@ pub use survival::SurvivalCurve;
 
 /// A validated first-passage problem: model parameters, start v_0, target v_t.
 /// Built with [`Problem::new`] (also on deserialisation), so always admissible.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawProblem", into = "RawProblem")]
 pub struct Problem {
     params: Params,
@@ -68,7 +68,7 @@ pub struct Problem {
 }
 
 /// Unvalidated mirror of [`Problem`] for (de)serialisation.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RawProblem {
     /// Model parameters.
     pub params: Params,
@@ -190,7 +190,7 @@ impl Problem {
 
     /// Same problem with another target (validated).
     pub fn with_target(&self, vt: f64) -> Result<Self> {
-        Problem::new(self.params, self.v0, vt)
+        Problem::new(self.params.clone(), self.v0, vt)
     }
 
     /// True when the target lies above the start (the + state drives into it).
@@ -202,7 +202,7 @@ impl Problem {
     /// and whether the ± labels were swapped.
     pub fn canonical(&self) -> (Problem, bool) {
         if self.upward() {
-            (*self, false)
+            (self.clone(), false)
         } else {
             let p = self.params.mirrored_reset();
             (

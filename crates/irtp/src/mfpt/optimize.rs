@@ -21,7 +21,7 @@ pub enum ScanAxis {
 }
 
 /// One point of a scan.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScanPoint {
     /// The scanned value (v_t or r).
     pub x: f64,
@@ -76,7 +76,7 @@ pub fn scan(
             };
             Ok(ScanPoint {
                 x,
-                problem: *p,
+                problem: p.clone(),
                 solution,
             })
         })

@@ -2,6 +2,7 @@
 
 use super::drag::{Drag, DragLaw};
 use super::noise::{chain::Chain, NoiseModel};
+use std::sync::Arc;
 use super::reset::{
     spec, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule, Schedule,
     Solver, Target,
@@ -19,7 +20,7 @@ use serde::{Deserialize, Serialize};
 /// not run it refuses it in [`Params::require`].
 ///
 /// Construct with [`Params::new`]; every field is then guaranteed admissible.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawParams", into = "RawParams")]
 pub struct Params {
     drag: DragLaw,
@@ -28,9 +29,9 @@ pub struct Params {
     reset: ResetRule,
     schedule: Schedule,
     /// None: the paper's symmetric telegraph noise ±sigma at rate lambda,
-    /// no thermal noise. Some: any other noise model (interned, so that
-    /// `Params` stays `Copy`; [`NoiseModel::intern`]).
-    noise: Option<&'static NoiseModel>,
+    /// no thermal noise. Some: any other noise model (shared by the
+    /// parameters derived from these: [`Params::with_rate`], ...).
+    noise: Option<Arc<NoiseModel>>,
 }
 
 /// Unvalidated mirror of [`Params`] used for (de)serialisation.
@@ -130,8 +131,8 @@ impl From<Params> for RawParams {
             reset_clock: p.schedule.clock.map(|c| c.spec()),
             reset_position: p.schedule.position.map(|x| x.x),
             refractory: p.schedule.refractory.map(|r| r.spec()),
-            noise: p.noise.map(|m| m.spec()),
-            temperature: p.noise.map(|m| m.temperature()),
+            noise: p.noise.as_ref().map(|m| m.spec()),
+            temperature: p.noise.as_ref().map(|m| m.temperature()),
         }
     }
 }
@@ -256,19 +257,19 @@ impl Params {
                 velocity: reset_velocity,
             }),
             schedule: Schedule::default(),
-            noise: Some(noise.intern()),
+            noise: Some(Arc::new(noise)),
         })
     }
 
     /// The noise model other than the paper's: None for the symmetric
     /// telegraph noise ±sigma at rate lambda without thermal noise.
-    pub fn noise(&self) -> Option<&'static NoiseModel> {
-        self.noise
+    pub fn noise(&self) -> Option<&NoiseModel> {
+        self.noise.as_deref()
     }
 
     /// The noise model, the paper's included.
     pub fn noise_model(&self) -> Result<NoiseModel> {
-        match self.noise {
+        match self.noise() {
             Some(m) => Ok(m.clone()),
             None => NoiseModel::telegraph(self.sigma, self.lambda),
         }
@@ -278,7 +279,7 @@ impl Params {
     /// another rate and reset velocity (the resetting rule's point target,
     /// noise kept).
     fn rebuilt(&self, rate: f64, reset_velocity: f64) -> Result<Self> {
-        match self.noise {
+        match self.noise() {
             None => Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity),
             Some(m) => Params::with_noise(self.drag, m.clone(), rate, reset_velocity),
         }
@@ -297,7 +298,7 @@ impl Params {
 
     /// Same parameters with another flip rate (validated).
     pub fn with_lambda(&self, lambda: f64) -> Result<Self> {
-        if let Some(m) = self.noise {
+        if let Some(m) = self.noise() {
             return Err(Error::invalid(
                 "lambda",
                 lambda,
@@ -361,7 +362,7 @@ impl Params {
                 noise,
             }),
         };
-        Ok(Params { reset, ..*self })
+        Ok(Params { reset, ..self.clone() })
     }
 
     /// Same parameters with the modifiers of the resetting rule (periodic
@@ -388,7 +389,7 @@ impl Params {
                  clock; its law exp is the Poisson clock as a renewal clock)",
             ));
         }
-        Ok(Params { schedule, ..*self })
+        Ok(Params { schedule, ..self.clone() })
     }
 
     /// The modifiers of the resetting rule.
@@ -475,15 +476,15 @@ impl Params {
     /// model other than the paper's mirrored too
     /// ([`NoiseModel::mirrored`]: every level negated, state for state).
     pub fn mirrored_reset(&self) -> Self {
-        let noise = self.noise.map(|m| match m.mirrored() {
-            Ok(n) => n.intern(),
+        let noise = self.noise.as_ref().map(|m| match m.mirrored() {
+            Ok(n) => Arc::new(n),
             // The mirror of a valid generator is valid.
-            Err(_) => m,
+            Err(_) => Arc::clone(m),
         });
         Params {
             reset: self.reset.mirrored(),
             noise,
-            ..*self
+            ..self.clone()
         }
     }
 
@@ -492,7 +493,7 @@ impl Params {
     /// ([`NoiseModel::velocity_interval`], Eq. (N1); ∞ with thermal noise
     /// and an unbounded drag).
     pub fn v_upper(&self) -> f64 {
-        match self.noise {
+        match self.noise() {
             None => self.drag.inverse(self.sigma),
             Some(m) => {
                 let (lo, hi) = m.velocity_interval(&self.drag);
@@ -510,7 +511,7 @@ impl Params {
         Params {
             drag: DragLaw::Linear,
             sigma: self.v_upper(),
-            ..*self
+            ..self.clone()
         }
     }
     /// Lower velocity bound v_l = -v_u.
@@ -547,7 +548,7 @@ impl Params {
     /// without thermal noise (asymmetric for an asymmetric noise), the
     /// drag's own domain (±∞ for an unbounded law) with T > 0.
     pub fn bounds(&self) -> (f64, f64) {
-        match self.noise {
+        match self.noise() {
             None => (self.v_lower(), self.v_upper()),
             Some(m) => m.velocity_interval(&self.drag),
         }

@@ -318,7 +318,7 @@ impl Setup {
             Some(solver) => crate::capability::check(solver, problem.params())?,
             None => super::noise_gate(problem, method)?,
         }
-        let p = *problem.params();
+        let p = problem.params().clone();
         let s = p.schedule();
         // A random target enters through its node weights; meshes put a
         // node at its centre.

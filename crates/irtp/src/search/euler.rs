@@ -148,7 +148,7 @@ impl EulerNoise for StepChain {
 
 /// The Euler search sampler of one problem and step (build with
 /// [`SearchEuler::new`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SearchEuler {
     problem: SearchProblem,
     dt: f64,
@@ -204,7 +204,7 @@ impl SearchEuler {
             ));
         }
         Ok(SearchEuler {
-            problem: *problem,
+            problem: problem.clone(),
             dt,
             t_max,
         })

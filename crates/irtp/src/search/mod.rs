@@ -83,7 +83,7 @@ impl PositionTarget {
 }
 
 /// A validated search problem (build with SearchProblem::new).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawSearchProblem", into = "RawSearchProblem")]
 pub struct SearchProblem {
     params: Params,
@@ -93,7 +93,7 @@ pub struct SearchProblem {
 }
 
 /// Unvalidated mirror of [`SearchProblem`] for (de)serialisation.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RawSearchProblem {
     /// Model parameters.
     pub params: Params,
@@ -233,12 +233,12 @@ impl SearchProblem {
 
     /// Same problem from another start position (validated).
     pub fn with_start(&self, x0: f64) -> Result<Self> {
-        SearchProblem::new(self.params, x0, self.v0, self.target)
+        SearchProblem::new(self.params.clone(), x0, self.v0, self.target)
     }
 
     /// Same problem with another target (validated).
     pub fn with_target(&self, target: PositionTarget) -> Result<Self> {
-        SearchProblem::new(self.params, self.x0, self.v0, target)
+        SearchProblem::new(self.params.clone(), self.x0, self.v0, target)
     }
 
     /// True when the mean search time is finite: see

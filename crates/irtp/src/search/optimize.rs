@@ -102,10 +102,10 @@ pub fn scan(
         .iter()
         .zip(values)
         .zip(sols)
-        .map(|((&problem, &x), s)| {
+        .map(|((problem, &x), s)| {
             Ok(SearchScanPoint {
                 x,
-                problem,
+                problem: problem.clone(),
                 solution: s?,
             })
         })

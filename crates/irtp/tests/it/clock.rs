@@ -338,7 +338,7 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
     let mut resolved = std::collections::BTreeSet::new();
     for (i, &(drag, sigma, spec)) in cases.iter().enumerate() {
         let p = full_reset(drag, sigma, 0.5, 0.0, sched(None, Some(0.0), Some(spec)));
-        let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+        let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
         let route = match renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts) {
             Ok(route) => route,
             Err(e @ irtp::Error::Numerical { .. })
@@ -413,7 +413,7 @@ fn renewal_route_on_an_infinite_mean_law() {
         sched(None, Some(0.0), Some("pareto:alpha=0.8,scale=0.5")),
     );
     let waiting = WaitingTime::of(&p).unwrap();
-    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     let s = renewal::solve(&problem, &waiting, &Default::default()).unwrap();
     assert!(s.infinite_mean && s.tau == f64::INFINITY, "{s:?}");
     assert!(!problem.mean_is_finite());

@@ -50,7 +50,7 @@ fn held_distribution_mean_matches_backward_tau() {
         ("point", held(paper(), 0.5)),
         ("uniform", uniform(held(paper(), 0.5))),
     ] {
-        let d = solve(p, &[0.0, 1.0, 2.0], 2000);
+        let d = solve(p.clone(), &[0.0, 1.0, 2.0], 2000);
         let prob = Problem::new(p, 0.0, 0.5).unwrap();
         let b = mfpt::backward::solve(&prob, &BackwardOptions::with_cells(8000)).unwrap();
         let tol = d.mean_error + b.error_estimate + d.tail_mass * d.t_end;
@@ -78,7 +78,7 @@ fn held_distribution_mean_matches_backward_tau() {
 #[test]
 fn held_distribution_survival_matches_exact_sampler() {
     let p = held(paper(), 0.5);
-    let prob = Problem::new(p, 0.0, 0.5).unwrap();
+    let prob = Problem::new(p.clone(), 0.0, 0.5).unwrap();
     let run = ParticleOptions {
         particles: 40_000,
         t_max: 1e4,

@@ -274,7 +274,7 @@ fn rejects_bad_problems() {
         // v_r = 0 (the default) below vt, v0 above: the start is blamed.
         (0.3, 0.2, "v0"),
     ] {
-        match Problem::new(p, v0, vt) {
+        match Problem::new(p.clone(), v0, vt) {
             Err(irtp::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name, "{v0} {vt}"),
             other => panic!("{v0} {vt}: {other:?}"),
         }

@@ -22,7 +22,7 @@ fn problems(c: &NoiseCase) -> [Problem; 2] {
     let (lo, hi) = (lo.max(-3.0), hi.min(3.0));
     let v0 = c.reset_velocity;
     [
-        Problem::new(p, v0, v0 + 0.6 * (hi - v0)).unwrap(),
+        Problem::new(p.clone(), v0, v0 + 0.6 * (hi - v0)).unwrap(),
         Problem::new(p, v0, v0 + 0.4 * (lo - v0)).unwrap(),
     ]
 }

@@ -48,7 +48,7 @@ fn euler_first_passage_with_a_noise_model_extrapolates_to_exact_under_each_modif
     for (c, (name, p)) in cases.iter().enumerate() {
         let seed = 10 * c as u64;
         let run = |dt: f64, seed: u64| {
-            let e = EulerFpt::new(*p, dt, t_max).unwrap();
+            let e = EulerFpt::new(p.clone(), dt, t_max).unwrap();
             e.stats(n, seed, &NoProgress).summary()
         };
         let ex = extrapolate(&run(dt, seed + 1), &run(dt / 2.0, seed + 2));

@@ -739,7 +739,7 @@ fn params_carry_another_noise_and_every_solver_refuses_it() {
             );
         }
         // The backward equations run every noise model (mfpt::backward).
-        assert!(irtp::mfpt::Problem::new(p, 0.0, 0.5).is_ok());
+        assert!(irtp::mfpt::Problem::new(p.clone(), 0.0, 0.5).is_ok());
         // A search admits a noise model at T = 0 (its methods decide at
         // `search::noise_gate`) and refuses thermal noise with the problem.
         let search = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Interval(-1.0, 1.0));

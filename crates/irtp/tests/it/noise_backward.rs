@@ -46,7 +46,7 @@ fn paper_as_states_matches_the_two_state_solver() {
         let drag: DragLaw = c.drag.parse().unwrap();
         let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
         for p in [upward(c), downward(c)] {
-            let q = Problem::new(two, p.v0(), p.vt()).unwrap();
+            let q = Problem::new(two.clone(), p.v0(), p.vt()).unwrap();
             let opts = BackwardOptions::with_cells(20_000);
             let reference = irtp::mfpt::backward::solve(&q, &opts).unwrap();
             let n = solve(&p, 20_000);

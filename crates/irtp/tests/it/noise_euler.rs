@@ -419,7 +419,7 @@ fn ou_first_passage_matches_siegert_and_the_backward_solve() {
         let seed = 700 + 10 * k as u64;
         let dt = 0.02;
         let st = |dt: f64, s: u64| {
-            EulerFpt::new(pr, dt, 1e4)
+            EulerFpt::new(pr.clone(), dt, 1e4)
                 .unwrap()
                 .stats(n, s, &NoProgress)
                 .summary()

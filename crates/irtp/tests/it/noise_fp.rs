@@ -139,7 +139,7 @@ fn paper_as_states_matches_the_two_state_solver() {
         ] {
             seen += 1;
             let (p, q) = match rule {
-                None => (c.params(), two),
+                None => (c.params(), two.clone()),
                 Some((t, w)) => (
                     c.params().with_reset(t, w).unwrap(),
                     two.with_reset(t, w).unwrap(),

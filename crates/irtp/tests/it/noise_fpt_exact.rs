@@ -31,7 +31,7 @@ fn problems(c: &NoiseCase) -> [Problem; 2] {
     let v0 = c.reset_velocity;
     let p = c.params();
     [
-        Problem::new(p, v0, v0 + 0.6 * (hi - v0)).expect("upward problem"),
+        Problem::new(p.clone(), v0, v0 + 0.6 * (hi - v0)).expect("upward problem"),
         Problem::new(p, v0, v0 + 0.4 * (lo - v0)).expect("downward problem"),
     ]
 }
@@ -136,7 +136,7 @@ fn paper_as_states_has_the_two_state_samplers_law() {
         let drag: DragLaw = c.drag.parse().unwrap();
         let two = Params::new(drag, 1.0, 0.5, c.rate, c.reset_velocity).unwrap();
         for p in problems(c) {
-            let q = Problem::new(two, p.v0(), p.vt()).unwrap();
+            let q = Problem::new(two.clone(), p.v0(), p.vt()).unwrap();
             let a = sampled(&p, 20_000, 8300, c.name);
             let b = sampled(&q, 20_000, 8301, c.name);
             let z = (a.tau - b.tau) / a.tau_err.hypot(b.tau_err);
@@ -189,7 +189,7 @@ fn exact_passage_with_noise_is_identical_across_threads_and_shards() {
 }
 
 fn refused_name(p: &Params, v0: f64, vt: f64) -> &'static str {
-    let pr = Problem::new(*p, v0, vt).unwrap();
+    let pr = Problem::new(p.clone(), v0, vt).unwrap();
     match mfpt::solve(&pr, &exact(10, 1), &NoProgress) {
         Err(e) if e.parameter().is_some() => e.parameter().unwrap(),
         other => panic!("not refused by name: {other:?}"),

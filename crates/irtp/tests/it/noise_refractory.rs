@@ -98,7 +98,7 @@ fn the_hold_scales_the_plain_density() {
         let (r, m) = (2.0, 0.5);
         let plain = noise(RPT, r, 0.0).with_reset(target, rule).unwrap();
         let a = stationary(&plain, &opts(2000)).unwrap();
-        let b = stationary(&held(plain, m), &opts(2000)).unwrap();
+        let b = stationary(&held(plain.clone(), m), &opts(2000)).unwrap();
         let scale = 1.0 / (1.0 + r * m);
         assert!((b.refractory_mass - r * m * scale).abs() < 1e-14);
         let held = &b.noise.as_ref().unwrap().held;
@@ -194,7 +194,7 @@ fn backward_redrawn_hold_scales_tau() {
     let plain = noise(RPT, r, 0.0)
         .with_reset(Target::point(0.0), NoiseAtReset::Redrawn)
         .unwrap();
-    let a = backward(&Problem::new(plain, 0.0, 0.5).unwrap());
+    let a = backward(&Problem::new(plain.clone(), 0.0, 0.5).unwrap());
     let b = backward(&Problem::new(held(plain, m), 0.0, 0.5).unwrap());
     let want = (1.0 + r * m) * a;
     assert!((b - want).abs() <= 1e-12 * want, "{b} vs {want}");

@@ -355,7 +355,7 @@ fn periodic_resetting_by_renewal() {
         .unwrap()
         .with_schedule(schedule)
         .unwrap();
-    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     let waiting = WaitingTime::of(&p).unwrap();
     assert_eq!(waiting, WaitingTime::Periodic { period: 2.0 });
     let run = |steps| {
@@ -462,7 +462,7 @@ fn refusals_name_the_parameter() {
 /// Full resetting with another protocol: the direct solve and the renewal
 /// route on one mesh agree (as in `direct_vs_renewal`).
 fn routes_agree(p: Params, target: PositionTarget) -> f64 {
-    let problem = SearchProblem::new(p, 0.0, 0.0, target).unwrap();
+    let problem = SearchProblem::new(p.clone(), 0.0, 0.0, target).unwrap();
     let d = solve(
         &problem,
         &BackwardOptions {
@@ -493,8 +493,8 @@ fn redrawn_noise_routes_agree() {
     let p = full("linear", 1.0, 0.5, 0.3, 0.0, 0.0)
         .with_reset(Target::point(0.0), NoiseAtReset::Redrawn)
         .unwrap();
-    let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
-    routes_agree(p, PositionTarget::Level(1.0));
+    let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    routes_agree(p.clone(), PositionTarget::Level(1.0));
     let opts = RenewalOptions {
         cells_x: 16,
         cells_v: 8,
@@ -541,7 +541,7 @@ fn random_target_routes_agree() {
 fn mirror_symmetry_and_no_resets() {
     let p = full("tan", 3.0, 0.5, 1.0, 0.0, 0.0);
     let opts = BackwardOptions::with_cells(16, 8);
-    let up = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let up = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     let down = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(-1.0)).unwrap();
     let (u, d) = (solve(&up, &opts).unwrap(), solve(&down, &opts).unwrap());
     assert!(
@@ -560,7 +560,7 @@ fn mirror_symmetry_and_no_resets() {
     let rd = renewal::solve(&down, &poisson, &ropts).unwrap();
     assert!((ru.tau - rd.tau).abs() <= 1e-9 * ru.tau);
     let free = Params::new(DragLaw::Tanh, 0.6, 0.5, 0.0, 0.0).unwrap();
-    let pr = SearchProblem::new(free, 0.1, 0.2, PositionTarget::Interval(-0.5, 0.5)).unwrap();
+    let pr = SearchProblem::new(free.clone(), 0.1, 0.2, PositionTarget::Interval(-0.5, 0.5)).unwrap();
     assert!(pr.mean_is_finite());
     let s = solve(&pr, &BackwardOptions::with_cells(16, 16)).unwrap();
     assert!(s.reset_values.is_none() && s.truncation_error == 0.0);

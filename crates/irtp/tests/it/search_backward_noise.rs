@@ -213,7 +213,7 @@ fn euler_mean(p: &Params, r: f64, dt: f64, n: usize, seed: u64) -> (f64, f64) {
 fn rpt_noise_matches_euler_particles() {
     let r = 0.5;
     let p = params(DragLaw::Linear, 1.0, Some("rpt:sigma=1,alpha=1,beta=2"), r);
-    let s = search(p, PositionTarget::Level(1.0), (32, 16));
+    let s = search(p.clone(), PositionTarget::Level(1.0), (32, 16));
     let n = 20_000;
     let (coarse, se_c) = euler_mean(&p, r, 0.02, n, 11);
     let (fine, se_f) = euler_mean(&p, r, 0.01, n, 12);

@@ -115,13 +115,13 @@ fn reported_errors_bound_a_finer_solve_over_drags_and_rates() {
 /// Each case solved on 16 x 8 (checked ladder) and on 64 x 32: the gap
 /// within the two error estimates, or the coarse solve refused (exit 4).
 fn coarse_within_finer(cases: &[SearchProblem]) {
-    for &pr in cases {
-        let fine = if pr == tan_up() {
+    for pr in cases {
+        let fine = if *pr == tan_up() {
             tan_up_default().clone()
         } else {
-            backward::solve(&pr, &BackwardOptions::with_cells(64, 32)).unwrap()
+            backward::solve(pr, &BackwardOptions::with_cells(64, 32)).unwrap()
         };
-        match backward::solve(&pr, &BackwardOptions::with_cells(16, 8)) {
+        match backward::solve(pr, &BackwardOptions::with_cells(16, 8)) {
             Ok(coarse) => {
                 let gap = (coarse.tau - fine.tau).abs();
                 assert!(

@@ -51,15 +51,15 @@ fn euler_with_a_refractory_period_matches_the_exact_sampler() {
     let rpt = NoiseModel::parse("rpt:sigma=1,alpha=1,beta=2", 0.0).unwrap();
     let rpt = Params::with_noise(DragLaw::Linear, rpt, 0.5, 0.0).unwrap();
     let cases = [
-        (paper, "exp:mean=0.5", ""),
-        (paper, "fixed:t=0.5", ""),
+        (paper.clone(), "exp:mean=0.5", ""),
+        (paper.clone(), "fixed:t=0.5", ""),
         (rpt, "exp:mean=0.5", ""),
-        (paper, "", "gamma:k=2,theta=0.5"),
+        (paper.clone(), "", "gamma:k=2,theta=0.5"),
         (paper, "fixed:t=0.3", "gamma:k=2,theta=0.5"),
     ];
     let z = bonferroni_z(cases.len());
     for (k, (params, hold, clock)) in cases.into_iter().enumerate() {
-        let pr = problem(params, hold, clock);
+        let pr = problem(params.clone(), hold, clock);
         let seed = 500 + 2 * k as u64;
         let (tau, se) = match search::solve(&pr, &SearchMethod::Exact(run(seed)), &NoProgress) {
             Ok(SearchResult::Particles(r)) => {

@@ -71,7 +71,7 @@ fn crossing_is_exact_against_the_linear_closed_form() {
         ),
     ];
     for (i, &(x0, v0, target, plus, s, dist)) in cases.iter().enumerate() {
-        let pr = SearchProblem::new(p, x0, v0, target).unwrap();
+        let pr = SearchProblem::new(p.clone(), x0, v0, target).unwrap();
         let sampler = SearchSampler::new(&irtp::model::drag::Linear, &pr).unwrap();
         let mut r = rng::stream(3, i as u64);
         let (t, events) = sampler.run(x0, v0, plus, 1e6, &mut r);
@@ -172,11 +172,11 @@ fn the_mean_is_classified_and_tau_withheld_when_infinite() {
     let full = p
         .with_schedule(Schedule::parse(None, Some(0.0), None).unwrap())
         .unwrap();
-    assert!(!level(p, 0.0, 0.0, 0.3).mean_is_finite());
+    assert!(!level(p.clone(), 0.0, 0.0, 0.3).mean_is_finite());
     assert!(level(full, 0.0, 0.0, 0.3).mean_is_finite());
-    let iv = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Interval(-0.3, 0.2)).unwrap();
+    let iv = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Interval(-0.3, 0.2)).unwrap();
     assert!(iv.mean_is_finite());
-    let res = solve(&level(p, 0.0, 0.0, 0.3), &exact(400, 50.0, 1));
+    let res = solve(&level(p.clone(), 0.0, 0.0, 0.3), &exact(400, 50.0, 1));
     assert!(res.tau().is_nan() && !res.mean_is_finite);
     let res = solve(&iv, &exact(400, f64::INFINITY, 1));
     assert!(res.tau().is_finite() && res.tail.is_none());
@@ -281,7 +281,7 @@ fn passage_times_respect_the_speed_limit_and_survival_is_monotone() {
             (PositionTarget::Interval(-0.25, 0.35), 0.25),
         ];
         for (j, &(target, dist)) in targets.iter().enumerate() {
-            let pr = SearchProblem::new(p, 0.0, 0.1 * p.v_upper(), target).unwrap();
+            let pr = SearchProblem::new(p.clone(), 0.0, 0.1 * p.v_upper(), target).unwrap();
             let bound = dist / vmax;
             irtp::with_drag!(p.drag(), |d| {
                 let sampler = SearchSampler::new(d, &pr).unwrap();
@@ -318,7 +318,7 @@ fn bad_problems_are_refused_naming_the_parameter() {
         Error::InvalidParameter { name, .. } => name,
         e => panic!("{e}"),
     };
-    let new = |x0: f64, v0: f64, t: PositionTarget| SearchProblem::new(p, x0, v0, t);
+    let new = |x0: f64, v0: f64, t: PositionTarget| SearchProblem::new(p.clone(), x0, v0, t);
     use PositionTarget::{Interval, Level};
     assert_eq!(name(new(f64::NAN, 0.0, Level(1.0))), "x0");
     assert_eq!(name(new(0.0, f64::NAN, Level(1.0))), "v0");
@@ -460,8 +460,8 @@ fn exact_sampler_agrees_with_an_euler_walk_under_every_modifier() {
 #[test]
 fn a_drift_from_the_reset_velocity_makes_the_mean_finite() {
     let p = Params::new(DragLaw::Tanh, 0.6, 1.0, 2.0, 0.3).unwrap();
-    let ahead = level(p, 0.0, 0.0, 1.0);
-    let behind = level(p, 0.0, 0.0, -1.0);
+    let ahead = level(p.clone(), 0.0, 0.0, 1.0);
+    let behind = level(p.clone(), 0.0, 0.0, -1.0);
     assert!(ahead.mean_is_finite() && !behind.mean_is_finite());
     let still = level(p.with_reset_velocity(0.0).unwrap(), 0.0, 0.0, 1.0);
     assert!(!still.mean_is_finite());

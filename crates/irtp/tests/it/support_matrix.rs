@@ -270,7 +270,7 @@ fn tau_particles(prob: &Problem, method: Method) -> Est {
 /// The MFPT by every listed method: (method, estimate).
 fn tau_all(p: &Params, seed: u64) -> Vec<(&'static str, Est)> {
     let vu = p.v_upper();
-    let prob = Problem::new(*p, -0.2 * vu, 0.4 * vu).unwrap();
+    let prob = Problem::new(p.clone(), -0.2 * vu, 0.4 * vu).unwrap();
     let run = |particles, seed| ParticleOptions {
         particles,
         t_max: f64::INFINITY,

@@ -381,7 +381,7 @@ impl StationarySpace for MeshSolution {
             held: fine.hold.as_ref().map_or_else(Vec::new, |h| h.q.clone()),
         };
         Ok(Stationary {
-            params: *params,
+            params: params.clone(),
             mesh: opts.mesh,
             cells: n,
             grading: mesh.grading,

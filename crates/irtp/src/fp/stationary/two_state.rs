@@ -106,7 +106,7 @@ impl StationarySpace for TwoState {
         let p_minus: Vec<f64> = m.iter().zip(&g.widths).map(|(c, h)| c[1] / h).collect();
         let p = p_plus.iter().zip(&p_minus).map(|(a, b)| a + b).collect();
         Ok(Stationary {
-            params: *params,
+            params: params.clone(),
             mesh: opts.mesh,
             cells: opts.cells,
             grading: g.grading,

@@ -184,7 +184,7 @@ pub(super) fn transient(
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(Transient {
-        params: *p,
+        params: p.clone(),
         scheme: o.scheme,
         mesh: Mesh::Graded,
         cells: o.cells,

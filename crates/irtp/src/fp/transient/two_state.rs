@@ -202,7 +202,7 @@ pub(super) fn trbdf2(
     let (mut v2, v2_mesh_error) = extrapolate(times, &fine.v2, &half.v2, &quarter.v2);
     check_resolved(params, times, &mut v2, &v2_mesh_error)?;
     Ok(Transient {
-        params: *params,
+        params: params.clone(),
         scheme: Scheme::TrBdf2,
         mesh: Mesh::Graded,
         cells: opts.cells,
@@ -390,7 +390,7 @@ impl Transient {
         ns: usize,
     ) -> Self {
         Transient {
-            params: *params,
+            params: params.clone(),
             scheme,
             mesh: scheme.mesh(),
             cells: g.cells(),

@@ -369,7 +369,7 @@ impl Setup {
     /// thermal generator of the distribution, every state absorbed).
     pub(crate) fn on_mesh(cp: &Problem, chain: &Chain, mesh: &Mesh) -> Setup {
         Setup {
-            p: *cp,
+            p: cp.clone(),
             swapped: false,
             space: Box::new(Finite(chain.clone())),
             lower: mesh.v[0],

@@ -78,27 +78,6 @@ impl NoiseModel {
         Self::new(noise.parse()?, temperature)
     }
 
-    /// This model as a `&'static` reference, one per distinct (spec,
-    /// temperature) in the process: [`crate::Params`] carries its noise so
-    /// and stays `Copy`. Each distinct model is allocated once and kept for
-    /// the life of the process (a sweep holds as many as it has distinct
-    /// noise values).
-    pub fn intern(self) -> &'static NoiseModel {
-        use std::sync::Mutex;
-        static TABLE: Mutex<Vec<&'static NoiseModel>> = Mutex::new(Vec::new());
-        let key = (self.spec(), self.temperature.to_bits());
-        let mut table = TABLE.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(m) = table
-            .iter()
-            .find(|m| (m.spec(), m.temperature.to_bits()) == key)
-        {
-            return m;
-        }
-        let m: &'static NoiseModel = Box::leak(Box::new(self));
-        table.push(m);
-        m
-    }
-
     /// The noise under v → -v: the same generator with every level
     /// negated, state for state (state s of the mirror is state s here), as
     /// a `states` noise (`none` is its own mirror). Downward first
