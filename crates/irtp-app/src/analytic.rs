@@ -175,7 +175,7 @@ pub fn run(args: &AnalyticArgs, ctx: &Context) -> irtp::Result<Outcome> {
         .map(|v| [v, d.pdf(v), d.cdf(v)]);
     let density = Table::from_rows("density", &["v", "p", "cdf"], rows);
     let run = RunParams {
-        drag: report.drag,
+        drag: report.drag.clone(),
         sigma: report.sigma,
         lambda: report.lambda,
         rate: report.rate,

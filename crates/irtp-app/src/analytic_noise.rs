@@ -108,7 +108,7 @@ pub(crate) fn run(
         None => Vec::new(),
     };
     let run = RunParams {
-        drag: report.drag,
+        drag: report.drag.clone(),
         noise: report.noise.clone(),
         temperature: report.temperature,
         rate: report.rate,

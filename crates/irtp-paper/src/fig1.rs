@@ -17,7 +17,7 @@ use irtp::sim::{SimSpec, TimeGrid};
 use serde::Serialize;
 
 /// A medium: drag law and noise amplitude.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct Medium {
     /// Drag law.
     pub drag: DragLaw,
@@ -146,10 +146,10 @@ fn compute_curve(
     opts: &Options,
     progress: &dyn Progress,
 ) -> Result<Curve> {
-    let (m, r) = (spec.media[mi], spec.rates[ri]);
+    let (m, r) = (spec.media[mi].clone(), spec.rates[ri]);
     let k = mi * spec.rates.len() + ri;
     let (t_max, burn_in) = (spec.t_max[mi], spec.burn_in[mi]);
-    let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
+    let params = Params::new(m.drag.clone(), m.sigma, spec.lambda, r, spec.reset_velocity)?;
     let sim_spec = SimSpec::new(
         spec.particles,
         TimeGrid::linear(t_max, spec.samples)?,
@@ -171,7 +171,7 @@ fn compute_curve(
     }
     let s = obs.summary();
     let stationary = Stationary {
-        drag: m.drag,
+        drag: m.drag.clone(),
         sigma: m.sigma,
         r,
         v2_sim_time_avg: s.v2,

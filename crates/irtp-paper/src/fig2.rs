@@ -368,7 +368,7 @@ pub fn compute(
     let n_stages = spec.lambdas.len() * spec.rates.len();
     let mut panels = Vec::new();
     for (li, &lambda) in spec.lambdas.iter().enumerate() {
-        let p0 = Params::new(spec.drag, spec.sigma, lambda, 0.0, spec.reset_velocity)?;
+        let p0 = Params::new(spec.drag.clone(), spec.sigma, lambda, 0.0, spec.reset_velocity)?;
         let curves = (0..spec.rates.len())
             .map(|ri| {
                 let k = li * spec.rates.len() + ri;
@@ -386,7 +386,7 @@ pub fn compute(
     Ok(Data {
         which,
         panels,
-        g_prime_edge: g_prime_edge(&Params::new(spec.drag, spec.sigma, 1.0, 0.0, 0.0)?),
+        g_prime_edge: g_prime_edge(&Params::new(spec.drag.clone(), spec.sigma, 1.0, 0.0, 0.0)?),
         scan: edge_max_scan(medium, spec)?,
     })
 }
@@ -569,7 +569,7 @@ fn edge_max_scan(medium: Medium, spec: &Spec) -> Result<Option<EdgeMaxScan>> {
         return Ok(None);
     }
     let p_first = Params::new(
-        spec.drag,
+        spec.drag.clone(),
         spec.sigma,
         spec.lambdas[0],
         0.0,
@@ -596,7 +596,7 @@ fn edge_max_scan(medium: Medium, spec: &Spec) -> Result<Option<EdgeMaxScan>> {
 /// Draw Fig. 2/3: points (simulation), lines (FP), black (analytic r = 0).
 pub fn plot(spec: &Spec, data: &Data) -> Figure {
     let m = super::fig1::Medium {
-        drag: spec.drag,
+        drag: spec.drag.clone(),
         sigma: spec.sigma,
     };
     let mut fig = Figure::new(
@@ -877,7 +877,7 @@ mod tests {
             (DragLaw::Tan, 3.0, 0.9, 1.0),
             (DragLaw::Tanh, 0.6, 3.0, 5.0),
         ] {
-            let p = Params::new(d, s, l, r, 0.0).unwrap();
+            let p = Params::new(d.clone(), s, l, r, 0.0).unwrap();
             let fp = compute::fp_stationary(&p, 20_000).unwrap();
             let sc = s / (l + r);
             let (a, b) = one_sided_slopes(&fp.v, &fp.p, 1e-3 * sc, 0.02 * sc);

@@ -172,7 +172,7 @@ fn compute_curve(
     opts: &Options,
     progress: &dyn Progress,
 ) -> Result<Curve> {
-    let (m, r) = (spec.media[mi], spec.rates[ri]);
+    let (m, r) = (spec.media[mi].clone(), spec.rates[ri]);
     let k = mi * spec.rates.len() + ri;
     let params = Params::new(m.drag, m.sigma, spec.lambda, r, spec.reset_velocity)?;
     let times = TimeGrid::log(spec.t_min, spec.t_max, spec.samples)?

@@ -274,7 +274,7 @@ pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<V
         spec.lambdas.len(),
         progress,
         |mi, li, stage| {
-            let (m, lambda) = (spec.media[mi], spec.lambdas[li]);
+            let (m, lambda) = (spec.media[mi].clone(), spec.lambdas[li]);
             let base = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
             let exact: Vec<f64> = spec
                 .line_rates
@@ -451,7 +451,7 @@ pub fn claims(spec: &Spec, curves: &[Vec<Curve>]) -> Vec<Claim> {
         .media
         .iter()
         .zip(curves)
-        .map(|(m, row)| exponent_claim(spec, m.drag, row))
+        .map(|(m, row)| exponent_claim(spec, m.drag.clone(), row))
         .collect();
     let all: Vec<&Point> = curves.iter().flatten().flat_map(|c| &c.points).collect();
     let worst_z = all.iter().map(|a| a.z.abs()).fold(0.0, f64::max);

@@ -265,7 +265,7 @@ fn compute_curve(
 ) -> Result<Curve> {
     let v0 = spec.v0;
     // (a)/(c): tau against v_t - v_0 at rate m.rate.
-    let pr = Params::new(m.drag, m.sigma, lambda, m.rate, spec.reset_velocity)?;
+    let pr = Params::new(m.drag.clone(), m.sigma, lambda, m.rate, spec.reset_velocity)?;
     let mut vs_target = Line {
         x: m.targets.iter().map(|&vt| vt - v0).collect(),
         tau: m
@@ -281,7 +281,7 @@ fn compute_curve(
         }
     }
     // (b)/(d): tau against r at target m.target.
-    let p0 = Params::new(m.drag, m.sigma, lambda, 0.0, spec.reset_velocity)?;
+    let p0 = Params::new(m.drag.clone(), m.sigma, lambda, 0.0, spec.reset_velocity)?;
     let mut vs_rate = Line {
         x: m.rates.clone(),
         tau: m
@@ -304,7 +304,7 @@ fn compute_curve(
         vs_rate,
         tau0: compute::mfpt(&p0, v0, m.target)?,
         optimum: Optimum {
-            drag: m.drag,
+            drag: m.drag.clone(),
             sigma: m.sigma,
             lambda,
             vt: m.target,
@@ -342,7 +342,7 @@ pub fn plot(spec: &Spec, curves: &[Vec<Curve>]) -> Figure {
     zoom.key = vec![Key::line("τ_{r} = τ_{0}", Color::Gray, Dash::Dotted)];
     for (mi, (m, row)) in spec.media.iter().zip(curves).enumerate() {
         let med = super::fig1::Medium {
-            drag: m.drag,
+            drag: m.drag.clone(),
             sigma: m.sigma,
         };
         let mut pa = Panel::new(

@@ -157,7 +157,7 @@ pub struct MediumResult {
 }
 
 fn params(spec: &Spec, m: &Medium, lambda: f64, r: f64) -> Result<Params> {
-    Params::new(m.drag, m.sigma, lambda, r, spec.reset_velocity)
+    Params::new(m.drag.clone(), m.sigma, lambda, r, spec.reset_velocity)
 }
 
 fn problem(spec: &Spec, m: &Medium, lambda: f64, vt_fraction: f64) -> Result<Problem> {

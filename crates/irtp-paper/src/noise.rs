@@ -183,15 +183,15 @@ impl Spec {
 
     /// The temperature of the thermal noises in medium `m`.
     fn temperature(&self, m: &Medium) -> Result<f64> {
-        let vu = Params::new(m.drag, m.sigma, self.lambda, 0.0, 0.0)?.v_upper();
+        let vu = Params::new(m.drag.clone(), m.sigma, self.lambda, 0.0, 0.0)?.v_upper();
         Ok(self.thermal_fraction * vu * vu)
     }
 
     /// The parameters of `noise` in `m` at rate r (v_r = 0, noise kept).
     pub fn params(&self, m: &Medium, noise: NoiseKind, r: f64) -> Result<Params> {
         match noise.spec(m, self.lambda, self.temperature(m)?) {
-            (None, _) => Params::new(m.drag, m.sigma, self.lambda, r, 0.0),
-            (Some(spec), t) => Params::with_noise(m.drag, NoiseModel::parse(&spec, t)?, r, 0.0),
+            (None, _) => Params::new(m.drag.clone(), m.sigma, self.lambda, r, 0.0),
+            (Some(spec), t) => Params::with_noise(m.drag.clone(), NoiseModel::parse(&spec, t)?, r, 0.0),
         }
     }
 }

@@ -138,7 +138,7 @@ impl Spec {
 
     /// The problem of `protocol` in medium `m` (rate 0; the optimiser sets it).
     fn problem(&self, m: &Medium, protocol: Protocol) -> Result<SearchProblem> {
-        let p = Params::new(m.drag, m.sigma, self.lambda, 0.0, self.v0)?;
+        let p = Params::new(m.drag.clone(), m.sigma, self.lambda, 0.0, self.v0)?;
         let l = self.scale(&p);
         let (full, target) = match protocol {
             Protocol::FullLevel => (true, PositionTarget::Level(self.level * l)),
@@ -273,7 +273,7 @@ fn rate_curve(
 
 /// The velocity-only search for the level: S(t) and its tail exponent.
 fn tail(spec: &Spec, m: &Medium, seed: u64, progress: &dyn Progress) -> Result<Tail> {
-    let p = Params::new(m.drag, m.sigma, spec.lambda, spec.tail_rate, spec.v0)?;
+    let p = Params::new(m.drag.clone(), m.sigma, spec.lambda, spec.tail_rate, spec.v0)?;
     let level = PositionTarget::Level(spec.level * spec.scale(&p));
     let pr = SearchProblem::new(p, spec.x0, spec.v0, level)?;
     let stats = exact::stats(&pr, spec.tail_t_max, spec.tail_particles, seed, progress)?;
@@ -314,7 +314,7 @@ pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<V
                 }
             }
             Ok(MediumResult {
-                v_upper: Params::new(m.drag, m.sigma, spec.lambda, 0.0, 0.0)?.v_upper(),
+                v_upper: Params::new(m.drag.clone(), m.sigma, spec.lambda, 0.0, 0.0)?.v_upper(),
                 curves,
                 tail: tail.expect("one tail per medium"),
             })

@@ -36,7 +36,7 @@ pub fn paper_sigma(drag: DragLaw) -> f64 {
 /// The paper's medium for `drag` with flip rate `lambda`, reset rate `r` and
 /// reset velocity `vr`.
 pub fn medium(drag: DragLaw, lambda: f64, r: f64, vr: f64) -> Params {
-    Params::new(drag, paper_sigma(drag), lambda, r, vr).unwrap()
+    Params::new(drag.clone(), paper_sigma(drag), lambda, r, vr).unwrap()
 }
 
 /// Shear-thickening medium: tan drag, Sigma = 3, reset to v_r = 0.
@@ -143,7 +143,7 @@ fn both_media(
     let mut out = Vec::new();
     for (drag, name) in [(DragLaw::Tan, "(a) tan"), (DragLaw::Tanh, "(b) tanh")] {
         for &r in rates {
-            out.push((medium(drag, lambda, r, 0.0), what(name, r)));
+            out.push((medium(drag.clone(), lambda, r, 0.0), what(name, r)));
         }
     }
     out

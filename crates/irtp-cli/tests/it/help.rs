@@ -373,7 +373,7 @@ fn table_refusals() -> Vec<String> {
     ];
     let tan: DragLaw = "tan".parse().unwrap();
     for schedule in schedules {
-        let p = Params::new(tan, 3.0, 0.5, 0.0, 0.0)
+        let p = Params::new(tan.clone(), 3.0, 0.5, 0.0, 0.0)
             .and_then(|p| p.with_schedule(schedule.unwrap()))
             .unwrap();
         for s in Solver::ALL {

@@ -202,7 +202,7 @@ fn redrawn_first_passage_matches_exact_sampler() {
     ];
     let z = bonferroni_z(3 * cases.len());
     for (i, (d, s, l, r, vr, v0, vt)) in cases.into_iter().enumerate() {
-        let p = redrawn(d, s, l, r, vr);
+        let p = redrawn(d.clone(), s, l, r, vr);
         let prob = Problem::new(p, v0, vt).unwrap();
         let ode = mfpt::backward::solve(&prob, &Default::default()).unwrap();
         let run = ParticleOptions {

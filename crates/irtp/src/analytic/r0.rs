@@ -209,7 +209,7 @@ fn centre_kind(drag: DragLaw, vu: f64, lambda: f64) -> Option<ExtremumKind> {
 /// g'(v_u). Other laws: sign changes on a grid, bisected to the last bit.
 fn off_centre_extrema(drag: DragLaw, sigma: f64, vu: f64, lambda: f64) -> Vec<Extremum> {
     if let Some(kappa) = drag.riccati() {
-        let gp = edge_slope(drag, sigma);
+        let gp = edge_slope(drag.clone(), sigma);
         if lambda > gp.min(1.0) && lambda < gp.max(1.0) {
             let kind = if kappa > 0.0 {
                 ExtremumKind::Minimum
@@ -315,19 +315,19 @@ fn shape_label(
 ///   *and* zero-slope edges: labelled (b), edge "smooth";
 /// - tan (ii)/(iii) at λ = 1+Σ²: a = 0, monotone with a finite edge value.
 pub fn regime(drag: DragLaw, sigma: f64, lambda: f64) -> Regime {
-    let a = lambda / edge_slope(drag, sigma) - 1.0;
+    let a = lambda / edge_slope(drag.clone(), sigma) - 1.0;
     let edge = EdgeBehaviour::from_exponent(a);
     let vu = drag.inverse(sigma);
     let mut extrema = Vec::new();
-    if let Some(kind) = centre_kind(drag, vu, lambda) {
-        let off = off_centre_extrema(drag, sigma, vu, lambda);
+    if let Some(kind) = centre_kind(drag.clone(), vu, lambda) {
+        let off = off_centre_extrema(drag.clone(), sigma, vu, lambda);
         extrema.extend(off.iter().rev().map(|e| Extremum { v: -e.v, ..*e }));
         extrema.push(Extremum { v: 0.0, kind });
         extrema.extend(off);
     }
     let (label, range) = match drag.regime_label(sigma, lambda) {
         Some((label, range)) => (label.to_string(), range),
-        None => shape_label(drag, sigma, lambda, edge, &extrema),
+        None => shape_label(drag.clone(), sigma, lambda, edge, &extrema),
     };
     let description = format!(
         "({label}) {drag} drag, {range}: {}; P {} (a = {a:.6}, v_u = {vu:.6})",
@@ -512,7 +512,7 @@ impl R0Density {
     /// the velocity piles up at the edges and no density exists). Closed form
     /// for a Riccati law ([`Drag::riccati`]), tabulated exponent otherwise.
     pub fn new(drag: DragLaw, sigma: f64, lambda: f64) -> Result<Self> {
-        Self::build(drag, sigma, lambda, drag.riccati())
+        Self::build(drag.clone(), sigma, lambda, drag.riccati())
     }
 
     /// [`R0Density::new`] by the quadrature of a law without closed form,
@@ -523,7 +523,7 @@ impl R0Density {
     }
 
     fn build(drag: DragLaw, sigma: f64, lambda: f64, kappa: Option<f64>) -> Result<Self> {
-        Params::new(drag, sigma, lambda, 0.0, 0.0)?;
+        Params::new(drag.clone(), sigma, lambda, 0.0, 0.0)?;
         if !(lambda > 0.0) {
             return Err(Error::invalid(
                 "lambda",
@@ -533,8 +533,8 @@ impl R0Density {
         }
         let vu = drag.inverse(sigma);
         let (c, form) = match kappa {
-            Some(kappa) => (lambda / edge_slope(drag, sigma), Form::Riccati(kappa)),
-            None => Self::quadrature_form(drag, sigma, lambda, vu)?,
+            Some(kappa) => (lambda / edge_slope(drag.clone(), sigma), Form::Riccati(kappa)),
+            None => Self::quadrature_form(drag.clone(), sigma, lambda, vu)?,
         };
         let a = c - 1.0;
         let m = c.min(1.0);
@@ -686,7 +686,7 @@ impl R0Density {
     /// (no cancellation in 1 - |κ|g²).
     fn stable_ln_unnorm(&self, kappa: f64, w: f64) -> f64 {
         let v = self.vu - w;
-        let (s2, d) = (self.sigma * self.sigma, edge_slope(self.drag, self.sigma));
+        let (s2, d) = (self.sigma * self.sigma, edge_slope(self.drag.clone(), self.sigma));
         let g = self.drag.force(v);
         let lq = if kappa < 0.0 {
             let x = ((-kappa).sqrt() * v).abs();
@@ -983,7 +983,7 @@ impl R0Density {
 
     /// Regime of the density (see [`regime`]).
     pub fn regime(&self) -> Regime {
-        regime(self.drag, self.sigma, self.lambda)
+        regime(self.drag.clone(), self.sigma, self.lambda)
     }
 
     /// a = λ/g'(v_u) - 1 in P ~ (v_u - |v|)^a.
@@ -998,7 +998,7 @@ impl R0Density {
 
     /// Drag law.
     pub fn drag(&self) -> DragLaw {
-        self.drag
+        self.drag.clone()
     }
     /// Sigma.
     pub fn sigma(&self) -> f64 {
@@ -1057,8 +1057,8 @@ mod tests {
     #[test]
     fn quadrature_matches_closed_forms() {
         for (drag, s, l) in CASES {
-            let exact = R0Density::new(drag, s, l).unwrap();
-            let quad = R0Density::by_quadrature(drag, s, l).unwrap();
+            let exact = R0Density::new(drag.clone(), s, l).unwrap();
+            let quad = R0Density::by_quadrature(drag.clone(), s, l).unwrap();
             assert!(matches!(quad.form, Form::Tabulated { .. }));
             assert!(rel(quad.v2(), exact.v2()) < 1e-12, "{drag} {s} {l} v2");
             assert!(
@@ -1088,8 +1088,8 @@ mod tests {
             (DragLaw::Tanh, 0.8, 0.8),
         ] {
             let vu = drag.inverse(s);
-            let closed = off_centre_extrema(drag, s, vu, l);
-            let numeric = numeric_extrema(drag, vu, l);
+            let closed = off_centre_extrema(drag.clone(), s, vu, l);
+            let numeric = numeric_extrema(drag.clone(), vu, l);
             assert_eq!(closed.len(), 1);
             assert_eq!(numeric.len(), 1);
             assert_eq!(numeric[0].kind, closed[0].kind, "{drag} {s} {l}");

@@ -214,7 +214,7 @@ impl TelegraphR0Density {
             0.5 * (vl + vu)
         };
         let gap = p + m;
-        let upper = Half::new(drag, p, 1.0, (kp, km), gap, vc)?;
+        let upper = Half::new(drag.clone(), p, 1.0, (kp, km), gap, vc)?;
         let lower = Half::new(drag, -m, -1.0, (km, kp), gap, vc)?;
         let mass = upper.panels.total() + lower.panels.total();
         let err = upper.panels.error + lower.panels.error;
@@ -239,7 +239,7 @@ impl TelegraphR0Density {
         let pi = self.noise.stationary()?;
         let (p, m, _, _) = self.noise.values();
         let plus = self.expect_split(&|_| 1.0)?.0;
-        let drag = self.upper.drag;
+        let drag = &self.upper.drag.clone();
         let mean_g = self.expect(&|v| drag.force(v))?;
         let mean_a = pi[0] * p - pi[1] * m;
         let scale = p.abs().max(m.abs());

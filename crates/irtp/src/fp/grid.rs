@@ -63,7 +63,7 @@ pub(crate) const MAX_GRADING: f64 = 40.0;
 
 /// Σ - g(v_u - x) for 0 ≤ x ≤ v_u, free of cancellation as x -> 0: the
 /// law's [`Drag::edge_drift`].
-pub(crate) fn edge_drift(drag: DragLaw, sigma: f64, x: f64) -> f64 {
+pub(crate) fn edge_drift(drag: &DragLaw, sigma: f64, x: f64) -> f64 {
     drag.edge_drift(sigma, x)
 }
 
@@ -290,7 +290,7 @@ impl Grid {
             if at_jump(j) {
                 sigma + jump
             } else if xu[j] <= xl[j] {
-                edge_drift(drag, sigma, xu[j])
+                edge_drift(&drag, sigma, xu[j])
             } else {
                 sigma - drag.force(edges[j])
             }
@@ -299,7 +299,7 @@ impl Grid {
             if at_jump(j) {
                 sigma + jump
             } else if xl[j] <= xu[j] {
-                edge_drift(drag, sigma, xl[j])
+                edge_drift(&drag, sigma, xl[j])
             } else {
                 sigma + drag.force(edges[j])
             }
@@ -716,7 +716,7 @@ mod tests {
             let vu = d.inverse(s);
             for &x in &[0.01, 0.3 * vu, 0.9 * vu] {
                 let direct = s - d.force(vu - x);
-                assert!((edge_drift(d, s, x) - direct).abs() < 1e-12 * (1.0 + direct));
+                assert!((edge_drift(&d, s, x) - direct).abs() < 1e-12 * (1.0 + direct));
             }
         }
     }
@@ -760,7 +760,7 @@ mod tests {
             ("power:n=0.5", -1.0),
         ] {
             let d: DragLaw = spec.parse().unwrap();
-            let p = Params::new(d, 3.0, 0.5, 1.0, vr).unwrap();
+            let p = Params::new(d.clone(), 3.0, 0.5, 1.0, vr).unwrap();
             let q0 = kink_grading(&p).unwrap().unwrap();
             let n = 1.0 / q0;
             let (a, b) = (

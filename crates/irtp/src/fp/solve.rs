@@ -193,7 +193,7 @@ mod tests {
             (DragLaw::Linear, 1.0, 0.3),
         ] {
             for r in [0.0, 1e-3, 2.0] {
-                let p = Params::new(d, s, l, r, 0.1).unwrap();
+                let p = Params::new(d.clone(), s, l, r, 0.1).unwrap();
                 check(&Grid::uniform(&p, 200), l, r);
                 // Moderate grading so that the residual check is well scaled.
                 check(&Grid::graded(&p, 90, 110).unwrap(), l, r);

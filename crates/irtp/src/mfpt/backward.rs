@@ -818,7 +818,7 @@ pub fn fixed_point_upwind(
     let n = m.v.len();
     let a: Vec<(f64, f64)> =
         m.v.iter()
-            .map(|&v| drifts(g, sigma, v, DriftSign::Simulated))
+            .map(|&v| drifts(g.clone(), sigma, v, DriftSign::Simulated))
             .collect();
     let (mut tp, mut tm) = (vec![0.0; n], vec![0.0; n]);
     let mut change = f64::INFINITY;

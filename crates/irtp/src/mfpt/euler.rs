@@ -479,7 +479,7 @@ mod tests {
             (DragLaw::Tanh, 0.6),
             (DragLaw::Linear, 1.0),
         ] {
-            let p = Params::new(d, sigma, 1e-300, 0.0, 0.0).unwrap();
+            let p = Params::new(d.clone(), sigma, 1e-300, 0.0, 0.0).unwrap();
             let (v0, vt, dt) = (-0.2, 0.5 * p.v_upper(), 1e-3);
             let pr = Problem::new(p, v0, vt).unwrap();
             let (mut v, mut n) = (v0, 0u64);

@@ -499,7 +499,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         // Where g jumps at a node v = 0 (Coulomb friction), each state's
         // drift is its limit on the side it moves to: g(0+) for +, g(0-) for -.
         if i + 1 < nodes {
-            let w = node_drift(g, sigma, m.v[i]) / (m.v[i + 1] - m.v[i]);
+            let w = node_drift(g.clone(), sigma, m.v[i]) / (m.v[i + 1] - m.v[i]);
             a.set(p, p + 2, w);
             a.set(p, p, -w - lam - rate);
             a.set(p, q, lam);
@@ -509,7 +509,7 @@ fn assemble(cp: &Problem, m: &Mesh) -> Assembly {
         }
         // The - drift -(Sigma + g) vanishes at v_l = -v_u (i = 0).
         let w = if i > 0 {
-            (-node_drift(g, -sigma, m.v[i])).max(0.0) / (m.v[i] - m.v[i - 1])
+            (-node_drift(g.clone(), -sigma, m.v[i])).max(0.0) / (m.v[i] - m.v[i - 1])
         } else {
             0.0
         };
@@ -651,7 +651,7 @@ impl AtomProbe {
         let par = cp.params();
         let (g, sigma) = (par.drag(), par.sigma());
         let w = (m.start..m.v.len() - 1)
-            .map(|i| node_drift(g, sigma, m.v[i]) / (m.v[i + 1] - m.v[i]))
+            .map(|i| node_drift(g.clone(), sigma, m.v[i]) / (m.v[i + 1] - m.v[i]))
             .collect();
         AtomProbe { w }
     }

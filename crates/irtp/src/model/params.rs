@@ -121,7 +121,7 @@ fn missing(name: &'static str) -> Error {
 impl From<Params> for RawParams {
     fn from(p: Params) -> Self {
         RawParams {
-            drag: p.drag,
+            drag: p.drag.clone(),
             sigma: p.noise.is_none().then_some(p.sigma),
             lambda: p.noise.is_none().then_some(p.lambda),
             rate: p.rate(),
@@ -280,8 +280,8 @@ impl Params {
     /// noise kept).
     fn rebuilt(&self, rate: f64, reset_velocity: f64) -> Result<Self> {
         match self.noise() {
-            None => Params::new(self.drag, self.sigma, self.lambda, rate, reset_velocity),
-            Some(m) => Params::with_noise(self.drag, m.clone(), rate, reset_velocity),
+            None => Params::new(self.drag.clone(), self.sigma, self.lambda, rate, reset_velocity),
+            Some(m) => Params::with_noise(self.drag.clone(), m.clone(), rate, reset_velocity),
         }
     }
 
@@ -309,7 +309,7 @@ impl Params {
             ));
         }
         let base = Params::new(
-            self.drag,
+            self.drag.clone(),
             self.sigma,
             lambda,
             self.rate(),
@@ -434,7 +434,7 @@ impl Params {
 
     /// Drag law.
     pub fn drag(&self) -> DragLaw {
-        self.drag
+        self.drag.clone()
     }
     /// Noise amplitude Sigma of the paper's noise. With another noise model
     /// ([`Params::noise`]): its largest |level|, which no method reads.

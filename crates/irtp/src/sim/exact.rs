@@ -1162,7 +1162,7 @@ mod tests {
             (power(0.5), 3.0, 1e-13),
             (power(0.3), 3.0, 1e-13),
         ] {
-            let p = Params::new(d, sg, 1.0, 0.0, 0.0).unwrap();
+            let p = Params::new(d.clone(), sg, 1.0, 0.0, 0.0).unwrap();
             let (lo, hi) = p.bounds();
             for s in [sg, -sg] {
                 let table = Segments::Table(PotentialTable::new(&d, s).unwrap());
@@ -1218,7 +1218,7 @@ mod tests {
             (DragLaw::Tan, 1000.0, 1e-11),
             (DragLaw::Tanh, 0.999999, 1e-11),
         ] {
-            let p = Params::new(d, sg, 1.0, 0.0, 0.0).unwrap();
+            let p = Params::new(d.clone(), sg, 1.0, 0.0, 0.0).unwrap();
             let (lo, hi) = p.bounds();
             for s in [sg, -sg] {
                 let tab = DeficitTable::new(&d, s, lo, hi).unwrap();

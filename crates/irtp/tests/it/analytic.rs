@@ -75,7 +75,7 @@ fn integrate_from_edge(d: &R0Density, w_max: f64, h: impl Fn(f64) -> f64) -> f64
 #[test]
 fn normalised_to_1e10_by_independent_quadrature() {
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
         let total = 2.0 * integrate_from_edge(&d, vu, |_| 1.0);
         let b2 = 2.0 * integrate_from_edge(&d, vu, |v| v * v);
@@ -94,7 +94,7 @@ fn normalised_to_1e10_by_independent_quadrature() {
 #[test]
 fn moments_agree_between_two_quadratures() {
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
         for k in [2u32, 4, 6] {
             let b = 2.0 * integrate_from_edge(&d, vu, |v| v.powi(k as i32));
@@ -113,7 +113,7 @@ fn moments_agree_between_two_quadratures() {
 #[test]
 fn cdf_matches_independent_tail_integrals() {
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
         for frac in [0.0, 0.1, 0.37, 0.5, 0.8, 0.99, 0.999_999] {
             let v = frac * vu;
@@ -168,7 +168,7 @@ fn singular_edge_mass_scaling() {
     assert!((r - 1e-10f64.powf(0.05)).abs() < 1e-8, "{r}");
     // Edge exponent from the density itself.
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let (w1, w2) = (1e-12, 1e-13);
         let slope = (d.pdf_at_edge_distance(w1) / d.pdf_at_edge_distance(w2)).ln() / 10f64.ln();
         if d.pdf_at_edge_distance(w1) > 0.0 {
@@ -247,11 +247,11 @@ fn forward_residual(drag: DragLaw, s: f64, l: f64, v: f64, p: impl Fn(f64) -> (f
 #[test]
 fn satisfies_stationary_forward_equations() {
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
         for frac in [-0.9, -0.5, -0.1, 0.05, 0.3, 0.7, 0.95] {
             let v = frac * vu;
-            let r = forward_residual(drag, s, l, v, |v| d.state_pdf(v));
+            let r = forward_residual(drag.clone(), s, l, v, |v| d.state_pdf(v));
             assert!(r < 1e-7, "{drag} {s} {l} v={v}: residual {r}");
             // Zero total flux: (Sigma - g)P+ - (Sigma + g)P- = 0.
             let (pp, pm) = d.state_pdf(v);
@@ -285,12 +285,12 @@ fn state_densities_near_the_edge() {
 fn paper_closed_forms_are_correct_and_wrong_sign_fails() {
     // Eqs. (34) / (35) equal the derived density up to normalisation...
     for (drag, s, l) in CASES {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
-        let k0 = d.pdf(0.0) / paper_formula(drag, s, l, 0.0);
+        let k0 = d.pdf(0.0) / paper_formula(drag.clone(), s, l, 0.0);
         for frac in [-0.95, -0.4, 0.2, 0.6, 0.9] {
             let v = frac * vu;
-            let q = paper_formula(drag, s, l, v);
+            let q = paper_formula(drag.clone(), s, l, v);
             if q < 1e-280 {
                 continue; // the printed form underflows (λ = 300), ours is scaled by P(0)
             }
@@ -369,7 +369,7 @@ fn regimes_of_the_paper_parameter_sets() {
 /// Check each reported extremum against the density: a max/min with
 /// P' = 0 there (centred difference) and the right neighbours.
 fn check_extrema(drag: DragLaw, s: f64, l: f64) {
-    let d = R0Density::new(drag, s, l).unwrap();
+    let d = R0Density::new(drag.clone(), s, l).unwrap();
     let reg = d.regime();
     for e in &reg.extrema {
         let h = 1e-4;
@@ -467,7 +467,7 @@ fn simulate_against_density(drag: DragLaw, s: f64, l: f64, particles: u64, seed:
     use irtp::parallel::{self, NoProgress};
     use irtp::stats::MeanAcc;
     use rand::Rng;
-    let d = R0Density::new(drag, s, l).unwrap();
+    let d = R0Density::new(drag.clone(), s, l).unwrap();
     let (vl, vu) = d.bounds();
     const BINS: usize = 16;
     let mut edges: Vec<f64> = (0..=BINS)
@@ -574,7 +574,7 @@ fn extreme_parameters_stay_accurate() {
         (DragLaw::Tanh, 0.999, 1e3),
         (DragLaw::Tan, 3.0, 1e-6),
     ] {
-        let d = R0Density::new(drag, s, l).unwrap();
+        let d = R0Density::new(drag.clone(), s, l).unwrap();
         let vu = d.bounds().1;
         let mut prev = 0.0;
         for i in 0..=2000 {
@@ -599,7 +599,7 @@ fn extreme_parameters_stay_accurate() {
 fn coulomb_r0_regime_reads_the_cusp() {
     let d: irtp::DragLaw = "coulomb:mu=0.5,gamma=1".parse().unwrap();
     for (lambda, centre) in [(0.5, "minimum"), (2.0, "maximum"), (1.0, "flat")] {
-        let lib = irtp::analytic::r0::R0Density::by_quadrature(d, 2.0, lambda).unwrap();
+        let lib = irtp::analytic::r0::R0Density::by_quadrature(d.clone(), 2.0, lambda).unwrap();
         let label = lib.regime().label.clone();
         assert!(label.contains(centre), "lambda={lambda}: {label}");
     }

@@ -336,8 +336,8 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
         ..Default::default()
     };
     let mut resolved = std::collections::BTreeSet::new();
-    for (i, &(drag, sigma, spec)) in cases.iter().enumerate() {
-        let p = full_reset(drag, sigma, 0.5, 0.0, sched(None, Some(0.0), Some(spec)));
+    for (i, &(ref drag, sigma, spec)) in cases.iter().enumerate() {
+        let p = full_reset(drag.clone(), sigma, 0.5, 0.0, sched(None, Some(0.0), Some(spec)));
         let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
         let route = match renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts) {
             Ok(route) => route,

@@ -80,8 +80,8 @@ fn twins_agree_in_every_solver() {
         for r in [0.0, 2.0] {
             let o = cells(4000);
             let (fa, fb) = (
-                stationary(&par(a, r), &o).unwrap(),
-                stationary(&par(b, r), &o).unwrap(),
+                stationary(&par(a.clone(), r), &o).unwrap(),
+                stationary(&par(b.clone(), r), &o).unwrap(),
             );
             assert!(
                 close(fa.v2, fb.v2),
@@ -99,9 +99,9 @@ fn twins_agree_in_every_solver() {
             let prob = Problem::new(par(d, 2.0), -0.249, 0.5).unwrap();
             backward::solve(&prob, &bo).unwrap().tau
         };
-        let (ta, tb) = (tau(a), tau(b));
+        let (ta, tb) = (tau(a.clone()), tau(b.clone()));
         assert!(close(ta, tb), "{}: tau {ta} vs {tb}", t.spec);
-        let ra = R0Density::from_params(&par(a, 0.0)).unwrap();
+        let ra = R0Density::from_params(&par(a.clone(), 0.0)).unwrap();
         let rb = R0Density::by_quadrature(b, t.sigma, t.lambda).unwrap();
         assert!(
             close(ra.v2(), rb.v2()),
@@ -160,7 +160,7 @@ fn r0_density_matches_the_reference() {
     for c in R0_CASES {
         let (d, sigma) = (c.law(), c.sigma);
         let vu = d.inverse(sigma);
-        let lib = R0Density::by_quadrature(d, sigma, c.lambda).unwrap();
+        let lib = R0Density::by_quadrature(d.clone(), sigma, c.lambda).unwrap();
         for i in 1..40 {
             let v = -vu + 2.0 * vu * i as f64 / 40.0;
             if let Some(want) = c.reference_shape(v) {

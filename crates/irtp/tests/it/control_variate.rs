@@ -38,7 +38,7 @@ fn controlled_msd_matches_the_moment_chain() {
     let times = grid.times().to_vec();
     let models: Vec<_> = [DragLaw::Tan, DragLaw::Tanh]
         .into_iter()
-        .flat_map(|d| [0.0, 1.0, 10.0].map(|r| (d, models::medium(d, 0.5, r, 0.0))))
+        .flat_map(|d| [0.0, 1.0, 10.0].map(|r| (d.clone(), models::medium(d.clone(), 0.5, r, 0.0))))
         .collect();
     let zmax = bonferroni_z(models.len() * times.len());
     for (m, (drag, p)) in models.iter().enumerate() {

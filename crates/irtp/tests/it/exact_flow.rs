@@ -20,7 +20,7 @@ fn fixed(cases: u32) -> ProptestConfig {
 
 /// The same drag law seen only through force/derivative/inverse/drift, so
 /// the trait's generic quadrature defaults run (independent of the closed forms).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Generic(DragLaw);
 
 impl Drag for Generic {
@@ -29,7 +29,7 @@ impl Drag for Generic {
         "generic"
     }
     fn flow(&self, s: f64) -> TabulatedFlow<Generic> {
-        TabulatedFlow::new(*self, s)
+        TabulatedFlow::new(self.clone(), s)
     }
     fn force(&self, v: f64) -> f64 {
         self.0.force(v)
@@ -67,7 +67,7 @@ const CASES: [(DragLaw, f64); 7] = [
 /// A start va in the interval and a target vb between va and v*, with
 /// v* - vb as small as 1e-14 (log-uniform distance to the fixed point).
 fn setup(case: usize, plus: bool, xa: f64, ldist: f64) -> (DragLaw, f64, f64, f64, f64) {
-    let (d, sigma) = CASES[case];
+    let (d, sigma) = CASES[case].clone();
     let vu = d.inverse(sigma);
     let s = if plus { sigma } else { -sigma };
     let vs = d.inverse(s);
@@ -95,7 +95,7 @@ proptest! {
     /// (|dt/dv| · ulp(v), which dominates only where v* - v is near ulp).
     #[test]
     fn time_inverts_velocity(case in 0usize..7, plus: bool, xa in 0.0005f64..0.9995, lt in -12.0f64..1.7) {
-        let (d, sigma) = CASES[case];
+        let (d, sigma) = CASES[case].clone();
         let vu = d.inverse(sigma);
         let s = if plus { sigma } else { -sigma };
         let va = -vu + 2.0 * vu * xa;
@@ -117,7 +117,7 @@ proptest! {
         let (d, s, vs, va, vb) = setup(case, plus, xa, ld);
         prop_assume!(vb != vs);
         let t = d.flow_time(s, va, vb);
-        let q = Generic(d).flow_time(s, va, vb);
+        let q = Generic(d.clone()).flow_time(s, va, vb);
         prop_assert!((t - q).abs() <= 1e-12 * t.max(1e-300) + 1e-15, "{d} s={s} {va}->{vb}: {t} vs {q}");
     }
 }
@@ -131,7 +131,7 @@ proptest! {
     /// the conditioning of the potential equation, ≤ ~1e-14 here).
     #[test]
     fn guided_velocity_matches(case in 0usize..7, plus: bool, xa in 0.0005f64..0.9995, lt in -12.0f64..1.7) {
-        let (d, sigma) = CASES[case];
+        let (d, sigma) = CASES[case].clone();
         let vu = d.inverse(sigma);
         let s = if plus { sigma } else { -sigma };
         let va = -vu + 2.0 * vu * xa;
@@ -167,7 +167,7 @@ fn guided(case: usize, plus: bool) -> &'static AnyFlow {
     let all = GUIDES.get_or_init(|| {
         CASES
             .iter()
-            .flat_map(|&(d, sigma)| [sigma, -sigma].map(|s| d.flow(s).accelerated()))
+            .flat_map(|&(ref d, sigma)| [sigma, -sigma].map(|s| d.flow(s).accelerated()))
             .collect()
     });
     &all[2 * case + usize::from(!plus)]
@@ -179,7 +179,7 @@ proptest! {
     /// Displacement ∫ v dt vs composite Simpson on v(t) (at least 10^5 intervals).
     #[test]
     fn displacement_matches_simpson(case in 0usize..7, plus: bool, xa in 0.001f64..0.999, lt in -3.0f64..1.0) {
-        let (d, sigma) = CASES[case];
+        let (d, sigma) = CASES[case].clone();
         let vu = d.inverse(sigma);
         let s = if plus { sigma } else { -sigma };
         let va = -vu + 2.0 * vu * xa;
@@ -231,7 +231,7 @@ fn deficits_match_generic_quadrature() {
             for (a, b) in [(-0.9, 0.9), (0.3, -0.99), (0.0, 1.0), (-1.0, 0.5)] {
                 let (va, vb) = (a * vu, b * vu);
                 let (p, q) = d.flow_deficits(s, va, vb);
-                let (pg, qg) = Generic(d).flow_deficits(s, va, vb);
+                let (pg, qg) = Generic(d.clone()).flow_deficits(s, va, vb);
                 assert!((p - pg).abs() < 1e-13 * (1.0 + p.abs()), "{d} {s}");
                 assert!((q - qg).abs() < 1e-13 * (1.0 + q.abs()), "{d} {s}");
             }
@@ -250,12 +250,12 @@ fn generic_velocity_and_displacement_defaults() {
                 let va = -vu + 2.0 * vu * xa;
                 let (a, b) = (
                     d.flow_velocity(s, va, t),
-                    Generic(d).flow_velocity(s, va, t),
+                    Generic(d.clone()).flow_velocity(s, va, t),
                 );
                 assert!((a - b).abs() < 1e-12, "{d} s={s} va={va} t={t}: {a} vs {b}");
                 let (a, b) = (
                     d.flow_displacement(s, va, t),
-                    Generic(d).flow_displacement(s, va, t),
+                    Generic(d.clone()).flow_displacement(s, va, t),
                 );
                 assert!((a - b).abs() < 1e-11, "{d} s={s} va={va} t={t}: {a} vs {b}");
             }

@@ -24,7 +24,7 @@ fn relax(p: &Params) -> f64 {
 
 #[test]
 fn stationary_v2_matches_fokker_planck() {
-    for (i, &(d, sigma, lambda, r)) in [
+    for (i, &(ref d, sigma, lambda, r)) in [
         (DragLaw::Tan, 3.0, 0.9, 0.0),
         (DragLaw::Tan, 3.0, 7.0, 2.0),
         (DragLaw::Tan, 3.0, 15.0, 10.0),
@@ -37,7 +37,7 @@ fn stationary_v2_matches_fokker_planck() {
     .iter()
     .enumerate()
     {
-        let p = Params::new(d, sigma, lambda, r, 0.0).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, r, 0.0).unwrap();
         let fp = stationary(&p, &StationaryOptions::default()).unwrap();
         let tr = relax(&p);
         let spec = SimSpec::new(

@@ -33,7 +33,7 @@ fn deterministic_limit_is_flow_time() {
         (DragLaw::Tanh, 0.6),
         (DragLaw::Linear, 1.0),
     ] {
-        let p = Params::new(d, sigma, 0.0, 0.0, 0.0).unwrap();
+        let p = Params::new(d.clone(), sigma, 0.0, 0.0, 0.0).unwrap();
         let vt = 0.7 * p.v_upper();
         let mut r = rng::stream(1, 0);
         let (t, ev) = first_passage(&p, -0.2, vt, true, 1e9, &mut r);

@@ -30,7 +30,7 @@ fn exact(p: &Problem, particles: u64, seed: u64) -> FptSummary {
 
 #[test]
 fn exact_mfpt_matches_backward_equations() {
-    for (i, &(d, sigma, lambda, r)) in [
+    for (i, &(ref d, sigma, lambda, r)) in [
         (DragLaw::Tan, 3.0, 0.9, 0.0),
         (DragLaw::Tan, 3.0, 7.0, 2.0),
         (DragLaw::Tan, 3.0, 15.0, 5.0),
@@ -41,7 +41,7 @@ fn exact_mfpt_matches_backward_equations() {
     .iter()
     .enumerate()
     {
-        let p = Params::new(d, sigma, lambda, r, 0.0).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, r, 0.0).unwrap();
         let (v0, vt) = (-0.249, 0.5);
         let prob = Problem::new(p, v0, vt).unwrap();
         let ode = backward(&prob);

@@ -18,7 +18,7 @@ use irtp::{DragLaw, Params};
 
 #[test]
 fn r0_density_and_v2_match_closed_form() {
-    for (i, &(d, sigma, lambda)) in [
+    for (i, &(ref d, sigma, lambda)) in [
         (DragLaw::Tan, 3.0, 0.9),
         (DragLaw::Tan, 3.0, 15.0),
         (DragLaw::Tanh, 0.6, 0.5),
@@ -27,7 +27,7 @@ fn r0_density_and_v2_match_closed_form() {
     .iter()
     .enumerate()
     {
-        let p = Params::new(d, sigma, lambda, 0.0, 0.0).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, 0.0, 0.0).unwrap();
         let exact_density = R0Density::from_params(&p).unwrap();
         // Slowest relaxation: noise (1/(2 lambda)) or drag (1/min g'; g' is
         // extremal at v = 0 or at the edge).

@@ -134,14 +134,14 @@ fn identical_across_thread_counts() {
 /// nonlinear drag with resetting, where no closed form exists.
 #[test]
 fn occupation_density_matches_final_histogram() {
-    for (i, &(d, sigma, lambda, r, vr)) in [
+    for (i, &(ref d, sigma, lambda, r, vr)) in [
         (DragLaw::Tan, 3.0, 0.9, 2.0, 0.3),
         (DragLaw::Tanh, 0.6, 1.2, 0.5, -0.2),
     ]
     .iter()
     .enumerate()
     {
-        let p = Params::new(d, sigma, lambda, r, vr).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, r, vr).unwrap();
         let spec = SimSpec::new(
             6000,
             TimeGrid::from_times(vec![0.0, 30.0]).unwrap(),
@@ -214,7 +214,7 @@ fn matches_richardson_extrapolated_euler() {
 /// density integrates to 1, and the deterministic case is exact.
 #[test]
 fn extreme_parameters_stay_finite() {
-    for &(d, sigma, lambda, r, vr) in &[
+    for &(ref d, sigma, lambda, r, vr) in &[
         (DragLaw::Tan, 3.0, 0.0, 0.0, 0.0),
         (DragLaw::Tan, 3.0, 0.0, 5.0, 0.5),
         (DragLaw::Tanh, 0.6, 2.0, 1e4, -0.1),
@@ -222,7 +222,7 @@ fn extreme_parameters_stay_finite() {
         (DragLaw::Tanh, 0.999_999, 0.3, 0.1, 0.0),
         (DragLaw::Linear, 1.0, 50.0, 0.0, 0.0),
     ] {
-        let p = Params::new(d, sigma, lambda, r, vr).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, r, vr).unwrap();
         let t_max = if r > 100.0 { 0.5 } else { 40.0 };
         let spec =
             SimSpec::new(64, TimeGrid::linear(t_max, 9).unwrap(), 0.5 * t_max, 25, 3).unwrap();

@@ -129,7 +129,7 @@ fn bad_options_are_rejected() {
 fn d_eff_large_r_law() {
     for (drag, sigma, lambda) in [(DragLaw::Tan, 3.0, 0.5), (DragLaw::Tanh, 0.6, 0.5)] {
         let ratio = |r: f64| {
-            let p = Params::new(drag, sigma, lambda, r, 0.0).unwrap();
+            let p = Params::new(drag.clone(), sigma, lambda, r, 0.0).unwrap();
             let d = stationary(&p, &StationaryOptions::default()).unwrap().d_eff;
             d * 2.0 * lambda * r * r / (sigma * sigma)
         };

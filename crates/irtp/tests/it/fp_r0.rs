@@ -48,8 +48,8 @@ fn exact_cell_masses(st: &Stationary, d: &R0Density) -> Vec<f64> {
 #[ignore = "slow tier"]
 fn v2_to_1e6_and_cell_averaged_density_in_every_regime() {
     for (drag, sigma, lambda) in CASES {
-        let p = Params::new(drag, sigma, lambda, 0.0, 0.0).unwrap();
-        let exact = R0Density::new(drag, sigma, lambda).unwrap();
+        let p = Params::new(drag.clone(), sigma, lambda, 0.0, 0.0).unwrap();
+        let exact = R0Density::new(drag.clone(), sigma, lambda).unwrap();
         let t0 = Instant::now();
         let st = stationary(&p, &StationaryOptions::default()).unwrap();
         let secs = t0.elapsed().as_secs_f64();

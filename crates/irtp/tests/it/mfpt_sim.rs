@@ -83,8 +83,8 @@ const CASES: [(DragLaw, f64, f64, f64, f64, f64, f64); 9] = [
 #[ignore = "slow tier"]
 fn backward_equations_match_euler_simulation() {
     let cases = CASES;
-    for (i, &(d, s, l, r, vr, v0, vt)) in cases.iter().enumerate() {
-        let p = problem(d, s, l, r, vr, v0, vt);
+    for (i, &(ref d, s, l, r, vr, v0, vt)) in cases.iter().enumerate() {
+        let p = problem(d.clone(), s, l, r, vr, v0, vt);
         let ode = profile(&p, &BackwardOptions::with_cells(4000))
             .unwrap()
             .at_start();
@@ -118,7 +118,7 @@ fn paper_printed_sign_disagrees_with_simulation() {
         cells: 4000,
         drift: DriftSign::PaperPrinted,
     };
-    for (i, &(d, s, l, r, vt)) in [
+    for (i, &(ref d, s, l, r, vt)) in [
         (DragLaw::Tan, 3.0, 0.5, 0.0, 0.5),
         (DragLaw::Tan, 3.0, 5.0, 0.0, 0.5),
         (DragLaw::Tanh, 0.6, 0.5, 0.2, 0.3),
@@ -126,7 +126,7 @@ fn paper_printed_sign_disagrees_with_simulation() {
     .iter()
     .enumerate()
     {
-        let p = problem(d, s, l, r, 0.0, -0.249, vt);
+        let p = problem(d.clone(), s, l, r, 0.0, -0.249, vt);
         let paper = profile(&p, &printed).unwrap().at_start().tau;
         let sim = euler(&p, 200 + i as u64);
         let z = (paper - sim.tau).abs() / sim.tau_err;
@@ -172,8 +172,8 @@ fn censoring_is_reported() {
 #[test]
 #[ignore = "slow tier"]
 fn euler_dt_bias_measurement() {
-    for (i, &(d, s, l, r, vr, v0, vt)) in CASES.iter().enumerate() {
-        let p = problem(d, s, l, r, vr, v0, vt);
+    for (i, &(ref d, s, l, r, vr, v0, vt)) in CASES.iter().enumerate() {
+        let p = problem(d.clone(), s, l, r, vr, v0, vt);
         let t = |dt| {
             euler_first_passage(&p, dt, 1e4, 20_000, 500 + i as u64, &NoProgress)
                 .unwrap()

@@ -380,7 +380,7 @@ fn noise_distribution_thermal_is_continuous_at_zero_temperature() {
     let drag: DragLaw = "linear".parse().unwrap();
     let at = |t: f64| {
         let noise = NoiseModel::parse(noises::PAPER_TELEGRAPH, t).unwrap();
-        let p = Params::with_noise(drag, noise, 0.5, 0.0).unwrap();
+        let p = Params::with_noise(drag.clone(), noise, 0.5, 0.0).unwrap();
         Problem::new(p, 0.0, 0.5).unwrap()
     };
     let cold = distribution(&at(0.0), &[0.1], &options(4000)).unwrap();

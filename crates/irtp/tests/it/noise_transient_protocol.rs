@@ -152,7 +152,7 @@ fn chain_refractory_matches_the_two_state_solver() {
     let noise = NoiseModel::parse(PAPER_AS_STATES, 0.0).unwrap();
     let drag: DragLaw = "tan".parse().unwrap();
     let chain = run(
-        &with_hold(Params::with_noise(drag, noise, 1.0, 0.2).unwrap()),
+        &with_hold(Params::with_noise(drag.clone(), noise, 1.0, 0.2).unwrap()),
         400,
         &times,
     );

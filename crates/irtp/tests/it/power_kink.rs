@@ -64,7 +64,7 @@ fn density_error(fp: &Stationary, exact: &R0Density, vu: f64) -> (f64, f64) {
 fn r0_density_converges_at_first_order() {
     for (spec, c, v2_tol) in [("power:n=0.5", 4.0, 1e-6), ("power:n=0.3", 16.0, 1e-4)] {
         let (d, sigma, lambda) = (law(spec), 3.0, 1.0);
-        let p = Params::new(d, sigma, lambda, 0.0, 0.0).unwrap();
+        let p = Params::new(d.clone(), sigma, lambda, 0.0, 0.0).unwrap();
         let vu = p.v_upper();
         let exact = R0Density::new(d, sigma, lambda).unwrap();
         let runs: Vec<(f64, f64, f64)> = [1000, 2000, 4000]

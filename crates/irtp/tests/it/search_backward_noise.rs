@@ -58,7 +58,7 @@ fn cases() -> Vec<(DragLaw, f64, PositionTarget, f64)> {
             PositionTarget::Interval(-1.0, 1.0),
         ] {
             for r in [0.5, 2.0] {
-                out.push((drag, sigma, target, r));
+                out.push((drag.clone(), sigma, target, r));
             }
         }
     }
@@ -72,9 +72,9 @@ fn cases() -> Vec<(DragLaw, f64, PositionTarget, f64)> {
 #[test]
 fn two_state_chain_is_the_paper_noise() {
     for (drag, sigma, target, r) in cases() {
-        let paper = search(params(drag, sigma, None, r), target, (16, 8));
+        let paper = search(params(drag.clone(), sigma, None, r), target, (16, 8));
         let chain = search(
-            params(drag, sigma, Some(&two_state(sigma)), r),
+            params(drag.clone(), sigma, Some(&two_state(sigma)), r),
             target,
             (16, 8),
         );
@@ -109,10 +109,10 @@ fn two_state_chain_is_the_paper_noise() {
 #[test]
 fn lumpable_three_state_chain_is_the_paper_noise() {
     for (drag, sigma, target, r) in cases() {
-        let paper = search(params(drag, sigma, None, r), target, (16, 8));
+        let paper = search(params(drag.clone(), sigma, None, r), target, (16, 8));
         let what = format!("{drag:?} {target:?} r = {r}");
         let exact = search(
-            params(drag, sigma, Some(&lumpable(sigma, 0.0)), r),
+            params(drag.clone(), sigma, Some(&lumpable(sigma, 0.0)), r),
             target,
             (16, 8),
         );

@@ -91,10 +91,10 @@ fn paper_noise_as_a_chain_matches_the_backward_solver() {
         ),
     ];
     for (k, (drag, noise, sigma, target)) in cases.into_iter().enumerate() {
-        let paper = full(Params::new(drag, sigma, 1.0, 0.5, 0.0).unwrap());
+        let paper = full(Params::new(drag.clone(), sigma, 1.0, 0.5, 0.0).unwrap());
         let reference = SearchProblem::new(paper, 0.0, 0.0, target).unwrap();
         let b = backward::solve(&reference, &BackwardOptions::default()).unwrap();
-        let pr = SearchProblem::new(noisy(drag, noise, 0.5), 0.0, 0.0, target).unwrap();
+        let pr = SearchProblem::new(noisy(drag.clone(), noise, 0.5), 0.0, 0.0, target).unwrap();
         let (tau, se) = exact(&pr, 20_000, 40 + k as u64);
         let diff = (tau - b.tau).abs();
         eprintln!(
@@ -153,7 +153,7 @@ fn rpt_exact_agrees_with_euler_extrapolated() {
         ),
     ];
     for (k, (drag, noise, target, rule)) in cases.into_iter().enumerate() {
-        let params = noisy(drag, noise, 0.5)
+        let params = noisy(drag.clone(), noise, 0.5)
             .with_reset(Target::point(0.0), rule)
             .unwrap();
         let pr = SearchProblem::new(params, 0.0, 0.0, target).unwrap();
@@ -195,8 +195,8 @@ const RPT_TANH: &str = "rpt:sigma=0.8,alpha=1,beta=2";
 /// family-wise over the cases.
 fn rpt_backward_vs_exact(cases: &[(DragLaw, &str, PositionTarget, f64)], particles: u64) {
     let z = irtp_testkit::stats::bonferroni_z(cases.len());
-    for (i, &(drag, noise, target, rate)) in cases.iter().enumerate() {
-        let p = noisy(drag, noise, rate);
+    for (i, &(ref drag, noise, target, rate)) in cases.iter().enumerate() {
+        let p = noisy(drag.clone(), noise, rate);
         let pr = SearchProblem::new(p, 0.0, 0.0, target).unwrap();
         let b = backward::solve(&pr, &BackwardOptions::default()).unwrap();
         let (tau, se) = exact(&pr, particles, 70 + i as u64);

@@ -272,7 +272,7 @@ fn lanes_do_not_change_results() {
         (DragLaw::Tanh, 0.6),
         (DragLaw::Linear, 1.0),
     ] {
-        let p = Params::new(drag, sigma, 0.9, 1.5, 0.05).unwrap();
+        let p = Params::new(drag.clone(), sigma, 0.9, 1.5, 0.05).unwrap();
         let s = spec(605, 0.3, 5, 0.1, 9, 8);
         for sampling in [EventSampling::Geometric, EventSampling::Bernoulli] {
             let one = euler::simulate_with_lanes(&p, &s, 1e-3, sampling, 1, &NoProgress).unwrap();
@@ -312,7 +312,7 @@ fn r0_density_matches_exact() {
         (DragLaw::Tanh, 0.6, 0.85, 21u64),
         (DragLaw::Tan, 3.0, 15.0, 22u64),
     ] {
-        let p = Params::new(drag, sigma, lambda, 0.0, 0.0).unwrap();
+        let p = Params::new(drag.clone(), sigma, lambda, 0.0, 0.0).unwrap();
         let s = spec(8000, 15.0, 2, 5.0, bins, seed);
         let obs = simulate(&p, &s, Method::euler(1e-3), &NoProgress).unwrap();
         let w = obs.bin_width();

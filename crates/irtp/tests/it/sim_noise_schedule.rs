@@ -144,11 +144,11 @@ fn paper_noise_as_states_agrees_under_every_modifier() {
     let (vr, drag) = (0.2, DragLaw::Tan);
     let mut rows = Vec::new();
     for (name, rate, sched) in cases {
-        let paper = Params::new(drag, 1.0, 0.5, rate, vr)
+        let paper = Params::new(drag.clone(), 1.0, 0.5, rate, vr)
             .unwrap()
             .with_schedule(sched)
             .unwrap();
-        let states = noisy(drag, PAPER_AS_STATES, rate, vr, sched);
+        let states = noisy(drag.clone(), PAPER_AS_STATES, rate, vr, sched);
         let (a, b) = (run(&paper, &spec), run(&states, &spec));
         if name == "position" {
             assert!(a.position.is_some() && b.position.is_some(), "{name}");

@@ -22,7 +22,7 @@ fn fixed(cases: u32) -> ProptestConfig {
 }
 
 /// A law seen only through g and g': the defaults of every other method run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct OnlyG(DragLaw);
 
 impl Drag for OnlyG {
@@ -37,7 +37,7 @@ impl Drag for OnlyG {
         self.0.derivative(v)
     }
     fn flow(&self, s: f64) -> TabulatedFlow<OnlyG> {
-        TabulatedFlow::new(*self, s)
+        TabulatedFlow::new(self.clone(), s)
     }
 }
 
@@ -61,9 +61,9 @@ fn flows(
     let all = ALL.get_or_init(|| {
         CASES
             .iter()
-            .flat_map(|&(d, sigma)| {
+            .flat_map(|&(ref d, sigma)| {
                 [sigma, -sigma].map(|s| {
-                    let t = OnlyG(d).flow(s);
+                    let t = OnlyG(d.clone()).flow(s);
                     (d.flow(s), t.clone(), t.accelerated())
                 })
             })
@@ -75,7 +75,7 @@ fn flows(
 /// A start va in the interval and a target vb between va and v*, with
 /// v* - vb down to 1e-14 |v* - va| (log-uniform), i.e. within 1e-12 of v*.
 fn setup(case: usize, plus: bool, xa: f64, ld: f64) -> (f64, f64) {
-    let (d, sigma) = CASES[case];
+    let (d, sigma) = CASES[case].clone();
     let vu = d.inverse(sigma);
     let vs = flows(case, plus).0.fixed_point();
     let va = -vu + 2.0 * vu * xa;
@@ -134,7 +134,7 @@ proptest! {
     /// plus the fixed points' difference.
     #[test]
     fn velocity_matches_closed_form(case in 0usize..6, plus: bool, xa in 0.0005f64..0.9995, lt in -12.0f64..1.7) {
-        let (d, sigma) = CASES[case];
+        let (d, sigma) = CASES[case].clone();
         let vu = d.inverse(sigma);
         let va = -vu + 2.0 * vu * xa;
         let t = 10f64.powf(lt);

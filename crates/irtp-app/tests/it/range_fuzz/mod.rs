@@ -56,7 +56,7 @@ struct Case {
 impl Case {
     /// v_u of the drawn model (when it is admissible).
     fn v_upper(&self) -> Option<f64> {
-        Params::new(self.drag?, self.sigma, self.lambda, self.rate, self.vr)
+        Params::new(self.drag.clone()?, self.sigma, self.lambda, self.rate, self.vr)
             .ok()
             .map(|p| p.v_upper())
     }
@@ -177,7 +177,7 @@ fn drag() -> impl Strategy<Value = DragLaw> {
 fn model(reset: bool) -> impl Strategy<Value = Case> {
     (drag(), sigma(), magnitude(), magnitude())
         .prop_flat_map(move |(drag, sigma, lambda, rate)| {
-            let vu = Params::new(drag, sigma, 0.0, 0.0, 0.0).map_or(1.0, |p| p.v_upper());
+            let vu = Params::new(drag.clone(), sigma, 0.0, 0.0, 0.0).map_or(1.0, |p| p.v_upper());
             let vr = if reset {
                 prop_oneof![1 => Just(0.0), 2 => velocity(vu)].boxed()
             } else {

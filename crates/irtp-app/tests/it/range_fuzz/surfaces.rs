@@ -84,6 +84,7 @@ fn expression_model(reset: bool) -> impl Strategy<Value = Case> {
             let spec = format!("expr:{text}");
             let drag = spec.parse::<DragLaw>().ok();
             let vu = drag
+                .clone()
                 .and_then(|d| Params::new(d, sigma, 0.0, 0.0, 0.0).ok())
                 .map_or(1.0, |p| p.v_upper());
             let vr = if reset {

@@ -108,8 +108,8 @@ fn atom_state(cp: &Problem, m: &Mesh, s: usize, a: f64, kill: f64) -> AtomState 
     let (mut tn, mut tm) = (vec![0.0; n], vec![0.0; n]);
     for i in (0..n - 1).rev() {
         let mid = 0.5 * (v[i] + v[i + 1]);
-        tm[i] = tn[i + 1] + piece_time(g, a, mid, v[i + 1]);
-        tn[i] = tm[i] + piece_time(g, a, v[i], mid);
+        tm[i] = tn[i + 1] + piece_time(g.clone(), a, mid, v[i + 1]);
+        tn[i] = tm[i] + piece_time(g.clone(), a, v[i], mid);
     }
     let ramps = (0..n)
         .map(|i| {
@@ -119,7 +119,7 @@ fn atom_state(cp: &Problem, m: &Mesh, s: usize, a: f64, kill: f64) -> AtomState 
         })
         .collect();
     let spread = (m.start..n - 1)
-        .map(|i| ((v[i + 1] - v[i]) / node_drift(g, a, v[i])).powi(2))
+        .map(|i| ((v[i + 1] - v[i]) / node_drift(g.clone(), a, v[i])).powi(2))
         .sum::<f64>()
         .sqrt();
     AtomState {
@@ -185,7 +185,7 @@ fn upwind_rows(cp: &Problem, m: &Mesh, chain: &Chain, absorbed: &[bool]) -> Rows
                 algebraic[row] = true;
                 continue;
             }
-            let b = node_drift(g, chain.levels[s], m.v[i]);
+            let b = node_drift(g.clone(), chain.levels[s], m.v[i]);
             let w = if b > 0.0 && i + 1 < nodes {
                 let w = b / (m.v[i + 1] - m.v[i]);
                 band.set(row, row + ns, w);

@@ -40,15 +40,15 @@ use crate::numerics::root;
 use exmex::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 /// The spec prefix: `expr:...`.
 const NAME: &str = "expr";
 
 /// A drag law g(v) given by an expression in v (see the module docs).
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 pub struct Expr {
-    law: &'static Compiled,
+    law: Arc<Compiled>,
     /// (|s|, |v*|) of the flow this copy was made for ([`Drag::flow`]):
     /// [`Drag::inverse`] at ±|s| is then a lookup (the tabulated flow asks
     /// for v* at every drift evaluation while it builds its tables).
@@ -78,15 +78,16 @@ impl Expr {
         let text = canonical(text);
         let table = LAWS.get_or_init(|| Mutex::new(HashMap::new()));
         let mut laws = table.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(law) = laws.get(&text) {
+        if let Some(law) = laws.get(&text).and_then(Weak::upgrade) {
             return Ok(Expr::of(law));
         }
-        let law: &'static Compiled = Box::leak(Box::new(compile(&text)?));
-        laws.insert(text, law);
+        laws.retain(|_, law| law.strong_count() > 0);
+        let law = Arc::new(compile(&text)?);
+        laws.insert(text, Arc::downgrade(&law));
         Ok(Expr::of(law))
     }
 
-    fn of(law: &'static Compiled) -> Expr {
+    fn of(law: Arc<Compiled>) -> Expr {
         Expr {
             law,
             pin: (f64::NAN, f64::NAN),
@@ -105,13 +106,15 @@ impl Expr {
     }
 }
 
-/// The interned laws, by canonical text.
-static LAWS: OnceLock<Mutex<HashMap<String, &'static Compiled>>> = OnceLock::new();
+/// The laws in use, by canonical text: a law parsed again while a copy
+/// lives is that law (one compilation, one inverse cache); a law no copy
+/// holds any more is freed and compiled anew when parsed again.
+static LAWS: OnceLock<Mutex<HashMap<String, Weak<Compiled>>>> = OnceLock::new();
 
 impl PartialEq for Expr {
-    /// The same expression (interned: the same canonical text).
+    /// The same expression (shared: the same canonical text).
     fn eq(&self, other: &Expr) -> bool {
-        std::ptr::eq(self.law, other.law)
+        Arc::ptr_eq(&self.law, &other.law)
     }
 }
 
@@ -413,7 +416,7 @@ impl Drag for Expr {
     fn flow(&self, s: f64) -> TabulatedFlow<Expr> {
         let a = s.abs();
         let pinned = Expr {
-            law: self.law,
+            law: Arc::clone(&self.law),
             pin: (a, increasing_root(self, a)),
         };
         TabulatedFlow::new(pinned, s)
@@ -683,15 +686,15 @@ mod tests {
         assert!(d.admissible(0.38).is_ok());
     }
 
-    /// One interned law per canonical text; the flow's pinned fixed point is
-    /// the plain inverse.
+    /// One shared law per canonical text while a copy lives; the flow's
+    /// pinned fixed point is the plain inverse.
     #[test]
-    fn interned_by_canonical_text() {
+    fn shared_by_canonical_text() {
         let (a, b) = (law("v +  v^3"), law(" v + v^3 "));
-        assert!(std::ptr::eq(a.law, b.law) && a == b);
+        assert!(Arc::ptr_eq(&a.law, &b.law) && a == b);
         assert_ne!(law("v+v^3"), a);
         let pinned = Expr {
-            law: a.law,
+            law: Arc::clone(&a.law),
             pin: (2.0, increasing_root(&a, 2.0)),
         };
         assert_eq!(pinned.inverse(-2.0), a.inverse(-2.0));

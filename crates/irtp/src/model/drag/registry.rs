@@ -78,7 +78,7 @@ macro_rules! __drag_registry {
         /// A drag law shipped with irtp (see [`crate::model::drag`]): a unit
         /// variant for a law without parameters, a variant carrying the
         /// law's value for a law with parameters.
-        #[derive(Clone, Copy, Debug, PartialEq)]
+        #[derive(Clone, Debug, PartialEq)]
         pub enum DragLaw {
             $(
                 #[doc = concat!("[`", stringify!($uty), "`](super::", stringify!($uty), ")")]

@@ -40,7 +40,7 @@ pub trait ParamLaw: Drag + Copy + PartialEq {
 /// A law named by a spec `name:...` whose [`super::DragLaw`] variant
 /// carries its value: every [`ParamLaw`] (`power:n=0.5,k=1`, through the
 /// functions of this module) and the expression law (`expr:v + v^3/3`).
-pub trait SpecLaw: Drag + Copy + PartialEq {
+pub trait SpecLaw: Drag + PartialEq {
     /// A representative law, for help texts and listings.
     fn example() -> Self;
     /// The law of a spec: `args` is the part after `name:` (None when the

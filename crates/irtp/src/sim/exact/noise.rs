@@ -185,7 +185,7 @@ impl ExactNoise for Chain {
         let law = (params.drag(), spec.as_str());
         self.levels
             .iter()
-            .map(|&a| level_segments(drag, law, a, lo, hi))
+            .map(|&a| level_segments(drag, law.clone(), a, lo, hi))
             .collect()
     }
     /// Accelerated at an interval edge, the plain closed form at an
@@ -196,7 +196,7 @@ impl ExactNoise for Chain {
         self.levels
             .iter()
             .map(|&a| {
-                Ok(match level_kind(drag, law, a, params.bounds(), method)? {
+                Ok(match level_kind(drag, law.clone(), a, params.bounds(), method)? {
                     LevelKind::Edge => drag.flow(a).accelerated(),
                     LevelKind::Interior => drag.flow(a),
                 })
@@ -325,7 +325,7 @@ mod tests {
             (DragLaw::Tanh, 0.2, -0.3f64.atanh(), 0.8f64.atanh()),
             (DragLaw::Linear, 0.0, -1.0, 1.0),
         ] {
-            let seg = level_segments(&d, (d, "test"), a, lo, hi).unwrap();
+            let seg = level_segments(&d, (d.clone(), "test"), a, lo, hi).unwrap();
             assert!(matches!(seg, Segments::Sides(..)), "{d} {a}: not tabulated");
             let solve = Segments::Solve(d.flow(a), DeficitTable::new(&d, a, lo, hi).unwrap());
             for i in 0..=16 {
