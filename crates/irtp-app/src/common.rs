@@ -85,7 +85,13 @@ impl NoiseArgs {
     pub fn params(&self, rate: f64, reset_velocity: f64) -> irtp::Result<Params> {
         let kind = match &self.noise {
             None if self.temperature.unwrap_or(0.0) == 0.0 => {
-                return Params::new(self.drag.clone(), self.sigma, self.lambda, rate, reset_velocity)
+                return Params::new(
+                    self.drag.clone(),
+                    self.sigma,
+                    self.lambda,
+                    rate,
+                    reset_velocity,
+                )
             }
             None => NoiseModel::telegraph(self.sigma, self.lambda)?
                 .kind()

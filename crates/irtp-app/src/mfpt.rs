@@ -713,7 +713,9 @@ impl DirectArgs {
         let vt = self.target.velocity()?;
         self.reject_renewal_flags()?;
         let (problem, backward) = self.problem.config(vt)?;
-        let method = self.sim.config(std::slice::from_ref(&problem), backward, &self.output)?;
+        let method = self
+            .sim
+            .config(std::slice::from_ref(&problem), backward, &self.output)?;
         Ok(DirectConfig {
             problem,
             backward,

@@ -368,7 +368,13 @@ pub fn compute(
     let n_stages = spec.lambdas.len() * spec.rates.len();
     let mut panels = Vec::new();
     for (li, &lambda) in spec.lambdas.iter().enumerate() {
-        let p0 = Params::new(spec.drag.clone(), spec.sigma, lambda, 0.0, spec.reset_velocity)?;
+        let p0 = Params::new(
+            spec.drag.clone(),
+            spec.sigma,
+            lambda,
+            0.0,
+            spec.reset_velocity,
+        )?;
         let curves = (0..spec.rates.len())
             .map(|ri| {
                 let k = li * spec.rates.len() + ri;

@@ -157,7 +157,13 @@ pub fn compute(spec: &Spec, opts: &Options, progress: &dyn Progress) -> Result<V
         .media
         .iter()
         .map(|m| {
-            let p = Params::new(m.drag.clone(), m.sigma, spec.lambda, 0.0, spec.reset_velocity)?;
+            let p = Params::new(
+                m.drag.clone(),
+                m.sigma,
+                spec.lambda,
+                0.0,
+                spec.reset_velocity,
+            )?;
             Problem::new(p, spec.v0, spec.vt)
         })
         .collect::<Result<_>>()?;

@@ -191,7 +191,9 @@ impl Spec {
     pub fn params(&self, m: &Medium, noise: NoiseKind, r: f64) -> Result<Params> {
         match noise.spec(m, self.lambda, self.temperature(m)?) {
             (None, _) => Params::new(m.drag.clone(), m.sigma, self.lambda, r, 0.0),
-            (Some(spec), t) => Params::with_noise(m.drag.clone(), NoiseModel::parse(&spec, t)?, r, 0.0),
+            (Some(spec), t) => {
+                Params::with_noise(m.drag.clone(), NoiseModel::parse(&spec, t)?, r, 0.0)
+            }
         }
     }
 }

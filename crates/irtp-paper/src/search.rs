@@ -273,7 +273,13 @@ fn rate_curve(
 
 /// The velocity-only search for the level: S(t) and its tail exponent.
 fn tail(spec: &Spec, m: &Medium, seed: u64, progress: &dyn Progress) -> Result<Tail> {
-    let p = Params::new(m.drag.clone(), m.sigma, spec.lambda, spec.tail_rate, spec.v0)?;
+    let p = Params::new(
+        m.drag.clone(),
+        m.sigma,
+        spec.lambda,
+        spec.tail_rate,
+        spec.v0,
+    )?;
     let level = PositionTarget::Level(spec.level * spec.scale(&p));
     let pr = SearchProblem::new(p, spec.x0, spec.v0, level)?;
     let stats = exact::stats(&pr, spec.tail_t_max, spec.tail_particles, seed, progress)?;

@@ -433,7 +433,7 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         grid_points: a.grid_points,
         ..RateRange::default()
     };
-    if let Some(clock) = problem.params().schedule().clock {
+    if let Some(clock) = &problem.params().schedule().clock {
         range.validate()?;
         let renewal = RenewalOptions {
             cells_x: backward.cells_x,
@@ -620,7 +620,7 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
         mean_opt_range: by_clock.as_ref().map(|o| o.mean_range),
         reset_clock_opt: by_clock
             .as_ref()
-            .and_then(|o| o.clock.map(|c| c.to_string())),
+            .and_then(|o| o.clock.as_ref().map(|c| c.to_string())),
         problem: &problem,
         r_min: range.r_min,
         r_max: range.r_max,

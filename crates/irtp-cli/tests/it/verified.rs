@@ -24,8 +24,12 @@ fn backward_tau_respects_its_lower_bound() {
     ];
     for (drag, sigma, lambda, v0, vt, vr) in cases {
         for rate in [0.0, 0.5, 5.0, 50.0] {
-            let p =
-                Problem::new(Params::new(drag.clone(), sigma, lambda, rate, vr).unwrap(), v0, vt).unwrap();
+            let p = Problem::new(
+                Params::new(drag.clone(), sigma, lambda, rate, vr).unwrap(),
+                v0,
+                vt,
+            )
+            .unwrap();
             let bound = backward::lower_bound(&p);
             let s = backward::solve(&p, &BackwardOptions::with_cells(4000)).unwrap();
             assert!(

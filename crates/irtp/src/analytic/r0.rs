@@ -533,7 +533,10 @@ impl R0Density {
         }
         let vu = drag.inverse(sigma);
         let (c, form) = match kappa {
-            Some(kappa) => (lambda / edge_slope(drag.clone(), sigma), Form::Riccati(kappa)),
+            Some(kappa) => (
+                lambda / edge_slope(drag.clone(), sigma),
+                Form::Riccati(kappa),
+            ),
             None => Self::quadrature_form(drag.clone(), sigma, lambda, vu)?,
         };
         let a = c - 1.0;
@@ -686,7 +689,10 @@ impl R0Density {
     /// (no cancellation in 1 - |κ|g²).
     fn stable_ln_unnorm(&self, kappa: f64, w: f64) -> f64 {
         let v = self.vu - w;
-        let (s2, d) = (self.sigma * self.sigma, edge_slope(self.drag.clone(), self.sigma));
+        let (s2, d) = (
+            self.sigma * self.sigma,
+            edge_slope(self.drag.clone(), self.sigma),
+        );
         let g = self.drag.force(v);
         let lq = if kappa < 0.0 {
             let x = ((-kappa).sqrt() * v).abs();

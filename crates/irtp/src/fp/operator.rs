@@ -608,7 +608,7 @@ mod tests {
                     let q = p
                         .with_reset(t, noise)
                         .unwrap()
-                        .with_schedule(sched)
+                        .with_schedule(sched.clone())
                         .unwrap();
                     out.push(ForwardOperator::new(&q, Mesh::Graded, 120).unwrap());
                 }

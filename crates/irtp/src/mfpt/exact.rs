@@ -134,7 +134,7 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
             total: noise.clocks(reset.rate()),
             noise,
             reset,
-            schedule: *params.schedule(),
+            schedule: params.schedule().clone(),
         })
     }
 

@@ -194,9 +194,12 @@ pub fn particle_units(
         Method::Exact(run) => {
             exact::units(problem, run.t_max, run.particles, run.seed, units, progress)
         }
-        Method::Euler { dt, run } => {
-            EulerFpt::new(problem.clone(), dt, run.t_max)?.units(run.particles, units, run.seed, progress)
-        }
+        Method::Euler { dt, run } => EulerFpt::new(problem.clone(), dt, run.t_max)?.units(
+            run.particles,
+            units,
+            run.seed,
+            progress,
+        ),
     })
 }
 

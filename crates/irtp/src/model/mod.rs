@@ -8,6 +8,7 @@ pub mod keys;
 pub mod noise;
 pub mod params;
 pub mod reset;
+pub(crate) mod shared;
 pub mod support_table;
 
 pub use atoms::VelocityAtom;

@@ -2,13 +2,13 @@
 
 use super::drag::{Drag, DragLaw};
 use super::noise::{chain::Chain, NoiseModel};
-use std::sync::Arc;
 use super::reset::{
     spec, NoiseAtReset, PoissonReset, RandomReset, RedrawnReset, Reset, ResetRule, Schedule,
     Solver, Target,
 };
 use crate::error::{finite, Error, Result};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Parameters of the IRTP with velocity resetting:
 /// dv/dt = -g(v) + eta(t), eta = ±Sigma flipping at rate lambda (paper Eqs. (5)-(6)),
@@ -280,7 +280,13 @@ impl Params {
     /// noise kept).
     fn rebuilt(&self, rate: f64, reset_velocity: f64) -> Result<Self> {
         match self.noise() {
-            None => Params::new(self.drag.clone(), self.sigma, self.lambda, rate, reset_velocity),
+            None => Params::new(
+                self.drag.clone(),
+                self.sigma,
+                self.lambda,
+                rate,
+                reset_velocity,
+            ),
             Some(m) => Params::with_noise(self.drag.clone(), m.clone(), rate, reset_velocity),
         }
     }
@@ -293,7 +299,7 @@ impl Params {
             reset: self.reset.with_rate(base.rate()),
             ..base
         };
-        p.with_schedule(self.schedule)
+        p.with_schedule(self.schedule.clone())
     }
 
     /// Same parameters with another flip rate (validated).
@@ -317,7 +323,7 @@ impl Params {
         )?;
         Ok(Params {
             reset: self.reset,
-            schedule: self.schedule,
+            schedule: self.schedule.clone(),
             ..base
         })
     }
@@ -328,7 +334,7 @@ impl Params {
         self.point_target("another reset velocity")?;
         self.rebuilt(self.rate(), reset_velocity)?
             .with_reset(Target::point(reset_velocity), self.reset.noise())?
-            .with_schedule(self.schedule)
+            .with_schedule(self.schedule.clone())
     }
 
     /// Same parameters and rate with another resetting protocol: the target
@@ -344,7 +350,7 @@ impl Params {
                 match noise {
                     NoiseAtReset::Kept => {
                         return Ok(Params {
-                            schedule: self.schedule,
+                            schedule: self.schedule.clone(),
                             ..base
                         })
                     }
@@ -362,7 +368,10 @@ impl Params {
                 noise,
             }),
         };
-        Ok(Params { reset, ..self.clone() })
+        Ok(Params {
+            reset,
+            ..self.clone()
+        })
     }
 
     /// Same parameters with the modifiers of the resetting rule (periodic
@@ -389,7 +398,10 @@ impl Params {
                  clock; its law exp is the Poisson clock as a renewal clock)",
             ));
         }
-        Ok(Params { schedule, ..self.clone() })
+        Ok(Params {
+            schedule,
+            ..self.clone()
+        })
     }
 
     /// The modifiers of the resetting rule.
@@ -673,7 +685,7 @@ mod tests {
     fn schedule_round_trip_and_refusal() {
         let p = Params::new(DragLaw::Tan, 3.0, 0.9, 0.0, 0.1).unwrap();
         let sched = Schedule::parse(Some(2.0), Some(-0.5), Some("exp:mean=0.25")).unwrap();
-        let q = p.with_schedule(sched).unwrap();
+        let q = p.with_schedule(sched.clone()).unwrap();
         let s = serde_json::to_string(&q).unwrap();
         assert!(s.contains("\"refractory\":\"exp:mean=0.25\""), "{s}");
         let back: Params = serde_json::from_str(&s).unwrap();

@@ -60,7 +60,7 @@ impl ClockTarget<'_> {
     /// The search without resets (the clock removed, rate 0) with `opts`.
     fn reset_free(&self, opts: &BackwardOptions) -> Result<backward::SearchSolution> {
         let p = self.base.params();
-        let mut schedule = *p.schedule();
+        let mut schedule = p.schedule().clone();
         schedule.clock = None;
         let params = p.with_schedule(schedule)?;
         let problem =
@@ -143,7 +143,7 @@ pub fn optimize_clock(
     renewal: &RenewalOptions,
     progress: &dyn Progress,
 ) -> Result<ClockOptimum> {
-    let clock = problem.params().schedule().clock.ok_or_else(|| {
+    let clock = problem.params().schedule().clock.clone().ok_or_else(|| {
         Error::invalid(
             "reset_clock",
             "none",
@@ -154,7 +154,7 @@ pub fn optimize_clock(
     clock.with_mean(1.0)?;
     let target = ClockTarget {
         base: problem,
-        clock,
+        clock: clock.clone(),
         renewal,
         backward: BackwardOptions {
             refine: renewal.refine,

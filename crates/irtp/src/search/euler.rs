@@ -267,7 +267,7 @@ impl SearchEuler {
             hi,
             max_steps: (self.t_max / dt).floor() as u64,
             reset: *p.reset(),
-            schedule: *p.schedule(),
+            schedule: p.schedule().clone(),
             x_reset: p.schedule().position.map(|r| r.x),
             refractory: p.schedule().refractory,
         }

@@ -140,7 +140,7 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
             segs,
             flows,
             reset: *params.reset(),
-            schedule: *sched,
+            schedule: sched.clone(),
             refractory: sched.refractory,
             x_reset: sched.position.map(|p| p.x),
             lo,

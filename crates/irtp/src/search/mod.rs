@@ -291,7 +291,7 @@ impl SearchProblem {
             || p.reset().noise() == NoiseAtReset::Redrawn;
         // A failed period of a level search lasts the waiting time R:
         // E(R) = ∞ makes the mean search time infinite.
-        let heavy = sched.clock.is_some_and(|c| !c.mean().is_finite());
+        let heavy = sched.clock.as_ref().is_some_and(|c| !c.mean().is_finite());
         let level = matches!(self.target, PositionTarget::Level(_));
         if level && !resets {
             return Some(NO_RESETS_REASON);
@@ -321,7 +321,7 @@ impl SearchProblem {
             Some(Refractory::Fixed { duration }) => duration,
             None => 0.0,
         };
-        match (sched.periodic, sched.clock) {
+        match (sched.periodic, sched.clock.clone()) {
             (Some(per), _) => per.cycle(sched.refractory),
             (None, Some(c)) => c.support_end() + hold,
             (None, None) => f64::INFINITY,

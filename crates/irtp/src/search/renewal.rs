@@ -57,7 +57,7 @@ use serde::{Deserialize, Serialize};
 
 /// The clock of the resets: which [`Clock`] law the renewal integrals run
 /// over (one home for every law: [`crate::model::reset::clock`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum WaitingTime {
     /// Poisson clock of rate r (`--rate`): the law `exp:rate=r`.
     Poisson {
@@ -81,7 +81,7 @@ impl WaitingTime {
     /// The clock of `p`: its period if periodic, its renewal clock, else
     /// its Poisson rate (refused if 0: no resets).
     pub fn of(p: &Params) -> Result<Self> {
-        match (p.schedule().periodic, p.schedule().clock) {
+        match (p.schedule().periodic, p.schedule().clock.clone()) {
             (Some(t), _) => Ok(WaitingTime::Periodic { period: t.period }),
             (None, Some(clock)) => Ok(WaitingTime::Renewal { clock }),
             (None, None) if p.rate() > 0.0 => Ok(WaitingTime::Poisson { rate: p.rate() }),
@@ -98,7 +98,7 @@ impl WaitingTime {
         match *self {
             WaitingTime::Poisson { rate } => Clock::Exp(ExpClock { rate }),
             WaitingTime::Periodic { period } => Clock::Fixed(FixedClock { t: period }),
-            WaitingTime::Renewal { clock } => clock,
+            WaitingTime::Renewal { ref clock } => clock.clone(),
         }
     }
 
@@ -109,7 +109,7 @@ impl WaitingTime {
         let (name, x) = match *self {
             WaitingTime::Poisson { rate } => ("rate", rate),
             WaitingTime::Periodic { period } => ("reset_period", period),
-            WaitingTime::Renewal { clock } => {
+            WaitingTime::Renewal { ref clock } => {
                 let t = clock.horizon(tail);
                 if !(t.is_finite() && clock.tail_integral(t).is_finite()) {
                     return Err(Error::invalid(
@@ -367,7 +367,7 @@ fn meshes(setup: &Setup, waiting: &WaitingTime, opts: &RenewalOptions) -> Vec<Pl
 /// times of `waiting` ([`SearchProblem::infinite_mean_reason`] of the
 /// problem with that clock): the verdict of the exact sampler.
 fn finite_under(problem: &SearchProblem, waiting: &WaitingTime) -> bool {
-    if WaitingTime::of(problem.params()).ok() == Some(*waiting) {
+    if WaitingTime::of(problem.params()).ok() == Some(waiting.clone()) {
         return problem.mean_is_finite();
     }
     let p = problem.params();
@@ -377,19 +377,19 @@ fn finite_under(problem: &SearchProblem, waiting: &WaitingTime) -> bool {
         ..*p.schedule()
     };
     let (rate, clocked) = match *waiting {
-        WaitingTime::Poisson { rate } => (rate, bare),
+        WaitingTime::Poisson { rate } => (rate, bare.clone()),
         WaitingTime::Periodic { period } => (
             0.0,
             Schedule {
                 periodic: Some(Periodic { period }),
-                ..bare
+                ..bare.clone()
             },
         ),
-        WaitingTime::Renewal { clock } => (
+        WaitingTime::Renewal { ref clock } => (
             0.0,
             Schedule {
-                clock: Some(clock),
-                ..bare
+                clock: Some(clock.clone()),
+                ..bare.clone()
             },
         ),
     };

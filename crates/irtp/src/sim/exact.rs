@@ -553,7 +553,7 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
             noise,
             tab,
             plain: schedule.is_plain(),
-            schedule: *schedule,
+            schedule: schedule.clone(),
             x_reset: schedule.position.map(|p| p.x),
             refractory: schedule.refractory,
             reset,

@@ -280,7 +280,11 @@ impl SimSpec {
 /// naming `burn_in`.
 pub(crate) fn check_period_window(params: &Params, spec: &SimSpec) -> Result<()> {
     let schedule = params.schedule();
-    let cycle = match (schedule.periodic, schedule.clock, schedule.refractory) {
+    let cycle = match (
+        schedule.periodic,
+        schedule.clock.clone(),
+        schedule.refractory,
+    ) {
         (Some(periodic), _, r) => periodic.cycle(r),
         // A fixed renewal clock is periodic too: T, plus a fixed
         // refractory period.

@@ -170,7 +170,7 @@ fn draws_follow_the_law() {
         check(spec, c, clock(reference.unwrap_or(spec)), 100 + i as u64);
     }
     let g = clock("gamma:k=2,theta=0.5");
-    check("table of gamma", gamma_table(), g, 99);
+    check("table of gamma", gamma_table(), g.clone(), 99);
     // The table's W is the Gamma's between its points to the linear
     // interpolation bound h² max|W''| / 8 = 0.005² · 4 / 8 = 1.25e-5.
     let t = gamma_table();
@@ -248,8 +248,8 @@ fn special_cases_bit_for_bit() {
     ];
     for (a, b) in pairs {
         let (pa, pb) = (
-            full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, a),
-            full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, b),
+            full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, a.clone()),
+            full_reset(DragLaw::Tanh, 0.6, 1.0, 0.0, b.clone()),
         );
         let (sa, sb) = (
             simulate(&pa, &spec, &NoProgress).unwrap(),
@@ -337,7 +337,13 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
     };
     let mut resolved = std::collections::BTreeSet::new();
     for (i, &(ref drag, sigma, spec)) in cases.iter().enumerate() {
-        let p = full_reset(drag.clone(), sigma, 0.5, 0.0, sched(None, Some(0.0), Some(spec)));
+        let p = full_reset(
+            drag.clone(),
+            sigma,
+            0.5,
+            0.0,
+            sched(None, Some(0.0), Some(spec)),
+        );
         let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
         let route = match renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts) {
             Ok(route) => route,

@@ -74,8 +74,8 @@ fn euler_richardson_agrees_with_exact_under_a_schedule() {
     ];
     let dt = 0.02;
     let mut rows = Vec::new();
-    for (c, &(noise, rate, vr, sched)) in cases.iter().enumerate() {
-        let p = noisy(noise, rate, vr, sched);
+    for (c, &(noise, rate, vr, ref sched)) in cases.iter().enumerate() {
+        let p = noisy(noise, rate, vr, sched.clone());
         let seed = 100 * c as u64;
         let coarse = sim::simulate(&p, &spec(seed + 1), Method::euler(dt), &NoProgress).unwrap();
         let fine = sim::simulate(&p, &spec(seed + 2), Method::euler(dt / 2.0), &NoProgress);

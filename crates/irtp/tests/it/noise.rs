@@ -479,7 +479,8 @@ fn telegraph_r0_reduces_to_the_symmetric_density() {
         (DragLaw::Cubic, 2.0, 1.5),
     ] {
         let sym = R0Density::new(drag.clone(), s, l).unwrap();
-        let tel = TelegraphR0Density::new(drag.clone(), Telegraph::symmetric(s, l).unwrap()).unwrap();
+        let tel =
+            TelegraphR0Density::new(drag.clone(), Telegraph::symmetric(s, l).unwrap()).unwrap();
         let vu = sym.bounds().1;
         assert_eq!(tel.bounds(), sym.bounds());
         for w in [1e-12, 1e-6, 0.01, 0.3, 0.9] {
@@ -567,7 +568,8 @@ fn telegraph_r0_solves_the_forward_equations() {
         (1.0, 1.5, 2.0, 0.9),
     ]) {
         let drag: DragLaw = law.parse().unwrap();
-        let d = TelegraphR0Density::new(drag.clone(), Telegraph::new(p, m, kp, km).unwrap()).unwrap();
+        let d =
+            TelegraphR0Density::new(drag.clone(), Telegraph::new(p, m, kp, km).unwrap()).unwrap();
         let (vl, vu) = d.bounds();
         let fluxes = |v: f64| {
             let (pp, pm) = d.state_pdf(v);

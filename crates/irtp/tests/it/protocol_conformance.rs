@@ -531,7 +531,7 @@ fn periodic_with_exp_refractory_is_refused_by_the_table_alone() {
         .unwrap();
     let p = c.params();
     let linear = Params::new(irtp::DragLaw::Linear, 1.0, 0.5, 0.0, 0.1)
-        .and_then(|l| l.with_schedule(*p.schedule()))
+        .and_then(|l| l.with_schedule(p.schedule().clone()))
         .unwrap();
     for (solver, params) in [(Solver::FpTransient, &p), (Solver::ClosedForm, &linear)] {
         match check(solver, params) {

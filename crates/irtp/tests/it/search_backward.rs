@@ -560,7 +560,8 @@ fn mirror_symmetry_and_no_resets() {
     let rd = renewal::solve(&down, &poisson, &ropts).unwrap();
     assert!((ru.tau - rd.tau).abs() <= 1e-9 * ru.tau);
     let free = Params::new(DragLaw::Tanh, 0.6, 0.5, 0.0, 0.0).unwrap();
-    let pr = SearchProblem::new(free.clone(), 0.1, 0.2, PositionTarget::Interval(-0.5, 0.5)).unwrap();
+    let pr =
+        SearchProblem::new(free.clone(), 0.1, 0.2, PositionTarget::Interval(-0.5, 0.5)).unwrap();
     assert!(pr.mean_is_finite());
     let s = solve(&pr, &BackwardOptions::with_cells(16, 16)).unwrap();
     assert!(s.reset_values.is_none() && s.truncation_error == 0.0);

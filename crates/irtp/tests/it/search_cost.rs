@@ -74,7 +74,7 @@ fn renewal_estimate_is_within_3x_of_the_work_done() {
         },
     ];
     for (k, (pr, cx, cv)) in cases().into_iter().enumerate().take(4) {
-        let waiting = clocks[k % clocks.len()];
+        let waiting = clocks[k % clocks.len()].clone();
         let opts = RenewalOptions {
             cells_x: cx / 2,
             cells_v: cv / 2,

@@ -362,7 +362,7 @@ fn euler_search(pr: &SearchProblem, plus: bool, dt: f64, t_max: f64, seed: u64, 
     let p = pr.params();
     let (lo, hi) = pr.target().bounds(pr.x0());
     let (sigma, lambda, r) = (p.sigma(), p.lambda(), p.rate());
-    let sched = *p.schedule();
+    let sched = p.schedule().clone();
     let mut rng = rng::stream(seed, i);
     let (mut t, mut x, mut v, mut plus) = (0.0, pr.x0(), pr.v0(), plus);
     let mut next_periodic = sched.periodic.map_or(f64::INFINITY, |q| q.next_after(0.0));

@@ -302,7 +302,8 @@ fn backward_distribution_refuses_by_name() {
         r => panic!("{r:?}"),
     };
     let velocity_only = Params::new(DragLaw::Linear, 1.0, 1.0, 0.5, 0.0).unwrap();
-    let pr = SearchProblem::new(velocity_only.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+    let pr =
+        SearchProblem::new(velocity_only.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
     assert_eq!(name(&pr), "reset_position");
     let periodic = Params::new(DragLaw::Linear, 1.0, 1.0, 0.0, 0.0)
         .unwrap()

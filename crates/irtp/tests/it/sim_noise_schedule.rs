@@ -146,7 +146,7 @@ fn paper_noise_as_states_agrees_under_every_modifier() {
     for (name, rate, sched) in cases {
         let paper = Params::new(drag.clone(), 1.0, 0.5, rate, vr)
             .unwrap()
-            .with_schedule(sched)
+            .with_schedule(sched.clone())
             .unwrap();
         let states = noisy(drag.clone(), PAPER_AS_STATES, rate, vr, sched);
         let (a, b) = (run(&paper, &spec), run(&states, &spec));

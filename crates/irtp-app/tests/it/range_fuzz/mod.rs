@@ -56,9 +56,15 @@ struct Case {
 impl Case {
     /// v_u of the drawn model (when it is admissible).
     fn v_upper(&self) -> Option<f64> {
-        Params::new(self.drag.clone()?, self.sigma, self.lambda, self.rate, self.vr)
-            .ok()
-            .map(|p| p.v_upper())
+        Params::new(
+            self.drag.clone()?,
+            self.sigma,
+            self.lambda,
+            self.rate,
+            self.vr,
+        )
+        .ok()
+        .map(|p| p.v_upper())
     }
 
     /// The least time to go from v0 (or, after a reset, from where a reset

@@ -26,21 +26,21 @@
 //! potential table, so the exact sampler evaluates the expression only
 //! while it builds its tables; the Euler scheme evaluates it every step.
 //!
-//! A parsed expression is interned for the life of the process (one leaked
-//! allocation per distinct expression): [`Expr`] holds a `&'static`
-//! reference to it, so [`super::DragLaw`] and [`crate::Params`] stay `Copy`
-//! and every method and engine keeps taking them by value. Two specs with
-//! the same canonical text (whitespace runs collapsed to one space) share
-//! one interned law, which is what [`Expr`]'s equality compares.
+//! A parsed expression is shared while in use (`model::shared`): [`Expr`]
+//! holds an `Arc` of it, so copies of a [`super::DragLaw`] and of
+//! [`crate::Params`] share one compilation and one inverse cache, and the
+//! law is freed with its last copy. Two specs with the same canonical text
+//! (whitespace runs collapsed to one space) parsed while one lives share
+//! one law, which is what [`Expr`]'s equality compares.
 
 use super::spec::SpecLaw;
 use super::{Drag, TabulatedFlow};
 use crate::error::{Error, Result};
+use crate::model::shared::Shared;
 use crate::numerics::root;
 use exmex::prelude::*;
-use std::collections::HashMap;
 use std::fmt;
-use std::sync::{Arc, Mutex, OnceLock, Weak};
+use std::sync::{Arc, Mutex};
 
 /// The spec prefix: `expr:...`.
 const NAME: &str = "expr";
@@ -76,15 +76,7 @@ impl Expr {
     /// in the module docs; errors name `drag` and the violation.
     pub fn parse(text: &str) -> Result<Expr> {
         let text = canonical(text);
-        let table = LAWS.get_or_init(|| Mutex::new(HashMap::new()));
-        let mut laws = table.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(law) = laws.get(&text).and_then(Weak::upgrade) {
-            return Ok(Expr::of(law));
-        }
-        laws.retain(|_, law| law.strong_count() > 0);
-        let law = Arc::new(compile(&text)?);
-        laws.insert(text, Arc::downgrade(&law));
-        Ok(Expr::of(law))
+        LAWS.get_or_compile(&text, || compile(&text)).map(Expr::of)
     }
 
     fn of(law: Arc<Compiled>) -> Expr {
@@ -106,10 +98,8 @@ impl Expr {
     }
 }
 
-/// The laws in use, by canonical text: a law parsed again while a copy
-/// lives is that law (one compilation, one inverse cache); a law no copy
-/// holds any more is freed and compiled anew when parsed again.
-static LAWS: OnceLock<Mutex<HashMap<String, Weak<Compiled>>>> = OnceLock::new();
+/// The expression laws in use, by canonical text.
+static LAWS: Shared<Compiled> = Shared::new();
 
 impl PartialEq for Expr {
     /// The same expression (shared: the same canonical text).

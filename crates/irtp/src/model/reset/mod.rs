@@ -58,7 +58,7 @@ use std::fmt;
 /// position resets too, and a refractory period after each reset. The
 /// default is the paper's: Poisson clock, position kept, no refractory
 /// period.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Schedule {
     /// Resets every T (the rule's Poisson rate is then 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -152,7 +152,7 @@ impl Schedule {
     /// without either.
     #[inline]
     pub fn next_reset<R: Rng + ?Sized>(&self, free: f64, rng: &mut R) -> f64 {
-        match (self.periodic, self.clock) {
+        match (self.periodic, self.clock.clone()) {
             (Some(p), _) => p.next_after(free),
             (None, Some(Clock::Fixed(f))) if self.refractory.is_none() => {
                 Periodic { period: f.t }.next_after(free)
@@ -171,7 +171,7 @@ impl Schedule {
     pub fn spec_of(&self, feature: Feature) -> String {
         match feature {
             Feature::Periodic => self.periodic.map(|p| p.period.to_string()),
-            Feature::Renewal => self.clock.map(|c| c.spec()),
+            Feature::Renewal => self.clock.as_ref().map(|c| c.spec()),
             Feature::Position => self.position.map(|p| p.x.to_string()),
             Feature::RefractoryExp | Feature::RefractoryFixed => self.refractory.map(|r| r.spec()),
         }
@@ -185,7 +185,7 @@ impl Schedule {
     pub fn event_rate_bound(&self, lambda: f64, rate: f64) -> f64 {
         let resets = rate
             + self.periodic.map_or(0.0, |p| 1.0 / p.period)
-            + self.clock.map_or(0.0, |c| 1.0 / c.mean());
+            + self.clock.as_ref().map_or(0.0, |c| 1.0 / c.mean());
         let per_reset = if self.refractory.is_some() { 2.0 } else { 1.0 };
         lambda + resets * per_reset
     }
@@ -196,7 +196,7 @@ impl Schedule {
     /// costly run to name them.
     pub fn cost_drivers(&self) -> Vec<&'static str> {
         let mut d: Vec<&'static str> = self.periodic.map(|_| "reset_period").into_iter().collect();
-        d.extend(self.clock.map(|_| "reset_clock"));
+        d.extend(self.clock.as_ref().map(|_| "reset_clock"));
         d
     }
 

@@ -46,9 +46,10 @@ impl PositionReset {
     ) -> (f64, f64) {
         let clock = match schedule.periodic {
             Some(p) => p.period,
-            None if schedule.clock.is_some() => {
-                schedule.clock.map_or(0.0, |c| c.horizon((-TAIL).exp()))
-            }
+            None if schedule.clock.is_some() => schedule
+                .clock
+                .as_ref()
+                .map_or(0.0, |c| c.horizon((-TAIL).exp())),
             None if rate > 0.0 => TAIL / rate,
             None => f64::INFINITY,
         };

@@ -314,7 +314,7 @@ impl<D: Drag> NoiseKernel<'_, D> {
             plan,
             seed: spec.seed,
             reset: *params.reset(),
-            schedule: *params.schedule(),
+            schedule: params.schedule().clone(),
             lo: obs.v_lo,
             scale: spec.bins as f64 / (obs.v_hi - obs.v_lo),
             bins: spec.bins,

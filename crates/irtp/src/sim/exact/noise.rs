@@ -196,10 +196,12 @@ impl ExactNoise for Chain {
         self.levels
             .iter()
             .map(|&a| {
-                Ok(match level_kind(drag, law.clone(), a, params.bounds(), method)? {
-                    LevelKind::Edge => drag.flow(a).accelerated(),
-                    LevelKind::Interior => drag.flow(a),
-                })
+                Ok(
+                    match level_kind(drag, law.clone(), a, params.bounds(), method)? {
+                        LevelKind::Edge => drag.flow(a).accelerated(),
+                        LevelKind::Interior => drag.flow(a),
+                    },
+                )
             })
             .collect()
     }

@@ -18,19 +18,19 @@
 //! until the step is below 4 ulp of R: R is exact to the rounding of H,
 //! about 1e-13 relative in W.
 //!
-//! The compiled expression and its table are interned (one leaked
-//! allocation per distinct expression) so the law stays `Copy`.
+//! The compiled expression and its table are shared by the copies of the
+//! law and freed with the last (`model::shared`).
 
 use super::{bad, check_mean, Law};
 use crate::error::{Error, Result};
 use crate::model::drag::expr::{check_names, check_size, on_big_stack, plain_numbers};
 use crate::model::drag::spec::number;
+use crate::model::shared::Shared;
 use crate::numerics::quad::gk15;
 use exmex::prelude::*;
 use rand::Rng;
 use std::cell::Cell;
-use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Arc;
 
 /// The cumulative hazard the table reaches.
 pub const H_END: f64 = 50.0;
@@ -39,9 +39,9 @@ pub const A_MAX: f64 = 1e15;
 const USAGE: &str = "hazard:EXPR (a rate r(a) >= 0 in the age a, whose integral diverges)";
 
 /// An age-dependent reset rate.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct HazardClock {
-    law: &'static Compiled,
+    law: Arc<Compiled>,
 }
 
 struct Compiled {
@@ -65,11 +65,12 @@ impl std::fmt::Debug for Compiled {
     }
 }
 
-static LAWS: OnceLock<Mutex<HashMap<String, &'static Compiled>>> = OnceLock::new();
+/// The hazard laws in use, by their text.
+static LAWS: Shared<Compiled> = Shared::new();
 
 impl PartialEq for HazardClock {
     fn eq(&self, other: &Self) -> bool {
-        std::ptr::eq(self.law, other.law)
+        Arc::ptr_eq(&self.law, &other.law)
     }
 }
 
@@ -77,13 +78,7 @@ impl HazardClock {
     /// The law of an expression in a (module docs).
     pub fn new(text: &str) -> Result<Self> {
         let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
-        let laws = LAWS.get_or_init(|| Mutex::new(HashMap::new()));
-        let mut laws = laws.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(law) = laws.get(&text) {
-            return Ok(HazardClock { law });
-        }
-        let law: &'static Compiled = Box::leak(Box::new(compile(&text)?));
-        laws.insert(text, law);
+        let law = LAWS.get_or_compile(&text, || compile(&text))?;
         Ok(HazardClock { law })
     }
 
@@ -316,7 +311,7 @@ impl Law for HazardClock {
         HazardClock::new(&format!("({scaled})/{}", number(c)))
     }
     fn tail_integral(&self, t: f64) -> f64 {
-        let l = self.law;
+        let l = &self.law.clone();
         let n = l.edges.len() - 1;
         let beyond = (-l.cum[n]).exp() / l.r_end;
         match l.panel(t.max(0.0)) {

@@ -44,7 +44,7 @@ use std::fmt;
 pub const FLAG: &str = "reset_clock";
 
 /// A law of the waiting time R between resets.
-pub trait Law: Copy + fmt::Debug + PartialEq + Send + Sync + Sized {
+pub trait Law: Clone + fmt::Debug + PartialEq + Send + Sync + Sized {
     /// The kind as spelled in a spec (`gamma`).
     const KIND: &'static str;
     /// The keys and their ranges, for messages (`gamma:k=K,theta=TH (K, TH > 0)`).
@@ -225,7 +225,7 @@ macro_rules! clock_laws {
 macro_rules! __clock_registry {
     ($($variant:ident => $m:ident :: $ty:ident,)+) => {
         /// A renewal reset clock: any law of the registry (module docs).
-        #[derive(Clone, Copy, Debug, PartialEq)]
+        #[derive(Clone, Debug, PartialEq)]
         pub enum Clock {
             $(
                 #[doc = concat!("[`", stringify!($ty), "`]")]

@@ -9,23 +9,23 @@
 //! T; a tail is written as points), at most [`MAX_POINTS`]. The app layer
 //! reads them from a CSV file (`table:file=PATH`) and writes this inline
 //! spelling into every provenance file, so a run is reproducible from its
-//! provenance alone. The table is interned (one leaked allocation per
-//! distinct spec) so the law stays `Copy`.
+//! provenance alone. A table is shared by the copies of its law and freed
+//! with the last (`model::shared`).
 
 use super::{bad, check_mean, Law};
 use crate::error::Result;
 use crate::model::drag::spec::number;
+use crate::model::shared::Shared;
 use rand::Rng;
-use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Arc;
 
 /// The most points a table takes.
 pub const MAX_POINTS: usize = 100_000;
 
 /// A tabulated survival function.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct TableClock {
-    data: &'static Data,
+    data: Arc<Data>,
 }
 
 #[derive(Debug)]
@@ -37,11 +37,12 @@ struct Data {
     cum: Vec<f64>,
 }
 
-static TABLES: OnceLock<Mutex<HashMap<String, &'static Data>>> = OnceLock::new();
+/// The tables in use, by their spec.
+static TABLES: Shared<Data> = Shared::new();
 
 impl PartialEq for TableClock {
     fn eq(&self, other: &Self) -> bool {
-        std::ptr::eq(self.data, other.data)
+        Arc::ptr_eq(&self.data, &other.data)
     }
 }
 
@@ -51,22 +52,18 @@ impl TableClock {
     pub fn new(t: Vec<f64>, w: Vec<f64>) -> Result<Self> {
         let spec = write(&t, &w);
         check(&t, &w, &spec)?;
-        let table = TABLES.get_or_init(|| Mutex::new(HashMap::new()));
-        let mut tables = table.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(d) = tables.get(&spec) {
-            return Ok(TableClock { data: d });
-        }
-        let mut cum = vec![0.0; t.len()];
-        for i in 1..t.len() {
-            cum[i] = cum[i - 1] + 0.5 * (w[i - 1] + w[i]) * (t[i] - t[i - 1]);
-        }
-        let data: &'static Data = Box::leak(Box::new(Data {
-            spec: spec.clone(),
-            t,
-            w,
-            cum,
-        }));
-        tables.insert(spec, data);
+        let data = TABLES.get_or_compile(&spec, || {
+            let mut cum = vec![0.0; t.len()];
+            for i in 1..t.len() {
+                cum[i] = cum[i - 1] + 0.5 * (w[i - 1] + w[i]) * (t[i] - t[i - 1]);
+            }
+            Ok(Data {
+                spec: spec.clone(),
+                t,
+                w,
+                cum,
+            })
+        })?;
         Ok(TableClock { data })
     }
 
@@ -85,7 +82,7 @@ impl TableClock {
 
     /// ∫_0^t W.
     fn antiderivative(&self, t: f64) -> f64 {
-        let d = self.data;
+        let d = &self.data.clone();
         let last = d.t.len() - 1;
         if t >= d.t[last] {
             return d.cum[last];
@@ -174,14 +171,14 @@ impl Law for TableClock {
     #[inline]
     fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         let u: f64 = rng.gen();
-        let d = self.data;
+        let d = &self.data.clone();
         // The first i with W_i ≤ u: R lies in (t_{i-1}, t_i].
         let i = d.w.partition_point(|&x| x > u).max(1);
         let (w0, w1) = (d.w[i - 1], d.w[i]);
         d.t[i - 1] + (w0 - u) / (w0 - w1) * (d.t[i] - d.t[i - 1])
     }
     fn survival(&self, t: f64) -> f64 {
-        let d = self.data;
+        let d = &self.data.clone();
         if t <= 0.0 {
             return 1.0;
         }
@@ -193,7 +190,7 @@ impl Law for TableClock {
         d.w[i] + s * (d.w[i + 1] - d.w[i])
     }
     fn density(&self, t: f64) -> Option<f64> {
-        let d = self.data;
+        let d = &self.data.clone();
         if t < 0.0 || t >= d.t[d.t.len() - 1] {
             return Some(0.0);
         }
