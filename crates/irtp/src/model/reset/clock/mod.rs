@@ -22,9 +22,9 @@
 //! form, so a written spec parses back bit for bit. Every error names
 //! `reset_clock` and the supported range.
 //!
-//! The laws are `Copy` (as [`crate::Params`] is): a table and a hazard
-//! expression are interned for the life of the process (one leaked
-//! allocation per distinct spec), as the `expr:` drag law is.
+//! The laws are `Clone` (as [`crate::Params`] is): a table and a hazard
+//! expression are shared by the copies of their law and freed with the
+//! last (`model::shared`), as the `expr:` drag law is.
 
 pub mod exp;
 pub mod fixed;
