@@ -148,11 +148,11 @@ fn hold_with_a_noise_model_is_in_the_atom() {
     }
 }
 
-/// Three states (levels 3, 1, −3, every rate 1/2: π = 1/3 each, exit rate
-/// 1) on tan drag reset at rate 1 to v_r = atan 1, the fixed point of the
-/// level-1 state: the start v = 0 holds nothing, the reset atom grows from
-/// 0 as m(t) = (1/3)(1/2)(1 − e^{−2t}) (Eq. (N52), m(0) = 0), as
-/// [`atom_case`] checks it.
+/// Three states (levels 3, 1, −3, every rate 1/2: π = 1/3 each, exit
+/// rate 1) on tan drag reset at rate 1 to v_r = atan 1, the fixed point
+/// of the level-1 state: the start v = 0 holds nothing, and the reset atom
+/// grows from nothing as m(t) = (1/3)(1/2)(1 − e^{−2t}) (Eq. (N52),
+/// m(0) = 0), as [`atom_case`] checks it.
 #[test]
 fn a_reset_atom_off_the_start_grows_from_nothing() {
     let spec = "states:levels=[3,1,-3],rates=[[-1,0.5,0.5],[0.5,-1,0.5],[0.5,0.5,-1]]";
