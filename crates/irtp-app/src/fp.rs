@@ -456,8 +456,8 @@ fn noise_text(n: &fp::NoiseSummary) -> String {
     )
 }
 
-/// Run `irtp fp transient`: `moments.csv`, `snapshots.csv`, `summary.json`,
-/// `run.json`.
+/// Run `irtp fp transient`: `moments.csv`, `snapshots.csv`, `atoms.csv`
+/// (with point masses), `summary.json`, `run.json`.
 pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     let (params, opts) = a.config()?;
     let out = open_out(
@@ -499,43 +499,6 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
     if let Some(e) = mesh_error {
         summary["v2_mesh_error_max"] = json!(e);
     }
-    let mut moments = Table {
-        name: "moments",
-        header: ["t", "v_mean", "v2", "mass"].map(String::from).to_vec(),
-        columns: vec![
-            tr.times.clone(),
-            tr.v_mean.clone(),
-            tr.v2.clone(),
-            tr.mass.clone(),
-        ],
-    };
-    // With a refractory period: the held point mass per recording time.
-    if params.schedule().refractory.is_some() {
-        moments.header.push("refractory_mass".into());
-        moments.columns.push(tr.refractory_mass.clone());
-    }
-    // With point masses: their total mass and error per recording time.
-    if tr.atoms.iter().any(|a| !a.is_empty()) {
-        let sum = |f: fn(&irtp::model::VelocityAtom) -> f64| -> Vec<f64> {
-            tr.atoms.iter().map(|a| a.iter().map(f).sum()).collect()
-        };
-        moments
-            .header
-            .extend(["atom_mass", "atom_err"].map(String::from));
-        moments.columns.push(sum(|a| a.mass));
-        moments.columns.push(sum(|a| a.err));
-    }
-    let snapshots = match tr.snapshots.first().map(|s| s.states.len()) {
-        Some(ns) if ns > 0 => noise_snapshots(&tr, ns),
-        _ => Table::from_rows(
-            "snapshots",
-            &["t", "v", "p", "p_plus", "p_minus"],
-            tr.snapshots.iter().flat_map(|s| {
-                let v = &tr.v;
-                (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
-            }),
-        ),
-    };
     let steps = match tr.dt {
         Some(dt) => format!("dt = {}  ({} time steps", fmt_sig(dt), tr.steps),
         None => format!(
@@ -577,12 +540,67 @@ pub fn transient(a: &TransientArgs, ctx: &Context) -> irtp::Result<Outcome> {
         seed: None,
         json: summary,
         parameters: json!({"model": params, "options": opts}),
-        tables: vec![moments, snapshots],
+        tables: transient_tables(&tr, &params),
         json_files: Vec::new(),
         text,
         wall_time_s: wall,
     };
     finish("fp transient", results, out, ctx)
+}
+
+/// The tables of `fp transient`: `moments`, `snapshots` and, where the law
+/// has point masses at some time, `atoms` (one row per recording time and
+/// atom: `t, v, mass, err`, as `atoms_t` of the summary).
+fn transient_tables(tr: &fp::Transient, params: &Params) -> Vec<Table> {
+    let mut moments = Table {
+        name: "moments",
+        header: ["t", "v_mean", "v2", "mass"].map(String::from).to_vec(),
+        columns: vec![
+            tr.times.clone(),
+            tr.v_mean.clone(),
+            tr.v2.clone(),
+            tr.mass.clone(),
+        ],
+    };
+    // With a refractory period: the held point mass per recording time.
+    if params.schedule().refractory.is_some() {
+        moments.header.push("refractory_mass".into());
+        moments.columns.push(tr.refractory_mass.clone());
+    }
+    // With point masses: their total mass and error per recording time.
+    if tr.atoms.iter().any(|a| !a.is_empty()) {
+        let sum = |f: fn(&irtp::model::VelocityAtom) -> f64| -> Vec<f64> {
+            tr.atoms.iter().map(|a| a.iter().map(f).sum()).collect()
+        };
+        moments
+            .header
+            .extend(["atom_mass", "atom_err"].map(String::from));
+        moments.columns.push(sum(|a| a.mass));
+        moments.columns.push(sum(|a| a.err));
+    }
+    let snapshots = match tr.snapshots.first().map(|s| s.states.len()) {
+        Some(ns) if ns > 0 => noise_snapshots(tr, ns),
+        _ => Table::from_rows(
+            "snapshots",
+            &["t", "v", "p", "p_plus", "p_minus"],
+            tr.snapshots.iter().flat_map(|s| {
+                let v = &tr.v;
+                (0..tr.cells).map(move |i| [s.t, v[i], s.p[i], s.p_plus[i], s.p_minus[i]])
+            }),
+        ),
+    };
+    let mut tables = vec![moments, snapshots];
+    if tr.atoms.iter().any(|a| !a.is_empty()) {
+        tables.push(Table::from_rows(
+            "atoms",
+            &["t", "v", "mass", "err"],
+            tr.times
+                .iter()
+                .zip(&tr.atoms)
+                .flat_map(|(&t, at)| at.iter().map(move |a| [t, a.v, a.mass, a.err])),
+        ));
+    }
+    tables
 }
 
 /// The snapshots of the N-state solver: t, v, p, one column p_s per state.

@@ -281,4 +281,14 @@ fn fp_transient_atom_in_time_against_its_ode_and_simulate() {
     );
     let moments = columns(&fp_dir.join("moments.csv"));
     assert_eq!(col(&moments, "atom_mass").last(), Some(&m));
+    // atoms.csv: one row per recording time and atom, as atoms_t.
+    let rows = columns(&fp_dir.join("atoms.csv"));
+    let names: Vec<&str> = rows.iter().map(|(h, _)| h.as_str()).collect();
+    assert_eq!(names, ["t", "v", "mass", "err"]);
+    assert_eq!(col(&rows, "t").len(), series.len());
+    for (k, e) in series.iter().enumerate() {
+        let (v, m, err) = atom(e);
+        let row = ["t", "v", "mass", "err"].map(|c| col(&rows, c)[k]);
+        assert_eq!(row, [e["t"].as_f64().unwrap(), v, m, err], "row {k}");
+    }
 }

@@ -6,6 +6,7 @@
 use crate::common::models;
 use irtp::fp::{stationary, transient, Mesh, StationaryOptions, Transient, TransientOptions};
 use irtp::model::noise::NoiseModel;
+use irtp::model::reset::Reset;
 use irtp::model::VelocityAtom;
 use irtp::{DragLaw, Params};
 
@@ -63,50 +64,102 @@ fn rpt_reset_atom_on_finer_meshes() {
 }
 
 fn rpt_atom_case(rate: f64, cells: usize) {
-    {
-        let p = rpt(rate);
-        let tr = run(&p, cells);
-        let st = stationary(
-            &p,
-            &StationaryOptions {
-                cells,
-                mesh: Mesh::Graded,
-                extrapolate: true,
-            },
-        )
-        .unwrap();
-        assert_eq!(st.v, tr.v, "the transient and stationary meshes differ");
-        assert_eq!(tr.atoms.len(), TIMES.len());
-        for (k, &t) in TIMES.iter().enumerate() {
-            let a = one(&tr.atoms[k]);
-            let want = rpt_atom(rate, t);
-            let tag = format!("r = {rate}, cells = {cells}, t = {t}");
-            println!("{tag}: atom {} ± {:.1e} (want {want})", a.mass, a.err);
-            assert_eq!(a.v, 0.0, "{tag}");
-            assert!(a.err > 0.0 && a.err < 1e-3, "{tag}: error {}", a.err);
-            assert!(
-                (a.mass - want).abs() <= a.err,
-                "{tag}: {} vs {want} ± {}",
-                a.mass,
-                a.err
-            );
-            let snap = &tr.snapshots[k];
-            assert_eq!((snap.t, one(&snap.atoms)), (t, a), "{tag}");
-            let density: f64 = snap.p.iter().zip(&st.widths).map(|(p, w)| p * w).sum();
-            let total = density + a.mass;
-            assert!((total - 1.0).abs() <= a.err + 1e-8, "{tag}: total {total}");
-            assert!(snap.p.iter().all(|&x| x >= 0.0), "{tag}");
-        }
-        let (a, s) = (one(&tr.atoms[TIMES.len() - 1]), one(&st.atoms));
-        assert!(
-            (a.mass - s.mass).abs() <= a.err + s.err,
-            "r = {rate}: t = 12 atom {} ± {} vs stationary {} ± {}",
-            a.mass,
-            a.err,
-            s.mass,
-            s.err
+    atom_case(&rpt(rate), cells, 1e-3, &|t| rpt_atom(rate, t));
+}
+
+/// The one atom of `p` at every time of [`TIMES`] on `cells` cells: its
+/// closed form `want(t)` within its error estimate, that estimate in
+/// (0, `max_err`) after t = 0, the same atom in the snapshot at that time,
+/// density mass (on the stationary solver's mesh, the same cells) + atom
+/// = 1 within the error, and at t = 12 the stationary solver's atom
+/// within both errors. Prints the error ratios |mass − want|/err.
+fn atom_case(p: &Params, cells: usize, max_err: f64, want: &dyn Fn(f64) -> f64) -> Transient {
+    let tr = run(p, cells);
+    let st = stationary(
+        p,
+        &StationaryOptions {
+            cells,
+            mesh: Mesh::Graded,
+            extrapolate: true,
+        },
+    )
+    .unwrap();
+    assert_eq!(st.v, tr.v, "the transient and stationary meshes differ");
+    assert_eq!(tr.atoms.len(), TIMES.len());
+    for (k, &t) in TIMES.iter().enumerate() {
+        let a = one(&tr.atoms[k]);
+        let want = want(t);
+        let tag = format!("cells = {cells}, t = {t}");
+        let ratio = (a.mass - want).abs() / a.err;
+        println!(
+            "{tag}: atom {} ± {:.1e} (want {want}, ratio {ratio:.3})",
+            a.mass, a.err
         );
+        assert_eq!(Some(a.v), p.reset().point(), "{tag}");
+        assert!(a.err > 0.0 && a.err < max_err, "{tag}: error {}", a.err);
+        assert!(ratio <= 1.0, "{tag}: {} vs {want} ± {}", a.mass, a.err);
+        let snap = &tr.snapshots[k];
+        assert_eq!((snap.t, one(&snap.atoms)), (t, a), "{tag}");
+        let density: f64 = snap.p.iter().zip(&st.widths).map(|(p, w)| p * w).sum();
+        let total = density + a.mass;
+        assert!((total - 1.0).abs() <= a.err + 1e-8, "{tag}: total {total}");
+        assert!(snap.p.iter().all(|&x| x >= 0.0), "{tag}");
     }
+    let (a, s) = (one(&tr.atoms[TIMES.len() - 1]), one(&st.atoms));
+    println!(
+        "t = 12: {} ± {:.1e}, stationary {} ± {:.1e}",
+        a.mass, a.err, s.mass, s.err
+    );
+    assert!(
+        (a.mass - s.mass).abs() <= a.err + s.err,
+        "t = 12 atom {} ± {} vs stationary {} ± {}",
+        a.mass,
+        a.err,
+        s.mass,
+        s.err
+    );
+    tr
+}
+
+/// Eq. (N53): the atom at v_r of a hold of rate κ = 1/M (share Q = r/(r +
+/// κ)) plus the free atom of a state (stationary share π_s, exit rate
+/// q_s) whose fixed point is v_r, starting from `m0` on it.
+fn hold_atom(r: f64, kappa: f64, pi: f64, exit: f64, m0: f64, t: f64) -> f64 {
+    let (b, c, share) = (exit + r, r + kappa, r / (r + kappa));
+    let (eb, ec) = ((-b * t).exp(), (-c * t).exp());
+    let held = share * (1.0 - ec);
+    let free = kappa * pi * share * (1.0 / b - ec / (b - c) + eb * (1.0 / (b - c) - 1.0 / b));
+    held + free + m0 * eb
+}
+
+/// Run-pause-tumble noise reset at rate 1 to v_r = 0 into an exponential
+/// refractory period of mean 1/4: one atom at 0, the held mass (every
+/// state's) plus the pause's free atom, Eq. (N53) (→ 1/5 + 4/45), as
+/// [`atom_case`] checks it; the held mass is part of it.
+#[test]
+fn hold_with_a_noise_model_is_in_the_atom() {
+    let p = models::with_schedule(rpt(1.0), None, None, Some("exp:mean=0.25"));
+    let want = |t: f64| hold_atom(1.0, 4.0, 1.0 / 3.0, 2.0, 1.0 / 3.0, t);
+    let tr = atom_case(&p, 800, 1e-3, &want);
+    for (k, a) in tr.atoms.iter().enumerate() {
+        let held = tr.refractory_mass[k];
+        assert!(held > 0.0 || k == 0, "t = {}: held {held}", TIMES[k]);
+        assert!(one(a).mass > held, "t = {}: {a:?} vs held {held}", TIMES[k]);
+    }
+}
+
+/// Three states (levels 3, 1, −3, every rate 1/2: π = 1/3 each, exit
+/// rate 1) on tan drag reset at rate 1 to v_r = atan 1, the fixed point
+/// of the level-1 state: the start v = 0 holds nothing, and the reset atom
+/// grows from nothing as m(t) = (1/3)(1/2)(1 − e^{−2t}) (Eq. (N52),
+/// m(0) = 0), as [`atom_case`] checks it.
+#[test]
+fn a_reset_atom_off_the_start_grows_from_nothing() {
+    let spec = "states:levels=[3,1,-3],rates=[[-1,0.5,0.5],[0.5,-1,0.5],[0.5,0.5,-1]]";
+    let noise = NoiseModel::parse(spec, 0.0).unwrap();
+    let vr = 1.0f64.atan();
+    let p = Params::with_noise("tan".parse().unwrap(), noise, 1.0, vr).unwrap();
+    atom_case(&p, 800, 5e-3, &|t| (1.0 - (-2.0 * t).exp()) / 6.0);
 }
 
 /// Without resets the pause still holds its share of the start at v = 0

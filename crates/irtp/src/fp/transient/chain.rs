@@ -6,7 +6,8 @@
 //! fine mesh's cells. Periodic resetting moves all mass to the reset
 //! target at every kT ([`TransientSpace::reset`]); an exponential
 //! refractory period adds one held mass per noise state after the cells
-//! ([`ChainOp`], docs/equations.md (R10)).
+//! ([`ChainOp`], docs/equations.md (R10)); at a point target their sum is
+//! an atom at v_r beside the states' atoms.
 
 use super::{
     integrate_levels, Scheme, Snapshot, Transient, TransientOptions, TransientSpace,
@@ -107,9 +108,12 @@ impl TransientSpace for ChainSpace<'_> {
                 .map(|j| [self.atom_rows[0][k][j], self.atom_rows[1][k][j], arow[j]])
                 .collect();
             let (split, rest) = split_held(u, &self.cells, &x);
+            let hold = self.hold_atom(o[3], self.obs[level - 1][k][3]);
+            let off_atom = if hold.is_some() { 0.0 } else { o[3] };
             self.fine_rows[k] = FineAtoms {
                 split,
-                total: rest.iter().sum::<f64>() + o[3],
+                hold,
+                total: rest.iter().sum::<f64>() + off_atom,
             };
             if self.snaps.contains(&self.all[k]) {
                 self.snapshots.push((self.all[k], rest));
@@ -117,6 +121,23 @@ impl TransientSpace for ChainSpace<'_> {
         }
         self.atom_rows[level][k] = arow;
         Ok(())
+    }
+}
+
+impl ChainSpace<'_> {
+    /// The held masses at a point target v_r as one atom (Eqs. (R10),
+    /// (N53)):
+    /// the fine mesh's total `fine`, its error the change from the mesh
+    /// cells/2's `half` (as [`super::two_state`]'s hold), at least 1e-14
+    /// of the mass. None without a hold or with a random target (its held
+    /// mass is spread over the target's cells).
+    fn hold_atom(&self, fine: f64, half: f64) -> Option<VelocityAtom> {
+        let v = self.p.reset().point()?;
+        self.hold.as_ref().map(|_| VelocityAtom {
+            v,
+            mass: fine,
+            err: (fine - half).abs().max(1e-14 * fine),
+        })
     }
 }
 
@@ -169,7 +190,7 @@ pub(super) fn transient(
     let op = c.op.take().expect("three meshes");
     let obs = &c.obs;
     let pick = |k: usize, j: usize| richardson(obs[0][k][j], obs[1][k][j], obs[2][k][j]);
-    let atoms = |k: usize| merge_atoms(&c.held, &c.fine_rows[k].split);
+    let atoms = |k: usize| merge_atoms(&c.held, &c.fine_rows[k]);
     check_balance(&times, &c.fine_rows, &atoms)?;
     let idx: Vec<usize> = rec
         .iter()
@@ -206,10 +227,13 @@ pub(super) fn transient(
 }
 
 /// The fine mesh's atoms at one time: per held (velocity, state) the
-/// extrapolated mass and its error, and the cell masses without them.
+/// extrapolated mass and its error, the refractory hold at a point target,
+/// and the mass of the rest (the cells without the atoms, and the held
+/// masses of a random target).
 #[derive(Clone, Debug, Default)]
 struct FineAtoms {
     split: Vec<(f64, f64)>,
+    hold: Option<VelocityAtom>,
     total: f64,
 }
 
@@ -259,11 +283,16 @@ fn split_held(
     (split, rest)
 }
 
-/// The atoms of one time: the held (velocity, state) masses summed per
-/// velocity, their errors added.
-fn merge_atoms(held: &[(f64, usize)], split: &[(f64, f64)]) -> Vec<VelocityAtom> {
+/// The atoms of one time: the held (velocity, state) masses and the
+/// refractory hold summed per velocity, their errors added.
+fn merge_atoms(held: &[(f64, usize)], fine: &FineAtoms) -> Vec<VelocityAtom> {
     let mut out: Vec<VelocityAtom> = Vec::new();
-    for (&(v, _), &(mass, err)) in held.iter().zip(split) {
+    let split = held
+        .iter()
+        .zip(&fine.split)
+        .map(|(&(v, _), &(m, e))| (v, m, e));
+    let hold = fine.hold.iter().map(|a| (a.v, a.mass, a.err));
+    for (v, mass, err) in split.chain(hold) {
         match out.iter_mut().find(|a| a.v == v) {
             Some(a) => {
                 a.mass += mass;

@@ -218,7 +218,9 @@ pub struct Transient {
     /// mass, error the change from the mesh of cells/2), and with a noise
     /// model at T = 0 the mass held at a state's fixed point (Eq. (N52):
     /// the reset target, or the start v = 0), extrapolated over the three
-    /// meshes. The snapshots' densities are without them, and the density
+    /// meshes; masses at one velocity are one atom (their masses and
+    /// errors added: the hold at v_r and a state's reset atom there). The
+    /// snapshots' densities are without them, and the density
     /// mass plus the atoms is checked to be 1 at every time (refused
     /// otherwise). Empty lists where nothing holds the velocity. At t = 0
     /// the start's share in the states that move is in the cells of v = 0,
