@@ -359,12 +359,8 @@ impl UpwindOperator {
         self.apply_mass(&x1, &mut mass);
         let x2 = solve((0..dim).map(|i| mass[i] + f2[i]).collect());
         let (p, q) = (2 * self.start, 2 * self.start + 1);
-        if !x1.iter().chain(&x2).all(|x| x.is_finite()) {
-            return Err(Failure::NonFinite {
-                method: METHOD,
-                at: f64::INFINITY,
-            });
-        }
+        Failure::check_finite(&x1, METHOD, f64::INFINITY)?;
+        Failure::check_finite(&x2, METHOD, f64::INFINITY)?;
         Ok(((x1[p], x1[q]), (x2[p], x2[q])))
     }
 
@@ -574,13 +570,7 @@ impl ShiftedLinear for UpwindOperator {
         x[n + 1] = b[n + 1] + c * x[2 * self.start + 1];
         x[n + 2] = b[n + 2] + c * x[n];
         x[n + 3] = b[n + 3] + c * x[n + 1];
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(Failure::NonFinite {
-                method: METHOD,
-                at: c,
-            });
-        }
-        Ok(())
+        Failure::check_finite(x, METHOD, c)
     }
 
     fn atol(&self, i: usize, atol: f64) -> f64 {

@@ -42,6 +42,19 @@ pub struct Singular {
     pub row: usize,
 }
 
+impl Singular {
+    /// This failure as the library's error in `method`:
+    /// [`crate::Error::Interrupted`] when a stop request ended the
+    /// factorisation (see [`Band::factor`]), else
+    /// [`crate::Error::Numerical`] giving `reason`.
+    pub fn into_error(self, method: &'static str, reason: String) -> crate::Error {
+        if crate::stop::stop_requested() {
+            return crate::Error::Interrupted;
+        }
+        crate::Error::Numerical { method, reason }
+    }
+}
+
 /// Rows eliminated between two polls of the stop request: one relaxed load
 /// per block, against kl·(kl + ku) flops a row.
 pub const STOP_POLL_ROWS: usize = 256;
@@ -172,6 +185,13 @@ impl Band {
             }
         }
         flops
+    }
+
+    /// [`Band::factor`] with its failure as the library's error in `method`
+    /// ([`Singular::into_error`], the reason naming the row).
+    pub fn factor_for(&mut self, method: &'static str) -> crate::Result<()> {
+        self.factor()
+            .map_err(|e| e.into_error(method, e.to_string()))
     }
 
     /// Solve A x = b in place with the factors of [`Band::factor`]. A stop

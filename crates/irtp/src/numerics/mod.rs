@@ -51,6 +51,15 @@ pub enum Failure {
 }
 
 impl Failure {
+    /// `Ok` when every value of `x` is finite, else
+    /// [`Failure::NonFinite`] of `method` at `at`.
+    pub fn check_finite(x: &[f64], method: &'static str, at: f64) -> Result<(), Failure> {
+        match x.iter().all(|v| v.is_finite()) {
+            true => Ok(()),
+            false => Err(Failure::NonFinite { method, at }),
+        }
+    }
+
     /// The same failure attributed to `method` (a caller's name for the
     /// computation, e.g. "r0 density normalisation").
     pub fn in_method(self, method: &'static str) -> Self {

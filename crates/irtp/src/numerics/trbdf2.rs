@@ -244,14 +244,7 @@ fn check_inputs<O: ShiftedLinear>(
             "finite, >= 0, sorted",
         ));
     }
-    if u.iter().any(|x| !x.is_finite()) {
-        return Err(Failure::NonFinite {
-            method: "TR-BDF2 initial state",
-            at: 0.0,
-        }
-        .into());
-    }
-    Ok(())
+    Ok(Failure::check_finite(u, "TR-BDF2 initial state", 0.0)?)
 }
 
 /// The first step: 1% of ‖u0‖ / ‖u0'‖ (weighted), at most the first output
@@ -387,13 +380,7 @@ fn error_norm<O: ShiftedLinear>(
             0.0
         }
     };
-    if w.un.iter().any(|x| !x.is_finite()) {
-        return Err(Failure::NonFinite {
-            method: "TR-BDF2 time stepping",
-            at: h,
-        }
-        .into());
-    }
+    Failure::check_finite(&w.un, "TR-BDF2 time stepping", h)?;
     Ok(match op.rms_norm_with_max_over() {
         None => (0..u.len()).map(ratio).fold(0.0, f64::max),
         Some(rows) => {

@@ -937,14 +937,8 @@ impl NodeAnswer {
 pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str) -> Result<Band> {
     let mut band = g.shifted(alpha, beta);
     band.factor().map_err(|e| {
-        // A factorisation ended by a stop request is no numerical failure.
-        if crate::parallel::stop_requested() {
-            return Error::Interrupted;
-        }
-        Error::Numerical {
-            method,
-            reason: format!("{e} (the upwind matrix should be a non-singular M-matrix)"),
-        }
+        let why = "the upwind matrix should be a non-singular M-matrix";
+        e.into_error(method, format!("{e} ({why})"))
     })?;
     Ok(band)
 }

@@ -370,9 +370,8 @@ impl RankN {
                 s.set(i, j, x + f64::from(u8::from(i == j)));
             }
         }
-        s.factor().map_err(|e| Error::Numerical {
-            method,
-            reason: format!("singular {n}×{n} reset capacitance ({e})"),
+        s.factor().map_err(|e| {
+            e.into_error(method, format!("singular {n}×{n} reset capacitance ({e})"))
         })?;
         Ok(RankN { z, s })
     }

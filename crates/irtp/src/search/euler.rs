@@ -49,12 +49,12 @@
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
 use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats};
-use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
+use crate::model::reset::{Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::Progress;
 use crate::rng::Rng;
 use crate::sim::euler::noise::StepChain;
-use crate::sim::euler::{euler_step, geometric_gap};
+use crate::sim::euler::{euler_step, geometric_gap, Clock, Step3};
 use rand::Rng as _;
 use std::ops::Range;
 
@@ -62,9 +62,9 @@ use std::ops::Range;
 /// stepped by P = exp(Q dt). A state enters with the step of its next
 /// jump (a geometric gap).
 trait EulerNoise {
-    /// The start state of a particle (`plus`: an even particle) and the
-    /// step of its first jump.
-    fn start(&self, plus: bool, rng: &mut Rng) -> (usize, u64);
+    /// The start state of a particle labelled with state `s0` (an even
+    /// particle: 0) and the step of its first jump.
+    fn start(&self, s0: usize, rng: &mut Rng) -> (usize, u64);
     /// The level a_s of state s.
     fn level(&self, s: usize) -> f64;
     /// The state and next jump step after a reset at `step` from s (whose
@@ -89,8 +89,8 @@ struct Telegraph {
 }
 
 impl EulerNoise for Telegraph {
-    fn start(&self, plus: bool, rng: &mut Rng) -> (usize, u64) {
-        (usize::from(!plus), geometric_gap(rng, self.ln_flip))
+    fn start(&self, s0: usize, rng: &mut Rng) -> (usize, u64) {
+        (s0, geometric_gap(rng, self.ln_flip))
     }
     #[inline]
     fn level(&self, s: usize) -> f64 {
@@ -109,8 +109,8 @@ impl EulerNoise for Telegraph {
 }
 
 impl EulerNoise for StepChain {
-    /// Drawn from π (one uniform), then its first jump.
-    fn start(&self, _: bool, rng: &mut Rng) -> (usize, u64) {
+    /// Drawn from π (one uniform; the label ignored), then its first jump.
+    fn start(&self, _: usize, rng: &mut Rng) -> (usize, u64) {
         let s = self.draw_stationary(rng);
         (s, geometric_gap(rng, self.ln_stay[s]))
     }
@@ -166,10 +166,9 @@ struct Chain {
     hi: f64,
     max_steps: u64,
     reset: ResetRule,
-    /// The scheduled clock (periodic or renewal), if any.
+    /// The scheduled clock (periodic or renewal) and refractory period, if any.
     schedule: Schedule,
     x_reset: Option<f64>,
-    refractory: Option<Refractory>,
 }
 
 impl SearchEuler {
@@ -238,19 +237,20 @@ impl SearchEuler {
                 .and_then(|ch| StepChain::new(&ch, self.dt))
                 .expect("noise chain validated by SearchEuler::new")
         });
-        let run = |noise: &(dyn Fn(&mut Rng, bool) -> FptSample + Sync)| {
+        // An even particle (`plus`) labelled with state 0 (+Sigma).
+        let run = |noise: &(dyn Fn(&mut Rng, usize) -> FptSample + Sync)| {
             first_passage_units(
                 n,
                 units.clone(),
                 seed,
                 self.t_max,
                 progress,
-                |_, rng, plus| noise(rng, plus),
+                |_, rng, plus| noise(rng, usize::from(!plus)),
             )
         };
         crate::with_drag!(p.drag(), |d| match &chain {
-            None => run(&|rng, plus| c.run(d, &paper, plus, rng)),
-            Some(ch) => run(&|rng, plus| c.run(d, ch, plus, rng)),
+            None => run(&|rng, s0| c.run(d, &paper, s0, rng)),
+            Some(ch) => run(&|rng, s0| c.run(d, ch, s0, rng)),
         })
     }
 
@@ -269,29 +269,27 @@ impl SearchEuler {
             reset: *p.reset(),
             schedule: p.schedule().clone(),
             x_reset: p.schedule().position.map(|r| r.x),
-            refractory: p.schedule().refractory,
         }
     }
 }
 
 impl Chain {
-    /// One particle (module docs): the passage time (None by t_max) and
-    /// the number of steps.
+    /// One particle (module docs) starting in noise state `s0` (the
+    /// paper's noise; a chain draws its own): the passage time (None by
+    /// t_max) and the number of steps.
     fn run<D: Drag, N: EulerNoise>(
         &self,
         drag: &D,
         noise: &N,
-        plus: bool,
+        s0: usize,
         rng: &mut Rng,
     ) -> FptSample {
         let (mut x, mut v) = (self.x0, self.v0);
-        let (mut s, mut next_flip) = noise.start(plus, rng);
+        let (mut s, mut next_flip) = noise.start(s0, rng);
         let mut next_reset = geometric_gap(rng, self.ln_reset);
-        // The next scheduled reset time (∞ without a clock; no draw then).
-        let mut next_scheduled = self.schedule.first_reset(rng);
+        // The scheduled resets and refractory holds (no draw without them).
+        let mut clock = Clock::start(&self.schedule, self.dt, rng);
         let mut step = 0u64;
-        // Held steps left of a refractory period.
-        let mut hold = 0u64;
         while step < self.max_steps {
             step += 1;
             // Stopped: reported as censored, in a chunk the cancelled
@@ -303,48 +301,31 @@ impl Chain {
             if poisson {
                 next_reset = step.saturating_add(geometric_gap(rng, self.ln_reset));
             }
-            // The scheduled reset at t_k falls in the step n = round(t_k/dt).
-            let scheduled = (step - 1) as f64 >= (next_scheduled / self.dt).round();
-            if hold > 0 {
-                // A held step: resets off (the clock restarts at the
-                // hold's end), x moves at the held velocity.
-                hold -= 1;
-                x += self.dt * v;
-                if !(x > self.lo && x < self.hi) {
-                    return FptSample {
-                        time: Some(step as f64 * self.dt),
-                        work: step,
-                    };
+            // Step n = step - 1 holds, resets (on the start side: never a
+            // passage) or drifts; a held step moves x at the held velocity.
+            let moved = match clock.step3(step - 1, poisson) {
+                Step3::Hold => {
+                    x += self.dt * v;
+                    true
                 }
-            } else if poisson || scheduled {
-                v = self.reset.draw_velocity(rng);
-                (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
-                x = self.x_reset.unwrap_or(x);
-                if let Some(r) = self.refractory {
-                    hold = (r.draw(rng) / self.dt).round() as u64;
+                Step3::Reset => {
+                    v = self.reset.draw_velocity(rng);
+                    (s, next_flip) = noise.reset(s, next_flip, step, &self.reset, rng);
+                    x = self.x_reset.unwrap_or(x);
+                    clock.rearm(&self.schedule, rng);
+                    false
                 }
-                // The clock restarts at the reset (a Poisson one at the
-                // step's start) or at the end of its hold; a periodic clock
-                // is not moved by a Poisson reset without a hold (its next
-                // multiple of T is the same).
-                let at = if scheduled {
-                    next_scheduled
-                } else {
-                    (step - 1) as f64 * self.dt
+                Step3::Drift => {
+                    x += self.dt * v;
+                    v = euler_step(drag, v, noise.level(s), self.dt);
+                    true
+                }
+            };
+            if moved && !(x > self.lo && x < self.hi) {
+                return FptSample {
+                    time: Some(step as f64 * self.dt),
+                    work: step,
                 };
-                let restart = scheduled || hold > 0 || self.schedule.clock.is_some();
-                if self.schedule.scheduled_clock() && restart {
-                    next_scheduled = self.schedule.next_reset(at + hold as f64 * self.dt, rng);
-                }
-            } else {
-                x += self.dt * v;
-                v = euler_step(drag, v, noise.level(s), self.dt);
-                if !(x > self.lo && x < self.hi) {
-                    return FptSample {
-                        time: Some(step as f64 * self.dt),
-                        work: step,
-                    };
-                }
             }
             if step == next_flip {
                 (s, next_flip) = noise.jump(s, step, rng);

@@ -775,24 +775,29 @@ pub(crate) enum Step3 {
 
 /// The schedule's modifiers of one particle (module docs): the next
 /// periodic or renewal reset time, its step, and the held steps left of a
-/// refractory period.
+/// refractory period. Shared by the scheduled loops of the simulation, the
+/// velocity first passage ([`crate::mfpt::euler`]) and the search
+/// ([`crate::search::euler`]); each relies on a scheduled clock having
+/// no Poisson rate ([`crate::Params::with_schedule`]).
 pub(crate) struct Clock {
     next: f64,
     /// round(next/dt): the step of the next scheduled reset (∞ without one).
     step: f64,
     hold: u64,
+    dt: f64,
 }
 
 impl Clock {
-    /// The clock at t = 0: the first scheduled reset time drawn from `rng`
-    /// (no draw without a clock).
+    /// The clock of `schedule` at step `dt` at t = 0: the first scheduled
+    /// reset time drawn from `rng` (no draw without a clock).
     #[inline]
-    pub(crate) fn start(fr: &Frame, rng: &mut Rng) -> Self {
-        let next = fr.schedule.first_reset(rng);
+    pub(crate) fn start(schedule: &Schedule, dt: f64, rng: &mut Rng) -> Self {
+        let next = schedule.first_reset(rng);
         Clock {
             next,
-            step: (next / fr.plan.dt).round(),
+            step: (next / dt).round(),
             hold: 0,
+            dt,
         }
     }
 
@@ -818,16 +823,17 @@ impl Clock {
     }
 
     /// After a reset: the refractory period's held steps round(D/dt), then
-    /// the next scheduled reset time, the clock restarted at the hold's end.
+    /// the next scheduled reset time, the clock restarted at the hold's end
+    /// (`schedule` the one it started with).
     #[inline]
-    pub(crate) fn rearm(&mut self, fr: &Frame, rng: &mut Rng) {
-        let dt = fr.plan.dt;
-        if let Some(r) = fr.schedule.refractory {
+    pub(crate) fn rearm(&mut self, schedule: &Schedule, rng: &mut Rng) {
+        let dt = self.dt;
+        if let Some(r) = schedule.refractory {
             self.hold = (r.draw(rng) / dt).round() as u64;
         }
-        if fr.schedule.scheduled_clock() {
+        if schedule.scheduled_clock() {
             let free = self.next + self.hold as f64 * dt;
-            self.next = fr.schedule.next_reset(free, rng);
+            self.next = schedule.next_reset(free, rng);
             self.step = (self.next / dt).round();
         }
     }
@@ -910,7 +916,7 @@ fn scheduled<N: NoiseSteps, E: Events>(
     let dt = plan.dt;
     let mut rng = rng::stream(fr.seed, i);
     let (mut st, mut ev) = noise.start::<E>(&mut rng, plan);
-    let mut clock = Clock::start(fr, &mut rng);
+    let mut clock = Clock::start(&fr.schedule, dt, &mut rng);
     let (mut v, mut x) = (0.0f64, 0.0f64);
     let (mut sv, mut sv2, mut msd, mut k) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     // Steps at the law's atom (held at the reset velocity, or resting at
@@ -945,7 +951,7 @@ fn scheduled<N: NoiseSteps, E: Events>(
                 if let Some(p) = fr.schedule.position {
                     x = p.x;
                 }
-                clock.rearm(fr, &mut rng);
+                clock.rearm(&fr.schedule, &mut rng);
             }
             Step3::Drift => v = noise.drift(v, &st, &mut rng),
         }

@@ -195,10 +195,7 @@ impl NoiseOperator {
     fn factorise(&self, c: f64) -> Result<ShiftedFactor> {
         let ns = self.mesh.states;
         let mut band = self.band(Some(c));
-        band.factor().map_err(|e| Error::Numerical {
-            method: "fp shifted solve (N states)",
-            reason: e.to_string(),
-        })?;
+        band.factor_for("fp shifted solve (N states)")?;
         let z: Vec<Vec<f64>> = (0..ns)
             .map(|s| {
                 let mut e = vec![0.0; self.dim()];

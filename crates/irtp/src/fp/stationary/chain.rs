@@ -102,10 +102,7 @@ fn solve_b(op: &NoiseOperator, b: &mut [f64]) -> Result<()> {
         }
         a.set(k, k, 1.0);
     }
-    a.factor().map_err(|e| Error::Numerical {
-        method: METHOD,
-        reason: format!("{e}"),
-    })?;
+    a.factor_for(METHOD)?;
     a.solve(b);
     Ok(())
 }

@@ -575,10 +575,7 @@ impl Setup {
             rhs,
             absorbed,
         } = op;
-        band.factor().map_err(|e| Error::Numerical {
-            method: METHOD,
-            reason: e.to_string(),
-        })?;
+        band.factor_for(METHOD)?;
         crate::parallel::check_stop()?;
         let mut x = rhs;
         band.solve(&mut x);

@@ -463,13 +463,7 @@ impl ShiftedLinear for Survival {
             x[n + s] = b[n + s] + c * x[self.reported[s]];
             x[n + ns + s] = b[n + ns + s] + c * x[n + s];
         }
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(Failure::NonFinite {
-                method: METHOD,
-                at: c,
-            });
-        }
-        Ok(())
+        Failure::check_finite(x, METHOD, c)
     }
 
     fn atol(&self, i: usize, atol: f64) -> f64 {

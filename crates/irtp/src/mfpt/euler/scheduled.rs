@@ -36,19 +36,20 @@ use std::ops::Range;
 
 /// How a first-passage particle starts: its noise state and event sampler.
 trait Begin: NoiseSteps {
-    /// The start of a particle labelled `plus` (the paper's +Σ).
-    fn begin(&self, plus: bool, rng: &mut Rng, plan: &EulerPlan) -> (Self::State, Geometric);
+    /// The start of a particle labelled with noise state `s0` (the paper's
+    /// +Σ: 0, -Σ: 1; a noise model draws its own).
+    fn begin(&self, s0: usize, rng: &mut Rng, plan: &EulerPlan) -> (Self::State, Geometric);
 }
 
 impl<D: Drag> Begin for Telegraph<'_, D> {
-    fn begin(&self, plus: bool, rng: &mut Rng, plan: &EulerPlan) -> (f64, Geometric) {
-        let eta = if plus { self.sigma } else { -self.sigma };
+    fn begin(&self, s0: usize, rng: &mut Rng, plan: &EulerPlan) -> (f64, Geometric) {
+        let eta = if s0 == 0 { self.sigma } else { -self.sigma };
         (eta, Geometric::flip_first(rng, plan))
     }
 }
 
 impl<D: Drag> Begin for NoiseKernel<'_, D> {
-    fn begin(&self, _plus: bool, rng: &mut Rng, plan: &EulerPlan) -> (State, Geometric) {
+    fn begin(&self, _s0: usize, rng: &mut Rng, plan: &EulerPlan) -> (State, Geometric) {
         self.start(rng, plan)
     }
 }
@@ -171,9 +172,10 @@ impl<N: Begin + Sync> Passage<'_, N> {
     fn start(&self, i: u64) -> Lane<N::State> {
         let fr = &self.frame;
         let mut rng = rng::stream(fr.seed, i);
-        let plus = (i % 2 == 0) != self.swapped;
-        let (st, ev) = self.noise.begin(plus, &mut rng, fr.plan);
-        let clock = Clock::start(fr, &mut rng);
+        // +Σ (state 0) for even i, the labels swapped in the reflected frame.
+        let s0 = usize::from((i % 2 == 0) == self.swapped);
+        let (st, ev) = self.noise.begin(s0, &mut rng, fr.plan);
+        let clock = Clock::start(&fr.schedule, fr.plan.dt, &mut rng);
         Lane {
             i,
             rng,
@@ -212,7 +214,7 @@ impl<N: Begin + Sync> Passage<'_, N> {
                 if l.v >= self.vt {
                     return Some(sample(n + 1, true));
                 }
-                l.clock.rearm(fr, rng);
+                l.clock.rearm(&fr.schedule, rng);
             }
             Step3::Drift => {
                 let w = self.noise.drift(l.v, &l.st, rng);

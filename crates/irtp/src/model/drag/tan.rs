@@ -1,7 +1,7 @@
 //! g(v) = tan(v): the paper's shear-thickening medium (Table 1), any Sigma > 0.
 
 use super::closed::{Canonical, ClosedFlow, ClosedForm, InverseGuide, Solve};
-use super::{quadrature_deficits, Drag, FlowMap};
+use super::{Drag, FlowMap};
 use crate::numerics::{fastmath, root};
 
 /// g(v) = tan(v), v_u = atan(Sigma).
@@ -90,9 +90,6 @@ impl Drag for Tan {
     }
     fn flow_velocity(&self, s: f64, v0: f64, t: f64) -> f64 {
         self.flow(s).velocity(v0, t)
-    }
-    fn flow_deficits(&self, s: f64, va: f64, vb: f64) -> (f64, f64) {
-        quadrature_deficits(self, s, va, vb)
     }
 }
 

@@ -1,7 +1,7 @@
 //! g(v) = tanh(v): the paper's shear-thinning medium (Table 1), 0 < Sigma < 1.
 
 use super::closed::{Canonical, ClosedFlow, ClosedForm, InverseGuide, Solve};
-use super::{quadrature_deficits, Drag, FlowMap};
+use super::{Drag, FlowMap};
 use crate::numerics::{fastmath, root};
 
 /// g(v) = tanh(v), bounded by 1: v_u = atanh(Sigma) needs Sigma < 1.
@@ -96,9 +96,6 @@ impl Drag for Tanh {
     }
     fn flow_velocity(&self, s: f64, v0: f64, t: f64) -> f64 {
         self.flow(s).velocity(v0, t)
-    }
-    fn flow_deficits(&self, s: f64, va: f64, vb: f64) -> (f64, f64) {
-        quadrature_deficits(self, s, va, vb)
     }
 }
 

@@ -93,10 +93,8 @@ pub fn solve(a: &[Vec<f64>], b: &[f64], method: &'static str) -> Result<Vec<f64>
             m.set(i, j, x);
         }
     }
-    m.factor().map_err(|e| Error::Numerical {
-        method,
-        reason: format!("singular {n}×{n} system ({e})"),
-    })?;
+    m.factor()
+        .map_err(|e| e.into_error(method, format!("singular {n}×{n} system ({e})")))?;
     let mut x = b.to_vec();
     m.solve(&mut x);
     if x.iter().any(|v| !v.is_finite()) {
