@@ -414,10 +414,7 @@ impl ChainOp {
     fn factorise(&self, c: f64, kappa: f64) -> Result<HeldFactor> {
         let (op, ns) = (&self.b.op, self.ns());
         let mut band = op.band(Some(c));
-        band.factor().map_err(|e| Error::Numerical {
-            method: "fp transient (held masses)",
-            reason: e.to_string(),
-        })?;
+        band.factor_for("fp transient (held masses)")?;
         let z: Vec<Vec<f64>> = (0..ns)
             .map(|s| {
                 let mut e = vec![0.0; op.dim()];
