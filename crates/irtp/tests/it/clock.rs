@@ -326,13 +326,18 @@ fn exp_clock_matches_the_poisson_rate() {
 /// route's mesh ladder is not asymptotic within its budget it refuses,
 /// naming the mesh flags (a verdict, not an answer); every other refusal
 /// fails, and so does a law without one resolved case.
-fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usize) {
+fn sampler_vs_renewal(
+    cases: &[(DragLaw, f64, &str)],
+    particles: u64,
+    total: usize,
+    (steps, tail): (usize, f64),
+) {
     let z = bonferroni_z(total);
     let opts = RenewalOptions {
         cells_x: 24,
         cells_v: 12,
-        steps: 80,
-        tail: 1e-6,
+        steps,
+        tail,
         ..Default::default()
     };
     let mut resolved = std::collections::BTreeSet::new();
@@ -345,6 +350,7 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
             sched(None, Some(0.0), Some(spec)),
         );
         let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0)).unwrap();
+        let t0 = std::time::Instant::now();
         let route = match renewal::solve(&problem, &WaitingTime::of(&p).unwrap(), &opts) {
             Ok(route) => route,
             Err(e @ irtp::Error::Numerical { .. })
@@ -357,8 +363,16 @@ fn sampler_vs_renewal(cases: &[(DragLaw, f64, &str)], particles: u64, total: usi
             Err(e) => panic!("{drag:?} {spec}: {e}"),
         };
         resolved.insert(spec.split(':').next().unwrap());
+        let t1 = std::time::Instant::now();
         let (tau, se) = sampled(p, particles, 300 + i as u64);
         let diff = (tau - route.tau).abs();
+        eprintln!(
+            "{drag:?} {spec}: sampler {tau} ± {se} ({:?}), renewal {} ± {} ({:?})",
+            t1.elapsed(),
+            route.tau,
+            route.error_estimate,
+            t1 - t0
+        );
         assert!(
             diff < z * se + route.error_estimate,
             "{drag:?} {spec}: sampler {tau} ± {se}, renewal {} ± {}",
@@ -395,13 +409,25 @@ fn search_sampler_matches_the_renewal_route() {
         ],
         20_000,
         2,
+        (80, 1e-6),
     );
 }
 
+/// Every law, on a coarser time mesh of the route (40 steps to a horizon
+/// where the clock's survival is 1e-4, instead of 80 to 1e-6). The route
+/// is the whole cost (100 000 particles take about 1 s a case; the route
+/// took 25 CPU-s for gamma k = 0.5, 8 s now, and more than 73 s for the
+/// Pareto law's long horizon), and its mesh error (2-30% of tau) sets the
+/// tolerance, not the sampler's SE (0.3%): the time error and the tail
+/// bound, both in the route's estimate, add 0.06 to it for gamma k = 0.5
+/// (18.09 ± 1.06 against 18.11 ± 1.00), whose tolerance z SE + estimate
+/// grows from 6.8% to 7.2% of tau; a fixed clock has no tail and keeps
+/// its 2%. A law whose sampler and renewal kernel disagree by more than
+/// that is still caught.
 #[test]
 #[ignore = "slow tier: every law, linear and tanh drag"]
 fn search_sampler_matches_the_renewal_route_every_law() {
-    sampler_vs_renewal(&SLOW_CASES, 100_000, SLOW_CASES.len());
+    sampler_vs_renewal(&SLOW_CASES, 100_000, SLOW_CASES.len(), (40, 1e-4));
 }
 
 /// An infinite-mean law: a level is never reached in finite mean time (a

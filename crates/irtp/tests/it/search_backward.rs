@@ -305,16 +305,24 @@ fn renewal_matches_direct_power() {
     direct_vs_renewal("power:n=0.5", 1.0, &[0.3, 1.0, 3.0], (16, 8), false);
 }
 
+/// The unrefined comparisons' cases, extrapolated, but r = 3 only for tan
+/// drag: at r = 3 the level is barely within reach for linear (v_u =
+/// Sigma = L = 1, tau = 317), tanh (tau = 3265) and power n = 0.5 (tau =
+/// 893), both ladders climb and those three cases took 88% of the test's
+/// time, while the errors allowed (27%, 125% and 95% of tau) make them
+/// the weakest checks of all; their discrete chains stay compared,
+/// unrefined, in [`renewal_matches_direct_linear`],
+/// [`renewal_matches_direct_tanh`] and [`renewal_matches_direct_power`].
 #[test]
 #[ignore = "slow tier"]
 fn renewal_matches_direct_extrapolated() {
-    for (drag, sigma) in [
-        ("linear", 1.0),
-        ("tan", 3.0),
-        ("tanh", 0.6),
-        ("power:n=0.5", 1.0),
+    for (drag, sigma, rates) in [
+        ("linear", 1.0, &[0.3, 1.0][..]),
+        ("tan", 3.0, &[0.3, 1.0, 3.0]),
+        ("tanh", 0.6, &[0.3, 1.0]),
+        ("power:n=0.5", 1.0, &[0.3, 1.0]),
     ] {
-        direct_vs_renewal(drag, sigma, &[0.3, 1.0, 3.0], (16, 8), true);
+        direct_vs_renewal(drag, sigma, rates, (16, 8), true);
     }
 }
 
