@@ -233,6 +233,9 @@ pub(super) fn mesh_on(p: &Problem, vl: f64, vu: f64, extra: &[f64], cells: usize
         let density = |x: f64| nu + nl / (vu - x);
         let mut x = a;
         for k in 1..=n {
+            if k % (1 << 14) == 0 {
+                crate::parallel::check_stop()?;
+            }
             // Last node of each segment exactly at the cut.
             x = if k == n {
                 b

@@ -244,6 +244,14 @@ fn band_bytes(states: usize, bandwidth: usize, cells: usize) -> f64 {
     8.0 * n * (cells as f64 + 1.0) * (3.0 * bandwidth as f64 + 1.0)
 }
 
+/// Nodes of an operator's assembly between two polls of the stop request.
+const STOP_POLL_NODES: usize = 1 << 14;
+
+/// Whether the assembly at node `i` must stop (see [`Setup::operator`]).
+fn stop_due(i: usize) -> bool {
+    i % STOP_POLL_NODES == 0 && crate::stop::stop_requested()
+}
+
 /// The memory budget of the band (256 MB), which the paper's noise at its
 /// largest mesh fits ([`super::BackwardOptions::validate`]: 2·10⁶ cells).
 const MAX_BAND_BYTES: f64 = 2e6 * 2.0 * 8.0 * 8.0;
@@ -438,6 +446,9 @@ impl Setup {
         let slots: Vec<usize> = (0..ns).map(|s| self.space.slot(s)).collect();
         let reset = self.reset_weights();
         for i in 0..n {
+            if stop_due(i) {
+                break;
+            }
             for s in 0..ns {
                 let row = ns * i + slots[s];
                 let (k, absorbed) = match self.cond[s] {
@@ -514,6 +525,9 @@ impl Setup {
         let t = self.chain().temperature;
         let mut op = self.empty(2 * ns - 1);
         for i in 0..n {
+            if stop_due(i) {
+                break;
+            }
             for s in 0..ns {
                 let row = ns * i + s;
                 if i == n - 1 {
@@ -545,7 +559,11 @@ impl Setup {
         op
     }
 
-    /// The operator of this setup at `rate` with source `src`.
+    /// The operator of this setup at `rate` with source `src`. A stop
+    /// request (polled every `STOP_POLL_NODES` nodes: millions of nodes
+    /// take a second) ends the assembly early: the operator is then
+    /// unfinished, for the caller's next poll (or the factorisation's,
+    /// [`Band::factor_for`]) to discard.
     pub(crate) fn operator(&self, rate: f64, src: &dyn Fn(usize, usize) -> f64) -> Operator {
         if self.chain().temperature > 0.0 {
             self.thermal(rate, src)
