@@ -273,7 +273,7 @@ impl<D: Drag, N: ExactNoise> PassageObserver for PositionTarget<'_, D, N> {
     #[inline(always)]
     fn hold(&mut self, t: f64, v: f64, d: f64, t_max: f64) -> Option<f64> {
         let (lo, hi) = (self.sampler.lo, self.sampler.hi);
-        if !(v > 0.0 || v < 0.0) {
+        if v == 0.0 || v.is_nan() {
             return None;
         }
         let bound = if v > 0.0 { hi } else { lo };
