@@ -6,20 +6,12 @@
 //! by [`super::first_passage_stats`]'s driver; the entry point is [`super::solve`] with
 //! [`super::Method::Exact`].
 //!
-//! With a periodic reset clock (resets at T, 2T, ... from t = 0) or a
-//! renewal clock (the next reset a drawn waiting time after the last one,
-//! or after the end of its refractory period) a flow segment also ends at
-//! the next scheduled time; after a reset with a
-//! refractory period of duration D the velocity is held at the reset
-//! velocity (below v_t, or the reset itself is the passage), so the period
-//! cannot cross v_t: it advances the time by D and flips the noise state
-//! with the probability of an odd number of flips, ½(1 - e^{-2 lambda D});
-//! Poisson resets are off during it and the periodic times inside it or at
-//! its end are skipped. With a finite-state noise the chain runs on alone
-//! during the period (its own holding times and jumps).
+//! Clocks, resets and refractory holds are those of the walk kernel
+//! (`sim::exact::passage`); a hold keeps v at the reset velocity (below
+//! v_t, or the reset itself is the passage), so it cannot cross v_t.
 //!
-//! One kernel runs every noise ([`Passage`]: `walk`, `walk_scheduled`),
-//! generic over the noise state space ([`ExactNoise`]): the paper's noise
+//! The walk is that kernel with the velocity-target observer, generic
+//! over the noise state space ([`ExactNoise`]): the paper's noise
 //! ([`FirstPassage`], two states, started stratified: +Sigma for even
 //! particles) and any finite-state noise at T = 0 (docs/equations.md Eqs.
 //! (N46)-(N48): events at rate q_s + r, a fixed point v*_s = g⁻¹(a_s)
@@ -40,8 +32,8 @@ use crate::model::reset::{Reset, ResetRule, Schedule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::{exp_gap, ExactNoise, Telegraph};
-use rand::Rng as _;
+use crate::sim::exact::passage::{Clocks, Flow, PassageObserver};
+use crate::sim::exact::{ExactNoise, Telegraph};
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
 /// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
@@ -73,13 +65,8 @@ pub struct Passage<F, N> {
     /// Per state: its fixed point v*_s = g⁻¹(a_s); its flow crosses v_t
     /// iff v*_s > v_t.
     stars: Vec<f64>,
-    noise: N,
-    /// Per state: q_s + r.
-    total: Vec<f64>,
-    /// The resetting rule (target and noise state at a reset).
-    reset: ResetRule,
-    /// The periodic or renewal clock and the refractory period.
-    schedule: Schedule,
+    /// The noise, its event rates, the resetting rule and the schedule.
+    clocks: Clocks<N>,
 }
 
 impl FirstPassage {
@@ -98,13 +85,14 @@ impl<F: FlowMap> FirstPassage<F> {
 
     /// (lambda, r, the resetting rule).
     pub(super) fn rates(&self) -> (f64, f64, &ResetRule) {
-        (self.noise.exit(0), self.reset.rate(), &self.reset)
+        let c = &self.clocks;
+        (c.noise.exit(0), c.reset.rate(), &c.reset)
     }
 }
 
 impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
     /// The sampler of the upward problem under `params` (any schedule
-    /// modifier, run by [`walk_scheduled`]): the flows of [`ExactNoise`],
+    /// modifier): the flows of [`ExactNoise`],
     /// memoised per noise kind, law, levels and interval; refused naming
     /// `temperature` at T > 0 or `noise` where a level's flow is not exact.
     pub(crate) fn build<D: Drag<Flow = F>>(drag: &D, params: &Params) -> Result<Self> {
@@ -127,26 +115,23 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
         let kind = std::any::type_name::<N>();
         let key = format!("first passage {kind} {drag:?} {}", bits.join(","));
         let flows = crate::memo::shared(key, || noise.flows(drag, params, "mfpt --method exact"))?;
-        let reset = *params.reset();
         Ok(Passage {
             flows: (*flows).clone(),
             stars: noise.levels().iter().map(|&a| drag.inverse(a)).collect(),
-            total: noise.clocks(reset.rate()),
-            noise,
-            reset,
-            schedule: params.schedule().clone(),
+            clocks: Clocks::new(noise, params),
         })
     }
 
     /// The flow and fixed point of each state, the noise and the resetting
     /// rule (for the control variate of [`super::control`]).
     pub(crate) fn parts(&self) -> (&[F], &[f64], &N, &ResetRule) {
-        (&self.flows, &self.stars, &self.noise, &self.reset)
+        let c = &self.clocks;
+        (&self.flows, &self.stars, &c.noise, &c.reset)
     }
 
     /// The periodic or renewal clock and the refractory period.
     pub(crate) fn schedule(&self) -> &Schedule {
-        &self.schedule
+        &self.clocks.schedule
     }
 
     /// One upward first passage, as [`first_passage`] (the start state by
@@ -165,9 +150,9 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
 
     /// [`Passage::run`] reporting the start, every flow segment and jump
     /// of the walk to `tally` (the random stream is consumed exactly as by
-    /// `run`, so the passage time is the same bits). Periodic and
-    /// refractory schedules report nothing: their clock is not a Poisson
-    /// one.
+    /// `run`, so the passage time is the same bits; the control variate
+    /// of [`super::control`] refuses the walks of a scheduled clock or a
+    /// refractory period).
     #[inline(always)]
     pub fn walk<T: Tally>(
         &self,
@@ -178,87 +163,29 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
         rng: &mut Rng,
         tally: &mut T,
     ) -> (Option<f64>, u64) {
-        let s = self.noise.start(Some(state(start_plus)), rng);
+        let s = self.clocks.noise.start(Some(usize::from(!start_plus)), rng);
         if v0 >= vt {
             return (Some(0.0), 0);
         }
-        if self.schedule.scheduled_clock() || self.schedule.refractory.is_some() {
-            return walk_scheduled(self, s, v0, vt, t_max, rng);
-        }
         tally.start(v0, s);
-        walk(self, s, v0, vt, t_max, rng, tally)
-    }
-
-    /// The reset's velocity and the noise state after it (in this order
-    /// from `rng`).
-    #[inline(always)]
-    fn reset(&self, s: usize, rng: &mut Rng) -> (f64, usize) {
-        let w = self.reset.draw_velocity(rng);
-        (w, self.noise.after_reset(s, &self.reset, rng))
-    }
-}
-
-/// The exact first passage of `space` from (v0 < v_t, state s) under
-/// Poisson events (module docs), reporting to `tally`: (passage time, or
-/// None if not reached by `t_max`; number of events).
-#[inline(always)]
-pub(crate) fn walk<F: FlowMap, N: ExactNoise, T: Tally>(
-    space: &Passage<F, N>,
-    mut s: usize,
-    v0: f64,
-    vt: f64,
-    t_max: f64,
-    rng: &mut Rng,
-    tally: &mut T,
-) -> (Option<f64>, u64) {
-    let (mut t, mut v) = (0.0f64, v0);
-    let mut events = 0u64;
-    loop {
-        let total = space.total[s];
-        let gap = exp_gap(rng, total);
-        v = match segment(space, s, v, vt, t, gap, t_max) {
-            Segment::Done(hit) => {
-                if let Some(hit) = hit {
-                    tally.flow(s, v, vt, hit - t);
-                }
-                return (hit, events);
-            }
-            Segment::Moved(w) => {
-                tally.flow(s, v, w, gap);
-                w
-            }
+        let mut obs = VelocityTarget {
+            flows: &self.flows,
+            stars: &self.stars,
+            v: v0,
+            vt,
+            tally,
         };
-        t += gap;
-        events += 1;
-        if let Some(j) = space.noise.event(s, rng.gen::<f64>() * total) {
-            tally.jump(v, s, Some((v, j)));
-            s = j;
-        } else {
-            let (w, after) = space.reset(s, rng);
-            if w >= vt {
-                tally.jump(v, s, None);
-                return (Some(t), events);
-            }
-            tally.jump(v, s, Some((w, after)));
-            (v, s) = (w, after);
-        }
+        self.clocks.walk(s, t_max, rng, &mut obs)
     }
-}
-
-/// The index of the paper's noise state in a [`Tally`]: 0 for +Sigma, 1
-/// for -Sigma (the order of [`FirstPassage`]'s flows).
-#[inline(always)]
-pub fn state(plus: bool) -> usize {
-    usize::from(!plus)
 }
 
 /// An observer of a first-passage walk ([`FirstPassage::walk`], and the
 /// N-state walk of a noise model): the passage-time control variate of
 /// [`super::control`] integrates along it. Noise states are indices (the
-/// paper's: [`state`]). `()` observes nothing and compiles away.
+/// paper's: 0 for +Sigma, 1 for -Sigma). `()` observes nothing and compiles away.
 pub trait Tally {
-    /// The walk's start in state `s` at `v` (called by the N-state walk,
-    /// whose start state is drawn from π).
+    /// The walk's start in state `s` at `v` (a chain's start state is
+    /// drawn from π).
     #[inline(always)]
     fn start(&mut self, _v: f64, _s: usize) {}
     /// A flow segment in noise state `s` from `va` to `vb` lasting `dt`
@@ -276,88 +203,58 @@ impl Tally for () {
     fn jump(&mut self, _: f64, _: usize, _: Option<(f64, usize)>) {}
 }
 
-/// The end of one flow segment of [`FirstPassage`].
-enum Segment {
-    /// The walk is over: the passage time, or None past t_max.
-    Done(Option<f64>),
-    /// The velocity at the segment's end (no passage, t_max not reached).
-    Moved(f64),
-}
-
-/// Flow for `step` from (t, v) in state `s`: the passage if the flow
-/// crosses v_t within the step (None when that is past t_max), a stop when
-/// the step reaches t_max, else the velocity at its end.
-#[inline(always)]
-fn segment<F: FlowMap, N>(
-    space: &Passage<F, N>,
-    s: usize,
+/// The velocity-target observer of the walk kernel: v along the walk,
+/// the passage the first time v reaches v_t from below (a flow segment
+/// tested with the exact flow time to v_t, which it crosses iff
+/// v*_s > v_t; a reset to v_r ≥ v_t is the passage at the reset
+/// instant), every segment and jump reported to `tally`.
+struct VelocityTarget<'a, F, T> {
+    flows: &'a [F],
+    stars: &'a [f64],
     v: f64,
     vt: f64,
-    t: f64,
-    step: f64,
-    t_max: f64,
-) -> Segment {
-    let flow = &space.flows[s];
-    if space.stars[s] > vt {
-        let tau = flow.time(v, vt);
-        if tau <= step {
-            let hit = t + tau;
-            return Segment::Done(if hit <= t_max { Some(hit) } else { None });
-        }
-    }
-    if t + step >= t_max {
-        return Segment::Done(None);
-    }
-    Segment::Moved(flow.velocity(v, step))
+    tally: &'a mut T,
 }
 
-/// [`walk`] with a periodic or renewal clock and/or a refractory period
-/// (module docs); nothing is reported (the clock is not a Poisson one).
-pub(crate) fn walk_scheduled<F: FlowMap, N: ExactNoise>(
-    space: &Passage<F, N>,
-    mut s: usize,
-    v0: f64,
-    vt: f64,
-    t_max: f64,
-    rng: &mut Rng,
-) -> (Option<f64>, u64) {
-    let (schedule, refractory) = (&space.schedule, space.schedule.refractory);
-    let (mut t, mut v) = (0.0f64, v0);
-    let mut next_periodic = schedule.first_reset(rng);
-    let mut events = 0u64;
-    loop {
-        let total = space.total[s];
-        let gap = exp_gap(rng, total);
-        let periodic = next_periodic - t <= gap;
-        let step = if periodic { next_periodic - t } else { gap };
-        v = match segment(space, s, v, vt, t, step, t_max) {
-            Segment::Done(hit) => return (hit, events),
-            Segment::Moved(v) => v,
-        };
-        t = if periodic { next_periodic } else { t + step };
-        events += 1;
-        if !periodic {
-            if let Some(j) = space.noise.event(s, rng.gen::<f64>() * total) {
-                s = j;
-                continue;
+impl<F: FlowMap, T: Tally> PassageObserver for VelocityTarget<'_, F, T> {
+    #[inline(always)]
+    fn flow(&mut self, s: usize, t: f64, step: f64, t_max: f64) -> Flow {
+        let flow = &self.flows[s];
+        if self.stars[s] > self.vt {
+            let tau = flow.time(self.v, self.vt);
+            if tau <= step {
+                let hit = t + tau;
+                if hit > t_max {
+                    return Flow::Done(None);
+                }
+                self.tally.flow(s, self.v, self.vt, hit - t);
+                return Flow::Done(Some(hit));
             }
         }
-        (v, s) = space.reset(s, rng);
-        if v >= vt {
-            return (Some(t), events);
+        if t + step >= t_max {
+            return Flow::Done(None);
         }
-        if let Some(r) = refractory {
-            let d = r.draw(rng);
-            if t + d >= t_max {
-                return (None, events);
-            }
-            s = space.noise.after_hold(s, d, rng);
-            t += d;
-            events += 1;
+        let w = flow.velocity(self.v, step);
+        self.tally.flow(s, self.v, w, step);
+        self.v = w;
+        Flow::Moved
+    }
+    #[inline(always)]
+    fn jump(&mut self, s: usize, j: usize) {
+        self.tally.jump(self.v, s, Some((self.v, j)));
+    }
+    #[inline(always)]
+    fn reset(&mut self, t: f64, v: f64, s: usize, after: usize) -> Option<f64> {
+        if v >= self.vt {
+            self.tally.jump(self.v, s, None);
+            return Some(t);
         }
-        if schedule.scheduled_clock() {
-            next_periodic = schedule.next_reset(t, rng);
-        }
+        self.tally.jump(self.v, s, Some((v, after)));
+        None
+    }
+    #[inline(always)]
+    fn resume(&mut self, v: f64, _: usize, _: Option<f64>) {
+        self.v = v;
     }
 }
 

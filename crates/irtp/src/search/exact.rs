@@ -3,10 +3,7 @@
 //! paper's ±Sigma telegraph noise or any finite-state noise at T = 0
 //! ([`ExactNoise`]: one walk, generic over the noise states).
 //!
-//! Between events (noise jumps and Poisson resets: a clock of rate
-//! q_s + r in state s, q_s = lambda for the paper's noise; periodic or
-//! renewal reset times; the end of a refractory period) the velocity
-//! follows the exact flow dv/dt = a_s - g(v) (a_s = ±Sigma for the paper's
+//! Between events (those of the walk kernel below) the velocity follows the exact flow dv/dt = a_s - g(v) (a_s = ±Sigma for the paper's
 //! noise), and x along a flow segment is the flow's displacement
 //! v*_s t - ∫ (v*_s - v) dt (the flow potential tables of the simulation
 //! sampler; for a level whose fixed point v*_s = g⁻¹(a_s) is inside the
@@ -21,18 +18,10 @@
 //! ([`crate::numerics::root::solve_increasing`], bisection where it does
 //! not converge): exact to rounding, no time step, no overshoot.
 //!
-//! One uniform u on [0, q_s + r) picks a jump of the noise (u < q_s, its
-//! target by [`Chain::jump`] from the same u; the other state for the
-//! paper's noise) or a reset. At a reset the velocity is drawn from the
-//! reset target, the noise state kept or re-drawn by the rule (±Sigma
-//! equally likely for the paper's noise, from π for a chain), and with
-//! position resetting x → x_r (on the start side of the target, so a reset
-//! is never a passage). A refractory period holds v at the reset velocity:
-//! x moves linearly (its crossing is closed-form), Poisson resets are off,
-//! the noise keeps jumping (the paper's noise flips with the probability
-//! ½(1 - e^{-2 lambda D}) of an odd number of flips; a chain's jumps are
-//! drawn one by one over D), and the periodic times inside it or at its
-//! end are skipped (as in [`crate::mfpt::exact`]).
+//! The walk is the kernel `sim::exact::passage` with the position-target
+//! observer: with position resetting x → x_r at a reset (on the start side
+//! of the target, so a reset is never a passage); during a hold x moves
+//! linearly (its crossing is closed-form).
 //!
 //! Start: the paper's noise starts at +Sigma for even particles and -Sigma
 //! for odd ones (stratified); a chain starts in a state drawn from π with
@@ -46,13 +35,13 @@ use crate::error::Result;
 use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
 use crate::model::drag::{FlowMap, FlowPoint};
 use crate::model::noise::chain::Chain;
-use crate::model::reset::{Refractory, Reset, ResetRule, Schedule};
+
 use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::{exp_gap, ExactNoise, Segments, Telegraph};
-use rand::Rng as _;
+use crate::sim::exact::passage::{Clocks, Flow, PassageObserver};
+use crate::sim::exact::{ExactNoise, Segments, Telegraph};
 use std::ops::Range;
 
 /// Prepared exact sampler of one search problem (flow tables built once),
@@ -60,32 +49,27 @@ use std::ops::Range;
 #[derive(Clone)]
 pub struct SearchSampler<D: Drag, N: ExactNoise = Telegraph> {
     drag: D,
-    noise: N,
     /// Flow segments of each noise state (the paper's: +Sigma, -Sigma).
     segs: Vec<Segments<D::Flow>>,
     /// The same flows, for flow times (the turning point v = 0).
     flows: Vec<D::Flow>,
-    /// Fixed points v*_s and levels a_s, per state.
+    /// Fixed points v*_s, per state.
     vs: Vec<f64>,
-    s: Vec<f64>,
-    /// Per state: q_s + r.
-    total: Vec<f64>,
-    reset: ResetRule,
-    schedule: Schedule,
-    refractory: Option<Refractory>,
+    /// The noise, its event rates, the resetting rule and the schedule.
+    clocks: Clocks<N>,
     x_reset: Option<f64>,
     /// The search region lo < x < hi (an open side is ∓∞).
     lo: f64,
     hi: f64,
 }
 
-/// The state of one walk between events.
-struct Walk {
-    t: f64,
+/// The position-target observer of the walk kernel: x and the flow
+/// point along the walk, the passage the first time x leaves the search
+/// region (module docs).
+struct PositionTarget<'a, D: Drag, N: ExactNoise> {
+    sampler: &'a SearchSampler<D, N>,
     x: f64,
-    /// Noise state (the paper's: 0 for +Sigma, 1 for -Sigma).
-    si: usize,
-    /// The start of the current flow segment.
+    /// The start of the current flow segment (its end after a Moved).
     a: FlowPoint,
 }
 
@@ -130,19 +114,13 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
         let segs = noise.segments(drag, params)?;
         let flows = noise.flows(drag, params, "the exact sampler")?;
         let (lo, hi) = problem.target().bounds(problem.x0());
-        let sched = params.schedule();
         Ok(SearchSampler {
             drag: drag.clone(),
             vs: flows.iter().map(|f| f.fixed_point()).collect(),
-            s: noise.levels().to_vec(),
-            total: noise.clocks(params.rate()),
-            noise,
+            clocks: Clocks::new(noise, params),
             segs,
             flows,
-            reset: *params.reset(),
-            schedule: sched.clone(),
-            refractory: sched.refractory,
-            x_reset: sched.position.map(|p| p.x),
+            x_reset: params.schedule().position.map(|p| p.x),
             lo,
             hi,
         })
@@ -160,91 +138,14 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
-        let si = self.noise.start(Some(usize::from(!start_plus)), rng);
-        let mut w = Walk {
-            t: 0.0,
+        let si = self.clocks.noise.start(Some(usize::from(!start_plus)), rng);
+        let a = self.segs[si].at(v0);
+        let mut obs = PositionTarget {
+            sampler: self,
             x: x0,
-            si,
-            a: self.segs[si].at(v0),
+            a,
         };
-        let mut next_periodic = self.schedule.first_reset(rng);
-        let mut events = 0u64;
-        loop {
-            let total = self.total[w.si];
-            let gap = exp_gap(rng, total);
-            let periodic = next_periodic - w.t <= gap;
-            let step = if periodic { next_periodic - w.t } else { gap };
-            let span = step.min(t_max - w.t);
-            let (b, x) = match self.segment(w.si, &w.a, w.x, span) {
-                // At most t_max (t + (t_max - t) may round above it).
-                Segment::Hit(tau) => return (Some((w.t + tau).min(t_max)), events),
-                Segment::Moved(b, x) => (b, x),
-            };
-            if span < step || w.t + step >= t_max {
-                return (None, events);
-            }
-            w.x = x;
-            w.t = if periodic { next_periodic } else { w.t + step };
-            events += 1;
-            if !periodic {
-                if let Some(j) = self.noise.event(w.si, rng.gen::<f64>() * total) {
-                    w.si = j;
-                    w.a = self.segs[w.si].at(b.v);
-                    continue;
-                }
-            }
-            if let Some(hit) = self.reset_at(&mut w, t_max, rng, &mut events) {
-                return (hit, events);
-            }
-            if self.schedule.scheduled_clock() {
-                next_periodic = self.schedule.next_reset(w.t, rng);
-            }
-        }
-    }
-
-    /// A reset at w.t: velocity and noise by the rule, x → x_r with
-    /// position resetting, then the refractory hold if any. `Some` ends
-    /// the walk: the passage time during the hold, or None past t_max.
-    fn reset_at(
-        &self,
-        w: &mut Walk,
-        t_max: f64,
-        rng: &mut Rng,
-        events: &mut u64,
-    ) -> Option<Option<f64>> {
-        let v = self.reset.draw_velocity(rng);
-        w.si = self.noise.after_reset(w.si, &self.reset, rng);
-        if let Some(xr) = self.x_reset {
-            w.x = xr;
-        }
-        if let Some(r) = self.refractory {
-            let d = r.draw(rng);
-            if let Some(tau) = self.held_crossing(w.x, v, d.min(t_max - w.t)) {
-                return Some(Some((w.t + tau).min(t_max)));
-            }
-            if w.t + d >= t_max {
-                return Some(None);
-            }
-            w.si = self.noise.after_hold(w.si, d, rng);
-            w.t += d;
-            w.x += v * d;
-            *events += 1;
-        }
-        w.a = self.segs[w.si].at(v);
-        None
-    }
-
-    /// The crossing time of x + v t (held velocity) within `span`, if any.
-    fn held_crossing(&self, x: f64, v: f64, span: f64) -> Option<f64> {
-        let bound = if v > 0.0 {
-            self.hi
-        } else if v < 0.0 {
-            self.lo
-        } else {
-            return None;
-        };
-        let tau = (bound - x) / v;
-        (tau <= span).then_some(tau)
+        self.clocks.walk(si, t_max, rng, &mut obs)
     }
 
     /// x after flowing for `dt` from `a` (state `si`, position `x`), and the
@@ -325,7 +226,7 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
         if !(dir * (x2 - bound) >= 0.0) {
             return None;
         }
-        let s = self.s[si];
+        let s = self.clocks.noise.levels()[si];
         // H(t) = ±(x(t) - bound), increasing on [t1, t2]: H(t1) < 0 <= H(t2).
         let h = |t: f64| {
             let (b, xt) = self.advance(si, a, x, t);
@@ -340,6 +241,51 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
         };
         let guess = t1 + (t2 - t1) * frac;
         Some(monotone_root(&h, t1, t2, guess))
+    }
+}
+
+impl<D: Drag, N: ExactNoise> PassageObserver for PositionTarget<'_, D, N> {
+    #[inline(always)]
+    fn flow(&mut self, s: usize, t: f64, step: f64, t_max: f64) -> Flow {
+        let span = step.min(t_max - t);
+        match self.sampler.segment(s, &self.a, self.x, span) {
+            // At most t_max (t + (t_max - t) may round above it).
+            Segment::Hit(tau) => Flow::Done(Some((t + tau).min(t_max))),
+            _ if span < step || t + step >= t_max => Flow::Done(None),
+            Segment::Moved(b, x) => {
+                (self.a, self.x) = (b, x);
+                Flow::Moved
+            }
+        }
+    }
+    #[inline(always)]
+    fn jump(&mut self, _: usize, j: usize) {
+        self.a = self.sampler.segs[j].at(self.a.v);
+    }
+    #[inline(always)]
+    fn reset(&mut self, _: f64, _: f64, _: usize, _: usize) -> Option<f64> {
+        if let Some(xr) = self.sampler.x_reset {
+            self.x = xr;
+        }
+        None
+    }
+    /// The crossing of x + v t (held velocity) within the hold, if any.
+    #[inline(always)]
+    fn hold(&mut self, t: f64, v: f64, d: f64, t_max: f64) -> Option<f64> {
+        let (lo, hi) = (self.sampler.lo, self.sampler.hi);
+        if v == 0.0 || v.is_nan() {
+            return None;
+        }
+        let bound = if v > 0.0 { hi } else { lo };
+        let tau = (bound - self.x) / v;
+        (tau <= d.min(t_max - t)).then_some((t + tau).min(t_max))
+    }
+    #[inline(always)]
+    fn resume(&mut self, v: f64, s: usize, held: Option<f64>) {
+        if let Some(d) = held {
+            self.x += v * d;
+        }
+        self.a = self.sampler.segs[s].at(v);
     }
 }
 

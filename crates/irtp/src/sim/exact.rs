@@ -83,6 +83,7 @@ use std::ops::Range;
 
 mod noise;
 mod ou;
+pub(crate) mod passage;
 
 pub use noise::{ExactNoise, Telegraph};
 
