@@ -23,10 +23,11 @@
 //! is the MSD-fit D_eff. The pairs cost two particles' events each (the
 //! linear flow is the cheaper one).
 
-use super::exact;
-use super::{Observables, SimSpec};
+use super::exact::{Sampler, Scratch, Telegraph};
+use super::{Observables, Part, SimSpec};
 use crate::error::{Error, Result};
 use crate::model::reset::Solver;
+use crate::model::Drag;
 use crate::model::Params;
 use crate::parallel::Progress;
 use crate::stats::{Controlled, PairAcc};
@@ -126,7 +127,7 @@ pub fn run(
             ),
         ));
     }
-    let sums = exact::simulate_coupled(params, &proxy, spec, progress)?;
+    let sums = simulate_coupled(params, &proxy, spec, progress)?;
     let x2 = sums
         .x2
         .iter()
@@ -145,4 +146,66 @@ pub fn run(
         x2,
         msd_d,
     })
+}
+
+/// [`run`]'s sampler: every particle of the run twice, with
+/// `params` and with the linear proxy `proxy` ([`Params::linear_proxy`]),
+/// from the same stream (seed, i), so both see the same events; the pairs
+/// (x(t_k)², x_proxy(t_k)²) and the pair of Eq. (36) slopes are summed.
+fn simulate_coupled(
+    params: &Params,
+    proxy: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<Coupled> {
+    crate::with_drag!(params.drag(), |d| coupled_drag(
+        d, params, proxy, spec, progress
+    ))
+}
+
+/// Per-chunk state of a coupled run: the totals, a one-particle accumulator
+/// per sampler and the scratch.
+struct CoupledChunk {
+    totals: Coupled,
+    one: [Observables; 2],
+    sc: Scratch,
+}
+
+fn coupled_drag<D: Drag>(
+    drag: &D,
+    params: &Params,
+    proxy: &Params,
+    spec: &SimSpec,
+    progress: &dyn Progress,
+) -> Result<Coupled> {
+    let target = Sampler::<D::Flow, Telegraph>::new(drag, params, spec)?;
+    let linear = Sampler::<_, Telegraph>::new(&crate::model::drag::Linear, proxy, spec)?;
+    let empty = [
+        Observables::new(spec, params),
+        Observables::new(spec, proxy),
+    ];
+    let b = spec.bins;
+    let first = spec.first_particle;
+    let init = || CoupledChunk {
+        totals: Coupled::empty(empty[0].clone()),
+        one: empty.clone(),
+        sc: target.scratch(b),
+    };
+    let chunk = |lo: u64, hi: u64, c: &mut CoupledChunk| {
+        for i in first + lo..first + hi {
+            target.particles(i..i + 1, &mut c.one[0], &mut c.sc);
+            linear.particles(i..i + 1, &mut c.one[1], &mut c.sc);
+            c.totals.push(&c.one[0], &c.one[1]);
+            c.one[0].clone_from(&empty[0]);
+            c.one[1].clone_from(&empty[1]);
+        }
+    };
+    let mut totals = Part::Whole.reduce(
+        spec.particles,
+        init,
+        chunk,
+        |a, b| a.totals.merge(&b.totals),
+        progress,
+    );
+    Ok(totals.remove(0).totals)
 }

@@ -76,7 +76,6 @@ use crate::numerics::chebyshev::{
 };
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
-use crate::sim::control::Coupled;
 use crate::sim::{Observables, Part, SimSpec};
 use rand::Rng as _;
 use std::ops::Range;
@@ -408,7 +407,7 @@ impl<F: FlowMap> Tables<F> {
 
 /// Everything fixed for a run: the noise and its tables and clock, the
 /// resetting protocol, the recording window.
-struct Sampler<F, N> {
+pub(crate) struct Sampler<F, N> {
     noise: N,
     tab: Tables<F>,
     /// Per state: the event clock q_s + r, its inverse, and 1/q_s (0 where
@@ -448,7 +447,7 @@ enum Edge {
 /// Per-chunk scratch: occupation times and full-crossing counts
 /// (difference arrays, so a segment crossing many bins costs O(1)), one
 /// per noise state.
-struct Scratch {
+pub(crate) struct Scratch {
     occ: Vec<f64>,
     cross: Vec<Vec<i64>>,
 }
@@ -503,7 +502,11 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
     /// The sampler of `params` with the noise `N` (its tables built or
     /// shared through [`crate::memo`]); refused naming `noise` where the
     /// velocity interval does not hold the start v = 0.
-    fn new<D: Drag<Flow = F>>(drag: &D, params: &Params, spec: &SimSpec) -> Result<Self> {
+    pub(crate) fn new<D: Drag<Flow = F>>(
+        drag: &D,
+        params: &Params,
+        spec: &SimSpec,
+    ) -> Result<Self> {
         params.require(Solver::Exact)?;
         super::check_period_window(params, spec)?;
         let noise = N::of(params)?;
@@ -575,7 +578,7 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
     }
 
     /// Empty scratch for `bins` bins.
-    fn scratch(&self, bins: usize) -> Scratch {
+    pub(crate) fn scratch(&self, bins: usize) -> Scratch {
         Scratch {
             occ: vec![0.0; bins],
             cross: vec![vec![0; bins]; self.total.len()],
@@ -757,7 +760,7 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
     /// Particles `ids` one after the other. (Interleaving four particles
     /// per thread, one event of each in turn, measured no faster: the
     /// event's chain is short next to its instruction count.)
-    fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
+    pub(crate) fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
         for i in ids {
             let mut p = self.start(i);
             if self.plain {
@@ -1078,68 +1081,6 @@ where
         progress,
     );
     totals.into_iter().map(|(obs, _)| obs).collect()
-}
-
-/// [`crate::sim::control::coupled`]: every particle of the run twice, with
-/// `params` and with the linear proxy `proxy` ([`Params::linear_proxy`]),
-/// from the same stream (seed, i), so both see the same events; the pairs
-/// (x(t_k)², x_proxy(t_k)²) and the pair of Eq. (36) slopes are summed.
-pub(crate) fn simulate_coupled(
-    params: &Params,
-    proxy: &Params,
-    spec: &SimSpec,
-    progress: &dyn Progress,
-) -> Result<Coupled> {
-    crate::with_drag!(params.drag(), |d| coupled_drag(
-        d, params, proxy, spec, progress
-    ))
-}
-
-/// Per-chunk state of a coupled run: the totals, a one-particle accumulator
-/// per sampler and the scratch.
-struct CoupledChunk {
-    totals: Coupled,
-    one: [Observables; 2],
-    sc: Scratch,
-}
-
-fn coupled_drag<D: Drag>(
-    drag: &D,
-    params: &Params,
-    proxy: &Params,
-    spec: &SimSpec,
-    progress: &dyn Progress,
-) -> Result<Coupled> {
-    let target = Sampler::<D::Flow, Telegraph>::new(drag, params, spec)?;
-    let linear = Sampler::<_, Telegraph>::new(&crate::model::drag::Linear, proxy, spec)?;
-    let empty = [
-        Observables::new(spec, params),
-        Observables::new(spec, proxy),
-    ];
-    let b = spec.bins;
-    let first = spec.first_particle;
-    let init = || CoupledChunk {
-        totals: Coupled::empty(empty[0].clone()),
-        one: empty.clone(),
-        sc: target.scratch(b),
-    };
-    let chunk = |lo: u64, hi: u64, c: &mut CoupledChunk| {
-        for i in first + lo..first + hi {
-            target.particles(i..i + 1, &mut c.one[0], &mut c.sc);
-            linear.particles(i..i + 1, &mut c.one[1], &mut c.sc);
-            c.totals.push(&c.one[0], &c.one[1]);
-            c.one[0].clone_from(&empty[0]);
-            c.one[1].clone_from(&empty[1]);
-        }
-    };
-    let mut totals = Part::Whole.reduce(
-        spec.particles,
-        init,
-        chunk,
-        |a, b| a.totals.merge(&b.totals),
-        progress,
-    );
-    Ok(totals.remove(0).totals)
 }
 
 #[cfg(test)]
