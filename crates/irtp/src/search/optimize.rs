@@ -289,9 +289,9 @@ pub fn golden_solves(range: &RateRange) -> f64 {
 /// not solved): the grid's solves; the golden-section solves
 /// ([`golden_solves`]) and the checked solve at the optimum, each at the
 /// upper quartile of the grid's costs (r* is not known before the grid is
-/// solved; a search's r* lies at the grid's small rates, whose truncated
-/// domains are the longest: the median priced them 1.6 to 3 times too
-/// cheap); and `at_zero` twice (the checked solve at r = 0 and the one on
+/// solved; the small rates, with the longest truncated domains, are the
+/// dearest, and the levels' r* lay among them in the cost tests, where
+/// the median put the total 1.6 to 3 times low); and `at_zero` twice (the checked solve at r = 0 and the one on
 /// the grid's meshes). A climbing checked solve is priced as one solve: its
 /// finer levels are checked against the budget as they are reached. Where
 /// the optimum is at r = 0 or r_max the golden section is skipped and the
