@@ -248,7 +248,7 @@ fn rate_curve(
     progress: &dyn Progress,
 ) -> Result<RateCurve> {
     let base = spec.problem(m, protocol)?;
-    let o = optimize::optimize_rate(&base, &spec.range, &spec.backward(), &NoProgress)?;
+    let o = optimize::optimize_rate(&base, &spec.range, &spec.backward(), &NoProgress)?.optimum;
     let r_mid = if o.r_opt > 0.0 { o.r_opt } else { 0.25 };
     let checks = [r_mid, 2.0 * r_mid]
         .into_iter()

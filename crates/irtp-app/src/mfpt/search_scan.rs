@@ -496,21 +496,10 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
     })
 }
 
-/// Solves of the golden-section refinement of r* (`minimize_rate`): the
-/// bracket of two grid steps in ln r shrunk by 0.618 a step to `rtol`, two
-/// to start.
-fn golden_solves(range: &RateRange) -> f64 {
-    let step = (range.r_max / range.r_min).ln() / (range.grid_points - 1) as f64;
-    let width = (2.0 * step).max(range.r_min * step.exp());
-    let shrink = 2.0 / (5f64.sqrt() - 1.0);
-    ((width / range.rtol).ln() / shrink.ln()).ceil().max(0.0) + 2.0
-}
-
 /// The estimated work of a rate optimisation ([`so::optimize_rate`],
-/// [`optimize_clock`]) from `cost_at(r)`, one solve's: the solve at each
-/// grid rate, the golden-section solves at the median of the grid's costs
-/// (where r* lies is not known before the grid is solved), the checked
-/// solve at the optimum, and `at_zero` (an interval's solve at r = 0).
+/// [`optimize_clock`]) from `cost_at(r)`, one solve's: [`so::total_work`]
+/// of the grid rates' and `at_zero` (an interval's solve at r = 0), the
+/// dearest grid rate's memory.
 /// Where the grid alone at the cheapest rate (r_max: the shortest domain)
 /// exceeds `max_work`, that lower bound, before any rate is priced.
 fn optimize_cost(
@@ -532,10 +521,8 @@ fn optimize_cost(
         .into_iter()
         .map(cost_at)
         .collect::<irtp::Result<Vec<_>>>()?;
-    let mut works: Vec<f64> = grid.iter().map(|c| c.work).collect();
-    works.sort_by(f64::total_cmp);
-    let median = works[works.len() / 2];
-    let total = works.iter().sum::<f64>() + (golden_solves(range) + 1.0) * median + at_zero;
+    let works: Vec<f64> = grid.iter().map(|c| c.work).collect();
+    let total = so::total_work(range, &works, at_zero);
     let memory = grid.iter().map(|c| c.memory).fold(0.0, f64::max);
     Ok(Cost {
         work: total,
@@ -599,7 +586,7 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
             (o.optimum.clone(), Some(o))
         }
         None => (
-            so::optimize_rate(&problem, &range, &backward, bar.as_ref())?,
+            so::optimize_rate(&problem, &range, &backward, bar.as_ref())?.optimum,
             None,
         ),
     };

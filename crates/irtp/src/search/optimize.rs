@@ -131,12 +131,33 @@ pub struct SearchTarget<'a> {
     /// tau of the checked solve at the optimum, set by `at_optimum` (a
     /// noise model's tau = Σ_s π_s T_s: its tau± are NaN).
     pub checked_opt: std::sync::OnceLock<f64>,
+    /// The work counted by every solve made so far (locating and checked:
+    /// the sum of their [`SearchSolution::work`]).
+    pub work: std::sync::Mutex<f64>,
 }
 
-impl SearchTarget<'_> {
+impl<'a> SearchTarget<'a> {
+    /// The objective of `base` under `backward`, nothing solved yet.
+    pub fn new(base: &'a SearchProblem, backward: &'a BackwardOptions) -> Self {
+        SearchTarget {
+            base,
+            backward,
+            checked_zero: std::sync::OnceLock::new(),
+            checked_opt: std::sync::OnceLock::new(),
+            work: std::sync::Mutex::new(0.0),
+        }
+    }
+
+    /// The backward solve at rate r under `opts`, its work added to `work`.
+    fn solve(&self, r: f64, opts: &BackwardOptions) -> Result<SearchSolution> {
+        let s = backward::solve(&self.base.with_rate(r)?, opts)?;
+        *self.work.lock().unwrap_or_else(|e| e.into_inner()) += s.work;
+        Ok(s)
+    }
+
     /// The checked solve at rate r (the options' `climb` as given).
     fn verified(&self, r: f64) -> Result<SearchSolution> {
-        backward::solve(&self.base.with_rate(r)?, self.backward)
+        self.solve(r, self.backward)
     }
 }
 
@@ -148,7 +169,7 @@ impl RateObjective for SearchTarget<'_> {
             climb: false,
             ..*self.backward
         };
-        let s = backward::solve(&self.base.with_rate(r)?, &locate)?;
+        let s = self.solve(r, &locate)?;
         let err = if s.asymptotic {
             s.error_estimate
         } else {
@@ -209,6 +230,18 @@ pub fn check_optimizable(base: &SearchProblem, range: &RateRange) -> Result<()> 
     Ok(())
 }
 
+/// [`optimize_rate`]'s answer and the work its solves counted.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SearchRateOptimum {
+    /// The optimum.
+    pub optimum: Optimum,
+    /// Floating-point operations counted by every backward solve made
+    /// (the grid's, the golden section's, the checked ones at r = 0 and at
+    /// the optimum: the sum of their [`SearchSolution::work`]), to compare
+    /// with [`estimate_work`].
+    pub work: f64,
+}
+
 /// The reset rate minimising the mean search time over
 /// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`SearchTarget`]),
 /// refused where it is infinite for every r ([`check_optimizable`]). tau
@@ -220,17 +253,12 @@ pub fn optimize_rate(
     range: &RateRange,
     opts: &BackwardOptions,
     progress: &dyn Progress,
-) -> Result<Optimum> {
+) -> Result<SearchRateOptimum> {
     check_optimizable(base, range)?;
     for r in [range.r_min, range.r_max] {
         backward::estimate(&base.with_rate(r)?, opts)?;
     }
-    let f = SearchTarget {
-        base,
-        backward: opts,
-        checked_zero: std::sync::OnceLock::new(),
-        checked_opt: std::sync::OnceLock::new(),
-    };
+    let f = SearchTarget::new(base, opts);
     let mut best = minimize_rate(&f, range, progress)?;
     best.tau_opt = match f.checked_opt.get() {
         Some(&t) if base.params().noise().is_some() => t,
@@ -239,5 +267,62 @@ pub fn optimize_rate(
     if let Some(&t0) = f.checked_zero.get() {
         best.tau_r0 = t0;
     }
-    Ok(best)
+    let work = f.work.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok(SearchRateOptimum {
+        optimum: best,
+        work,
+    })
+}
+
+/// Solves of the golden-section refinement of r* ([`minimize_rate`]): the
+/// bracket of two grid steps in ln r shrunk by 0.618 a step to `rtol`, two
+/// to start.
+pub fn golden_solves(range: &RateRange) -> f64 {
+    let step = (range.r_max / range.r_min).ln() / (range.grid_points - 1) as f64;
+    let width = (2.0 * step).max(range.r_min * step.exp());
+    let shrink = 2.0 / (5f64.sqrt() - 1.0);
+    ((width / range.rtol).ln() / shrink.ln()).ceil().max(0.0) + 2.0
+}
+
+/// The estimated work of a rate optimisation from one solve's at each grid
+/// rate (`grid`, in any order) and at r = 0 (`at_zero`: 0 where r = 0 is
+/// not solved): the grid's solves; the golden-section solves
+/// ([`golden_solves`]) and the checked solve at the optimum, each at the
+/// upper quartile of the grid's costs (r* is not known before the grid is
+/// solved; the small rates, with the longest truncated domains, are the
+/// dearest, and the levels' r* lay among them in the cost tests, where
+/// the median put the total 1.6 to 3 times low); and `at_zero` twice (the checked solve at r = 0 and the one on
+/// the grid's meshes). A climbing checked solve is priced as one solve: its
+/// finer levels are checked against the budget as they are reached. Where
+/// the optimum is at r = 0 or r_max the golden section is skipped and the
+/// estimate is above the work done.
+pub fn total_work(range: &RateRange, grid: &[f64], at_zero: f64) -> f64 {
+    let mut works = grid.to_vec();
+    works.sort_by(f64::total_cmp);
+    let upper = works.get(3 * works.len() / 4).copied().unwrap_or(0.0);
+    works.iter().sum::<f64>() + (golden_solves(range) + 1.0) * upper + 2.0 * at_zero
+}
+
+/// The estimated work of [`optimize_rate`]: [`total_work`] of
+/// [`backward::estimate`] at each grid rate and, for an interval, at r = 0.
+pub fn estimate_work(
+    base: &SearchProblem,
+    range: &RateRange,
+    opts: &BackwardOptions,
+) -> Result<f64> {
+    range.validate()?;
+    let locate = BackwardOptions {
+        climb: false,
+        ..*opts
+    };
+    let grid = range
+        .grid()
+        .into_iter()
+        .map(|r| Ok(backward::estimate(&base.with_rate(r)?, &locate)?.work))
+        .collect::<Result<Vec<f64>>>()?;
+    let at_zero = match base.target() {
+        PositionTarget::Interval(..) => backward::estimate(&base.with_rate(0.0)?, &locate)?.work,
+        PositionTarget::Level(_) => 0.0,
+    };
+    Ok(total_work(range, &grid, at_zero))
 }

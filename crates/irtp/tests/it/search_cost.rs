@@ -2,10 +2,14 @@
 //! count (`search::backward::estimate`, `search::renewal::estimate` and
 //! the solutions' `work`: band factorisations and solves, docs/equations.md
 //! (S2)): within a factor of 3 either way over levels, intervals, rates
-//! and clocks.
+//! and clocks; and the rate optimiser's total estimate
+//! (`search::optimize::estimate_work`) against the work of all its solves.
 
+use irtp::mfpt::optimize::RateRange;
 use irtp::model::reset::{Clock, Schedule};
+use irtp::parallel::NoProgress;
 use irtp::search::backward::{self, BackwardOptions};
+use irtp::search::optimize;
 use irtp::search::renewal::{self, RenewalOptions, WaitingTime};
 use irtp::search::{PositionTarget, SearchProblem};
 use irtp::{DragLaw, Params};
@@ -86,4 +90,53 @@ fn renewal_estimate_is_within_3x_of_the_work_done() {
         let s = renewal::solve(&pr, &waiting, &opts).unwrap();
         assert_within_3(&format!("renewal {waiting:?} {pr:?}"), est, s.work);
     }
+}
+
+/// The rate optimiser (`mfpt optimize --xt`, full resetting to x_r = 0
+/// and v_r = 0): its total estimate against the work of every solve it
+/// makes (grid, golden section, the checked one at the optimum), over
+/// drags and levels at three distances; and an interval whose optimum is
+/// r = 0, where the golden section is skipped: the estimate is above the
+/// work done (the skipped solves are priced), never below.
+#[test]
+fn optimize_estimate_is_within_3x_of_the_work_done() {
+    let range = RateRange {
+        r_min: 0.05,
+        r_max: 20.0,
+        grid_points: 9,
+        ..RateRange::default()
+    };
+    let cases = [
+        (DragLaw::Linear, 1.0, 1.0),
+        (DragLaw::Linear, 1.0, 2.0),
+        (DragLaw::Linear, 1.0, 3.0),
+        (DragLaw::Tan, 3.0, 1.0),
+        (DragLaw::Tan, 3.0, 2.0),
+    ];
+    let opts = BackwardOptions::with_cells(12, 6);
+    for (drag, sigma, l) in cases {
+        let pr = problem(drag.clone(), sigma, 0.0, PositionTarget::Level(l));
+        let est = optimize::estimate_work(&pr, &range, &opts).unwrap();
+        let best = optimize::optimize_rate(&pr, &range, &opts, &NoProgress).unwrap();
+        let r = best.optimum.r_opt;
+        assert!(best.optimum.interior, "{drag:?} L = {l}: r* = {r}");
+        assert_within_3(
+            &format!("optimize {drag:?} L = {l}, r* {r:.3}"),
+            est,
+            best.work,
+        );
+    }
+    let pr = problem(DragLaw::Tan, 3.0, 0.0, PositionTarget::Interval(-1.0, 2.0));
+    let est = optimize::estimate_work(&pr, &range, &opts).unwrap();
+    let best = optimize::optimize_rate(&pr, &range, &opts, &NoProgress).unwrap();
+    println!(
+        "optimize interval: estimate {est:.3e}, counted {:.3e}",
+        best.work
+    );
+    assert_eq!(best.optimum.r_opt, 0.0);
+    assert!(
+        est >= best.work && best.work > 0.0,
+        "{est:e} < {:e}",
+        best.work
+    );
 }

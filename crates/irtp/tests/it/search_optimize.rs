@@ -41,7 +41,9 @@ fn range(points: usize) -> RateRange {
 fn search_optimum_is_the_minimum_of_a_dense_scan() {
     let pr = problem(true, PositionTarget::Level(1.0));
     let o = BackwardOptions::with_cells(12, 6);
-    let best = optimize_rate(&pr, &range(13), &o, &NoProgress).unwrap();
+    let best = optimize_rate(&pr, &range(13), &o, &NoProgress)
+        .unwrap()
+        .optimum;
     println!("{best:?}");
     assert!(best.interior && !best.at_upper_bound, "{best:?}");
     assert_eq!(best.tau_r0, f64::INFINITY);
@@ -79,7 +81,9 @@ fn search_optimum_is_the_minimum_of_a_dense_scan() {
 fn resetting_that_does_not_help_gives_r_star_zero() {
     let pr = problem(true, PositionTarget::Interval(-1.0, 1.0));
     let o = BackwardOptions::with_cells(12, 6);
-    let best = optimize_rate(&pr, &range(9), &o, &NoProgress).unwrap();
+    let best = optimize_rate(&pr, &range(9), &o, &NoProgress)
+        .unwrap()
+        .optimum;
     println!("{best:?}");
     assert_eq!(best.r_opt, 0.0);
     assert!(!best.interior && best.tau_opt == best.tau_r0);
@@ -102,7 +106,9 @@ fn velocity_only_level_is_refused_an_interval_runs() {
         other => panic!("{other:?}"),
     }
     let pr = problem(false, PositionTarget::Interval(-1.0, 1.0));
-    let best = optimize_rate(&pr, &range(9), &o, &NoProgress).unwrap();
+    let best = optimize_rate(&pr, &range(9), &o, &NoProgress)
+        .unwrap()
+        .optimum;
     assert!(
         best.tau_r0.is_finite() && best.tau_opt <= best.tau_r0,
         "{best:?}"
