@@ -47,7 +47,7 @@
 //! // Full resetting to (x_r, v_r) = (0, 0) at rate 0.3, noise state kept.
 //! let schedule = Schedule::parse(None, Some(0.0), None)?;
 //! let p = Params::new(DragLaw::Linear, 1.0, 0.5, 0.3, 0.0)?.with_schedule(schedule)?;
-//! let problem = SearchProblem::new(p, 0.0, 0.0, PositionTarget::Level(1.0))?;
+//! let problem = SearchProblem::new(p.clone(), 0.0, 0.0, PositionTarget::Level(1.0))?;
 //! let opts = BackwardOptions::with_cells(16, 8);
 //! let cost = backward::estimate(&problem, &opts)?;
 //! assert!(cost.work < 1e9);
