@@ -376,10 +376,21 @@ impl OutputDir {
     /// The checksums of the files staged so far (`sha256:<hex>` by name);
     /// a stop request ends it with [`irtp::Error::Interrupted`].
     pub fn checksums(&self) -> Result<BTreeMap<String, String>> {
+        self.hashes(true)
+    }
+
+    /// The checksums of the files staged so far, with no stop poll: for an
+    /// index of small files that must follow what was just committed (a
+    /// stop between a figure and its index would leave the figure unlisted).
+    pub fn checksums_unstoppable(&self) -> Result<BTreeMap<String, String>> {
+        self.hashes(false)
+    }
+
+    fn hashes(&self, poll: bool) -> Result<BTreeMap<String, String>> {
         self.files
             .iter()
             .filter(|f| *f != "run.json")
-            .map(|f| Ok((f.clone(), hash_file(&self.staging.join(f), true)?)))
+            .map(|f| Ok((f.clone(), hash_file(&self.staging.join(f), poll)?)))
             .collect()
     }
 }

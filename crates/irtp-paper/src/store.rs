@@ -278,7 +278,8 @@ impl Dir {
     }
 
     /// Write the index of the figures present; returns `run.json`'s content
-    /// and every file of the directory written by irtp.
+    /// and every file of the directory written by irtp. It does not stop on
+    /// a stop request: it follows a committed figure, which it must list.
     pub fn write_index(&self, argv: &[String]) -> Result<(Value, Vec<PathBuf>)> {
         let mut out = OutputDir::with_lock(&self.path, self.lock.clone())?;
         let mut params = serde_json::Map::new();
@@ -313,7 +314,7 @@ impl Dir {
         for (_, r) in &self.records {
             prov.checksums.extend(r.checksums.clone());
         }
-        prov.checksums.extend(out.checksums()?);
+        prov.checksums.extend(out.checksums_unstoppable()?);
         prov.files = files.clone();
         let value = super::to_json(&prov);
         out.write_json("run.json", &value)?;

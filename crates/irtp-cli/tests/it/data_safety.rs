@@ -513,7 +513,6 @@ fn fuzz_writers_never_touch_what_they_did_not_write() {
         root.join("missing"),
     ];
     let mut draw = Draw(20_261_206);
-    let t0 = std::time::Instant::now();
     let mut answered: std::collections::BTreeMap<(String, Option<i32>), u32> = Default::default();
     for case in 0..400 {
         let fresh = root.join(format!("new{case}"));
@@ -617,5 +616,4 @@ fn fuzz_writers_never_touch_what_they_did_not_write() {
             assert!(answered.contains_key(&(w.to_string(), c)), "{answered:?}");
         }
     }
-    assert!(t0.elapsed().as_secs() < 60);
 }
