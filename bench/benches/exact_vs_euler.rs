@@ -86,7 +86,7 @@ fn particles(c: &mut Criterion) {
     g.bench_function("first_passage_exact", |b| {
         let mut r = irtp::rng::stream(3, 0);
         let fpt = irtp::mfpt::FirstPassage::new(&p);
-        b.iter(|| black_box(fpt.run(0.0, 0.8, true, 1e6, &mut r)))
+        b.iter(|| black_box(fpt.run(0.0, 0.8, 0, 1e6, &mut r)))
     });
     // The same passage with the martingale control variate alongside
     // (u piecewise constant on 2048 cells): its cost per event.
@@ -97,7 +97,7 @@ fn particles(c: &mut Criterion) {
         let (vl, _) = p.bounds();
         let ctl =
             PassageControl::new(&fpt, vl, 0.8, 2048, |v, s| v + f64::from(u8::from(s))).unwrap();
-        b.iter(|| black_box(controlled_walk(&fpt, &ctl, (0.0, 0.8, true, 1e6), &mut r)))
+        b.iter(|| black_box(controlled_walk(&fpt, &ctl, (0.0, 0.8, 0, 1e6), &mut r)))
     });
     // The paper's Euler scheme over the same time span (dt = 1e-3, one
     // uniform per step for the flip and one for the reset), for scale.

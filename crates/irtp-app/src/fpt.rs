@@ -706,8 +706,8 @@ fn exact_report<'a>(c: &'a Config, st: &FptStats, seed: u64) -> Report<'a> {
         }
     };
     let (qp, qm) = (
-        m2(&st.plus, st.censored_plus),
-        m2(&st.minus, st.censored_minus),
+        m2(&st.arrived[0], st.censored_in[0]),
+        m2(&st.arrived[1], st.censored_in[1]),
     );
     let second = 0.5 * (qp + qm);
     let variance = second - s.tau * s.tau;
@@ -772,15 +772,18 @@ fn distribution_table(d: &Distribution) -> irtp::Result<Table> {
 /// bins left out).
 fn histogram_table(st: &FptStats) -> Table {
     let e = edges(st.t_max);
-    let n_plus = (st.plus.n + st.censored_plus) as f64;
-    let n_minus = (st.minus.n + st.censored_minus) as f64;
+    let n_plus = (st.particles_in(0)) as f64;
+    let n_minus = (st.particles_in(1)) as f64;
     let first = (0..=e.len())
-        .find(|&j| st.arrivals.plus[j] + st.arrivals.minus[j] > 0)
+        .find(|&j| st.arrivals.counts[0][j] + st.arrivals.counts[1][j] > 0)
         .unwrap_or(e.len());
     let rows = (first..=e.len()).map(|j| {
         let lo = if j == 0 { 0.0 } else { e[j - 1] };
         let hi = if j < e.len() { e[j] } else { st.t_max };
-        let (cp, cm) = (st.arrivals.plus[j] as f64, st.arrivals.minus[j] as f64);
+        let (cp, cm) = (
+            st.arrivals.counts[0][j] as f64,
+            st.arrivals.counts[1][j] as f64,
+        );
         let (pp, pm) = (cp / n_plus, cm / n_minus);
         let var = pp * (1.0 - pp) / n_plus + pm * (1.0 - pm) / n_minus;
         let w = hi - lo;

@@ -218,8 +218,8 @@ fn compare(
     st: &FptStats,
     times: &[f64],
 ) -> Curve {
-    let n_plus = (st.plus.n + st.censored_plus) as f64;
-    let n_minus = (st.minus.n + st.censored_minus) as f64;
+    let n_plus = (st.particles_in(0)) as f64;
+    let n_minus = (st.particles_in(1)) as f64;
     let n = n_plus + n_minus;
     let (mut bins, mut pb, mut ps, mut pe) = (vec![], vec![], vec![], vec![]);
     let (mut compared, mut max_z, mut skipped) = (0, 0.0f64, 0);
@@ -238,7 +238,10 @@ fn compare(
         let bp = d.survival_plus[j] - d.survival_plus[j + 1];
         let bm = d.survival_minus[j] - d.survival_minus[j + 1];
         let p = if hi <= earliest { 0.0 } else { 0.5 * (bp + bm) };
-        let (cp, cm) = (st.arrivals.plus[j] as f64, st.arrivals.minus[j] as f64);
+        let (cp, cm) = (
+            st.arrivals.counts[0][j] as f64,
+            st.arrivals.counts[1][j] as f64,
+        );
         let q = 0.5 * (cp / n_plus + cm / n_minus);
         let var = 0.25 * (bp * (1.0 - bp) / n_plus + bm * (1.0 - bm) / n_minus);
         // Bins reaching into the window where the mesh smears the kink the

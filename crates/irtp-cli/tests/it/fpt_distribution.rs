@@ -47,7 +47,8 @@ fn sample(pr: &Problem, n: u64, seed: u64) -> Vec<(bool, f64)> {
             let mut rng = irtp::rng::stream(seed, i);
             let plus = i % 2 == 0;
             let p = pr.params();
-            let (t, _) = first_passage_to(p, pr.v0(), pr.vt(), plus, 1e6, &mut rng).unwrap();
+            let (t, _) =
+                first_passage_to(p, pr.v0(), pr.vt(), (i % 2) as usize, 1e6, &mut rng).unwrap();
             (plus, t.expect("arrived by 1e6"))
         })
         .collect()

@@ -183,8 +183,15 @@ fn sample(pr: &Problem, n: u64, seed: u64) -> Vec<(bool, f64)> {
         .map(|i| {
             let mut rng = irtp::rng::stream(seed, i);
             let plus = i % 2 == 0;
-            let (t, _) =
-                first_passage_to(pr.params(), pr.v0(), pr.vt(), plus, 1e6, &mut rng).unwrap();
+            let (t, _) = first_passage_to(
+                pr.params(),
+                pr.v0(),
+                pr.vt(),
+                (i % 2) as usize,
+                1e6,
+                &mut rng,
+            )
+            .unwrap();
             (plus, t.expect("arrived by 1e6"))
         })
         .collect()

@@ -369,21 +369,22 @@ impl<F: FlowMap> Tally for Martingale<'_, F> {
     }
 }
 
-/// One walk of `fpt` with the martingale alongside: (passage time or None
-/// past t_max, M_T, events).
+/// One walk of `fpt` from noise state `start` (0: +Sigma, 1: -Sigma)
+/// with the martingale alongside: (passage time or None past t_max, M_T,
+/// events).
 pub fn controlled_walk<F: FlowMap>(
     fpt: &FirstPassage<F>,
     ctl: &PassageControl,
-    (v0, vt, start_plus, t_max): (f64, f64, bool, f64),
+    (v0, vt, start, t_max): (f64, f64, usize, f64),
     rng: &mut rng::Rng,
 ) -> (Option<f64>, f64, u64) {
     let mut m = Martingale::new(ctl, fpt.parts().0);
-    let (time, events) = fpt.walk(v0, vt, start_plus, t_max, rng, &mut m);
+    let (time, events) = fpt.walk(v0, vt, start, t_max, rng, &mut m);
     (time, m.jumps - m.compensator, events)
 }
 
 /// Mergeable sums of a controlled first-passage run, split by starting
-/// noise state (even particle index: +Sigma).
+/// noise state (stratum 0, even particle index: +Sigma; stratum 1: -Sigma).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ControlledStats {
     /// (T, M_T) of the particles started in +Sigma.
@@ -541,7 +542,7 @@ fn run_states(
         let (flows, ..) = fpt.parts();
         Ok(reduce(particles, seed, progress, |_, rng| {
             let mut m = Martingale::new(&ctl, flows);
-            let (time, events) = fpt.walk(cp.v0(), cp.vt(), true, t_max, rng, &mut m);
+            let (time, events) = fpt.walk(cp.v0(), cp.vt(), 0, t_max, rng, &mut m);
             (time, m.jumps - m.compensator, events)
         }))
     })
@@ -565,29 +566,30 @@ pub fn run_with<F: FlowMap>(
     (particles, seed, t_max): (u64, u64, f64),
     progress: &dyn Progress,
 ) -> ControlledStats {
-    reduce(particles, seed, progress, |plus, rng| {
-        controlled_walk(fpt, ctl, (v0, vt, plus != swapped, t_max), rng)
+    reduce(particles, seed, progress, |k, rng| {
+        let start = if swapped { 1 - k } else { k };
+        controlled_walk(fpt, ctl, (v0, vt, start, t_max), rng)
     })
 }
 
 /// `particles` controlled walks (particle i: stream (seed, i), `walk`
-/// given whether i is even), the even ones in the `plus` half.
+/// given its stratum i mod 2), stratum 0 (even i) in the `plus` half.
 fn reduce(
     particles: u64,
     seed: u64,
     progress: &dyn Progress,
-    walk: impl Fn(bool, &mut rng::Rng) -> (Option<f64>, f64, u64) + Sync,
+    walk: impl Fn(usize, &mut rng::Rng) -> (Option<f64>, f64, u64) + Sync,
 ) -> ControlledStats {
     parallel::reduce(
         particles,
         ControlledStats::default,
         |i, acc: &mut ControlledStats| {
             let mut rng = rng::stream(seed, i);
-            let plus = i % 2 == 0;
-            let (time, m, events) = walk(plus, &mut rng);
+            let k = (i % 2) as usize;
+            let (time, m, events) = walk(k, &mut rng);
             acc.events += events;
             match time {
-                Some(t) if plus => acc.plus.push(t, m),
+                Some(t) if k == 0 => acc.plus.push(t, m),
                 Some(t) => acc.minus.push(t, m),
                 None => acc.censored += 1,
             }

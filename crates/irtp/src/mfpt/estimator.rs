@@ -1,14 +1,15 @@
 //! First-passage estimators shared by every particle method.
 //!
 //! [`first_passage_stats`] is method-agnostic: it hands particle `i` its own
-//! stream `rng::stream(seed, i)` and its starting noise state (even `i`: +Sigma,
-//! odd `i`: -Sigma — stratified, so tau = (tau+ + tau-)/2 is estimated with
-//! exactly balanced halves), calls the per-particle sampler and reduces the
+//! stream `rng::stream(seed, i)` and its stratum `i mod K` (the starting
+//! noise state; for the paper's noise even `i`: +Sigma, odd `i`: -Sigma —
+//! stratified, so tau = (tau+ + tau-)/2 is estimated with exactly balanced
+//! halves), calls the per-particle sampler and reduces the
 //! results deterministically into mergeable sums and counts ([`FptStats`],
 //! with the arrival-time histogram of [`super::survival`]), summarised as
 //! [`FptSummary`]: the mean passage times when every particle arrived by
 //! t_max, otherwise the restricted mean E[min(T, t_max)], a lower bound. A particle method is any
-//! `Fn(index, &mut Rng, start_plus) -> FptSample`
+//! `Fn(index, &mut Rng, stratum) -> FptSample`
 //! ([`super::euler`], [`super::exact`]).
 
 use super::survival::{Arrivals, SurvivalCurve};
@@ -27,21 +28,48 @@ pub struct FptSample {
     pub work: u64,
 }
 
-/// Mergeable first-passage statistics, split by starting noise state:
+/// The strata of the paper's noise: start states +Sigma (index 0) and
+/// -Sigma (index 1), weight 1/2 each. A noise model's run has the same
+/// two equal halves (even and odd particles), each particle's start state
+/// drawn from the stationary law π (the halves are two samples of the
+/// π-mixture).
+pub const HALVES: [f64; 2] = [0.5, 0.5];
+
+/// Σ_k w_k x_k over the strata of weights `w`; for [`HALVES`] exactly
+/// (x_0 + x_1)/2.
+fn mix(w: &[f64], x: impl Fn(usize) -> f64) -> f64 {
+    if w == HALVES {
+        return 0.5 * (x(0) + x(1));
+    }
+    (0..w.len()).map(|k| w[k] * x(k)).sum()
+}
+
+/// The standard error sqrt(Σ_k w_k² e_k²) of [`mix`] from the strata's
+/// standard errors `e`; for [`HALVES`] exactly sqrt(e_0² + e_1²)/2.
+fn mix_err(w: &[f64], e: impl Fn(usize) -> f64) -> f64 {
+    if w == HALVES {
+        let (a, b) = (e(0), e(1));
+        return 0.5 * (a * a + b * b).sqrt();
+    }
+    let var: f64 = (0..w.len()).map(|k| (w[k] * e(k)).powi(2)).sum();
+    var.sqrt()
+}
+
+/// Mergeable first-passage statistics, split by stratum (the starting
+/// noise state; particle i is in stratum i mod the number of strata):
 /// sums and counts only (merged by addition), so a run gives the same bits
 /// for any thread count and shard split.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FptStats {
     /// The censoring time: every particle not arrived by t_max is censored.
     pub t_max: f64,
-    /// Arrival times of particles started in +Sigma.
-    pub plus: MeanAcc,
-    /// Arrival times of particles started in -Sigma.
-    pub minus: MeanAcc,
-    /// Particles started in +Sigma that had not arrived by t_max.
-    pub censored_plus: u64,
-    /// Particles started in -Sigma that had not arrived by t_max.
-    pub censored_minus: u64,
+    /// The weight of each stratum in the estimates (its probability as a
+    /// start state; they sum to 1).
+    pub weights: Vec<f64>,
+    /// Arrival times of the particles of each stratum.
+    pub arrived: Vec<MeanAcc>,
+    /// Particles of each stratum that had not arrived by t_max.
+    pub censored_in: Vec<u64>,
     /// Arrival-time histogram on the fixed grid of t_max (the survival curve).
     pub arrivals: Arrivals,
     /// Total work (sum of [`FptSample::work`]).
@@ -49,89 +77,106 @@ pub struct FptStats {
 }
 
 impl FptStats {
-    /// No particle yet, censoring at `t_max`.
+    /// No particle yet, censoring at `t_max`, in the strata [`HALVES`].
     pub fn new(t_max: f64) -> Self {
+        Self::stratified(t_max, &HALVES)
+    }
+    /// No particle yet, censoring at `t_max`, one stratum per weight.
+    pub fn stratified(t_max: f64, weights: &[f64]) -> Self {
+        let k = weights.len();
+        assert!(k > 0, "first-passage statistics need a stratum");
         FptStats {
             t_max,
-            plus: MeanAcc::new(),
-            minus: MeanAcc::new(),
-            censored_plus: 0,
-            censored_minus: 0,
-            arrivals: Arrivals::new(t_max),
+            weights: weights.to_vec(),
+            arrived: vec![MeanAcc::new(); k],
+            censored_in: vec![0; k],
+            arrivals: Arrivals::new(t_max, k),
             work: 0,
         }
     }
-    /// Add one particle.
-    pub fn push(&mut self, start_plus: bool, s: FptSample) {
+    /// The number of strata.
+    pub fn strata(&self) -> usize {
+        self.weights.len()
+    }
+    /// Add one particle of stratum `k`.
+    pub fn push(&mut self, k: usize, s: FptSample) {
         self.work += s.work;
-        if let Some(t) = s.time {
-            self.arrivals.push(self.t_max, start_plus, t);
-        }
-        match (start_plus, s.time) {
-            (true, Some(t)) => self.plus.push(t),
-            (false, Some(t)) => self.minus.push(t),
-            (true, None) => self.censored_plus += 1,
-            (false, None) => self.censored_minus += 1,
+        match s.time {
+            Some(t) => {
+                self.arrivals.push(self.t_max, k, t);
+                self.arrived[k].push(t);
+            }
+            None => self.censored_in[k] += 1,
         }
     }
-    /// Merge another shard (same t_max).
+    /// Merge another shard (same t_max and strata).
     pub fn merge(&mut self, o: &FptStats) {
         assert_eq!(
             self.t_max.to_bits(),
             o.t_max.to_bits(),
             "merging first-passage statistics of different t_max"
         );
-        self.plus.merge(&o.plus);
-        self.minus.merge(&o.minus);
-        self.censored_plus += o.censored_plus;
-        self.censored_minus += o.censored_minus;
+        assert_eq!(
+            self.weights, o.weights,
+            "merging first-passage statistics of different strata"
+        );
+        for (a, b) in self.arrived.iter_mut().zip(&o.arrived) {
+            a.merge(b);
+        }
+        for (a, b) in self.censored_in.iter_mut().zip(&o.censored_in) {
+            *a += b;
+        }
         self.arrivals.merge(&o.arrivals);
         self.work += o.work;
     }
+    /// Particles of stratum `k` (arrived or not).
+    pub fn particles_in(&self, k: usize) -> u64 {
+        self.arrived[k].n + self.censored_in[k]
+    }
     /// Particles in total.
     pub fn particles(&self) -> u64 {
-        self.plus.n + self.minus.n + self.censored()
+        self.arrived.iter().map(|a| a.n).sum::<u64>() + self.censored()
     }
     /// Particles that had not arrived by t_max.
     pub fn censored(&self) -> u64 {
-        self.censored_plus + self.censored_minus
+        self.censored_in.iter().sum()
     }
     /// The Kaplan-Meier survival curve of the passage times (see
     /// [`SurvivalCurve`]).
     pub fn survival(&self) -> SurvivalCurve {
-        SurvivalCurve::new(
-            &self.arrivals,
-            self.t_max,
-            self.plus.n + self.censored_plus,
-            self.minus.n + self.censored_minus,
-        )
+        let n: Vec<u64> = (0..self.strata()).map(|k| self.particles_in(k)).collect();
+        SurvivalCurve::new(&self.arrivals, self.t_max, &n, &self.weights)
     }
     /// Means (NaN where censored), restricted means, standard errors and
-    /// the censoring.
+    /// the censoring; `tau_plus`/`tau_minus` are strata 0 and 1 (the
+    /// paper's ±Sigma; NaN where there is no such stratum).
     pub fn summary(&self) -> FptSummary {
-        let (tp, tm) = (self.plus.mean(), self.minus.mean());
-        let (ep, em) = (self.plus.sem(), self.minus.sem());
-        let rp = restricted(&self.plus, self.censored_plus, self.t_max);
-        let rm = restricted(&self.minus, self.censored_minus, self.t_max);
-        let (rp, rm, erp, erm) = (rp.0, rm.0, rp.1, rm.1);
-        let rmst = 0.5 * (rp + rm);
+        let w = &self.weights;
+        let k = w.len();
+        let at = |x: &[f64], j: usize| x.get(j).copied().unwrap_or(f64::NAN);
+        let t: Vec<f64> = self.arrived.iter().map(MeanAcc::mean).collect();
+        let e: Vec<f64> = self.arrived.iter().map(MeanAcc::sem).collect();
+        let (r, er): (Vec<f64>, Vec<f64>) = (0..k)
+            .map(|j| restricted(&self.arrived[j], self.censored_in[j], self.t_max))
+            .unzip();
+        let rmst = mix(w, |j| r[j]);
         let censored = self.censored();
         // A mean over the arrived particles alone is no estimate of tau.
         let unless = |c: u64, x: f64| if c == 0 { x } else { f64::NAN };
-        let (cp, cm) = (self.censored_plus, self.censored_minus);
+        let c = |j: usize| self.censored_in.get(j).copied().unwrap_or(0);
         FptSummary {
-            tau: unless(censored, 0.5 * (tp + tm)),
-            tau_err: unless(censored, 0.5 * (ep * ep + em * em).sqrt()),
-            tau_plus: unless(cp, tp),
-            tau_plus_err: unless(cp, ep),
-            tau_minus: unless(cm, tm),
-            tau_minus_err: unless(cm, em),
+            tau: unless(censored, mix(w, |j| t[j])),
+            tau_err: unless(censored, mix_err(w, |j| e[j])),
+            tau_plus: unless(c(0), at(&t, 0)),
+            tau_plus_err: unless(c(0), at(&e, 0)),
+            tau_minus: unless(c(1), at(&t, 1)),
+            tau_minus_err: unless(c(1), at(&e, 1)),
             rmst,
-            rmst_err: 0.5 * (erp * erp + erm * erm).sqrt(),
-            rmst_plus: rp,
-            rmst_plus_err: erp,
-            rmst_minus: rm,
-            rmst_minus_err: erm,
+            rmst_err: mix_err(w, |j| er[j]),
+            rmst_plus: at(&r, 0),
+            rmst_plus_err: at(&er, 0),
+            rmst_minus: at(&r, 1),
+            rmst_minus_err: at(&er, 1),
             t_max: self.t_max,
             particles: self.particles(),
             censored,
@@ -210,26 +255,29 @@ pub struct FptSummary {
     pub work_per_particle: f64,
 }
 
-/// Run `n` particles: particle `i` gets `rng::stream(seed, i)` and starts in
-/// +Sigma for even `i`, -Sigma for odd `i`; a sample time must be <= `t_max`
-/// (`None`: censored). Bit-identical for any thread count.
+/// Run `n` particles in the strata of `weights`: particle `i` gets
+/// `rng::stream(seed, i)` and stratum `i % weights.len()` (for the
+/// paper's noise, [`HALVES`]: +Sigma for even `i`, -Sigma for odd `i`),
+/// handed to the sampler; a sample time must be <= `t_max` (`None`:
+/// censored). Bit-identical for any thread count.
 pub fn first_passage_stats<S>(
     n: u64,
     seed: u64,
-    t_max: f64,
+    (t_max, weights): (f64, &[f64]),
     progress: &dyn Progress,
     sample: S,
 ) -> FptStats
 where
-    S: Fn(u64, &mut Rng, bool) -> FptSample + Sync,
+    S: Fn(u64, &mut Rng, usize) -> FptSample + Sync,
 {
+    let k = weights.len() as u64;
     parallel::reduce(
         n,
-        || FptStats::new(t_max),
+        || FptStats::stratified(t_max, weights),
         |i, acc| {
             let mut rng = rng::stream(seed, i);
-            let plus = i % 2 == 0;
-            acc.push(plus, sample(i, &mut rng, plus));
+            let s = (i % k) as usize;
+            acc.push(s, sample(i, &mut rng, s));
         },
         |a, b| a.merge(&b),
         progress,
@@ -238,24 +286,25 @@ where
 
 /// The unit totals of units `units` of the run of [`first_passage_stats`]
 /// over `n` particles ([`parallel::reduce_units`]: unit u holds particles
-/// u·UNIT..(u+1)·UNIT, each with its own stream (seed, i) and start state).
+/// u·UNIT..(u+1)·UNIT, each with its own stream (seed, i) and stratum).
 /// [`merge_units`] of all units' totals, in unit order and however they were
 /// split into calls, is [`first_passage_stats`]'s result bit for bit.
 pub fn first_passage_units<S>(
     n: u64,
     units: Range<u64>,
     seed: u64,
-    t_max: f64,
+    (t_max, weights): (f64, &[f64]),
     progress: &dyn Progress,
     sample: S,
 ) -> Vec<FptStats>
 where
-    S: Fn(u64, &mut Rng, bool) -> FptSample + Sync,
+    S: Fn(u64, &mut Rng, usize) -> FptSample + Sync,
 {
+    let k = weights.len() as u64;
     parallel::reduce_units(
         n,
         units,
-        || FptStats::new(t_max),
+        || FptStats::stratified(t_max, weights),
         |lo, hi, acc| {
             for i in lo..hi {
                 // A cancelled chunk is discarded: stop within one particle.
@@ -263,8 +312,8 @@ where
                     return;
                 }
                 let mut rng = rng::stream(seed, i);
-                let plus = i % 2 == 0;
-                acc.push(plus, sample(i, &mut rng, plus));
+                let s = (i % k) as usize;
+                acc.push(s, sample(i, &mut rng, s));
             }
         },
         |a, b| a.merge(&b),
@@ -272,10 +321,12 @@ where
     )
 }
 
-/// Unit totals merged in unit order into empty statistics at `t_max`: the
-/// same additions as the reduction that made them, so the same bits.
+/// Unit totals merged in unit order into empty statistics at `t_max`
+/// (in the strata of the units, [`HALVES`] when there is none): the same
+/// additions as the reduction that made them, so the same bits.
 pub fn merge_units(t_max: f64, units: &[FptStats]) -> FptStats {
-    let mut total = FptStats::new(t_max);
+    let weights = units.first().map_or(&HALVES[..], |u| &u.weights);
+    let mut total = FptStats::stratified(t_max, weights);
     for u in units {
         total.merge(u);
     }
@@ -293,7 +344,7 @@ mod tests {
     fn stats(t_max: f64, times: &[Option<f64>]) -> FptStats {
         let mut st = FptStats::new(t_max);
         for (i, &t) in times.iter().enumerate() {
-            st.push(i % 2 == 0, sample(t));
+            st.push(i % 2, sample(t));
         }
         st
     }
@@ -335,8 +386,8 @@ mod tests {
         // The second part starts at an even index: same start states.
         a.merge(&b);
         assert_eq!(a.arrivals, whole.arrivals);
-        assert_eq!((a.censored_plus, a.censored_minus), (2, 2));
-        assert_eq!(a.plus.n + a.minus.n, whole.plus.n + whole.minus.n);
+        assert_eq!(a.censored_in, [2, 2]);
+        assert_eq!(a.particles(), whole.particles());
         let json = serde_json::to_string(&a).unwrap();
         assert_eq!(serde_json::from_str::<FptStats>(&json).unwrap(), a);
     }

@@ -19,11 +19,12 @@
 //! (upward) frame a segment crosses v_t iff v*_s > v_t. A chain's particle
 //! starts in a state drawn from π (the stream's first uniform), so τ is
 //! the π-averaged Σ_s π_s T_s(v_0) of the backward equations (Eq. (N47))
-//! and the even and odd particles (the `plus` and `minus` halves of
-//! [`FptStats`]) are two independent halves of the same law. The noise
+//! and the even and odd particles (strata 0 and 1 of [`FptStats`], the
+//! `plus` and `minus` halves of its summary) are two independent halves
+//! of the same law. The noise
 //! is dispatched once, at the entry (`units`).
 
-use super::estimator::{first_passage_units, FptSample, FptStats};
+use super::estimator::{first_passage_units, FptSample, FptStats, HALVES};
 use super::Problem;
 use crate::error::{Error, Result};
 use crate::model::drag::{AnyFlow, FlowMap};
@@ -36,7 +37,7 @@ use crate::sim::exact::passage::{Clocks, Flow, PassageObserver};
 use crate::sim::exact::{ExactNoise, Telegraph};
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
-/// starting at v(0) = v0 in noise state +Sigma (`start_plus`) or -Sigma.
+/// starting at v(0) = v0 in noise state `start` (0: +Sigma, 1: -Sigma).
 /// A flow segment is tested with the exact flow time to vt (no overshoot);
 /// a reset to v_r ≥ vt counts as passage at the reset instant. Returns
 /// (passage time, or None if not reached by `t_max`; number of events).
@@ -45,11 +46,11 @@ pub fn first_passage(
     params: &Params,
     v0: f64,
     vt: f64,
-    start_plus: bool,
+    start: usize,
     t_max: f64,
     rng: &mut Rng,
 ) -> (Option<f64>, u64) {
-    FirstPassage::new(params).run(v0, vt, start_plus, t_max, rng)
+    FirstPassage::new(params).run(v0, vt, start, t_max, rng)
 }
 
 /// The prepared exact first-passage sampler of the paper's noise.
@@ -135,17 +136,18 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
     }
 
     /// One upward first passage, as [`first_passage`] (the start state by
-    /// [`ExactNoise::start`]: the paper's +Sigma where `start_plus`, a
-    /// chain's drawn from π with the stream's first uniform).
+    /// [`ExactNoise::start`]: the paper's state `start` (0: +Sigma, 1:
+    /// -Sigma), a chain's drawn from π with the stream's first uniform,
+    /// `start` unused).
     pub fn run(
         &self,
         v0: f64,
         vt: f64,
-        start_plus: bool,
+        start: usize,
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
-        self.walk(v0, vt, start_plus, t_max, rng, &mut ())
+        self.walk(v0, vt, start, t_max, rng, &mut ())
     }
 
     /// [`Passage::run`] reporting the start, every flow segment and jump
@@ -158,12 +160,12 @@ impl<F: FlowMap, N: ExactNoise> Passage<F, N> {
         &self,
         v0: f64,
         vt: f64,
-        start_plus: bool,
+        start: usize,
         t_max: f64,
         rng: &mut Rng,
         tally: &mut T,
     ) -> (Option<f64>, u64) {
-        let s = self.clocks.noise.start(Some(usize::from(!start_plus)), rng);
+        let s = self.clocks.noise.start(Some(start), rng);
         if v0 >= vt {
             return (Some(0.0), 0);
         }
@@ -261,20 +263,21 @@ impl<F: FlowMap, T: Tally> PassageObserver for VelocityTarget<'_, F, T> {
 /// [`first_passage`] in either direction: the first time v(t) reaches `vt`
 /// from `v0` (from below or from above). A downward problem is the upward
 /// one under v → -v (all drag laws are odd): v0, vt and v_r change sign and
-/// the noise states swap, so both directions share one code path.
+/// the noise states swap (`start` 0: +Sigma, 1: -Sigma becomes 1 - `start`),
+/// so both directions share one code path.
 pub fn first_passage_to(
     params: &Params,
     v0: f64,
     vt: f64,
-    start_plus: bool,
+    start: usize,
     t_max: f64,
     rng: &mut Rng,
 ) -> Result<(Option<f64>, u64)> {
     if v0 <= vt {
-        return Ok(first_passage(params, v0, vt, start_plus, t_max, rng));
+        return Ok(first_passage(params, v0, vt, start, t_max, rng));
     }
     let mirrored = params.mirrored_reset();
-    Ok(first_passage(&mirrored, -v0, -vt, !start_plus, t_max, rng))
+    Ok(first_passage(&mirrored, -v0, -vt, 1 - start, t_max, rng))
 }
 
 /// Validate a first-passage time cap (`t_max`): t_max > 0 (+∞ allowed:
@@ -307,9 +310,9 @@ pub(super) fn check_problem(problem: &Problem) -> Result<()> {
 /// (either direction) by the exact sampler over `particles` particles,
 /// through the method-agnostic driver
 /// ([`super::estimator::first_passage_units`]: particle i has the stream
-/// (seed, i), start state +Sigma for even i; with a noise model other than
-/// the paper's a state drawn from π, the even and odd particles two halves
-/// of one law). Downward problems run in the mirrored upward frame
+/// (seed, i), stratum i mod 2 of [`HALVES`]: the paper's start state
+/// +Sigma for even i; with a noise model other than the paper's a state
+/// drawn from π, the even and odd particles two halves of one law). Downward problems run in the mirrored upward frame
 /// ([`Problem::canonical`]), where the noise states swap (a noise model's
 /// levels are negated state for state). Inputs are checked by
 /// [`super::Method::check`].
@@ -333,8 +336,8 @@ pub(super) fn units(
 }
 
 /// [`units`] of the canonical problem `cp` with the noise `N`; the
-/// stratum of particle i is its parity, its state swapped in a mirrored
-/// frame (`swapped`).
+/// stratum of particle i is its parity, the paper's start state that
+/// stratum's, swapped in a mirrored frame (`swapped`).
 fn noise_units<D: Drag, N: ExactNoise>(
     d: &D,
     cp: &Problem,
@@ -343,8 +346,10 @@ fn noise_units<D: Drag, N: ExactNoise>(
     progress: &dyn Progress,
 ) -> Vec<FptStats> {
     let fpt = Passage::<D::Flow, N>::build(d, cp.params()).expect("checked by Method::check");
-    first_passage_units(particles, units, seed, t_max, progress, |_, rng, plus| {
-        let (time, work) = fpt.run(cp.v0(), cp.vt(), plus != swapped, t_max, rng);
+    let run = (t_max, &HALVES[..]);
+    first_passage_units(particles, units, seed, run, progress, |_, rng, k| {
+        let start = if swapped { 1 - k } else { k };
+        let (time, work) = fpt.run(cp.v0(), cp.vt(), start, t_max, rng);
         FptSample { time, work }
     })
 }
@@ -361,8 +366,9 @@ mod tests {
         let q = p.with_reset_velocity(-0.1).unwrap();
         for i in 0..50 {
             let (mut a, mut b) = (rng::stream(9, i), rng::stream(9, i));
-            let down = first_passage_to(&p, 0.2, -0.3, i % 2 == 0, 1e3, &mut a).unwrap();
-            let up = first_passage(&q, -0.2, 0.3, i % 2 == 1, 1e3, &mut b);
+            let s = (i % 2) as usize;
+            let down = first_passage_to(&p, 0.2, -0.3, s, 1e3, &mut a).unwrap();
+            let up = first_passage(&q, -0.2, 0.3, 1 - s, 1e3, &mut b);
             assert_eq!(down, up);
             assert!(down.0.is_some());
         }

@@ -52,58 +52,58 @@ pub fn edges(t_max: f64) -> &'static [f64] {
     &all[..all.partition_point(|&e| e < t_max)]
 }
 
-/// Arrival counts per bin of the grid of `t_max`, by starting noise state:
-/// bin `j < edges.len()` holds the arrivals in `(edges[j-1], edges[j]]`
-/// (bin 0 from t = 0), the last bin those in `(edges[last], t_max]`.
+/// Arrival counts per bin of the grid of `t_max`, by stratum (starting
+/// noise state): bin `j < edges.len()` holds the arrivals in
+/// `(edges[j-1], edges[j]]` (bin 0 from t = 0), the last bin those in
+/// `(edges[last], t_max]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Arrivals {
-    /// Particles started in +Sigma.
-    pub plus: Vec<u64>,
-    /// Particles started in -Sigma.
-    pub minus: Vec<u64>,
+    /// The counts of each stratum (for the paper's noise: +Sigma, -Sigma).
+    pub counts: Vec<Vec<u64>>,
 }
 
 impl Arrivals {
-    /// Empty counts for the grid of `t_max`.
-    pub fn new(t_max: f64) -> Self {
+    /// Empty counts of `strata` strata for the grid of `t_max`.
+    pub fn new(t_max: f64, strata: usize) -> Self {
         let bins = edges(t_max).len() + 1;
         Arrivals {
-            plus: vec![0; bins],
-            minus: vec![0; bins],
+            counts: vec![vec![0; bins]; strata],
         }
     }
 
-    /// Count one arrival at time `t` (t <= t_max) of the grid of `t_max`.
-    pub fn push(&mut self, t_max: f64, start_plus: bool, t: f64) {
+    /// Count one arrival at time `t` (t <= t_max) of stratum `k` on the
+    /// grid of `t_max`.
+    pub fn push(&mut self, t_max: f64, k: usize, t: f64) {
         let j = edges(t_max).partition_point(|&e| e < t);
-        let counts = if start_plus {
-            &mut self.plus
-        } else {
-            &mut self.minus
-        };
-        counts[j] += 1;
+        self.counts[k][j] += 1;
     }
 
-    /// Add another shard's counts (same grid).
+    /// The arrivals of every stratum in bin `j`.
+    pub fn in_bin(&self, j: usize) -> u64 {
+        self.counts.iter().map(|c| c[j]).sum()
+    }
+
+    /// Add another shard's counts (same grid and strata).
     pub fn merge(&mut self, o: &Arrivals) {
+        let shape = |a: &Arrivals| (a.counts.len(), a.counts.first().map(Vec::len));
         assert_eq!(
-            self.plus.len(),
-            o.plus.len(),
-            "merging first-passage histograms of different grids (t_max)"
+            shape(self),
+            shape(o),
+            "merging first-passage histograms of different grids (t_max) or strata"
         );
-        for (a, b) in self.plus.iter_mut().zip(&o.plus) {
-            *a += b;
-        }
-        for (a, b) in self.minus.iter_mut().zip(&o.minus) {
-            *a += b;
+        for (mine, theirs) in self.counts.iter_mut().zip(&o.counts) {
+            for (a, b) in mine.iter_mut().zip(theirs) {
+                *a += b;
+            }
         }
     }
 }
 
-/// The Kaplan-Meier survival curve S(t) = (S+(t) + S-(t))/2 of a uniformly
-/// random initial noise state (the stratified estimate, like tau), at t = 0
-/// and the grid times (t_max the last, when finite), with the binomial
-/// (Greenwood) standard error sqrt(S±(1 - S±)/N±) of each half combined.
+/// The Kaplan-Meier survival curve S(t) = Σ_k w_k S_k(t) of a start
+/// state drawn with the strata's weights (the stratified estimate, like
+/// tau; the paper's noise: (S+(t) + S-(t))/2), at t = 0 and the grid
+/// times (t_max the last, when finite), with the binomial (Greenwood)
+/// standard error sqrt(S_k(1 - S_k)/N_k) of each stratum combined.
 /// Leading grid times where no particle has arrived are left out (one is
 /// kept), and the curve stops at the first time S = 0.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -119,36 +119,34 @@ pub struct SurvivalCurve {
 }
 
 impl SurvivalCurve {
-    /// The curve of `arrivals` on the grid of `t_max`, with `n_plus` and
-    /// `n_minus` particles started in each state (arrived or not).
-    pub fn new(arrivals: &Arrivals, t_max: f64, n_plus: u64, n_minus: u64) -> Self {
+    /// The curve of `arrivals` on the grid of `t_max`, with `n[k]`
+    /// particles started in stratum k (arrived or not) of weight
+    /// `weights[k]`.
+    pub fn new(arrivals: &Arrivals, t_max: f64, n: &[u64], weights: &[f64]) -> Self {
         let mut times: Vec<f64> = edges(t_max).to_vec();
         if t_max.is_finite() {
             times.push(t_max);
         }
-        let half = |n: u64, c: u64| {
-            let s = 1.0 - c as f64 / n as f64;
-            (s, s * (1.0 - s) / n as f64)
-        };
-        let (mut cp, mut cm) = (0u64, 0u64);
-        let total = n_plus + n_minus;
+        let total: u64 = n.iter().sum();
         let mut curve = SurvivalCurve {
             t: vec![0.0],
             survival: vec![1.0],
             survival_err: vec![0.0],
             at_risk: vec![total],
         };
+        let mut arrived = vec![0u64; n.len()];
         for (j, &t) in times.iter().enumerate() {
-            cp += arrivals.plus[j];
-            cm += arrivals.minus[j];
-            let ((sp, vp), (sm, vm)) = (half(n_plus, cp), half(n_minus, cm));
-            let row = (t, 0.5 * (sp + sm), 0.5 * (vp + vm).sqrt(), total - cp - cm);
-            let none_yet = cp + cm == 0;
+            for (c, counts) in arrived.iter_mut().zip(&arrivals.counts) {
+                *c += counts[j];
+            }
+            let all: u64 = arrived.iter().sum();
+            let (s, e) = stratified(n, &arrived, weights);
+            let none_yet = all == 0;
             if none_yet && curve.t.len() > 1 {
                 curve.pop();
             }
-            curve.push(row);
-            if cp + cm == total {
+            curve.push((t, s, e, total - all));
+            if all == total {
                 break;
             }
         }
@@ -170,9 +168,31 @@ impl SurvivalCurve {
     }
 }
 
+/// S = Σ_k w_k S_k and its standard error sqrt(Σ_k w_k² S_k(1 - S_k)/N_k)
+/// with `c[k]` of `n[k]` particles of stratum k arrived; for two equal
+/// halves exactly (S_0 + S_1)/2 and sqrt(v_0 + v_1)/2.
+fn stratified(n: &[u64], c: &[u64], w: &[f64]) -> (f64, f64) {
+    let half = |k: usize| {
+        let s = 1.0 - c[k] as f64 / n[k] as f64;
+        (s, s * (1.0 - s) / n[k] as f64)
+    };
+    if w == super::estimator::HALVES {
+        let ((sp, vp), (sm, vm)) = (half(0), half(1));
+        return (0.5 * (sp + sm), 0.5 * (vp + vm).sqrt());
+    }
+    let (mut s, mut v) = (0.0, 0.0);
+    for (k, &wk) in w.iter().enumerate() {
+        let (sk, vk) = half(k);
+        s += wk * sk;
+        v += wk * wk * vk;
+    }
+    (s, v.sqrt())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mfpt::estimator::HALVES;
 
     #[test]
     fn grid_is_increasing_round_and_cut_at_t_max() {
@@ -188,27 +208,27 @@ mod tests {
 
     #[test]
     fn arrivals_fall_in_the_bin_of_their_upper_edge() {
-        let mut a = Arrivals::new(2.0);
+        let mut a = Arrivals::new(2.0, 2);
         for t in [0.0, 1e-9, 1.0, 1.0000001, 2.0] {
-            a.push(2.0, true, t);
+            a.push(2.0, 0, t);
         }
         let e = edges(2.0);
         let one = e.iter().position(|&x| x == 1.0).unwrap();
-        assert_eq!(a.plus[0], 2);
-        assert_eq!(a.plus[one], 1);
-        assert_eq!(a.plus[one + 1], 1);
-        assert_eq!(a.plus[e.len()], 1);
-        assert_eq!(a.plus.iter().sum::<u64>(), 5);
-        assert!(a.minus.iter().all(|&c| c == 0));
+        assert_eq!(a.counts[0][0], 2);
+        assert_eq!(a.counts[0][one], 1);
+        assert_eq!(a.counts[0][one + 1], 1);
+        assert_eq!(a.counts[0][e.len()], 1);
+        assert_eq!(a.counts[0].iter().sum::<u64>(), 5);
+        assert!(a.counts[1].iter().all(|&c| c == 0));
     }
 
     #[test]
     fn curve_starts_at_one_trims_and_stops_at_zero() {
-        let mut a = Arrivals::new(10.0);
-        for (plus, t) in [(true, 0.5), (false, 0.5), (true, 2.0), (false, 3.0)] {
-            a.push(10.0, plus, t);
+        let mut a = Arrivals::new(10.0, 2);
+        for (k, t) in [(0, 0.5), (1, 0.5), (0, 2.0), (1, 3.0)] {
+            a.push(10.0, k, t);
         }
-        let c = SurvivalCurve::new(&a, 10.0, 2, 2);
+        let c = SurvivalCurve::new(&a, 10.0, &[2, 2], &HALVES);
         assert_eq!((c.t[0], c.survival[0], c.at_risk[0]), (0.0, 1.0, 4));
         // One leading time with no arrival kept (0.47), then 0.51 > 0.5.
         assert_eq!(&c.t[1..3], &[0.47, 0.51]);
@@ -221,7 +241,7 @@ mod tests {
             (0.0, 0)
         );
         // A censored particle: the curve ends at t_max with S > 0.
-        let c = SurvivalCurve::new(&a, 10.0, 3, 2);
+        let c = SurvivalCurve::new(&a, 10.0, &[3, 2], &HALVES);
         assert_eq!(*c.t.last().unwrap(), 10.0);
         assert_eq!(*c.at_risk.last().unwrap(), 1);
         assert_eq!(*c.survival.last().unwrap(), 0.5 * (1.0 - 2.0 / 3.0));

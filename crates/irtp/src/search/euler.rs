@@ -48,7 +48,7 @@
 
 use super::SearchProblem;
 use crate::error::{finite, Error, Result};
-use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats};
+use crate::mfpt::estimator::{first_passage_units, FptSample, FptStats, HALVES};
 use crate::model::reset::{Reset, ResetRule, Schedule};
 use crate::model::Drag;
 use crate::parallel::Progress;
@@ -101,7 +101,7 @@ impl EulerNoise for Telegraph {
         }
     }
     fn reset(&self, s: usize, next: u64, _: u64, rule: &ResetRule, rng: &mut Rng) -> (usize, u64) {
-        (usize::from(!rule.draw_noise(s == 0, rng)), next)
+        (rule.draw_telegraph(s, rng), next)
     }
     fn jump(&self, s: usize, step: u64, rng: &mut Rng) -> (usize, u64) {
         (1 - s, step.saturating_add(geometric_gap(rng, self.ln_flip)))
@@ -215,7 +215,8 @@ impl SearchEuler {
     }
 
     /// The unit totals of units `units` of the run of `n` particles
-    /// (particle i: stream (seed, i), +Sigma for even i; the contract of
+    /// (particle i: stream (seed, i), stratum i mod 2 of [`HALVES`]: the
+    /// start state, +Sigma for even i; the contract of
     /// [`first_passage_units`]: merged in unit order, bit-identical for
     /// any thread count and split).
     pub fn units(
@@ -237,15 +238,15 @@ impl SearchEuler {
                 .and_then(|ch| StepChain::new(&ch, self.dt))
                 .expect("noise chain validated by SearchEuler::new")
         });
-        // An even particle (`plus`) labelled with state 0 (+Sigma).
+        // Stratum k labelled with state k (0: +Sigma for an even particle).
         let run = |noise: &(dyn Fn(&mut Rng, usize) -> FptSample + Sync)| {
             first_passage_units(
                 n,
                 units.clone(),
                 seed,
-                self.t_max,
+                (self.t_max, &HALVES[..]),
                 progress,
-                |_, rng, plus| noise(rng, usize::from(!plus)),
+                |_, rng, k| noise(rng, k),
             )
         };
         crate::with_drag!(p.drag(), |d| match &chain {

@@ -26,13 +26,14 @@
 //! Start: the paper's noise starts at +Sigma for even particles and -Sigma
 //! for odd ones (stratified); a chain starts in a state drawn from π with
 //! the stream's first uniform, so τ is the π-averaged mean search time and
-//! the even and odd particles (the `plus` and `minus` halves of
-//! [`FptStats`]) are two independent halves of the same law (as in
+//! the even and odd particles (strata 0 and 1 of [`FptStats`], the `plus`
+//! and `minus` halves of its summary) are two independent halves of the
+//! same law (as in
 //! [`crate::mfpt::exact`]'s N-state sampler).
 
 use super::SearchProblem;
 use crate::error::Result;
-use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats};
+use crate::mfpt::estimator::{first_passage_units, merge_units, FptSample, FptStats, HALVES};
 use crate::model::drag::{FlowMap, FlowPoint};
 use crate::model::noise::chain::Chain;
 
@@ -127,18 +128,18 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
     }
 
     /// One search from (x0, v0), the noise state by [`ExactNoise::start`]
-    /// (the paper's: +Sigma where `start_plus`, else -Sigma): (the first
-    /// time x leaves the search region, or None if not by `t_max`; the
-    /// number of events).
+    /// (the paper's: state `start`, 0: +Sigma, 1: -Sigma; a chain's drawn
+    /// from π, `start` unused): (the first time x leaves the search
+    /// region, or None if not by `t_max`; the number of events).
     pub fn run(
         &self,
         x0: f64,
         v0: f64,
-        start_plus: bool,
+        start: usize,
         t_max: f64,
         rng: &mut Rng,
     ) -> (Option<f64>, u64) {
-        let si = self.clocks.noise.start(Some(usize::from(!start_plus)), rng);
+        let si = self.clocks.noise.start(Some(start), rng);
         let a = self.segs[si].at(v0);
         let mut obs = PositionTarget {
             sampler: self,
@@ -329,8 +330,9 @@ macro_rules! with_sampler {
 
 /// The unit totals of units `units` of the search run of `particles`
 /// particles of `problem` by the exact sampler, through the method-agnostic
-/// driver [`first_passage_units`] (particle i: stream (seed, i), start
-/// state +Sigma for even i with the paper's noise, drawn from π with a
+/// driver [`first_passage_units`] (particle i: stream (seed, i), stratum
+/// i mod 2 of [`HALVES`], the start state: +Sigma for even i with the
+/// paper's noise; drawn from π with a
 /// noise model; censored at `t_max`), monomorphised for the law's type and
 /// the noise states. Merged in unit order ([`stats`]) they are
 /// bit-identical for any thread count and any split into parts.
@@ -347,10 +349,10 @@ pub fn units(
         particles,
         units.clone(),
         seed,
-        t_max,
+        (t_max, &HALVES[..]),
         progress,
-        |_, rng, plus| {
-            let (time, work) = sampler.run(x0, v0, plus, t_max, rng);
+        |_, rng, k| {
+            let (time, work) = sampler.run(x0, v0, k, t_max, rng);
             FptSample { time, work }
         },
     )))
@@ -372,17 +374,18 @@ pub fn stats(
 
 /// One search of `problem` (any law and noise, dispatched per call; for
 /// many particles build a [`SearchSampler`] once, as [`stats`] does): the
-/// passage time (None if not by `t_max`) and the number of events.
+/// passage time (None if not by `t_max`) and the number of events, from
+/// noise state `start` (0: +Sigma, 1: -Sigma; a chain's drawn from π).
 pub fn search_once(
     problem: &SearchProblem,
-    start_plus: bool,
+    start: usize,
     t_max: f64,
     rng: &mut Rng,
 ) -> Result<(Option<f64>, u64)> {
     with_sampler!(problem, |d, sampler| Ok(sampler.run(
         problem.x0(),
         problem.v0(),
-        start_plus,
+        start,
         t_max,
         rng
     )))

@@ -48,10 +48,7 @@ pub struct TailFit {
 /// understate the error). `None` with fewer than [`MIN_POINTS`] times in
 /// the window.
 pub fn fit_tail(stats: &FptStats) -> Option<TailFit> {
-    let (np, nm) = (
-        stats.plus.n + stats.censored_plus,
-        stats.minus.n + stats.censored_minus,
-    );
+    let (np, nm) = (stats.particles_in(0), stats.particles_in(1));
     let mut times: Vec<f64> = edges(stats.t_max).to_vec();
     if stats.t_max.is_finite() {
         times.push(stats.t_max);
@@ -60,8 +57,8 @@ pub fn fit_tail(stats: &FptStats) -> Option<TailFit> {
     let (mut cp, mut cm) = (0u64, 0u64);
     let mut rows = Vec::with_capacity(times.len());
     for (j, &t) in times.iter().enumerate() {
-        cp += stats.arrivals.plus[j];
-        cm += stats.arrivals.minus[j];
+        cp += stats.arrivals.counts[0][j];
+        cm += stats.arrivals.counts[1][j];
         rows.push((t, np - cp, nm - cm));
     }
     let last = rows
@@ -127,7 +124,7 @@ mod tests {
             let m = n / 2;
             let t = (m as f64 / (m - i / 2) as f64).powi(2);
             let time = (t <= t_max).then_some(t);
-            st.push(i % 2 == 0, FptSample { time, work: 1 });
+            st.push((i % 2) as usize, FptSample { time, work: 1 });
         }
         let fit = fit_tail(&st).unwrap();
         assert!((fit.theta - 0.5).abs() < 0.01, "{fit:?}");

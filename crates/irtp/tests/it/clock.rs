@@ -261,9 +261,9 @@ fn special_cases_bit_for_bit() {
             SearchProblem::new(pb, 0.0, 0.0, PositionTarget::Level(1.0)).unwrap(),
         );
         for i in 0..200u64 {
-            let plus = i % 2 == 0;
-            let ra = search::exact::search_once(&qa, plus, 1e4, &mut rng::stream(9, i)).unwrap();
-            let rb = search::exact::search_once(&qb, plus, 1e4, &mut rng::stream(9, i)).unwrap();
+            let s = (i % 2) as usize;
+            let ra = search::exact::search_once(&qa, s, 1e4, &mut rng::stream(9, i)).unwrap();
+            let rb = search::exact::search_once(&qb, s, 1e4, &mut rng::stream(9, i)).unwrap();
             assert_eq!(ra, rb, "search sampler, particle {i}");
         }
     }
@@ -280,8 +280,15 @@ fn special_cases_bit_for_bit() {
     let vt = 0.5 * pa.v_upper();
     for i in 0..200u64 {
         let f = |p: &Params| {
-            irtp::mfpt::exact::first_passage_to(p, 0.0, vt, i % 2 == 0, 1e4, &mut rng::stream(4, i))
-                .unwrap()
+            irtp::mfpt::exact::first_passage_to(
+                p,
+                0.0,
+                vt,
+                (i % 2) as usize,
+                1e4,
+                &mut rng::stream(4, i),
+            )
+            .unwrap()
         };
         assert_eq!(f(&pa), f(&pb), "mfpt exact, particle {i}");
     }

@@ -36,16 +36,13 @@ fn deterministic_limit_is_flow_time() {
         let p = Params::new(d.clone(), sigma, 0.0, 0.0, 0.0).unwrap();
         let vt = 0.7 * p.v_upper();
         let mut r = rng::stream(1, 0);
-        let (t, ev) = first_passage(&p, -0.2, vt, true, 1e9, &mut r);
+        let (t, ev) = first_passage(&p, -0.2, vt, 0, 1e9, &mut r);
         assert_eq!(ev, 0);
         assert_eq!(t, Some(d.flow_time(sigma, -0.2, vt)));
         // Starting in the minus state with no flips: never arrives.
-        assert_eq!(first_passage(&p, -0.2, vt, false, 50.0, &mut r).0, None);
+        assert_eq!(first_passage(&p, -0.2, vt, 1, 50.0, &mut r).0, None);
         // Already past the target.
-        assert_eq!(
-            first_passage(&p, vt, vt, false, 50.0, &mut r),
-            (Some(0.0), 0)
-        );
+        assert_eq!(first_passage(&p, vt, vt, 1, 50.0, &mut r), (Some(0.0), 0));
     }
 }
 

@@ -29,8 +29,9 @@ fn passage_times_are_the_plain_samplers_bits() {
     let ctl = PassageControl::new(&fpt, vl, p.vt(), 64, |v, s| v + f64::from(u8::from(s))).unwrap();
     for i in 0..200 {
         let (mut a, mut b) = (rng::stream(5, i), rng::stream(5, i));
-        let plain = fpt.run(p.v0(), p.vt(), i % 2 == 0, 1e4, &mut a);
-        let (t, m, events) = controlled_walk(&fpt, &ctl, (p.v0(), p.vt(), i % 2 == 0, 1e4), &mut b);
+        let plain = fpt.run(p.v0(), p.vt(), (i % 2) as usize, 1e4, &mut a);
+        let (t, m, events) =
+            controlled_walk(&fpt, &ctl, (p.v0(), p.vt(), (i % 2) as usize, 1e4), &mut b);
         assert_eq!((t, events), plain);
         assert!(m.is_finite());
     }
@@ -85,7 +86,7 @@ fn the_martingale_has_mean_zero_for_any_control() {
             for i in 0..20_000u64 {
                 let mut r = rng::stream(40 + k as u64 * 3 + j as u64, i);
                 let (time, mt, _) =
-                    controlled_walk(&fpt, &ctl, (p.v0(), p.vt(), i % 2 == 0, 1e6), &mut r);
+                    controlled_walk(&fpt, &ctl, (p.v0(), p.vt(), (i % 2) as usize, 1e6), &mut r);
                 assert!(time.is_some());
                 m.push(mt);
             }

@@ -160,7 +160,10 @@ fn censoring_is_reported() {
     let s = st.summary();
     assert_eq!(s.particles, 400);
     assert!(s.censored > 0 && s.tau_lower_bound == Some(s.rmst));
-    assert_eq!(st.plus.n + st.minus.n + s.censored, 400);
+    assert_eq!(
+        st.arrived.iter().map(|a| a.n).sum::<u64>() + s.censored,
+        400
+    );
     assert!(s.tau.is_nan() && s.tau_err.is_nan(), "{s:?}");
     assert!(s.rmst > 0.0 && s.rmst <= 2.0, "{s:?}");
 }

@@ -74,9 +74,10 @@ fn crossing_is_exact_against_the_linear_closed_form() {
         let pr = SearchProblem::new(p.clone(), x0, v0, target).unwrap();
         let sampler = SearchSampler::new(&irtp::model::drag::Linear, &pr).unwrap();
         let mut r = rng::stream(3, i as u64);
-        let (t, events) = sampler.run(x0, v0, plus, 1e6, &mut r);
+        let start = usize::from(!plus);
+        let (t, events) = sampler.run(x0, v0, start, 1e6, &mut r);
         // The one-off entry point walks the same path.
-        let once = search_once(&pr, plus, 1e6, &mut rng::stream(3, i as u64)).unwrap();
+        let once = search_once(&pr, start, 1e6, &mut rng::stream(3, i as u64)).unwrap();
         assert_eq!(once, (t, events));
         let t = t.unwrap();
         let want = linear_root(s, v0, dist, 50.0);
@@ -287,7 +288,7 @@ fn passage_times_respect_the_speed_limit_and_survival_is_monotone() {
                 let sampler = SearchSampler::new(d, &pr).unwrap();
                 for i in 0..40u64 {
                     let mut r = rng::stream(77, i);
-                    let (t, _) = sampler.run(0.0, pr.v0(), i % 2 == 0, 200.0, &mut r);
+                    let (t, _) = sampler.run(0.0, pr.v0(), (i % 2) as usize, 200.0, &mut r);
                     if let Some(t) = t {
                         assert!(t >= bound, "{p:?} {target:?}: {t} < {bound}");
                     }

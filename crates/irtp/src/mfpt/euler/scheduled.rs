@@ -13,8 +13,9 @@
 //! in the reflected frame) with its first flip gap drawn before its first
 //! reset gap: the stream of the lane kernel of [`super`]. A noise model
 //! starts in a state drawn from π, so tau is the π-averaged MFPT
-//! Σ_s π_s tau_s(v_0); the even and odd particles (the `plus` and `minus`
-//! halves of [`FptStats`]) are two independent halves of the same law.
+//! Σ_s π_s tau_s(v_0); the even and odd particles (strata 0 and 1 of
+//! [`FptStats`], the `plus` and `minus` halves of its summary) are two
+//! independent halves of the same law.
 //!
 //! At T > 0 a passage between two monitored steps is detected by the
 //! Brownian-bridge crossing probability: a step v_n → v_{n+1} < v_t

@@ -294,12 +294,25 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
         self.target().draw(rng)
     }
 
-    /// The noise state after a reset (`plus`: eta = +Sigma before it).
+    /// The noise sign after a reset (`plus`: eta = +Sigma before it; true:
+    /// +Sigma after it), for engines that keep the sign; one boolean when
+    /// redrawn, as [`Reset::draw_telegraph`].
     #[inline]
     fn draw_noise<R: Rng + ?Sized>(&self, plus: bool, rng: &mut R) -> bool {
         match self.noise() {
             NoiseAtReset::Kept => plus,
             NoiseAtReset::Redrawn => rng.gen::<bool>(),
+        }
+    }
+
+    /// The paper's noise state (0: +Sigma, 1: -Sigma) after a reset from
+    /// state `s`: kept, or redrawn ±Sigma with probability ½ each (one
+    /// boolean, true: +Sigma).
+    #[inline]
+    fn draw_telegraph<R: Rng + ?Sized>(&self, s: usize, rng: &mut R) -> usize {
+        match self.noise() {
+            NoiseAtReset::Kept => s,
+            NoiseAtReset::Redrawn => usize::from(!rng.gen::<bool>()),
         }
     }
 
