@@ -391,4 +391,24 @@ mod tests {
         let json = serde_json::to_string(&a).unwrap();
         assert_eq!(serde_json::from_str::<FptStats>(&json).unwrap(), a);
     }
+
+    #[test]
+    fn three_strata_mix_with_their_weights() {
+        let w = [0.25, 0.25, 0.5];
+        let mut st = FptStats::stratified(10.0, &w);
+        // Stratum k holds the times k+1 and k+3: means 2, 3, 4.
+        for (i, t) in [1.0, 2.0, 3.0, 3.0, 4.0, 5.0].into_iter().enumerate() {
+            st.push(i % 3, sample(Some(t)));
+        }
+        let s = st.summary();
+        assert_eq!(s.tau, 0.25 * 2.0 + 0.25 * 3.0 + 0.5 * 4.0);
+        assert_eq!((s.tau_plus, s.tau_minus, s.particles), (2.0, 3.0, 6));
+        // Each stratum's standard error is 1 (sd sqrt(2) over sqrt(2)).
+        assert!((s.tau_err - (2.0 * 0.0625 + 0.25f64).sqrt()).abs() < 1e-15);
+        // S(t) at t = 2.2 (past the arrivals 1, 2): strata 1/2, 1/2, 1.
+        let c = st.survival();
+        let j = c.t.iter().position(|&t| t == 2.2).unwrap();
+        assert_eq!(c.survival[j], 0.25 * 0.5 + 0.25 * 0.5 + 0.5 * 1.0);
+        assert_eq!(c.at_risk[j], 4);
+    }
 }
