@@ -536,6 +536,22 @@ struct Kernel<'a, D> {
     schedule: Schedule,
 }
 
+/// The paper's noise state of the level `eta` (0: +Sigma, 1: -Sigma).
+#[inline]
+fn sign_state(eta: f64) -> usize {
+    usize::from(!(eta > 0.0))
+}
+
+/// The level of the paper's noise state `s` (0: +Sigma, 1: -Sigma).
+#[inline]
+fn state_level(s: usize, sigma: f64) -> f64 {
+    if s == 0 {
+        sigma
+    } else {
+        -sigma
+    }
+}
+
 /// Number of Bernoulli(p) trials up to and including the first success,
 /// G ~ Geometric(p) on {1, 2, ...}: G = 1 + floor(ln U / ln(1-p)), U ∈ (0, 1],
 /// since P(G > k) = P(U ≤ (1-p)^k) = (1-p)^k. `ln_1mp` = ln(1-p) < 0;
@@ -700,8 +716,8 @@ impl<D: Drag> Kernel<'_, D> {
                 // 3. reset or Euler drift
                 if ev[l].reset(n, &mut rng[l]) {
                     v[l] = self.reset.draw_velocity(&mut rng[l]);
-                    let plus = self.reset.draw_noise(eta[l] > 0.0, &mut rng[l]);
-                    eta[l] = if plus { self.sigma } else { -self.sigma };
+                    let s = self.reset.draw_telegraph(sign_state(eta[l]), &mut rng[l]);
+                    eta[l] = state_level(s, self.sigma);
                 } else {
                     v[l] = euler_step(self.f, v[l], eta[l], dt);
                 }
@@ -884,8 +900,8 @@ impl<D: Drag> NoiseSteps for Telegraph<'_, D> {
     }
     #[inline]
     fn reset(&self, eta: &mut f64, _n: u64, rng: &mut Rng) {
-        let plus = self.reset.draw_noise(*eta > 0.0, rng);
-        *eta = if plus { self.sigma } else { -self.sigma };
+        let s = self.reset.draw_telegraph(sign_state(*eta), rng);
+        *eta = state_level(s, self.sigma);
     }
     #[inline]
     fn jump<E: Events>(&self, eta: &mut f64, ev: &mut E, n: u64, rng: &mut Rng) {

@@ -393,7 +393,7 @@ fn euler_search(pr: &SearchProblem, plus: bool, dt: f64, t_max: f64, seed: u64, 
         }
         if reset {
             v = p.reset().draw_velocity(&mut rng);
-            plus = p.reset().draw_noise(plus, &mut rng);
+            plus = p.reset().draw_telegraph(usize::from(!plus), &mut rng) == 0;
             if let Some(pos) = sched.position {
                 x = pos.x;
             }

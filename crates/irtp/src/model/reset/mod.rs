@@ -294,17 +294,6 @@ pub trait Reset: Clone + Send + Sync + fmt::Debug {
         self.target().draw(rng)
     }
 
-    /// The noise sign after a reset (`plus`: eta = +Sigma before it; true:
-    /// +Sigma after it), for engines that keep the sign; one boolean when
-    /// redrawn, as [`Reset::draw_telegraph`].
-    #[inline]
-    fn draw_noise<R: Rng + ?Sized>(&self, plus: bool, rng: &mut R) -> bool {
-        match self.noise() {
-            NoiseAtReset::Kept => plus,
-            NoiseAtReset::Redrawn => rng.gen::<bool>(),
-        }
-    }
-
     /// The paper's noise state (0: +Sigma, 1: -Sigma) after a reset from
     /// state `s`: kept, or redrawn ±Sigma with probability ½ each (one
     /// boolean, true: +Sigma).

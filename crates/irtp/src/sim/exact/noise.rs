@@ -111,7 +111,7 @@ impl ExactNoise for Telegraph {
     }
     #[inline(always)]
     fn after_reset(&self, s: usize, rule: &ResetRule, rng: &mut Rng) -> usize {
-        usize::from(!rule.draw_noise(s == 0, rng))
+        rule.draw_telegraph(s, rng)
     }
     /// A flip with the probability ½(1 - e^{-2 lambda d}) of an odd number
     /// of flips (one uniform).
