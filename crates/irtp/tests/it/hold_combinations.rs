@@ -158,13 +158,13 @@ fn msd_paper_as_states_with_a_hold_matches_the_two_state_chain() {
     let two = held(Params::new(DragLaw::Tan, 1.0, 0.5, 1.0, 0.2).unwrap(), 0.7);
     let a = msd(&chain, &msd_opts(&times), &NoProgress).unwrap();
     let b = msd(&two, &msd_opts(&times), &NoProgress).unwrap();
-    for k in 0..times.len() {
+    for (k, t) in times.iter().enumerate() {
         let err = a.x2_err[k] + b.x2_err[k];
         println!(
-            "t={}: N-state {} two-state {} (est {err:e})",
-            times[k], a.x2[k], b.x2[k]
+            "t={t}: N-state {} two-state {} (est {err:e})",
+            a.x2[k], b.x2[k]
         );
-        assert!((a.x2[k] - b.x2[k]).abs() <= err, "t={}", times[k]);
+        assert!((a.x2[k] - b.x2[k]).abs() <= err, "t={t}");
         assert!((a.mass[k] - 1.0).abs() < 1e-9);
     }
 }
@@ -226,4 +226,39 @@ fn distribution_with_a_noise_model_runs_the_hold() {
             assert!(z.abs() <= zmax, "{target:?} t = {}: z = {z}", c.t[j]);
         }
     }
+}
+
+/// The held x-moments of `fp msd` ((R14)) tend to the stationary
+/// Green-Kubo D_eff with the hold ((R10), `fp stationary`): a uniform
+/// target, noise re-drawn, (<xv> - <x><v>)(t = 200) against D_eff within
+/// the two solvers' error estimates (the chain's: its change when the
+/// finest mesh is left out).
+#[test]
+fn msd_hold_tends_to_the_stationary_d_eff() {
+    let p = noise(RPT, 2.0, 0.0)
+        .with_reset(Target::uniform(-0.3, 0.4), NoiseAtReset::Redrawn)
+        .unwrap();
+    let p = held(p, 0.5);
+    let slope = |levels: usize| {
+        let o = MsdOptions {
+            levels,
+            times: vec![200.0],
+            ..MsdOptions::default()
+        };
+        let m = msd(&p, &o, &NoProgress).unwrap();
+        m.xv[0] - m.x_mean[0] * m.v_mean[0]
+    };
+    let (fine, coarse) = (slope(3), slope(2));
+    let s = irtp::fp::stationary(&p, &irtp::fp::StationaryOptions::default()).unwrap();
+    let e = s.noise.as_ref().unwrap().errors.unwrap()[2];
+    let tol = (fine - coarse).abs() + e;
+    println!(
+        "msd {fine} (levels 2: {coarse}), stationary D_eff {} ± {e:e}",
+        s.d_eff
+    );
+    assert!(
+        (fine - s.d_eff).abs() <= tol,
+        "{fine} vs {} (tol {tol:e})",
+        s.d_eff
+    );
 }
