@@ -241,7 +241,9 @@ fn msd_hold_tends_to_the_stationary_d_eff() {
     let p = held(p, 0.5);
     let slope = |levels: usize| {
         let o = MsdOptions {
+            cells: 100,
             levels,
+            rtol: 1e-8,
             times: vec![200.0],
             ..MsdOptions::default()
         };
@@ -249,7 +251,11 @@ fn msd_hold_tends_to_the_stationary_d_eff() {
         m.xv[0] - m.x_mean[0] * m.v_mean[0]
     };
     let (fine, coarse) = (slope(3), slope(2));
-    let s = irtp::fp::stationary(&p, &irtp::fp::StationaryOptions::default()).unwrap();
+    let o = irtp::fp::StationaryOptions {
+        cells: 4000,
+        ..irtp::fp::StationaryOptions::default()
+    };
+    let s = irtp::fp::stationary(&p, &o).unwrap();
     let e = s.noise.as_ref().unwrap().errors.unwrap()[2];
     let tol = (fine - coarse).abs() + e;
     println!(
