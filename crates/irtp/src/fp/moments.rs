@@ -36,7 +36,7 @@
 //! first-order upwind scheme).
 
 use super::grid::Mesh;
-use super::nstate::{observe as observe_blocks, operator, Blocks};
+use super::nstate::{observe as observe_blocks, operator, Blocks, HeldBlocks};
 use super::operator::ForwardOperator;
 use super::stationary::MIN_CELLS;
 use crate::error::{finite, Error, Result};
@@ -448,7 +448,8 @@ fn verify(params: &Params, s: &MomentSeries) -> Result<()> {
 }
 
 /// One level of [`moments`] for a noise model: the moment chain on the
-/// N-state mesh refined `refine` times ([`Blocks`] of 3 blocks), the rows
+/// N-state mesh refined `refine` times ([`Blocks`] of 3 blocks; with an
+/// exponential refractory period [`HeldBlocks`], entry (R14)), the rows
 /// of [`observe_blocks`] at `times` and the number of accepted steps.
 fn chain_level(
     p: &Params,
@@ -461,7 +462,17 @@ fn chain_level(
         atol: o.rtol,
         ..Tolerances::default()
     };
-    let mut b = Blocks::new(operator(p, o.cells, refine, true)?, 3);
+    let op = operator(p, o.cells, refine, true)?;
+    if let Some(mut h) = HeldBlocks::of(p, op.clone()) {
+        let (mut u, obs) = (h.initial()?, h.observer());
+        let mut rows = vec![[0.0; 6]; times.len()];
+        let stats = integrate(&mut h, &mut u, times, &tol, |k, _, u| {
+            rows[k] = obs.observe(u);
+            Ok(())
+        })?;
+        return Ok((rows, stats.steps));
+    }
+    let mut b = Blocks::new(op, 3);
     let mut u = b.initial()?;
     let v = b.v.clone();
     let mut rows = vec![[0.0; 6]; times.len()];

@@ -729,14 +729,15 @@ pub(super) fn moments_at_start(
 /// `problem` is ignored). Differentiating the backward equations in r
 /// (Eq. (N30)) gives the r = 0 operator acting on sigma_s = d T_s / dr with
 /// source T_mix,s - T_s(v) (the reset value state s returns to, evaluated
-/// with the r = 0 solution). Negative derivative: a little resetting
+/// with the r = 0 solution; with an exponential refractory period the held
+/// value T_R,s of Eq. (R13)). Negative derivative: a little resetting
 /// shortens the search.
 pub fn rate_derivative_at_zero(problem: &Problem, opts: &BackwardOptions) -> Result<(f64, f64)> {
     opts.validate()?;
     let set = setup_checked(problem, opts.cells, BARRIER, opts.drift)?;
     let ns = set.states();
     let x = set.solve(0.0, true, &|_, _| 1.0)?.ok_or_else(overflow)?;
-    let mix = set.returns(&x);
+    let mix = set.held_returns(&x)?;
     let d = set
         .solve(0.0, false, &|k, s| mix[s] - x[ns * k + s])?
         .ok_or_else(overflow)?;

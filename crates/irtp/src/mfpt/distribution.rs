@@ -38,9 +38,10 @@
 //! left there, `tail_mass`, is the unresolved probability (reported).
 //!
 //! An exponential refractory period (paper's noise, docs/equations.md,
-//! (R12)) adds the held survival H± to the upwind system
-//! (`mfpt/upwind.rs`); the box scheme then gives the mean only (R6), the
-//! reported second moments are the distribution's own.
+//! (R12); a noise model, (R15)) adds the held survival H± (H_s) to the
+//! upwind system (`mfpt/upwind.rs`, `distribution/finite.rs`); the box
+//! scheme then gives the mean only ((R6), (R11)), the reported second
+//! moments are the distribution's own.
 //!
 //! One driver runs every noise over its state space (the `Space`s of
 //! [`super::backward`]): the paper's `Telegraph` by the two-state upwind

@@ -310,13 +310,20 @@ pub fn protocol_runs(solver: Solver, feature: Feature, noise: NoiseClass) -> boo
 /// other modifier with one: the N-state Fokker-Planck and backward
 /// equations run an exponential refractory period, one held state per
 /// noise state (docs/equations.md, (R10), (R11)), the time-dependent one
-/// too; it also runs periodic resetting (all mass to the target at every
-/// kT).
+/// too, the moment chain of `fp msd` ((R14)), the optimal rate over the
+/// backward mean ((R13)) and the first-passage distribution ((R15)); the
+/// time-dependent one also runs periodic resetting (all mass to the target
+/// at every kT).
 fn hold_with_noise(solver: Solver, feature: Feature) -> bool {
     match feature {
         Feature::RefractoryExp => matches!(
             solver,
-            Solver::FpStationary | Solver::FpTransient | Solver::Backward
+            Solver::FpStationary
+                | Solver::FpTransient
+                | Solver::FpMsd
+                | Solver::Backward
+                | Solver::FptDistribution
+                | Solver::MfptOptimize
         ),
         Feature::Periodic => solver == Solver::FpTransient,
         _ => false,
@@ -393,6 +400,7 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::FpTransient
                 | S::FpMsd
                 | S::Backward
+                | S::MfptOptimize
                 | S::ClosedForm
         ),
         F::RefractoryFixed => matches!(

@@ -21,6 +21,7 @@ mod fp_linear;
 mod fp_r0;
 mod fp_sim;
 mod fp_transient;
+mod hold_combinations;
 mod mfpt_backward;
 mod mfpt_control;
 mod mfpt_control_noise;

@@ -15,9 +15,11 @@
 //! TR-BDF2.
 
 mod held;
+mod held_chain;
 mod mesh;
 mod operator;
 
 pub(crate) use held::Hold;
+pub(crate) use held_chain::HeldBlocks;
 pub use operator::NoiseOperator;
 pub(crate) use operator::{observe, operator, Blocks};

@@ -649,6 +649,23 @@ impl Setup {
         }
     }
 
+    /// The value each state's reset leads to, of a nodal solution x of the
+    /// mean: [`Self::returns`], and with an exponential refractory period
+    /// of mean M the held values T_R = P R + W M (docs/equations.md,
+    /// (R11); W the reset's mass below v_t, the rest a passage at the
+    /// reset itself). Refused for a fixed refractory period.
+    pub(crate) fn held_returns(&self, x: &[f64]) -> Result<Vec<f64>> {
+        let ret = self.returns(x);
+        let Some(mean) = refractory_mean(&self.p, true)? else {
+            return Ok(ret);
+        };
+        let p = held_transfer(self.chain(), mean)?;
+        let wsum: f64 = self.mesh.weights.as_ref().map_or(1.0, |w| w.iter().sum());
+        Ok(p.iter()
+            .map(|row| row.iter().zip(&ret).map(|(a, b)| a * b).sum::<f64>() + wsum * mean)
+            .collect())
+    }
+
     /// Refuse a nodal solution with a negative value beyond rounding
     /// ([`Space::rounding`] of the largest): the mesh did not resolve it.
     pub(crate) fn non_negative(&self, x: &[f64]) -> Result<()> {
@@ -775,6 +792,25 @@ fn refractory_mean(p: &Problem, mean_only: bool) -> Result<Option<f64>> {
 /// [`chain_correction`] relies on), and b -= (Σ_j c_j) W/κ as for the
 /// paper's noise ([`refractory`]).
 fn chain_refractory(chain: &Chain, mean: f64, m: &Mesh, op: &mut Operator) -> Result<()> {
+    let p = held_transfer(chain, mean)?;
+    let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
+    let mut c = vec![0.0; chain.states()];
+    for i in 0..op.rhs.len() {
+        for (cj, col) in c.iter_mut().zip(&op.border) {
+            *cj = col[i];
+        }
+        op.rhs[i] -= c.iter().sum::<f64>() * wsum * mean;
+        for (kk, col) in op.border.iter_mut().enumerate() {
+            col[i] = c.iter().zip(&p).map(|(cj, row)| cj * row[kk]).sum();
+        }
+    }
+    Ok(())
+}
+
+/// The held phase's transfer matrix P = κ (κ I - Q)⁻¹ of `chain` for a
+/// refractory period of mean M = 1/κ (docs/equations.md, (R11)): the held
+/// values are T_R = P T(u) + M. Non-negative, rows summing to 1.
+fn held_transfer(chain: &Chain, mean: f64) -> Result<Vec<Vec<f64>>> {
     let ns = chain.states();
     let k = 1.0 / mean;
     // Deflated, well posed as κ → 0: κ I - Q + 1 πᵀ is nonsingular for
@@ -798,18 +834,7 @@ fn chain_refractory(chain: &Chain, mean: f64, m: &Mesh, op: &mut Operator) -> Re
             row[c] = pi[c] + k * x;
         }
     }
-    let wsum: f64 = m.weights.as_ref().map_or(1.0, |w| w.iter().sum());
-    let mut c = vec![0.0; ns];
-    for i in 0..op.rhs.len() {
-        for (cj, col) in c.iter_mut().zip(&op.border) {
-            *cj = col[i];
-        }
-        op.rhs[i] -= c.iter().sum::<f64>() * wsum * mean;
-        for (kk, col) in op.border.iter_mut().enumerate() {
-            col[i] = c.iter().zip(&p).map(|(cj, row)| cj * row[kk]).sum();
-        }
-    }
-    Ok(())
+    Ok(p)
 }
 
 /// The reset terms of the paper's noise by two extra solves with the

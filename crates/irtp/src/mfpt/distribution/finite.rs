@@ -33,6 +33,17 @@
 //! here the same number. The meshes, extrapolation, mixture and checks
 //! are the driver's ([`super::distribution`]).
 //!
+//! An exponential refractory period of mean 1/κ (docs/equations.md,
+//! (R15)) adds N held survivals H_s(t) after the integrals: a reset sends
+//! the particle into the held phase (the noise rule applied), which the
+//! noise leaves jumping and ends at rate κ in the state it has then, at the
+//! reset velocity: dH_s/dt = Σ_s' Q_ss' (H_s' - H_s) + κ (ℓ_s(S) - H_s),
+//! H_s(0) = W (the target's mass below v_t), and the reset values of the
+//! free rows are H (kept) or Σ π H (re-drawn) instead of ℓ(S). The atoms'
+//! reset share forces the H rows (κ ℓ_s(A)) instead of the free rows. The
+//! shifted solve eliminates H = K_c⁻¹ (b_H + cκ ℓ(C)),
+//! K_c = (1 + cκ) I - c Q: the border columns become U cκ K_c⁻¹.
+//!
 //! With thermal noise (T > 0, Eq. (N49)) the same time loop runs the
 //! second-order equations dS_s/dt = T ∂²_v S_s + (a_s - g) ∂_v S_s +
 //! Σ_s' Q_ss' (S_s' - S_s) - r S_s + r R_s, absorbed at v_t in every
@@ -48,14 +59,15 @@
 //! and `atom_spread` are 0 (no time is [`Distribution::smeared`]).
 
 use super::super::backward::{
-    extreme_states, mesh_on, moments_at_start, BackwardOptions, Finite, Mesh, Moments,
+    extreme_states, mesh_on, moments_at_start, solve_on, BackwardOptions, Finite, Mesh, Moments,
+    BARRIER,
 };
 use super::super::upwind::{exp_moments, node_drift};
 use super::super::Problem;
 use super::{hidden, landing_points, Distribution, Plan, Run, RunAtom};
 use crate::error::Result;
 use crate::model::noise::chain::{self, Chain};
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::Drag;
 use crate::numerics::band::Band;
 use crate::numerics::trbdf2::{self, ShiftedLinear, Stats, Tolerances};
@@ -147,17 +159,22 @@ struct Survival {
     atoms: Vec<AtomState>,
     reported: Vec<usize>,
     scales: (f64, f64),
+    /// An exponential refractory period: (κ, W), the held survivals H_s
+    /// after the integrals (module doc).
+    hold: Option<(f64, f64)>,
     /// The absolute time at which the current integration started.
     t0: f64,
     cache: Option<Factored>,
 }
 
-/// M - cA factored, with B⁻¹(-c U_j) and the capacitance matrix I + E.
+/// M - cA factored, with B⁻¹(-c U'_j) and the capacitance matrix I + E
+/// (U' = U, or U cκ K_c⁻¹ with a hold, K_c then kept).
 struct Factored {
     c: f64,
     band: Band,
     z: Vec<Vec<f64>>,
     cap: Vec<Vec<f64>>,
+    kc: Vec<Vec<f64>>,
 }
 
 /// The rows of one mesh: band (bandwidth N each side), border columns
@@ -256,6 +273,13 @@ impl Survival {
             .filter(|&s| absorbed[s])
             .map(|s| atom_state(cp, m, s, chain.levels[s], chain.exit[s] + rate))
             .collect();
+        let hold = match par.schedule().refractory {
+            Some(Refractory::Exp { mean }) if rate > 0.0 => Some((
+                1.0 / mean,
+                m.weights.as_ref().map_or(1.0, |w| w.iter().sum()),
+            )),
+            _ => None,
+        };
         Survival {
             ns,
             n,
@@ -269,15 +293,72 @@ impl Survival {
             atoms,
             reported: (0..ns).map(|s| ns * m.start + s).collect(),
             scales,
+            hold,
             t0: 0.0,
             cache: None,
         }
     }
 
+    /// The index of the first held survival (after the integrals).
+    fn held(&self) -> usize {
+        self.n + 2 * self.ns
+    }
+
+    /// The values the border columns multiply: the held survivals with a
+    /// refractory period, else the reset values of the mesh unknowns.
+    fn returns(&self, u: &[f64]) -> Vec<f64> {
+        match self.hold {
+            Some(_) => u[self.held()..self.held() + self.ns].to_vec(),
+            None => (0..self.ns).map(|j| self.reset_value(u, j)).collect(),
+        }
+    }
+
+    /// (Q y)_s = Σ_s' Q_ss' (y_s' - y_s).
+    fn q_times(&self, y: &[f64]) -> Vec<f64> {
+        (0..self.ns)
+            .map(|s| {
+                let q = &self.chain.q[s];
+                (0..self.ns)
+                    .filter(|&j| j != s)
+                    .map(|j| q[j] * y[j])
+                    .sum::<f64>()
+                    - self.chain.exit[s] * y[s]
+            })
+            .collect()
+    }
+
+    /// K_c = (1 + cκ) I - c Q.
+    fn held_matrix(&self, kappa: f64, c: f64) -> Vec<Vec<f64>> {
+        (0..self.ns)
+            .map(|i| {
+                (0..self.ns)
+                    .map(|j| match i == j {
+                        true => 1.0 + c * (kappa + self.chain.exit[i]),
+                        false => -c * self.chain.q[i][j],
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The atoms' reset values per state at absolute time t: ℓ_s(A).
+    fn atom_returns(&self, t: f64) -> Vec<f64> {
+        let mut out = vec![0.0; self.ns];
+        for a in &self.atoms {
+            let d = (-a.kill * t).exp();
+            out[a.s] += d * self.mesh.reset_value(|k| a.ramp(k, t));
+        }
+        out
+    }
+
     /// The initial state: C_s = 1 - A_s(v, 0) (0 in the absorbed states,
     /// 1 in the others; with T > 0 S_s = 1 but at v_t), the integrals 0.
     fn initial(&self) -> Vec<f64> {
-        let mut u = vec![0.0; self.n + 2 * self.ns];
+        let mut u = vec![0.0; self.dim()];
+        if let Some((_, w)) = self.hold {
+            let h = self.held();
+            u[h..].fill(w);
+        }
         let atom: Vec<bool> = (0..self.ns)
             .map(|s| self.atoms.iter().any(|a| a.s == s))
             .collect();
@@ -294,9 +375,9 @@ impl Survival {
         self.mesh.reset_value(|k| x[self.ns * k + j])
     }
 
-    /// out = A C + U ℓ(C) on the mesh unknowns.
+    /// out = A C + U ℓ(C) on the mesh unknowns (U H with a hold).
     fn apply_mesh(&self, u: &[f64], out: &mut [f64]) {
-        let ell: Vec<f64> = (0..self.ns).map(|j| self.reset_value(u, j)).collect();
+        let ell = self.returns(u);
         for (i, o) in out.iter_mut().enumerate().take(self.n) {
             let mut x = 0.0;
             for j in self.band.row_range(i) {
@@ -321,7 +402,13 @@ impl Survival {
             .map(|(a, d)| d * self.mesh.reset_value(|k| a.ramp(k, t)))
             .collect();
         let mut reset = vec![0.0; ns];
-        for (a, l) in self.atoms.iter().zip(&ell) {
+        // With a hold the atoms' reset share forces the held rows instead.
+        let shared = if self.hold.is_some() {
+            0
+        } else {
+            self.atoms.len()
+        };
+        for (a, l) in self.atoms.iter().zip(&ell).take(shared) {
             if self.redrawn {
                 reset.iter_mut().for_each(|x| *x += self.chain.pi[a.s] * l);
             } else {
@@ -383,10 +470,16 @@ impl Survival {
             at: c,
         };
         b.factor().map_err(|_| bad())?;
-        let (mut z, mut cap) = (Vec::new(), Vec::new());
+        let (mut z, mut cap, mut kc) = (Vec::new(), Vec::new(), Vec::new());
         if self.rate > 0.0 {
-            z = self
-                .border
+            let border = match self.hold {
+                Some((kappa, _)) => {
+                    kc = self.held_matrix(kappa, c);
+                    self.held_border(&kc, kappa, c).map_err(|_| bad())?
+                }
+                None => self.border.clone(),
+            };
+            z = border
                 .iter()
                 .map(|col| {
                     let mut y: Vec<f64> = col.iter().map(|x| -c * x).collect();
@@ -402,13 +495,49 @@ impl Survival {
                 })
                 .collect();
         }
-        Ok(Factored { c, band: b, z, cap })
+        Ok(Factored {
+            c,
+            band: b,
+            z,
+            cap,
+            kc,
+        })
+    }
+
+    /// The border columns with the held rows eliminated: column k is
+    /// Σ_j U_j G_jk, G = cκ K_c⁻¹ (column k of G: cκ K_c⁻¹ e_k).
+    fn held_border(&self, kc: &[Vec<f64>], kappa: f64, c: f64) -> Result<Vec<Vec<f64>>> {
+        let ns = self.ns;
+        let mut out = vec![vec![0.0; self.n]; ns];
+        for (k, col) in out.iter_mut().enumerate() {
+            let mut e = vec![0.0; ns];
+            e[k] = c * kappa;
+            let g = chain::solve(kc, &e, METHOD)?;
+            for (uj, gj) in self.border.iter().zip(&g) {
+                for (o, x) in col.iter_mut().zip(uj) {
+                    *o += x * gj;
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The held rows' share of the shifted solve: with b_H moved, the
+    /// mesh right side gains c U K_c⁻¹ b_H.
+    fn held_rhs(&self, kc: &[Vec<f64>], c: f64, bh: &[f64], out: &mut [f64]) -> Result<()> {
+        let y = chain::solve(kc, bh, METHOD)?;
+        for (uj, yj) in self.border.iter().zip(&y) {
+            for (o, x) in out.iter_mut().zip(uj) {
+                *o += c * x * yj;
+            }
+        }
+        Ok(())
     }
 }
 
 impl ShiftedLinear for Survival {
     fn dim(&self) -> usize {
-        self.n + 2 * self.ns
+        self.n + 2 * self.ns + if self.hold.is_some() { self.ns } else { 0 }
     }
 
     fn apply(&self, u: &[f64], out: &mut [f64]) {
@@ -417,6 +546,14 @@ impl ShiftedLinear for Survival {
         for s in 0..ns {
             out[n + s] = u[self.reported[s]];
             out[n + ns + s] = u[n + s];
+        }
+        if let Some((kappa, _)) = self.hold {
+            let h = self.held();
+            let qh = self.q_times(&u[h..h + ns]);
+            for s in 0..ns {
+                let ell = self.reset_value(u, s);
+                out[h + s] = qh[s] + kappa * (ell - u[h + s]);
+            }
         }
     }
 
@@ -444,7 +581,16 @@ impl ShiftedLinear for Survival {
         }
         let fac = self.cache.as_ref().expect("factored above");
         let (n, ns) = (self.n, self.ns);
+        let bad = || Failure::NonFinite {
+            method: METHOD,
+            at: c,
+        };
         x[..n].copy_from_slice(&b[..n]);
+        if self.hold.is_some() && self.rate > 0.0 {
+            let h = self.held();
+            self.held_rhs(&fac.kc, c, &b[h..h + ns], &mut x[..n])
+                .map_err(|_| bad())?;
+        }
         fac.band.solve(&mut x[..n]);
         if self.rate > 0.0 {
             let ell: Vec<f64> = (0..ns).map(|j| self.reset_value(&x[..n], j)).collect();
@@ -463,6 +609,15 @@ impl ShiftedLinear for Survival {
             x[n + s] = b[n + s] + c * x[self.reported[s]];
             x[n + ns + s] = b[n + ns + s] + c * x[n + s];
         }
+        if let Some((kappa, _)) = self.hold {
+            // H = K_c⁻¹ (b_H + cκ ℓ(C)).
+            let h = self.held();
+            let rhs: Vec<f64> = (0..ns)
+                .map(|s| b[h + s] + c * kappa * self.reset_value(&x[..n], s))
+                .collect();
+            let y = chain::solve(&fac.kc, &rhs, METHOD).map_err(|_| bad())?;
+            x[h..h + ns].copy_from_slice(&y);
+        }
         Failure::check_finite(x, METHOD, c)
     }
 
@@ -470,7 +625,8 @@ impl ShiftedLinear for Survival {
         match i.checked_sub(self.n) {
             None => atol,
             Some(k) if k < self.ns => atol * self.scales.0,
-            Some(_) => atol * self.scales.1,
+            Some(k) if k < 2 * self.ns => atol * self.scales.1,
+            Some(_) => atol,
         }
     }
 
@@ -485,6 +641,12 @@ impl ShiftedLinear for Survival {
         }
         self.forcing_at(self.t0 + t, out);
         out[self.n..].fill(0.0);
+        if let Some((kappa, _)) = self.hold {
+            let h = self.held();
+            for (o, l) in out[h..].iter_mut().zip(self.atom_returns(self.t0 + t)) {
+                *o = kappa * l;
+            }
+        }
         true
     }
 }
@@ -567,7 +729,16 @@ fn run(cp: &Problem, m: &Mesh, chain: &Chain, plan: &Plan) -> Result<Run> {
 /// highest / lowest level.
 fn box_moments(problem: &Problem, cells: usize, user: &Chain) -> Result<Moments> {
     let (hi, lo) = extreme_states(&user.levels);
-    let (t1, t2, cells) = moments_at_start(problem, cells)?;
+    let (t1, t2, cells) = match problem.params().schedule().refractory {
+        // The box scheme gives the mean only with a hold ((R11)); the
+        // second moments 2 T² until the distribution's own replace them.
+        Some(_) => {
+            let s = solve_on(problem, cells, BARRIER)?;
+            let t2 = s.per_state.iter().map(|t| 2.0 * t * t).collect();
+            (s.per_state, t2, s.cells)
+        }
+        None => moments_at_start(problem, cells)?,
+    };
     let mix = |x: &[f64]| -> f64 { x.iter().zip(&user.pi).map(|(a, b)| a * b).sum() };
     let (tau, second) = (mix(&t1), mix(&t2));
     let var = |m2: f64, m: f64| m2 - m * m;
