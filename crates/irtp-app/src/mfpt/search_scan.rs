@@ -443,19 +443,25 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
             ..RenewalOptions::default()
         };
         let max_work = a.output.budget.max_work;
-        let c = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |f| {
-            let waiting = WaitingTime::Renewal {
-                clock: clock.with_mean(1.0 / f)?,
-            };
-            let c = search::renewal::estimate(&problem, &waiting, &renewal)?;
-            Ok(Cost {
-                work: c.work,
-                unit: "operations",
-                drivers: Vec::new(),
-                memory: c.memory,
-                memory_drivers: vec!["cells_x", "cells_v"],
-            })
-        })?;
+        let c = optimize_cost(
+            &range,
+            zero_cost(&problem, &backward)?,
+            None,
+            max_work,
+            |f| {
+                let waiting = WaitingTime::Renewal {
+                    clock: clock.with_mean(1.0 / f)?,
+                };
+                let c = search::renewal::estimate(&problem, &waiting, &renewal)?;
+                Ok(Cost {
+                    work: c.work,
+                    unit: "operations",
+                    drivers: Vec::new(),
+                    memory: c.memory,
+                    memory_drivers: vec!["cells_x", "cells_v"],
+                })
+            },
+        )?;
         a.output.budget.check(&Cost {
             drivers: vec!["grid_points", "cells_x", "cells_v", "r_min"],
             ..c
@@ -475,7 +481,10 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
     }
     so::check_optimizable(&problem, &range)?;
     let max_work = a.output.budget.max_work;
-    let cost = optimize_cost(&range, zero_cost(&problem, &backward)?, max_work, |r| {
+    // The grid rates are screened on half the cells first.
+    let screens = Some(so::screen_work(&problem, &range, &backward)?);
+    let at_zero = zero_cost(&problem, &backward)?;
+    let cost = optimize_cost(&range, at_zero, screens, max_work, |r| {
         solve_cost(&problem.with_rate(r)?, &backward, 1.0)
     })?;
     a.output.budget.check(&Cost {
@@ -499,12 +508,14 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
 /// The estimated work of a rate optimisation ([`so::optimize_rate`],
 /// [`optimize_clock`]) from `cost_at(r)`, one solve's: [`so::total_work`]
 /// of the grid rates' and `at_zero` (an interval's solve at r = 0), the
-/// dearest grid rate's memory.
+/// dearest grid rate's memory; with `screens` (the screening solves' work,
+/// [`so::screen_work`]) [`so::screened_total_work`] instead.
 /// Where the grid alone at the cheapest rate (r_max: the shortest domain)
 /// exceeds `max_work`, that lower bound, before any rate is priced.
 fn optimize_cost(
     range: &RateRange,
     at_zero: f64,
+    screens: Option<f64>,
     max_work: f64,
     cost_at: impl Fn(f64) -> irtp::Result<Cost>,
 ) -> irtp::Result<Cost> {
@@ -522,7 +533,10 @@ fn optimize_cost(
         .map(cost_at)
         .collect::<irtp::Result<Vec<_>>>()?;
     let works: Vec<f64> = grid.iter().map(|c| c.work).collect();
-    let total = so::total_work(range, &works, at_zero);
+    let total = match screens {
+        Some(s) => so::screened_total_work(range, &works, at_zero, s),
+        None => so::total_work(range, &works, at_zero),
+    };
     let memory = grid.iter().map(|c| c.memory).fold(0.0, f64::max);
     Ok(Cost {
         work: total,

@@ -165,7 +165,9 @@ pub struct Optimum {
     /// True when the minimum sits at the top of the search range r_max
     /// (widen the range: the true optimum may be larger).
     pub at_upper_bound: bool,
-    /// The coarse grid (r, tau) the minimum was bracketed on.
+    /// The coarse grid (r, tau) the minimum was bracketed on (a rate the
+    /// objective's screen ruled out carries the screen's value:
+    /// [`RateObjective::screen`]).
     pub grid: Vec<(f64, f64)>,
 }
 
@@ -201,6 +203,14 @@ pub trait RateObjective: Sync {
     fn at_zero(&self) -> Result<AtZero>;
     /// tau± and the error estimate of tau at rate r (r = 0 included).
     fn at_optimum(&self, r: f64) -> Result<AtOptimum>;
+    /// A cheaper tau at rate r > 0 and an error bound that holds for it
+    /// and for [`RateObjective::tau`] alike (the same solver on coarser
+    /// meshes of the same sequence), used only to leave grid rates out of
+    /// the full solves ([`minimize_rate`]); None (the default) where there
+    /// is none: every grid rate is solved in full.
+    fn screen(&self, _r: f64) -> Option<(f64, f64)> {
+        None
+    }
 }
 
 /// The velocity target's tau(r): the 1-D backward equations.
@@ -322,9 +332,7 @@ pub fn minimize_rate(
     let zero = f.at_zero()?;
     let rs = range.grid();
     let k = rs.len();
-    let evals = parallel::map(k as u64, |i| f.tau(rs[i as usize]), progress)
-        .into_iter()
-        .collect::<Result<Vec<(f64, f64)>>>()?;
+    let evals = grid_evals(f, &rs, progress)?;
     let taus: Vec<f64> = evals.iter().map(|e| e.0).collect();
     let kmin = (0..k)
         .min_by(|&i, &j| taus[i].total_cmp(&taus[j]))
@@ -381,6 +389,52 @@ pub fn minimize_rate(
         at_upper_bound: at_upper_bound && r_opt > 0.0,
         grid: rs.into_iter().zip(taus).collect(),
     })
+}
+
+/// tau and its error at each grid rate `rs`: first the objective's screen
+/// ([`RateObjective::screen`]) at every rate, then [`RateObjective::tau`]
+/// at the rates the screen cannot rule out, in parallel, in grid order.
+/// With the screens' values t_i and bounds e_i (each bounding the full
+/// solve's error too), a rate j is left out where t_j - 2 e_j exceeds
+/// t_b + 2 e_b for some screened rate b: its full value is then above
+/// b's, so it is not the grid's minimum and cannot move the bracket; it
+/// keeps its screen's value and bound (the wider error: [`bracket`] stays
+/// conservative). A rate whose screen failed or has no finite bound is
+/// solved in full.
+fn grid_evals(
+    f: &dyn RateObjective,
+    rs: &[f64],
+    progress: &dyn Progress,
+) -> Result<Vec<(f64, f64)>> {
+    let k = rs.len() as u64;
+    let screened: Vec<Option<(f64, f64)>> =
+        parallel::map(k, |i| Ok(f.screen(rs[i as usize])), &parallel::NoProgress)
+            .into_iter()
+            .map(|s| {
+                s.ok()
+                    .flatten()
+                    .filter(|(t, e)| t.is_finite() && e.is_finite())
+            })
+            .collect();
+    let best = screened
+        .iter()
+        .flatten()
+        .map(|(t, e)| t + 2.0 * e)
+        .fold(f64::INFINITY, f64::min);
+    let full: Vec<usize> = (0..rs.len())
+        .filter(|&i| screened[i].map_or(true, |(t, e)| t - 2.0 * e <= best))
+        .collect();
+    let solved = parallel::map(full.len() as u64, |i| f.tau(rs[full[i as usize]]), progress)
+        .into_iter()
+        .collect::<Result<Vec<(f64, f64)>>>()?;
+    let mut evals: Vec<(f64, f64)> = screened
+        .iter()
+        .map(|s| s.unwrap_or((f64::NAN, f64::NAN)))
+        .collect();
+    for (&i, e) in full.iter().zip(solved) {
+        evals[i] = e;
+    }
+    Ok(evals)
 }
 
 /// The rates r* may lie between ([`Optimum::r_opt_range`]): walking out

@@ -168,19 +168,28 @@ impl Band {
     /// the floating-point operations done.
     #[inline]
     fn eliminate(&mut self, k: usize, last: usize, jmax: usize) -> f64 {
-        let d = self.a[self.idx(k, k)];
+        let (w, kl) = (self.w, self.kl);
+        // Row k's columns k..=jmax are contiguous in its storage, and every
+        // row below starts after row k's storage ends: split there, so the
+        // update of row i runs over two plain slices (no index arithmetic,
+        // no bounds checks in the loop; the same operations in any order,
+        // each entry's own a_ij - l a_kj).
+        let (above, below) = self.a.split_at_mut((k + 1) * w);
+        let row_k = &above[k * w + kl..k * w + kl + 1 + (jmax - k)];
+        let d = row_k[0];
+        let pivot_row = &row_k[1..];
         let mut flops = 0.0;
         for i in k + 1..=last {
-            let ik = self.idx(i, k);
-            let l = self.a[ik] / d;
-            self.a[ik] = l;
+            // Entry (i, j) of row i sits at i w + j + kl - i (see `idx`).
+            let at = (i - k - 1) * w + kl + k - i;
+            let l = below[at] / d;
+            below[at] = l;
             flops += 1.0;
             if l != 0.0 {
                 flops += 2.0 * (jmax - k) as f64;
-                for j in k + 1..=jmax {
-                    let kj = self.a[self.idx(k, j)];
-                    let ij = self.idx(i, j);
-                    self.a[ij] -= l * kj;
+                let row_i = &mut below[at + 1..at + 1 + (jmax - k)];
+                for (x, y) in row_i.iter_mut().zip(pivot_row) {
+                    *x -= l * y;
                 }
             }
         }
@@ -208,19 +217,29 @@ impl Band {
             }
             b.swap(k, self.piv[k]);
             let bk = b[k];
-            for i in k + 1..=(k + kl).min(n - 1) {
-                b[i] -= self.a[self.idx(i, k)] * bk;
+            let last = (k + kl).min(n - 1);
+            if last > k {
+                // Column k below the diagonal: entry (i, k) at i (w - 1) + k + kl.
+                let first = (k + 1) * (self.w - 1) + k + kl;
+                let col = self.a[first..].iter().step_by(self.w - 1);
+                for (bi, a) in b[k + 1..=last].iter_mut().zip(col) {
+                    *bi -= a * bk;
+                }
             }
         }
         for k in (0..n).rev() {
             if k % STOP_POLL_SOLVE_ROWS == 0 && crate::stop::stop_requested() {
                 return;
             }
+            // Row k's entries k..=jmax are contiguous (see `idx`); the sum
+            // runs left to right as before.
+            let jmax = (k + ku + kl).min(n - 1);
+            let row = &self.a[k * self.w + kl..k * self.w + kl + 1 + (jmax - k)];
             let mut s = b[k];
-            for j in k + 1..=(k + ku + kl).min(n - 1) {
-                s -= self.a[self.idx(k, j)] * b[j];
+            for (a, x) in row[1..].iter().zip(&b[k + 1..=jmax]) {
+                s -= a * x;
             }
-            b[k] = s / self.a[self.idx(k, k)];
+            b[k] = s / row[0];
         }
     }
 }

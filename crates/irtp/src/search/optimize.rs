@@ -118,7 +118,12 @@ pub fn scan(
 /// climbing (one mesh sequence for every rate, so that tau(r) is one
 /// smooth function to minimise); the reported values (r = 0, the
 /// optimum) with the checked ladder (`climb`), whose refusal ends the
-/// optimisation (exit 4, naming the mesh flags). r = 0 is compared with
+/// optimisation (exit 4, naming the mesh flags). Each grid rate is first
+/// screened on half the cells ([`screening`]): a rate whose screened value
+/// is above another's by more than twice both error estimates is not
+/// solved in full ([`crate::mfpt::optimize::minimize_rate`]); the checked
+/// solve at the optimum reuses the locating one where that was asymptotic
+/// (the same solve). r = 0 is compared with
 /// the grid on the grid's meshes (the checked value differs from them by
 /// the mesh error, which would otherwise decide r* = 0 against a tiny r).
 pub struct SearchTarget<'a> {
@@ -131,9 +136,13 @@ pub struct SearchTarget<'a> {
     /// tau of the checked solve at the optimum, set by `at_optimum` (a
     /// noise model's tau = Σ_s π_s T_s: its tau± are NaN).
     pub checked_opt: std::sync::OnceLock<f64>,
-    /// The work counted by every solve made so far (locating and checked:
-    /// the sum of their [`SearchSolution::work`]).
+    /// The work counted by every solve made so far (screening, locating
+    /// and checked: the sum of their [`SearchSolution::work`]).
     pub work: std::sync::Mutex<f64>,
+    /// The locating solves by rate (its bits): the checked solve at the
+    /// optimum is the same solve where the locating one was asymptotic
+    /// (nothing to climb), and is taken from here.
+    located: std::sync::Mutex<std::collections::BTreeMap<u64, SearchSolution>>,
 }
 
 impl<'a> SearchTarget<'a> {
@@ -145,7 +154,12 @@ impl<'a> SearchTarget<'a> {
             checked_zero: std::sync::OnceLock::new(),
             checked_opt: std::sync::OnceLock::new(),
             work: std::sync::Mutex::new(0.0),
+            located: std::sync::Mutex::new(std::collections::BTreeMap::new()),
         }
+    }
+
+    fn screening(&self) -> Option<BackwardOptions> {
+        screening(self.backward)
     }
 
     /// The backward solve at rate r under `opts`, its work added to `work`.
@@ -170,6 +184,10 @@ impl RateObjective for SearchTarget<'_> {
             ..*self.backward
         };
         let s = self.solve(r, &locate)?;
+        self.located
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert(r.to_bits(), s.clone());
         let err = if s.asymptotic {
             s.error_estimate
         } else {
@@ -197,8 +215,32 @@ impl RateObjective for SearchTarget<'_> {
         })
     }
 
+    /// The solve on half the cells each way (its ladder's meshes are the
+    /// check, coarse and widened meshes of the full solve's, its error
+    /// estimate conservative for its extrapolated value, 5-15× in the
+    /// solver's tests): where asymptotic, its value and error estimate
+    /// (the full solve's meshes, finer in the same sequence, have the
+    /// smaller mesh difference); else None, as where it fails.
+    fn screen(&self, r: f64) -> Option<(f64, f64)> {
+        let s = self.solve(r, &self.screening()?).ok()?;
+        s.asymptotic.then_some((s.tau, s.error_estimate))
+    }
+
+    /// The checked solve at r: the locating solve there where it was
+    /// asymptotic (the checked one would climb no further and repeat it
+    /// to the bit), else solved with the options' `climb`.
     fn at_optimum(&self, r: f64) -> Result<AtOptimum> {
-        let s = self.verified(r)?;
+        let located = self
+            .located
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(&r.to_bits())
+            .filter(|s| s.asymptotic && self.backward.refine)
+            .cloned();
+        let s = match located {
+            Some(s) => s,
+            None => self.verified(r)?,
+        };
         let _ = self.checked_opt.set(s.tau);
         Ok(AtOptimum {
             tau_plus: s.tau_plus,
@@ -274,6 +316,34 @@ pub fn optimize_rate(
     })
 }
 
+/// The options of the screening solves ([`RateObjective::screen`] of
+/// [`SearchTarget`]): half the cells each way (the check mesh of the full
+/// solve's ladder is the screen's coarse mesh), not climbing; None where
+/// that mesh is below the solver's least (2 cells) or nothing is refined
+/// (no error bound).
+pub fn screening(opts: &BackwardOptions) -> Option<BackwardOptions> {
+    let o = BackwardOptions {
+        cells_x: opts.cells_x / 2,
+        cells_v: opts.cells_v / 2,
+        climb: false,
+        ..*opts
+    };
+    (opts.refine && o.validate().is_ok()).then_some(o)
+}
+
+/// The estimated work of the screening solves, one at each grid rate
+/// ([`backward::estimate`] under [`screening`]; 0 without screening).
+pub fn screen_work(base: &SearchProblem, range: &RateRange, opts: &BackwardOptions) -> Result<f64> {
+    let Some(o) = screening(opts) else {
+        return Ok(0.0);
+    };
+    range
+        .grid()
+        .into_iter()
+        .map(|r| Ok(backward::estimate(&base.with_rate(r)?, &o)?.work))
+        .sum()
+}
+
 /// Solves of the golden-section refinement of r* ([`minimize_rate`]): the
 /// bracket of two grid steps in ln r shrunk by 0.618 a step to `rtol`, two
 /// to start.
@@ -303,8 +373,34 @@ pub fn total_work(range: &RateRange, grid: &[f64], at_zero: f64) -> f64 {
     works.iter().sum::<f64>() + (golden_solves(range) + 1.0) * upper + 2.0 * at_zero
 }
 
-/// The estimated work of [`optimize_rate`]: [`total_work`] of
-/// [`backward::estimate`] at each grid rate and, for an interval, at r = 0.
+/// The estimated work of a rate optimisation whose grid rates are
+/// screened first ([`SearchTarget`]): `screens` (the screening solves',
+/// [`screen_work`]); the grid's full solves at half the sum of `grid`
+/// (the screen leaves out the rates far from r*, where it can tell them
+/// apart, and none where its meshes are not asymptotic: at the defaults of
+/// `mfpt optimize --xt 2` the whole run counted 1.6e10 operations, the
+/// grid's full solves alone would be 4.2e10); the golden-section solves
+/// ([`golden_solves`]) and the checked solve at the optimum at the mean of
+/// the median and the upper quartile of the grid's costs (r* is not known
+/// before the grid is solved; the median put the cost tests' totals near
+/// a third of the work, the upper quartile the defaults' above three
+/// times); `at_zero` twice (as [`total_work`]). Calibrated
+/// on the cost tests (a 9-rate grid, r* among the dear rates, little
+/// screened) and those defaults: within 3× of the work counted both ways.
+pub fn screened_total_work(range: &RateRange, grid: &[f64], at_zero: f64, screens: f64) -> f64 {
+    let mut works = grid.to_vec();
+    works.sort_by(f64::total_cmp);
+    let at = |q: usize| works.get(q * works.len() / 4).copied().unwrap_or(0.0);
+    let per_solve = 0.5 * (at(2) + at(3));
+    screens
+        + 0.5 * works.iter().sum::<f64>()
+        + (golden_solves(range) + 1.0) * per_solve
+        + 2.0 * at_zero
+}
+
+/// The estimated work of [`optimize_rate`]: [`screened_total_work`] of
+/// [`backward::estimate`] at each grid rate and, for an interval, at r = 0,
+/// and of the screening solves ([`screen_work`]).
 pub fn estimate_work(
     base: &SearchProblem,
     range: &RateRange,
@@ -324,5 +420,6 @@ pub fn estimate_work(
         PositionTarget::Interval(..) => backward::estimate(&base.with_rate(0.0)?, &locate)?.work,
         PositionTarget::Level(_) => 0.0,
     };
-    Ok(total_work(range, &grid, at_zero))
+    let screens = screen_work(base, range, opts)?;
+    Ok(screened_total_work(range, &grid, at_zero, screens))
 }

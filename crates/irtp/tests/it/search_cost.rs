@@ -140,3 +140,42 @@ fn optimize_estimate_is_within_3x_of_the_work_done() {
         best.work
     );
 }
+
+/// The rate optimiser at the command line's defaults (`mfpt optimize --xt
+/// 2 --v0 0 --reset-position 0`: tan drag, Sigma 3, 61 rates from 1e-3
+/// to 1e3, 32 x 16 cells), where the screen leaves the dear small rates
+/// out of the full solves: the estimate against the work counted.
+#[test]
+fn optimize_estimate_at_the_defaults_is_within_3x_of_the_work_done() {
+    let range = RateRange::default();
+    let opts = BackwardOptions::with_cells(32, 16);
+    let pr = problem(DragLaw::Tan, 3.0, 0.0, PositionTarget::Level(2.0));
+    let est = optimize::estimate_work(&pr, &range, &opts).unwrap();
+    let best = optimize::optimize_rate(&pr, &range, &opts, &NoProgress).unwrap();
+    let locate = BackwardOptions {
+        climb: false,
+        ..opts
+    };
+    let mut grid: Vec<f64> = range
+        .grid()
+        .into_iter()
+        .map(|r| {
+            backward::estimate(&pr.with_rate(r).unwrap(), &locate)
+                .unwrap()
+                .work
+        })
+        .collect();
+    let screens = optimize::screen_work(&pr, &range, &opts).unwrap();
+    grid.sort_by(f64::total_cmp);
+    let n = grid.len();
+    println!(
+        "defaults: screens {screens:.3e}, grid {:.3e}, golden solves {}, median {:.3e}, \
+         upper quartile {:.3e}",
+        grid.iter().sum::<f64>(),
+        optimize::golden_solves(&range),
+        grid[n / 2],
+        grid[3 * n / 4]
+    );
+    assert!(best.optimum.interior);
+    assert_within_3("optimize at the defaults", est, best.work);
+}
