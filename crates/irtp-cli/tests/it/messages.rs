@@ -181,6 +181,10 @@ fn spec(rng: &mut Rng, kinds: &[&str], keys: &[&str]) -> String {
     s
 }
 
+/// 300 random `--noise`, `--reset-clock` and `--drag` specs, each run by a
+/// small command (200 cells, 20 particles to t = 1, 5 points: the work is
+/// bounded by the arguments, not by a wall-clock limit): exit 0, or exit 2
+/// with one line under 200 characters naming a flag and nothing written.
 #[test]
 #[ignore = "slow tier: spec fuzz through the binary (~30 s)"]
 fn spec_fuzz_answers_or_refuses_in_one_line() {
@@ -216,7 +220,6 @@ fn spec_fuzz_answers_or_refuses_in_one_line() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
     let d = dir.to_str().unwrap().to_string();
-    let start = std::time::Instant::now();
     for i in 0..300 {
         let (flag, value, base): (&str, String, &[&str]) = match i % 3 {
             0 => (
@@ -254,5 +257,4 @@ fn spec_fuzz_answers_or_refuses_in_one_line() {
             code => panic!("{args:?}: exit {code:?}: {err}"),
         }
     }
-    assert!(start.elapsed().as_secs() < 60, "{:?}", start.elapsed());
 }

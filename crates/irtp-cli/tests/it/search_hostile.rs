@@ -128,12 +128,13 @@ impl Mix {
 
 /// Targets, meshes and clocks drawn at random (fixed seed): exit 0 with a
 /// finite tau (or an infinite mean reported), or exit 2/4 with one line
-/// under 200 characters naming a flag and nothing written.
+/// under 200 characters naming a flag and nothing written. Each run's
+/// work is bounded by its arguments (64 particles, `--max-work=3e9`), not
+/// by a wall-clock limit, which a loaded machine would overrun.
 #[test]
 #[ignore = "slow tier: 40 random searches through the binary (about 40 s)"]
 fn random_searches_answer_or_refuse() {
     let mut g = Mix(20_261_206);
-    let t0 = std::time::Instant::now();
     for _ in 0..40 {
         let xt = g.pick(&["1", "-1", "0.3", "1e-9", "1e-300", "40", "-1e6", "0.05"]);
         let clock = g.pick(&[
@@ -190,7 +191,6 @@ fn random_searches_answer_or_refuse() {
             c => panic!("{args:?}: exit {c:?}: {err}"),
         }
     }
-    assert!(t0.elapsed().as_secs() < 60, "{:?}", t0.elapsed());
 }
 
 /// A mesh sequence that is not asymptotic (tanh drag, an interval, the

@@ -393,12 +393,14 @@ fn sampler_vs_renewal(
     }
 }
 
-const SLOW_CASES: [(DragLaw, f64, &str); 8] = [
+/// Every law; the fixed clock on linear drag is left to
+/// [`search_sampler_matches_the_renewal_route`], which checks that case
+/// on the route's finer time mesh (80 steps to 1e-6, a smaller estimate).
+const SLOW_CASES: [(DragLaw, f64, &str); 7] = [
     (DragLaw::Linear, 1.0, "gamma:k=0.5,theta=1.6"),
     (DragLaw::Tanh, 0.9, "gamma:k=3,theta=0.6"),
     (DragLaw::Linear, 1.0, "weibull:k=1.5,scale=1"),
     (DragLaw::Linear, 1.0, "pareto:alpha=2.5,scale=0.3"),
-    (DragLaw::Linear, 1.0, "fixed:t=3"),
     (DragLaw::Tanh, 0.9, "fixed:t=3"),
     (DragLaw::Linear, 1.0, "table:0:1;0.5:0.8;1:0.5;2:0.1;4:0"),
     (DragLaw::Tanh, 0.9, "hazard:0.5+a"),
