@@ -482,9 +482,9 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
     so::check_optimizable(&problem, &range)?;
     let max_work = a.output.budget.max_work;
     // The grid rates are screened on half the cells first.
-    let screens = Some(so::screen_work(&problem, &range, &backward)?);
+    let screens = || so::screen_work(&problem, &range, &backward);
     let at_zero = zero_cost(&problem, &backward)?;
-    let cost = optimize_cost(&range, at_zero, screens, max_work, |r| {
+    let cost = optimize_cost(&range, at_zero, Some(&screens), max_work, |r| {
         solve_cost(&problem.with_rate(r)?, &backward, 1.0)
     })?;
     a.output.budget.check(&Cost {
@@ -511,16 +511,18 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
 /// dearest grid rate's memory; with `screens` (the screening solves' work,
 /// [`so::screen_work`]) [`so::screened_total_work`] instead.
 /// Where the grid alone at the cheapest rate (r_max: the shortest domain)
-/// exceeds `max_work`, that lower bound, before any rate is priced.
+/// exceeds `max_work` (half the grid with screening), that lower bound,
+/// before any rate is priced or screened.
 fn optimize_cost(
     range: &RateRange,
     at_zero: f64,
-    screens: Option<f64>,
+    screens: Option<&dyn Fn() -> irtp::Result<f64>>,
     max_work: f64,
     cost_at: impl Fn(f64) -> irtp::Result<Cost>,
 ) -> irtp::Result<Cost> {
     let cheapest = cost_at(range.r_max)?;
-    let floor = cheapest.work * range.grid_points as f64;
+    let share = if screens.is_some() { 0.5 } else { 1.0 };
+    let floor = share * cheapest.work * range.grid_points as f64;
     if !(floor <= max_work) {
         return Ok(Cost {
             work: floor,
@@ -534,7 +536,7 @@ fn optimize_cost(
         .collect::<irtp::Result<Vec<_>>>()?;
     let works: Vec<f64> = grid.iter().map(|c| c.work).collect();
     let total = match screens {
-        Some(s) => so::screened_total_work(range, &works, at_zero, s),
+        Some(s) => so::screened_total_work(range, &works, at_zero, s()?),
         None => so::total_work(range, &works, at_zero),
     };
     let memory = grid.iter().map(|c| c.memory).fold(0.0, f64::max);
