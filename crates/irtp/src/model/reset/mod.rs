@@ -3,8 +3,9 @@
 //! A rule carries everything a method needs: the rate of the Poisson clock,
 //! the target (a point or a law to sample and to spread over a mesh), the
 //! target's moments for the closed forms, and what happens to the noise
-//! state. Engines call [`Reset::draw_velocity`] and [`Reset::draw_noise`] at
-//! a reset event and never write the rule themselves. Meshes, backward
+//! state. Engines call [`Reset::draw_velocity`] and [`Reset::draw_telegraph`]
+//! (the paper's noise) or [`Reset::draw_noise_state`] (a noise model) at a
+//! reset event and never write the rule themselves. Meshes, backward
 //! equations and closed forms read a target only through the [`TargetLaw`]
 //! interface (its mass on a cell, its moments, its support), so every method
 //! picks up a new kind of target; a method that needs a point target asks
