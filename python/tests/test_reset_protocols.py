@@ -31,10 +31,13 @@ def test_random_target_spec_and_bad_input():
     with pytest.raises(ValueError, match="reset_to"):
         irtp.fp_stationary(reset_to="gauss:mean=5,std=0.3")
     # mfpt optimize runs a random target too (the backward equations'
-    # target weights); a refractory period it does not run is refused,
-    # naming the flag.
+    # target weights) and an exponential refractory period (a Markov hold);
+    # a fixed one (not Markov in (v, noise)) is refused, naming the flag.
     opt = irtp.mfpt_optimize(v0=-0.249, vt=0.5, reset_to="uniform:a=-0.5,b=0.2")
     assert opt.params["problem"]["params"]["reset"] == "uniform:a=-0.5,b=0.2,noise=kept"
     assert opt.params["tau_opt"] <= opt.params["tau_r0"]
+    held = irtp.mfpt_optimize(v0=-0.249, vt=0.5, refractory="exp:mean=0.2")
+    assert held.params["problem"]["params"]["refractory"] == "exp:mean=0.2"
+    assert held.params["tau_opt"] <= held.params["tau_r0"]
     with pytest.raises(ValueError, match="refractory"):
-        irtp.mfpt_optimize(v0=-0.249, vt=0.5, refractory="exp:mean=0.2")
+        irtp.mfpt_optimize(v0=-0.249, vt=0.5, refractory="fixed:t=0.2")
