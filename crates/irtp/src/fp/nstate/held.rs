@@ -22,6 +22,7 @@ use crate::error::Result;
 use crate::model::noise::chain;
 use crate::model::reset::{Refractory, Reset};
 use crate::model::Params;
+use crate::numerics::band::Band;
 
 const METHOD: &str = "fp stationary (refractory)";
 
@@ -178,5 +179,89 @@ impl Hold {
         let f2 = u2 - 2.0 * v_mean * u1 + v_mean * v_mean;
         let y_sum: f64 = y.iter().sum();
         (f_bar * op.rate * y_sum + self.mass() * f2) / self.kappa
+    }
+}
+
+/// The factors of the shifted solve (I − cA) x = b with the held masses
+/// (R10) (and per atom (R14)): (I − cB)'s band factors (B without the
+/// reset influx), Z_s = (I − cB)⁻¹ E_s, I + cK (K = κI − Qᵀ) and the
+/// capacitance I − c G S Z, G = cκ (I + cK)⁻¹ r W. One factorisation for
+/// `fp transient`'s held masses and `fp msd`'s held blocks.
+pub(crate) struct HeldFactor {
+    /// The shift c.
+    pub c: f64,
+    /// (I − cB)'s band factors.
+    pub band: Band,
+    /// Z_s per noise state s.
+    pub z: Vec<Vec<f64>>,
+    /// I + cK.
+    pub ik: Vec<Vec<f64>>,
+    /// The capacitance I − c G S Z.
+    pub cap: Vec<Vec<f64>>,
+}
+
+impl HeldFactor {
+    /// The factors at shift `c` of `op` with the hold's leaving rate
+    /// `kappa`; `method` names the solve in a failure.
+    pub(crate) fn new(
+        op: &NoiseOperator,
+        c: f64,
+        kappa: f64,
+        method: &'static str,
+    ) -> Result<Self> {
+        let ns = op.mesh.states;
+        let mut band = op.band(Some(c));
+        band.factor_for(method)?;
+        let z: Vec<Vec<f64>> = (0..ns)
+            .map(|s| {
+                let mut e = vec![0.0; op.dim()];
+                let mut w = vec![0.0; ns];
+                w[s] = 1.0;
+                op.add_target(&w, &mut e);
+                band.solve(&mut e);
+                e
+            })
+            .collect();
+        let ik: Vec<Vec<f64>> = (0..ns)
+            .map(|i| {
+                (0..ns)
+                    .map(|j| match i == j {
+                        true => 1.0 + c * (kappa + op.chain.exit[i]),
+                        false => -c * op.chain.q[j][i],
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut f = HeldFactor {
+            c,
+            band,
+            z,
+            ik,
+            cap: Vec::new(),
+        };
+        let cols =
+            f.z.iter()
+                .map(|zs| f.g_times(op, kappa, &op.state_sums(zs), method))
+                .collect::<Result<Vec<_>>>()?;
+        f.cap = (0..ns)
+            .map(|i| {
+                (0..ns)
+                    .map(|j| f64::from(u8::from(i == j)) - c * cols[j][i])
+                    .collect()
+            })
+            .collect();
+        Ok(f)
+    }
+
+    /// G y = cκ (I + cK)⁻¹ r W y.
+    pub(crate) fn g_times(
+        &self,
+        op: &NoiseOperator,
+        kappa: f64,
+        y: &[f64],
+        method: &'static str,
+    ) -> Result<Vec<f64>> {
+        let l = chain::solve(&self.ik, &op.influx(y), method)?;
+        Ok(l.iter().map(|x| self.c * kappa * x).collect())
     }
 }

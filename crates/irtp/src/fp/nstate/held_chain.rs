@@ -21,12 +21,11 @@
 //! cells' Woodbury over the rank-N re-entry with r W replaced by
 //! G = cκ L r W, its constant cκ Σ_a E_a L d_a.
 
-use super::{Hold, NoiseOperator};
+use super::{HeldFactor as Factor, Hold, NoiseOperator};
 use crate::error::Result;
 use crate::model::noise::chain;
 use crate::model::reset::Reset;
 use crate::model::Params;
-use crate::numerics::band::Band;
 use crate::numerics::trbdf2::ShiftedLinear;
 use crate::numerics::Failure;
 
@@ -42,16 +41,6 @@ pub(crate) struct HeldBlocks {
     /// The velocity of every cell unknown (its cell centre).
     v: Vec<f64>,
     factor: Option<Factor>,
-}
-
-/// (I − cB)'s band factors, Z_s = (I − cB)⁻¹ E_s, I + cK and the
-/// capacitance I − c G S Z.
-struct Factor {
-    c: f64,
-    band: Band,
-    z: Vec<Vec<f64>>,
-    ik: Vec<Vec<f64>>,
-    cap: Vec<Vec<f64>>,
 }
 
 impl HeldBlocks {
@@ -159,55 +148,8 @@ impl HeldBlocks {
         }
     }
 
-    /// G y = cκ (I + cK)⁻¹ r W y.
-    fn g_times(&self, f: &Factor, y: &[f64]) -> Result<Vec<f64>> {
-        let l = chain::solve(&f.ik, &self.op.influx(y), METHOD)?;
-        Ok(l.iter().map(|x| f.c * self.kappa * x).collect())
-    }
-
     fn factorise(&self, c: f64) -> Result<Factor> {
-        let (op, ns) = (&self.op, self.ns());
-        let mut band = op.band(Some(c));
-        band.factor_for(METHOD)?;
-        let z: Vec<Vec<f64>> = (0..ns)
-            .map(|s| {
-                let mut e = vec![0.0; op.dim()];
-                let mut w = vec![0.0; ns];
-                w[s] = 1.0;
-                op.add_target(&w, &mut e);
-                band.solve(&mut e);
-                e
-            })
-            .collect();
-        let ik: Vec<Vec<f64>> = (0..ns)
-            .map(|i| {
-                (0..ns)
-                    .map(|j| match i == j {
-                        true => 1.0 + c * (self.kappa + op.chain.exit[i]),
-                        false => -c * op.chain.q[j][i],
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut f = Factor {
-            c,
-            band,
-            z,
-            ik,
-            cap: Vec::new(),
-        };
-        let cols =
-            f.z.iter()
-                .map(|zs| self.g_times(&f, &op.state_sums(zs)))
-                .collect::<Result<Vec<_>>>()?;
-        f.cap = (0..ns)
-            .map(|i| {
-                (0..ns)
-                    .map(|j| f64::from(u8::from(i == j)) - c * cols[j][i])
-                    .collect()
-            })
-            .collect();
-        Ok(f)
+        Factor::new(&self.op, c, self.kappa, METHOD)
     }
 
     /// Solve (I − cA_h) [x; y] = b for one block (module docs).
@@ -220,7 +162,7 @@ impl HeldBlocks {
             self.place(a, &l, c * self.kappa, &mut rhs);
         }
         f.band.solve(&mut rhs);
-        let t = self.g_times(f, &self.op.state_sums(&rhs))?;
+        let t = f.g_times(&self.op, self.kappa, &self.op.state_sums(&rhs), METHOD)?;
         let ct: Vec<f64> = t.iter().map(|y| c * y).collect();
         let w = chain::solve(&f.cap, &ct, "fp msd (capacitance)")?;
         for (zs, ws) in f.z.iter().zip(&w) {

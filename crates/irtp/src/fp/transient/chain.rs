@@ -15,16 +15,18 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::fp::extrapolate::richardson;
-use crate::fp::nstate::{observe, operator, Blocks, Hold, NoiseOperator};
+use crate::fp::nstate::{observe, operator, Blocks, HeldFactor, Hold, NoiseOperator};
 use crate::fp::Mesh;
 use crate::model::atoms::transient_atom_states;
 use crate::model::noise::chain;
 use crate::model::reset::Reset;
 use crate::model::{Params, VelocityAtom};
-use crate::numerics::band::Band;
 use crate::numerics::trbdf2::{ShiftedLinear, Tolerances};
 use crate::numerics::Failure;
 use crate::parallel::Progress;
+
+/// The held masses' solves, named in a failure.
+const HELD: &str = "fp transient (held masses)";
 
 /// The chain on the nested meshes of `base` << level cells: per mesh the
 /// rows of [`observe`] and the held cells' masses at every output time;
@@ -376,16 +378,6 @@ pub(super) struct ChainOp {
     factor: Option<HeldFactor>,
 }
 
-/// (I − cB)'s band factors (B without the re-injection), Z_s = (I − cB)⁻¹
-/// E_s, I + cK, and the capacitance I − c G S Z, G = cκ (I + cK)⁻¹ r W.
-struct HeldFactor {
-    c: f64,
-    band: Band,
-    z: Vec<Vec<f64>>,
-    ik: Vec<Vec<f64>>,
-    cap: Vec<Vec<f64>>,
-}
-
 impl ChainOp {
     fn ns(&self) -> usize {
         self.b.op.mesh.states
@@ -405,55 +397,8 @@ impl ChainOp {
             .collect()
     }
 
-    /// G y = cκ (I + cK)⁻¹ r W y.
-    fn g_times(f: &HeldFactor, op: &NoiseOperator, kappa: f64, y: &[f64]) -> Result<Vec<f64>> {
-        let l = chain::solve(&f.ik, &op.influx(y), "fp transient (held masses)")?;
-        Ok(l.iter().map(|x| f.c * kappa * x).collect())
-    }
-
     fn factorise(&self, c: f64, kappa: f64) -> Result<HeldFactor> {
-        let (op, ns) = (&self.b.op, self.ns());
-        let mut band = op.band(Some(c));
-        band.factor_for("fp transient (held masses)")?;
-        let z: Vec<Vec<f64>> = (0..ns)
-            .map(|s| {
-                let mut e = vec![0.0; op.dim()];
-                let mut w = vec![0.0; ns];
-                w[s] = 1.0;
-                op.add_target(&w, &mut e);
-                band.solve(&mut e);
-                e
-            })
-            .collect();
-        let ik: Vec<Vec<f64>> = (0..ns)
-            .map(|i| {
-                (0..ns)
-                    .map(|j| match i == j {
-                        true => 1.0 + c * (kappa + op.chain.exit[i]),
-                        false => -c * op.chain.q[j][i],
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut f = HeldFactor {
-            c,
-            band,
-            z,
-            ik,
-            cap: Vec::new(),
-        };
-        let cols =
-            f.z.iter()
-                .map(|zs| Self::g_times(&f, op, kappa, &op.state_sums(zs)))
-                .collect::<Result<Vec<_>>>()?;
-        f.cap = (0..ns)
-            .map(|i| {
-                (0..ns)
-                    .map(|j| f64::from(u8::from(i == j)) - c * cols[j][i])
-                    .collect()
-            })
-            .collect();
-        Ok(f)
+        HeldFactor::new(&self.b.op, c, kappa, HELD)
     }
 
     /// The held masses of `u` (after the cells) and the cells.
@@ -469,13 +414,13 @@ impl ChainOp {
         let d = op.dim();
         let (bx, bq) = b.split_at(d);
         let mut rhs = bx.to_vec();
-        let lq = chain::solve(&f.ik, bq, "fp transient (held masses)")?;
+        let lq = chain::solve(&f.ik, bq, HELD)?;
         op.add_target(
             &lq.iter().map(|y| c * kappa * y).collect::<Vec<_>>(),
             &mut rhs,
         );
         f.band.solve(&mut rhs);
-        let t = Self::g_times(f, op, kappa, &op.state_sums(&rhs))?;
+        let t = f.g_times(op, kappa, &op.state_sums(&rhs), HELD)?;
         let u = chain::solve(
             &f.cap,
             &t.iter().map(|y| c * y).collect::<Vec<_>>(),
@@ -488,7 +433,7 @@ impl ChainOp {
         }
         let inf = op.influx(&op.state_sums(&rhs));
         let dq: Vec<f64> = bq.iter().zip(&inf).map(|(d, r)| d + c * r).collect();
-        let q = chain::solve(&f.ik, &dq, "fp transient (held masses)")?;
+        let q = chain::solve(&f.ik, &dq, HELD)?;
         x[..d].copy_from_slice(&rhs);
         x[d..].copy_from_slice(&q);
         Ok(())
