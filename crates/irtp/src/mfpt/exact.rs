@@ -33,7 +33,7 @@ use crate::model::reset::{Reset, ResetRule, Schedule};
 use crate::model::{Drag, Params};
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::passage::{Clocks, Flow, PassageObserver};
+use crate::sim::exact::passage::{Clocks, Flow, Mode, Observer};
 use crate::sim::exact::{ExactNoise, Telegraph};
 
 /// Exact first passage of v to `vt` from below: the first time v(t) ≥ vt,
@@ -218,9 +218,10 @@ struct VelocityTarget<'a, F, T> {
     tally: &'a mut T,
 }
 
-impl<F: FlowMap, T: Tally> PassageObserver for VelocityTarget<'_, F, T> {
+impl<F: FlowMap, T: Tally> Observer for VelocityTarget<'_, F, T> {
+    const MODE: Mode = Mode::Passage;
     #[inline(always)]
-    fn flow(&mut self, s: usize, t: f64, step: f64, t_max: f64) -> Flow {
+    fn flow(&mut self, s: usize, t: f64, step: f64, _: f64, t_max: f64) -> Flow {
         let flow = &self.flows[s];
         if self.stars[s] > self.vt {
             let tau = flow.time(self.v, self.vt);

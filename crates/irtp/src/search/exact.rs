@@ -41,7 +41,7 @@ use crate::model::Drag;
 use crate::numerics::root::solve_increasing;
 use crate::parallel::Progress;
 use crate::rng::Rng;
-use crate::sim::exact::passage::{Clocks, Flow, PassageObserver};
+use crate::sim::exact::passage::{Clocks, Flow, Mode, Observer};
 use crate::sim::exact::{ExactNoise, Segments, Telegraph};
 use std::ops::Range;
 
@@ -245,9 +245,10 @@ impl<D: Drag, N: ExactNoise> SearchSampler<D, N> {
     }
 }
 
-impl<D: Drag, N: ExactNoise> PassageObserver for PositionTarget<'_, D, N> {
+impl<D: Drag, N: ExactNoise> Observer for PositionTarget<'_, D, N> {
+    const MODE: Mode = Mode::Passage;
     #[inline(always)]
-    fn flow(&mut self, s: usize, t: f64, step: f64, t_max: f64) -> Flow {
+    fn flow(&mut self, s: usize, t: f64, step: f64, _: f64, t_max: f64) -> Flow {
         let span = step.min(t_max - t);
         match self.sampler.segment(s, &self.a, self.x, span) {
             // At most t_max (t + (t_max - t) may round above it).

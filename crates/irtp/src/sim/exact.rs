@@ -32,33 +32,34 @@
 //! occupation time of every histogram bin over [burn_in, t_max] (bin edges
 //! crossed in full contribute the precomputed flow time across the bin).
 //!
-//! The noise's state space is a type parameter of the one event loop
-//! (`Sampler` over [`ExactNoise`], shared with the first-passage and
-//! search samplers), dispatched once per run: the paper's two-state noise
+//! A particle is one walk of the event-to-event kernel the first-passage
+//! and search samplers also run ([`passage`]: `Clocks::walk`) with this
+//! sampler's observer (`Recorder`, the kernel's record mode: its own
+//! random stream, bit for bit). The noise's state space is a type
+//! parameter, dispatched once per run: the paper's two-state noise
 //! ([`Telegraph`], its random draws bit for bit) or any finite-state noise
 //! at T = 0 (docs/equations.md Eqs. (N10)-(N12): per level its own
 //! segments, fixed point (possibly interior) and crossing times, events at
 //! rate q_s + r in state s). Both share the per-state tables (`Tables`)
-//! and the segment code (`Segments`, `flow_segment`, the occupation and
-//! crossing times).
+//! and the segment code (`Segments`, the recorder's segment, the
+//! occupation and crossing times).
 //!
 //! The modifiers of the resetting rule ([`crate::model::reset::Schedule`])
-//! run in a second step function of that loop, chosen once per run (the
-//! paper's protocol keeps its own step, bit for bit), for every
-//! finite-state noise: the next event is the earliest of the
-//! exponential clock (noise jumps at rate q_s, the paper's flips at rate
-//! lambda, plus Poisson resets at rate r outside a refractory period), the
-//! next scheduled reset time (resets at
-//! T, 2T, ... from t = 0 with a periodic clock; with a renewal clock a
-//! waiting time drawn at each reset, or at the end of its refractory
-//! period, from the clock's law) and the end of a refractory period. A reset sends
-//! x to x_r with position resetting; a refractory period is a held segment:
-//! v constant at the reset velocity, x linear in t, the occupation of the
+//! are the kernel's: the next event is the earliest of the exponential
+//! clock (noise jumps at rate q_s, the paper's flips at rate lambda, plus
+//! Poisson resets at rate r outside a refractory period), the next
+//! scheduled reset time (resets at T, 2T, ... from t = 0 with a periodic
+//! clock; with a renewal clock a waiting time from the clock's law, drawn
+//! at each reset and counted from it or from the end of its refractory
+//! period) and the end of a refractory period. A reset sends x to x_r
+//! with position resetting; a refractory period is a held segment: v
+//! constant at the reset velocity, x linear in t, the occupation of the
 //! held velocity's bin and the time averages exact; the noise jumps during
-//! it (state-dependent rate q_s), reset-clock events are ignored (the periodic times inside it or at
-//! its end skipped), and the flow resumes from the held velocity with the
-//! noise state of that moment. An event at t acts just after t: a
-//! recording time equal to a periodic reset time sees the state before it.
+//! it (state-dependent rate q_s), reset-clock events are ignored (the
+//! periodic times inside it or at its end skipped), and the flow resumes
+//! from the held velocity with the noise state of that moment. An event
+//! at t acts just after t: a recording time equal to a periodic reset
+//! time sees the state before it.
 //!
 //! With thermal noise (T > 0) and linear drag a second loop, `ou`, runs the
 //! same event clock with exact Ornstein-Uhlenbeck segments in between
@@ -69,7 +70,7 @@
 use crate::error::{Error, Result};
 use crate::model::drag::{FlowMap, FlowPoint, PotentialTable};
 use crate::model::noise::chain::Chain;
-use crate::model::reset::{Refractory, Reset, ResetRule, Schedule, Solver};
+use crate::model::reset::{Reset, Solver};
 use crate::model::{Drag, Params};
 use crate::numerics::chebyshev::{
     self, clenshaw, clenshaw2, Adaptive, Piece, Refine, Unresolved, NC,
@@ -77,6 +78,7 @@ use crate::numerics::chebyshev::{
 use crate::parallel::Progress;
 use crate::rng::{self, Rng};
 use crate::sim::{Observables, Part, SimSpec};
+use passage::{Clocks, Flow, Mode, Observer};
 use rand::Rng as _;
 use std::ops::Range;
 
@@ -405,43 +407,19 @@ impl<F: FlowMap> Tables<F> {
     }
 }
 
-/// Everything fixed for a run: the noise and its tables and clock, the
-/// resetting protocol, the recording window.
+/// Everything fixed for a run: the noise's clocks and the resetting
+/// protocol ([`Clocks`]), the tables, the recording window.
 pub(crate) struct Sampler<F, N> {
-    noise: N,
+    clocks: Clocks<N>,
     tab: Tables<F>,
-    /// Per state: the event clock q_s + r, its inverse, and 1/q_s (0 where
-    /// q_s = 0: the clock of a refractory period).
-    total: Vec<f64>,
-    inv_total: Vec<f64>,
-    inv_exit: Vec<f64>,
     /// The segment start at the point target v_r, per noise state.
     at_vr: Option<Vec<FlowPoint>>,
-    /// The resetting rule (rate, target, noise state at a reset).
-    reset: ResetRule,
     times: Vec<f64>,
     burn_in: f64,
     t_max: f64,
     seed: u64,
-    /// The paper's protocol (no modifier): the plain step runs.
-    plain: bool,
-    /// The schedule (its periodic or renewal clock).
-    schedule: Schedule,
     /// Position resetting: x_r.
     x_reset: Option<f64>,
-    /// Refractory period after each reset.
-    refractory: Option<Refractory>,
-}
-
-/// What ends a segment of the scheduled event loop.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Edge {
-    /// The exponential clock: a flip, or a Poisson reset.
-    Clock,
-    /// A periodic reset time.
-    Periodic,
-    /// The end of a refractory period.
-    Release,
 }
 
 /// Per-chunk scratch: occupation times and full-crossing counts
@@ -538,29 +516,14 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
         if params.noise().is_none() {
             check_cancellation(params)?;
         }
-        let schedule = params.schedule();
-        let reset = *params.reset();
-        let total = noise.clocks(reset.rate());
-        let inv_exit = (0..total.len())
-            .map(|s| match noise.exit(s) {
-                q if q > 0.0 => 1.0 / q,
-                _ => 0.0,
-            })
-            .collect();
+        let reset = params.reset();
         Ok(Sampler {
             at_vr: reset
                 .point()
                 .map(|vr| tab.segs.iter().map(|s| s.at(vr)).collect()),
-            inv_total: total.iter().map(|t| 1.0 / t).collect(),
-            inv_exit,
-            total,
-            noise,
+            clocks: Clocks::new(noise, params),
             tab,
-            plain: schedule.is_plain(),
-            schedule: schedule.clone(),
-            x_reset: schedule.position.map(|p| p.x),
-            refractory: schedule.refractory,
-            reset,
+            x_reset: params.schedule().position.map(|p| p.x),
             times: spec.grid.times().to_vec(),
             burn_in: spec.burn_in,
             t_max: spec.grid.t_max(),
@@ -581,282 +544,196 @@ impl<F: FlowMap, N: ExactNoise> Sampler<F, N> {
     pub(crate) fn scratch(&self, bins: usize) -> Scratch {
         Scratch {
             occ: vec![0.0; bins],
-            cross: vec![vec![0; bins]; self.total.len()],
+            cross: vec![vec![0; bins]; self.tab.segs.len()],
         }
     }
 
-    /// A particle at t = 0 (v = 0, noise state drawn).
-    fn start(&self, i: u64) -> Lane {
-        let mut rng = rng::stream(self.seed, i);
-        let si = self.noise.start(None, &mut rng);
-        let next_periodic = self.schedule.first_reset(&mut rng);
-        Lane {
-            rng,
-            si,
-            a: self.tab.segs[si].at(0.0),
-            t: 0.0,
-            x: 0.0,
-            k: 0,
-            int_v: 0.0,
-            int_v2: 0.0,
-            msd: 0.0,
-            at_atom: 0.0,
-            events: 0,
-            done: false,
-            held: false,
-            hold_until: f64::INFINITY,
-            next_periodic,
-        }
-    }
-
-    /// One flow segment of a particle up to its next event (or t_max), then
-    /// the event (the paper's protocol).
-    #[inline]
-    fn step(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
-        let (rate, inv) = (self.total[p.si], self.inv_total[p.si]);
-        let gap = if rate > 0.0 {
-            // Exp(rate) by a product with 1/rate (the division sits on the
-            // event's dependency chain).
-            p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
-        } else {
-            f64::INFINITY
-        };
-        let t_end = (p.t + gap).min(self.t_max);
-        let b = flow_segment(self, p, obs, sc, t_end);
-        if t_end >= self.t_max {
-            p.done = true;
-            return;
-        }
-        p.events += 1;
-        match self.noise.event(p.si, p.rng.gen::<f64>() * rate) {
-            Some(j) => {
-                p.si = j;
-                p.a = self.tab.segs[j].at(b.v);
-            }
-            None => {
-                let v = self.draw_reset(p);
-                p.a = self.reset_point(p.si, v);
-            }
-        }
-    }
-
-    /// The velocity after a reset (drawn for a random target) and the noise
-    /// state (kept or re-drawn), stored in the lane.
-    #[inline(always)]
-    fn draw_reset(&self, p: &mut Lane) -> f64 {
-        let v = self.reset.draw_velocity(&mut p.rng);
-        p.si = self.noise.after_reset(p.si, &self.reset, &mut p.rng);
-        v
-    }
-
-    /// [`Sampler::step`] with the schedule's modifiers (see the module
-    /// docs): the segment ends at the exponential clock, the next periodic
-    /// reset time or the end of the refractory period, whichever is first.
-    fn step_scheduled(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch) {
-        // Inside a refractory period only the noise's jumps run (rate q_s).
-        let si = p.si;
-        let (rate, inv) = if p.held {
-            (self.noise.exit(si), self.inv_exit[si])
-        } else {
-            (self.total[si], self.inv_total[si])
-        };
-        let gap = if rate > 0.0 {
-            p.rng.sample::<f64, _>(rand_distr::Exp1) * inv
-        } else {
-            f64::INFINITY
-        };
-        let (mut t_end, mut edge) = (p.t + gap, Edge::Clock);
-        let (at, kind) = if p.held {
-            (p.hold_until, Edge::Release)
-        } else {
-            (p.next_periodic, Edge::Periodic)
-        };
-        if at <= t_end {
-            (t_end, edge) = (at, kind);
-        }
-        let t_end = t_end.min(self.t_max);
-        if p.held {
-            self.hold_to(p, obs, sc, t_end);
-        } else {
-            flow_segment(self, p, obs, sc, t_end);
-        }
-        if t_end >= self.t_max {
-            p.done = true;
-            return;
-        }
-        p.events += 1;
-        match edge {
-            Edge::Release => {
-                p.held = false;
-                p.a = self.tab.segs[p.si].at(p.a.v);
-            }
-            Edge::Periodic => self.reset_scheduled(p),
-            Edge::Clock if p.held => p.si = self.noise.draw_jump(si, &mut p.rng),
-            Edge::Clock => match self.noise.event(si, p.rng.gen::<f64>() * rate) {
-                Some(j) => {
-                    p.si = j;
-                    p.a = self.tab.segs[j].at(p.a.v);
-                }
-                None => self.reset_scheduled(p),
-            },
-        }
-    }
-
-    /// A reset with the schedule's modifiers at p.t: velocity and noise by
-    /// the rule, x → x_r with position resetting, then a refractory period
-    /// (held at the reset velocity) if any; the next periodic time is the
-    /// first one after the reset, or after the refractory period.
-    fn reset_scheduled(&self, p: &mut Lane) {
-        let v = self.draw_reset(p);
-        p.a = self.reset_point(p.si, v);
-        if let Some(x) = self.x_reset {
-            p.x = x;
-        }
-        let mut free = p.t;
-        if let Some(r) = self.refractory {
-            p.held = true;
-            p.hold_until = p.t + r.draw(&mut p.rng);
-            free = p.hold_until;
-        }
-        if self.schedule.scheduled_clock() {
-            p.next_periodic = self.schedule.next_reset(free, &mut p.rng);
-        }
-    }
-
-    /// A held segment (refractory period) from p.t to `t_end`: v constant
-    /// at p.a.v, x linear in t, the held velocity's bin (or its atom)
-    /// occupied.
-    fn hold_to(&self, p: &mut Lane, obs: &mut Observables, sc: &mut Scratch, t_end: f64) {
-        let (t, v) = (p.t, p.a.v);
-        while p.k < self.times.len() && self.times[p.k] <= t_end {
-            let xk = p.x + v * (self.times[p.k] - t);
-            obs.record(p.k, v, xk);
-            p.msd += obs.msd_term(p.k, xk);
-            p.k += 1;
-        }
-        if t_end > self.burn_in {
-            let dw = t_end - t.max(self.burn_in);
-            p.int_v += v * dw;
-            p.int_v2 += v * v * dw;
-            if obs.is_atom(v) {
-                p.at_atom += dw;
-            } else {
-                sc.occ[obs.bin_of(v)] += dw;
-            }
-        }
-        p.x += v * (t_end - t);
-        p.t = t_end;
-    }
-
-    /// Close a particle: full bin crossings (occupation += crossings × tau)
-    /// and its contribution to the observables.
-    fn finish(&self, p: &Lane, obs: &mut Observables, sc: &mut Scratch) {
-        for (cross, tau) in sc.cross.iter_mut().zip(&self.tab.tau) {
-            add_crossings(cross, &mut sc.occ, tau);
-        }
-        close_particle(p, obs, &mut sc.occ, self.t_max - self.burn_in);
-    }
-
-    /// Particles `ids` one after the other. (Interleaving four particles
-    /// per thread, one event of each in turn, measured no faster: the
-    /// event's chain is short next to its instruction count.)
+    /// Particles `ids` one after the other, each a walk of the kernel
+    /// ([`Clocks::walk`]) from v = 0 in a drawn noise state with its
+    /// [`Recorder`]. (Interleaving four particles per thread, one event of
+    /// each in turn, measured no faster: the event's chain is short next
+    /// to its instruction count.)
     pub(crate) fn particles(&self, ids: Range<u64>, obs: &mut Observables, sc: &mut Scratch) {
         for i in ids {
-            let mut p = self.start(i);
-            if self.plain {
-                while !p.done {
-                    self.step(&mut p, obs, sc);
-                }
+            let mut rng = rng::stream(self.seed, i);
+            let s = self.clocks.noise.start(None, &mut rng);
+            let mut rec = Recorder {
+                sampler: self,
+                obs: &mut *obs,
+                sc: &mut *sc,
+                a: self.tab.segs[s].at(0.0),
+                x: 0.0,
+                k: 0,
+                int_v: 0.0,
+                int_v2: 0.0,
+                msd: 0.0,
+                at_atom: 0.0,
+            };
+            let (_, events) = self.clocks.walk(s, self.t_max, &mut rng, &mut rec);
+            rec.finish(events);
+        }
+    }
+}
+
+/// The simulation's observer of the walk kernel ([`passage`],
+/// [`Mode::Record`]): one particle's moments at the grid times, its time
+/// averages and occupation times over [burn_in, t_max] (or its time at
+/// the law's atom), and x; a reset sends x to x_r with position
+/// resetting, a hold is v constant, x linear in t.
+struct Recorder<'a, F, N> {
+    sampler: &'a Sampler<F, N>,
+    obs: &'a mut Observables,
+    sc: &'a mut Scratch,
+    /// The start of the current segment (its end after a Moved; the held
+    /// velocity's point during a hold).
+    a: FlowPoint,
+    x: f64,
+    /// Next grid time index.
+    k: usize,
+    int_v: f64,
+    int_v2: f64,
+    msd: f64,
+    /// Time in the window spent exactly at the law's atom.
+    at_atom: f64,
+}
+
+impl<F: FlowMap, N: ExactNoise> Observer for Recorder<'_, F, N> {
+    const MODE: Mode = Mode::Record;
+    #[inline(always)]
+    fn flow(&mut self, s: usize, t: f64, _: f64, end: f64, t_max: f64) -> Flow {
+        let t_end = end.min(t_max);
+        self.segment(s, t, t_end);
+        if t_end >= t_max {
+            Flow::Done(None)
+        } else {
+            Flow::Moved
+        }
+    }
+    #[inline(always)]
+    fn jump(&mut self, _: usize, j: usize) {
+        self.a = self.sampler.tab.segs[j].at(self.a.v);
+    }
+    #[inline(always)]
+    fn reset(&mut self, _: f64, v: f64, _: usize, after: usize) -> Option<f64> {
+        self.a = self.sampler.reset_point(after, v);
+        if let Some(x) = self.sampler.x_reset {
+            self.x = x;
+        }
+        None
+    }
+    fn held(&mut self, t: f64, end: f64, t_max: f64) -> Flow {
+        let t_end = end.min(t_max);
+        self.hold_to(t, t_end);
+        if t_end >= t_max {
+            Flow::Done(None)
+        } else {
+            Flow::Moved
+        }
+    }
+    #[inline(always)]
+    fn resume(&mut self, _: f64, s: usize, held: Option<f64>) {
+        if held.is_some() {
+            self.a = self.sampler.tab.segs[s].at(self.a.v);
+        }
+    }
+}
+
+impl<F: FlowMap, N> Recorder<'_, F, N> {
+    /// The flow segment from `t` to `t_end` in noise state `si`: moments
+    /// at the grid times inside (t, t_end], the window integrals and
+    /// occupation times, the position; the end point becomes the start.
+    #[inline(always)]
+    fn segment(&mut self, si: usize, t: f64, t_end: f64) {
+        let (tab, a) = (&self.sampler.tab, self.a);
+        let (seg, vs) = (&tab.segs[si], tab.vs[si]);
+        let (times, burn_in) = (&self.sampler.times, self.sampler.burn_in);
+        // Moments at grid times inside (t, t_end].
+        while self.k < times.len() && times[self.k] <= t_end {
+            let dt = times[self.k] - t;
+            let pk = seg.advance(&a, dt);
+            let xk = self.x + vs * dt - (a.q[0] - pk.q[0]);
+            self.obs.record(self.k, pk.v, xk);
+            self.msd += self.obs.msd_term(self.k, xk);
+            self.k += 1;
+        }
+        let dt = t_end - t;
+        let b = seg.advance(&a, dt);
+        // Stationary window [burn_in, t_max].
+        if t_end > burn_in {
+            let (w, dw) = if t < burn_in {
+                (seg.advance(&a, burn_in - t), t_end - burn_in)
             } else {
-                while !p.done {
-                    self.step_scheduled(&mut p, obs, sc);
-                }
+                (a, dt)
+            };
+            let (j1, j2) = (w.q[0] - b.q[0], w.q[1] - b.q[1]);
+            self.int_v += vs * dw - j1;
+            self.int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
+            // Resting exactly at the law's atom: its own account, no bin.
+            if w.v == b.v && self.obs.is_atom(b.v) {
+                self.at_atom += dw;
+            } else {
+                occupy(tab, self.obs, self.sc, si, &w, b.v, dw);
             }
-            self.finish(&p, obs, sc);
         }
+        self.x += vs * dt - (a.q[0] - b.q[0]);
+        self.a = b;
     }
-}
 
-/// The per-state tables as the segment code reads them, by noise state:
-/// its segments, fixed point v*, 1/g'(v*) and the flow potential at the
-/// bin edges, and the recording window ([`Sampler`] reads them from its
-/// `Tables`); each entry is read where the segment code needs it (measured:
-/// building a per-state view up front cost the two-state loop 3 % CPU
-/// time).
-trait StateTables<F> {
-    fn seg(&self, si: usize) -> &Segments<F>;
-    fn fixed_point(&self, si: usize) -> f64;
-    fn inv_rate(&self, si: usize) -> f64;
-    fn phi_edges(&self, si: usize) -> &[f64];
-    /// (grid times, burn-in).
-    fn window(&self) -> (&[f64], f64);
-}
-
-/// Occupation times and per-state crossing difference arrays of a chunk.
-trait Occupation {
-    fn occ(&mut self) -> &mut [f64];
-    fn cross(&mut self, si: usize) -> &mut [i64];
-}
-
-/// The flow segment of a particle from p.t to `t_end` under its noise
-/// state: moments at the grid times inside (p.t, t_end], the window
-/// integrals and occupation times, the position; returns (and stores) the
-/// end point.
-#[inline(always)]
-fn flow_segment<F: FlowMap, T: StateTables<F>, S: Occupation>(
-    tab: &T,
-    p: &mut Lane,
-    obs: &mut Observables,
-    sc: &mut S,
-    t_end: f64,
-) -> FlowPoint {
-    let (t, si, a) = (p.t, p.si, p.a);
-    let seg = tab.seg(si);
-    let vs = tab.fixed_point(si);
-    let (times, burn_in) = tab.window();
-    // Moments at grid times inside (t, t_end].
-    while p.k < times.len() && times[p.k] <= t_end {
-        let dt = times[p.k] - t;
-        let pk = seg.advance(&a, dt);
-        let xk = p.x + vs * dt - (a.q[0] - pk.q[0]);
-        obs.record(p.k, pk.v, xk);
-        p.msd += obs.msd_term(p.k, xk);
-        p.k += 1;
-    }
-    let dt = t_end - t;
-    let b = seg.advance(&a, dt);
-    // Stationary window [burn_in, t_max].
-    if t_end > burn_in {
-        let (w, dw) = if t < burn_in {
-            (seg.advance(&a, burn_in - t), t_end - burn_in)
-        } else {
-            (a, dt)
-        };
-        let (j1, j2) = (w.q[0] - b.q[0], w.q[1] - b.q[1]);
-        p.int_v += vs * dw - j1;
-        p.int_v2 += vs * vs * dw - 2.0 * vs * j1 + j2;
-        // Resting exactly at the law's atom: its own account, no bin.
-        if w.v == b.v && obs.is_atom(b.v) {
-            p.at_atom += dw;
-        } else {
-            occupy(tab, obs, sc, si, &w, b.v, dw);
+    /// A held piece (refractory period) from `t` to `t_end`: v constant at
+    /// the held velocity, x linear in t, its bin (or its atom) occupied.
+    fn hold_to(&mut self, t: f64, t_end: f64) {
+        let (v, times, burn_in) = (self.a.v, &self.sampler.times, self.sampler.burn_in);
+        while self.k < times.len() && times[self.k] <= t_end {
+            let xk = self.x + v * (times[self.k] - t);
+            self.obs.record(self.k, v, xk);
+            self.msd += self.obs.msd_term(self.k, xk);
+            self.k += 1;
         }
+        if t_end > burn_in {
+            let dw = t_end - t.max(burn_in);
+            self.int_v += v * dw;
+            self.int_v2 += v * v * dw;
+            if self.obs.is_atom(v) {
+                self.at_atom += dw;
+            } else {
+                self.sc.occ[self.obs.bin_of(v)] += dw;
+            }
+        }
+        self.x += v * (t_end - t);
     }
-    p.x += vs * dt - (a.q[0] - b.q[0]);
-    p.t = t_end;
-    p.a = b;
-    b
+
+    /// Close the particle after `events` events: full bin crossings
+    /// (occupation += crossings × tau) and its contribution to the
+    /// observables.
+    fn finish(self, events: u64) {
+        let (sc, obs) = (self.sc, self.obs);
+        for (cross, tau) in sc.cross.iter_mut().zip(&self.sampler.tab.tau) {
+            add_crossings(cross, &mut sc.occ, tau);
+        }
+        let window = self.sampler.t_max - self.sampler.burn_in;
+        obs.finish_particle(
+            self.int_v / window,
+            self.int_v2 / window,
+            &mut sc.occ,
+            window,
+            self.a.v,
+            self.msd,
+        );
+        obs.finish_atom(self.at_atom, window, self.a.v);
+        obs.record_final_position(self.x);
+        obs.steps += events;
+    }
 }
 
-/// Add the occupation times of a flow segment a → b of duration dt:
-/// partial first and last bins from flow potentials (time to an edge =
-/// (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed), bins crossed
-/// in full via the difference array of crossings.
+/// Add the occupation times of a flow segment a → b of duration dt in
+/// noise state si: partial first and last bins from flow potentials (time
+/// to an edge = (Φ(va) - Φ(edge)) / g'(v*), edge potentials precomputed),
+/// bins crossed in full via the difference array of crossings.
 #[inline]
-fn occupy<F, T: StateTables<F>, S: Occupation>(
-    tab: &T,
+fn occupy<F>(
+    tab: &Tables<F>,
     obs: &Observables,
-    sc: &mut S,
+    sc: &mut Scratch,
     si: usize,
     a: &FlowPoint,
     vb: f64,
@@ -864,11 +741,11 @@ fn occupy<F, T: StateTables<F>, S: Occupation>(
 ) {
     let (ka, kb) = (obs.bin_of(a.v), obs.bin_of(vb));
     if ka == kb {
-        sc.occ()[ka] += dt;
+        sc.occ[ka] += dt;
         return;
     }
-    let (pa, inv_k) = (a.phi, tab.inv_rate(si));
-    let phi = tab.phi_edges(si);
+    let (pa, inv_k) = (a.phi, tab.inv_rate[si]);
+    let phi = &tab.phi_edges[si];
     // Time to reach edge e (clamped into [0, dt] against rounding).
     let to = |e: usize| ((pa - phi[e]) * inv_k).clamp(0.0, dt);
     let (first, last, from, to_last) = if kb > ka {
@@ -876,13 +753,13 @@ fn occupy<F, T: StateTables<F>, S: Occupation>(
     } else {
         (kb + 1, ka, to(ka), to(kb + 1))
     };
-    sc.occ()[ka] += from;
+    sc.occ[ka] += from;
     if last > first {
-        let cross = sc.cross(si);
+        let cross = &mut sc.cross[si];
         cross[first] += 1;
         cross[last] -= 1;
     }
-    sc.occ()[kb] += dt - to_last;
+    sc.occ[kb] += dt - to_last;
 }
 
 /// Add the full bin crossings of one noise state to the occupation times
@@ -895,81 +772,6 @@ fn add_crossings(cross: &mut [i64], occ: &mut [f64], tau: &[f64]) {
         n += *c;
         *c = 0;
         *o += n as f64 * tau;
-    }
-}
-
-/// A particle's contribution to the observables, its crossings already in
-/// `occ`; `window` = t_max - burn_in.
-fn close_particle(p: &Lane, obs: &mut Observables, occ: &mut [f64], window: f64) {
-    obs.finish_particle(
-        p.int_v / window,
-        p.int_v2 / window,
-        occ,
-        window,
-        p.a.v,
-        p.msd,
-    );
-    obs.finish_atom(p.at_atom, window, p.a.v);
-    obs.record_final_position(p.x);
-    obs.steps += p.events;
-}
-
-/// One particle in flight.
-struct Lane {
-    rng: Rng,
-    /// Noise state (the paper's: 0 for +Sigma, 1 for -Sigma).
-    si: usize,
-    /// The start of the current segment.
-    a: FlowPoint,
-    t: f64,
-    x: f64,
-    /// Next grid time index.
-    k: usize,
-    int_v: f64,
-    int_v2: f64,
-    msd: f64,
-    /// Time in the window spent exactly at the law's atom.
-    at_atom: f64,
-    events: u64,
-    done: bool,
-    /// Inside a refractory period (v held at p.a.v until `hold_until`).
-    held: bool,
-    hold_until: f64,
-    /// The next periodic reset time (∞ without a periodic clock).
-    next_periodic: f64,
-}
-
-impl<F, N> StateTables<F> for Sampler<F, N> {
-    #[inline(always)]
-    fn seg(&self, si: usize) -> &Segments<F> {
-        &self.tab.segs[si]
-    }
-    #[inline(always)]
-    fn fixed_point(&self, si: usize) -> f64 {
-        self.tab.vs[si]
-    }
-    #[inline(always)]
-    fn inv_rate(&self, si: usize) -> f64 {
-        self.tab.inv_rate[si]
-    }
-    #[inline(always)]
-    fn phi_edges(&self, si: usize) -> &[f64] {
-        &self.tab.phi_edges[si]
-    }
-    #[inline(always)]
-    fn window(&self) -> (&[f64], f64) {
-        (&self.times, self.burn_in)
-    }
-}
-
-impl Occupation for Scratch {
-    #[inline(always)]
-    fn occ(&mut self) -> &mut [f64] {
-        &mut self.occ
-    }
-    #[inline(always)]
-    fn cross(&mut self, si: usize) -> &mut [i64] {
-        &mut self.cross[si]
     }
 }
 
