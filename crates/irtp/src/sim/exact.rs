@@ -33,7 +33,7 @@
 //! crossed in full contribute the precomputed flow time across the bin).
 //!
 //! A particle is one walk of the event-to-event kernel the first-passage
-//! and search samplers also run ([`passage`]: `Clocks::walk`) with this
+//! and search samplers also run (`passage`: `Clocks::walk`) with this
 //! sampler's observer (`Recorder`, the kernel's record mode: its own
 //! random stream, bit for bit). The noise's state space is a type
 //! parameter, dispatched once per run: the paper's two-state noise
