@@ -5,6 +5,9 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use irtp::model::drag::{Cubic, Linear, PotentialTable, Power, Tan, Tanh};
+use irtp::model::reset::periodic::Periodic;
+use irtp::model::reset::position::PositionReset;
+use irtp::model::reset::Schedule;
 use irtp::model::{Drag, FlowMap};
 use irtp::parallel::NoProgress;
 use irtp::sim::exact::{self, DeficitTable};
@@ -164,5 +167,65 @@ fn events_per_law(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, kernels, particles, events_per_law);
+/// Events per second of the exact sampler's one kernel (`Clocks::walk`
+/// with the simulation's recorder) under each modifier of the resetting
+/// rule, on the Fig. 2 workload (tan, Sigma = 3, lambda = 0.5): the
+/// paper's protocol (r = 2), a refractory period after each Poisson reset,
+/// a periodic clock, and a renewal clock with position resetting and a
+/// refractory period (events: flips, resets and, during a hold, the
+/// noise's jumps and the release).
+fn events_per_schedule(c: &mut Criterion) {
+    let mut g = c.benchmark_group("exact_events_schedule");
+    g.sample_size(10);
+    let refractory = Some("exp:mean=0.3".parse().unwrap());
+    let cases = [
+        ("plain", 2.0, Schedule::default()),
+        (
+            "refractory",
+            2.0,
+            Schedule {
+                refractory,
+                ..Schedule::default()
+            },
+        ),
+        (
+            "periodic",
+            0.0,
+            Schedule {
+                periodic: Some(Periodic { period: 0.5 }),
+                ..Schedule::default()
+            },
+        ),
+        (
+            "renewal_position_refractory",
+            0.0,
+            Schedule {
+                clock: Some("gamma:k=2,theta=0.25".parse().unwrap()),
+                position: Some(PositionReset { x: 0.0 }),
+                refractory,
+                ..Schedule::default()
+            },
+        ),
+    ];
+    for (name, r, schedule) in cases {
+        let p = Params::new(DragLaw::Tan, 3.0, 0.5, r, 0.0)
+            .and_then(|p| p.with_schedule(schedule))
+            .unwrap();
+        let spec = fig2_workload();
+        let events = exact::simulate(&p, &spec, &NoProgress).unwrap().steps;
+        g.throughput(Throughput::Elements(events));
+        g.bench_function(name, |b| {
+            b.iter(|| black_box(exact::simulate(&p, &spec, &NoProgress).unwrap().steps))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    kernels,
+    particles,
+    events_per_law,
+    events_per_schedule
+);
 criterion_main!(benches);
