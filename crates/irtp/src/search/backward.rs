@@ -21,10 +21,11 @@
 //!
 //! An exponential refractory period of mean M with a point reset velocity
 //! (docs/equations.md, (S13)) adds a held value T_h(x, s) per x node and
-//! noise state: `v_r ∂x T_h + Σ_s' Q_ss' (T_h(s') - T_h(s)) + (T(x, v_r, s)
-//! - T_h(s)) / M = -1` (x moves at v_r while held, resets are off, the
-//! noise jumps on), upwinded at v_r (algebraic for v_r = 0); a reset leads
-//! to T_h at x_r (full resetting) or at x, not to (x, v_r).
+//! noise state:
+//! `v_r ∂x T_h + Σ_s' Q_ss' (T_h(s') - T_h(s)) + (T(x, v_r, s) - T_h(s)) / M = -1`
+//! (x moves at v_r while held, resets are off, the noise jumps on),
+//! upwinded at v_r (algebraic for v_r = 0); a reset leads to T_h at x_r
+//! (full resetting) or at x, not to (x, v_r).
 //!
 //! Discretisation: first-order upwind in x and v on the mesh of
 //! `search::mesh` (a Markov generator: the matrix `r I - A` is an M-matrix,
@@ -162,7 +163,8 @@ pub struct MeshInfo {
     pub nodes_x: usize,
     /// v nodes of the finest mesh solved.
     pub nodes_v: usize,
-    /// Unknowns of the finest mesh (2 n_x n_v).
+    /// Unknowns of the finest mesh (N n_x n_v for N noise states; N n_x
+    /// (n_v + 1) with an exponential refractory period).
     pub unknowns: usize,
     /// Sub- and super-diagonals of its band matrix.
     pub band: usize,
