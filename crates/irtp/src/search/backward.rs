@@ -555,7 +555,9 @@ pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
 
 /// What the size of a search mesh grows with, by the library's names: the
 /// mesh options, the target (its distance sets the cell size), the reset
-/// rate and the clock (the length of the far stretch), then `extra`.
+/// rate and the clock (the length of the far stretch), an exponential
+/// refractory period (its mean lengthens the far stretch; its held
+/// unknowns add a slot per column), then `extra`.
 pub fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'static str> {
     let mut d = vec!["cells_x", "cells_v"];
     d.push(match problem.target() {
@@ -564,6 +566,9 @@ pub fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'st
     });
     d.push("rate");
     d.extend(problem.params().schedule().cost_drivers());
+    if let Some(Refractory::Exp { .. }) = problem.params().schedule().refractory {
+        d.push("refractory");
+    }
     d.extend_from_slice(extra);
     d
 }

@@ -303,3 +303,20 @@ fn a_random_target_with_a_hold_is_refused_naming_reset_to() {
     let e = distribution::solve(&pr, &opts).unwrap_err();
     assert_eq!(e.parameter(), Some("reset_to"), "{e}");
 }
+
+/// A solve above the budget names the refractory period among what the
+/// mesh grows with (its mean lengthens the far stretch of a level).
+#[test]
+fn a_costly_held_solve_names_the_refractory_period() {
+    let pr = Case::paper(DragLaw::Linear, "exp:mean=0.5").problem();
+    let tiny = BackwardOptions {
+        max_work: 1e3,
+        ..BackwardOptions::with_cells(16, 8)
+    };
+    match solve(&pr, &tiny).unwrap_err() {
+        irtp::Error::TooCostly { drivers, .. } => {
+            assert!(drivers.contains(&"refractory"), "{drivers:?}")
+        }
+        other => panic!("{other}"),
+    }
+}
