@@ -614,14 +614,6 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
         ),
         (
             [
-                &["mfpt", "--method", "backward", "--refractory", "exp:mean=1"][..],
-                &search,
-            ]
-            .concat(),
-            "--refractory",
-        ),
-        (
-            [
                 &["mfpt", "--method", "backward", "--refractory", "fixed:t=1"][..],
                 &search,
             ]
@@ -630,7 +622,7 @@ fn refused_combinations_are_one_short_line_naming_the_flag() {
         ),
         (
             [
-                &["mfpt", "distribution", "--refractory", "exp:mean=1"][..],
+                &["mfpt", "distribution", "--refractory", "fixed:t=1"][..],
                 &search,
             ]
             .concat(),

@@ -396,6 +396,8 @@ pub fn supports(solver: Solver, feature: Feature) -> bool {
                 | S::FptDistribution
                 | S::SearchExact
                 | S::SearchEuler
+                | S::SearchBackward
+                | S::SearchDistribution
                 | S::FpStationary
                 | S::FpTransient
                 | S::FpMsd

@@ -19,6 +19,14 @@
 //! from the stationary law π; the paper's noise: (tau+ + tau-)/2). Its
 //! per-state values are `tau_states` (`tau_plus`, `tau_minus` are NaN).
 //!
+//! An exponential refractory period of mean M with a point reset velocity
+//! (docs/equations.md, (S13)) adds a held value T_h(x, s) per x node and
+//! noise state:
+//! `v_r ∂x T_h + Σ_s' Q_ss' (T_h(s') - T_h(s)) + (T(x, v_r, s) - T_h(s)) / M = -1`
+//! (x moves at v_r while held, resets are off, the noise jumps on),
+//! upwinded at v_r (algebraic for v_r = 0); a reset leads to T_h at x_r
+//! (full resetting) or at x, not to (x, v_r).
+//!
 //! Discretisation: first-order upwind in x and v on the mesh of
 //! `search::mesh` (a Markov generator: the matrix `r I - A` is an M-matrix,
 //! so T ≥ 0 and the mean speed bound T ≥ distance / v_u hold exactly on
@@ -58,10 +66,10 @@
 //! # Ok::<(), irtp::Error>(())
 //! ```
 
-use super::mesh::{Generator, Layout, LocalReset, Mesh, Noise, Side};
+use super::mesh::{Generator, Hold, Layout, LocalReset, Mesh, Noise, Side};
 use super::{yes, PositionTarget, SearchProblem};
 use crate::error::{Error, Result};
-use crate::model::reset::{NoiseAtReset, Reset};
+use crate::model::reset::{NoiseAtReset, Refractory, Reset};
 use crate::model::Drag;
 use crate::numerics::band::Band;
 use crate::numerics::bordered::Capacitance;
@@ -155,7 +163,8 @@ pub struct MeshInfo {
     pub nodes_x: usize,
     /// v nodes of the finest mesh solved.
     pub nodes_v: usize,
-    /// Unknowns of the finest mesh (2 n_x n_v).
+    /// Unknowns of the finest mesh (N n_x n_v for N noise states; N n_x
+    /// (n_v + 1) with an exponential refractory period).
     pub unknowns: usize,
     /// Sub- and super-diagonals of its band matrix.
     pub band: usize,
@@ -191,8 +200,10 @@ pub struct SearchSolution {
     /// (0 without truncation): a bound on the truncation error of T_X
     /// (the far field decays at least like e^{-r X / v_u}).
     pub truncation_error: f64,
-    /// T(x_r, v_r, ±) for full resetting (extrapolated like tau); None for
-    /// a noise model other than the paper's (see `reset_states`).
+    /// T(x_r, v_r, ±) for full resetting (extrapolated like tau; with an
+    /// exponential refractory period the held T_h(x_r, ±) at the start of
+    /// a hold, (S13)); None for a noise model other than the paper's (see
+    /// `reset_states`).
     pub reset_values: Option<[f64; 2]>,
     /// T(x_r, v_r, s) for each state s of a noise model other than the
     /// paper's with full resetting; absent otherwise.
@@ -304,14 +315,17 @@ pub(crate) struct Setup {
     pub near: Vec<f64>,
     /// Distance from x0 to the nearest exit.
     pub distance: f64,
+    /// An exponential refractory hold at the point target v_r ((S13)), or
+    /// None.
+    pub hold: Option<Hold>,
 }
 
 impl Setup {
-    /// Check what the search solvers run: the noise the method runs
-    /// ([`super::noise_gate`]); no refractory period; a finite
-    /// mean. `renewal`: full resetting required, any
-    /// clock (the renewal route takes its waiting-time law separately);
-    /// otherwise a Poisson clock only.
+    /// Check what the search solvers run: the noise and the protocol the
+    /// method runs ([`crate::capability::check`]; an exponential refractory
+    /// period with a point target only); a finite mean. `renewal`: full
+    /// resetting required, any clock (the renewal route takes its
+    /// waiting-time law separately); otherwise a Poisson clock only.
     pub fn new(problem: &SearchProblem, method: &str, renewal: bool) -> Result<Setup> {
         // The noise and the protocol the method runs (crate::capability).
         match super::solver_of(method) {
@@ -337,6 +351,13 @@ impl Setup {
             (true, None) => Resetting::Velocity { v: vr },
         };
         refuse_infinite(problem, resetting)?;
+        let hold = match s.refractory {
+            Some(Refractory::Exp { mean }) => Some(Hold {
+                kappa: 1.0 / mean,
+                v: p.point_target(&format!("an exponential refractory period in {method}"))?,
+            }),
+            _ => None,
+        };
         let noise = Noise::of(&p, method)?;
         let n = noise.states();
         let mix = match p.reset().noise() {
@@ -369,6 +390,7 @@ impl Setup {
             sides,
             near,
             distance,
+            hold,
         })
     }
 
@@ -408,7 +430,7 @@ impl Setup {
             None => p.rate(),
         };
         let scale = (p.v_upper() / (re * (2.0 * self.noise.rate + re)).sqrt()).min(extent);
-        Layout::new(
+        let mut layout = Layout::new(
             p,
             self.near.clone(),
             self.sides,
@@ -417,7 +439,9 @@ impl Setup {
             cells,
             &self.v_points(),
             self.noise.states(),
-        )
+        );
+        layout.hold = self.hold;
+        layout
     }
 }
 
@@ -454,9 +478,14 @@ fn refuse_infinite(problem: &SearchProblem, resetting: Resetting) -> Result<()> 
     Ok(())
 }
 
-/// The truncation distance X = v_u ln(1/tol) / r (Poisson clock).
+/// The truncation distance X = v_u ln(1/tol) / r (Poisson clock); with
+/// an exponential refractory period of mean M, v_u ln(1/tol) (1/r + M):
+/// x also moves during the hold that follows a reset.
 fn extent(p: &Params, tol: f64) -> f64 {
-    p.v_upper() * (1.0 / tol).ln() / p.rate()
+    match p.schedule().refractory {
+        Some(Refractory::Exp { mean }) => p.v_upper() * (1.0 / tol).ln() * (1.0 / p.rate() + mean),
+        _ => p.v_upper() * (1.0 / tol).ln() / p.rate(),
+    }
 }
 
 /// Estimated cost of [`solve`]: the band LU of each mesh (n kl (2 kl + ku)
@@ -501,7 +530,8 @@ pub(crate) fn build(plans: &[Plan]) -> Vec<Mesh> {
 
 /// Cost of factorising each mesh of `plans` and `solves` solves with each,
 /// in f64 from the node counts ([`Layout::nodes`]): N n_x n_v unknowns,
-/// N n_v = kl sub- and super-diagonals (N noise states). A solve is 2 (3 kl + 1) operations
+/// N n_v = kl sub- and super-diagonals (N noise states; n_v + 1 slots
+/// per column with a hold). A solve is 2 (3 kl + 1) operations
 /// a row; the factorisation does 2 (kl + ku) = 4 kl a row for each nonzero
 /// multiplier, and about 0.4 kl of a row's kl multipliers are nonzero
 /// (upwind rows reach back a column only where v < 0; counted by
@@ -514,6 +544,7 @@ pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
     };
     for (layout, k) in plans {
         let (nx, nv) = layout.nodes(*k);
+        let nv = nv + f64::from(u8::from(layout.hold.is_some()));
         let ns = layout.states as f64;
         let (n, kl) = (ns * nx * nv, ns * nv);
         c.work += 1.6 * n * kl * kl + solves * n * 2.0 * (3.0 * kl + 1.0);
@@ -524,7 +555,9 @@ pub(crate) fn cost_of(plans: &[Plan], solves: f64) -> Cost {
 
 /// What the size of a search mesh grows with, by the library's names: the
 /// mesh options, the target (its distance sets the cell size), the reset
-/// rate and the clock (the length of the far stretch), then `extra`.
+/// rate and the clock (the length of the far stretch), an exponential
+/// refractory period (its mean lengthens the far stretch; its held
+/// unknowns add a slot per column), then `extra`.
 pub fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'static str> {
     let mut d = vec!["cells_x", "cells_v"];
     d.push(match problem.target() {
@@ -533,6 +566,9 @@ pub fn mesh_drivers(problem: &SearchProblem, extra: &[&'static str]) -> Vec<&'st
     });
     d.push("rate");
     d.extend(problem.params().schedule().cost_drivers());
+    if let Some(Refractory::Exp { .. }) = problem.params().schedule().refractory {
+        d.push("refractory");
+    }
     d.extend_from_slice(extra);
     d
 }
@@ -587,7 +623,7 @@ pub(crate) fn meshes(setup: &Setup, opts: &BackwardOptions) -> Vec<Plan> {
 /// Solve for the mean first-passage time at (x0, v0), tau for each
 /// starting noise state and their mean, with the mesh and truncation
 /// error estimates (module docs). Refuses (typed) periodic clocks (see
-/// [`super::renewal::solve`]), refractory periods, an
+/// [`super::renewal::solve`]), a fixed refractory period, an
 /// infinite mean (one-sided level without full resetting), and a solve
 /// above the budgets of `opts` ([`estimate`]).
 pub fn solve(problem: &SearchProblem, opts: &BackwardOptions) -> Result<SearchSolution> {
@@ -935,7 +971,18 @@ impl NodeAnswer {
 
 /// Factorise `r I - A` (identity rows on the target).
 pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str) -> Result<Band> {
-    let mut band = g.shifted(alpha, beta);
+    factor_held(g, (alpha, alpha), beta, method)
+}
+
+/// [`factor`] with `alpha.1` in place of `alpha.0` on the held rows
+/// ([`Generator::shifted_held`]).
+pub(crate) fn factor_held(
+    g: &Generator,
+    alpha: (f64, f64),
+    beta: f64,
+    method: &'static str,
+) -> Result<Band> {
+    let mut band = g.shifted_held(alpha.0, alpha.1, beta);
     band.factor().map_err(|e| {
         let why = "the upwind matrix should be a non-singular M-matrix";
         e.into_error(method, format!("{e} ({why})"))
@@ -951,7 +998,9 @@ pub(crate) fn factor(g: &Generator, alpha: f64, beta: f64, method: &'static str)
 /// reset comes first, into state s'), its escape chances
 /// e_s = Σ_j w_j h(x_r, v_j, s) from the hitting chance h solved for
 /// directly (no cancellation when it is small); one response W_s' per
-/// noise state s'.
+/// noise state s'. With an exponential refractory period ((S13)) a reset
+/// starts a hold: R_s is the held unknown T_h(x_r, s), the held rows carry
+/// no reset (neither the loss r nor a response's source).
 fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     const METHOD: &str = "the backward solver (--method backward)";
     let p = &setup.params;
@@ -966,7 +1015,7 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     let g = Generator::assemble(mesh, p, &setup.noise, local.as_ref());
     let full = matches!(setup.resetting, Resetting::Full { .. });
     let r = if full { p.rate() } else { 0.0 };
-    let band = factor(&g, r, 1.0, METHOD)?;
+    let band = factor_held(&g, (r, 0.0), 1.0, METHOD)?;
     let fill = |f: &dyn Fn(usize) -> f64| -> Vec<f64> {
         (0..g.dim())
             .map(|k| if g.absorbing[k] { 0.0 } else { f(k) })
@@ -978,16 +1027,16 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     let reset = match setup.resetting {
         Resetting::Full { x, v } => {
             let ir = mesh.node(x, v)?.0;
-            let weights = mesh.target_weights(p)?;
-            let at_reset = |f: &[f64], s: usize| -> f64 {
-                weights
-                    .iter()
-                    .map(|&(j, w)| w * f[mesh.idx(ir, j, s)])
-                    .sum()
-            };
+            let weights = reset_weights(mesh, p, ir)?;
+            let at_reset =
+                |f: &[f64], s: usize| -> f64 { weights.iter().map(|&(k, w)| w * f[k + s]).sum() };
             let w: Vec<Vec<f64>> = (0..ns)
                 .map(|s2| {
-                    let mut w = fill(&|k| r * setup.mix[k % ns][s2]);
+                    let source = |k: usize| match g.held[k] {
+                        true => 0.0,
+                        false => r * setup.mix[k % ns][s2],
+                    };
+                    let mut w = fill(&source);
                     band.solve(&mut w);
                     w
                 })
@@ -1014,6 +1063,20 @@ fn solve_on(setup: &Setup, mesh: &Mesh) -> Result<NodeAnswer> {
     verify(&t, &tau, setup, METHOD)?;
     let pi = setup.noise.pi.clone();
     Ok(NodeAnswer { tau, reset, pi })
+}
+
+/// Where a full reset lands, as (unknown of state 0, weight) pairs (the
+/// unknown of state s is that plus s): the held unknown at x_r with a hold
+/// ((S13)), else the target's node weights at (x_r, v_j).
+pub(crate) fn reset_weights(mesh: &Mesh, p: &Params, ir: usize) -> Result<Vec<(usize, f64)>> {
+    if mesh.hold.is_some() {
+        return Ok(vec![(mesh.held(ir, 0), 1.0)]);
+    }
+    let weights = mesh.target_weights(p)?;
+    Ok(weights
+        .iter()
+        .map(|&(j, w)| (mesh.idx(ir, j, 0), w))
+        .collect())
 }
 
 /// The reset values R solving R = M R + u (the renewal at the reset point,

@@ -25,15 +25,21 @@
 //! checked on every run: 0 ≤ S ≤ 1 and S non-increasing (to 1e-9), and on
 //! the extrapolated curve within its error estimate.
 //!
-//! Refused by name: periodic clocks and refractory periods (the equation is
-//! not autonomous there; the exact sampler runs them), a one-sided level
+//! An exponential refractory period is Markov: the held survival
+//! H(x, s, t) joins S on the mesh ((S14), the held unknowns of (S13)), a
+//! reset leads to it and it releases to S(x, v_r, s, t) at rate 1/M.
+//!
+//! Refused by name: periodic clocks and a fixed refractory period (the
+//! equation is not autonomous there; the exact sampler runs them), a
+//! random reset target with an exponential refractory period, a one-sided level
 //! with velocity-only resetting or none: x is unbounded on the far side and
 //! S(t) there needs the whole half-line (the mesh of the stationary solver
 //! truncates it only because resets to x_r bound the distance travelled;
 //! the exact sampler gives S(t) and its tail).
 
 use super::backward::{
-    build, check_budget, cost_of, factor, mesh_drivers, mesh_info, meshes, BackwardOptions,
+    build, check_budget, cost_of, factor_held, mesh_drivers, mesh_info, meshes, reset_weights,
+    BackwardOptions,
 };
 use super::backward::{truncation_factor, Cost, MeshInfo, Resetting, Setup};
 use super::mesh::{Generator, LocalReset, Mesh};
@@ -293,7 +299,9 @@ fn check_curve(s: &[f64], tol: &[f64], method: &'static str) -> Result<()> {
 /// The operator B of the survival equation on one mesh: the generator A
 /// (with velocity-only resetting inside it) and, with full resetting, the
 /// reset term `r [Σ_s'' mix(s, s'') R_s''(S) - S]`, R_s'' the weighed reset
-/// point values (N noise states).
+/// point values (N noise states); with an exponential refractory period
+/// R_s'' is the held survival at x_r and the held rows carry no reset
+/// term ((S14)).
 struct Operator<'a> {
     g: &'a Generator,
     /// Full-resetting rate (0 otherwise).
@@ -325,7 +333,7 @@ impl Operator<'_> {
             let rv = self.reset_values(u);
             let ns = self.mix.len();
             for (k, o) in out.iter_mut().enumerate() {
-                if !self.g.absorbing[k] {
+                if !self.g.absorbing[k] && !self.g.held[k] {
                     let m = &self.mix[k % ns];
                     let back = (1..ns).fold(m[0] * rv[0], |a, s| a + m[s] * rv[s]);
                     *o += self.r * (back - u[k]);
@@ -338,7 +346,7 @@ impl Operator<'_> {
         let ns = self.mix.len();
         (0..self.g.dim())
             .map(|k| {
-                if self.g.absorbing[k] {
+                if self.g.absorbing[k] || self.g.held[k] {
                     0.0
                 } else {
                     c * self.mix[k % ns][s2]
@@ -413,8 +421,8 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
     let (r, reset) = match setup.resetting {
         Resetting::Full { x, v } => {
             let ir = mesh.node(x, v)?.0;
-            let w = mesh.target_weights(p)?;
-            let at = |s| w.iter().map(|&(j, wj)| (mesh.idx(ir, j, s), wj)).collect();
+            let w = reset_weights(mesh, p, ir)?;
+            let at = |s| w.iter().map(|&(k, wj)| (k + s, wj)).collect();
             (p.rate(), (0..mesh.states).map(at).collect())
         }
         _ => (0.0, vec![]),
@@ -427,8 +435,9 @@ fn run(setup: &Setup, mesh: &Mesh, t_max: f64, steps: usize) -> Result<Curve> {
     };
     let stepper = Stepper::new(t_max / steps as f64);
     let d = stepper.d();
-    // (1 + d r) I - d A, and the rank-N term -d r U Rᵀ of the reset values.
-    let band: Band = factor(&g, 1.0 + d * r, d, METHOD)?;
+    // (1 + d r) I - d A (I - d A on the held rows: no reset acts during a
+    // hold), and the rank-N term -d r U Rᵀ of the reset values.
+    let band: Band = factor_held(&g, (1.0 + d * r, 1.0), d, METHOD)?;
     let base = |y: &mut [f64]| band.solve(y);
     let coupling = match (r > 0.0, mesh.states) {
         (false, _) => Coupling::None,

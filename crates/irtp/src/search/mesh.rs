@@ -19,6 +19,10 @@
 //! a = 0 at v = 0) has its drift a_s - g(v) change sign there: v*_s is a
 //! node (a breakpoint of the layout), so each row is upwinded by the sign
 //! of its own node's drift and no cell straddles a fixed point.
+//!
+//! An exponential refractory hold (docs/equations.md, (S13)) adds N held
+//! unknowns to each x-column after its (v_j, s) ones: N (n_v + 1) sub- and
+//! super-diagonals. The held velocity v_r is a v node.
 
 use crate::error::{Error, Result};
 use crate::model::reset::Reset;
@@ -54,6 +58,20 @@ pub(crate) struct Layout {
     pub vc: Vec<usize>,
     /// Noise states N: the unknowns per (x, v) node.
     pub states: usize,
+    /// An exponential refractory hold at the reset velocity (one held
+    /// unknown per noise state in each x-column), or None.
+    pub hold: Option<Hold>,
+}
+
+/// An exponential refractory hold (docs/equations.md, (S13)): after a
+/// reset the velocity is held at `v` for an Exp time of rate `kappa`
+/// (1/mean), x moving at `v` and the noise jumping on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Hold {
+    /// The release rate κ = 1/M.
+    pub kappa: f64,
+    /// The held velocity v_r (a v node).
+    pub v: f64,
 }
 
 /// The geometric far stretch of a truncated side.
@@ -135,6 +153,7 @@ impl Layout {
             vb,
             vc,
             states,
+            hold: None,
         }
     }
 
@@ -204,6 +223,9 @@ pub(crate) struct Mesh {
     pub sides: (Side, Side),
     /// Noise states N per node.
     pub states: usize,
+    /// The hold and the index of its velocity's node, or None: then each
+    /// x-column has one more slot after its v nodes, the held unknowns.
+    pub hold: Option<(Hold, usize)>,
 }
 
 impl Mesh {
@@ -222,29 +244,49 @@ impl Mesh {
             }
         }
         let v = piecewise(&layout.vb, &layout.vc, k);
+        // The held velocity is a breakpoint of the layout, hence a node.
+        let hold = layout.hold.map(|h| {
+            let j = v.iter().position(|&z| z == h.v);
+            (h, j.expect("the held velocity is a v breakpoint"))
+        });
         Mesh {
             x,
             v,
             sides: layout.sides,
             states: layout.states,
+            hold,
         }
     }
 
-    /// Number of unknowns, N n_x n_v.
-    pub fn unknowns(&self) -> usize {
-        self.states * self.x.len() * self.v.len()
+    /// Slots per x-column: the v nodes, and one more with a hold.
+    #[inline]
+    fn slots(&self) -> usize {
+        self.v.len() + usize::from(self.hold.is_some())
     }
 
-    /// Sub- (and super-) diagonals of the generator: N n_v.
+    /// Number of unknowns, N n_x n_v (N n_x (n_v + 1) with a hold).
+    pub fn unknowns(&self) -> usize {
+        self.states * self.x.len() * self.slots()
+    }
+
+    /// Sub- (and super-) diagonals of the generator: N n_v (N (n_v + 1)
+    /// with a hold).
     pub fn band(&self) -> usize {
-        self.states * self.v.len()
+        self.states * self.slots()
     }
 
     /// Index of node (x_i, v_j) in state s (the paper's noise: 0 is
     /// +Sigma, 1 is -Sigma).
     #[inline]
     pub fn idx(&self, i: usize, j: usize, s: usize) -> usize {
-        (i * self.v.len() + j) * self.states + s
+        (i * self.slots() + j) * self.states + s
+    }
+
+    /// Index of the held unknown at x_i in state s (after the column's v
+    /// nodes); meaningful only with a hold.
+    #[inline]
+    pub fn held(&self, i: usize, s: usize) -> usize {
+        (i * self.slots() + self.v.len()) * self.states + s
     }
 
     /// Whether node (i, j) lies on the target with a velocity pointing out:
@@ -375,6 +417,9 @@ pub(crate) struct Generator {
     val: Vec<f64>,
     /// Per unknown: whether T = 0 is imposed there.
     pub absorbing: Vec<bool>,
+    /// Per unknown: whether it is held (a refractory hold's unknown: no
+    /// resets act on it).
+    pub held: Vec<bool>,
     kl: usize,
 }
 
@@ -382,7 +427,8 @@ impl Generator {
     /// Assemble the reset-free generator of docs/equations.md (search
     /// section) on `mesh`: upwind x- and v-transport, the noise's jumps
     /// (rates Q_ss'; the paper's flips at rate lambda), and a velocity-only
-    /// reset if `local` is given.
+    /// reset if `local` is given (into the held unknowns with a hold).
+    /// With a hold, each column's held rows follow its v nodes ((S13)).
     pub fn assemble(
         mesh: &Mesh,
         p: &Params,
@@ -395,6 +441,7 @@ impl Generator {
             col: Vec::with_capacity(6 * n),
             val: Vec::with_capacity(6 * n),
             absorbing: vec![false; n],
+            held: vec![false; n],
             kl: mesh.band(),
         };
         g.start.push(0);
@@ -410,6 +457,20 @@ impl Generator {
                     }
                     g.push_row(&row);
                 }
+            }
+            let Some((hold, jr)) = mesh.hold else {
+                continue;
+            };
+            for s in 0..mesh.states {
+                row.clear();
+                let k = mesh.held(i, s);
+                g.held[k] = true;
+                if mesh.absorbing(i, jr) {
+                    g.absorbing[k] = true;
+                } else {
+                    held_row(mesh, noise, (hold, jr), (i, s), &mut row);
+                }
+                g.push_row(&row);
             }
         }
         g
@@ -428,11 +489,13 @@ impl Generator {
         self.absorbing.len()
     }
 
-    /// The band matrix `alpha I - beta A` (identity rows where absorbing).
+    /// The band matrix `alpha I - beta A` (identity rows where absorbing),
+    /// with `held_alpha` in place of `alpha` on the held rows (a full
+    /// reset's loss rate is in `alpha`, and no reset acts during a hold).
     /// A stop request (SIGTERM) leaves it unfilled: the factorisation that
     /// follows polls the request at its first row and discards the run, so
     /// filling a large band (page faults under load) does not delay the stop.
-    pub fn shifted(&self, alpha: f64, beta: f64) -> Band {
+    pub fn shifted_held(&self, alpha: f64, held_alpha: f64, beta: f64) -> Band {
         let n = self.dim();
         let mut b = Band::new(n, self.kl, self.kl);
         for k in 0..n {
@@ -443,7 +506,7 @@ impl Generator {
                 b.set(k, k, 1.0);
                 continue;
             }
-            b.set(k, k, alpha);
+            b.set(k, k, if self.held[k] { held_alpha } else { alpha });
             for e in self.start[k]..self.start[k + 1] {
                 let c = self.col[e];
                 b.set(k, c, b.get(k, c) - beta * self.val[e]);
@@ -501,10 +564,48 @@ fn upwind_row(
     }
     if let Some(r) = local {
         for t in 0..mesh.states {
+            if mesh.hold.is_some() {
+                // The reset starts a hold in state t ((S13)).
+                if r.mix[s][t] > 0.0 {
+                    add(row, mesh.held(i, t), r.rate * r.mix[s][t]);
+                }
+                continue;
+            }
             for &(jr, w) in r.target.iter().filter(|_| r.mix[s][t] > 0.0) {
                 add(row, mesh.idx(i, jr, t), r.rate * r.mix[s][t] * w);
             }
         }
     }
     row.push((k, diag));
+}
+
+/// The entries of the held row (i, s) ((S13)): transport in x at the held
+/// velocity v_r, upwind (none for v_r = 0: the row is algebraic in x), the
+/// noise's jumps s → s' between held unknowns at rate Q_ss', and the
+/// release at rate κ to the node (x_i, v_r) in state s; the diagonal last.
+fn held_row(
+    mesh: &Mesh,
+    noise: &Noise,
+    (hold, jr): (Hold, usize),
+    (i, s): (usize, usize),
+    row: &mut Vec<(usize, f64)>,
+) {
+    let mut diag = 0.0;
+    let mut add = |row: &mut Vec<(usize, f64)>, c: usize, rate: f64| {
+        row.push((c, rate));
+        diag -= rate;
+    };
+    let v = hold.v;
+    if v > 0.0 && i + 1 < mesh.x.len() {
+        add(row, mesh.held(i + 1, s), v / (mesh.x[i + 1] - mesh.x[i]));
+    } else if v < 0.0 && i > 0 {
+        add(row, mesh.held(i - 1, s), -v / (mesh.x[i] - mesh.x[i - 1]));
+    }
+    for (t, &q) in noise.q[s].iter().enumerate() {
+        if t != s && q > 0.0 {
+            add(row, mesh.held(i, t), q);
+        }
+    }
+    add(row, mesh.idx(i, jr, s), hold.kappa);
+    row.push((mesh.held(i, s), diag));
 }

@@ -253,7 +253,7 @@ impl RateObjective for SearchTarget<'_> {
 /// Refuse a search whose rate cannot be optimised: velocity-only resetting
 /// with a one-sided level (tau infinite at every r), named by the flag
 /// that makes it finite; then the backward solver's own refusals at the
-/// rates of `range` (a periodic clock, a refractory period).
+/// rates of `range` (a periodic clock, a fixed refractory period).
 pub fn check_optimizable(base: &SearchProblem, range: &RateRange) -> Result<()> {
     range.validate()?;
     let full = base.params().schedule().position.is_some();

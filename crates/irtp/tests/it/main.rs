@@ -49,6 +49,7 @@ mod search_cross;
 mod search_errors;
 mod search_euler_refractory;
 mod search_exact;
+mod search_hold;
 mod search_methods;
 mod search_noise;
 mod search_noise_renewal;

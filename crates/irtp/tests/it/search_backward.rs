@@ -416,7 +416,7 @@ fn refusals_name_the_parameter() {
     );
     let refractory = Params::new(DragLaw::Linear, 1.0, 0.5, 1.0, 0.0)
         .unwrap()
-        .with_schedule(Schedule::parse(None, Some(0.0), Some("exp:mean=0.5")).unwrap())
+        .with_schedule(Schedule::parse(None, Some(0.0), Some("fixed:t=0.5")).unwrap())
         .unwrap();
     let pr = SearchProblem::new(refractory, 0.0, 0.0, level).unwrap();
     assert_eq!(
