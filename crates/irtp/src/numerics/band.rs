@@ -48,16 +48,23 @@ thread_local! {
 /// meshes come in a few sizes, each factored and dropped before the next.
 const SPARES: usize = 2;
 
-/// Zeroed storage of `len` values: the smallest spare that holds them
-/// without being more than twice as large (a far larger one stays spare
-/// for its own size), else a fresh allocation.
+/// Zeroed storage of `len` values: the smallest spare that holds them,
+/// else a fresh allocation, the spares (all too small) freed first. A
+/// thread so holds, besides its live matrices, at most [`SPARES`] storages
+/// no larger than the largest matrix it has built.
 fn storage(len: usize) -> Vec<f64> {
     let spare = SPARE.try_with(|s| {
         let mut s = s.try_borrow_mut().ok()?;
-        let i = (0..s.len())
-            .filter(|&i| s[i].capacity() >= len && s[i].capacity() <= 2 * len.max(1))
-            .min_by_key(|&i| s[i].capacity())?;
-        Some(s.swap_remove(i))
+        let fits = (0..s.len())
+            .filter(|&i| s[i].capacity() >= len)
+            .min_by_key(|&i| s[i].capacity());
+        match fits {
+            Some(i) => Some(s.swap_remove(i)),
+            None => {
+                s.clear();
+                None
+            }
+        }
     });
     match spare.ok().flatten() {
         Some(mut a) => {
@@ -384,9 +391,10 @@ mod tests {
 
     /// A matrix built in a dropped one's storage (its LU factors, the
     /// fill included) holds what one built fresh holds, to the bit; a
-    /// storage far larger than needed is not taken.
+    /// smaller matrix takes a spare too, a larger one frees the spares.
     #[test]
     fn reused_storage_is_zeroed() {
+        let spares = || SPARE.with(|s| s.borrow().len());
         let (mut first, _) = matrix(30, 2, 2, 0.5);
         first.factor().unwrap();
         let at = first.a.as_ptr();
@@ -402,8 +410,14 @@ mod tests {
         }
         assert_eq!(band.a, fresh.a);
         drop((band, fresh));
+        assert_eq!(spares(), 2);
         let small = Band::new(3, 1, 1);
-        assert!(small.a.capacity() < 30 * 7 && small.a.iter().all(|&x| x == 0.0));
+        assert!(small.a.len() == 12 && small.a.iter().all(|&x| x == 0.0));
+        assert_eq!(spares(), 1);
+        let large = Band::new(100, 2, 2);
+        assert_eq!(spares(), 0);
+        drop((small, large));
+        assert_eq!(spares(), 2);
     }
 
     #[test]

@@ -403,24 +403,25 @@ pub fn locate_solves(range: &RateRange) -> f64 {
 
 /// The estimated work of a rate optimisation whose grid rates are
 /// screened first ([`SearchTarget`]): `screens` (the screening solves',
-/// [`screen_work`]); the grid's full solves at half the sum of `grid`
-/// (the screen leaves out the rates far from r*, where it can tell them
-/// apart, and none where its meshes are not asymptotic); the solves
-/// locating r* ([`locate_solves`]) and the checked solve at the optimum
-/// at the mean of the median and the upper quartile of the grid's costs
-/// (r* is not known before the grid is solved); `at_zero` twice (as
-/// [`total_work`]). Calibrated on the cost tests (a 9-rate grid, r* among
-/// the dear rates, little screened) and the defaults of `mfpt optimize
-/// --xt 2`: within 3× of the work counted both ways.
+/// [`screen_work`]); the solves locating r* ([`locate_solves`]) and the
+/// checked solve at the optimum, each at the mean of the median and the
+/// upper quartile of the grid's costs (r* is not known before the grid is
+/// solved); the grid's full solves at half the sum of `grid`, each rate's
+/// cost capped at that per-solve cost (the screen leaves out the rates far
+/// from r*, where it can tell them apart, and none where its meshes are
+/// not asymptotic; the dearest rates, the smallest with the longest
+/// truncated domains, were far from r* at the defaults of `mfpt optimize
+/// --xt 2`, whose grid sums to 4.2e10 operations and whose whole run
+/// counted 8.1e9); `at_zero` twice (as [`total_work`]). Calibrated on the
+/// cost tests (a 9-rate grid, r* among the dear rates, little screened)
+/// and those defaults: within 3× of the work counted both ways.
 pub fn screened_total_work(range: &RateRange, grid: &[f64], at_zero: f64, screens: f64) -> f64 {
     let mut works = grid.to_vec();
     works.sort_by(f64::total_cmp);
     let at = |q: usize| works.get(q * works.len() / 4).copied().unwrap_or(0.0);
     let per_solve = 0.5 * (at(2) + at(3));
-    screens
-        + 0.5 * works.iter().sum::<f64>()
-        + (locate_solves(range) + 1.0) * per_solve
-        + 2.0 * at_zero
+    let full: f64 = works.iter().map(|w| w.min(per_solve)).sum();
+    screens + 0.5 * full + (locate_solves(range) + 1.0) * per_solve + 2.0 * at_zero
 }
 
 /// The estimated work of [`optimize_rate`]: [`screened_total_work`] of
