@@ -213,8 +213,9 @@ pub trait RateObjective: Sync {
     }
     /// How r* is located inside the grid's bracket of an interior minimum:
     /// None (the default), golden-section search in ln r to
-    /// [`RateRange::rtol`]; Some(t), Brent's method in ln r ([`brent`])
-    /// until r* is known to within t in ln r.
+    /// [`RateRange::rtol`]; Some(t), Brent's method in ln r (parabolic steps,
+    /// golden-section ones where a parabola is not trusted) until r* is
+    /// known to within 2 t in ln r.
     fn ln_rate_tolerance(&self) -> Option<f64> {
         None
     }
@@ -393,7 +394,7 @@ fn brent<F: FnMut(f64) -> Result<f64>>(
 /// Steps of [`brent`] before it gives up: its golden-section steps alone
 /// shrink the bracket by 0.618 at least every other step, so 200 steps
 /// close any bracket 10^20 times its tolerance.
-pub const BRENT_STEPS: usize = 200;
+const BRENT_STEPS: usize = 200;
 
 /// The reset rate minimising tau(v_0) of the velocity target over
 /// r ∈ {0} ∪ [r_min, r_max] ([`minimize_rate`] on [`VelocityTarget`]).

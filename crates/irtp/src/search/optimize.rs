@@ -256,11 +256,12 @@ impl RateObjective for SearchTarget<'_> {
 }
 
 /// How closely the search's r* is located in ln r (Brent's method inside
-/// the grid's bracket, [`minimize_rate`]): tau(r) carries its mesh error
-/// (about 1 % at the command line's defaults), which leaves r* uncertain
-/// over the reported `r_opt_range`, at least a grid step each way (0.23 in
-/// ln r at the defaults); at 1e-4 in ln r from the minimum, tau exceeds it
-/// by about tau'' 1e-8 / 2 (tau'' = d²tau/d(ln r)²), far below that error.
+/// the grid's bracket, [`minimize_rate`], stops with r* within twice this
+/// of its r): tau(r) carries its mesh error (about 1 % at the command
+/// line's defaults), which leaves r* uncertain over the reported
+/// `r_opt_range`, at least a grid step each way (0.23 in ln r at the
+/// defaults); at 2e-4 in ln r from the minimum, tau exceeds it by about
+/// 2e-8 tau'' (tau'' = d²tau/d(ln r)²), far below that error.
 pub const LN_RATE_TOL: f64 = 1e-4;
 
 /// Refuse a search whose rate cannot be optimised: velocity-only resetting
