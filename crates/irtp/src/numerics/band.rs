@@ -10,8 +10,13 @@
 //! safe there; the interchanges stay within the band (fill of at most `kl`
 //! extra super-diagonals). The operation order is fixed (row by row, left
 //! to right), so results are reproducible to the bit.
+//!
+//! The storage of a dropped matrix is kept for the next one built on the
+//! same thread ([`Band::new`]): solvers that factor one mesh after another
+//! (a rate optimisation solves the same few shapes dozens of times) then
+//! neither allocate nor page-fault fresh memory for each.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::ops::RangeInclusive;
 
 thread_local! {
@@ -31,6 +36,64 @@ pub fn work_done() -> f64 {
 
 fn count(flops: f64) {
     WORK.with(|w| w.set(w.get() + flops));
+}
+
+thread_local! {
+    /// The storage of band matrices dropped on this thread, at most
+    /// [`SPARES`], for [`Band::new`] to reuse.
+    static SPARE: RefCell<Vec<Vec<f64>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Dropped storages kept per thread (the largest): a backward solve's
+/// meshes come in a few sizes, each factored and dropped before the next,
+/// so the largest serves them all.
+const SPARES: usize = 1;
+
+/// Zeroed storage of `len` values: the smallest spare that holds them,
+/// else a fresh allocation, the spares (all too small) freed first. A
+/// thread so holds, besides its live matrices, at most [`SPARES`] storages
+/// no larger than the largest matrix it has built.
+fn storage(len: usize) -> Vec<f64> {
+    let spare = SPARE.try_with(|s| {
+        let mut s = s.try_borrow_mut().ok()?;
+        let fits = (0..s.len())
+            .filter(|&i| s[i].capacity() >= len)
+            .min_by_key(|&i| s[i].capacity());
+        match fits {
+            Some(i) => Some(s.swap_remove(i)),
+            None => {
+                s.clear();
+                None
+            }
+        }
+    });
+    match spare.ok().flatten() {
+        Some(mut a) => {
+            a.clear();
+            a.resize(len, 0.0);
+            a
+        }
+        None => vec![0.0; len],
+    }
+}
+
+/// Keep `a` for [`storage`], the smallest spare dropped beyond [`SPARES`].
+fn keep(a: Vec<f64>) {
+    if a.capacity() == 0 {
+        return;
+    }
+    let _ = SPARE.try_with(|s| {
+        let Ok(mut s) = s.try_borrow_mut() else {
+            return;
+        };
+        s.push(a);
+        if s.len() > SPARES {
+            let i = (0..s.len())
+                .min_by_key(|&i| s[i].capacity())
+                .expect("more than SPARES spares");
+            s.swap_remove(i);
+        }
+    });
 }
 
 /// A zero or non-finite pivot: the matrix is singular (or overflowed) at
@@ -65,7 +128,8 @@ pub const STOP_POLL_SOLVE_ROWS: usize = 1 << 14;
 
 /// An n×n band matrix with `kl` sub- and `ku` super-diagonals, stored by
 /// rows with room for the `kl` extra super-diagonals that pivoting fills
-/// in; [`Band::factor`] overwrites it with its LU factors.
+/// in; [`Band::factor`] overwrites it with its LU factors. Its storage is
+/// kept for reuse on the thread that drops it (module docs).
 #[derive(Clone, Debug)]
 pub struct Band {
     n: usize,
@@ -77,7 +141,9 @@ pub struct Band {
 }
 
 impl Band {
-    /// The zero n×n matrix with `kl` sub- and `ku` super-diagonals.
+    /// The zero n×n matrix with `kl` sub- and `ku` super-diagonals, in the
+    /// storage of one dropped earlier on this thread where one fits (every
+    /// entry set to zero all the same).
     pub fn new(n: usize, kl: usize, ku: usize) -> Self {
         let w = 2 * kl + ku + 1;
         Band {
@@ -85,7 +151,7 @@ impl Band {
             kl,
             ku,
             w,
-            a: vec![0.0; n * w],
+            a: storage(n * w),
             piv: vec![0; n],
         }
     }
@@ -244,6 +310,12 @@ impl Band {
     }
 }
 
+impl Drop for Band {
+    fn drop(&mut self) {
+        keep(std::mem::take(&mut self.a));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     // The dense reference solve and the copy read as the textbook loops.
@@ -316,6 +388,36 @@ mod tests {
                 assert!((x - y).abs() < 1e-10 * (1.0 + y.abs()), "{x} vs {y}");
             }
         }
+    }
+
+    /// A matrix built in a dropped one's storage (its LU factors, the
+    /// fill included) holds what one built fresh holds, to the bit; a
+    /// smaller matrix takes a larger spare, a larger one frees the spare.
+    #[test]
+    fn reused_storage_is_zeroed() {
+        let spares = || SPARE.with(|s| s.borrow().len());
+        let (mut first, _) = matrix(30, 2, 2, 0.5);
+        first.factor().unwrap();
+        let at = first.a.as_ptr();
+        drop(first);
+        let (band, _) = matrix(30, 2, 2, 0.5);
+        assert_eq!(band.a.as_ptr(), at, "the dropped storage is reused");
+        let mut fresh = band.clone();
+        fresh.a = vec![0.0; band.a.len()];
+        for i in 0..30 {
+            for j in band.row_range(i) {
+                fresh.set(i, j, band.get(i, j));
+            }
+        }
+        assert_eq!(band.a, fresh.a);
+        drop((band, fresh));
+        assert_eq!(spares(), 1);
+        let large = Band::new(100, 2, 2);
+        assert_eq!(spares(), 0, "the spare too small is freed");
+        drop(large);
+        let small = Band::new(3, 1, 1);
+        assert!(small.a.len() == 12 && small.a.iter().all(|&x| x == 0.0));
+        assert!(small.a.capacity() >= 700 && spares() == 0);
     }
 
     #[test]

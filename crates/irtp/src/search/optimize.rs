@@ -226,6 +226,11 @@ impl RateObjective for SearchTarget<'_> {
         s.asymptotic.then_some((s.tau, s.error_estimate))
     }
 
+    /// [`LN_RATE_TOL`]: Brent's method locates r* to it.
+    fn ln_rate_tolerance(&self) -> Option<f64> {
+        Some(LN_RATE_TOL)
+    }
+
     /// The checked solve at r: the locating solve there where it was
     /// asymptotic (the checked one would climb no further and repeat it
     /// to the bit), else solved with the options' `climb`.
@@ -249,6 +254,15 @@ impl RateObjective for SearchTarget<'_> {
         })
     }
 }
+
+/// How closely the search's r* is located in ln r (Brent's method inside
+/// the grid's bracket, [`minimize_rate`], stops with r* within twice this
+/// of its r): tau(r) carries its mesh error (about 1 % at the command
+/// line's defaults), which leaves r* uncertain over the reported
+/// `r_opt_range`, at least a grid step each way (0.23 in ln r at the
+/// defaults); at 2e-4 in ln r from the minimum, tau exceeds it by about
+/// 2e-8 tau'' (tau'' = d²tau/d(ln r)²), far below that error.
+pub const LN_RATE_TOL: f64 = 1e-4;
 
 /// Refuse a search whose rate cannot be optimised: velocity-only resetting
 /// with a one-sided level (tau infinite at every r), named by the flag
@@ -373,29 +387,42 @@ pub fn total_work(range: &RateRange, grid: &[f64], at_zero: f64) -> f64 {
     works.iter().sum::<f64>() + (golden_solves(range) + 1.0) * upper + 2.0 * at_zero
 }
 
+/// Solves of the refinement of the search's r* ([`minimize_rate`]:
+/// Brent's method in ln r to [`LN_RATE_TOL`] from the bracket of two grid
+/// steps, one to start): priced at the golden section's count to the
+/// bracket Brent's stopping rule leaves (4 [`LN_RATE_TOL`] wide), its
+/// bound where parabolic steps are not trusted; on a smooth minimum the
+/// parabolic steps take it there in fewer.
+pub fn locate_solves(range: &RateRange) -> f64 {
+    let step = (range.r_max / range.r_min).ln() / (range.grid_points - 1) as f64;
+    let shrink = 2.0 / (5f64.sqrt() - 1.0);
+    ((2.0 * step / (4.0 * LN_RATE_TOL)).ln() / shrink.ln())
+        .ceil()
+        .max(0.0)
+        + 1.0
+}
+
 /// The estimated work of a rate optimisation whose grid rates are
 /// screened first ([`SearchTarget`]): `screens` (the screening solves',
-/// [`screen_work`]); the grid's full solves at half the sum of `grid`
-/// (the screen leaves out the rates far from r*, where it can tell them
-/// apart, and none where its meshes are not asymptotic: at the defaults of
-/// `mfpt optimize --xt 2` the whole run counted 1.6e10 operations, the
-/// grid's full solves alone would be 4.2e10); the golden-section solves
-/// ([`golden_solves`]) and the checked solve at the optimum at the mean of
-/// the median and the upper quartile of the grid's costs (r* is not known
-/// before the grid is solved; the median put the cost tests' totals near
-/// a third of the work, the upper quartile the defaults' above three
-/// times); `at_zero` twice (as [`total_work`]). Calibrated
-/// on the cost tests (a 9-rate grid, r* among the dear rates, little
-/// screened) and those defaults: within 3× of the work counted both ways.
+/// [`screen_work`]); the solves locating r* ([`locate_solves`]) and the
+/// checked solve at the optimum, each at the mean of the median and the
+/// upper quartile of the grid's costs (r* is not known before the grid is
+/// solved); the grid's full solves at half the sum of `grid`, each rate's
+/// cost capped at that per-solve cost (the screen leaves out the rates far
+/// from r*, where it can tell them apart, and none where its meshes are
+/// not asymptotic; the dearest rates, the smallest with the longest
+/// truncated domains, were far from r* at the defaults of `mfpt optimize
+/// --xt 2`, whose grid sums to 4.2e10 operations and whose whole run
+/// counted 8.1e9); `at_zero` twice (as [`total_work`]). Calibrated on the
+/// cost tests (a 9-rate grid, r* among the dear rates, little screened)
+/// and those defaults: within 3× of the work counted both ways.
 pub fn screened_total_work(range: &RateRange, grid: &[f64], at_zero: f64, screens: f64) -> f64 {
     let mut works = grid.to_vec();
     works.sort_by(f64::total_cmp);
     let at = |q: usize| works.get(q * works.len() / 4).copied().unwrap_or(0.0);
     let per_solve = 0.5 * (at(2) + at(3));
-    screens
-        + 0.5 * works.iter().sum::<f64>()
-        + (golden_solves(range) + 1.0) * per_solve
-        + 2.0 * at_zero
+    let full: f64 = works.iter().map(|w| w.min(per_solve)).sum();
+    screens + 0.5 * full + (locate_solves(range) + 1.0) * per_solve + 2.0 * at_zero
 }
 
 /// The estimated work of [`optimize_rate`]: [`screened_total_work`] of

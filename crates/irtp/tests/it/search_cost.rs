@@ -169,10 +169,10 @@ fn optimize_estimate_at_the_defaults_is_within_3x_of_the_work_done() {
     grid.sort_by(f64::total_cmp);
     let n = grid.len();
     println!(
-        "defaults: screens {screens:.3e}, grid {:.3e}, golden solves {}, median {:.3e}, \
+        "defaults: screens {screens:.3e}, grid {:.3e}, locating solves {}, median {:.3e}, \
          upper quartile {:.3e}",
         grid.iter().sum::<f64>(),
-        optimize::golden_solves(&range),
+        optimize::locate_solves(&range),
         grid[n / 2],
         grid[3 * n / 4]
     );
