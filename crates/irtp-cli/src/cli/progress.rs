@@ -47,7 +47,7 @@ pub fn time_left(elapsed: Duration, f: f64) -> Option<Duration> {
 }
 
 /// "~12 s left", "~3 min 05 s left", or "" while there is no estimate.
-fn fmt_left(left: Option<Duration>) -> String {
+pub fn fmt_left(left: Option<Duration>) -> String {
     let Some(d) = left else {
         return String::new();
     };
@@ -129,30 +129,5 @@ impl Reporter for Bars {
     }
     fn cancelled(&self) -> bool {
         super::signals::stop_requested()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn units_and_estimates() {
-        assert_eq!(unit_of("simulate"), Unit::Count("particles"));
-        assert_eq!(unit_of("point 3"), Unit::Count("particles"));
-        assert_eq!(unit_of("mfpt scan"), Unit::Count("points"));
-        assert_eq!(unit_of("fig7"), Unit::Percent);
-        let s = Duration::from_secs;
-        assert_eq!(time_left(s(10), 0.25), Some(s(30)));
-        assert_eq!(time_left(s(10), 0.01), None, "too little done");
-        assert_eq!(
-            time_left(Duration::from_millis(500), 0.5),
-            None,
-            "too early"
-        );
-        assert_eq!(time_left(s(10), f64::NAN), None);
-        assert_eq!(fmt_left(Some(s(185))), "~3 min 05 s left");
-        assert_eq!(fmt_left(Some(s(12))), "~12 s left");
-        assert_eq!(fmt_left(None), "");
     }
 }

@@ -35,6 +35,7 @@ mod noise_fpt_dist_exact_cli;
 mod noise_fpt_exact_cli;
 mod noise_fpt_schedule_cli;
 mod plot;
+mod progress;
 mod protocol_samplers;
 mod protocol_solvers;
 mod random_target_fpt;
