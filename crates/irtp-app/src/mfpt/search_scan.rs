@@ -408,7 +408,7 @@ pub(super) struct OptimizeConfig {
 }
 
 /// Flags → validated search, rate range and mesh; refused where the mean is
-/// infinite at every r; the cost (grid, golden section, the optimum; each
+/// infinite at every r; the cost (grid, refinement of r*, the optimum; each
 /// at most the cost at r_min, whose truncated domain (or horizon) is the
 /// longest) checked against the budget.
 pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> {
@@ -420,8 +420,8 @@ pub(super) fn optimize_config(a: &OptimizeArgs) -> irtp::Result<OptimizeConfig> 
         ));
     }
     a.output.no_seed("mfpt optimize")?;
-    // The grid and the golden section solve about a hundred rates, the
-    // smallest on long truncated domains (about 1e10 operations at 32 x 16
+    // The screened grid and Brent's refinement solve about a hundred
+    // rates, the smallest on long truncated domains (about 1e10 operations at 32 x 16
     // and r = 1e-3): half the scan's cells each way keeps the default run
     // within the default --max-work; the optimum's checked solve refines
     // where its meshes are not asymptotic.
@@ -636,7 +636,7 @@ pub(super) fn run_optimize(a: &OptimizeArgs, ctx: &Context) -> irtp::Result<Outc
         method: if by_clock.is_some() {
             "renewal route + golden-section".into()
         } else {
-            "backward-2d + golden-section".into()
+            "backward-2d + brent".into()
         },
         seed: None,
         json: json.clone(),

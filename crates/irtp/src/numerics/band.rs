@@ -49,10 +49,15 @@ thread_local! {
 /// so the largest serves them all.
 const SPARES: usize = 1;
 
+/// The largest storage kept (values; 64 MiB): a solve's larger matrix
+/// is freed when dropped, so a long-lived process (a Python session)
+/// holds at most this much per thread after its solves.
+const SPARE_MAX_LEN: usize = 1 << 23;
+
 /// Zeroed storage of `len` values: the smallest spare that holds them,
 /// else a fresh allocation, the spares (all too small) freed first. A
 /// thread so holds, besides its live matrices, at most [`SPARES`] storages
-/// no larger than the largest matrix it has built.
+/// of at most [`SPARE_MAX_LEN`] values each.
 fn storage(len: usize) -> Vec<f64> {
     let spare = SPARE.try_with(|s| {
         let mut s = s.try_borrow_mut().ok()?;
@@ -77,9 +82,10 @@ fn storage(len: usize) -> Vec<f64> {
     }
 }
 
-/// Keep `a` for [`storage`], the smallest spare dropped beyond [`SPARES`].
+/// Keep `a` for [`storage`] (unless larger than [`SPARE_MAX_LEN`]), the
+/// smallest spare dropped beyond [`SPARES`].
 fn keep(a: Vec<f64>) {
-    if a.capacity() == 0 {
+    if a.capacity() == 0 || a.capacity() > SPARE_MAX_LEN {
         return;
     }
     let _ = SPARE.try_with(|s| {
