@@ -330,13 +330,7 @@ impl ForwardOperator {
         x: &mut [f64],
         inject: bool,
     ) -> std::result::Result<(), Failure> {
-        let fail = Failure::NonFinite {
-            method: "fp shifted solve (I - cA) x = b",
-            at: c,
-        };
-        if !(c > 0.0 && c.is_finite()) {
-            return Err(fail);
-        }
+        let fail = Failure::shifted_solve("fp shifted solve (I - cA) x = b", c)?;
         if !matches!(&self.shifted, Some(s) if s.c == c) {
             self.shifted = Some(self.factorise(c));
         }

@@ -60,6 +60,18 @@ impl Failure {
         }
     }
 
+    /// The failure of the shifted solve (M - cA) x = b of `method`
+    /// ([`Failure::NonFinite`] at c): Ok(it), for the solve to report
+    /// later, where c is a shift it takes (positive and finite), else
+    /// Err(it).
+    pub fn shifted_solve(method: &'static str, c: f64) -> Result<Failure, Failure> {
+        let fail = Failure::NonFinite { method, at: c };
+        match c > 0.0 && c.is_finite() {
+            true => Ok(fail),
+            false => Err(fail),
+        }
+    }
+
     /// The same failure attributed to `method` (a caller's name for the
     /// computation, e.g. "r0 density normalisation").
     pub fn in_method(self, method: &'static str) -> Self {

@@ -26,6 +26,20 @@ use crate::numerics::band::Band;
 
 const METHOD: &str = "fp stationary (refractory)";
 
+/// K y = κ y − Qᵀ y: the held block's operator on one vector of per-state
+/// values (held masses, or a held block of the moment chain).
+pub(crate) fn k_times(ch: &chain::Chain, kappa: f64, y: &[f64]) -> Vec<f64> {
+    (0..y.len())
+        .map(|s| {
+            let inflow: f64 = (0..y.len())
+                .filter(|&t| t != s)
+                .map(|t| ch.q[t][s] * y[t])
+                .sum();
+            (kappa + ch.exit[s]) * y[s] - inflow
+        })
+        .collect()
+}
+
 /// The held block of an N-state chain.
 #[derive(Clone, Debug)]
 pub(crate) struct Hold {

@@ -21,7 +21,7 @@
 //! cells' Woodbury over the rank-N re-entry with r W replaced by
 //! G = cκ L r W, its constant cκ Σ_a E_a L d_a.
 
-use super::{HeldFactor as Factor, Hold, NoiseOperator};
+use super::{k_times, HeldFactor as Factor, Hold, NoiseOperator};
 use crate::error::Result;
 use crate::model::noise::chain;
 use crate::model::reset::Reset;
@@ -105,20 +105,6 @@ impl HeldBlocks {
         }
     }
 
-    /// K y = κ y − Qᵀ y.
-    fn k_times(&self, y: &[f64]) -> Vec<f64> {
-        let ch = &self.op.chain;
-        (0..y.len())
-            .map(|s| {
-                let inflow: f64 = (0..y.len())
-                    .filter(|&t| t != s)
-                    .map(|t| ch.q[t][s] * y[t])
-                    .sum();
-                (self.kappa + ch.exit[s]) * y[s] - inflow
-            })
-            .collect()
-    }
-
     /// What [`observe`] needs of this chain, owned (to observe while the
     /// time stepping holds the chain).
     pub(crate) fn observer(&self) -> Observer {
@@ -140,7 +126,7 @@ impl HeldBlocks {
         self.op.add_target(&back, ox);
         for (a, (ya, oa)) in y.chunks_exact(ns).zip(oy.chunks_exact_mut(ns)).enumerate() {
             self.place(a, ya, self.kappa, ox);
-            let ky = self.k_times(ya);
+            let ky = k_times(&self.op.chain, self.kappa, ya);
             let w = self.atoms[a].1;
             for s in 0..ns {
                 oa[s] = w * inf[s] - ky[s];
@@ -222,13 +208,10 @@ impl ShiftedLinear for HeldBlocks {
         b: &[f64],
         x: &mut [f64],
     ) -> std::result::Result<(), Failure> {
-        let fail = Failure::NonFinite {
-            method: "fp msd shifted solve (I - cA) x = b (N states, held states)",
-            at: c,
-        };
-        if !(c > 0.0 && c.is_finite()) {
-            return Err(fail);
-        }
+        let fail = Failure::shifted_solve(
+            "fp msd shifted solve (I - cA) x = b (N states, held states)",
+            c,
+        )?;
         if !matches!(&self.factor, Some(f) if f.c == c) {
             self.factor = Some(self.factorise(c).map_err(|_| fail)?);
         }

@@ -19,7 +19,7 @@ mod held_chain;
 mod mesh;
 mod operator;
 
-pub(crate) use held::{HeldFactor, Hold};
+pub(crate) use held::{k_times, HeldFactor, Hold};
 pub(crate) use held_chain::HeldBlocks;
 pub use operator::NoiseOperator;
 pub(crate) use operator::{observe, operator, Blocks};

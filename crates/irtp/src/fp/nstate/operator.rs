@@ -159,13 +159,7 @@ impl NoiseOperator {
         b: &[f64],
         x: &mut [f64],
     ) -> std::result::Result<(), Failure> {
-        let fail = Failure::NonFinite {
-            method: "fp shifted solve (I - cA) x = b (N states)",
-            at: c,
-        };
-        if !(c > 0.0 && c.is_finite()) {
-            return Err(fail);
-        }
+        let fail = Failure::shifted_solve("fp shifted solve (I - cA) x = b (N states)", c)?;
         if !matches!(&self.shifted, Some(f) if f.c == c) {
             self.shifted = Some(self.factorise(c).map_err(|_| fail)?);
         }

@@ -15,7 +15,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::fp::extrapolate::richardson;
-use crate::fp::nstate::{observe, operator, Blocks, HeldFactor, Hold, NoiseOperator};
+use crate::fp::nstate::{k_times, observe, operator, Blocks, HeldFactor, Hold, NoiseOperator};
 use crate::fp::Mesh;
 use crate::model::atoms::transient_atom_states;
 use crate::model::noise::chain;
@@ -383,20 +383,6 @@ impl ChainOp {
         self.b.op.mesh.states
     }
 
-    /// K q = κ q − Qᵀ q.
-    fn k_times(&self, kappa: f64, q: &[f64]) -> Vec<f64> {
-        let ch = &self.b.op.chain;
-        (0..q.len())
-            .map(|s| {
-                let inflow: f64 = (0..q.len())
-                    .filter(|&t| t != s)
-                    .map(|t| ch.q[t][s] * q[t])
-                    .sum();
-                (kappa + ch.exit[s]) * q[s] - inflow
-            })
-            .collect()
-    }
-
     fn factorise(&self, c: f64, kappa: f64) -> Result<HeldFactor> {
         HeldFactor::new(&self.b.op, c, kappa, HELD)
     }
@@ -456,7 +442,7 @@ impl ShiftedLinear for ChainOp {
         let inf = op.influx(&op.state_sums(x));
         let back: Vec<f64> = q.iter().zip(&inf).map(|(q, r)| h.kappa * q - r).collect();
         op.add_target(&back, &mut out[..d]);
-        let kq = self.k_times(h.kappa, q);
+        let kq = k_times(&self.b.op.chain, h.kappa, q);
         for (s, o) in out[d..].iter_mut().enumerate() {
             *o = inf[s] - kq[s];
         }
@@ -471,13 +457,8 @@ impl ShiftedLinear for ChainOp {
         let Some(kappa) = self.hold.as_ref().map(|h| h.kappa) else {
             return self.b.solve_shifted(c, b, x);
         };
-        let fail = Failure::NonFinite {
-            method: "fp shifted solve (I - cA) x = b (N states, held masses)",
-            at: c,
-        };
-        if !(c > 0.0 && c.is_finite()) {
-            return Err(fail);
-        }
+        let fail =
+            Failure::shifted_solve("fp shifted solve (I - cA) x = b (N states, held masses)", c)?;
         match self.solve_held(kappa, c, b, x) {
             Ok(()) if x.iter().all(|v| v.is_finite()) => Ok(()),
             _ => Err(fail),
