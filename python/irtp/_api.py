@@ -431,7 +431,8 @@ DOCS: Dict[str, Doc] = {
     "mfpt_optimize": Doc(
         "The reset rate r minimising the mean first-passage time (Fig. 7(b)).",
         "Compares r = 0 with a coarse log grid over [r_min, r_max] and refines\n"
-        "the best bracket by golden section; every tau from the backward\n"
+        "the best bracket by golden section (Brent's method for a search\n"
+        "target); every tau from the backward\n"
         "equations Eqs. (26)-(28); with a search target (xt=, interval=) from\n"
         "the 2-D backward equation (velocity-only resetting with xt= is\n"
         "refused: tau is infinite at every r). ``rate`` is refused.",

@@ -61,7 +61,7 @@ pub enum MfptCommand {
     ///
     /// Answers whether resetting helps: tau(r) on a log grid of
     /// --grid-points rates brackets the minimum, a golden-section search in
-    /// log r refines it, and r = 0 is compared;
+    /// log r (Brent's method for a search) refines it, and r = 0 is compared;
     /// r* = 0 when resetting does not shorten the first passage. A target
     /// velocity --vt or a search (--xt or --interval with
     /// --reset-position).
